@@ -1,0 +1,6 @@
+//! The CPU reference backend in f64: the yardstick for the GPU path.
+
+pub mod cells;
+pub mod engine;
+
+pub use engine::{ContactStats, CpuEngine, Energies};

@@ -1,0 +1,17 @@
+//! `powder`: a discrete element method (DEM) engine for cohesive powders.
+//!
+//! * [`model`] — contact models in f64, one module each, plus the papers' closed forms;
+//! * [`cpu`] — the f64 CPU reference backend (linked cells, per-contact history, Verlet);
+//! * [`scene`] — the TOML scene description and its validation;
+//! * [`collide`] — the head-on two-sphere collision used to check models against theory;
+//! * [`output`] — plots and atomically written files.
+
+pub mod collide;
+pub mod cpu;
+pub mod error;
+pub mod model;
+pub mod output;
+pub mod run;
+pub mod scene;
+
+pub use error::{ParamError, PowderError};

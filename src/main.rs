@@ -1,0 +1,356 @@
+//! The `powder` command line: `run` a scene headless, `collide` two spheres.
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use powder::collide::{self, CollideResult, CollideSpec};
+use powder::model::{AdhesionMode, ContactModel, HystereticParams, K2Rule, LsdParams};
+use powder::run::{run_cpu, Snapshot};
+use powder::scene::Scene;
+use powder::{ParamError, PowderError};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(name = "powder", version, about = "DEM engine for cohesive powders")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run a scene headless and print a summary.
+    Run(RunArgs),
+    /// Collide two spheres head-on and compare with the papers' closed forms.
+    Collide(Box<CollideArgs>),
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum Backend {
+    /// The f64 CPU reference engine.
+    Cpu,
+}
+
+#[derive(Args)]
+struct RunArgs {
+    /// Scene file (TOML); see the README for the schema.
+    scene: PathBuf,
+    #[arg(long, value_enum, default_value = "cpu")]
+    backend: Backend,
+    /// Stop after this many steps (default: the scene's duration).
+    #[arg(long)]
+    steps: Option<u64>,
+    /// Print the summary as JSON on stdout.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum ModelKind {
+    Hysteretic,
+    Lsd,
+}
+
+#[derive(Args)]
+#[command(allow_negative_numbers = true)]
+struct CollideArgs {
+    #[arg(long, value_enum)]
+    model: ModelKind,
+    /// Hysteretic: loading stiffness k1, N/m.
+    #[arg(long)]
+    k1: Option<f64>,
+    /// Hysteretic: limit stiffness kp, N/m.
+    #[arg(long)]
+    kp: Option<f64>,
+    /// Hysteretic: tensile-branch slope kc, N/m.
+    #[arg(long)]
+    kc: Option<f64>,
+    /// Hysteretic: plasticity depth phi_f in (0, 1].
+    #[arg(long = "phi-f")]
+    phi_f: Option<f64>,
+    /// Hysteretic: non-contact adhesive force fa, N (default 0).
+    #[arg(long)]
+    fa: Option<f64>,
+    /// Hysteretic: non-contact adhesive stiffness, N/m ("inf" = zero range; default kc, or inf when kc = 0).
+    #[arg(long)]
+    kca: Option<f64>,
+    /// Hysteretic: non-contact adhesion on first approach.
+    #[arg(long, value_enum)]
+    adhesion: Option<AdhesionMode>,
+    /// Hysteretic: k2(delta_max) interpolation.
+    #[arg(long = "k2-rule", value_enum)]
+    k2_rule: Option<K2Rule>,
+    /// LSD: spring stiffness k, N/m.
+    #[arg(long)]
+    k: Option<f64>,
+    /// Viscous damping gamma0, kg/s (default 0).
+    #[arg(long, default_value_t = 0.0)]
+    gamma0: f64,
+    /// Radius of sphere 1, m.
+    #[arg(long)]
+    radius: f64,
+    /// Radius of sphere 2, m (default: --radius).
+    #[arg(long)]
+    radius2: Option<f64>,
+    /// Density, kg/m^3.
+    #[arg(long)]
+    density: f64,
+    /// Relative approach speed, m/s.
+    #[arg(long, required_unless_present = "sweep_velocity")]
+    velocity: Option<f64>,
+    /// Sweep the velocity: FROM:TO:N.
+    #[arg(long = "sweep-velocity")]
+    sweep_velocity: Option<String>,
+    /// Logarithmic sweep spacing (and log velocity axis in --plot).
+    #[arg(long)]
+    log: bool,
+    /// Draw e against v (and chi) with the closed form on top, as SVG.
+    #[arg(long)]
+    plot: Option<PathBuf>,
+    /// Time step, s (default tc/50 on the stiffest branch).
+    #[arg(long)]
+    dt: Option<f64>,
+    /// Accept a --dt above the stable limit.
+    #[arg(long)]
+    force: bool,
+    #[arg(long, value_enum, default_value = "cpu")]
+    backend: Backend,
+    /// Print JSON on stdout (one object, or an array for a sweep).
+    #[arg(long)]
+    json: bool,
+}
+
+fn required(value: Option<f64>, name: &'static str, model: &str) -> Result<f64, PowderError> {
+    value.ok_or_else(|| {
+        ParamError::new(
+            name,
+            format!(
+                "--{} is required for --model {model}",
+                name.replace('_', "-")
+            ),
+        )
+        .into()
+    })
+}
+
+fn reject(value: bool, name: &'static str, model: &str) -> Result<(), PowderError> {
+    if value {
+        Err(ParamError::new(
+            name,
+            format!(
+                "--{} does not apply to --model {model}",
+                name.replace('_', "-")
+            ),
+        )
+        .into())
+    } else {
+        Ok(())
+    }
+}
+
+fn contact_model(a: &CollideArgs) -> Result<ContactModel, PowderError> {
+    let model = match a.model {
+        ModelKind::Hysteretic => {
+            reject(a.k.is_some(), "k", "hysteretic")?;
+            let kc = required(a.kc, "kc", "hysteretic")?;
+            ContactModel::Hysteretic(HystereticParams {
+                k1: required(a.k1, "k1", "hysteretic")?,
+                kp: required(a.kp, "kp", "hysteretic")?,
+                kc,
+                phi_f: required(a.phi_f, "phi_f", "hysteretic")?,
+                fa: a.fa.unwrap_or(0.0),
+                kca: a.kca.unwrap_or(if kc > 0.0 { kc } else { f64::INFINITY }),
+                adhesion: a.adhesion.unwrap_or_default(),
+                gamma0: a.gamma0,
+                k2_rule: a.k2_rule.unwrap_or_default(),
+            })
+        }
+        ModelKind::Lsd => {
+            for (given, name) in [
+                (a.k1.is_some(), "k1"),
+                (a.kp.is_some(), "kp"),
+                (a.kc.is_some(), "kc"),
+                (a.phi_f.is_some(), "phi_f"),
+                (a.fa.is_some(), "fa"),
+                (a.kca.is_some(), "kca"),
+                (a.adhesion.is_some(), "adhesion"),
+                (a.k2_rule.is_some(), "k2_rule"),
+            ] {
+                reject(given, name, "lsd")?;
+            }
+            ContactModel::Lsd(LsdParams {
+                k: required(a.k, "k", "lsd")?,
+                gamma0: a.gamma0,
+            })
+        }
+    };
+    model.validate()?;
+    Ok(model)
+}
+
+fn fmt_opt(x: Option<f64>) -> String {
+    x.map_or_else(|| "-".into(), |v| format!("{v:.6}"))
+}
+
+fn print_table(results: &[CollideResult]) {
+    println!(
+        "{:>12} {:>9} {:>10} {:>10} {:>6} {:>12} {:>12} {:>12} {:>9} {:>10}",
+        "v (m/s)",
+        "chi",
+        "e",
+        "e_analytic",
+        "stuck",
+        "delta_max",
+        "delta_c",
+        "t_contact",
+        "steps",
+        "E_balance"
+    );
+    for r in results {
+        println!(
+            "{:>12.5e} {:>9} {:>10.6} {:>10} {:>6} {:>12.5e} {:>12} {:>12} {:>9} {:>10.2e}",
+            r.velocity,
+            r.chi.map_or_else(|| "-".into(), |c| format!("{c:.4}")),
+            r.e,
+            fmt_opt(r.e_analytic),
+            r.stuck,
+            r.delta_max,
+            r.delta_c.map_or_else(|| "-".into(), |d| format!("{d:.5e}")),
+            r.contact_duration
+                .map_or_else(|| "-".into(), |t| format!("{t:.5e}")),
+            r.steps,
+            r.energy.balance_error
+        );
+    }
+    if let Some(r) = results.first() {
+        println!("backend {}, dt = {:.4e} s", r.backend, r.dt);
+    }
+}
+
+fn collide_cmd(a: &CollideArgs) -> Result<(), PowderError> {
+    let model = contact_model(a)?;
+    let spec = CollideSpec {
+        model,
+        radius1: a.radius,
+        radius2: a.radius2.unwrap_or(a.radius),
+        density: a.density,
+        velocity: a.velocity.unwrap_or(1.0),
+        dt: a.dt,
+        force: a.force,
+    };
+    let results = match &a.sweep_velocity {
+        Some(text) => {
+            if a.velocity.is_some() {
+                return Err(ParamError::new(
+                    "velocity",
+                    "give either --velocity or --sweep-velocity, not both",
+                )
+                .into());
+            }
+            let vs = collide::sweep_velocities(text, a.log)?;
+            spec.validate()?;
+            collide::sweep(&spec, &vs)?
+        }
+        None => vec![collide::collide(&spec)?],
+    };
+    if let Some(path) = &a.plot {
+        collide::restitution_plot(&spec, &results, a.log).write_svg(path)?;
+        eprintln!("wrote {}", path.display());
+    }
+    if a.json {
+        let text = if a.sweep_velocity.is_some() {
+            serde_json::to_string_pretty(&results)
+        } else {
+            serde_json::to_string_pretty(&results[0])
+        }
+        .map_err(|e| PowderError::Run(format!("cannot encode JSON: {e}")))?;
+        println!("{text}");
+    } else {
+        print_table(&results);
+    }
+    Ok(())
+}
+
+fn print_snapshot(s: &Snapshot) {
+    eprintln!(
+        "step {:>9}  t = {:.4e} s  E_kin {:.4e}  E_el {:.4e}  E_diss {:.4e}  E_tot {:.6e} J  Z = {:.3}  max δ/a12 = {:.3e}",
+        s.step,
+        s.time,
+        s.energies.kinetic,
+        s.energies.elastic,
+        s.energies.dissipated,
+        s.energies.total(),
+        s.contacts.coordination,
+        s.contacts.max_overlap_ratio
+    );
+}
+
+fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
+    let scene = Scene::load(&a.scene)?;
+    let Backend::Cpu = a.backend;
+    let summary = run_cpu(&scene, a.steps, print_snapshot)?;
+    if a.json {
+        let text = serde_json::to_string_pretty(&summary)
+            .map_err(|e| PowderError::Run(format!("cannot encode JSON: {e}")))?;
+        println!("{text}");
+        return Ok(());
+    }
+    let l = &summary.last;
+    println!("scene            {}", summary.scene);
+    println!(
+        "backend          {} ({} particles)",
+        summary.backend, summary.particles
+    );
+    println!(
+        "dt               {:.4e} s ({})",
+        summary.dt, summary.dt_rule
+    );
+    println!(
+        "steps            {} (t = {:.4e} s)",
+        summary.steps, summary.time
+    );
+    println!(
+        "wall time        {:.2} s ({:.3e} particle-steps/s)",
+        summary.wall_seconds, summary.particle_steps_per_second
+    );
+    println!(
+        "energies (J)     kinetic {:.4e}, elastic {:.4e}, gravitational {:.4e}, dissipated {:.4e}",
+        l.energies.kinetic, l.energies.elastic, l.energies.gravitational, l.energies.dissipated
+    );
+    println!(
+        "energy balance   {:.3e} (relative)",
+        summary.energy_balance_error
+    );
+    println!(
+        "contacts         {} particle-particle, {} wall, {} non-contact; {:.3} per particle",
+        l.contacts.contacts,
+        l.contacts.wall_contacts,
+        l.contacts.non_contact,
+        l.contacts.coordination
+    );
+    println!(
+        "overlap          max {:.4e} m (max δ/a12 {:.4e}, mean δ/a12 {:.4e})",
+        l.contacts.max_overlap, l.contacts.max_overlap_ratio, l.contacts.mean_overlap_ratio
+    );
+    if summary.outside_domain > 0 {
+        println!(
+            "warning          {} particles ended outside the domain box",
+            summary.outside_domain
+        );
+    }
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match &cli.command {
+        Command::Run(a) => run_cmd(a),
+        Command::Collide(a) => collide_cmd(a),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}

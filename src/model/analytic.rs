@@ -1,0 +1,382 @@
+//! Closed forms from the papers, the yardstick for the simulations.
+//!
+//! Equation numbers refer to paper 000 (Singh, Magnanimo, Luding, long version) unless
+//! marked otherwise. η = (kp − k1)/k1 is the plasticity, β = kc/k1 the adhesivity and
+//! χ = δmax/δmax^p the scaled impact velocity (= v/vp without fa).
+
+use crate::model::hysteretic::{AdhesionMode, HystereticParams};
+use std::f64::consts::PI;
+
+/// Plasticity η = (kp − k1)/k1 (eq. 27a).
+pub fn plasticity(k1: f64, kp: f64) -> f64 {
+    (kp - k1) / k1
+}
+
+/// Adhesivity β = kc/k1 (eq. 27b).
+pub fn adhesivity(k1: f64, kc: f64) -> f64 {
+    kc / k1
+}
+
+/// e_n^(1)² for χ ≤ 1 without fa (eq. 32, squared); ≤ 0 means the pair sticks.
+pub fn en1_squared(eta: f64, beta: f64, chi: f64) -> f64 {
+    let a = 1.0 + eta * chi;
+    1.0 / a - beta * eta * eta * chi * chi / (a * (1.0 + beta + eta * chi))
+}
+
+/// e_n^(2)² for χ ≥ 1 without fa (eq. 33, squared); ≤ 0 means the pair sticks.
+pub fn en2_squared(eta: f64, beta: f64, chi: f64) -> f64 {
+    1.0 - (1.0 - en1_squared(eta, beta, 1.0)) / (chi * chi)
+}
+
+/// Coefficient of restitution without fa and without viscosity (eqs. 32–33), 0 when stuck.
+pub fn en_no_fa(eta: f64, beta: f64, chi: f64) -> f64 {
+    let sq = if chi <= 1.0 {
+        en1_squared(eta, beta, chi)
+    } else {
+        en2_squared(eta, beta, chi)
+    };
+    sq.max(0.0).sqrt()
+}
+
+/// Lower end of the sticking regime χc^(b) (eq. 34).
+pub fn chi_c_b(eta: f64, beta: f64) -> f64 {
+    (1.0 + (1.0 + 4.0 * beta * (1.0 + beta)).sqrt()) / (2.0 * beta * eta)
+}
+
+/// Upper end of the sticking regime χc^(c) (eq. 37); meaningful for β ≥ β*.
+pub fn chi_c_c(eta: f64, beta: f64) -> f64 {
+    (1.0 - en1_squared(eta, beta, 1.0)).sqrt()
+}
+
+/// Minimal adhesivity for sticking β* = 1/(η − 1) (eq. 40b).
+pub fn beta_star(eta: f64) -> f64 {
+    1.0 / (eta - 1.0)
+}
+
+/// Sticking overlap δc/δmax^p for χc^(b) ≤ χ ≤ 1 (eq. 36) and 1 ≤ χ ≤ χc^(c) (eq. 38);
+/// `None` where the pair does not stick.
+pub fn sticking_overlap(eta: f64, beta: f64, chi: f64) -> Option<f64> {
+    let sq = if chi <= 1.0 {
+        en1_squared(eta, beta, chi)
+    } else {
+        en2_squared(eta, beta, chi)
+    };
+    if sq > 0.0 || beta <= 0.0 {
+        None
+    } else {
+        Some(chi * (-sq / beta).sqrt())
+    }
+}
+
+/// Largest sticking overlap, at χ = 1 (eq. 39).
+pub fn sticking_overlap_at_limit(eta: f64, beta: f64) -> f64 {
+    ((beta * eta * eta - (1.0 + eta + beta)) / (beta * (1.0 + eta) * (1.0 + eta + beta))).sqrt()
+}
+
+/// Low-velocity approximation e_n ≈ 1 − ηχ/2 (paper 000 §5.1).
+pub fn en_low_velocity(eta: f64, chi: f64) -> f64 {
+    1.0 - 0.5 * eta * chi
+}
+
+/// Asymptote for kc = 0 and ηχ ≫ 1: e_n ≈ (ηχ)^(−1/2) (eq. C.2).
+pub fn en_asymptote_no_adhesion(eta: f64, chi: f64) -> f64 {
+    (eta * chi).powf(-0.5)
+}
+
+/// Asymptote for small β and ηχ ≫ β: e_n ≈ √(1/(ηχ) − β) (eq. C.3).
+pub fn en_asymptote_weak_adhesion(eta: f64, beta: f64, chi: f64) -> f64 {
+    (1.0 / (eta * chi) - beta).max(0.0).sqrt()
+}
+
+/// Walton–Braun-type form for kc = 0: e_n = 1/√(1 + S·v/ω0) with S = (kp − k1)/(k1·δmax^p)
+/// and ω0 = √(k1/m_r) (eq. C.1c).
+pub fn en_walton_braun_plastic(s: f64, v: f64, omega0: f64) -> f64 {
+    1.0 / (1.0 + s * v / omega0).sqrt()
+}
+
+/// √-rule asymptote for kc = 0 and large ηχ: e_n ≈ (η·√χ)^(−1/2) (eq. D.2).
+pub fn en_asymptote_sqrt_rule(eta: f64, chi: f64) -> f64 {
+    (eta * chi.sqrt()).powf(-0.5)
+}
+
+/// Walton–Braun restitution with constant unloading stiffness, e = √(k1/k2) (eq. 6).
+pub fn walton_braun(k1: f64, k2: f64) -> f64 {
+    (k1 / k2).sqrt()
+}
+
+/// LSD contact duration tc = π/ω, ω = √(k/m_r − η0²), η0 = γ0/(2m_r) (eq. 3);
+/// `None` when the oscillator is over-damped.
+pub fn lsd_contact_time(k: f64, gamma0: f64, reduced_mass: f64) -> Option<f64> {
+    let eta0 = gamma0 / (2.0 * reduced_mass);
+    let wsq = k / reduced_mass - eta0 * eta0;
+    (wsq > 0.0).then(|| PI / wsq.sqrt())
+}
+
+/// LSD restitution e = exp(−η0·tc) (eq. 4); `None` when over-damped.
+pub fn lsd_restitution(k: f64, gamma0: f64, reduced_mass: f64) -> Option<f64> {
+    let eta0 = gamma0 / (2.0 * reduced_mass);
+    lsd_contact_time(k, gamma0, reduced_mass).map(|tc| (-eta0 * tc).exp())
+}
+
+/// Dimensionless restitution with fa (eqs. 30–31) in terms of η, β, the non-contact
+/// adhesivity α = √(Ea/Ei) and the inverse impact velocity ψ = √(Ep/Ei) (eq. 27).
+/// Returns (e_n², χ) with χ = (√(1+α²) + α)/ψ (eq. 28a).
+pub fn en_squared_dimensionless(eta: f64, beta: f64, alpha: f64, psi: f64) -> (f64, f64) {
+    let chi = ((1.0 + alpha * alpha).sqrt() + alpha) / psi;
+    let sq = if chi < 1.0 {
+        let a = 1.0 + eta * chi;
+        (1.0 / a - beta * eta * eta * chi * chi / (a * (1.0 + beta + eta * chi)))
+            * psi
+            * psi
+            * chi
+            * chi
+            - 2.0 * alpha * psi * chi
+    } else {
+        1.0 - (1.0 - 1.0 / (1.0 + eta) + beta * eta * eta / ((1.0 + eta) * (1.0 + beta + eta)))
+            * psi
+            * psi
+    };
+    (sq, chi)
+}
+
+/// Dimensionless impact velocity ζ = vi/vp = 1/√(ψ² − 2αψ) (eq. 28b).
+pub fn zeta(alpha: f64, psi: f64) -> f64 {
+    1.0 / (psi * psi - 2.0 * alpha * psi).sqrt()
+}
+
+/// The full closed-form prediction for one head-on collision of the hysteretic model
+/// (paper 000 eqs. 16–25), viscosity excluded.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HystereticPrediction {
+    /// Total restitution e = εo·en·εi (0 when stuck).
+    pub e: f64,
+    /// Contact restitution e_n (eq. 22 or 24).
+    pub en: f64,
+    /// Pull-in restitution εi (eq. 17b; 1 for jump-in).
+    pub eps_i: f64,
+    /// Pull-off restitution εo (eq. 18b).
+    pub eps_o: f64,
+    pub stuck: bool,
+    /// Largest overlap (eq. 20b, or on the limit branch for v ≥ vp).
+    pub delta_max: f64,
+    /// χ = δmax/δmax^p (eq. 28a) with δmax of the k1 branch (eq. 20b): v/vp without fa,
+    /// also beyond the limit.
+    pub chi: f64,
+    /// Plastic limit velocity (eq. 19).
+    pub v_p: f64,
+    /// Energy dissipated in contact, J.
+    pub dissipated: f64,
+}
+
+/// Predicts the outcome of a head-on collision with approach speed `v_inf` (from beyond
+/// the interaction range), reduced radius `a12` and reduced mass `mr`.
+/// Returns `None` where no closed form applies (viscous damping, γ0 > 0).
+pub fn hysteretic_collision(
+    p: &HystereticParams,
+    a12: f64,
+    mr: f64,
+    v_inf: f64,
+) -> Option<HystereticPrediction> {
+    if p.gamma0 > 0.0 {
+        return None;
+    }
+    let (k1, kp, kc, fa) = (p.k1, p.kp, p.kc, p.fa);
+    let well = if p.kca.is_finite() {
+        fa * fa / p.kca
+    } else {
+        0.0
+    };
+    let eps_i = match p.adhesion {
+        AdhesionMode::Reversible => (1.0 + well / (mr * v_inf * v_inf)).sqrt(),
+        AdhesionMode::JumpIn => 1.0,
+    };
+    let vi = eps_i * v_inf;
+    let ei = 0.5 * mr * vi * vi;
+    let dp = p.delta_max_p(a12);
+    let vp_sq = if dp.is_finite() {
+        dp * (k1 * dp - 2.0 * fa) / mr
+    } else {
+        f64::INFINITY
+    };
+    let loop_factor = |k2: f64| 1.0 - k1 / k2 + kc * (k2 - k1).powi(2) / (k1 * k2 * (k2 + kc));
+    // δmax reached along k1 (eq. 20b); its ratio to δmax^p is χ (eq. 28a) in both regimes.
+    let dmax_k1 = (fa + (fa * fa + k1 * mr * vi * vi).sqrt()) / k1;
+    let (delta_max, dissipated) = if vi * vi < vp_sq {
+        // eq. 21
+        let dmax = dmax_k1;
+        let k2 = p.k2(dmax, a12);
+        (dmax, loop_factor(k2) * 0.5 * k1 * dmax * dmax)
+    } else {
+        // eq. 23: kinetic energy left at δmax^p loads the limit branch kp(δ − δ0^p) − fa.
+        let ke1 = ei - 0.5 * dp * (k1 * dp - 2.0 * fa);
+        let u0 = dp - p.delta0_p(a12);
+        let c = 2.0 * ke1 + kp * u0 * u0 - 2.0 * fa * u0;
+        let u = (fa + (fa * fa + kp * c).sqrt()) / kp;
+        (p.delta0_p(a12) + u, loop_factor(kp) * 0.5 * k1 * dp * dp)
+    };
+    let ef = ei - dissipated;
+    let chi = dmax_k1 / dp;
+    let stuck_prediction = |en: f64| HystereticPrediction {
+        e: 0.0,
+        en,
+        eps_i,
+        eps_o: 0.0,
+        stuck: true,
+        delta_max,
+        chi,
+        v_p: vp_sq.sqrt(),
+        dissipated,
+    };
+    if ef <= 0.0 {
+        return Some(stuck_prediction(0.0));
+    }
+    let en = (ef / ei).sqrt();
+    let vf = en * vi;
+    let eps_o_sq = 1.0 - well / (mr * vf * vf);
+    if eps_o_sq <= 0.0 {
+        return Some(stuck_prediction(en));
+    }
+    let eps_o = eps_o_sq.sqrt();
+    Some(HystereticPrediction {
+        e: eps_o * en * eps_i,
+        en,
+        eps_i,
+        eps_o,
+        stuck: false,
+        delta_max,
+        chi,
+        v_p: vp_sq.sqrt(),
+        dissipated,
+    })
+}
+
+/// Impact speed that reaches χ (without fa): v = χ·vp, vp = √(k1/m_r)·δmax^p (eq. 13).
+pub fn velocity_for_chi(p: &HystereticParams, a12: f64, mr: f64, chi: f64) -> f64 {
+    chi * (p.k1 / mr).sqrt() * p.delta_max_p(a12)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn limits_are_consistent() {
+        let (eta, beta) = (4.0, 1.0);
+        assert_relative_eq!(
+            en1_squared(eta, beta, chi_c_b(eta, beta)),
+            0.0,
+            epsilon = 1e-12
+        );
+        assert_relative_eq!(
+            en2_squared(eta, beta, chi_c_c(eta, beta)),
+            0.0,
+            epsilon = 1e-12
+        );
+        // eq. 39 is eq. 36 at χ = 1; the paper's fig. 8 value for η = 4, β = 1 is √(1/3)
+        assert_relative_eq!(
+            sticking_overlap(eta, beta, 1.0).unwrap(),
+            sticking_overlap_at_limit(eta, beta),
+            epsilon = 1e-12
+        );
+        assert_relative_eq!(
+            sticking_overlap_at_limit(eta, beta),
+            (1.0f64 / 3.0).sqrt(),
+            epsilon = 1e-12
+        );
+        // at β* the sticking regime shrinks to χ = 1
+        let bs = beta_star(eta);
+        assert_relative_eq!(en1_squared(eta, bs, 1.0), 0.0, epsilon = 1e-12);
+        assert_relative_eq!(chi_c_b(eta, bs), 1.0, epsilon = 1e-12);
+        assert_relative_eq!(chi_c_c(eta, bs), 1.0, epsilon = 1e-12);
+        // continuity at χ = 1
+        assert_relative_eq!(
+            en1_squared(eta, 0.1, 1.0),
+            en2_squared(eta, 0.1, 1.0),
+            epsilon = 1e-14
+        );
+    }
+
+    #[test]
+    fn asymptotes_approach_the_full_form() {
+        let eta = 500.0;
+        let chi = 0.5;
+        let full = en_no_fa(eta, 0.0, chi);
+        assert_relative_eq!(
+            full,
+            en_asymptote_no_adhesion(eta, chi),
+            max_relative = 3e-3
+        );
+        let full = en_no_fa(eta, 1e-4, chi);
+        assert_relative_eq!(
+            full,
+            en_asymptote_weak_adhesion(eta, 1e-4, chi),
+            max_relative = 1e-2
+        );
+        assert_relative_eq!(
+            en_no_fa(4.0, 0.0, 1e-4),
+            en_low_velocity(4.0, 1e-4),
+            max_relative = 1e-7
+        );
+    }
+
+    #[test]
+    fn dimensional_prediction_matches_dimensionless_forms() {
+        let a12: f64 = 1.1e-3;
+        let mr = 0.5 * 2000.0 * 4.0 / 3.0 * PI * a12.powi(3);
+        for fa in [0.0, 5e-7, 5e-6] {
+            let p = HystereticParams {
+                fa,
+                ..HystereticParams::paper_figure()
+            };
+            for v in [1e-3, 1e-2, 3e-2, 0.1] {
+                let pred = hysteretic_collision(&p, a12, mr, v).unwrap();
+                let ei = 0.5 * mr * v * v;
+                let alpha = (0.5 * fa * fa / p.k1 / ei).sqrt();
+                let dp = p.delta_max_p(a12);
+                let psi = (0.5 * p.k1 * dp * dp / ei).sqrt();
+                let (sq, chi) = en_squared_dimensionless(4.0, 1.0, alpha, psi);
+                assert_relative_eq!(chi, pred.chi, max_relative = 1e-9);
+                if !pred.stuck {
+                    assert_relative_eq!(sq.sqrt(), pred.en, max_relative = 1e-9);
+                } else {
+                    assert!(sq <= 1e-12);
+                }
+                if fa == 0.0 {
+                    assert_relative_eq!(pred.e, en_no_fa(4.0, 1.0, v / pred.v_p), epsilon = 1e-12);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn lsd_and_walton_braun() {
+        let e = lsd_restitution(1000.0, 0.0, 1e-3).unwrap();
+        assert_relative_eq!(e, 1.0);
+        let tc = lsd_contact_time(1000.0, 0.0, 1e-3).unwrap();
+        assert_relative_eq!(tc, PI * (1e-3f64 / 1000.0).sqrt());
+        assert!(lsd_restitution(1.0, 10.0, 1e-3).is_none());
+        assert_relative_eq!(walton_braun(100.0, 400.0), 0.5);
+    }
+
+    #[test]
+    fn appendix_c_walton_braun_form_is_eq_32_for_kc_zero() {
+        let p = HystereticParams {
+            kc: 0.0,
+            ..HystereticParams::paper_figure()
+        };
+        let a12 = 1e-3;
+        let mr = 1e-5;
+        let dp = p.delta_max_p(a12);
+        let s = (p.kp - p.k1) / (p.k1 * dp);
+        let w0 = (p.k1 / mr).sqrt();
+        for v in [1e-3, 1e-2] {
+            let chi = v / (w0 * dp);
+            assert_relative_eq!(
+                en_walton_braun_plastic(s, v, w0),
+                en_no_fa(4.0, 0.0, chi),
+                max_relative = 1e-12
+            );
+        }
+    }
+}

@@ -1,0 +1,37 @@
+//! The linear spring–dashpot (LSD) model, f = k·δ + γ0·δ̇ (paper 000 eq. 2), the simplest
+//! model and the check of the integrator against a closed form. As in eq. 2 the force is
+//! not clamped at zero: the closed forms (eqs. 3–4) assume the same.
+
+use crate::error::{require_non_negative, require_positive, ParamError};
+use crate::model::NormalForce;
+use serde::{Deserialize, Serialize};
+
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LsdParams {
+    /// Spring stiffness k, N/m.
+    pub k: f64,
+    /// Viscous damping γ0, kg/s.
+    pub gamma0: f64,
+}
+
+impl LsdParams {
+    pub fn validate(&self) -> Result<(), ParamError> {
+        require_positive("k", self.k, "the spring stiffness k")?;
+        require_non_negative("gamma0", self.gamma0, "the viscous damping gamma0")?;
+        Ok(())
+    }
+
+    pub fn force(&self, delta: f64, delta_dot: f64) -> NormalForce {
+        if delta > 0.0 {
+            let conservative = self.k * delta;
+            NormalForce {
+                force: conservative + self.gamma0 * delta_dot,
+                conservative,
+                potential: 0.5 * self.k * delta * delta,
+                in_contact: true,
+            }
+        } else {
+            NormalForce::default()
+        }
+    }
+}

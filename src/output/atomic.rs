@@ -1,0 +1,172 @@
+//! Atomic file replacement: write a sibling temporary file, flush it to disk, then rename it
+//! over the target. A crash at any point leaves either the old file or the complete new one,
+//! never a truncated file that looks valid.
+
+use std::fs::{self, File, OpenOptions};
+use std::io::{self, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use crate::error::PowderError;
+
+/// Distinguishes temporary files made by concurrent calls in one process.
+static COUNTER: AtomicU64 = AtomicU64::new(0);
+
+/// Writes `bytes` to `path` atomically.
+///
+/// The data go to a temporary file in the same directory (so the final rename never crosses a
+/// file system), which is synced and then renamed over `path`. An existing file at `path` is
+/// left untouched until the new content is complete, and keeps its permissions. The parent
+/// directory is not created: a missing directory is an error naming `path`. If `path` is a
+/// symbolic link, the link itself is replaced.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), PowderError> {
+    write_atomic_io(path, bytes)
+        .map_err(|err| PowderError::io(format!("cannot write `{}`", path.display()), err))
+}
+
+fn write_atomic_io(path: &Path, bytes: &[u8]) -> io::Result<()> {
+    let file_name = path.file_name().ok_or_else(|| {
+        io::Error::new(io::ErrorKind::InvalidInput, "the path does not name a file")
+    })?;
+    let dir = match path.parent() {
+        Some(parent) if !parent.as_os_str().is_empty() => parent,
+        _ => Path::new("."),
+    };
+
+    let (tmp_path, mut file) = create_temp(dir, file_name)?;
+    let result = (|| {
+        file.write_all(bytes)?;
+        if let Ok(meta) = fs::metadata(path) {
+            if meta.is_file() {
+                // Best effort: keep the replaced file's permissions.
+                let _ = file.set_permissions(meta.permissions());
+            }
+        }
+        file.sync_all()?;
+        drop(file);
+        fs::rename(&tmp_path, path)
+    })();
+    if let Err(err) = result {
+        let _ = fs::remove_file(&tmp_path);
+        return Err(err);
+    }
+    sync_dir(dir);
+    Ok(())
+}
+
+/// Creates a new, uniquely named temporary file next to the target.
+fn create_temp(dir: &Path, file_name: &std::ffi::OsStr) -> io::Result<(PathBuf, File)> {
+    let pid = std::process::id();
+    let mut last_err = None;
+    for _ in 0..16 {
+        let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+        let mut name = std::ffi::OsString::from(".");
+        name.push(file_name);
+        name.push(format!(".{pid}.{n}.tmp"));
+        let tmp_path = dir.join(name);
+        match OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&tmp_path)
+        {
+            Ok(file) => return Ok((tmp_path, file)),
+            Err(err) if err.kind() == io::ErrorKind::AlreadyExists => last_err = Some(err),
+            Err(err) => return Err(err),
+        }
+    }
+    Err(last_err.unwrap_or_else(|| io::Error::other("cannot create a temporary file")))
+}
+
+/// Makes the rename durable where the platform allows syncing a directory (best effort).
+fn sync_dir(dir: &Path) {
+    #[cfg(unix)]
+    if let Ok(d) = File::open(dir) {
+        let _ = d.sync_all();
+    }
+    #[cfg(not(unix))]
+    let _ = dir;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn entries(dir: &Path) -> Vec<String> {
+        let mut names: Vec<String> = fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        names
+    }
+
+    #[test]
+    fn writes_a_new_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("out.txt");
+        write_atomic(&path, b"hello").unwrap();
+        assert_eq!(fs::read(&path).unwrap(), b"hello");
+        assert_eq!(entries(dir.path()), vec!["out.txt".to_string()]);
+    }
+
+    #[test]
+    fn replaces_an_existing_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("out.txt");
+        fs::write(&path, b"a much longer old content").unwrap();
+        write_atomic(&path, b"new").unwrap();
+        assert_eq!(fs::read(&path).unwrap(), b"new");
+        assert_eq!(entries(dir.path()), vec!["out.txt".to_string()]);
+    }
+
+    #[test]
+    fn writes_empty_content() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("empty");
+        write_atomic(&path, b"").unwrap();
+        assert_eq!(fs::read(&path).unwrap(), b"");
+    }
+
+    #[test]
+    fn missing_directory_is_an_error_naming_the_path() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("no_such_dir").join("out.txt");
+        let err = write_atomic(&path, b"x").unwrap_err();
+        let msg = err.to_string();
+        assert!(msg.contains(&path.display().to_string()), "{msg}");
+        assert!(matches!(err, PowderError::Io { .. }));
+        assert!(!dir.path().join("no_such_dir").exists());
+    }
+
+    #[test]
+    fn failed_rename_keeps_the_target_and_leaves_no_temp_file() {
+        let dir = tempfile::tempdir().unwrap();
+        // A non-empty directory cannot be replaced by a file.
+        let path = dir.path().join("target");
+        fs::create_dir(&path).unwrap();
+        fs::write(path.join("inner"), b"keep").unwrap();
+        let err = write_atomic(&path, b"x").unwrap_err();
+        assert!(err.to_string().contains("cannot write"), "{err}");
+        assert_eq!(entries(dir.path()), vec!["target".to_string()]);
+        assert_eq!(fs::read(path.join("inner")).unwrap(), b"keep");
+    }
+
+    #[test]
+    fn path_without_file_name_is_an_error() {
+        let err = write_atomic(Path::new("/"), b"x").unwrap_err();
+        assert!(err.to_string().contains("cannot write `/`"), "{err}");
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn keeps_permissions_of_the_replaced_file() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("perm.txt");
+        fs::write(&path, b"old").unwrap();
+        fs::set_permissions(&path, fs::Permissions::from_mode(0o640)).unwrap();
+        write_atomic(&path, b"new").unwrap();
+        let mode = fs::metadata(&path).unwrap().permissions().mode() & 0o777;
+        assert_eq!(mode, 0o640);
+    }
+}

@@ -1,0 +1,217 @@
+//! The `powder` binary: the documented interface and its error messages.
+
+use std::process::Command;
+
+fn powder(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_powder"))
+        .args(args)
+        .output()
+        .expect("the binary runs");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+const PAPER: [&str; 14] = [
+    "collide",
+    "--model",
+    "hysteretic",
+    "--k1",
+    "100",
+    "--kp",
+    "500",
+    "--kc",
+    "100",
+    "--phi-f",
+    "0.05",
+    "--radius",
+    "1.1e-3",
+    "--density",
+];
+
+fn hysteretic(extra: &[&str]) -> (bool, String, String) {
+    let mut args: Vec<&str> = PAPER.to_vec();
+    args.push("2000");
+    args.extend_from_slice(extra);
+    powder(&args)
+}
+
+#[test]
+fn collide_json_has_the_documented_keys() {
+    let (ok, out, err) = hysteretic(&["--velocity", "0.05", "--json"]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    for key in [
+        "e",
+        "stuck",
+        "e_analytic",
+        "delta_max",
+        "contact_duration",
+        "dt",
+        "steps",
+        "backend",
+    ] {
+        assert!(v.get(key).is_some(), "missing `{key}` in {out}");
+    }
+    assert_eq!(v["backend"], "cpu");
+    let (e, ea) = (v["e"].as_f64().unwrap(), v["e_analytic"].as_f64().unwrap());
+    assert!((e - ea).abs() < 5e-3);
+}
+
+#[test]
+fn stuck_collision_reports_null_duration() {
+    // χ = 0.8 lies inside the sticking window (0.5, 1.155) for η = 4, β = 1
+    let (ok, out, err) = hysteretic(&["--velocity", "0.2303", "--json"]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["stuck"], true);
+    assert_eq!(v["e"], 0.0);
+    assert!(v["contact_duration"].is_null());
+}
+
+#[test]
+fn sweep_prints_an_array_and_plots() {
+    let dir = tempfile::tempdir().unwrap();
+    let svg = dir.path().join("e.svg");
+    let (ok, out, err) = hysteretic(&[
+        "--sweep-velocity",
+        "0.01:1:6",
+        "--log",
+        "--json",
+        "--plot",
+        svg.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v.as_array().unwrap().len(), 6);
+    let text = std::fs::read_to_string(&svg).unwrap();
+    assert!(text.contains("<svg"));
+}
+
+#[test]
+fn table_output_without_json() {
+    let (ok, out, _) = hysteretic(&["--velocity", "0.05"]);
+    assert!(ok);
+    assert!(out.contains("e_analytic") && out.contains("backend cpu"));
+}
+
+#[test]
+fn too_large_dt_is_refused_with_the_limit_unless_forced() {
+    let (ok, _, err) = hysteretic(&["--velocity", "0.05", "--dt", "1e-4"]);
+    assert!(!ok);
+    assert!(
+        err.contains("dt") && err.contains("stable limit") && err.contains("--force"),
+        "{err}"
+    );
+    let (ok, _, err) = hysteretic(&["--velocity", "0.05", "--dt", "1e-4", "--force"]);
+    assert!(ok, "{err}");
+}
+
+#[test]
+fn bad_parameters_name_the_parameter_and_the_rule() {
+    let cases: &[(&[&str], &str)] = &[
+        (&["--velocity", "0.05", "--kca", "-1"], "kca"),
+        (&["--velocity", "-0.05"], "velocity"),
+        (&["--velocity", "0.05", "--fa", "-1"], "fa"),
+        (&["--velocity", "0.05", "--gamma0", "-1"], "gamma0"),
+        (&["--velocity", "0.05", "--radius2", "0"], "radius2"),
+        (&["--velocity", "0.05", "--k", "3"], "does not apply"),
+        (&["--sweep-velocity", "1:2"], "FROM:TO:N"),
+    ];
+    for (extra, needle) in cases {
+        let (ok, _, err) = hysteretic(extra);
+        assert!(!ok, "{extra:?} should fail");
+        assert!(err.contains(needle), "{extra:?}: `{err}` lacks `{needle}`");
+        assert!(!err.contains("panicked"), "{err}");
+    }
+    let (ok, _, err) = powder(&[
+        "collide",
+        "--model",
+        "hysteretic",
+        "--k1",
+        "100",
+        "--kp",
+        "50",
+        "--kc",
+        "1",
+        "--phi-f",
+        "0.05",
+        "--radius",
+        "1e-3",
+        "--density",
+        "2000",
+        "--velocity",
+        "0.1",
+    ]);
+    assert!(!ok && err.contains("kp") && err.contains("k1"), "{err}");
+    let (ok, _, err) = powder(&[
+        "collide",
+        "--model",
+        "hysteretic",
+        "--k1",
+        "100",
+        "--kp",
+        "500",
+        "--kc",
+        "1",
+        "--phi-f",
+        "1.5",
+        "--radius",
+        "1e-3",
+        "--density",
+        "2000",
+        "--velocity",
+        "0.1",
+    ]);
+    assert!(!ok && err.contains("phi_f"), "{err}");
+    let (ok, _, err) = powder(&[
+        "collide",
+        "--model",
+        "lsd",
+        "--k",
+        "100",
+        "--radius",
+        "1e-3",
+        "--density",
+        "-5",
+        "--velocity",
+        "0.1",
+    ]);
+    assert!(!ok && err.contains("density"), "{err}");
+    let (ok, _, err) = powder(&[
+        "collide",
+        "--model",
+        "hysteretic",
+        "--kp",
+        "500",
+        "--kc",
+        "1",
+        "--phi-f",
+        "0.5",
+        "--radius",
+        "1e-3",
+        "--density",
+        "2000",
+        "--velocity",
+        "0.1",
+    ]);
+    assert!(!ok && err.contains("--k1 is required"), "{err}");
+}
+
+#[test]
+fn run_prints_a_summary_and_rejects_missing_files() {
+    let scene = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/examples/cohesive_cluster.toml"
+    );
+    let (ok, out, err) = powder(&["run", scene, "--steps", "200"]);
+    assert!(ok, "{err}");
+    assert!(
+        out.contains("energies") && out.contains("per particle"),
+        "{out}"
+    );
+    let (ok, _, err) = powder(&["run", "/nonexistent/scene.toml"]);
+    assert!(!ok && err.contains("/nonexistent/scene.toml"), "{err}");
+}

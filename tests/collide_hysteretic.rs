@@ -1,0 +1,290 @@
+//! `collide` on the CPU reference path against the closed forms of papers 000 and 003.
+
+use powder::collide::{collide, CollideResult, CollideSpec};
+use powder::model::analytic::{self, beta_star, chi_c_b, chi_c_c, en_no_fa};
+use powder::model::{AdhesionMode, ContactModel, HystereticParams, K2Rule};
+
+const RADIUS: f64 = 1.1e-3;
+const DENSITY: f64 = 2000.0;
+
+fn params(kc: f64) -> HystereticParams {
+    HystereticParams {
+        kc,
+        kca: f64::INFINITY,
+        ..HystereticParams::paper_figure()
+    }
+}
+
+fn spec(p: HystereticParams, r2: f64, v: f64) -> CollideSpec {
+    CollideSpec {
+        model: ContactModel::Hysteretic(p),
+        radius1: RADIUS,
+        radius2: r2,
+        density: DENSITY,
+        velocity: v,
+        dt: None,
+        force: false,
+    }
+}
+
+fn mass(r: f64) -> f64 {
+    DENSITY * 4.0 / 3.0 * std::f64::consts::PI * r.powi(3)
+}
+
+fn geometry(r2: f64) -> (f64, f64) {
+    let (m1, m2) = (mass(RADIUS), mass(r2));
+    (2.0 * RADIUS * r2 / (RADIUS + r2), m1 * m2 / (m1 + m2))
+}
+
+/// Velocity for scaled impact velocity χ (fa = 0): v = χ·√(k1/m_r)·δmax^p.
+fn v_for(p: &HystereticParams, r2: f64, chi: f64) -> f64 {
+    let (a12, mr) = geometry(r2);
+    analytic::velocity_for_chi(p, a12, mr, chi)
+}
+
+fn run(p: HystereticParams, r2: f64, chi: f64) -> CollideResult {
+    collide(&spec(p, r2, v_for(&p, r2, chi))).unwrap()
+}
+
+const CHIS: [f64; 12] = [
+    0.01, 0.03, 0.1, 0.2, 0.34, 0.5, 0.69, 0.9, 1.1, 1.5, 2.5, 5.0,
+];
+
+/// Tolerance on e at the default dt = tc/50 (on kp): measured errors are below 2e-3.
+const E_TOL: f64 = 5e-3;
+
+#[test]
+fn restitution_matches_eqs_32_33_for_beta_below_at_and_above_beta_star() {
+    let eta = 4.0;
+    for beta in [
+        beta_star(eta) / 3.0,
+        beta_star(eta),
+        3.0 * beta_star(eta),
+        1.0,
+    ] {
+        let p = params(beta * 100.0);
+        for chi in CHIS {
+            let r = run(p, RADIUS, chi);
+            let expect = en_no_fa(eta, beta, chi);
+            assert!(
+                (r.e - expect).abs() < E_TOL,
+                "beta {beta}, chi {chi}: e = {} but eqs. 32/33 give {expect}",
+                r.e
+            );
+            let ea = r.e_analytic.unwrap();
+            assert!(
+                (ea * ea - expect * expect).abs() < 1e-12,
+                "beta {beta} chi {chi}: dimensional {ea} vs eqs. 32/33 {expect}"
+            );
+            let sq = if chi <= 1.0 {
+                analytic::en1_squared(eta, beta, chi)
+            } else {
+                analytic::en2_squared(eta, beta, chi)
+            };
+            if sq > 0.0025 {
+                assert!(!r.stuck, "beta {beta}, chi {chi} should rebound");
+            }
+            if sq < -0.02 {
+                assert!(r.stuck, "beta {beta}, chi {chi} should stick");
+            }
+        }
+    }
+}
+
+#[test]
+fn unequal_radii_use_reduced_radius_and_mass() {
+    let p = params(10.0);
+    for r2 in [0.5 * RADIUS, 3.0 * RADIUS] {
+        for chi in [0.1, 0.5, 2.0] {
+            let r = run(p, r2, chi);
+            let expect = en_no_fa(4.0, 0.1, chi);
+            assert!(
+                (r.e - expect).abs() < E_TOL,
+                "r2 {r2}, chi {chi}: {} vs {expect}",
+                r.e
+            );
+            assert!((r.chi.unwrap() - chi).abs() < 1e-9);
+        }
+    }
+}
+
+#[test]
+fn sqrt_rule_matches_eq_21_with_d1() {
+    let p = HystereticParams {
+        k2_rule: K2Rule::Sqrt,
+        ..params(10.0)
+    };
+    for chi in [0.05, 0.3, 0.8, 2.0] {
+        let r = run(p, RADIUS, chi);
+        let e = r.e_analytic.unwrap();
+        assert!((r.e - e).abs() < E_TOL, "chi {chi}: {} vs {e}", r.e);
+        // the √ rule is stiffer at small δmax than the linear rule: lower e
+        assert!(e < en_no_fa(4.0, 0.1, chi) + 1e-12);
+    }
+}
+
+#[test]
+fn non_contact_adhesion_matches_eqs_19_to_25() {
+    for (adhesion, fa, kca) in [
+        (AdhesionMode::JumpIn, 5e-7, 100.0),
+        (AdhesionMode::JumpIn, 5e-6, 100.0),
+        (AdhesionMode::Reversible, 5e-6, 100.0),
+        (AdhesionMode::Reversible, 5e-6, f64::INFINITY),
+    ] {
+        let p = HystereticParams {
+            fa,
+            kca,
+            adhesion,
+            ..params(100.0)
+        };
+        let (a12, mr) = geometry(RADIUS);
+        for v in [2e-3, 5e-3, 0.02, 0.05, 0.2, 0.5] {
+            let r = collide(&spec(p, RADIUS, v)).unwrap();
+            let pred = analytic::hysteretic_collision(&p, a12, mr, v).unwrap();
+            assert!(
+                (r.e - pred.e).abs() < E_TOL,
+                "{adhesion:?} fa {fa} kca {kca} v {v}: e = {} vs {} (en {}, eps_i {}, eps_o {})",
+                r.e,
+                pred.e,
+                pred.en,
+                pred.eps_i,
+                pred.eps_o
+            );
+            if pred.e > 0.05 {
+                assert!(!r.stuck);
+            }
+        }
+    }
+}
+
+#[test]
+fn sticking_limits_eqs_34_and_37() {
+    let (eta, beta) = (4.0, 1.0);
+    let p = params(100.0);
+    let (lo, hi) = (chi_c_b(eta, beta), chi_c_c(eta, beta));
+    assert!(
+        !run(p, RADIUS, 0.97 * lo).stuck,
+        "below chi_c^(b) the pair rebounds"
+    );
+    assert!(
+        run(p, RADIUS, 1.03 * lo).stuck,
+        "above chi_c^(b) the pair sticks"
+    );
+    assert!(
+        run(p, RADIUS, 0.97 * hi).stuck,
+        "below chi_c^(c) the pair sticks"
+    );
+    assert!(
+        !run(p, RADIUS, 1.03 * hi).stuck,
+        "above chi_c^(c) the pair rebounds"
+    );
+}
+
+#[test]
+fn sticking_overlap_eqs_36_38_39() {
+    let (eta, beta) = (4.0, 1.0);
+    let p = params(100.0);
+    let (a12, _) = geometry(RADIUS);
+    let dp = p.delta_max_p(a12);
+    // eq. 39 at χ = 1: δc/δmax^p = √(1/3) for η = 4, β = 1 (fig. 8)
+    let r = run(p, RADIUS, 1.0);
+    let dc = r.delta_c.expect("stuck at chi = 1") / dp;
+    let expect = analytic::sticking_overlap_at_limit(eta, beta);
+    assert!(
+        (dc - expect).abs() < 0.01 * expect,
+        "δc/δmax^p = {dc} vs eq. 39 {expect}"
+    );
+    for chi in [0.6, 0.8, 0.9, 1.05, 1.1] {
+        let r = run(p, RADIUS, chi);
+        let dc = r.delta_c.expect("stuck") / dp;
+        let expect = analytic::sticking_overlap(eta, beta, chi).unwrap();
+        assert!(
+            (dc - expect).abs() < 0.01 * expect,
+            "chi {chi}: {dc} vs {expect}"
+        );
+        assert!((r.delta_c_analytic.unwrap() / dp - expect).abs() < 1e-12);
+    }
+}
+
+#[test]
+fn error_falls_as_dt_shrinks() {
+    let p = params(10.0);
+    let chi = 0.69;
+    let v = v_for(&p, RADIUS, chi);
+    let expect = en_no_fa(4.0, 0.1, chi);
+    let (_, mr) = geometry(RADIUS);
+    let tc = std::f64::consts::PI * (mr / p.kp).sqrt();
+    let errors: Vec<f64> = [12.5, 25.0, 50.0, 100.0, 200.0]
+        .iter()
+        .map(|f| {
+            let s = CollideSpec {
+                dt: Some(tc / f),
+                ..spec(p, RADIUS, v)
+            };
+            (collide(&s).unwrap().e - expect).abs()
+        })
+        .collect();
+    // Coarse steps (tc/12.5, tc/25) are not yet in the asymptotic regime: errors of either
+    // sign; from the default tc/50 on, the error falls monotonically and fast.
+    assert!(errors[0] < E_TOL && errors[1] < E_TOL, "{errors:?}");
+    for w in errors[2..].windows(2) {
+        assert!(w[1] < 0.5 * w[0], "error did not fall with dt: {errors:?}");
+    }
+}
+
+#[test]
+fn energy_balance_closes_and_dissipation_matches_the_loop() {
+    let (a12, mr) = geometry(RADIUS);
+    for kc in [0.0, 10.0, 100.0] {
+        let p = params(kc);
+        for chi in [0.2, 0.7, 1.5, 3.0] {
+            let v = v_for(&p, RADIUS, chi);
+            let r = collide(&spec(p, RADIUS, v)).unwrap();
+            assert!(
+                r.energy.balance_error < 1e-3,
+                "kc {kc} chi {chi}: balance error {}",
+                r.energy.balance_error
+            );
+            let pred = analytic::hysteretic_collision(&p, a12, mr, v).unwrap();
+            if !r.stuck {
+                let ke0 = r.energy.initial_kinetic;
+                assert!(
+                    (r.energy.dissipated - pred.dissipated).abs() < 5e-3 * ke0,
+                    "kc {kc} chi {chi}: dissipated {} vs loop area {}",
+                    r.energy.dissipated,
+                    pred.dissipated
+                );
+                assert!((r.energy.final_kinetic - r.e * r.e * ke0).abs() < 1e-9 * ke0);
+            }
+        }
+    }
+}
+
+#[test]
+fn viscous_damping_lowers_e_and_has_no_closed_form() {
+    let p = params(10.0);
+    let v = v_for(&p, RADIUS, 0.5);
+    let plain = collide(&spec(p, RADIUS, v)).unwrap();
+    let damped = collide(&spec(HystereticParams { gamma0: 5e-3, ..p }, RADIUS, v)).unwrap();
+    assert!(damped.e < plain.e - 0.01);
+    assert!(damped.e_analytic.is_none());
+    assert!(
+        damped.energy.balance_error < 1e-3,
+        "{}",
+        damped.energy.balance_error
+    );
+}
+
+#[test]
+fn delta_max_matches_energy_balance() {
+    let p = params(100.0);
+    for chi in [0.3, 0.9, 2.0] {
+        let r = run(p, RADIUS, chi);
+        let expect = r.delta_max_analytic.unwrap();
+        assert!(
+            (r.delta_max - expect).abs() < 2e-3 * expect,
+            "chi {chi}: {} vs {expect}",
+            r.delta_max
+        );
+    }
+}
