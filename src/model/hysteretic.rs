@@ -285,6 +285,7 @@ impl HystereticParams {
                 conservative,
                 potential,
                 in_contact: true,
+                contact_radius: 0.0,
             }
         } else if delta > -range {
             // Non-contact range: a later mechanical contact starts afresh (paper 000 §2.2.5),
@@ -304,6 +305,7 @@ impl HystereticParams {
                 conservative: force,
                 potential,
                 in_contact: false,
+                contact_radius: 0.0,
             }
         } else {
             // Beyond the interaction range the pair forgets its contact (paper 000, footnote 3).

@@ -29,6 +29,7 @@ impl LsdParams {
                 conservative,
                 potential: 0.5 * self.k * delta * delta,
                 in_contact: true,
+                contact_radius: 0.0,
             }
         } else {
             NormalForce::default()

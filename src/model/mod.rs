@@ -3,12 +3,14 @@
 
 pub mod analytic;
 pub mod hysteretic;
+pub mod jkr;
 pub mod lsd;
 
 pub use hysteretic::{AdhesionMode, HystereticParams, K2Rule};
 pub use lsd::LsdParams;
 
 use crate::error::ParamError;
+use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 /// Per-contact history that survives between steps (and, on the GPU, re-sorting).
@@ -17,8 +19,13 @@ pub struct ContactHistory {
     /// Largest overlap reached on the current branch family (δmax).
     pub delta_max: f64,
     /// Whether the pair has touched since it last left the interaction range
-    /// (jump-in adhesion acts only after the first touch).
+    /// (jump-in adhesion acts only after the first touch; a JKR contact persists into
+    /// negative overlap until pull-off).
     pub touched: bool,
+    /// Tangential spring displacement, kept in the current tangent plane (JKR friction).
+    pub tangential: DVec3,
+    /// Rolling displacement ξ, kept in the current tangent plane (JKR rolling resistance).
+    pub rolling: DVec3,
 }
 
 /// The normal force of one contact and what the energy bookkeeping needs.
@@ -30,8 +37,11 @@ pub struct NormalForce {
     pub conservative: f64,
     /// Stored (recoverable) energy of the contact in its current state.
     pub potential: f64,
-    /// Mechanical contact (δ > 0), as opposed to the non-contact range.
+    /// Mechanical contact, as opposed to the non-contact range (for JKR: from the first
+    /// touch until pull-off, also at negative overlap).
     pub in_contact: bool,
+    /// Contact radius a, m (JKR/Hertz; 0 for the piece-wise linear models).
+    pub contact_radius: f64,
 }
 
 /// Pair properties the normal force laws need.
