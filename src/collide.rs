@@ -11,9 +11,9 @@
 
 use crate::cpu::CpuEngine;
 use crate::error::PowderError;
-use crate::model::{analytic, ContactModel, PairGeometry};
+use crate::model::{analytic, ContactModel, Dissipation, PairGeometry};
 use crate::output::plot::{Plot, Series, Style};
-use crate::scene::{Domain, DtSetting, Material, ParticleInit, Scene};
+use crate::scene::{Domain, DtSetting, Material, ParticleInit, Scene, Wall};
 use serde::Serialize;
 use std::f64::consts::PI;
 
@@ -30,6 +30,28 @@ pub struct CollideSpec {
     pub dt: Option<f64>,
     /// Accept a dt above the stable limit.
     pub force: bool,
+    /// Collide sphere 1 with a plane of the same material instead of sphere 2.
+    pub wall: bool,
+    /// Angle between the approach velocity and the tangent plane at contact, degrees
+    /// (90 = head-on, as ψ in paper 002 §5).
+    pub impact_angle: f64,
+}
+
+impl CollideSpec {
+    /// A head-on sphere–sphere collision.
+    pub fn head_on(model: ContactModel, radius: f64, density: f64, velocity: f64) -> Self {
+        Self {
+            model,
+            radius1: radius,
+            radius2: radius,
+            density,
+            velocity,
+            dt: None,
+            force: false,
+            wall: false,
+            impact_angle: 90.0,
+        }
+    }
 }
 
 /// The energy ledger of the collision, J.
@@ -42,17 +64,37 @@ pub struct CollisionEnergy {
     pub balance_error: f64,
 }
 
+/// JKR characteristic scales of the pair (with the stiffness scale applied).
+#[derive(Clone, Debug, Serialize)]
+pub struct JkrScales {
+    /// Pull-off force Fc = 3πγR*, N.
+    pub fc: f64,
+    /// Equilibrium contact radius a0, m.
+    pub a0: f64,
+    /// Equilibrium overlap δ0 = a0²/(3R*), m.
+    pub delta0: f64,
+    /// Overlap where the contact breaks (negative), m.
+    pub pulloff_overlap: f64,
+    /// Reduced-stiffness note (paper 002 §3, §6.2), when a stiffness scale is set.
+    pub stiffness_scaling: Option<String>,
+}
+
 /// One collision's outcome, measured and predicted.
 #[derive(Clone, Debug, Serialize)]
 pub struct CollideResult {
     pub model: &'static str,
     pub velocity: f64,
-    /// Separation speed / approach speed; 0 when stuck.
+    /// Normal separation speed / normal approach speed; 0 when stuck.
     pub e: f64,
     pub stuck: bool,
-    /// Closed-form restitution where one applies (no viscosity for the hysteretic model).
+    /// Closed-form restitution where one applies (no viscosity for the hysteretic model,
+    /// no dissipation for JKR).
     pub e_analytic: Option<f64>,
     pub stuck_analytic: Option<bool>,
+    /// Tangential contact-point speed after / before (oblique impacts with friction).
+    pub e_tangential: Option<f64>,
+    /// Angular speed of sphere 1 at the end, rad/s (models with friction or rolling).
+    pub omega_final: Option<f64>,
     /// Largest overlap reached, m.
     pub delta_max: f64,
     pub delta_max_analytic: Option<f64>,
@@ -63,9 +105,10 @@ pub struct CollideResult {
     /// Overlap where the kinetic energy first vanished when stuck (δc), m.
     pub delta_c: Option<f64>,
     pub delta_c_analytic: Option<f64>,
-    /// Time in mechanical contact (δ > 0), s; null when stuck.
+    /// Time in mechanical contact, s (JKR: until pull-off); null when stuck.
     pub contact_duration: Option<f64>,
     pub contact_duration_analytic: Option<f64>,
+    pub jkr: Option<JkrScales>,
     pub dt: f64,
     pub steps: u64,
     pub backend: &'static str,
@@ -76,6 +119,8 @@ fn model_name(m: &ContactModel) -> &'static str {
     match m {
         ContactModel::Hysteretic(_) => "hysteretic",
         ContactModel::Lsd(_) => "lsd",
+        ContactModel::Jkr(p) if p.surface_energy == 0.0 => "hertz",
+        ContactModel::Jkr(_) => "jkr",
     }
 }
 
@@ -85,9 +130,24 @@ impl CollideSpec {
         (m(self.radius1), m(self.radius2))
     }
 
-    fn geometry(&self) -> PairGeometry {
+    /// Effective radius and mass of the pair (the plane is an infinite body).
+    pub fn geometry(&self) -> PairGeometry {
         let (m1, m2) = self.masses();
-        PairGeometry::spheres(self.radius1, self.radius2, m1, m2)
+        if self.wall {
+            PairGeometry::wall(self.radius1, m1)
+        } else {
+            PairGeometry::spheres(self.radius1, self.radius2, m1, m2)
+        }
+    }
+
+    /// Normal component of the approach speed.
+    fn normal_speed(&self) -> f64 {
+        self.velocity * self.impact_angle.to_radians().sin()
+    }
+
+    /// Time-step rule for this pair at this impact speed.
+    pub fn time_step(&self) -> crate::model::TimeStep {
+        self.model.time_step(&self.geometry(), self.normal_speed())
     }
 
     /// Checks the inputs, naming the offending option.
@@ -95,12 +155,24 @@ impl CollideSpec {
         use crate::error::{require_positive, ParamError};
         self.model.validate()?;
         require_positive("radius", self.radius1, "the radius")?;
-        require_positive("radius2", self.radius2, "the second radius")?;
+        if !self.wall {
+            require_positive("radius2", self.radius2, "the second radius")?;
+        }
         require_positive("density", self.density, "the density")?;
         require_positive("velocity", self.velocity, "the impact velocity")?;
+        if !(self.impact_angle > 0.0 && self.impact_angle <= 90.0) {
+            return Err(ParamError::new(
+                "impact-angle",
+                format!(
+                    "the impact angle must be in (0, 90] degrees from the tangent plane (90 = head-on), got {}",
+                    self.impact_angle
+                ),
+            )
+            .into());
+        }
         if let Some(dt) = self.dt {
             require_positive("dt", dt, "the time step")?;
-            let ts = self.model.time_step(self.geometry().reduced_mass);
+            let ts = self.time_step();
             if dt > ts.max && !self.force {
                 return Err(ParamError::new(
                     "dt",
@@ -115,47 +187,68 @@ impl CollideSpec {
         Ok(())
     }
 
-    /// The two-particle scene: sphere 1 at the origin, sphere 2 on +x, both moving
-    /// towards each other in the centre-of-mass frame.
+    /// The collision as a scene: sphere 1 at the origin; sphere 2 on +x (or a plane
+    /// x = x_w facing −x), approaching along x with the normal speed and along y with the
+    /// tangential one (the line of centres at first touch is x).
     fn scene(&self, dt: f64) -> Scene {
         let (m1, m2) = self.masses();
-        let range = self.model.range();
-        let gap = range + 2.0 * self.velocity * dt;
-        let x2 = self.radius1 + self.radius2 + gap;
-        let v = self.velocity;
-        let r = self.radius1.max(self.radius2);
+        let geom = self.geometry();
+        let reach = self.model.reach(geom.r_eff());
+        let vn = self.normal_speed();
+        let vt = self.velocity * self.impact_angle.to_radians().cos();
+        let gap = self.model.range() + 2.5 * vn * dt;
+        let r = self.radius1.max(if self.wall { 0.0 } else { self.radius2 });
+        // room for the tangential travel during the collision
+        let side = 4.0 * r + 10.0 * reach;
+        let mut particles = vec![ParticleInit {
+            position: [0.0; 3],
+            velocity: [0.0; 3],
+            radius: self.radius1,
+            material: 0,
+        }];
+        let mut walls = vec![];
+        let x2 = if self.wall {
+            let xw = self.radius1 + gap;
+            particles[0].velocity = [vn, vt, 0.0];
+            walls.push(Wall {
+                point: [xw, 0.0, 0.0],
+                normal: [-1.0, 0.0, 0.0],
+                material: 0,
+            });
+            xw
+        } else {
+            let x2 = self.radius1 + self.radius2 + gap;
+            let f1 = m2 / (m1 + m2);
+            let f2 = m1 / (m1 + m2);
+            particles[0].velocity = [vn * f1, vt * f1, 0.0];
+            particles.push(ParticleInit {
+                position: [x2, 0.0, 0.0],
+                velocity: [-vn * f2, -vt * f2, 0.0],
+                radius: self.radius2,
+                material: 0,
+            });
+            x2
+        };
         Scene {
             name: "collide".into(),
             domain: Domain {
-                min: [-2.0 * r, -2.0 * r, -2.0 * r],
-                max: [x2 + 2.0 * r, 2.0 * r, 2.0 * r],
+                min: [-side, -side, -side],
+                max: [x2 + side, side, side],
             },
             gravity: [0.0; 3],
             dt: DtSetting::Fixed(dt),
             force_dt: true,
             duration: f64::INFINITY,
             output_every: u64::MAX,
+            impact_velocity: vn,
             materials: vec![Material {
                 name: "collide".into(),
                 density: self.density,
                 model: self.model,
             }],
             interactions: vec![],
-            walls: vec![],
-            particles: vec![
-                ParticleInit {
-                    position: [0.0; 3],
-                    velocity: [v * m2 / (m1 + m2), 0.0, 0.0],
-                    radius: self.radius1,
-                    material: 0,
-                },
-                ParticleInit {
-                    position: [x2, 0.0, 0.0],
-                    velocity: [-v * m1 / (m1 + m2), 0.0, 0.0],
-                    radius: self.radius2,
-                    material: 0,
-                },
-            ],
+            walls,
+            particles,
         }
     }
 }
@@ -163,28 +256,53 @@ impl CollideSpec {
 /// Largest number of steps one collision may take before it is reported as undecided.
 pub const MAX_STEPS: u64 = 50_000_000;
 
-/// Runs one head-on collision on the CPU reference backend.
+/// Relative motion of the colliding pair: overlap, normal approach speed, unit normal
+/// (from the partner to sphere 1) and the tangential contact-point velocity.
+fn pair_state(e: &CpuEngine, wall: bool) -> (f64, f64, glam::DVec3, glam::DVec3) {
+    let r1 = e.radii()[0];
+    let w1 = e.angular_velocities().first().copied().unwrap_or_default();
+    if wall {
+        let n = glam::DVec3::new(-1.0, 0.0, 0.0);
+        let v = e.velocities()[0];
+        let vc = v - r1 * w1.cross(n);
+        (e.wall_overlap(0, 0), -v.dot(n), n, vc - n * vc.dot(n))
+    } else {
+        let d = e.positions()[0] - e.positions()[1];
+        let n = d.normalize();
+        let v = e.velocities()[0] - e.velocities()[1];
+        let w2 = e.angular_velocities().get(1).copied().unwrap_or_default();
+        let vc = v - r1 * w1.cross(n) - e.radii()[1] * w2.cross(n);
+        (e.overlap(0, 1), -v.dot(n), n, vc - n * vc.dot(n))
+    }
+}
+
+/// Runs one collision on the CPU reference backend.
 pub fn collide(spec: &CollideSpec) -> Result<CollideResult, PowderError> {
     spec.validate()?;
     let geom = spec.geometry();
-    let dt = spec
-        .dt
-        .unwrap_or_else(|| spec.model.time_step(geom.reduced_mass).default);
+    let dt = spec.dt.unwrap_or_else(|| spec.time_step().default);
     let mut engine = CpuEngine::new(&spec.scene(dt))?;
-    let range = spec.model.range();
+    let reach = spec.model.reach(geom.r_eff());
+    let vn0 = spec.normal_speed();
     let start = engine.energies();
-
-    let approach_speed = |e: &CpuEngine| {
-        let n = (e.positions()[0] - e.positions()[1]).normalize();
-        -(e.velocities()[0] - e.velocities()[1]).dot(n)
+    let in_contact = |e: &CpuEngine| {
+        if spec.wall {
+            e.wall_contact_history(0, 0)
+        } else {
+            e.contact_history(0, 1)
+        }
+        .is_some_and(|h| h.touched)
     };
+
     let mut touched = false;
     let mut receding = false;
     let mut first_contact = None;
     let mut last_contact = 0.0;
     let mut delta_max: f64 = 0.0;
     let mut delta_c = None;
+    let mut vt_in = None;
     let mut e = 0.0;
+    let mut vt_out = 0.0;
     loop {
         if engine.steps >= MAX_STEPS {
             return Err(PowderError::Run(format!(
@@ -192,10 +310,14 @@ pub fn collide(spec: &CollideSpec) -> Result<CollideResult, PowderError> {
                 spec.velocity, engine.time
             )));
         }
+        let (_, _, _, vt_before) = pair_state(&engine, spec.wall);
         engine.step()?;
-        let delta = engine.overlap(0, 1);
-        let vn = approach_speed(&engine);
-        if delta > 0.0 {
+        let (delta, vn, _, vt) = pair_state(&engine, spec.wall);
+        let contact = delta > 0.0 || (touched && in_contact(&engine));
+        if contact {
+            if !touched {
+                vt_in = Some(vt_before.length());
+            }
             touched = true;
             first_contact.get_or_insert(engine.time - dt);
             last_contact = engine.time;
@@ -207,17 +329,19 @@ pub fn collide(spec: &CollideSpec) -> Result<CollideResult, PowderError> {
         if vn < 0.0 {
             receding = true;
         }
-        if receding && vn > 0.0 && delta > -range {
+        if receding && vn > 0.0 && delta > -reach {
             delta_c = Some(delta);
             break;
         }
-        if receding && delta <= -range {
-            e = -vn / spec.velocity;
+        if receding && delta <= -reach && !in_contact(&engine) {
+            e = -vn / vn0;
+            vt_out = vt.length();
             break;
         }
     }
     let stuck = delta_c.is_some();
     let end = engine.energies();
+    let rotates = engine.rotates();
     let mut result = CollideResult {
         model: model_name(&spec.model),
         velocity: spec.velocity,
@@ -225,6 +349,10 @@ pub fn collide(spec: &CollideSpec) -> Result<CollideResult, PowderError> {
         stuck,
         e_analytic: None,
         stuck_analytic: None,
+        e_tangential: (rotates && !stuck)
+            .then(|| vt_in.filter(|v| *v > 0.0).map(|v| vt_out / v))
+            .flatten(),
+        omega_final: rotates.then(|| engine.angular_velocities()[0].length()),
         delta_max,
         delta_max_analytic: None,
         chi: None,
@@ -233,6 +361,7 @@ pub fn collide(spec: &CollideSpec) -> Result<CollideResult, PowderError> {
         delta_c_analytic: None,
         contact_duration: (!stuck).then(|| last_contact - first_contact.unwrap_or(0.0)),
         contact_duration_analytic: None,
+        jkr: None,
         dt,
         steps: engine.steps,
         backend: "cpu",
@@ -243,11 +372,42 @@ pub fn collide(spec: &CollideSpec) -> Result<CollideResult, PowderError> {
             balance_error: (end.total() - start.total()).abs() / start.kinetic,
         },
     };
+    predict(spec, &geom, &mut result);
+    Ok(result)
+}
+
+/// The closed-form restitution of this collision, where one applies.
+pub fn closed_form_e(spec: &CollideSpec) -> Option<f64> {
+    let geom = spec.geometry();
+    let v = spec.normal_speed();
     match &spec.model {
         ContactModel::Hysteretic(p) => {
-            if let Some(pred) =
-                analytic::hysteretic_collision(p, geom.a12, geom.reduced_mass, spec.velocity)
-            {
+            analytic::hysteretic_collision(p, geom.a12, geom.reduced_mass, v).map(|r| r.e)
+        }
+        ContactModel::Lsd(p) => analytic::lsd_restitution(p.k, p.gamma0, geom.reduced_mass),
+        ContactModel::Jkr(p) => {
+            let undamped = matches!(p.dissipation, Dissipation::None);
+            let plain =
+                spec.impact_angle == 90.0 && p.friction == 0.0 && p.rolling_hysteresis == 0.0;
+            if !undamped || !plain {
+                None
+            } else if p.surface_energy == 0.0 {
+                Some(1.0)
+            } else {
+                let r = geom.r_eff();
+                let w = analytic::jkr_loss(p.pulloff) * p.fc(r) * p.delta0(r);
+                Some(analytic::jkr_restitution(w, geom.reduced_mass, v).unwrap_or(0.0))
+            }
+        }
+    }
+}
+
+/// Fills in the closed forms that apply to this collision.
+fn predict(spec: &CollideSpec, geom: &PairGeometry, result: &mut CollideResult) {
+    let v = spec.normal_speed();
+    match &spec.model {
+        ContactModel::Hysteretic(p) => {
+            if let Some(pred) = analytic::hysteretic_collision(p, geom.a12, geom.reduced_mass, v) {
                 result.e_analytic = Some(pred.e);
                 result.stuck_analytic = Some(pred.stuck);
                 result.delta_max_analytic = Some(pred.delta_max);
@@ -267,11 +427,35 @@ pub fn collide(spec: &CollideSpec) -> Result<CollideResult, PowderError> {
             result.contact_duration_analytic =
                 analytic::lsd_contact_time(p.k, p.gamma0, geom.reduced_mass);
             if p.gamma0 == 0.0 {
-                result.delta_max_analytic = Some(spec.velocity * (geom.reduced_mass / p.k).sqrt());
+                result.delta_max_analytic = Some(v * (geom.reduced_mass / p.k).sqrt());
+            }
+        }
+        ContactModel::Jkr(p) => {
+            let r = geom.r_eff();
+            let mr = geom.reduced_mass;
+            let e_star = p.e_star();
+            let undamped = matches!(p.dissipation, Dissipation::None);
+            result.e_analytic = closed_form_e(spec);
+            result.stuck_analytic = result.e_analytic.map(|e| e == 0.0);
+            if p.surface_energy == 0.0 {
+                result.contact_duration_analytic =
+                    Some(analytic::hertz_contact_time(mr, r, e_star, v));
+                if undamped {
+                    // ½m*v² = 8/15·E*·√R*·δ^(5/2)
+                    result.delta_max_analytic =
+                        Some((15.0 * mr * v * v / (16.0 * e_star * r.sqrt())).powf(0.4));
+                }
+            } else {
+                result.jkr = Some(JkrScales {
+                    fc: p.fc(r),
+                    a0: p.a0(r),
+                    delta0: p.delta0(r),
+                    pulloff_overlap: p.pulloff_overlap(r),
+                    stiffness_scaling: p.stiffness_scaling_report(),
+                });
             }
         }
     }
-    Ok(result)
 }
 
 /// Velocities of a sweep `FROM:TO:N`, linear or logarithmic.
@@ -364,7 +548,7 @@ pub fn restitution_plot(spec: &CollideSpec, results: &[CollideResult], log: bool
             analytic::hysteretic_collision(&elastic_plastic, geom.a12, geom.reduced_mass, vmin)
                 .map(|pred| pred.v_p)
         }
-        ContactModel::Lsd(_) => None,
+        _ => None,
     };
     let scale = vp.filter(|v| v.is_finite() && *v > 0.0);
     let x_of = |v: f64| scale.map_or(v, |vp| v / vp);
@@ -377,20 +561,21 @@ pub fn restitution_plot(spec: &CollideSpec, results: &[CollideResult], log: bool
         } else {
             vmin + (vmax - vmin) * t
         };
-        let e = match &spec.model {
-            ContactModel::Hysteretic(p) => {
-                analytic::hysteretic_collision(p, geom.a12, geom.reduced_mass, v).map(|r| r.e)
-            }
-            ContactModel::Lsd(p) => analytic::lsd_restitution(p.k, p.gamma0, geom.reduced_mass),
-        };
-        if let Some(e) = e {
+        if let Some(e) = closed_form_e(&CollideSpec {
+            velocity: v,
+            ..spec.clone()
+        }) {
             curve.push((x_of(v), e));
         }
     }
     let mut series = Vec::new();
     if !curve.is_empty() {
         series.push(Series {
-            label: "closed form (paper 000 eqs. 16-25)".into(),
+            label: match spec.model {
+                ContactModel::Hysteretic(_) => "closed form (paper 000 eqs. 16-25)".into(),
+                ContactModel::Lsd(_) => "closed form (paper 000 eq. 4)".into(),
+                ContactModel::Jkr(_) => "closed form (JKR loss 0.7722 Fc d0, paper 001)".into(),
+            },
             points: curve,
             style: Style::Line,
         });

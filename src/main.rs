@@ -2,7 +2,10 @@
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use powder::collide::{self, CollideResult, CollideSpec};
-use powder::model::{AdhesionMode, ContactModel, HystereticParams, K2Rule, LsdParams};
+use powder::model::{
+    AdhesionMode, ContactModel, Dissipation, HystereticParams, JkrParams, K2Rule, LsdParams,
+    Pulloff,
+};
 use powder::run::{run_cpu, Snapshot};
 use powder::scene::Scene;
 use powder::{ParamError, PowderError};
@@ -48,6 +51,16 @@ struct RunArgs {
 enum ModelKind {
     Hysteretic,
     Lsd,
+    Jkr,
+    Hertz,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum DissipationKind {
+    /// Paper 002 eqs. 11-13, 16, calibrated by --restitution.
+    Tsuji,
+    /// Paper 001 eq. 19 with --D, --alpha, --beta.
+    Powerlaw,
 }
 
 #[derive(Args)]
@@ -83,8 +96,50 @@ struct CollideArgs {
     #[arg(long)]
     k: Option<f64>,
     /// Viscous damping gamma0, kg/s (default 0).
-    #[arg(long, default_value_t = 0.0)]
-    gamma0: f64,
+    #[arg(long)]
+    gamma0: Option<f64>,
+    /// JKR/Hertz: Young's modulus E of both bodies, Pa.
+    #[arg(long)]
+    youngs: Option<f64>,
+    /// JKR/Hertz: Poisson ratio, in (-1, 0.5).
+    #[arg(long)]
+    poisson: Option<f64>,
+    /// JKR: surface energy gamma per surface, J/m^2 (Fc = 3 pi gamma R*).
+    #[arg(long = "surface-energy")]
+    surface_energy: Option<f64>,
+    /// JKR/Hertz: target restitution e for --dissipation tsuji (the default dissipation when given).
+    #[arg(long)]
+    restitution: Option<f64>,
+    /// JKR/Hertz: dissipation model (default: none, or tsuji when --restitution is given).
+    #[arg(long, value_enum)]
+    dissipation: Option<DissipationKind>,
+    /// JKR/Hertz power-law dissipation: coefficient D.
+    #[arg(long = "D")]
+    d: Option<f64>,
+    /// JKR/Hertz power-law dissipation: velocity exponent alpha.
+    #[arg(long)]
+    alpha: Option<f64>,
+    /// JKR/Hertz power-law dissipation: contact-radius exponent beta.
+    #[arg(long)]
+    beta: Option<f64>,
+    /// JKR/Hertz: sliding friction coefficient mu_s (0 = frictionless).
+    #[arg(long)]
+    friction: Option<f64>,
+    /// JKR: rolling resistance, adhesion hysteresis Delta gamma / gamma (0 = none).
+    #[arg(long = "rolling-hysteresis")]
+    rolling_hysteresis: Option<f64>,
+    /// JKR: pull-off rule.
+    #[arg(long, value_enum)]
+    pulloff: Option<Pulloff>,
+    /// JKR/Hertz: reduced stiffness S: E -> S E, gamma -> gamma S^(2/5) (paper 002 eq. 24).
+    #[arg(long = "stiffness-scale")]
+    stiffness_scale: Option<f64>,
+    /// Angle between the approach velocity and the tangent plane, degrees (90 = head-on).
+    #[arg(long = "impact-angle", default_value_t = 90.0)]
+    impact_angle: f64,
+    /// Collide one sphere with a plane of the same material.
+    #[arg(long)]
+    wall: bool,
     /// Radius of sphere 1, m.
     #[arg(long)]
     radius: f64,
@@ -148,38 +203,125 @@ fn reject(value: bool, name: &'static str, model: &str) -> Result<(), PowderErro
 }
 
 fn contact_model(a: &CollideArgs) -> Result<ContactModel, PowderError> {
+    let model_name = format!("{:?}", a.model).to_lowercase();
+    let m = model_name.as_str();
+    let hysteretic_only = [
+        (a.k1.is_some(), "k1"),
+        (a.kp.is_some(), "kp"),
+        (a.kc.is_some(), "kc"),
+        (a.phi_f.is_some(), "phi_f"),
+        (a.fa.is_some(), "fa"),
+        (a.kca.is_some(), "kca"),
+        (a.adhesion.is_some(), "adhesion"),
+        (a.k2_rule.is_some(), "k2_rule"),
+    ];
+    let jkr_only = [
+        (a.youngs.is_some(), "youngs"),
+        (a.poisson.is_some(), "poisson"),
+        (a.surface_energy.is_some(), "surface_energy"),
+        (a.restitution.is_some(), "restitution"),
+        (a.dissipation.is_some(), "dissipation"),
+        (a.d.is_some(), "D"),
+        (a.alpha.is_some(), "alpha"),
+        (a.beta.is_some(), "beta"),
+        (a.friction.is_some(), "friction"),
+        (a.rolling_hysteresis.is_some(), "rolling_hysteresis"),
+        (a.pulloff.is_some(), "pulloff"),
+        (a.stiffness_scale.is_some(), "stiffness_scale"),
+    ];
+    let reject_all = |list: &[(bool, &'static str)]| -> Result<(), PowderError> {
+        for &(given, name) in list {
+            reject(given, name, m)?;
+        }
+        Ok(())
+    };
     let model = match a.model {
         ModelKind::Hysteretic => {
-            reject(a.k.is_some(), "k", "hysteretic")?;
-            let kc = required(a.kc, "kc", "hysteretic")?;
+            reject(a.k.is_some(), "k", m)?;
+            reject_all(&jkr_only)?;
+            let kc = required(a.kc, "kc", m)?;
             ContactModel::Hysteretic(HystereticParams {
-                k1: required(a.k1, "k1", "hysteretic")?,
-                kp: required(a.kp, "kp", "hysteretic")?,
+                k1: required(a.k1, "k1", m)?,
+                kp: required(a.kp, "kp", m)?,
                 kc,
-                phi_f: required(a.phi_f, "phi_f", "hysteretic")?,
+                phi_f: required(a.phi_f, "phi_f", m)?,
                 fa: a.fa.unwrap_or(0.0),
                 kca: a.kca.unwrap_or(if kc > 0.0 { kc } else { f64::INFINITY }),
                 adhesion: a.adhesion.unwrap_or_default(),
-                gamma0: a.gamma0,
+                gamma0: a.gamma0.unwrap_or(0.0),
                 k2_rule: a.k2_rule.unwrap_or_default(),
             })
         }
         ModelKind::Lsd => {
-            for (given, name) in [
-                (a.k1.is_some(), "k1"),
-                (a.kp.is_some(), "kp"),
-                (a.kc.is_some(), "kc"),
-                (a.phi_f.is_some(), "phi_f"),
-                (a.fa.is_some(), "fa"),
-                (a.kca.is_some(), "kca"),
-                (a.adhesion.is_some(), "adhesion"),
-                (a.k2_rule.is_some(), "k2_rule"),
-            ] {
-                reject(given, name, "lsd")?;
-            }
+            reject_all(&hysteretic_only)?;
+            reject_all(&jkr_only)?;
             ContactModel::Lsd(LsdParams {
-                k: required(a.k, "k", "lsd")?,
-                gamma0: a.gamma0,
+                k: required(a.k, "k", m)?,
+                gamma0: a.gamma0.unwrap_or(0.0),
+            })
+        }
+        ModelKind::Jkr | ModelKind::Hertz => {
+            reject(a.k.is_some(), "k", m)?;
+            reject(a.gamma0.is_some(), "gamma0", m)?;
+            reject_all(&hysteretic_only)?;
+            let surface_energy = if a.model == ModelKind::Hertz {
+                reject(a.surface_energy.is_some(), "surface_energy", m)?;
+                reject(a.rolling_hysteresis.is_some(), "rolling_hysteresis", m)?;
+                reject(a.pulloff.is_some(), "pulloff", m)?;
+                0.0
+            } else {
+                required(a.surface_energy, "surface_energy", m)?
+            };
+            let kind = a
+                .dissipation
+                .or(a.restitution.map(|_| DissipationKind::Tsuji));
+            let dissipation = match kind {
+                None => {
+                    for (given, name) in [
+                        (a.d.is_some(), "D"),
+                        (a.alpha.is_some(), "alpha"),
+                        (a.beta.is_some(), "beta"),
+                    ] {
+                        if given {
+                            return Err(ParamError::new(
+                                name,
+                                format!("--{name} needs --dissipation powerlaw"),
+                            )
+                            .into());
+                        }
+                    }
+                    Dissipation::None
+                }
+                Some(DissipationKind::Tsuji) => Dissipation::Tsuji {
+                    restitution: a.restitution.ok_or_else(|| {
+                        PowderError::from(ParamError::new(
+                            "restitution",
+                            "--dissipation tsuji needs --restitution E (0 < E <= 1)",
+                        ))
+                    })?,
+                },
+                Some(DissipationKind::Powerlaw) => {
+                    reject(
+                        a.restitution.is_some(),
+                        "restitution",
+                        "--dissipation powerlaw",
+                    )?;
+                    Dissipation::PowerLaw {
+                        d: required(a.d, "D", "jkr --dissipation powerlaw")?,
+                        alpha: required(a.alpha, "alpha", "jkr --dissipation powerlaw")?,
+                        beta: required(a.beta, "beta", "jkr --dissipation powerlaw")?,
+                    }
+                }
+            };
+            ContactModel::Jkr(JkrParams {
+                youngs: required(a.youngs, "youngs", m)?,
+                poisson: required(a.poisson, "poisson", m)?,
+                surface_energy,
+                dissipation,
+                friction: a.friction.unwrap_or(0.0),
+                rolling_hysteresis: a.rolling_hysteresis.unwrap_or(0.0),
+                pulloff: a.pulloff.unwrap_or_default(),
+                stiffness_scale: a.stiffness_scale.unwrap_or(1.0),
             })
         }
     };
@@ -236,7 +378,14 @@ fn collide_cmd(a: &CollideArgs) -> Result<(), PowderError> {
         velocity: a.velocity.unwrap_or(1.0),
         dt: a.dt,
         force: a.force,
+        wall: a.wall,
+        impact_angle: a.impact_angle,
     };
+    if let ContactModel::Jkr(p) = &spec.model {
+        if let Some(note) = p.stiffness_scaling_report() {
+            eprintln!("note: {note}");
+        }
+    }
     let results = match &a.sweep_velocity {
         Some(text) => {
             if a.velocity.is_some() {

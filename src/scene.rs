@@ -21,11 +21,13 @@
 //! force_dt = false              # default false; true accepts a dt above the stability limit
 //! output_every = 1000           # default 1000, >= 1: steps between progress/summary lines
 //! gravity = [0.0, 0.0, -9.81]   # m/s^2, default [0, 0, 0]
+//! impact_velocity = 1.0         # m/s, > 0, default 1: largest expected impact speed; sets the
+//!                               # Hertz/JKR contact time of the automatic time step
 //!
 //! [[material]]                  # at least one; referred to by name
 //! name = "powder"               # required, unique
 //! density = 2000.0              # required, kg/m^3, > 0
-//! model = "hysteretic"          # required: "hysteretic" or "lsd"; the other keys are the
+//! model = "hysteretic"          # required: "hysteretic", "lsd", "jkr" or "hertz"; the other keys are the
 //!                               # model's parameters (below); no other keys are allowed
 //!
 //! # model = "hysteretic" (piece-wise linear adhesive elasto-plastic model):
@@ -43,6 +45,25 @@
 //! # model = "lsd" (linear spring-dashpot):
 //! k = 300.0                     # required, N/m, > 0: spring stiffness
 //! gamma0 = 0.0                  # kg/s, >= 0, default 0: viscous damping
+//!
+//! # model = "jkr" (JKR adhesive elastic spheres) or "hertz" (the same without adhesion):
+//! youngs = 1e8                  # required, Pa, > 0: Young's modulus E of the material
+//! poisson = 0.3                 # required, -1 < poisson < 0.5
+//! surface_energy = 0.05         # jkr only, required, J/m^2, >= 0: gamma per surface, Fc = 3 pi gamma R*
+//! dissipation = "none"          # "none" (default), "tsuji" (paper 002 eqs. 11-16, needs
+//!                               # restitution; the default when restitution is given) or
+//!                               # "powerlaw" (paper 001 eq. 19, needs D, alpha, beta)
+//! restitution = 0.9             # target restitution e in (0, 1] of "tsuji"
+//! D = 118.0                     # "powerlaw": F = sgn(v) D E* |v|^alpha a^beta
+//! alpha = 3.0
+//! beta = 1.5
+//! friction = 0.0                # >= 0, default 0: sliding friction mu_s (adhesive Coulomb
+//!                               # limit |Ft| <= mu_s |F_N + 2 Fc|); > 0 makes particles rotate
+//! rolling_hysteresis = 0.0      # jkr only, >= 0, default 0: Delta gamma / gamma of the
+//!                               # rolling resistance (xi_crit = a0/12 * Delta gamma / gamma)
+//! pulloff = "displacement"      # jkr only: "displacement" (default, breaks at
+//!                               # -(3/4)^(2/3) delta0) or "force" (breaks at F = -Fc)
+//! stiffness_scale = 1.0         # > 0, default 1: E -> S E and gamma -> gamma S^(2/5)
 //!
 //! [[interaction]]               # optional: the model for a pair of materials
 //! materials = ["powder", "glass"]  # required: two material names (order does not matter)
@@ -103,7 +124,10 @@
 //! `[[interaction]]`.
 
 use crate::error::PowderError;
-use crate::model::{AdhesionMode, ContactModel, HystereticParams, K2Rule, LsdParams};
+use crate::model::{
+    AdhesionMode, ContactModel, Dissipation, HystereticParams, JkrParams, K2Rule, LsdParams,
+    Pulloff,
+};
 use rand::{Rng, SeedableRng};
 use rand_distr::{Distribution, LogNormal, Normal};
 use rand_pcg::Pcg64;
@@ -194,6 +218,9 @@ pub struct Scene {
     pub duration: f64,
     /// Steps between progress/summary lines.
     pub output_every: u64,
+    /// Largest expected impact speed, m/s (default 1): sets the Hertz/JKR contact time
+    /// for the automatic time step.
+    pub impact_velocity: f64,
     pub materials: Vec<Material>,
     pub interactions: Vec<Interaction>,
     pub walls: Vec<Wall>,
@@ -267,14 +294,56 @@ const TOP_KEYS: &[&str] = &[
     "particles",
 ];
 const DOMAIN_KEYS: &[&str] = &["min", "max"];
-const SIMULATION_KEYS: &[&str] = &["duration", "dt", "force_dt", "output_every", "gravity"];
+const SIMULATION_KEYS: &[&str] = &[
+    "duration",
+    "dt",
+    "force_dt",
+    "output_every",
+    "gravity",
+    "impact_velocity",
+];
 const MATERIAL_KEYS: &[&str] = &["name", "density", "model"];
 const INTERACTION_KEYS: &[&str] = &["materials", "model"];
 const HYSTERETIC_KEYS: &[&str] = &[
     "k1", "kp", "kc", "phi_f", "fa", "kca", "adhesion", "gamma0", "k2_rule",
 ];
 const LSD_KEYS: &[&str] = &["k", "gamma0"];
-const MODELS: &[&str] = &["hysteretic", "lsd"];
+const JKR_KEYS: &[&str] = &[
+    "youngs",
+    "poisson",
+    "surface_energy",
+    "dissipation",
+    "restitution",
+    "D",
+    "alpha",
+    "beta",
+    "friction",
+    "rolling_hysteresis",
+    "pulloff",
+    "stiffness_scale",
+];
+const HERTZ_KEYS: &[&str] = &[
+    "youngs",
+    "poisson",
+    "dissipation",
+    "restitution",
+    "D",
+    "alpha",
+    "beta",
+    "friction",
+    "stiffness_scale",
+];
+const MODELS: &[&str] = &["hysteretic", "lsd", "jkr", "hertz"];
+
+/// The parameter keys of each model.
+fn model_keys(kind: &str) -> &'static [&'static str] {
+    match kind {
+        "hysteretic" => HYSTERETIC_KEYS,
+        "lsd" => LSD_KEYS,
+        "jkr" => JKR_KEYS,
+        _ => HERTZ_KEYS,
+    }
+}
 const WALL_KEYS: &[&str] = &["point", "normal", "material"];
 const PARTICLE_KINDS: &[&str] = &["list", "lattice", "random"];
 const LIST_KEYS: &[&str] = &[
@@ -804,6 +873,7 @@ fn parse_scene(src: &Src) -> Res<Scene> {
         gravity: sim.gravity,
         dt: sim.dt,
         force_dt: sim.force_dt,
+        impact_velocity: sim.impact_velocity,
         duration: sim.duration,
         output_every: sim.output_every,
         materials,
@@ -847,6 +917,7 @@ struct SimSettings {
     dt: DtSetting,
     force_dt: bool,
     output_every: u64,
+    impact_velocity: f64,
     gravity: [f64; 3],
 }
 
@@ -888,7 +959,14 @@ fn parse_simulation(root: &Tbl) -> Res<SimSettings> {
         ));
     }
     let gravity = t.vec3("gravity")?.unwrap_or([0.0; 3]);
+    let impact_velocity = t
+        .positive(
+            "impact_velocity",
+            "the largest expected impact speed in m/s",
+        )?
+        .unwrap_or(1.0);
     Ok(SimSettings {
+        impact_velocity,
         duration,
         dt,
         force_dt,
@@ -950,24 +1028,23 @@ fn parse_materials(root: &Tbl) -> Res<Vec<Material>> {
 /// Reads `model` and checks the table's keys against `common` plus that model's parameters.
 fn model_kind(t: &Tbl, common: &[&str], owner: &str) -> Res<&'static str> {
     let mut all: Vec<&str> = common.to_vec();
-    for k in HYSTERETIC_KEYS.iter().chain(LSD_KEYS) {
+    for k in MODELS.iter().flat_map(|m| model_keys(m)) {
         if !all.contains(k) {
             all.push(k);
         }
     }
     let Some(kind) = t.choice("model", MODELS)? else {
         t.check_keys(&all, |_| None)?;
-        return Err(t.missing("model", "the contact model, \"hysteretic\" or \"lsd\""));
+        return Err(t.missing(
+            "model",
+            "the contact model, \"hysteretic\", \"lsd\", \"jkr\" or \"hertz\"",
+        ));
     };
-    let (own, other, other_name) = if kind == "hysteretic" {
-        (HYSTERETIC_KEYS, LSD_KEYS, "lsd")
-    } else {
-        (LSD_KEYS, HYSTERETIC_KEYS, "hysteretic")
-    };
+    let own = model_keys(kind);
     let allowed: Vec<&str> = common.iter().chain(own).copied().collect();
     t.check_keys(&allowed, |k| {
-        other.contains(&k).then(|| {
-            format!("`{k}` is a parameter of the `{other_name}` model, but {owner} uses model = \"{kind}\"")
+        MODELS.iter().find(|m| model_keys(m).contains(&k)).map(|m| {
+            format!("`{k}` is a parameter of the `{m}` model, but {owner} uses model = \"{kind}\"")
         })
     })?;
     Ok(kind)
@@ -1019,10 +1096,68 @@ fn build_model(t: &Tbl, kind: &str, owner: &str) -> Res<ContactModel> {
             gamma0,
             k2_rule,
         })
-    } else {
+    } else if kind == "lsd" {
         let k = t.f64_req("k", "the LSD spring stiffness k in N/m")?;
         let gamma0 = t.f64("gamma0")?.unwrap_or(0.0);
         ContactModel::Lsd(LsdParams { k, gamma0 })
+    } else {
+        let youngs = t.f64_req("youngs", "Young's modulus of the material in Pa")?;
+        let poisson = t.f64_req("poisson", "the Poisson ratio, in (-1, 0.5)")?;
+        let surface_energy = if kind == "jkr" {
+            t.f64_req(
+                "surface_energy",
+                "the surface energy gamma per surface in J/m^2",
+            )?
+        } else {
+            0.0
+        };
+        let restitution = t.f64("restitution")?;
+        let default = if restitution.is_some() {
+            "tsuji"
+        } else {
+            "none"
+        };
+        let dissipation = match t
+            .choice("dissipation", &["none", "tsuji", "powerlaw"])?
+            .unwrap_or(default)
+        {
+            "tsuji" => Dissipation::Tsuji {
+                restitution: restitution.ok_or_else(|| {
+                    t.missing(
+                        "restitution",
+                        "the target restitution of dissipation = \"tsuji\"",
+                    )
+                })?,
+            },
+            "powerlaw" => Dissipation::PowerLaw {
+                d: t.f64_req("D", "the power-law dissipation coefficient D")?,
+                alpha: t.f64_req("alpha", "the power-law velocity exponent alpha")?,
+                beta: t.f64_req("beta", "the power-law contact-radius exponent beta")?,
+            },
+            _ => Dissipation::None,
+        };
+        for key in ["D", "alpha", "beta"] {
+            if t.has(key) && !matches!(dissipation, Dissipation::PowerLaw { .. }) {
+                return Err(t.err_key(
+                    key,
+                    format!("`{key}` applies to dissipation = \"powerlaw\" only"),
+                ));
+            }
+        }
+        let pulloff = match t.choice("pulloff", &["displacement", "force"])? {
+            Some("force") => Pulloff::Force,
+            _ => Pulloff::Displacement,
+        };
+        ContactModel::Jkr(JkrParams {
+            youngs,
+            poisson,
+            surface_energy,
+            dissipation,
+            friction: t.f64("friction")?.unwrap_or(0.0),
+            rolling_hysteresis: t.f64("rolling_hysteresis")?.unwrap_or(0.0),
+            pulloff,
+            stiffness_scale: t.f64("stiffness_scale")?.unwrap_or(1.0),
+        })
     };
     model
         .validate()

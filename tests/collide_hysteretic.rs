@@ -24,6 +24,8 @@ fn spec(p: HystereticParams, r2: f64, v: f64) -> CollideSpec {
         velocity: v,
         dt: None,
         force: false,
+        wall: false,
+        impact_angle: 90.0,
     }
 }
 
@@ -66,8 +68,10 @@ fn restitution_matches_eqs_32_33_for_beta_below_at_and_above_beta_star() {
         for chi in CHIS {
             let r = run(p, RADIUS, chi);
             let expect = en_no_fa(eta, beta, chi);
+            // compare kinetic-energy fractions: at the sticking limits e = √(e²) is
+            // infinitely sensitive, e² is not
             assert!(
-                (r.e - expect).abs() < E_TOL,
+                (r.e * r.e - expect * expect).abs() < 2.0 * E_TOL,
                 "beta {beta}, chi {chi}: e = {} but eqs. 32/33 give {expect}",
                 r.e
             );

@@ -12,6 +12,8 @@ fn spec(k: f64, gamma0: f64, r2: f64) -> CollideSpec {
         velocity: 0.1,
         dt: None,
         force: false,
+        wall: false,
+        impact_angle: 90.0,
     }
 }
 
@@ -44,9 +46,11 @@ fn damped_lsd_matches_exp_minus_eta0_tc() {
                 "gamma0 {gamma0}, r2 {r2}: {} vs {e} (eta0*dt {eta0_dt})",
                 r.e
             );
-            // The ledger's imbalance is the same first-order onset error (measured ≈ 2·η0·dt).
+            // The ledger integrates the model exactly across the contact edges; what is left is
+            // the integrator's first-order error where the force jumps (γ0·v at the touch and
+            // at separation, within a step): up to ≈ 4·η0·dt of the kinetic energy.
             assert!(
-                r.energy.balance_error < 3.0 * eta0_dt,
+                r.energy.balance_error < 5.0 * eta0_dt,
                 "gamma0 {gamma0} r2 {r2}: {} (eta0*dt {eta0_dt})",
                 r.energy.balance_error
             );

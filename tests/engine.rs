@@ -21,6 +21,7 @@ fn scene(
         force_dt: false,
         duration: 1.0,
         output_every: 1000,
+        impact_velocity: 1.0,
         materials: vec![Material {
             name: "m".into(),
             density: 2000.0,

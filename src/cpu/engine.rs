@@ -5,7 +5,7 @@
 
 use crate::cpu::cells::CellGrid;
 use crate::error::PowderError;
-use crate::model::{ContactHistory, ContactModel, PairGeometry, TimeStep};
+use crate::model::{ContactHistory, ContactModel, Kinematics, PairGeometry, Response, TimeStep};
 use crate::scene::{DtSetting, Scene};
 use glam::DVec3;
 use std::collections::HashMap;
@@ -14,11 +14,41 @@ use std::collections::HashMap;
 #[derive(Clone, Copy, Debug, Default)]
 struct ContactRecord {
     history: ContactHistory,
-    /// Overlap, total normal force and stored energy at the end of the last step, for the
-    /// work integral of the energy ledger.
+    /// Overlap, forces and stored energy at the end of the last step, for the work
+    /// integral of the energy ledger.
     delta: f64,
     force: f64,
+    tangential: DVec3,
+    rolling_torque: DVec3,
     potential: f64,
+    /// Tangential contact velocity and relative angular velocity the forces were
+    /// evaluated with (the power of friction and rolling is integrated trapezoidally).
+    v_t: DVec3,
+    omega_rel: DVec3,
+}
+
+impl ContactRecord {
+    fn new(history: ContactHistory, delta: f64, r: &Response, m: &Motion) -> Self {
+        Self {
+            history,
+            delta,
+            force: r.normal.force,
+            tangential: r.tangential,
+            rolling_torque: r.rolling_torque,
+            potential: r.potential,
+            v_t: m.v_t,
+            omega_rel: m.omega_rel,
+        }
+    }
+}
+
+/// Relative motion of a pair over the last step that the ledger needs.
+#[derive(Clone, Copy, Debug, Default)]
+struct Motion {
+    delta: f64,
+    /// Tangential velocity at the contact and relative angular velocity ω_i − ω_j.
+    v_t: DVec3,
+    omega_rel: DVec3,
 }
 
 /// A planar wall: an infinite-mass body with the contact model of its material pair.
@@ -75,6 +105,11 @@ pub struct CpuEngine {
     vel: Vec<DVec3>,
     acc: Vec<DVec3>,
     force: Vec<DVec3>,
+    /// Angular velocity, torque and moment of inertia: empty unless some contact model
+    /// exerts tangential forces or torques (a scene without friction does not pay for them).
+    omega: Vec<DVec3>,
+    torque: Vec<DVec3>,
+    inertia: Vec<f64>,
     radius: Vec<f64>,
     mass: Vec<f64>,
     material: Vec<usize>,
@@ -91,6 +126,18 @@ pub struct CpuEngine {
     wall_contacts: HashMap<(u32, u32), ContactRecord>,
     dissipated: f64,
     domain: (DVec3, DVec3),
+}
+
+/// Mass and radius of the lightest particle of each material (for the time-step rule).
+fn lightest_particles(scene: &Scene, mass: &[f64]) -> Vec<Option<(f64, f64)>> {
+    let mut out: Vec<Option<(f64, f64)>> = vec![None; scene.materials.len()];
+    for (p, &m) in scene.particles.iter().zip(mass) {
+        let slot = &mut out[p.material];
+        if slot.is_none_or(|(lm, _)| m < lm) {
+            *slot = Some((m, p.radius));
+        }
+    }
+    out
 }
 
 impl CpuEngine {
@@ -125,27 +172,27 @@ impl CpuEngine {
         }
         // Time step: the most demanding pair of materials, with the lightest particles of
         // each (walls count as infinite mass).
-        let mut lightest = vec![f64::INFINITY; n_materials];
-        for (m, &mat) in mass.iter().zip(&material) {
-            lightest[mat] = lightest[mat].min(*m);
-        }
+        let lightest = lightest_particles(scene, &mass);
         let mut time_step: Option<TimeStep> = None;
         let mut consider = |ts: TimeStep| {
             if time_step.as_ref().is_none_or(|t| ts.max < t.max) {
                 time_step = Some(ts);
             }
         };
+        let v_imp = scene.impact_velocity;
         for a in 0..n_materials {
+            let Some((ma, ra)) = lightest[a] else {
+                continue;
+            };
             for b in 0..n_materials {
-                if lightest[a].is_finite() && lightest[b].is_finite() {
-                    let mr = lightest[a] * lightest[b] / (lightest[a] + lightest[b]);
-                    consider(models[a * n_materials + b].time_step(mr));
+                if let Some((mb, rb)) = lightest[b] {
+                    let geom = PairGeometry::spheres(ra, rb, ma, mb);
+                    consider(models[a * n_materials + b].time_step(&geom, v_imp));
                 }
             }
             for w in 0..scene.walls.len() {
-                if lightest[a].is_finite() {
-                    consider(wall_models[w * n_materials + a].time_step(lightest[a]));
-                }
+                let geom = PairGeometry::wall(ra, ma);
+                consider(wall_models[w * n_materials + a].time_step(&geom, v_imp));
             }
         }
         let time_step =
@@ -162,13 +209,15 @@ impl CpuEngine {
                 dt
             }
         };
-        let max_range = models
-            .iter()
-            .chain(&wall_models)
-            .map(ContactModel::range)
-            .fold(0.0, f64::max);
         let r_max = radius.iter().copied().fold(0.0, f64::max);
-        let cutoff = 2.0 * r_max + max_range;
+        // The largest distance beyond touching at which any pair still interacts (the
+        // non-contact range, or how far a JKR neck stretches), at the largest radius.
+        let max_reach = models
+            .iter()
+            .map(|m| m.reach(0.5 * r_max))
+            .chain(wall_models.iter().map(|m| m.reach(r_max)))
+            .fold(0.0, f64::max);
+        let cutoff = 2.0 * r_max + max_reach;
         let domain = (
             DVec3::from_array(scene.domain.min),
             DVec3::from_array(scene.domain.max),
@@ -182,7 +231,23 @@ impl CpuEngine {
                 normal: DVec3::from_array(w.normal).normalize(),
             })
             .collect();
-        let cutoff_pad = radius.iter().map(|r| r + max_range).collect();
+        let cutoff_pad = radius.iter().map(|r| r + max_reach).collect();
+        let rotation = models
+            .iter()
+            .chain(&wall_models)
+            .any(ContactModel::needs_rotation);
+        let (omega, torque, inertia) = if rotation {
+            (
+                vec![DVec3::ZERO; n],
+                vec![DVec3::ZERO; n],
+                mass.iter()
+                    .zip(&radius)
+                    .map(|(m, r)| 0.4 * m * r * r)
+                    .collect(),
+            )
+        } else {
+            (Vec::new(), Vec::new(), Vec::new())
+        };
         let mut engine = Self {
             time: 0.0,
             steps: 0,
@@ -190,6 +255,9 @@ impl CpuEngine {
             time_step,
             acc: vec![DVec3::ZERO; n],
             force: vec![DVec3::ZERO; n],
+            omega,
+            torque,
+            inertia,
             pos,
             vel,
             radius,
@@ -208,7 +276,8 @@ impl CpuEngine {
             domain,
         };
         let v_pred = engine.vel.clone();
-        engine.compute_forces(&v_pred)?;
+        let w_pred = engine.omega.clone();
+        engine.compute_forces(&v_pred, &w_pred)?;
         engine.update_acceleration();
         // Contacts present at the start carry stored energy, not dissipation.
         engine.dissipated = 0.0;
@@ -240,6 +309,16 @@ impl CpuEngine {
         &self.vel
     }
 
+    /// Angular velocities; empty when no contact model needs rotation.
+    pub fn angular_velocities(&self) -> &[DVec3] {
+        &self.omega
+    }
+
+    /// Whether particles rotate in this scene.
+    pub fn rotates(&self) -> bool {
+        !self.omega.is_empty()
+    }
+
     pub fn radii(&self) -> &[f64] {
         &self.radius
     }
@@ -259,9 +338,22 @@ impl CpuEngine {
         self.contacts.get(&key).map(|c| c.history)
     }
 
+    /// History of the contact between particle `i` and wall `w`, if any.
+    pub fn wall_contact_history(&self, w: usize, i: usize) -> Option<ContactHistory> {
+        self.wall_contacts
+            .get(&(w as u32, i as u32))
+            .map(|c| c.history)
+    }
+
     /// Overlap δ = r_i + r_j − |x_i − x_j| of a pair.
     pub fn overlap(&self, i: usize, j: usize) -> f64 {
         self.radius[i] + self.radius[j] - self.pos[i].distance(self.pos[j])
+    }
+
+    /// Overlap of particle `i` with wall `w`.
+    pub fn wall_overlap(&self, w: usize, i: usize) -> f64 {
+        let wall = &self.walls[w];
+        self.radius[i] - (self.pos[i] - wall.point).dot(wall.normal)
     }
 
     /// Particles outside the domain box (informational; they still interact).
@@ -279,8 +371,8 @@ impl CpuEngine {
         }
     }
 
-    /// One velocity-Verlet step. The viscous forces see the predicted velocity
-    /// v + a·dt, which keeps the damped oscillator second-order accurate.
+    /// One velocity-Verlet step. Velocity-dependent forces see the predicted velocity
+    /// v + a·dt (and ω + α·dt), which keeps the damped oscillator second-order accurate.
     pub fn step(&mut self) -> Result<(), PowderError> {
         let dt = self.dt;
         let mut v_pred = Vec::with_capacity(self.pos.len());
@@ -290,10 +382,19 @@ impl CpuEngine {
             v_pred.push(v_half + 0.5 * dt * self.acc[i]);
             self.vel[i] = v_half;
         }
-        self.compute_forces(&v_pred)?;
+        let mut w_pred = Vec::with_capacity(self.omega.len());
+        for i in 0..self.omega.len() {
+            let alpha = self.torque[i] / self.inertia[i];
+            self.omega[i] += 0.5 * dt * alpha;
+            w_pred.push(self.omega[i] + 0.5 * dt * alpha);
+        }
+        self.compute_forces(&v_pred, &w_pred)?;
         self.update_acceleration();
         for i in 0..self.pos.len() {
             self.vel[i] += 0.5 * dt * self.acc[i];
+        }
+        for i in 0..self.omega.len() {
+            self.omega[i] += 0.5 * dt * self.torque[i] / self.inertia[i];
         }
         self.time += dt;
         self.steps += 1;
@@ -308,23 +409,47 @@ impl CpuEngine {
         Ok(())
     }
 
-    /// Books the energy of one contact over the last step: the work the pair did on the
-    /// contact (trapezoidal in δ) minus the change of its stored energy is dissipated.
-    /// A new contact enters at the edge of the range, δ = −range, with no force or energy.
+    /// Energy dissipated by one contact over the last step: the work the pair did on the
+    /// contact (trapezoidal: along δ for the normal force, along the tangential and
+    /// relative angular motion for friction and rolling) minus the change of its stored
+    /// energy. A step that crosses the contact's entry or exit edge integrates the normal
+    /// work only over the part inside, from the force just inside the edge (the model's
+    /// [`ContactModel::edges`]), so the jumps of JKR and jump-in adhesion are booked right.
     fn book(
         old: Option<&ContactRecord>,
-        range: f64,
-        delta: f64,
-        force: f64,
-        potential: f64,
+        new: &ContactRecord,
+        m: &Motion,
+        dt: f64,
+        edges: [(f64, f64); 2],
     ) -> f64 {
-        let (d0, f0, u0) = old.map_or((-range, 0.0, 0.0), |c| (c.delta, c.force, c.potential));
-        0.5 * (f0 + force) * (delta - d0) - (potential - u0)
+        let was_in = old.is_some_and(|o| o.history.touched || o.potential != 0.0 || o.force != 0.0);
+        let is_in = new.history.touched || new.potential != 0.0 || new.force != 0.0;
+        let blank = ContactRecord::default();
+        let o = old.unwrap_or(&blank);
+        let (d0, f0) = if was_in { (o.delta, o.force) } else { edges[0] };
+        let (d1, f1) = if is_in {
+            (m.delta, new.force)
+        } else {
+            edges[1]
+        };
+        let normal = if was_in || is_in {
+            0.5 * (f0 + f1) * (d1 - d0)
+        } else {
+            0.0
+        };
+        normal
+            - 0.5 * (o.tangential.dot(o.v_t) + new.tangential.dot(m.v_t)) * dt
+            - 0.5 * (o.rolling_torque.dot(o.omega_rel) + new.rolling_torque.dot(m.omega_rel)) * dt
+            - (new.potential - o.potential)
     }
 
-    fn compute_forces(&mut self, v_pred: &[DVec3]) -> Result<(), PowderError> {
+    fn compute_forces(&mut self, v_pred: &[DVec3], w_pred: &[DVec3]) -> Result<(), PowderError> {
+        let dt = self.dt;
         self.force.iter_mut().for_each(|f| *f = DVec3::ZERO);
+        self.torque.iter_mut().for_each(|t| *t = DVec3::ZERO);
         self.grid.rebuild(&self.pos);
+        let rotation = !w_pred.is_empty();
+        let omega_of = |i: usize| if rotation { w_pred[i] } else { DVec3::ZERO };
         let mut old = std::mem::take(&mut self.contacts);
         let mut new = HashMap::with_capacity(old.len().max(16));
         let mut dissipated = 0.0;
@@ -334,6 +459,7 @@ impl CpuEngine {
             let radius = &self.radius;
             let pad = &self.cutoff_pad;
             let force = &mut self.force;
+            let torque = &mut self.torque;
             let (models, nm, mass, material) =
                 (&self.models, self.n_materials, &self.mass, &self.material);
             self.grid.for_each_pair(pos, |i, j| {
@@ -352,73 +478,113 @@ impl CpuEngine {
                     return;
                 }
                 let n = if dist > 0.0 { d / dist } else { DVec3::Z };
-                let delta_dot = -(v_pred[i] - v_pred[j]).dot(n);
                 let geom = PairGeometry::spheres(radius[i], radius[j], mass[i], mass[j]);
+                let (wi, wj) = (omega_of(i), omega_of(j));
+                let v_rel = v_pred[i] - v_pred[j];
+                let v_c = v_rel - radius[i] * wi.cross(n) - radius[j] * wj.cross(n);
+                let v_t = v_c - n * v_c.dot(n);
+                let k = Kinematics {
+                    delta,
+                    delta_dot: -v_rel.dot(n),
+                    n,
+                    v_t,
+                    v_roll: geom.r_eff() * (wi - wj).cross(n)
+                        + 0.5 * (radius[i] - radius[j]) / (radius[i] + radius[j]) * v_t,
+                };
                 let mut history = prior.map(|c| c.history).unwrap_or_default();
-                let nf = model.force(delta, delta_dot, &geom, &mut history);
-                if !nf.force.is_finite() && failure.is_none() {
+                let r = model.respond(&k, &geom, dt, &mut history);
+                if !(r.normal.force.is_finite() && r.tangential.is_finite()) && failure.is_none() {
                     failure = Some(format!(
                         "non-finite contact force between particles {i} and {j} (overlap {delta:e} m)"
                     ));
                 }
-                dissipated += Self::book(prior.as_ref(), model.range(), delta, nf.force, nf.potential);
-                force[i] += nf.force * n;
-                force[j] -= nf.force * n;
-                if delta > -model.range() {
-                    new.insert(
-                        key,
-                        ContactRecord {
-                            history,
-                            delta,
-                            force: nf.force,
-                            potential: nf.potential,
-                        },
-                    );
+                let motion = Motion {
+                    delta,
+                    v_t,
+                    omega_rel: wi - wj,
+                };
+                let record = ContactRecord::new(history, delta, &r, &motion);
+                let edges = model.edges(&geom, k.delta_dot);
+                dissipated += Self::book(prior.as_ref(), &record, &motion, dt, edges);
+                let f = r.normal.force * n + r.tangential;
+                force[i] += f;
+                force[j] -= f;
+                if rotation {
+                    let t = n.cross(r.tangential);
+                    torque[i] += -radius[i] * t + r.rolling_torque;
+                    torque[j] += -radius[j] * t - r.rolling_torque;
+                }
+                if delta > -model.range() || history.touched {
+                    new.insert(key, record);
                 }
             });
         }
-        // Pairs that jumped beyond the cutoff in one step leave with their last force.
+        // Pairs that jumped beyond the cut-off in one step leave with their last force.
         for ((i, j), c) in old.drain() {
-            let delta = self.overlap(i as usize, j as usize);
-            dissipated += Self::book(Some(&c), 0.0, delta, 0.0, 0.0);
+            let motion = Motion {
+                delta: self.overlap(i as usize, j as usize),
+                ..Default::default()
+            };
+            let edges = [(0.0, 0.0), (motion.delta, 0.0)];
+            dissipated += Self::book(Some(&c), &ContactRecord::default(), &motion, dt, edges);
         }
         self.contacts = new;
 
         let mut old_w = std::mem::take(&mut self.wall_contacts);
         let mut new_w = HashMap::with_capacity(old_w.len());
         for (w, wall) in self.walls.iter().enumerate() {
+            let n = wall.normal;
             for (i, v) in v_pred.iter().enumerate() {
-                let delta = self.radius[i] - (self.pos[i] - wall.point).dot(wall.normal);
+                let delta = self.radius[i] - (self.pos[i] - wall.point).dot(n);
                 let model = &self.wall_models[w * self.n_materials + self.material[i]];
                 let key = (w as u32, i as u32);
                 let prior = old_w.remove(&key);
                 if delta <= -model.range() && prior.is_none() {
                     continue;
                 }
-                let delta_dot = -v.dot(wall.normal);
                 let geom = PairGeometry::wall(self.radius[i], self.mass[i]);
+                let wi = omega_of(i);
+                let v_c = *v - self.radius[i] * wi.cross(n);
+                let v_t = v_c - n * v_c.dot(n);
+                let k = Kinematics {
+                    delta,
+                    delta_dot: -v.dot(n),
+                    n,
+                    v_t,
+                    // eq. 20 with r_j → ∞: (r_i − r_j)/(r_i + r_j) → −1
+                    v_roll: geom.r_eff() * wi.cross(n) - 0.5 * v_t,
+                };
                 let mut history = prior.map(|c| c.history).unwrap_or_default();
-                let nf = model.force(delta, delta_dot, &geom, &mut history);
-                if !nf.force.is_finite() && failure.is_none() {
+                let r = model.respond(&k, &geom, dt, &mut history);
+                if !(r.normal.force.is_finite() && r.tangential.is_finite()) && failure.is_none() {
                     failure = Some(format!(
                         "non-finite contact force between particle {i} and wall {w} (overlap {delta:e} m)"
                     ));
                 }
-                dissipated +=
-                    Self::book(prior.as_ref(), model.range(), delta, nf.force, nf.potential);
-                self.force[i] += nf.force * wall.normal;
-                if delta > -model.range() {
-                    new_w.insert(
-                        key,
-                        ContactRecord {
-                            history,
-                            delta,
-                            force: nf.force,
-                            potential: nf.potential,
-                        },
-                    );
+                let motion = Motion {
+                    delta,
+                    v_t,
+                    omega_rel: wi,
+                };
+                let record = ContactRecord::new(history, delta, &r, &motion);
+                let edges = model.edges(&geom, k.delta_dot);
+                dissipated += Self::book(prior.as_ref(), &record, &motion, dt, edges);
+                self.force[i] += r.normal.force * n + r.tangential;
+                if rotation {
+                    self.torque[i] += -self.radius[i] * n.cross(r.tangential) + r.rolling_torque;
+                }
+                if delta > -model.range() || history.touched {
+                    new_w.insert(key, record);
                 }
             }
+        }
+        for ((w, i), c) in old_w.drain() {
+            let motion = Motion {
+                delta: self.wall_overlap(w as usize, i as usize),
+                ..Default::default()
+            };
+            let edges = [(0.0, 0.0), (motion.delta, 0.0)];
+            dissipated += Self::book(Some(&c), &ContactRecord::default(), &motion, dt, edges);
         }
         self.wall_contacts = new_w;
         self.dissipated += dissipated;
@@ -439,6 +605,9 @@ impl CpuEngine {
             dissipated: self.dissipated,
             ..Default::default()
         };
+        for i in 0..self.omega.len() {
+            e.kinetic += 0.5 * self.inertia[i] * self.omega[i].length_squared();
+        }
         for i in 0..self.pos.len() {
             e.kinetic += 0.5 * self.mass[i] * self.vel[i].length_squared();
             e.gravitational -= self.mass[i] * self.gravity.dot(self.pos[i]);

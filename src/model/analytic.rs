@@ -380,3 +380,123 @@ mod tests {
         }
     }
 }
+
+// ---- JKR and Hertz (papers 001, 002) ----
+//
+// Closed forms for the JKR family of `crate::model::jkr`. Energies in units of Fc·δ0 with
+// Fc = 3πγR*, δ0 = a0²/(3R*), a0 = (9πγR*²/E*)^(1/3) (γ per surface).
+
+use crate::model::jkr::{self, Pulloff};
+
+/// Hertz contact time 2.87·(m*²/(R*·E*²·v))^(1/5) for impact speed `v`, s.
+pub fn hertz_contact_time(m_eff: f64, r_eff: f64, e_star: f64, v: f64) -> f64 {
+    2.87 * (m_eff * m_eff / (r_eff * e_star * e_star * v)).powf(0.2)
+}
+
+/// Energy lost in one undamped JKR touch/pull-off cycle, W/(Fc·δ0) = P(x_break) − P(x_touch)
+/// with P(x) = (24/5)x⁵ − 8x^(7/2) + 2x², x_touch = (2/3)^(2/3):
+/// ≈ 0.7722 for displacement pull-off (x_break = 6^(−2/3); paper 001 quotes ≈ 0.773) and
+/// ≈ 0.3814 for force pull-off (x_break = 2^(−2/3)).
+pub fn jkr_loss(pulloff: Pulloff) -> f64 {
+    jkr::potential_shape(pulloff.break_radius_ratio()) - jkr::potential_shape(jkr::X_TOUCH)
+}
+
+/// Restitution of an undamped JKR collision that loses `w` (J) at reduced mass `m_eff` and
+/// impact speed `v`: √(1 − W/(½m*v²)); `None` when the pair sticks (W ≥ ½m*v²).
+pub fn jkr_restitution(w: f64, m_eff: f64, v: f64) -> Option<f64> {
+    let ke = 0.5 * m_eff * v * v;
+    (w < ke).then(|| (1.0 - w / ke).sqrt())
+}
+
+/// Largest impact speed at which an undamped JKR pair sticks, √(2W/m*).
+pub fn jkr_sticking_velocity(w: f64, m_eff: f64) -> f64 {
+    (2.0 * w / m_eff).sqrt()
+}
+
+/// Surface energy for a reduced stiffness S = Emod/E: γ·S^(2/5) (paper 002 eq. 24).
+pub fn reduced_surface_energy(gamma: f64, s: f64) -> f64 {
+    gamma * s.powf(0.4)
+}
+
+/// Collision-time factor Δtcol,mod/Δtcol = (E/Emod)^(2/5) = S^(−2/5) (paper 002 §6.2).
+pub fn collision_time_factor(s: f64) -> f64 {
+    s.powf(-0.4)
+}
+
+#[cfg(test)]
+mod jkr_tests {
+    use super::*;
+    use crate::model::jkr::JkrParams;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn jkr_loss_values() {
+        assert_relative_eq!(jkr_loss(Pulloff::Displacement), 0.7722, max_relative = 1e-4);
+        assert_relative_eq!(
+            jkr_loss(Pulloff::Displacement),
+            0.7722405328755862,
+            max_relative = 1e-12
+        );
+        assert_relative_eq!(
+            jkr_loss(Pulloff::Force),
+            0.3813841613953991,
+            max_relative = 1e-12
+        );
+        // the same loss from the model's potential just after the touch (it is −W there)
+        let p = JkrParams::jkr(1e9, 0.3, 0.1);
+        let r = 1e-5;
+        let mut h = crate::model::ContactHistory::default();
+        let geom = crate::model::PairGeometry::spheres(2.0 * r, 2.0 * r, 1.0, 1.0);
+        let f = p.normal_force(1e-13 * p.delta0(r), 0.0, &geom, &mut h);
+        assert_relative_eq!(
+            -f.potential / (p.fc(r) * p.delta0(r)),
+            jkr_loss(Pulloff::Displacement),
+            max_relative = 1e-9
+        );
+    }
+
+    #[test]
+    fn restitution_and_sticking() {
+        let (w, m) = (2e-15, 1e-12);
+        let vs = jkr_sticking_velocity(w, m);
+        assert_relative_eq!(0.5 * m * vs * vs, w, max_relative = 1e-14);
+        assert!(jkr_restitution(w, m, 0.99 * vs).is_none());
+        assert!(jkr_restitution(w, m, vs).is_none());
+        let e = jkr_restitution(w, m, 2.0 * vs).unwrap();
+        assert_relative_eq!(e, 0.75f64.sqrt(), max_relative = 1e-14);
+        assert!(jkr_restitution(w, m, 1e3 * vs).unwrap() > 0.999_999);
+    }
+
+    #[test]
+    fn reduced_stiffness_relations() {
+        let s = 0.01;
+        assert_relative_eq!(reduced_surface_energy(0.1, s), 0.1 * 0.01f64.powf(0.4));
+        assert_relative_eq!(
+            collision_time_factor(s),
+            10f64.powf(0.8),
+            max_relative = 1e-14
+        );
+        assert_eq!(collision_time_factor(1.0), 1.0);
+        // γ^(5/3)/E^(2/3) is invariant (paper 002 eq. A.11), hence Fc·δ0 and the loss W
+        let (g, e) = (0.1, 1e9);
+        let gm = reduced_surface_energy(g, s);
+        assert_relative_eq!(
+            gm.powf(5.0 / 3.0) / (s * e).powf(2.0 / 3.0),
+            g.powf(5.0 / 3.0) / e.powf(2.0 / 3.0),
+            max_relative = 1e-12
+        );
+        // Hertz contact time scales by the same factor at fixed m*, R*, v
+        let (m, r, v) = (1e-9, 1e-4, 1.0);
+        assert_relative_eq!(
+            hertz_contact_time(m, r, s * e, v) / hertz_contact_time(m, r, e, v),
+            collision_time_factor(s),
+            max_relative = 1e-12
+        );
+        let p = JkrParams::hertz(e, 0.3);
+        assert_relative_eq!(
+            hertz_contact_time(m, r, p.e_star(), v),
+            p.hertz_contact_time(r, m, v),
+            max_relative = 1e-15
+        );
+    }
+}

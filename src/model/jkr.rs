@@ -1,0 +1,1535 @@
+//! The JKR family of contact laws in f64 (papers 001 and 002): Hertz (γ = 0) and JKR
+//! elastic normal force with contact hysteresis, Tsuji or power-law normal damping,
+//! Mindlin-type tangential spring with the adhesive Coulomb limit, and the
+//! Dominik–Tielens/Krijt rolling resistance; optionally with a reduced particle stiffness
+//! (paper 002 §3).
+//!
+//! Sign conventions: δ > 0 is overlap, δ̇ = dδ/dt is the approach speed, a positive normal
+//! force is repulsive. The unit normal n points from particle j to particle i.
+//!
+//! Material: both bodies share E and ν, so E* = E/(2(1−ν²)) (paper 002 eq. 2) and, with
+//! G = E/(2(1+ν)), G* = G/(2(2−ν)) (paper 002 eq. 15). γ is the surface energy *per
+//! surface* (work of adhesion w = 2γ), so Fc = 3πγR*, a0 = (9πγR*²/E*)^(1/3) and
+//! δ0 = a0²/(3R*) (paper 001 eq. 8, paper 002 eq. 7).
+//!
+//! Dimensionless JKR: with x = a/a0 and d = δ/δ0,
+//! * d = 3x² − 2√x (paper 001 eq. 5),
+//! * F/Fc = 4x³ − 4x^(3/2) (paper 001 eq. 6),
+//! * ∫F dδ = Fc·δ0·P(x) + const, P(x) = (24/5)x⁵ − 8x^(7/2) + 2x² (see [`potential_shape`]).
+//!
+//! Landmarks: touch at d = 0, x = (2/3)^(2/3), F = −8/9·Fc; largest attraction F = −Fc at
+//! x = 2^(−2/3), d = −2^(−4/3) ≈ −0.397; pull-off under displacement control at the turning
+//! point of d(x), x = 6^(−2/3), d = −(3/4)^(2/3) ≈ −0.8255, F = −5/9·Fc; equilibrium at
+//! x = 1, d = 1, F = 0.
+
+use crate::error::{require_finite, require_non_negative, require_positive, ParamError};
+use crate::model::{ContactHistory, NormalForce, PairGeometry};
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+use std::f64::consts::PI;
+use std::fmt;
+
+/// s_min = 6^(−1/3): √(a/a0) at the displacement-controlled pull-off (turning point of
+/// d(s) = 3s⁴ − 2s).
+pub const S_MIN: f64 = 0.5503212081491045;
+/// δ/δ0 at the displacement-controlled pull-off: −(3/4)^(2/3) = −1.5·6^(−1/3).
+pub const D_PULLOFF_DISPLACEMENT: f64 = -0.8254818122236567;
+/// δ/δ0 where the JKR force reaches −Fc (force-controlled pull-off): −2^(−4/3).
+pub const D_PULLOFF_FORCE: f64 = -0.3968502629920499;
+/// a/a0 at the displacement-controlled pull-off, 6^(−2/3).
+pub const X_PULLOFF_DISPLACEMENT: f64 = 0.30285343213869;
+/// a/a0 at the force-controlled pull-off, 2^(−2/3).
+pub const X_PULLOFF_FORCE: f64 = 0.6299605249474366;
+/// a/a0 at the first touch (δ = 0), (2/3)^(2/3).
+pub const X_TOUCH: f64 = 0.7631428283688879;
+
+/// Newton iterations of the f64 contact-radius solver (converged to rounding everywhere).
+pub const NEWTON_ITERATIONS_F64: usize = 5;
+/// Newton iterations of the f32 contact-radius solver (the WGSL kernel's count).
+pub const NEWTON_ITERATIONS_F32: usize = 3;
+
+/// 2·√(5/6), the prefactor of the Tsuji damping (paper 002 eqs. 11 and 16).
+const TSUJI_PREFACTOR: f64 = 1.8257418583505538;
+
+/// Normal (and tangential) dissipation of the JKR family.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "kebab-case")]
+pub enum Dissipation {
+    /// No dissipation: the only loss is the JKR contact hysteresis.
+    #[default]
+    None,
+    /// Tsuji-type damping calibrated from a target restitution e ∈ (0, 1]
+    /// (paper 002 eqs. 11–13 normal and 16 tangential). For Hertz (γ = 0) the restitution
+    /// of a head-on collision equals the target, independent of the impact velocity
+    /// (measured: within 2.5e-7 at dt = tc/2e5 and 1.6e-8 at tc/1e6 for e = 0.1…0.95;
+    /// `tests::tsuji_damping_calibration`). With adhesion the JKR loss comes on top.
+    Tsuji { restitution: f64 },
+    /// Power-law dissipation F_dis = sgn(δ̇)·D·E*·|δ̇|^α·a^β (paper 001 eq. 19), in any
+    /// consistent unit system (D carries the units). Normal direction only.
+    PowerLaw {
+        #[serde(rename = "D", alias = "d")]
+        d: f64,
+        alpha: f64,
+        beta: f64,
+    },
+}
+
+/// Where a JKR contact breaks on separation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum Pulloff {
+    /// Displacement control (paper 001): the contact persists down to the turning point
+    /// δc = −(3/4)^(2/3)·δ0, where F = −5/9·Fc.
+    #[default]
+    Displacement,
+    /// Force control (LAMMPS's choice): the contact breaks where F reaches −Fc, at
+    /// δ = −2^(−4/3)·δ0 ≈ −0.397·δ0.
+    Force,
+}
+
+impl Pulloff {
+    /// δ/δ0 at which the contact breaks.
+    pub fn break_overlap_ratio(self) -> f64 {
+        match self {
+            Self::Displacement => D_PULLOFF_DISPLACEMENT,
+            Self::Force => D_PULLOFF_FORCE,
+        }
+    }
+
+    /// a/a0 at which the contact breaks.
+    pub fn break_radius_ratio(self) -> f64 {
+        match self {
+            Self::Displacement => X_PULLOFF_DISPLACEMENT,
+            Self::Force => X_PULLOFF_FORCE,
+        }
+    }
+}
+
+fn default_stiffness_scale() -> f64 {
+    1.0
+}
+
+/// Parameters of the JKR family (SI units). Both bodies are of the same material.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct JkrParams {
+    /// Young's modulus E of both bodies, Pa (before the stiffness scale).
+    pub youngs: f64,
+    /// Poisson's ratio ν ∈ (−1, 0.5).
+    pub poisson: f64,
+    /// Surface energy γ per surface, J/m² (work of adhesion 2γ); 0 gives Hertz.
+    pub surface_energy: f64,
+    #[serde(default)]
+    pub dissipation: Dissipation,
+    /// Sliding friction coefficient μs ≥ 0; 0 = no tangential force.
+    #[serde(default)]
+    pub friction: f64,
+    /// Adhesion hysteresis Δγ/γ ≥ 0 of the rolling resistance (paper 002 eq. 18);
+    /// 0 = no rolling resistance. Needs γ > 0.
+    #[serde(default)]
+    pub rolling_hysteresis: f64,
+    #[serde(default)]
+    pub pulloff: Pulloff,
+    /// Stiffness scale S > 0 (typically ≤ 1): E → S·E and γ → γ·S^(2/5) (paper 002 eq. 24).
+    #[serde(default = "default_stiffness_scale")]
+    pub stiffness_scale: f64,
+}
+
+/// Tangential force of one contact.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Tangential {
+    /// Force on particle i (−this on j), N.
+    pub force: DVec3,
+    /// Tangential stiffness St = 8G*·a, N/m (the spring energy is ½·St·|s|²).
+    pub stiffness: f64,
+    /// Whether the Coulomb limit truncated the force.
+    pub sliding: bool,
+}
+
+/// Rolling-resistance torque of one contact.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Rolling {
+    /// Torque on particle i; on j it is the negative.
+    pub torque: DVec3,
+    /// Rolling stiffness kr = 4Fc·(a/a0)^(3/2), N (the spring energy is ½·kr·|ξ|²).
+    pub stiffness: f64,
+    /// Whether ξ was truncated to ξcrit (irreversible rolling).
+    pub yielding: bool,
+}
+
+/// What a reduced stiffness S ≠ 1 changes (paper 002 §3, §6.2).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StiffnessScaling {
+    /// S = Emod/E.
+    pub scale: f64,
+    /// γmod/γ = S^(2/5) (paper 002 eq. 24); also the factor on the pull-off force Fc.
+    pub surface_energy_factor: f64,
+    /// Δtcol,mod/Δtcol = (E/Emod)^(2/5) = S^(−2/5) (paper 002 §6.2).
+    pub collision_time_factor: f64,
+    /// How much larger the time step may be at a fixed number of steps per collision
+    /// (the same factor as the collision time).
+    pub dt_gain: f64,
+    /// Fc,mod/Fc = S^(2/5): the force needed to separate two particles drops.
+    pub pulloff_force_factor: f64,
+}
+
+impl fmt::Display for StiffnessScaling {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "stiffness_scale S = {:.4e}: E -> S*E and surface_energy -> surface_energy*S^(2/5) = {:.4}*surface_energy (paper 002 eq. 24); \
+             collisions last S^(-2/5) = {:.4} times longer, so dt can grow by the same factor {:.4} (paper 002 sec. 6.2). \
+             Warning: the pull-off force Fc = 3*pi*gamma*R* drops by S^(2/5) = {:.4}; keep external separating forces \
+             (drag, shear) well below Fc,mod (paper 002 sec. 6.2)",
+            self.scale,
+            self.surface_energy_factor,
+            self.collision_time_factor,
+            self.dt_gain,
+            self.pulloff_force_factor
+        )?;
+        if self.scale < 1e-3 {
+            write!(
+                f,
+                ". S < 1e-3 may change the behaviour of dense agglomerates (paper 002 sec. 6.2)"
+            )?;
+        }
+        Ok(())
+    }
+}
+
+/// The Tsuji damping ratio β = ln e/√(ln²e + π²) (paper 002 eq. 12), ≤ 0.
+pub fn tsuji_beta(restitution: f64) -> f64 {
+    let l = restitution.ln();
+    l / (l * l + PI * PI).sqrt()
+}
+
+/// P(x) = (24/5)x⁵ − 8x^(7/2) + 2x², x = a/a0: ∫F dδ = Fc·δ0·P(x) + const along the
+/// stable JKR branch (dδ = δ0·(6x − x^(−1/2))·dx and F = Fc·(4x³ − 4x^(3/2)) give the
+/// integrand Fc·δ0·(24x⁴ − 28x^(5/2) + 4x)).
+pub fn potential_shape(x: f64) -> f64 {
+    let x2 = x * x;
+    4.8 * x2 * x2 * x - 8.0 * x2 * x * x.sqrt() + 2.0 * x2
+}
+
+/// Rotates `v` into the plane normal to `n`, keeping its length (zero if `v` ∥ `n`).
+///
+/// The contact frame turns with the pair; projecting alone would shrink a stored spring
+/// and so destroy elastic energy (and torque) by frame rotation alone; rescaling to the
+/// old length keeps |v| and ½k|v|² (the usual history rotation of LIGGGHTS/LAMMPS).
+fn rotate_into_plane(v: DVec3, n: DVec3) -> DVec3 {
+    let len = v.length();
+    if len == 0.0 {
+        return DVec3::ZERO;
+    }
+    let p = v - n * n.dot(v);
+    let lp = p.length();
+    if lp > 1e-12 * len {
+        p * (len / lp)
+    } else {
+        DVec3::ZERO
+    }
+}
+
+// Constants of the deflated solve (see `solve_t_f64`): c = 2·s_min, b = 2·s_min²,
+// √18·s_min = dk/dt at t = 0.
+const C_T: f64 = 2.0 * S_MIN;
+const B_T: f64 = 2.0 * S_MIN * S_MIN;
+const SQRT3: f64 = 1.7320508075688772;
+const SLOPE0: f64 = 2.3348151486780315;
+
+/// Solves 3s⁴ − 2s = d for s = s_min + t on the stable branch, given e = d − d_min ≥ 0,
+/// returning t ≥ 0.
+///
+/// With s = s_min + t and 12·s_min³ = 2 the linear term cancels:
+/// 3s⁴ − 2s − d = 3t²·((t + c)² + b) − e with c = 2s_min, b = 2s_min²: a double root at
+/// t = 0 when e = 0. Newton is therefore run on the deflated function
+/// k(t) = √3·t·√((t + c)² + b) − √e, which is increasing and convex on t ≥ 0 with
+/// k'(0) = √18·s_min > 0 (no double root), started from an upper bound so it decreases
+/// monotonically. Upper bounds: k ≥ √18·s_min·t and k ≥ √3·t·(t + c); t0 is the smaller
+/// of their roots, within a few % of the root everywhere. The Newton update is written
+/// without cancellation: t ← (t²(t + c) + √e·w^(1/2)/√3)/(w + t(t + c)), w = (t + c)² + b.
+fn solve_t_f64(e: f64) -> f64 {
+    let r = e.max(0.0).sqrt();
+    let q = 2.0 * r / SQRT3;
+    let mut t = (r / SLOPE0).min(q / (C_T + (C_T * C_T + 2.0 * q).sqrt()));
+    for _ in 0..NEWTON_ITERATIONS_F64 {
+        let tc = t + C_T;
+        let w = tc * tc + B_T;
+        t = (t * t * tc + r * w.sqrt() / SQRT3) / (w + t * tc);
+    }
+    t
+}
+
+/// The f32 twin of [`JkrParams::contact_radius`]: the same deflated guarded Newton
+/// ([`NEWTON_ITERATIONS_F32`] iterations), only +, −, ×, ÷, sqrt and min, as in the WGSL
+/// kernel. `a0` = 0 or `delta0` = 0 means Hertz: a = √(R·max(δ, 0)).
+///
+/// Measured relative error against the f64 solve of the same f32 inputs: see
+/// [`JkrParams::contact_radius`].
+pub fn contact_radius_f32(delta: f32, r_eff: f32, a0: f32, delta0: f32) -> f32 {
+    contact_radius_f32_iterations(delta, r_eff, a0, delta0, NEWTON_ITERATIONS_F32)
+}
+
+fn contact_radius_f32_iterations(
+    delta: f32,
+    r_eff: f32,
+    a0: f32,
+    delta0: f32,
+    iterations: usize,
+) -> f32 {
+    if a0 <= 0.0 || delta0 <= 0.0 {
+        return (r_eff * delta.max(0.0)).sqrt();
+    }
+    const SMIN: f32 = S_MIN as f32;
+    const DMIN: f32 = D_PULLOFF_DISPLACEMENT as f32;
+    const C: f32 = C_T as f32;
+    const B: f32 = B_T as f32;
+    const S3: f32 = SQRT3 as f32;
+    const K0: f32 = SLOPE0 as f32;
+    let e = (delta / delta0 - DMIN).max(0.0);
+    let r = e.sqrt();
+    let q = 2.0 * r / S3;
+    let mut t = (r / K0).min(q / (C + (C * C + 2.0 * q).sqrt()));
+    for _ in 0..iterations {
+        let tc = t + C;
+        let w = tc * tc + B;
+        t = (t * t * tc + r * w.sqrt() / S3) / (w + t * tc);
+    }
+    let s = SMIN + t;
+    a0 * s * s
+}
+
+impl JkrParams {
+    /// Hertz contact (γ = 0) without dissipation, friction or rolling resistance.
+    pub fn hertz(youngs: f64, poisson: f64) -> Self {
+        Self::jkr(youngs, poisson, 0.0)
+    }
+
+    /// JKR contact without dissipation, friction or rolling resistance; displacement
+    /// pull-off, S = 1.
+    pub fn jkr(youngs: f64, poisson: f64, surface_energy: f64) -> Self {
+        Self {
+            youngs,
+            poisson,
+            surface_energy,
+            dissipation: Dissipation::None,
+            friction: 0.0,
+            rolling_hysteresis: 0.0,
+            pulloff: Pulloff::Displacement,
+            stiffness_scale: 1.0,
+        }
+    }
+
+    /// Checks every rule of the model; the error names the parameter and the rule.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        require_positive("youngs", self.youngs, "Young's modulus youngs")?;
+        require_finite("poisson", self.poisson)?;
+        if !(self.poisson > -1.0 && self.poisson < 0.5) {
+            return Err(ParamError::new(
+                "poisson",
+                format!(
+                    "Poisson's ratio must satisfy -1 < poisson < 0.5, got {}",
+                    self.poisson
+                ),
+            ));
+        }
+        require_non_negative(
+            "surface_energy",
+            self.surface_energy,
+            "the surface energy surface_energy (0 gives Hertz)",
+        )?;
+        match self.dissipation {
+            Dissipation::None => {}
+            Dissipation::Tsuji { restitution } => {
+                require_finite("restitution", restitution)?;
+                if !(restitution > 0.0 && restitution <= 1.0) {
+                    return Err(ParamError::new(
+                        "restitution",
+                        format!(
+                            "the Tsuji target restitution must satisfy 0 < restitution <= 1, got {restitution} (paper 002 eq. 12)"
+                        ),
+                    ));
+                }
+            }
+            Dissipation::PowerLaw { d, alpha, beta } => {
+                require_non_negative("D", d, "the power-law dissipation coefficient D")?;
+                require_non_negative(
+                    "alpha",
+                    alpha,
+                    "the velocity exponent alpha of the power-law dissipation",
+                )?;
+                require_finite("beta", beta)?;
+            }
+        }
+        require_non_negative("friction", self.friction, "the sliding friction friction")?;
+        require_non_negative(
+            "rolling_hysteresis",
+            self.rolling_hysteresis,
+            "the adhesion hysteresis rolling_hysteresis (delta gamma / gamma)",
+        )?;
+        if self.rolling_hysteresis > 0.0 && self.surface_energy <= 0.0 {
+            return Err(ParamError::new(
+                "rolling_hysteresis",
+                format!(
+                    "rolling resistance (rolling_hysteresis = {}) needs surface_energy > 0: the rolling stiffness is 4*Fc*(a/a0)^(3/2) (paper 002 eqs. 18-21)",
+                    self.rolling_hysteresis
+                ),
+            ));
+        }
+        require_positive(
+            "stiffness_scale",
+            self.stiffness_scale,
+            "the stiffness scale stiffness_scale",
+        )?;
+        Ok(())
+    }
+
+    /// Unscaled E* = E/(2(1−ν²)).
+    pub fn e_star_unscaled(&self) -> f64 {
+        self.youngs / (2.0 * (1.0 - self.poisson * self.poisson))
+    }
+
+    /// Effective modulus after scaling, S·E/(2(1−ν²)), Pa.
+    pub fn e_star(&self) -> f64 {
+        self.stiffness_scale * self.e_star_unscaled()
+    }
+
+    /// Effective shear modulus after scaling, G* = G/(2(2−ν)) with G = S·E/(2(1+ν)), Pa.
+    pub fn g_star(&self) -> f64 {
+        let g = self.stiffness_scale * self.youngs / (2.0 * (1.0 + self.poisson));
+        g / (2.0 * (2.0 - self.poisson))
+    }
+
+    /// Surface energy after scaling, γ·S^(2/5) (paper 002 eq. 24), J/m².
+    pub fn gamma(&self) -> f64 {
+        if self.stiffness_scale == 1.0 {
+            self.surface_energy
+        } else {
+            self.surface_energy * self.stiffness_scale.powf(0.4)
+        }
+    }
+
+    /// Pull-off force Fc = 3πγR* (scaled γ), N.
+    pub fn fc(&self, r_eff: f64) -> f64 {
+        3.0 * PI * self.gamma() * r_eff
+    }
+
+    /// Equilibrium contact radius a0 = (9πγR*²/E*)^(1/3) (scaled γ, E*), m.
+    pub fn a0(&self, r_eff: f64) -> f64 {
+        (9.0 * PI * self.gamma() * r_eff * r_eff / self.e_star()).cbrt()
+    }
+
+    /// Equilibrium overlap δ0 = a0²/(3R*) (scaled), m.
+    pub fn delta0(&self, r_eff: f64) -> f64 {
+        let a0 = self.a0(r_eff);
+        a0 * a0 / (3.0 * r_eff)
+    }
+
+    /// Unscaled Fc = 3πγR* (the rolling model keeps it, paper 002 §3.2), N.
+    pub fn fc_unscaled(&self, r_eff: f64) -> f64 {
+        3.0 * PI * self.surface_energy * r_eff
+    }
+
+    /// Unscaled a0 = (9πγR*²/E*)^(1/3) (the rolling model's ξcrit keeps it), m.
+    pub fn a0_unscaled(&self, r_eff: f64) -> f64 {
+        (9.0 * PI * self.surface_energy * r_eff * r_eff / self.e_star_unscaled()).cbrt()
+    }
+
+    /// The (negative) overlap at which a touching contact breaks, per [`Pulloff`]; 0 for
+    /// Hertz.
+    pub fn pulloff_overlap(&self, r_eff: f64) -> f64 {
+        if self.gamma() == 0.0 {
+            0.0
+        } else {
+            self.pulloff.break_overlap_ratio() * self.delta0(r_eff)
+        }
+    }
+
+    /// Contact radius a(δ) on the stable JKR branch: the root of δ = a²/R − 2√(πγa/E*)
+    /// (paper 001 eq. 5) with a ≥ a(δc); for δ below the displacement-controlled pull-off
+    /// δc = −(3/4)^(2/3)·δ0 it returns a(δc). Hertz (γ = 0): a = √(R·max(δ, 0)).
+    ///
+    /// Normalised, s = √(a/a0) solves g(s) = 3s⁴ − 2s − δ/δ0 = 0 for s ≥ s_min = 6^(−1/3).
+    /// g has a double root at the pull-off point, where plain Newton is only linear; the
+    /// solver therefore runs Newton on the deflated form √3·t·√((t + 2s_min)² + 2s_min²)
+    /// = √(δ/δ0 − δc/δ0) with t = s − s_min (exact, no series truncation), which is
+    /// increasing and convex with a non-zero slope at t = 0, started to the right of the
+    /// root (guarded Newton, monotone, quadratic everywhere).
+    ///
+    /// Guarded Newton, 5 iterations in f64 (4 reach rounding; δ(a(δ)) round-trips to
+    /// 1e-12 over δ/δ0 ∈ [δc/δ0, 10⁸]). The f32 twin [`contact_radius_f32`], guarded Newton,
+    /// 3 iterations (the initial guess is within 8.5 %; 2 iterations give 7.7e-7, 3 reach the
+    /// f32 rounding floor): f32 relative error ≤ 4.4e-7 over δ/δ0 ∈ [−0.8255, 1000]
+    /// against the f64 solve of the same rounded δ/δ0, including at the pull-off point.
+    /// Against the f64 solve of the same f32 inputs δ, δ0 the error also contains the
+    /// f32 rounding of δ/δ0 (≈ 5e-8), which the infinite slope da/dδ at δc amplifies
+    /// (≈ 4e-8/√(δ/δ0 − δc/δ0)): ≤ 4.4e-7 for δ/δ0 − δc/δ0 ≥ 1e-2, ≤ 3.5e-6 for ≥ 1e-4,
+    /// ≤ 2.9e-5 for ≥ 1e-6 and ≤ 1.1e-4 at the pull-off point itself (there the force is
+    /// still accurate to ≈ 7e-5·Fc since dF/da is finite). This is conditioning, not the
+    /// solver; f32 positions give far larger errors in δ anyway. Measured by
+    /// `tests::f32_solver_accuracy`.
+    pub fn contact_radius(&self, delta: f64, r_eff: f64) -> f64 {
+        if self.gamma() == 0.0 {
+            return (r_eff * delta.max(0.0)).sqrt();
+        }
+        let a0 = self.a0(r_eff);
+        let d = delta / self.delta0(r_eff);
+        let s = S_MIN + solve_t_f64(d - D_PULLOFF_DISPLACEMENT);
+        a0 * s * s
+    }
+
+    /// Overlap δ(a) = a²/R − 2√(πγa/E*) (paper 001 eq. 5), the inverse of
+    /// [`Self::contact_radius`] on the stable branch.
+    pub fn overlap_for_radius(&self, a: f64, r_eff: f64) -> f64 {
+        a * a / r_eff - 2.0 * (PI * self.gamma() * a / self.e_star()).sqrt()
+    }
+
+    /// Elastic JKR force F = 4E*a³/(3R*) − 4√(πγE*a³) (paper 001 eq. 6, paper 002 eqs. 8–9),
+    /// repulsive positive.
+    pub fn elastic_force(&self, a: f64, r_eff: f64) -> f64 {
+        let es = self.e_star();
+        let a3 = a * a * a;
+        4.0 * es * a3 / (3.0 * r_eff) - 4.0 * (PI * self.gamma() * es * a3).sqrt()
+    }
+
+    /// The dissipative normal force for contact radius `a`, approach speed `delta_dot` and
+    /// reduced mass `m`, repulsive positive (it opposes δ̇).
+    fn normal_dissipation(&self, a: f64, delta_dot: f64, m: f64) -> f64 {
+        match self.dissipation {
+            Dissipation::None => 0.0,
+            Dissipation::Tsuji { restitution } => {
+                // Sn = 2E*·a: paper 002 eq. 13 writes 2E*√(Rδ), which is 2E*·a for Hertz;
+                // the contact radius also exists at negative overlap in JKR.
+                let sn = 2.0 * self.e_star() * a;
+                -TSUJI_PREFACTOR * tsuji_beta(restitution) * (sn * m).sqrt() * delta_dot
+            }
+            Dissipation::PowerLaw { d, alpha, beta } => {
+                if delta_dot == 0.0 {
+                    0.0
+                } else {
+                    delta_dot.signum()
+                        * d
+                        * self.e_star()
+                        * delta_dot.abs().powf(alpha)
+                        * a.powf(beta)
+                }
+            }
+        }
+    }
+
+    /// The normal force just inside the contact's two edges, where it jumps: at the touch
+    /// (δ = 0, ≈ −8/9·Fc for JKR) and at the break (δ = pull-off overlap, −5/9·Fc or −Fc),
+    /// each with the dissipative force at that contact radius. The energy ledger integrates
+    /// the work of a step that crosses an edge from there rather than from zero.
+    pub fn edge_forces(&self, geom: &PairGeometry, delta_dot: f64) -> [(f64, f64); 2] {
+        let r = 0.5 * geom.a12;
+        let m = geom.reduced_mass;
+        let at = |delta: f64| {
+            let a = self.contact_radius(delta, r);
+            self.elastic_force(a, r) + self.normal_dissipation(a, delta_dot, m)
+        };
+        let exit = self.pulloff_overlap(r);
+        [(0.0, at(0.0)), (exit, at(exit))]
+    }
+
+    /// Normal force for overlap `delta` and approach speed `delta_dot`, with the JKR
+    /// contact hysteresis kept in `history.touched`:
+    /// * no force before the first touch (δ ≤ 0, not touched);
+    /// * the contact starts at δ > 0 (the force jumps to ≈ −8/9·Fc just past δ = 0);
+    /// * a touching contact persists for δ > [`Self::pulloff_overlap`] (also at δ < 0) and
+    ///   breaks once δ ≤ it: touched = false, tangential and rolling history zeroed, no force.
+    ///
+    /// Hertz (γ = 0): contact only while δ > 0.
+    ///
+    /// `conservative` is the elastic force, `force` adds the dissipation (Tsuji:
+    /// −2√(5/6)·β·√(Sn·m*)·δ̇ with Sn = 2E*a, paper 002 eqs. 11–13; power law:
+    /// sgn(δ̇)·D·E*·|δ̇|^α·a^β with a from the equilibrium JKR relation, paper 001 eq. 19).
+    /// `potential` is the stored energy relative to the break point,
+    /// Fc·δ0·(P(x) − P(x_break)) (Hertz: 8/15·E*·√R*·δ^(5/2)). It is negative for a bound
+    /// contact: just after the touch it is −W with W = Fc·δ0·(P(x_break) − P(x_touch)) the
+    /// energy lost in an undamped touch/pull-off cycle (≈ 0.7722·Fc·δ0 with displacement
+    /// pull-off, ≈ 0.3814·Fc·δ0 with force pull-off), so kinetic + potential energy drops by
+    /// W at the touch and is continuous at the break.
+    pub fn normal_force(
+        &self,
+        delta: f64,
+        delta_dot: f64,
+        geom: &PairGeometry,
+        history: &mut ContactHistory,
+    ) -> NormalForce {
+        let r = 0.5 * geom.a12;
+        let gamma = self.gamma();
+        let (a, conservative, potential) = if gamma == 0.0 {
+            if delta <= 0.0 {
+                *history = ContactHistory::default();
+                return NormalForce::default();
+            }
+            let a = (r * delta).sqrt();
+            let es = self.e_star();
+            let conservative = 4.0 * es * a * a * a / (3.0 * r);
+            let potential = 8.0 / 15.0 * es * r.sqrt() * delta * delta * delta.sqrt();
+            (a, conservative, potential)
+        } else {
+            if !history.touched && delta <= 0.0 {
+                *history = ContactHistory::default();
+                return NormalForce::default();
+            }
+            let d0 = self.delta0(r);
+            if delta <= self.pulloff.break_overlap_ratio() * d0 {
+                *history = ContactHistory::default();
+                return NormalForce::default();
+            }
+            let a0 = self.a0(r);
+            let a = self.contact_radius(delta, r);
+            let x = a / a0;
+            let potential = self.fc(r)
+                * d0
+                * (potential_shape(x) - potential_shape(self.pulloff.break_radius_ratio()));
+            (a, self.elastic_force(a, r), potential)
+        };
+        history.touched = true;
+        history.delta_max = history.delta_max.max(delta);
+        NormalForce {
+            force: conservative + self.normal_dissipation(a, delta_dot, geom.reduced_mass),
+            conservative,
+            potential,
+            in_contact: true,
+            contact_radius: a,
+        }
+    }
+
+    /// Tangential force on particle i (paper 002 eqs. 14–17).
+    ///
+    /// `v_t` is the tangential velocity of i relative to j at the contact point (already in
+    /// the tangent plane), `spring` the stored displacement s (history). Steps: the spring
+    /// is rotated into the current tangent plane keeping its length (see
+    /// `rotate_into_plane`: a rigid rotation of the pair must not change the stored
+    /// energy), s += v_t·dt, St = 8G*·a, and
+    /// F = −St·s − c_t·v_t with c_t = −2√(5/6)·β·√(St·m*) ≥ 0 (Tsuji only; β < 0).
+    /// The force is truncated to |F| ≤ μs·|F_N + 2Fc| (eq. 17) with F_N the conservative
+    /// (elastic) normal force; when truncated, F is set to the limit along its direction and
+    /// the spring to s = −(F + c_t·v_t)/St, and `sliding` is true.
+    /// Without friction or contact the spring is zeroed and there is no force.
+    pub fn tangential_force(
+        &self,
+        n: DVec3,
+        v_t: DVec3,
+        normal: &NormalForce,
+        geom: &PairGeometry,
+        dt: f64,
+        spring: &mut DVec3,
+    ) -> Tangential {
+        if self.friction == 0.0 || !normal.in_contact {
+            *spring = DVec3::ZERO;
+            return Tangential::default();
+        }
+        let r = 0.5 * geom.a12;
+        let mut s = rotate_into_plane(*spring, n) + v_t * dt;
+        let st = 8.0 * self.g_star() * normal.contact_radius;
+        let ct = match self.dissipation {
+            Dissipation::Tsuji { restitution } => {
+                -TSUJI_PREFACTOR * tsuji_beta(restitution) * (st * geom.reduced_mass).sqrt()
+            }
+            _ => 0.0,
+        };
+        let mut force = -st * s - ct * v_t;
+        let limit = self.friction * (normal.conservative + 2.0 * self.fc(r)).abs();
+        let magnitude = force.length();
+        let mut sliding = false;
+        if magnitude > limit {
+            sliding = true;
+            force *= limit / magnitude;
+            if st > 0.0 {
+                s = -(force + ct * v_t) / st;
+            }
+        }
+        *spring = s;
+        Tangential {
+            force,
+            stiffness: st,
+            sliding,
+        }
+    }
+
+    /// Rolling-resistance torque on particle i (Dominik–Tielens/Krijt, paper 002
+    /// eqs. 18–22).
+    ///
+    /// `v_roll` is the rolling velocity of eq. 20 and `xi` the stored rolling displacement
+    /// ξ: rotated into the tangent plane keeping its length (as the tangential spring),
+    /// ξ += v_roll·dt, truncated to |ξ| ≤ ξcrit = (a0/12)·(Δγ/γ) (`yielding` when
+    /// truncated). kr = 4Fc·(a/a0)^(3/2) and torque = −kr·(n × ξ) on i (+kr·(n × ξ) on j).
+    ///
+    /// Direction: with v_roll = R*(ω_i − ω_j) × n, ξ grows along (ω_i − ω_j) × n and
+    /// n × ((ω_i − ω_j) × n) is the tangential part of ω_i − ω_j, so the torque on i opposes
+    /// the relative rolling rotation ω_i − ω_j.
+    ///
+    /// Reduced stiffness (paper 002 §3.2): Fc and a0 in ξcrit and in the prefactor 4Fc are
+    /// the unscaled values; only the ratio a/a0 uses the modified a and a0.
+    /// Zero (and ξ zeroed) without rolling hysteresis, without surface energy or out of
+    /// contact.
+    pub fn rolling_torque(
+        &self,
+        n: DVec3,
+        v_roll: DVec3,
+        normal: &NormalForce,
+        geom: &PairGeometry,
+        dt: f64,
+        xi: &mut DVec3,
+    ) -> Rolling {
+        if self.rolling_hysteresis == 0.0 || self.surface_energy == 0.0 || !normal.in_contact {
+            *xi = DVec3::ZERO;
+            return Rolling::default();
+        }
+        let r = 0.5 * geom.a12;
+        let mut x = rotate_into_plane(*xi, n) + v_roll * dt;
+        let xi_crit = self.a0_unscaled(r) / 12.0 * self.rolling_hysteresis;
+        let len = x.length();
+        let yielding = len > xi_crit;
+        if yielding {
+            x *= xi_crit / len;
+        }
+        *xi = x;
+        let ratio = normal.contact_radius / self.a0(r);
+        let kr = 4.0 * self.fc_unscaled(r) * ratio * ratio.sqrt();
+        Rolling {
+            torque: -kr * n.cross(x),
+            stiffness: kr,
+            yielding,
+        }
+    }
+
+    /// Hertz contact time 2.87·(m*²/(R*·E*²·v))^(1/5) at impact speed `v` (scaled E*), s.
+    pub fn hertz_contact_time(&self, r_eff: f64, m_eff: f64, v: f64) -> f64 {
+        let es = self.e_star();
+        2.87 * (m_eff * m_eff / (r_eff * es * es * v)).powf(0.2)
+    }
+
+    /// Stiffness dF/dδ at the equilibrium overlap δ0: 1.2·Fc/δ0 (dF/dx = 6Fc and
+    /// dδ/dx = 5δ0 at x = 1), N/m; 0 for Hertz.
+    pub fn equilibrium_stiffness(&self, r_eff: f64) -> f64 {
+        if self.gamma() == 0.0 {
+            0.0
+        } else {
+            1.2 * self.fc(r_eff) / self.delta0(r_eff)
+        }
+    }
+
+    /// What the stiffness scale changes; `None` when S = 1.
+    pub fn stiffness_scaling(&self) -> Option<StiffnessScaling> {
+        if self.stiffness_scale == 1.0 {
+            return None;
+        }
+        let g = self.stiffness_scale.powf(0.4);
+        Some(StiffnessScaling {
+            scale: self.stiffness_scale,
+            surface_energy_factor: g,
+            collision_time_factor: 1.0 / g,
+            dt_gain: 1.0 / g,
+            pulloff_force_factor: g,
+        })
+    }
+
+    /// Human-readable report of [`Self::stiffness_scaling`] (with the pull-off warning of
+    /// paper 002 §6.2); `None` when S = 1.
+    pub fn stiffness_scaling_report(&self) -> Option<String> {
+        self.stiffness_scaling().map(|s| s.to_string())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    // Silica-like micro-spheres: r = 1 µm each, E = 70 GPa, ν = 0.17, γ = 0.05 J/m².
+    const R1: f64 = 1e-6;
+
+    fn params() -> JkrParams {
+        JkrParams::jkr(70e9, 0.17, 0.05)
+    }
+
+    fn geom() -> PairGeometry {
+        let m = 2200.0 * 4.0 / 3.0 * PI * R1.powi(3);
+        PairGeometry::spheres(R1, R1, m, m)
+    }
+
+    fn reff() -> f64 {
+        0.5 * geom().a12
+    }
+
+    /// Force with a fresh, touched history (the stable branch).
+    fn touched_force(p: &JkrParams, delta: f64) -> NormalForce {
+        let mut h = ContactHistory {
+            touched: true,
+            ..Default::default()
+        };
+        p.normal_force(delta, 0.0, &geom(), &mut h)
+    }
+
+    #[test]
+    fn landmarks_of_the_normalised_curve() {
+        assert_relative_eq!(S_MIN, 6f64.powf(-1.0 / 3.0), max_relative = 1e-15);
+        assert_relative_eq!(
+            D_PULLOFF_DISPLACEMENT,
+            -(0.75f64).powf(2.0 / 3.0),
+            max_relative = 1e-15
+        );
+        assert_relative_eq!(D_PULLOFF_DISPLACEMENT, -1.5 * S_MIN, max_relative = 1e-15);
+        assert_relative_eq!(
+            D_PULLOFF_FORCE,
+            -(2f64).powf(-4.0 / 3.0),
+            max_relative = 1e-15
+        );
+        assert_relative_eq!(X_PULLOFF_DISPLACEMENT, S_MIN * S_MIN, max_relative = 1e-15);
+        assert_relative_eq!(
+            X_PULLOFF_FORCE,
+            0.5f64.powf(2.0 / 3.0),
+            max_relative = 1e-15
+        );
+        assert_relative_eq!(
+            X_TOUCH,
+            (2.0f64 / 3.0).powf(2.0 / 3.0),
+            max_relative = 1e-15
+        );
+        // d(x) = 3x² − 2√x at the landmarks
+        let d = |x: f64| 3.0 * x * x - 2.0 * x.sqrt();
+        assert!(d(X_TOUCH).abs() < 1e-15);
+        assert_relative_eq!(d(X_PULLOFF_FORCE), D_PULLOFF_FORCE, max_relative = 1e-14);
+        assert_relative_eq!(
+            d(X_PULLOFF_DISPLACEMENT),
+            D_PULLOFF_DISPLACEMENT,
+            max_relative = 1e-14
+        );
+    }
+
+    #[test]
+    fn contact_radius_round_trips() {
+        let p = params();
+        let r = reff();
+        let (a0, d0) = (p.a0(r), p.delta0(r));
+        // δ → a → δ: well conditioned everywhere, including the pull-off point
+        let mut worst: f64 = 0.0;
+        let mut ds: Vec<f64> = (0..=2000)
+            .map(|i| D_PULLOFF_DISPLACEMENT + 1e-14 * 10f64.powf(i as f64 * 0.0075))
+            .collect();
+        ds.extend((0..=4000).map(|i| -0.9 + i as f64 * 1e-3));
+        ds.extend((0..=600).map(|i| 10f64.powf(-3.0 + i as f64 * 0.02)));
+        for &d in &ds {
+            let delta = d * d0;
+            let a = p.contact_radius(delta, r);
+            let back = p.overlap_for_radius(a, r);
+            let expect = delta.max(D_PULLOFF_DISPLACEMENT * d0);
+            let err = (back - expect).abs() / (d0 * d.abs().max(1.0));
+            worst = worst.max(err);
+        }
+        assert!(worst < 1e-12, "δ(a(δ)) worst relative error {worst:e}");
+        // a → δ → a: ill-conditioned only right at the pull-off point (da/dδ = ∞ there)
+        for i in 0..=1000 {
+            let x = X_PULLOFF_DISPLACEMENT * (1.0 + 1e-3) + i as f64 * 0.01;
+            let a = x * a0;
+            let back = p.contact_radius(p.overlap_for_radius(a, r), r);
+            assert_relative_eq!(back, a, max_relative = 1e-12);
+        }
+        let a = X_PULLOFF_DISPLACEMENT * a0;
+        assert_relative_eq!(
+            p.contact_radius(D_PULLOFF_DISPLACEMENT * d0, r),
+            a,
+            max_relative = 1e-7
+        );
+        // below the pull-off overlap the radius is clamped to the pull-off radius
+        assert_relative_eq!(p.contact_radius(-2.0 * d0, r), a, max_relative = 1e-14);
+        // equilibrium
+        assert_relative_eq!(p.contact_radius(d0, r), a0, max_relative = 1e-14);
+    }
+
+    #[test]
+    fn f64_solver_converges_far_out() {
+        // very large δ/δ0 (nearly Hertz): the solver still converges in its fixed count
+        let p = params();
+        let r = reff();
+        let d0 = p.delta0(r);
+        for d in [1e3, 1e5, 1e8] {
+            let a = p.contact_radius(d * d0, r);
+            assert_relative_eq!(p.overlap_for_radius(a, r), d * d0, max_relative = 1e-13);
+        }
+    }
+
+    #[test]
+    fn force_landmarks() {
+        let p = params();
+        let r = reff();
+        let (fc, d0) = (p.fc(r), p.delta0(r));
+        let f = |d: f64| p.elastic_force(p.contact_radius(d * d0, r), r);
+        assert_relative_eq!(f(0.0), -8.0 / 9.0 * fc, max_relative = 1e-12);
+        assert_relative_eq!(f(D_PULLOFF_FORCE), -fc, max_relative = 1e-12);
+        assert_relative_eq!(
+            f(D_PULLOFF_DISPLACEMENT),
+            -5.0 / 9.0 * fc,
+            max_relative = 1e-7
+        );
+        assert!(f(1.0).abs() < 1e-12 * fc);
+        // −Fc is the minimum along the branch
+        for i in 0..200 {
+            let d = D_PULLOFF_DISPLACEMENT + i as f64 * 0.01;
+            assert!(f(d) >= -fc * (1.0 + 1e-12));
+        }
+        // pull-off overlaps
+        assert_relative_eq!(
+            p.pulloff_overlap(r),
+            -(0.75f64).powf(2.0 / 3.0) * d0,
+            max_relative = 1e-14
+        );
+        let q = JkrParams {
+            pulloff: Pulloff::Force,
+            ..p
+        };
+        assert_relative_eq!(
+            q.pulloff_overlap(r),
+            -0.3968502629920499 * d0,
+            max_relative = 1e-14
+        );
+        assert_eq!(JkrParams::hertz(1e9, 0.3).pulloff_overlap(r), 0.0);
+        // the paper-001 numbers: Fc = 3πγR*, δ0 = a0²/(3R*)
+        assert_relative_eq!(fc, 3.0 * PI * 0.05 * r, max_relative = 1e-15);
+        let es = 70e9 / (2.0 * (1.0 - 0.17 * 0.17));
+        assert_relative_eq!(p.e_star(), es, max_relative = 1e-15);
+        assert_relative_eq!(
+            p.a0(r),
+            (9.0 * PI * 0.05 * r * r / es).cbrt(),
+            max_relative = 1e-15
+        );
+    }
+
+    #[test]
+    fn hertz_limit() {
+        let r = reff();
+        let h = JkrParams::hertz(70e9, 0.17);
+        let es = h.e_star();
+        for delta in [1e-10, 1e-9, 1e-8] {
+            let f = touched_force(&h, delta);
+            let expect = 4.0 / 3.0 * es * r.sqrt() * delta.powf(1.5);
+            assert_relative_eq!(f.conservative, expect, max_relative = 1e-14);
+            assert_relative_eq!(
+                f.potential,
+                8.0 / 15.0 * es * r.sqrt() * delta.powf(2.5),
+                max_relative = 1e-14
+            );
+            // JKR with a vanishing surface energy tends to Hertz
+            let j = JkrParams::jkr(70e9, 0.17, 1e-12);
+            let fj = touched_force(&j, delta);
+            assert_relative_eq!(fj.conservative, expect, max_relative = 1e-3);
+            let jj = JkrParams::jkr(70e9, 0.17, 1e-16);
+            let fjj = touched_force(&jj, delta);
+            assert_relative_eq!(fjj.conservative, expect, max_relative = 3e-5);
+            assert!((fjj.conservative - expect).abs() < (fj.conservative - expect).abs());
+        }
+        // Hertz: no contact at δ ≤ 0, even after touching
+        let mut hist = ContactHistory::default();
+        assert!(h.normal_force(1e-9, 0.0, &geom(), &mut hist).in_contact);
+        let f = h.normal_force(-1e-12, 0.0, &geom(), &mut hist);
+        assert!(!f.in_contact && f.force == 0.0 && !hist.touched);
+    }
+
+    #[test]
+    fn potential_is_the_integral_of_the_force() {
+        let p = params();
+        let r = reff();
+        let (fc, d0) = (p.fc(r), p.delta0(r));
+        for d in [-0.8, -0.5, -0.2, 0.0, 0.3, 1.0, 2.0, 10.0] {
+            let h = 1e-5 * d0;
+            let up = touched_force(&p, d * d0 + h).potential;
+            let down = touched_force(&p, d * d0 - h).potential;
+            let f = touched_force(&p, d * d0).conservative;
+            assert!(
+                ((up - down) / (2.0 * h) - f).abs() < 1e-7 * fc,
+                "dU/dδ at d = {d}: {} vs {f}",
+                (up - down) / (2.0 * h)
+            );
+        }
+        // Hertz
+        let hz = JkrParams::hertz(70e9, 0.17);
+        let delta = 1e-9;
+        let h = 1e-14;
+        let du = (touched_force(&hz, delta + h).potential
+            - touched_force(&hz, delta - h).potential)
+            / (2.0 * h);
+        assert_relative_eq!(
+            du,
+            touched_force(&hz, delta).conservative,
+            max_relative = 1e-7
+        );
+        // P(x) is the antiderivative: P'(x) = F/Fc·dδ/dx /δ0
+        for x in [0.3, 0.5, 0.9, 1.5] {
+            let h = 1e-6;
+            let dp = (potential_shape(x + h) - potential_shape(x - h)) / (2.0 * h);
+            let integrand = (4.0 * x.powi(3) - 4.0 * x.powf(1.5)) * (6.0 * x - x.powf(-0.5));
+            assert_relative_eq!(dp, integrand, max_relative = 1e-8);
+        }
+        // the potential vanishes at the break point
+        let at_break = touched_force(&p, D_PULLOFF_DISPLACEMENT * d0 * (1.0 - 1e-12)).potential;
+        assert!(at_break.abs() < 1e-6 * fc * d0);
+        equilibrium_stiffness_fd(&p);
+    }
+
+    /// dF/dδ at δ0 by finite differences equals 1.2·Fc/δ0.
+    fn equilibrium_stiffness_fd(p: &JkrParams) {
+        let r = reff();
+        let d0 = p.delta0(r);
+        let h = 1e-6 * d0;
+        let k = (touched_force(p, d0 + h).conservative - touched_force(p, d0 - h).conservative)
+            / (2.0 * h);
+        assert_relative_eq!(k, p.equilibrium_stiffness(r), max_relative = 1e-8);
+        assert_relative_eq!(
+            p.equilibrium_stiffness(r),
+            1.2 * p.fc(r) / d0,
+            max_relative = 1e-15
+        );
+    }
+
+    #[test]
+    fn cycle_loss_from_the_potential() {
+        let p = params();
+        let r = reff();
+        let (fc, d0) = (p.fc(r), p.delta0(r));
+        // the potential just after the touch is −(energy lost over the cycle): the
+        // bookkeeping drops by W at the touch and is continuous at the break
+        let w = -touched_force(&p, 1e-13 * d0).potential;
+        assert_relative_eq!(w / (fc * d0), 0.7722, max_relative = 1e-4);
+        assert_relative_eq!(w / (fc * d0), 0.7722405328755862, max_relative = 1e-9);
+        let q = JkrParams {
+            pulloff: Pulloff::Force,
+            ..p
+        };
+        let wq = -touched_force(&q, 1e-13 * d0).potential;
+        assert_relative_eq!(wq / (fc * d0), 0.3813841613953991, max_relative = 1e-9);
+    }
+
+    /// Head-on pair integrated with velocity Verlet (the engine's scheme), δ from the
+    /// separation. Returns (approach speed at the end (negative: separating), stuck, contact
+    /// time).
+    fn collide(p: &JkrParams, v: f64, steps_per_d0: f64) -> (f64, bool, f64) {
+        let g = geom();
+        let r = reff();
+        let m = g.reduced_mass;
+        let scale = if p.gamma() > 0.0 {
+            p.delta0(r)
+        } else {
+            // Hertz: the largest overlap
+            (15.0 * m * v * v / (16.0 * p.e_star() * r.sqrt())).powf(0.4)
+        };
+        let dt = scale / steps_per_d0 / v;
+        let mut hist = ContactHistory::default();
+        let mut delta = -1e-3 * scale;
+        let mut vel = v;
+        let mut f = p.normal_force(delta, vel, &g, &mut hist).force;
+        let mut t_contact = 0.0;
+        let mut was_in = false;
+        for _ in 0..200_000_000u64 {
+            let vh = vel - 0.5 * dt * f / m;
+            delta += vh * dt;
+            // velocity-dependent force: evaluate with the half-step velocity predictor
+            let nf = p.normal_force(delta, vh - 0.5 * dt * f / m, &g, &mut hist);
+            f = nf.force;
+            vel = vh - 0.5 * dt * f / m;
+            if nf.in_contact {
+                t_contact += dt;
+                was_in = true;
+            } else if was_in {
+                return (vel, false, t_contact);
+            }
+            if t_contact > 0.0 && delta < -2.0 * scale {
+                return (vel, false, t_contact);
+            }
+        }
+        (vel, true, t_contact)
+    }
+
+    #[test]
+    fn undamped_jkr_collision_loses_the_cycle_energy() {
+        let p = params();
+        let r = reff();
+        let m = geom().reduced_mass;
+        let w = p.fc(r) * p.delta0(r) * 0.7722405328755862;
+        let v_stick = (2.0 * w / m).sqrt();
+        for factor in [1.5, 3.0] {
+            let v = factor * v_stick;
+            let (vout, stuck, _) = collide(&p, v, 2e5);
+            assert!(!stuck);
+            let lost = 0.5 * m * (v * v - vout * vout);
+            assert_relative_eq!(lost, w, max_relative = 1e-4);
+            let e = -vout / v;
+            assert_relative_eq!(e, (1.0 - w / (0.5 * m * v * v)).sqrt(), max_relative = 1e-4);
+        }
+    }
+
+    #[test]
+    fn hysteresis_of_touch_and_pulloff() {
+        let p = params();
+        let r = reff();
+        let g = geom();
+        let d0 = p.delta0(r);
+        let mut h = ContactHistory::default();
+        // approaching from δ < 0: nothing
+        for d in [-0.9, -0.5, -0.1, 0.0] {
+            let f = p.normal_force(d * d0, 1.0, &g, &mut h);
+            assert_eq!(f, NormalForce::default());
+            assert!(!h.touched);
+        }
+        // touch
+        let f = p.normal_force(1e-9 * d0, 1.0, &g, &mut h);
+        assert!(h.touched && f.in_contact);
+        assert_relative_eq!(f.conservative, -8.0 / 9.0 * p.fc(r), max_relative = 1e-6);
+        h.tangential = DVec3::new(1e-9, 0.0, 0.0);
+        h.rolling = DVec3::new(0.0, 1e-9, 0.0);
+        // separating into negative overlap: still in contact, attractive
+        let f = p.normal_force(-0.1 * d0, -1.0, &g, &mut h);
+        assert!(f.in_contact && f.force < 0.0 && f.contact_radius > 0.0);
+        let f = p.normal_force(-0.8254 * d0, -1.0, &g, &mut h);
+        assert!(f.in_contact);
+        assert_relative_eq!(f.conservative, -5.0 / 9.0 * p.fc(r), max_relative = 5e-2);
+        // past δc: broken, history reset
+        let f = p.normal_force(-0.826 * d0, -1.0, &g, &mut h);
+        assert_eq!(f, NormalForce::default());
+        assert_eq!(h, ContactHistory::default());
+        // and no force on the way back in until δ > 0
+        let f = p.normal_force(-0.1 * d0, 1.0, &g, &mut h);
+        assert_eq!(f, NormalForce::default());
+        // force-controlled pull-off breaks at −0.397·δ0
+        let q = JkrParams {
+            pulloff: Pulloff::Force,
+            ..p
+        };
+        let mut h = ContactHistory::default();
+        q.normal_force(0.5 * d0, 0.0, &g, &mut h);
+        assert!(q.normal_force(-0.39 * d0, 0.0, &g, &mut h).in_contact);
+        assert!(!q.normal_force(-0.40 * d0, 0.0, &g, &mut h).in_contact);
+    }
+
+    #[test]
+    fn f32_solver_accuracy() {
+        let p = params();
+        let r = reff();
+        let (a0, d0) = (p.a0(r) as f32, p.delta0(r) as f32);
+        let mut ds: Vec<f64> = vec![-0.8255, D_PULLOFF_DISPLACEMENT];
+        // near the pull-off point, logarithmically in the distance d − dc
+        ds.extend(
+            (0..=3000).map(|i| D_PULLOFF_DISPLACEMENT + 10f64.powf(-12.0 + i as f64 * 0.004)),
+        );
+        // the whole attractive range and around 0
+        ds.extend((0..=200_000).map(|i| -0.8255 + i as f64 * 1e-5));
+        ds.extend((0..=2000).map(|i| -1e-3 + i as f64 * 1e-6));
+        // logarithmically up to 1000
+        ds.extend((0..=20_000).map(|i| 10f64.powf(-8.0 + i as f64 * 5.5e-4)));
+        // worst error per band of e = d − dc: [< 1e-6, < 1e-4, < 1e-2, ≥ 1e-2], against the
+        // f64 solve of the same f32 inputs (total), and against the f64 solve of the same
+        // f32-rounded d (the solver's own error)
+        let mut total = [0.0f64; 4];
+        let mut own = 0.0f64;
+        for &d in &ds {
+            let delta = (d * d0 as f64) as f32;
+            let a32 = contact_radius_f32(delta, r as f32, a0, d0) as f64;
+            let exact_d = delta as f64 / d0 as f64;
+            let s = S_MIN + solve_t_f64(exact_d - D_PULLOFF_DISPLACEMENT);
+            let a64 = a0 as f64 * s * s;
+            let e = exact_d - D_PULLOFF_DISPLACEMENT;
+            let band = match e {
+                e if e < 1e-6 => 0,
+                e if e < 1e-4 => 1,
+                e if e < 1e-2 => 2,
+                _ => 3,
+            };
+            total[band] = total[band].max((a32 - a64).abs() / a64);
+            let rounded_d = (delta / d0) as f64;
+            let s = S_MIN + solve_t_f64(rounded_d - (D_PULLOFF_DISPLACEMENT as f32) as f64);
+            let a64 = a0 as f64 * s * s;
+            own = own.max((a32 - a64).abs() / a64);
+        }
+        eprintln!(
+            "f32 contact radius ({NEWTON_ITERATIONS_F32} iterations): relative error by \
+             d - dc in [<1e-6, <1e-4, <1e-2, >=1e-2]: {:.3e} {:.3e} {:.3e} {:.3e}; \
+             solver's own (same rounded d): {own:.3e}",
+            total[0], total[1], total[2], total[3]
+        );
+        assert!(own < 6e-7, "solver error {own:e}");
+        assert!(total[3] < 6e-7, "{total:?}");
+        assert!(total[2] < 5e-6, "{total:?}");
+        assert!(total[1] < 5e-5, "{total:?}");
+        assert!(total[0] < 2e-4, "{total:?}");
+        // equilibrium
+        assert_relative_eq!(
+            contact_radius_f32(d0, r as f32, a0, d0) as f64,
+            a0 as f64,
+            max_relative = 3e-7
+        );
+        // Hertz fallback
+        let a = contact_radius_f32(1e-9, 1e-6, 0.0, 0.0);
+        assert_relative_eq!(a as f64, (1e-15f64).sqrt(), max_relative = 1e-6);
+        assert_eq!(contact_radius_f32(-1e-9, 1e-6, 0.0, 0.0), 0.0);
+    }
+
+    /// RK4 integration of a head-on Hertz + Tsuji collision: (restitution, contact time).
+    fn tsuji_collision(p: &JkrParams, v: f64) -> (f64, f64) {
+        let g = geom();
+        let m = g.reduced_mass;
+        let tc = p.hertz_contact_time(reff(), m, v);
+        let dt = tc / 200_000.0;
+        let acc = |d: f64, dd: f64| -> f64 {
+            let mut h = ContactHistory::default();
+            -p.normal_force(d, dd, &g, &mut h).force / m
+        };
+        let (mut d, mut dd, mut t) = (0.0f64, v, 0.0f64);
+        for _ in 0..100_000_000u64 {
+            let (k1x, k1v) = (dd, acc(d, dd));
+            let (k2x, k2v) = (
+                dd + 0.5 * dt * k1v,
+                acc(d + 0.5 * dt * k1x, dd + 0.5 * dt * k1v),
+            );
+            let (k3x, k3v) = (
+                dd + 0.5 * dt * k2v,
+                acc(d + 0.5 * dt * k2x, dd + 0.5 * dt * k2v),
+            );
+            let (k4x, k4v) = (dd + dt * k3v, acc(d + dt * k3x, dd + dt * k3v));
+            let nd = d + dt / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
+            let ndd = dd + dt / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
+            if nd <= 0.0 && t > 0.0 {
+                // linear interpolation to δ = 0
+                let frac = d / (d - nd);
+                return (-(dd + frac * (ndd - dd)) / v, t + frac * dt);
+            }
+            d = nd;
+            dd = ndd;
+            t += dt;
+        }
+        panic!("the pair did not separate (e_target too small?)");
+    }
+
+    #[test]
+    fn tsuji_damping_calibration() {
+        let hz = JkrParams::hertz(70e9, 0.17);
+        // undamped: e = 1 and the Hertz contact time 2.87·(m²/(R E² v))^(1/5)
+        let (e, t) = tsuji_collision(&hz, 0.1);
+        assert_relative_eq!(e, 1.0, max_relative = 1e-9);
+        assert_relative_eq!(
+            t,
+            hz.hertz_contact_time(reff(), geom().reduced_mass, 0.1),
+            max_relative = 2e-3
+        );
+        let mut report = String::new();
+        for target in [0.95, 0.9, 0.7, 0.5, 0.3, 0.1] {
+            let p = JkrParams {
+                dissipation: Dissipation::Tsuji {
+                    restitution: target,
+                },
+                ..hz
+            };
+            let mut es = Vec::new();
+            for v in [1e-3, 0.1, 10.0] {
+                let (e, _) = tsuji_collision(&p, v);
+                es.push(e);
+            }
+            // velocity-independent (the damping ∝ δ^(1/4)·δ̇ keeps Hertz self-similar)
+            for e in &es {
+                assert_relative_eq!(*e, es[0], max_relative = 1e-12);
+            }
+            let rel = es[0] / target - 1.0;
+            report.push_str(&format!(
+                "e_target {target}: e = {:.9} ({rel:+.2e})\n",
+                es[0]
+            ));
+            // measured: the calibration is exact for Hertz up to the integration error
+            // (+2.5e-7 at dt = tc/2e5, +1.6e-8 at tc/1e6, shrinking with dt)
+            assert!(rel.abs() < 1e-6, "target {target}: e = {}", es[0]);
+        }
+        eprintln!("{report}");
+    }
+
+    #[test]
+    fn power_law_dissipation() {
+        let p = JkrParams {
+            dissipation: Dissipation::PowerLaw {
+                d: 118.0,
+                alpha: 3.0,
+                beta: 1.5,
+            },
+            ..params()
+        };
+        let r = reff();
+        let g = geom();
+        let d0 = p.delta0(r);
+        let mut h = ContactHistory::default();
+        let f = p.normal_force(0.5 * d0, 0.2, &g, &mut h);
+        let expect = 118.0 * p.e_star() * 0.2f64.powi(3) * f.contact_radius.powf(1.5);
+        assert_relative_eq!(f.force - f.conservative, expect, max_relative = 1e-12);
+        // opposes the motion on the way out, zero at rest
+        let f = p.normal_force(0.5 * d0, -0.2, &g, &mut h);
+        assert_relative_eq!(f.force - f.conservative, -expect, max_relative = 1e-12);
+        let f = p.normal_force(0.5 * d0, 0.0, &g, &mut h);
+        assert_eq!(f.force, f.conservative);
+        // Tsuji acts at negative overlap too (a > 0 there)
+        let t = JkrParams {
+            dissipation: Dissipation::Tsuji { restitution: 0.5 },
+            ..params()
+        };
+        let f = t.normal_force(-0.5 * d0, -0.1, &g, &mut h);
+        assert!(f.in_contact && f.force < f.conservative);
+    }
+
+    #[test]
+    fn tangential_spring_and_coulomb_limit() {
+        let p = JkrParams {
+            friction: 0.3,
+            dissipation: Dissipation::Tsuji { restitution: 0.5 },
+            ..params()
+        };
+        let r = reff();
+        let g = geom();
+        let d0 = p.delta0(r);
+        let mut h = ContactHistory::default();
+        let normal = p.normal_force(d0, 0.0, &g, &mut h);
+        let n = DVec3::X;
+        let st = 8.0 * p.g_star() * normal.contact_radius;
+        let ct = -TSUJI_PREFACTOR * tsuji_beta(0.5) * (st * g.reduced_mass).sqrt();
+        assert!(ct > 0.0);
+        let limit = 0.3 * (normal.conservative + 2.0 * p.fc(r)).abs();
+        // below the limit: F = −St·s − c·v_t
+        let mut s = DVec3::new(0.0, 1e-3 * d0, 0.0);
+        let v = DVec3::new(0.0, 0.0, 1e-6);
+        let dt = 1e-9;
+        let t = p.tangential_force(n, v, &normal, &g, dt, &mut s);
+        let s_expect = DVec3::new(0.0, 1e-3 * d0, 1e-15);
+        assert!((s - s_expect).length() < 1e-12 * s_expect.length());
+        let f_expect = -st * s_expect - ct * v;
+        assert!(!t.sliding && (t.force - f_expect).length() < 1e-12 * f_expect.length());
+        assert!(f_expect.length() < limit);
+        assert_relative_eq!(t.stiffness, st, max_relative = 1e-15);
+        // above the limit: |F| = μs·|F_N + 2Fc| exactly, spring consistent with the force
+        let mut s = DVec3::new(0.0, 10.0 * d0, 0.0);
+        let t = p.tangential_force(n, v, &normal, &g, dt, &mut s);
+        assert!(t.sliding);
+        assert_relative_eq!(t.force.length(), limit, max_relative = 1e-14);
+        assert!((-st * s - ct * v - t.force).length() < 1e-12 * limit);
+        assert!(t.force.y < 0.0);
+        // a new tangent plane: the spring is rotated, keeping its length
+        let mut s = DVec3::new(0.0, 1e-3 * d0, 0.0);
+        let n2 = DVec3::new(0.6, 0.8, 0.0);
+        let t2 = p.tangential_force(n2, DVec3::ZERO, &normal, &g, dt, &mut s);
+        assert!(s.dot(n2).abs() < 1e-15 * s.length());
+        assert_relative_eq!(s.length(), 1e-3 * d0, max_relative = 1e-14);
+        assert_relative_eq!(t2.force.length(), st * 1e-3 * d0, max_relative = 1e-14);
+        // no friction, or no contact: spring zeroed, no force
+        let mut s = DVec3::new(0.0, 1e-3 * d0, 0.0);
+        let t = params().tangential_force(n, v, &normal, &g, dt, &mut s);
+        assert_eq!((t, s), (Tangential::default(), DVec3::ZERO));
+        let mut s = DVec3::new(0.0, 1e-3 * d0, 0.0);
+        let t = p.tangential_force(n, v, &NormalForce::default(), &g, dt, &mut s);
+        assert_eq!((t, s), (Tangential::default(), DVec3::ZERO));
+        // Hertz: the limit is μs·F_N
+        let hz = JkrParams {
+            friction: 0.3,
+            ..JkrParams::hertz(70e9, 0.17)
+        };
+        let nh = hz.normal_force(1e-9, 0.0, &g, &mut ContactHistory::default());
+        let mut s = DVec3::new(0.0, 1e-6, 0.0);
+        let t = hz.tangential_force(n, DVec3::ZERO, &nh, &g, dt, &mut s);
+        assert_relative_eq!(
+            t.force.length(),
+            0.3 * nh.conservative,
+            max_relative = 1e-14
+        );
+    }
+
+    #[test]
+    fn rolling_resistance() {
+        let p = JkrParams {
+            rolling_hysteresis: 0.5,
+            ..params()
+        };
+        let r = reff();
+        let g = geom();
+        let d0 = p.delta0(r);
+        let mut h = ContactHistory::default();
+        let normal = p.normal_force(d0, 0.0, &g, &mut h);
+        let n = DVec3::X;
+        // particle i spins about +y, j at rest: v_roll = R*·(ω_i − ω_j) × n
+        let omega_i = DVec3::new(0.0, 2.0, 0.0);
+        let v_roll = r * omega_i.cross(n);
+        let xi_crit = p.a0_unscaled(r) / 12.0 * 0.5;
+        let mut xi = DVec3::ZERO;
+        let dt = 1e-3 * xi_crit / v_roll.length();
+        let m = p.rolling_torque(n, v_roll, &normal, &g, dt, &mut xi);
+        assert!(!m.yielding);
+        assert!(m.torque.dot(omega_i) < 0.0, "opposes ω_i − ω_j");
+        assert!(m.torque.normalize().dot(-omega_i.normalize()) > 1.0 - 1e-12);
+        // kr = 4Fc at equilibrium (a = a0)
+        assert_relative_eq!(m.stiffness, 4.0 * p.fc(r), max_relative = 1e-12);
+        assert_relative_eq!(
+            m.torque.length(),
+            m.stiffness * xi.length(),
+            max_relative = 1e-14
+        );
+        // keep rolling: |ξ| never exceeds ξcrit, and yields
+        let mut yielded = false;
+        for _ in 0..5000 {
+            let m = p.rolling_torque(n, v_roll, &normal, &g, dt, &mut xi);
+            assert!(xi.length() <= xi_crit * (1.0 + 1e-14));
+            yielded |= m.yielding;
+        }
+        assert!(yielded);
+        assert_relative_eq!(xi.length(), xi_crit, max_relative = 1e-14);
+        // the largest torque is the Krijt yield torque 4Fc·ξcrit at a = a0
+        let m = p.rolling_torque(n, v_roll, &normal, &g, dt, &mut xi);
+        assert_relative_eq!(
+            m.torque.length(),
+            4.0 * p.fc(r) * xi_crit,
+            max_relative = 1e-12
+        );
+        // rotated into a new tangent plane with its length kept
+        let n2 = DVec3::new(0.8, 0.0, 0.6);
+        p.rolling_torque(n2, DVec3::ZERO, &normal, &g, dt, &mut xi);
+        assert!(xi.dot(n2).abs() < 1e-14 * xi.length());
+        assert_relative_eq!(xi.length(), xi_crit, max_relative = 1e-14);
+        // off without hysteresis or out of contact
+        let m = params().rolling_torque(n, v_roll, &normal, &g, dt, &mut xi);
+        assert_eq!((m, xi), (Rolling::default(), DVec3::ZERO));
+        xi = DVec3::Y;
+        let m = p.rolling_torque(n, v_roll, &NormalForce::default(), &g, dt, &mut xi);
+        assert_eq!((m, xi), (Rolling::default(), DVec3::ZERO));
+    }
+
+    #[test]
+    fn stiffness_scaling_keeps_the_cycle_energy() {
+        let p = params();
+        let s = 0.01;
+        let q = JkrParams {
+            stiffness_scale: s,
+            rolling_hysteresis: 0.5,
+            ..p
+        };
+        let r = reff();
+        assert_relative_eq!(q.e_star(), s * p.e_star(), max_relative = 1e-15);
+        assert_relative_eq!(q.g_star(), s * p.g_star(), max_relative = 1e-15);
+        assert_relative_eq!(q.gamma(), 0.05 * s.powf(0.4), max_relative = 1e-15);
+        // paper 002 eqs. 23–24: Fc·δ0 (hence the cycle loss 0.7722·Fc·δ0) is unchanged
+        let w = |p: &JkrParams| p.fc(r) * p.delta0(r) * 0.7722405328755862;
+        assert_relative_eq!(w(&q), w(&p), max_relative = 1e-12);
+        // and so is the work from touch to equilibrium (eq. 23) and the sticking velocity
+        let work = |p: &JkrParams| {
+            touched_force(p, 1e-13 * p.delta0(r)).potential
+                - touched_force(p, p.delta0(r)).potential
+        };
+        assert_relative_eq!(work(&q), work(&p), max_relative = 1e-9);
+        let m = geom().reduced_mass;
+        let v = 2.0 * (2.0 * w(&p) / m).sqrt();
+        let (vp, _, tp) = collide(&p, v, 2e4);
+        let (vq, _, tq) = collide(&q, v, 2e4);
+        // the undamped JKR dynamics are self-similar in δ0 and sqrt(m*·δ0/Fc) ∝ S^(−2/5):
+        // same outcome, collisions last S^(−2/5) times longer (paper 002 §6.2)
+        assert_relative_eq!(vp, vq, max_relative = 1e-9);
+        let factor = q.stiffness_scaling().unwrap().collision_time_factor;
+        assert_relative_eq!(factor, s.powf(-0.4), max_relative = 1e-15);
+        assert_relative_eq!(tq / tp, factor, max_relative = 1e-6);
+        // the pull-off force drops by S^(2/5)
+        assert_relative_eq!(q.fc(r) / p.fc(r), s.powf(0.4), max_relative = 1e-14);
+        // rolling: at equilibrium kr = 4·Fc (unscaled) and ξcrit with the unscaled a0
+        let mut h = ContactHistory::default();
+        let nq = q.normal_force(q.delta0(r), 0.0, &geom(), &mut h);
+        let mut xi = DVec3::ZERO;
+        let m = q.rolling_torque(DVec3::X, DVec3::Y, &nq, &geom(), 1.0, &mut xi);
+        assert_relative_eq!(m.stiffness, 4.0 * p.fc(r), max_relative = 1e-12);
+        assert_relative_eq!(xi.length(), p.a0(r) / 12.0 * 0.5, max_relative = 1e-12);
+        // report only when S ≠ 1
+        assert!(p.stiffness_scaling_report().is_none());
+        let text = q.stiffness_scaling_report().unwrap();
+        assert!(
+            text.contains("pull-off") && text.contains("6.3096"),
+            "{text}"
+        );
+    }
+
+    #[test]
+    fn hertz_contact_time_matches_the_closed_form() {
+        let p = JkrParams::hertz(1e9, 0.3);
+        let (r, m, v) = (1e-3, 1e-5, 0.5);
+        let es = p.e_star();
+        assert_relative_eq!(
+            p.hertz_contact_time(r, m, v),
+            2.87 * (m * m / (r * es * es * v)).powf(0.2),
+            max_relative = 1e-15
+        );
+        assert_eq!(p.equilibrium_stiffness(r), 0.0);
+    }
+
+    #[test]
+    fn validation_names_parameter_and_rule() {
+        let bad = |f: fn(&mut JkrParams)| {
+            let mut p = params();
+            f(&mut p);
+            p.validate().unwrap_err()
+        };
+        assert_eq!(bad(|p| p.youngs = 0.0).param, "youngs");
+        assert_eq!(bad(|p| p.youngs = f64::NAN).param, "youngs");
+        let e = bad(|p| p.poisson = 0.5);
+        assert_eq!(e.param, "poisson");
+        assert!(e.message.contains("0.5"));
+        assert_eq!(bad(|p| p.poisson = -1.0).param, "poisson");
+        assert_eq!(bad(|p| p.surface_energy = -1.0).param, "surface_energy");
+        assert_eq!(
+            bad(|p| p.dissipation = Dissipation::Tsuji { restitution: 0.0 }).param,
+            "restitution"
+        );
+        assert_eq!(
+            bad(|p| p.dissipation = Dissipation::Tsuji { restitution: 1.1 }).param,
+            "restitution"
+        );
+        let pl = |d, alpha, beta| Dissipation::PowerLaw { d, alpha, beta };
+        let mut q = params();
+        q.dissipation = pl(-1.0, 3.0, 1.5);
+        assert_eq!(q.validate().unwrap_err().param, "D");
+        q.dissipation = pl(1.0, -3.0, 1.5);
+        assert_eq!(q.validate().unwrap_err().param, "alpha");
+        q.dissipation = pl(1.0, 3.0, f64::INFINITY);
+        assert_eq!(q.validate().unwrap_err().param, "beta");
+        assert_eq!(bad(|p| p.friction = -0.1).param, "friction");
+        assert_eq!(
+            bad(|p| p.rolling_hysteresis = -0.1).param,
+            "rolling_hysteresis"
+        );
+        let e = bad(|p| {
+            p.rolling_hysteresis = 0.3;
+            p.surface_energy = 0.0
+        });
+        assert_eq!(e.param, "rolling_hysteresis");
+        assert!(e.message.contains("surface_energy"));
+        assert_eq!(bad(|p| p.stiffness_scale = 0.0).param, "stiffness_scale");
+        assert!(params().validate().is_ok());
+        assert!(JkrParams::hertz(1e9, 0.3).validate().is_ok());
+        let e = bad(|p| p.youngs = -1.0);
+        assert!(e.to_string().contains("`youngs`"), "{e}");
+    }
+
+    #[test]
+    fn serde_names() {
+        let p = JkrParams {
+            dissipation: Dissipation::PowerLaw {
+                d: 118.0,
+                alpha: 3.0,
+                beta: 1.5,
+            },
+            ..params()
+        };
+        let json = serde_json::to_string(&p).unwrap();
+        assert!(
+            json.contains("\"kind\":\"power-law\"") && json.contains("\"D\":118"),
+            "{json}"
+        );
+        assert_eq!(serde_json::from_str::<JkrParams>(&json).unwrap(), p);
+        // optional fields default
+        let q: JkrParams = serde_json::from_str(
+            r#"{"youngs": 1e9, "poisson": 0.3, "surface_energy": 0.1,
+                "dissipation": {"kind": "tsuji", "restitution": 0.5}, "pulloff": "force"}"#,
+        )
+        .unwrap();
+        assert_eq!(q.stiffness_scale, 1.0);
+        assert_eq!(q.pulloff, Pulloff::Force);
+        assert_eq!(q.dissipation, Dissipation::Tsuji { restitution: 0.5 });
+    }
+}

@@ -7,6 +7,7 @@ pub mod jkr;
 pub mod lsd;
 
 pub use hysteretic::{AdhesionMode, HystereticParams, K2Rule};
+pub use jkr::{Dissipation, JkrParams, Pulloff};
 pub use lsd::LsdParams;
 
 use crate::error::ParamError;
@@ -54,6 +55,11 @@ pub struct PairGeometry {
 }
 
 impl PairGeometry {
+    /// Effective radius R* = r1·r2/(r1 + r2) (r for a wall) = a12/2.
+    pub fn r_eff(&self) -> f64 {
+        0.5 * self.a12
+    }
+
     pub fn spheres(r1: f64, r2: f64, m1: f64, m2: f64) -> Self {
         Self {
             a12: 2.0 * r1 * r2 / (r1 + r2),
@@ -75,6 +81,37 @@ impl PairGeometry {
 pub enum ContactModel {
     Hysteretic(HystereticParams),
     Lsd(LsdParams),
+    /// JKR (Hertz when the surface energy is zero), with damping, friction and rolling.
+    Jkr(JkrParams),
+}
+
+/// Relative motion at one contact, as the engine measures it.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Kinematics {
+    /// Overlap δ, m.
+    pub delta: f64,
+    /// Approach speed δ̇, m/s.
+    pub delta_dot: f64,
+    /// Unit normal from particle j to particle i.
+    pub n: DVec3,
+    /// Tangential velocity of i relative to j at the contact point.
+    pub v_t: DVec3,
+    /// Rolling velocity v_L = R*·(ω_i − ω_j) × n + ½·(r_i − r_j)/(r_i + r_j)·v_t
+    /// (paper 002 eq. 20).
+    pub v_roll: DVec3,
+}
+
+/// Forces and torques of one contact on particle i (particle j gets the opposite force;
+/// see the engine for the torques).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Response {
+    pub normal: NormalForce,
+    /// Tangential force on i.
+    pub tangential: DVec3,
+    /// Rolling-resistance torque on i (−this on j).
+    pub rolling_torque: DVec3,
+    /// Stored energy of the contact: normal + tangential spring + rolling spring, J.
+    pub potential: f64,
 }
 
 impl ContactModel {
@@ -82,29 +119,76 @@ impl ContactModel {
         match self {
             Self::Hysteretic(p) => p.validate(),
             Self::Lsd(p) => p.validate(),
+            Self::Jkr(p) => p.validate(),
+        }
+    }
+
+    /// Whether contacts of this model exert tangential forces or torques, so particles
+    /// need angular velocity.
+    pub fn needs_rotation(&self) -> bool {
+        match self {
+            Self::Jkr(p) => p.friction > 0.0 || p.rolling_hysteresis > 0.0,
+            _ => false,
+        }
+    }
+
+    /// Forces of one contact for the given kinematics, updating the history.
+    pub fn respond(
+        &self,
+        k: &Kinematics,
+        geom: &PairGeometry,
+        dt: f64,
+        history: &mut ContactHistory,
+    ) -> Response {
+        match self {
+            Self::Jkr(p) => {
+                let normal = p.normal_force(k.delta, k.delta_dot, geom, history);
+                let mut r = Response {
+                    normal,
+                    potential: normal.potential,
+                    ..Default::default()
+                };
+                if normal.in_contact && p.friction > 0.0 {
+                    let t =
+                        p.tangential_force(k.n, k.v_t, &normal, geom, dt, &mut history.tangential);
+                    r.tangential = t.force;
+                    r.potential += 0.5 * t.stiffness * history.tangential.length_squared();
+                }
+                if normal.in_contact && p.rolling_hysteresis > 0.0 {
+                    let m =
+                        p.rolling_torque(k.n, k.v_roll, &normal, geom, dt, &mut history.rolling);
+                    r.rolling_torque = m.torque;
+                    r.potential += 0.5 * m.stiffness * history.rolling.length_squared();
+                }
+                r
+            }
+            _ => {
+                let normal = self.force(k.delta, k.delta_dot, geom, history);
+                Response {
+                    normal,
+                    potential: normal.potential,
+                    ..Default::default()
+                }
+            }
         }
     }
 
     /// Non-contact interaction range (how far beyond touching a pair still interacts), m.
+    /// For JKR this is how far into negative overlap a touching pair stays in contact.
     pub fn range(&self) -> f64 {
         match self {
             Self::Hysteretic(p) => p.range(),
             Self::Lsd(_) => 0.0,
+            Self::Jkr(_) => 0.0,
         }
     }
 
-    /// Stiffest branch, N/m, for the time-step rule.
-    pub fn stiffest(&self) -> f64 {
+    /// Largest separation beyond touching at which a pair of effective radius `r_eff` can
+    /// still interact, m: the search cut-off needs it.
+    pub fn reach(&self, r_eff: f64) -> f64 {
         match self {
-            Self::Hysteretic(p) => p.stiffest(),
-            Self::Lsd(p) => p.k,
-        }
-    }
-
-    pub fn gamma0(&self) -> f64 {
-        match self {
-            Self::Hysteretic(p) => p.gamma0,
-            Self::Lsd(p) => p.gamma0,
+            Self::Jkr(p) => -p.pulloff_overlap(r_eff),
+            _ => self.range(),
         }
     }
 
@@ -119,32 +203,92 @@ impl ContactModel {
         match self {
             Self::Hysteretic(p) => p.force(delta, delta_dot, geom.a12, history),
             Self::Lsd(p) => p.force(delta, delta_dot),
+            Self::Jkr(p) => p.normal_force(delta, delta_dot, geom, history),
         }
     }
 
-    /// Contact duration on the stiffest branch without damping, tc = π·√(m_r/k_max)
-    /// (paper 000 eq. 3 with η0 = 0): the shortest time scale the integrator must resolve.
-    pub fn stiff_contact_time(&self, reduced_mass: f64) -> f64 {
-        std::f64::consts::PI * (reduced_mass / self.stiffest()).sqrt()
+    /// Where the contact starts and ends and the force just inside those edges:
+    /// `[(entry δ, entry force), (exit δ, exit force)]`. The forces can jump there (JKR at
+    /// touch and pull-off, −fa of jump-in adhesion, a viscous force γ0·δ̇ at first touch).
+    pub fn edges(&self, geom: &PairGeometry, delta_dot: f64) -> [(f64, f64); 2] {
+        match self {
+            Self::Hysteretic(p) => {
+                let range = p.range();
+                if range > 0.0 {
+                    [(-range, 0.0), (-range, 0.0)]
+                } else {
+                    let f = -p.fa + p.gamma0 * delta_dot;
+                    [(0.0, f), (0.0, f)]
+                }
+            }
+            Self::Lsd(p) => {
+                let f = p.gamma0 * delta_dot;
+                [(0.0, f), (0.0, f)]
+            }
+            Self::Jkr(p) => p.edge_forces(geom, delta_dot),
+        }
     }
 
-    /// Time-step limits for a pair of reduced mass `reduced_mass`.
-    pub fn time_step(&self, reduced_mass: f64) -> TimeStep {
-        let tc = self.stiff_contact_time(reduced_mass);
+    /// Time-step limits for a pair of geometry `geom` meeting at up to `impact_velocity`.
+    ///
+    /// The contact time tc is π·√(m_r/k_max) on the stiffest linear branch (kp, or kc_a
+    /// when finite and larger; k for LSD); for Hertz/JKR the Hertz time
+    /// 2.87·(m*²/(R*·E*²·v))^(1/5) at the impact velocity, and for JKR no longer than the
+    /// oscillation time π·√(m*/k_eq) about the equilibrium overlap (k_eq = dF/dδ at δ0)
+    /// nor the time δ0/v to cross the adhesive zone, whose force jumps at touch and
+    /// pull-off make the error first order in dt.
+    pub fn time_step(&self, geom: &PairGeometry, impact_velocity: f64) -> TimeStep {
+        let mr = geom.reduced_mass;
+        let (tc, what, gamma0) = match self {
+            Self::Hysteretic(p) => {
+                let k = p.stiffest();
+                (
+                    std::f64::consts::PI * (mr / k).sqrt(),
+                    format!("tc = pi*sqrt(m_r/k) on the stiffest branch k = {k:.4e} N/m"),
+                    p.gamma0,
+                )
+            }
+            Self::Lsd(p) => (
+                std::f64::consts::PI * (mr / p.k).sqrt(),
+                format!("tc = pi*sqrt(m_r/k) with k = {:.4e} N/m", p.k),
+                p.gamma0,
+            ),
+            Self::Jkr(p) => {
+                let r = geom.r_eff();
+                let hertz = p.hertz_contact_time(r, mr, impact_velocity);
+                if p.surface_energy > 0.0 {
+                    let eq = std::f64::consts::PI * (mr / p.equilibrium_stiffness(r)).sqrt();
+                    // the force jumps at touch and pull-off: the adhesive zone (depth ~δ0)
+                    // must be crossed in many steps, or the loss W is off by O(Fc·v·dt)
+                    let zone = p.delta0(r) / impact_velocity;
+                    if zone < eq.min(hertz) {
+                        (zone, format!("tc = delta0/v, the time to cross the JKR adhesive zone delta0 = {:.4e} m at the impact velocity {impact_velocity} m/s", p.delta0(r)), 0.0)
+                    } else if eq < hertz {
+                        (eq, format!("tc = pi*sqrt(m*/k_eq), the JKR oscillation about the equilibrium overlap (k_eq = {:.4e} N/m)", p.equilibrium_stiffness(r)), 0.0)
+                    } else {
+                        (hertz, format!("tc = Hertz contact time at the impact velocity {impact_velocity} m/s"), 0.0)
+                    }
+                } else {
+                    (
+                        hertz,
+                        format!(
+                            "tc = Hertz contact time at the impact velocity {impact_velocity} m/s"
+                        ),
+                        0.0,
+                    )
+                }
+            }
+        };
         let mut max = tc / MAX_DT_FRACTION;
-        let mut reason = format!(
-            "dt <= tc/{MAX_DT_FRACTION} with tc = pi*sqrt(m_r/k) = {tc:.4e} s on the stiffest branch k = {:.4e} N/m",
-            self.stiffest()
-        );
-        let g = self.gamma0();
-        if g > 0.0 {
+        let mut reason = format!("dt <= tc/{MAX_DT_FRACTION} with {what}, tc = {tc:.4e} s");
+        if gamma0 > 0.0 {
             // explicit viscous force: keep γ0·dt/m_r small (the exact decay per step is
             // exp(−γ0·dt/m_r); the explicit update is unstable beyond γ0·dt/m_r = 2).
-            let visc = MAX_VISCOUS_STEP * reduced_mass / g;
+            let visc = MAX_VISCOUS_STEP * mr / gamma0;
             if visc < max {
                 max = visc;
                 reason = format!(
-                    "dt <= {MAX_VISCOUS_STEP}*m_r/gamma0 = {visc:.4e} s for the viscous damping gamma0 = {g:.4e} kg/s"
+                    "dt <= {MAX_VISCOUS_STEP}*m_r/gamma0 = {visc:.4e} s for the viscous damping gamma0 = {gamma0:.4e} kg/s"
                 );
             }
         }

@@ -1,0 +1,217 @@
+//! JKR, Hertz and their options through `collide`, against papers 001 and 002.
+
+use powder::collide::{collide, CollideResult, CollideSpec};
+use powder::model::{analytic, ContactModel, Dissipation, JkrParams, PairGeometry, Pulloff};
+
+const R: f64 = 1e-6;
+const RHO: f64 = 2000.0;
+
+fn jkr() -> JkrParams {
+    JkrParams::jkr(1e9, 0.3, 0.05)
+}
+
+fn spec(p: JkrParams, v: f64) -> CollideSpec {
+    CollideSpec::head_on(ContactModel::Jkr(p), R, RHO, v)
+}
+
+fn geometry() -> PairGeometry {
+    let m = RHO * 4.0 / 3.0 * std::f64::consts::PI * R.powi(3);
+    PairGeometry::spheres(R, R, m, m)
+}
+
+fn loss(p: &JkrParams) -> f64 {
+    let r = geometry().r_eff();
+    analytic::jkr_loss(p.pulloff) * p.fc(r) * p.delta0(r)
+}
+
+fn run(p: JkrParams, v: f64) -> CollideResult {
+    collide(&spec(p, v)).unwrap()
+}
+
+#[test]
+fn undamped_jkr_loses_0_7722_fc_delta0_per_collision() {
+    for pulloff in [Pulloff::Displacement, Pulloff::Force] {
+        let p = JkrParams { pulloff, ..jkr() };
+        let v_stick = analytic::jkr_sticking_velocity(loss(&p), geometry().reduced_mass);
+        let m = geometry().reduced_mass;
+        for f in [1.05, 1.3, 2.0, 5.0, 20.0] {
+            let v = f * v_stick;
+            let r = run(p, v);
+            assert!(!r.stuck);
+            // The force jumps at the touch (−8/9·Fc) and at pull-off: first order in dt.
+            // At the default dt the lost energy is within 1.5 % of W (plus 1e-4 of the
+            // kinetic energy, the integrator's share); e near the sticking velocity is very
+            // sensitive to it (e² = 1 − W/E), so compare W.
+            let ke = 0.5 * m * v * v;
+            let w_sim = (1.0 - r.e * r.e) * ke;
+            assert!(
+                (w_sim - loss(&p)).abs() < 0.015 * loss(&p) + 1e-4 * ke,
+                "{pulloff:?} v/v_stick {f}: W {w_sim} vs {}",
+                loss(&p)
+            );
+            assert!(r.energy.balance_error < 1e-3, "{}", r.energy.balance_error);
+            // ten times finer steps: about ten times closer (the pull-off phase within a step
+            // varies, so not exactly)
+            let fine = collide(&CollideSpec {
+                dt: Some(0.1 * r.dt),
+                ..spec(p, v)
+            })
+            .unwrap();
+            let w_fine = (1.0 - fine.e * fine.e) * ke;
+            assert!(
+                (w_fine - loss(&p)).abs() < 0.004 * loss(&p) + 1e-5 * ke,
+                "{pulloff:?} v/v_stick {f}: fine W {w_fine} vs {}",
+                loss(&p)
+            );
+            let e = analytic::jkr_restitution(loss(&p), m, v).unwrap();
+            assert!(
+                (fine.e - e).abs() < 0.01,
+                "{pulloff:?} v/v_stick {f}: {} vs {e}",
+                fine.e
+            );
+        }
+        for f in [0.5, 0.9] {
+            let r = run(p, f * v_stick);
+            assert!(r.stuck, "{pulloff:?} v/v_stick {f} should stick");
+            assert_eq!(r.e, 0.0);
+        }
+        let scales = run(p, 2.0 * v_stick).jkr.unwrap();
+        assert!(scales.pulloff_overlap < 0.0 && scales.fc > 0.0 && scales.a0 > 0.0);
+    }
+    // the force-controlled rule breaks earlier, so it loses less
+    let d = JkrParams {
+        pulloff: Pulloff::Displacement,
+        ..jkr()
+    };
+    let f = JkrParams {
+        pulloff: Pulloff::Force,
+        ..jkr()
+    };
+    assert!(loss(&f) < loss(&d));
+}
+
+#[test]
+fn hertz_is_elastic_with_the_hertz_contact_time() {
+    let p = JkrParams::hertz(1e9, 0.3);
+    for v in [0.01, 0.1, 1.0] {
+        let r = run(p, v);
+        assert!((r.e - 1.0).abs() < 2e-3, "v {v}: e = {}", r.e);
+        let tc = r.contact_duration_analytic.unwrap();
+        // 2.87 is the paper's rounded constant (the exact one is 2.868)
+        assert!(
+            (r.contact_duration.unwrap() - tc).abs() < 5e-3 * tc + 2.0 * r.dt,
+            "{:?} vs {tc}",
+            r.contact_duration
+        );
+        let dmax = r.delta_max_analytic.unwrap();
+        assert!((r.delta_max - dmax).abs() < 2e-3 * dmax);
+    }
+}
+
+#[test]
+fn tsuji_damping_reaches_the_target_restitution() {
+    for e in [0.3, 0.6, 0.9] {
+        let p = JkrParams {
+            dissipation: Dissipation::Tsuji { restitution: e },
+            ..JkrParams::hertz(1e9, 0.3)
+        };
+        for v in [0.05, 0.5] {
+            let r = run(p, v);
+            assert!(
+                (r.e - e).abs() < 0.02 * e + 2e-3,
+                "target {e}, v {v}: {}",
+                r.e
+            );
+        }
+    }
+}
+
+#[test]
+fn power_law_dissipation_lowers_e_with_d() {
+    let v = 3.0; // above the sticking velocity (≈ 0.66 m/s)
+    let mut last = run(jkr(), v).e;
+    assert!(last > 0.5);
+    for d in [1e-10, 1e-9, 1e-8] {
+        let p = JkrParams {
+            dissipation: Dissipation::PowerLaw {
+                d,
+                alpha: 1.0,
+                beta: 1.0,
+            },
+            ..jkr()
+        };
+        let r = run(p, v);
+        assert!(r.e < last, "D {d}: {} !< {last}", r.e);
+        assert!(r.energy.balance_error < 2e-3);
+        last = r.e;
+    }
+}
+
+#[test]
+fn reduced_stiffness_keeps_the_collision_and_enlarges_dt() {
+    let base = jkr();
+    let soft = JkrParams {
+        stiffness_scale: 0.01,
+        ..base
+    };
+    let v_stick = analytic::jkr_sticking_velocity(loss(&base), geometry().reduced_mass);
+    // γ·S^(2/5) keeps the loss W = 0.7722·Fc·δ0 (paper 002 eq. 23)
+    assert!((loss(&soft) - loss(&base)).abs() < 1e-9 * loss(&base));
+    for f in [1.5, 3.0] {
+        let (a, b) = (run(base, f * v_stick), run(soft, f * v_stick));
+        assert!(
+            (a.e - b.e).abs() < 0.01,
+            "v/v_stick {f}: {} vs {}",
+            a.e,
+            b.e
+        );
+        let gain = b.dt / a.dt;
+        assert!(gain > 2.0, "dt gain {gain}");
+    }
+    assert!(soft.stiffness_scaling_report().is_some() && base.stiffness_scaling_report().is_none());
+}
+
+#[test]
+fn oblique_wall_impact_with_friction_spins_the_sphere_and_keeps_the_ledger() {
+    let p = JkrParams {
+        friction: 0.3,
+        dissipation: Dissipation::Tsuji { restitution: 0.8 },
+        ..JkrParams::hertz(1e9, 0.3)
+    };
+    let s = CollideSpec {
+        wall: true,
+        impact_angle: 30.0,
+        ..spec(p, 0.5)
+    };
+    let r = collide(&s).unwrap();
+    assert!(!r.stuck);
+    assert!(r.omega_final.unwrap() > 0.0, "friction makes it spin");
+    let et = r.e_tangential.unwrap();
+    assert!(et < 1.0 && et > 0.0, "tangential restitution {et}");
+    assert!(r.energy.balance_error < 2e-3, "{}", r.energy.balance_error);
+    // without friction: no spin, tangential speed kept
+    let plain = collide(&CollideSpec {
+        model: ContactModel::Jkr(JkrParams { friction: 0.0, ..p }),
+        ..s.clone()
+    })
+    .unwrap();
+    assert!(plain.omega_final.is_none());
+}
+
+#[test]
+fn rolling_resistance_dissipates_and_balances() {
+    let p = JkrParams {
+        friction: 0.5,
+        rolling_hysteresis: 0.5,
+        ..jkr()
+    };
+    let v_stick = analytic::jkr_sticking_velocity(loss(&p), geometry().reduced_mass);
+    let s = CollideSpec {
+        wall: true,
+        impact_angle: 45.0,
+        ..spec(p, 20.0 * v_stick)
+    };
+    let r = collide(&s).unwrap();
+    assert!(r.energy.balance_error < 2e-3, "{}", r.energy.balance_error);
+    assert!(r.energy.dissipated > 0.0);
+}
