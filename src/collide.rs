@@ -12,7 +12,7 @@
 use crate::cpu::CpuEngine;
 use crate::error::PowderError;
 use crate::model::{analytic, ContactModel, Dissipation, PairGeometry};
-use crate::output::plot::{Plot, Series, Style};
+use crate::output::plot::{Legend, Plot, Series, Style};
 use crate::scene::{Domain, DtSetting, Material, ParticleInit, Scene, Wall};
 use serde::Serialize;
 use std::f64::consts::PI;
@@ -600,5 +600,11 @@ pub fn restitution_plot(spec: &CollideSpec, results: &[CollideResult], log: bool
         log_y: false,
         series,
         y_range: Some((0.0, 1.05)),
+        // the e(v) curves leave the lower left (hysteretic: low χ has e near 1) or the
+        // upper left (JKR: sticking at low v) empty
+        legend: match spec.model {
+            ContactModel::Jkr(_) => Legend::UpperLeft,
+            _ => Legend::LowerLeft,
+        },
     }
 }

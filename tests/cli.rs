@@ -215,3 +215,263 @@ fn run_prints_a_summary_and_rejects_missing_files() {
     let (ok, _, err) = powder(&["run", "/nonexistent/scene.toml"]);
     assert!(!ok && err.contains("/nonexistent/scene.toml"), "{err}");
 }
+
+const JKR: [&str; 13] = [
+    "collide",
+    "--model",
+    "jkr",
+    "--youngs",
+    "1e9",
+    "--poisson",
+    "0.3",
+    "--surface-energy",
+    "0.05",
+    "--radius",
+    "1e-6",
+    "--density",
+    "2000",
+];
+
+fn jkr_cmd(extra: &[&str]) -> (bool, String, String) {
+    let mut args: Vec<&str> = JKR.to_vec();
+    args.extend_from_slice(extra);
+    powder(&args)
+}
+
+#[test]
+fn collide_jkr_reports_the_jkr_scales_and_the_same_keys() {
+    let (ok, out, err) = jkr_cmd(&["--velocity", "2", "--json"]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    for key in [
+        "e",
+        "stuck",
+        "e_analytic",
+        "delta_max",
+        "contact_duration",
+        "dt",
+        "steps",
+        "backend",
+    ] {
+        assert!(v.get(key).is_some(), "missing `{key}` in {out}");
+    }
+    for key in ["fc", "a0", "delta0", "pulloff_overlap"] {
+        assert!(
+            v["jkr"][key].as_f64().is_some(),
+            "missing jkr.{key} in {out}"
+        );
+    }
+    assert_eq!(v["model"], "jkr");
+    let (e, ea) = (v["e"].as_f64().unwrap(), v["e_analytic"].as_f64().unwrap());
+    assert!((e - ea).abs() < 5e-3, "{e} vs {ea}");
+}
+
+#[test]
+fn collide_jkr_options_run_and_stiffness_scaling_warns() {
+    let (ok, out, err) = jkr_cmd(&[
+        "--velocity",
+        "2",
+        "--restitution",
+        "0.8",
+        "--friction",
+        "0.3",
+        "--rolling-hysteresis",
+        "0.5",
+        "--impact-angle",
+        "40",
+        "--wall",
+        "--pulloff",
+        "force",
+        "--stiffness-scale",
+        "0.1",
+        "--json",
+    ]);
+    assert!(ok, "{err}");
+    assert!(
+        err.contains("pull-off force"),
+        "the reduced-stiffness warning: {err}"
+    );
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert!(v["omega_final"].as_f64().unwrap() > 0.0);
+    assert!(v["jkr"]["stiffness_scaling"].is_string());
+    let (ok, out, err) = jkr_cmd(&[
+        "--velocity",
+        "2",
+        "--dissipation",
+        "powerlaw",
+        "--D",
+        "1e-9",
+        "--alpha",
+        "1",
+        "--beta",
+        "1",
+        "--json",
+    ]);
+    assert!(ok, "{err}");
+    assert!(
+        serde_json::from_str::<serde_json::Value>(&out).unwrap()["e"]
+            .as_f64()
+            .unwrap()
+            > 0.0
+    );
+}
+
+#[test]
+fn collide_hertz_and_jkr_errors_name_the_option() {
+    let cases: &[(&[&str], &str)] = &[
+        (
+            &[
+                "collide",
+                "--model",
+                "hertz",
+                "--youngs",
+                "1e9",
+                "--poisson",
+                "0.3",
+                "--surface-energy",
+                "0.1",
+                "--radius",
+                "1e-6",
+                "--density",
+                "2000",
+                "--velocity",
+                "1",
+            ],
+            "surface-energy",
+        ),
+        (
+            &[
+                "collide",
+                "--model",
+                "jkr",
+                "--youngs",
+                "1e9",
+                "--poisson",
+                "0.6",
+                "--surface-energy",
+                "0.1",
+                "--radius",
+                "1e-6",
+                "--density",
+                "2000",
+                "--velocity",
+                "1",
+            ],
+            "poisson",
+        ),
+        (
+            &[
+                "collide",
+                "--model",
+                "jkr",
+                "--youngs",
+                "1e9",
+                "--poisson",
+                "0.3",
+                "--surface-energy",
+                "0.1",
+                "--radius",
+                "1e-6",
+                "--density",
+                "2000",
+                "--velocity",
+                "1",
+                "--dissipation",
+                "tsuji",
+            ],
+            "restitution",
+        ),
+        (
+            &[
+                "collide",
+                "--model",
+                "jkr",
+                "--youngs",
+                "1e9",
+                "--poisson",
+                "0.3",
+                "--surface-energy",
+                "0.1",
+                "--radius",
+                "1e-6",
+                "--density",
+                "2000",
+                "--velocity",
+                "1",
+                "--restitution",
+                "1.5",
+            ],
+            "restitution",
+        ),
+        (
+            &[
+                "collide",
+                "--model",
+                "jkr",
+                "--youngs",
+                "1e9",
+                "--poisson",
+                "0.3",
+                "--surface-energy",
+                "0.1",
+                "--radius",
+                "1e-6",
+                "--density",
+                "2000",
+                "--velocity",
+                "1",
+                "--kp",
+                "5",
+            ],
+            "does not apply",
+        ),
+        (
+            &[
+                "collide",
+                "--model",
+                "jkr",
+                "--youngs",
+                "1e9",
+                "--poisson",
+                "0.3",
+                "--surface-energy",
+                "0.1",
+                "--radius",
+                "1e-6",
+                "--density",
+                "2000",
+                "--velocity",
+                "1",
+                "--impact-angle",
+                "120",
+            ],
+            "impact-angle",
+        ),
+        (
+            &[
+                "collide",
+                "--model",
+                "jkr",
+                "--youngs",
+                "-1e9",
+                "--poisson",
+                "0.3",
+                "--surface-energy",
+                "0.1",
+                "--radius",
+                "1e-6",
+                "--density",
+                "2000",
+                "--velocity",
+                "1",
+            ],
+            "youngs",
+        ),
+    ];
+    for (args, needle) in cases {
+        let (ok, _, err) = powder(args);
+        assert!(!ok, "{args:?} should fail");
+        assert!(err.contains(needle), "{args:?}: `{err}` lacks `{needle}`");
+        assert!(!err.contains("panicked"), "{err}");
+    }
+}

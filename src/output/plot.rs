@@ -60,6 +60,18 @@ pub struct Plot {
     pub log_y: bool,
     pub series: Vec<Series>,
     pub y_range: Option<(f64, f64)>,
+    /// Where the legend goes (pick the emptiest corner of the data).
+    pub legend: Legend,
+}
+
+/// Legend placement.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Legend {
+    #[default]
+    UpperRight,
+    UpperLeft,
+    LowerLeft,
+    LowerRight,
 }
 
 /// One axis: its range and whether it is logarithmic.
@@ -271,7 +283,12 @@ impl Plot {
         if any_label {
             chart
                 .configure_series_labels()
-                .position(SeriesLabelPosition::UpperRight)
+                .position(match self.legend {
+                    Legend::UpperRight => SeriesLabelPosition::UpperRight,
+                    Legend::UpperLeft => SeriesLabelPosition::UpperLeft,
+                    Legend::LowerLeft => SeriesLabelPosition::LowerLeft,
+                    Legend::LowerRight => SeriesLabelPosition::LowerRight,
+                })
                 .background_style(WHITE.mix(0.85))
                 .border_style(BLACK)
                 .label_font(("sans-serif", 14))
@@ -475,6 +492,7 @@ mod tests {
             log_y: false,
             series,
             y_range: None,
+            legend: Legend::default(),
         }
     }
 

@@ -1,0 +1,97 @@
+//! Every shipped scene loads and runs; JKR scenes parse with their options and errors.
+
+use powder::cpu::CpuEngine;
+use powder::model::{ContactModel, Dissipation, Pulloff};
+use powder::scene::Scene;
+
+#[test]
+fn every_example_scene_loads_and_steps() {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/examples");
+    let mut seen = 0;
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "toml") {
+            let scene = Scene::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            let mut engine = CpuEngine::new(&scene).unwrap();
+            engine.run_steps(200).unwrap();
+            let e = engine.energies();
+            assert!(e.total().is_finite(), "{}", path.display());
+            seen += 1;
+        }
+    }
+    assert!(seen >= 3);
+}
+
+const JKR_SCENE: &str = r#"
+[domain]
+min = [0.0, 0.0, 0.0]
+max = [1e-4, 1e-4, 1e-4]
+
+[simulation]
+duration = 1e-5
+impact_velocity = 0.5
+
+[[material]]
+name = "m"
+density = 2500.0
+model = "jkr"
+youngs = 1e8
+poisson = 0.3
+surface_energy = 0.01
+dissipation = "powerlaw"
+D = 1e-9
+alpha = 1.0
+beta = 1.0
+friction = 0.2
+rolling_hysteresis = 0.3
+pulloff = "force"
+stiffness_scale = 0.5
+
+[[particles]]
+kind = "list"
+positions = [[5e-5, 5e-5, 5e-5]]
+radius = 5e-6
+"#;
+
+#[test]
+fn jkr_material_parses_with_all_options() {
+    let s = Scene::from_toml_str(JKR_SCENE, "jkr").unwrap();
+    assert_eq!(s.impact_velocity, 0.5);
+    let ContactModel::Jkr(p) = s.materials[0].model else {
+        panic!("not jkr")
+    };
+    assert_eq!(
+        p.dissipation,
+        Dissipation::PowerLaw {
+            d: 1e-9,
+            alpha: 1.0,
+            beta: 1.0
+        }
+    );
+    assert_eq!(p.pulloff, Pulloff::Force);
+    assert_eq!(
+        (p.friction, p.rolling_hysteresis, p.stiffness_scale),
+        (0.2, 0.3, 0.5)
+    );
+}
+
+#[test]
+fn jkr_scene_errors_name_the_key() {
+    let err = |text: String| Scene::from_toml_str(&text, "jkr").unwrap_err().to_string();
+    let e = err(JKR_SCENE.replace("friction = 0.2", "fricton = 0.2"));
+    assert!(e.contains("did you mean `friction`"), "{e}");
+    let e = err(JKR_SCENE.replace("friction = 0.2", "kp = 0.2"));
+    assert!(
+        e.contains("`kp` is a parameter of the `hysteretic` model"),
+        "{e}"
+    );
+    let e = err(JKR_SCENE.replace("poisson = 0.3", "poisson = 0.7"));
+    assert!(e.contains("poisson"), "{e}");
+    let e = err(JKR_SCENE.replace("dissipation = \"powerlaw\"", "dissipation = \"tsuji\""));
+    assert!(e.contains("restitution"), "{e}");
+    let e = err(JKR_SCENE.replace("model = \"jkr\"", "model = \"hertz\""));
+    assert!(
+        e.contains("surface_energy") && e.contains("`jkr` model"),
+        "{e}"
+    );
+}
