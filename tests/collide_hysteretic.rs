@@ -96,6 +96,27 @@ fn restitution_matches_eqs_32_33_for_beta_below_at_and_above_beta_star() {
 }
 
 #[test]
+fn restitution_matches_for_a_stiffer_limit_branch() {
+    // η = 19 (kp = 2000 N/m): β* = 1/18; below, at and above it
+    let eta = 19.0;
+    for beta in [0.02, beta_star(eta), 0.2] {
+        let p = HystereticParams {
+            kp: 2000.0,
+            ..params(beta * 100.0)
+        };
+        for chi in [0.01, 0.1, 0.3, 0.7, 1.5, 4.0] {
+            let r = run(p, RADIUS, chi);
+            let expect = en_no_fa(eta, beta, chi);
+            assert!(
+                (r.e * r.e - expect * expect).abs() < 2.0 * E_TOL,
+                "eta {eta}, beta {beta}, chi {chi}: e = {} vs {expect}",
+                r.e
+            );
+        }
+    }
+}
+
+#[test]
 fn unequal_radii_use_reduced_radius_and_mass() {
     let p = params(10.0);
     for r2 in [0.5 * RADIUS, 3.0 * RADIUS] {
