@@ -9,6 +9,7 @@
 pub mod collide;
 pub mod cpu;
 pub mod error;
+pub mod gpu;
 pub mod model;
 pub mod output;
 pub mod run;

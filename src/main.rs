@@ -25,6 +25,27 @@ enum Command {
     Run(RunArgs),
     /// Collide two spheres head-on and compare with the papers' closed forms.
     Collide(Box<CollideArgs>),
+    /// Show the GPU adapter the GPU engine would use (POWDER_ADAPTER overrides it).
+    Info(InfoArgs),
+}
+
+#[derive(Args)]
+struct InfoArgs {
+    /// Print the adapter summary as JSON on stdout.
+    #[arg(long)]
+    json: bool,
+}
+
+fn info_cmd(a: &InfoArgs) -> Result<(), PowderError> {
+    let ctx = powder::gpu::GpuContext::new()?;
+    if a.json {
+        let text = serde_json::to_string_pretty(&ctx.summary)
+            .map_err(|e| PowderError::Run(format!("cannot encode JSON: {e}")))?;
+        println!("{text}");
+    } else {
+        println!("{}", ctx.summary);
+    }
+    Ok(())
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -494,6 +515,7 @@ fn main() -> ExitCode {
     let result = match &cli.command {
         Command::Run(a) => run_cmd(a),
         Command::Collide(a) => collide_cmd(a),
+        Command::Info(a) => info_cmd(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,49 @@
+// common.wgsl — shared by every shader stage of the GPU engine.
+//
+// `src/gpu/shaders.rs` prepends this file to each stage file (grid.wgsl, and later the
+// force and integration kernels), so everything here is visible to every stage. Keep it
+// to declarations that every stage can share: constants, structs mirrored in Rust
+// (`src/gpu/layout.rs`, checked there against naga's layout), and pure helpers.
+//
+// Core WGSL only: no f64, no float atomics, no subgroups, so the kernels run on every
+// wgpu backend (Vulkan, Metal, DX12, GL) and every adapter, the software ones included.
+
+// Invocations per workgroup for every 1-D kernel. The host computes dispatch sizes from
+// the workgroup size it reads back from naga, so changing this needs no Rust edit.
+const WG_SIZE: u32 = 256u;
+
+// Grid parameters of a run (uniform). The grid's origin (the domain's min corner) is
+// implicit: particle cells are integer coordinates relative to it.
+// Layout: mirrored by `layout::GridParams` (32 bytes).
+struct GridParams {
+    // Number of cells per axis.
+    dims: vec3<u32>,
+    n_particles: u32,
+    // Cell width h (>= largest interaction distance + Verlet skin), fixed for a run.
+    cell_width: f32,
+    // dims.x * dims.y * dims.z.
+    n_cells: u32,
+    _pad0: u32,
+    _pad1: u32,
+}
+
+@group(0) @binding(0) var<uniform> grid: GridParams;
+
+// Linear cell key of an integer cell coordinate: each component clamped to
+// [0, dims - 1] (particles outside the grid land in its boundary cells), x fastest.
+fn cell_key(cell: vec3<i32>, dims: vec3<u32>) -> u32 {
+    let hi = vec3<i32>(dims) - vec3<i32>(1);
+    let c = vec3<u32>(clamp(cell, vec3<i32>(0), hi));
+    return c.x + dims.x * (c.y + dims.y * c.z);
+}
+
+// Index of a workgroup in a (possibly 2-D or 3-D) dispatch, x fastest. Dispatches larger
+// than max_compute_workgroups_per_dimension are split over y by the host.
+fn linear_workgroup(wid: vec3<u32>, nwg: vec3<u32>) -> u32 {
+    return wid.x + nwg.x * (wid.y + nwg.y * wid.z);
+}
+
+// Global invocation index of a 1-D kernel (workgroup size WG_SIZE) under a split dispatch.
+fn global_index(wid: vec3<u32>, nwg: vec3<u32>, lid: u32) -> u32 {
+    return linear_workgroup(wid, nwg) * WG_SIZE + lid;
+}

@@ -1,0 +1,396 @@
+//! The wgpu device the GPU engine runs on: adapter choice, device creation, and a
+//! summary of what the adapter offers (`powder info`).
+//!
+//! Adapter choice (environment variable `POWDER_ADAPTER`):
+//!
+//! * `auto` (default, also when unset or empty): a real GPU when one is present —
+//!   discrete, then integrated, then virtual, then unknown — and the software adapter
+//!   (device type `Cpu`: Mesa lavapipe on Vulkan, llvmpipe on GL) otherwise;
+//! * `software`: only adapters of device type `Cpu`;
+//! * `hardware`: only adapters that are not of device type `Cpu`;
+//! * anything else: adapters whose name contains the string, ignoring case.
+//!
+//! Among equally ranked adapters, Vulkan is preferred over Metal, DX12 and GL (the same
+//! device usually shows up both on Vulkan and on GL). The device is created with the
+//! adapter's own limits, not wgpu's downlevel defaults, so storage buffers can be as
+//! large as the adapter allows; no optional feature is requested, so the kernels stay
+//! portable (core WGSL only).
+
+use crate::PowderError;
+use serde::Serialize;
+use std::fmt;
+
+/// Backends searched for adapters.
+pub const BACKENDS: wgpu::Backends = wgpu::Backends::VULKAN
+    .union(wgpu::Backends::METAL)
+    .union(wgpu::Backends::DX12)
+    .union(wgpu::Backends::GL);
+
+/// The environment variable that overrides the adapter choice.
+pub const ADAPTER_ENV: &str = "POWDER_ADAPTER";
+
+/// What to install when no adapter exists at all.
+pub const INSTALL_HINT: &str = "on Debian/Ubuntu install the software Vulkan driver: \
+     apt-get install -y mesa-vulkan-drivers libvulkan1";
+
+/// An open wgpu device, its queue, and the adapter it came from.
+pub struct GpuContext {
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub adapter: wgpu::Adapter,
+    pub summary: AdapterSummary,
+}
+
+/// The limits the GPU engine cares about (a subset of [`wgpu::Limits`]).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct LimitsSummary {
+    pub max_storage_buffer_binding_size: u64,
+    pub max_buffer_size: u64,
+    pub max_compute_workgroup_size_x: u32,
+    pub max_compute_invocations_per_workgroup: u32,
+    pub max_compute_workgroups_per_dimension: u32,
+    pub max_storage_buffers_per_shader_stage: u32,
+    pub max_bind_groups: u32,
+}
+
+impl From<&wgpu::Limits> for LimitsSummary {
+    fn from(l: &wgpu::Limits) -> Self {
+        Self {
+            max_storage_buffer_binding_size: l.max_storage_buffer_binding_size,
+            max_buffer_size: l.max_buffer_size,
+            max_compute_workgroup_size_x: l.max_compute_workgroup_size_x,
+            max_compute_invocations_per_workgroup: l.max_compute_invocations_per_workgroup,
+            max_compute_workgroups_per_dimension: l.max_compute_workgroups_per_dimension,
+            max_storage_buffers_per_shader_stage: l.max_storage_buffers_per_shader_stage,
+            max_bind_groups: l.max_bind_groups,
+        }
+    }
+}
+
+/// What an adapter is and offers, for people (`Display`) and scripts (`Serialize`).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct AdapterSummary {
+    pub name: String,
+    /// `vulkan`, `metal`, `dx12` or `gl`.
+    pub backend: String,
+    /// `DiscreteGpu`, `IntegratedGpu`, `VirtualGpu`, `Cpu` or `Other`.
+    pub device_type: String,
+    pub driver: String,
+    pub driver_info: String,
+    /// Optional wgpu features the adapter offers (none of them is requested).
+    pub features: Vec<String>,
+    pub limits: LimitsSummary,
+}
+
+impl AdapterSummary {
+    pub fn of(adapter: &wgpu::Adapter) -> Self {
+        let info = adapter.get_info();
+        Self {
+            name: info.name,
+            backend: info.backend.to_str().to_string(),
+            device_type: format!("{:?}", info.device_type),
+            driver: info.driver,
+            driver_info: info.driver_info,
+            features: adapter
+                .features()
+                .iter_names()
+                .map(|(name, _)| name.to_string())
+                .collect(),
+            limits: LimitsSummary::from(&adapter.limits()),
+        }
+    }
+}
+
+fn mib(bytes: u64) -> String {
+    if bytes >= 1 << 20 {
+        format!("{bytes} ({} MiB)", bytes >> 20)
+    } else {
+        bytes.to_string()
+    }
+}
+
+impl fmt::Display for AdapterSummary {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let l = &self.limits;
+        writeln!(f, "adapter          {}", self.name)?;
+        writeln!(f, "backend          {}", self.backend)?;
+        writeln!(f, "device type      {}", self.device_type)?;
+        let driver = match (self.driver.is_empty(), self.driver_info.is_empty()) {
+            (true, true) => "-".to_string(),
+            (false, true) => self.driver.clone(),
+            (true, false) => self.driver_info.clone(),
+            (false, false) => format!("{} ({})", self.driver, self.driver_info),
+        };
+        writeln!(f, "driver           {driver}")?;
+        writeln!(f, "limits")?;
+        writeln!(
+            f,
+            "  max_storage_buffer_binding_size        {}",
+            mib(l.max_storage_buffer_binding_size)
+        )?;
+        writeln!(
+            f,
+            "  max_buffer_size                        {}",
+            mib(l.max_buffer_size)
+        )?;
+        writeln!(
+            f,
+            "  max_compute_workgroup_size_x           {}",
+            l.max_compute_workgroup_size_x
+        )?;
+        writeln!(
+            f,
+            "  max_compute_invocations_per_workgroup  {}",
+            l.max_compute_invocations_per_workgroup
+        )?;
+        writeln!(
+            f,
+            "  max_compute_workgroups_per_dimension   {}",
+            l.max_compute_workgroups_per_dimension
+        )?;
+        writeln!(
+            f,
+            "  max_storage_buffers_per_shader_stage   {}",
+            l.max_storage_buffers_per_shader_stage
+        )?;
+        writeln!(
+            f,
+            "  max_bind_groups                        {}",
+            l.max_bind_groups
+        )?;
+        if self.features.is_empty() {
+            write!(f, "features         (none)")
+        } else {
+            write!(f, "features         {}", self.features.join(", "))
+        }
+    }
+}
+
+/// How `POWDER_ADAPTER` restricts the choice.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum AdapterPreference {
+    /// Best real GPU, else software.
+    Auto,
+    /// Device type `Cpu` only.
+    Software,
+    /// Anything but device type `Cpu`.
+    Hardware,
+    /// Case-insensitive substring of the adapter name.
+    Name(String),
+}
+
+impl AdapterPreference {
+    /// Parses a `POWDER_ADAPTER` value (`None` or empty = auto).
+    pub fn parse(value: Option<&str>) -> Self {
+        match value.map(str::trim) {
+            None | Some("") => Self::Auto,
+            Some(v) => match v.to_ascii_lowercase().as_str() {
+                "auto" => Self::Auto,
+                "software" => Self::Software,
+                "hardware" => Self::Hardware,
+                _ => Self::Name(v.to_string()),
+            },
+        }
+    }
+
+    /// Reads `POWDER_ADAPTER`.
+    pub fn from_env() -> Self {
+        Self::parse(std::env::var(ADAPTER_ENV).ok().as_deref())
+    }
+
+    /// Whether an adapter with this info may be chosen.
+    pub fn accepts(&self, info: &wgpu::AdapterInfo) -> bool {
+        match self {
+            Self::Auto => true,
+            Self::Software => info.device_type == wgpu::DeviceType::Cpu,
+            Self::Hardware => info.device_type != wgpu::DeviceType::Cpu,
+            Self::Name(s) => info.name.to_lowercase().contains(&s.to_lowercase()),
+        }
+    }
+}
+
+/// Sort key of an adapter: lower is better.
+pub fn adapter_rank(info: &wgpu::AdapterInfo) -> (u8, u8) {
+    let device = match info.device_type {
+        wgpu::DeviceType::DiscreteGpu => 0,
+        wgpu::DeviceType::IntegratedGpu => 1,
+        wgpu::DeviceType::VirtualGpu => 2,
+        wgpu::DeviceType::Other => 3,
+        wgpu::DeviceType::Cpu => 4,
+    };
+    let backend = match info.backend {
+        wgpu::Backend::Vulkan => 0,
+        wgpu::Backend::Metal => 1,
+        wgpu::Backend::Dx12 => 2,
+        wgpu::Backend::Gl => 3,
+        _ => 4,
+    };
+    (device, backend)
+}
+
+fn describe(info: &wgpu::AdapterInfo) -> String {
+    format!(
+        "{} ({}, {:?})",
+        info.name,
+        info.backend.to_str(),
+        info.device_type
+    )
+}
+
+/// Every adapter wgpu finds on [`BACKENDS`].
+pub fn enumerate_adapters() -> Vec<wgpu::Adapter> {
+    let instance = new_instance();
+    pollster::block_on(instance.enumerate_adapters(BACKENDS))
+}
+
+fn new_instance() -> wgpu::Instance {
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+    desc.backends = BACKENDS;
+    wgpu::Instance::new(desc)
+}
+
+/// Picks the best adapter allowed by `pref`; the error names what exists.
+pub fn choose_adapter(
+    adapters: Vec<wgpu::Adapter>,
+    pref: &AdapterPreference,
+) -> Result<wgpu::Adapter, PowderError> {
+    let tried = "Vulkan, Metal, DX12, GL";
+    if adapters.is_empty() {
+        return Err(PowderError::Run(format!(
+            "no GPU adapter found (tried {tried}); {INSTALL_HINT}"
+        )));
+    }
+    let all: Vec<String> = adapters.iter().map(|a| describe(&a.get_info())).collect();
+    let mut allowed: Vec<(wgpu::Adapter, (u8, u8))> = adapters
+        .into_iter()
+        .filter_map(|a| {
+            let info = a.get_info();
+            pref.accepts(&info).then(|| (a, adapter_rank(&info)))
+        })
+        .collect();
+    // Stable sort: enumeration order breaks ties.
+    allowed.sort_by_key(|(_, rank)| *rank);
+    match allowed.into_iter().next() {
+        Some((a, _)) => Ok(a),
+        None => Err(PowderError::Run(format!(
+            "no GPU adapter matches {ADAPTER_ENV}={} (tried {tried}); adapters found: {}; \
+             set {ADAPTER_ENV} to auto, software, hardware or part of one of these names",
+            match pref {
+                AdapterPreference::Name(s) => s.clone(),
+                other => format!("{other:?}").to_lowercase(),
+            },
+            all.join("; ")
+        ))),
+    }
+}
+
+impl GpuContext {
+    /// Opens the adapter chosen by `POWDER_ADAPTER` (see the module docs).
+    pub fn new() -> Result<Self, PowderError> {
+        Self::with_preference(&AdapterPreference::from_env())
+    }
+
+    /// Opens the best adapter allowed by `pref`.
+    pub fn with_preference(pref: &AdapterPreference) -> Result<Self, PowderError> {
+        let adapter = choose_adapter(enumerate_adapters(), pref)?;
+        let summary = AdapterSummary::of(&adapter);
+        let desc = wgpu::DeviceDescriptor {
+            label: Some("powder"),
+            required_features: wgpu::Features::empty(),
+            required_limits: adapter.limits(),
+            ..Default::default()
+        };
+        let (device, queue) = pollster::block_on(adapter.request_device(&desc)).map_err(|e| {
+            PowderError::Run(format!(
+                "cannot open a device on adapter {} ({}): {e}",
+                summary.name, summary.backend
+            ))
+        })?;
+        Ok(Self {
+            device,
+            queue,
+            adapter,
+            summary,
+        })
+    }
+
+    /// The limits the device was created with (the adapter's own).
+    pub fn limits(&self) -> wgpu::Limits {
+        self.device.limits()
+    }
+
+    /// Largest storage binding, capped by the largest buffer.
+    pub fn max_storage_binding(&self) -> u64 {
+        let l = self.device.limits();
+        l.max_storage_buffer_binding_size.min(l.max_buffer_size)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn info(
+        name: &str,
+        backend: wgpu::Backend,
+        device_type: wgpu::DeviceType,
+    ) -> wgpu::AdapterInfo {
+        wgpu::AdapterInfo {
+            name: name.into(),
+            ..wgpu::AdapterInfo::new(device_type, backend)
+        }
+    }
+
+    #[test]
+    fn gpu_preference_parsing() {
+        assert_eq!(AdapterPreference::parse(None), AdapterPreference::Auto);
+        assert_eq!(AdapterPreference::parse(Some("")), AdapterPreference::Auto);
+        assert_eq!(
+            AdapterPreference::parse(Some("AUTO")),
+            AdapterPreference::Auto
+        );
+        assert_eq!(
+            AdapterPreference::parse(Some("software")),
+            AdapterPreference::Software
+        );
+        assert_eq!(
+            AdapterPreference::parse(Some("Hardware")),
+            AdapterPreference::Hardware
+        );
+        assert_eq!(
+            AdapterPreference::parse(Some("RTX")),
+            AdapterPreference::Name("RTX".into())
+        );
+    }
+
+    #[test]
+    fn gpu_adapter_ranking_and_filters() {
+        use wgpu::{Backend as B, DeviceType as D};
+        let lavapipe = info("llvmpipe (LLVM 15.0.6, 256 bits)", B::Vulkan, D::Cpu);
+        let gl = info("llvmpipe (LLVM 15.0.6, 256 bits)", B::Gl, D::Cpu);
+        let igpu = info("Intel(R) UHD Graphics", B::Vulkan, D::IntegratedGpu);
+        let dgpu = info("NVIDIA GeForce RTX 4090", B::Vulkan, D::DiscreteGpu);
+        let dgpu_gl = info("NVIDIA GeForce RTX 4090", B::Gl, D::DiscreteGpu);
+        let mut all = [&gl, &lavapipe, &igpu, &dgpu_gl, &dgpu];
+        all.sort_by_key(|i| adapter_rank(i));
+        assert_eq!(all[0], &dgpu);
+        assert_eq!(all[1], &dgpu_gl);
+        assert_eq!(all[2], &igpu);
+        assert_eq!(all[3], &lavapipe);
+        assert_eq!(all[4], &gl);
+        assert!(AdapterPreference::Software.accepts(&lavapipe));
+        assert!(!AdapterPreference::Software.accepts(&igpu));
+        assert!(AdapterPreference::Hardware.accepts(&igpu));
+        assert!(!AdapterPreference::Hardware.accepts(&gl));
+        assert!(AdapterPreference::Name("rtx".into()).accepts(&dgpu));
+        assert!(!AdapterPreference::Name("rtx".into()).accepts(&lavapipe));
+    }
+
+    #[test]
+    fn gpu_no_adapter_error_names_the_fix() {
+        let e = choose_adapter(Vec::new(), &AdapterPreference::Auto).unwrap_err();
+        let text = e.to_string();
+        assert!(text.contains("no GPU adapter found"), "{text}");
+        assert!(text.contains("apt-get install -y mesa-vulkan-drivers libvulkan1"));
+    }
+}

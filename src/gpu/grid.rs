@@ -1,0 +1,599 @@
+//! Deterministic counting sort of particles by grid cell on the GPU ([`GridSort`]) and the
+//! multi-level exclusive scan it uses ([`ExclusiveScan`]).
+//!
+//! Input: one `vec4<i32>` cell per particle (xyz = integer cell relative to the grid
+//! origin, see [`crate::gpu::layout`]). Each particle's key is its cell clamped into the
+//! grid and linearised x fastest, `key = x + dx (y + dy z)`. Output:
+//!
+//! * `sorted_index[k]`: original index of the k-th particle in order of (key, index) —
+//!   exactly what a stable counting sort by key produces, identical on every run and
+//!   every adapter;
+//! * `cell_start[c]`, `cell_count[c]`: the slice of `sorted_index` holding cell c.
+//!
+//! The passes (kernels in `shaders/grid.wgsl`): clear the counts, compute keys, count
+//! per cell with atomics, exclusive-scan the counts into `cell_start`, scatter each
+//! particle into its cell's slice with an atomic slot (racy order inside a cell), then
+//! sort each cell's slice by original index (insertion sort per cell; cells of more than
+//! [`SMALL_CELL`] particles — only found when particles pile up in the clamped boundary
+//! cells or the grid is coarse — get a workgroup each and a bitonic sort). All passes
+//! are dispatches of one compute pass in the caller's encoder: no submission in between.
+
+use crate::gpu::context::GpuContext;
+use crate::gpu::kernel::{self, Kernel, Program};
+use crate::gpu::layout::{GridParams, ScanParams};
+use crate::gpu::shaders;
+use crate::PowderError;
+
+/// Elements per workgroup of `scan_blocks` (`SCAN_BLOCK` in `shaders/grid.wgsl`).
+pub const SCAN_BLOCK: u32 = 1024;
+/// Largest cell sorted by one invocation (`SMALL_CELL` in `shaders/grid.wgsl`).
+pub const SMALL_CELL: u32 = 32;
+/// Workgroups of `sort_large_cells` (a grid-stride loop over the queued cells).
+pub const LARGE_CELL_GROUPS: u32 = 64;
+
+/// Bytes per particle of the cell buffer passed to [`GridSort::encode`].
+pub const CELL_BYTES: u64 = 16;
+
+fn check_binding(
+    ctx: &GpuContext,
+    what: &str,
+    count: u64,
+    per_item: u64,
+    unit: &str,
+) -> Result<(), PowderError> {
+    let limit = ctx.max_storage_binding();
+    let bytes = count * per_item;
+    if bytes > limit {
+        return Err(PowderError::Run(format!(
+            "{what}: {count} {unit} need {bytes} bytes ({per_item} bytes each), over the \
+             adapter's storage binding limit of {limit} bytes ({} MiB, {}); at most {} {unit} \
+             fit",
+            limit >> 20,
+            ctx.summary.name,
+            limit / per_item
+        )));
+    }
+    Ok(())
+}
+
+/// Exclusive prefix sum of `n` u32s from one buffer into another, in levels of
+/// [`SCAN_BLOCK`]-element blocks: each level scans its blocks and writes block sums,
+/// the sums are scanned by the next level, and the scanned sums are added back. Sums
+/// wrap modulo 2^32.
+pub struct ExclusiveScan {
+    n: u32,
+    levels: Vec<ScanLevel>,
+    scan_blocks: Kernel,
+    scan_add: Kernel,
+    max_per_dim: u32,
+    _buffers: Vec<wgpu::Buffer>,
+}
+
+struct ScanLevel {
+    n: u32,
+    n_blocks: u32,
+    blocks: wgpu::BindGroup,
+    /// Adds the next level's scanned sums into this level's output (absent at the top).
+    add: Option<wgpu::BindGroup>,
+}
+
+impl ExclusiveScan {
+    /// Scans `input[0..n]` into `output[0..n]` (both storage buffers of >= 4 n bytes,
+    /// not the same buffer). `program` is the `grid` shader program.
+    pub fn new(
+        ctx: &GpuContext,
+        program: &Program,
+        input: &wgpu::Buffer,
+        output: &wgpu::Buffer,
+        n: u32,
+    ) -> Result<Self, PowderError> {
+        check_binding(ctx, "exclusive scan", n as u64, 4, "elements")?;
+        let device = &ctx.device;
+        let scan_blocks = program.kernel("scan_blocks")?.clone();
+        let scan_add = program.kernel("scan_add")?.clone();
+        let mut levels: Vec<ScanLevel> = Vec::new();
+        let mut buffers = Vec::new();
+        let (mut level_in, mut level_out, mut level_n) = (input.clone(), output.clone(), n);
+        loop {
+            let n_blocks = level_n.div_ceil(SCAN_BLOCK).max(1);
+            let params = kernel::uniform_buffer(
+                device,
+                "scan params",
+                bytemuck::bytes_of(&ScanParams {
+                    n: level_n,
+                    n_blocks,
+                    _pad: [0; 2],
+                }),
+            );
+            let sums = kernel::storage_buffer(device, "scan block sums", n_blocks as u64 * 4);
+            let blocks = scan_blocks.bind(
+                device,
+                &[
+                    ("scan_params", &params),
+                    ("scan_in", &level_in),
+                    ("scan_out", &level_out),
+                    ("scan_sums", &sums),
+                ],
+            )?;
+            let mut level = ScanLevel {
+                n: level_n,
+                n_blocks,
+                blocks,
+                add: None,
+            };
+            if n_blocks == 1 {
+                levels.push(level);
+                buffers.extend([params, sums]);
+                break;
+            }
+            let scanned_sums =
+                kernel::storage_buffer(device, "scanned block sums", n_blocks as u64 * 4);
+            level.add = Some(scan_add.bind(
+                device,
+                &[
+                    ("scan_params", &params),
+                    ("scan_out", &level_out),
+                    ("scan_carry", &scanned_sums),
+                ],
+            )?);
+            levels.push(level);
+            buffers.extend([params, sums.clone(), scanned_sums.clone()]);
+            level_in = sums;
+            level_out = scanned_sums;
+            level_n = n_blocks;
+        }
+        Ok(Self {
+            n,
+            levels,
+            scan_blocks,
+            scan_add,
+            max_per_dim: ctx.limits().max_compute_workgroups_per_dimension,
+            _buffers: buffers,
+        })
+    }
+
+    /// Elements scanned.
+    pub fn len(&self) -> u32 {
+        self.n
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.n == 0
+    }
+
+    /// Number of levels (1 up to [`SCAN_BLOCK`] elements, 2 up to `SCAN_BLOCK^2`, ...).
+    pub fn levels(&self) -> usize {
+        self.levels.len()
+    }
+
+    /// Records the scan's dispatches into `pass`.
+    pub fn record(&self, pass: &mut wgpu::ComputePass<'_>) {
+        for level in &self.levels {
+            self.scan_blocks.dispatch_workgroups(
+                pass,
+                &level.blocks,
+                level.n_blocks,
+                self.max_per_dim,
+            );
+        }
+        for level in self.levels.iter().rev() {
+            if let Some(add) = &level.add {
+                self.scan_add.dispatch(pass, add, level.n, self.max_per_dim);
+            }
+        }
+    }
+}
+
+/// Exclusive scan of `values` on the GPU (upload, scan, read back): for tests.
+pub fn scan_blocking(ctx: &GpuContext, values: &[u32]) -> Result<Vec<u32>, PowderError> {
+    use wgpu::util::DeviceExt;
+    let n = u32::try_from(values.len())
+        .map_err(|_| PowderError::Run(format!("cannot scan {} elements", values.len())))?;
+    let program = Program::new(ctx, &grid_variant()?)?;
+    let input = ctx
+        .device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("scan input"),
+            contents: if values.is_empty() {
+                &[0; 4]
+            } else {
+                bytemuck::cast_slice(values)
+            },
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        });
+    let output = kernel::storage_buffer(&ctx.device, "scan output", n as u64 * 4);
+    let scan = ExclusiveScan::new(ctx, &program, &input, &output, n)?;
+    let mut encoder = ctx
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("scan"),
+        });
+    {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("scan"),
+            timestamp_writes: None,
+        });
+        scan.record(&mut pass);
+    }
+    let bytes = kernel::submit_and_read(ctx, encoder, &[(&output, n as u64 * 4)])?;
+    Ok(kernel::u32s(&bytes[0]))
+}
+
+fn grid_variant() -> Result<shaders::ShaderVariant, PowderError> {
+    shaders::variant("grid")
+        .ok_or_else(|| PowderError::Run("shader variant `grid` is missing".into()))
+}
+
+/// What [`GridSort::sort_blocking`] reads back.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SortResult {
+    /// `sorted_index[k]` = original index of the k-th particle in (cell key, index) order.
+    pub sorted_index: Vec<u32>,
+    /// First slot of each cell in `sorted_index`.
+    pub cell_start: Vec<u32>,
+    /// Particles in each cell.
+    pub cell_count: Vec<u32>,
+}
+
+/// Pipelines and buffers of the cell sort for `n_particles` particles on a grid of
+/// `dims` cells; reusable for every step of a run.
+pub struct GridSort {
+    device: wgpu::Device,
+    n_particles: u32,
+    dims: [u32; 3],
+    n_cells: u32,
+    cell_width: f32,
+    max_per_dim: u32,
+    large_groups: u32,
+    cell_keys: Kernel,
+    clear_counts: Kernel,
+    count: Kernel,
+    scatter: Kernel,
+    sort_within_cells: Kernel,
+    sort_large_cells: Kernel,
+    params: wgpu::Buffer,
+    keys: wgpu::Buffer,
+    cell_count: wgpu::Buffer,
+    cell_start: wgpu::Buffer,
+    sorted_index: wgpu::Buffer,
+    _large_cells: wgpu::Buffer,
+    bg_clear: wgpu::BindGroup,
+    bg_count: wgpu::BindGroup,
+    bg_scatter: wgpu::BindGroup,
+    bg_sort_small: wgpu::BindGroup,
+    bg_sort_large: wgpu::BindGroup,
+    scan: ExclusiveScan,
+}
+
+impl GridSort {
+    /// Builds the pipelines and allocates the buffers. Fails with a message naming the
+    /// sizes when a buffer would exceed the adapter's storage binding limit.
+    pub fn new(
+        ctx: &GpuContext,
+        n_particles: u32,
+        dims: [u32; 3],
+        cell_width: f32,
+    ) -> Result<Self, PowderError> {
+        if dims.contains(&0) || dims.iter().any(|&d| d > i32::MAX as u32) {
+            return Err(PowderError::Run(format!(
+                "grid dims {dims:?}: each axis needs 1 to {} cells",
+                i32::MAX
+            )));
+        }
+        let n_cells64 = dims.iter().map(|&d| d as u64).product::<u64>();
+        let n_cells = u32::try_from(n_cells64).map_err(|_| {
+            PowderError::Run(format!(
+                "grid of {}x{}x{} = {n_cells64} cells exceeds 2^32 - 1 cells",
+                dims[0], dims[1], dims[2]
+            ))
+        })?;
+        if !(cell_width.is_finite() && cell_width > 0.0) {
+            return Err(PowderError::Run(format!(
+                "cell width must be finite and > 0, got {cell_width}"
+            )));
+        }
+        let grid_name = format!("grid sort of {}x{}x{} cells", dims[0], dims[1], dims[2]);
+        check_binding(
+            ctx,
+            "grid sort",
+            n_particles as u64,
+            CELL_BYTES,
+            "particles",
+        )?;
+        check_binding(ctx, &grid_name, n_cells as u64, 4, "cells")?;
+
+        let device = &ctx.device;
+        let program = Program::new(ctx, &grid_variant()?)?;
+        let k = |name: &str| program.kernel(name).cloned();
+        let params = kernel::uniform_buffer(
+            device,
+            "grid params",
+            bytemuck::bytes_of(&GridParams {
+                dims,
+                n_particles,
+                cell_width,
+                n_cells,
+                _pad: [0; 2],
+            }),
+        );
+        let n4 = n_particles as u64 * 4;
+        let c4 = n_cells as u64 * 4;
+        let keys = kernel::storage_buffer(device, "cell keys", n4);
+        let cell_count = kernel::storage_buffer(device, "cell count", c4);
+        let cell_start = kernel::storage_buffer(device, "cell start", c4);
+        let sorted_index = kernel::storage_buffer(device, "sorted index", n4);
+        // Queue of large cells: a count, then at most n / (SMALL_CELL + 1) cell keys (at
+        // least one slot: a struct ending in a runtime array binds >= 8 bytes).
+        let large_capacity = n_particles / (SMALL_CELL + 1);
+        let large_cells =
+            kernel::storage_buffer(device, "large cells", 4 + large_capacity.max(1) as u64 * 4);
+        let named: &[(&str, &wgpu::Buffer)] = &[
+            ("grid", &params),
+            ("keys", &keys),
+            ("cell_count", &cell_count),
+            ("cell_count_atomic", &cell_count),
+            ("cell_start", &cell_start),
+            ("sorted_index", &sorted_index),
+            ("large_cells", &large_cells),
+            ("large_cells_atomic", &large_cells),
+        ];
+        let clear_counts = k("clear_counts")?;
+        let count = k("count")?;
+        let scatter = k("scatter")?;
+        let sort_within_cells = k("sort_within_cells")?;
+        let sort_large_cells = k("sort_large_cells")?;
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let bg_clear = clear_counts.bind(device, named)?;
+        let bg_count = count.bind(device, named)?;
+        let bg_scatter = scatter.bind(device, named)?;
+        let bg_sort_small = sort_within_cells.bind(device, named)?;
+        let bg_sort_large = sort_large_cells.bind(device, named)?;
+        let scan = ExclusiveScan::new(ctx, &program, &cell_count, &cell_start, n_cells)?;
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(PowderError::Run(format!(
+                "cannot set up the {grid_name} for {n_particles} particles: {e}"
+            )));
+        }
+        Ok(Self {
+            device: device.clone(),
+            n_particles,
+            dims,
+            n_cells,
+            cell_width,
+            max_per_dim: ctx.limits().max_compute_workgroups_per_dimension,
+            large_groups: large_capacity.min(LARGE_CELL_GROUPS),
+            cell_keys: k("cell_keys")?,
+            clear_counts,
+            count,
+            scatter,
+            sort_within_cells,
+            sort_large_cells,
+            params,
+            keys,
+            cell_count,
+            cell_start,
+            sorted_index,
+            _large_cells: large_cells,
+            bg_clear,
+            bg_count,
+            bg_scatter,
+            bg_sort_small,
+            bg_sort_large,
+            scan,
+        })
+    }
+
+    pub fn n_particles(&self) -> u32 {
+        self.n_particles
+    }
+
+    pub fn dims(&self) -> [u32; 3] {
+        self.dims
+    }
+
+    pub fn n_cells(&self) -> u32 {
+        self.n_cells
+    }
+
+    pub fn cell_width(&self) -> f32 {
+        self.cell_width
+    }
+
+    /// `array<u32>`, n_particles: original index of each sorted slot.
+    pub fn sorted_index(&self) -> &wgpu::Buffer {
+        &self.sorted_index
+    }
+
+    /// `array<u32>`, n_cells: first sorted slot of each cell.
+    pub fn cell_start(&self) -> &wgpu::Buffer {
+        &self.cell_start
+    }
+
+    /// `array<u32>`, n_cells: particles in each cell.
+    pub fn cell_count(&self) -> &wgpu::Buffer {
+        &self.cell_count
+    }
+
+    /// `array<u32>`, n_particles: clamped cell key of each particle, original order.
+    pub fn keys(&self) -> &wgpu::Buffer {
+        &self.keys
+    }
+
+    /// The uniform `GridParams` buffer.
+    pub fn params(&self) -> &wgpu::Buffer {
+        &self.params
+    }
+
+    /// Records the whole sort into `encoder` as one compute pass. `cells` holds one
+    /// `vec4<i32>` per particle (storage usage).
+    ///
+    /// # Panics
+    /// If `cells` is smaller than 16 bytes per particle or lacks `STORAGE` usage.
+    pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, cells: &wgpu::Buffer) {
+        let need = self.n_particles as u64 * CELL_BYTES;
+        assert!(
+            cells.size() >= need && cells.usage().contains(wgpu::BufferUsages::STORAGE),
+            "GridSort::encode: the cell buffer must be a storage buffer of >= {need} bytes \
+             (16 per particle, {} particles); got {} bytes, usage {:?}",
+            self.n_particles,
+            cells.size(),
+            cells.usage()
+        );
+        let bg_keys = self
+            .cell_keys
+            .bind(
+                &self.device,
+                &[
+                    ("grid", &self.params),
+                    ("cells", cells),
+                    ("keys", &self.keys),
+                ],
+            )
+            .expect("cell_keys binds grid, cells and keys");
+        let (n, c, max) = (self.n_particles, self.n_cells, self.max_per_dim);
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("grid sort"),
+            timestamp_writes: None,
+        });
+        // One invocation at least: it also empties the large-cell queue.
+        self.clear_counts
+            .dispatch(&mut pass, &self.bg_clear, c, max);
+        self.cell_keys.dispatch(&mut pass, &bg_keys, n, max);
+        self.count.dispatch(&mut pass, &self.bg_count, n, max);
+        self.scan.record(&mut pass);
+        self.scatter.dispatch(&mut pass, &self.bg_scatter, n, max);
+        self.sort_within_cells
+            .dispatch(&mut pass, &self.bg_sort_small, c, max);
+        self.sort_large_cells.dispatch_workgroups(
+            &mut pass,
+            &self.bg_sort_large,
+            self.large_groups,
+            max,
+        );
+    }
+
+    /// Uploads `cells`, sorts, and reads the result back (one submission): for tests
+    /// and tools, not for the stepping loop.
+    pub fn sort_blocking(
+        &self,
+        ctx: &GpuContext,
+        cells: &[[i32; 4]],
+    ) -> Result<SortResult, PowderError> {
+        use wgpu::util::DeviceExt;
+        if cells.len() != self.n_particles as usize {
+            return Err(PowderError::Run(format!(
+                "GridSort for {} particles was given {} cells",
+                self.n_particles,
+                cells.len()
+            )));
+        }
+        let zero = [[0i32; 4]];
+        let contents: &[[i32; 4]] = if cells.is_empty() { &zero } else { cells };
+        let cell_buf = ctx
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("particle cells"),
+                contents: bytemuck::cast_slice(contents),
+                usage: wgpu::BufferUsages::STORAGE,
+            });
+        let mut encoder = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("grid sort"),
+            });
+        self.encode(&mut encoder, &cell_buf);
+        let n4 = self.n_particles as u64 * 4;
+        let c4 = self.n_cells as u64 * 4;
+        let out = kernel::submit_and_read(
+            ctx,
+            encoder,
+            &[
+                (&self.sorted_index, n4),
+                (&self.cell_start, c4),
+                (&self.cell_count, c4),
+            ],
+        )?;
+        Ok(SortResult {
+            sorted_index: kernel::u32s(&out[0]),
+            cell_start: kernel::u32s(&out[1]),
+            cell_count: kernel::u32s(&out[2]),
+        })
+    }
+}
+
+/// The CPU reference of the sort: clamped linear cell keys, then a stable counting sort
+/// by key (ties keep index order). Used by the tests and as documentation of the result.
+pub fn sort_reference(cells: &[[i32; 4]], dims: [u32; 3]) -> SortResult {
+    let n_cells = dims.iter().map(|&d| d as usize).product::<usize>();
+    let key = |c: &[i32; 4]| -> usize {
+        let cl = |v: i32, d: u32| v.clamp(0, d as i32 - 1) as usize;
+        let (x, y, z) = (cl(c[0], dims[0]), cl(c[1], dims[1]), cl(c[2], dims[2]));
+        x + dims[0] as usize * (y + dims[1] as usize * z)
+    };
+    let keys: Vec<usize> = cells.iter().map(key).collect();
+    let mut cell_count = vec![0u32; n_cells];
+    for &k in &keys {
+        cell_count[k] += 1;
+    }
+    let mut cell_start = vec![0u32; n_cells];
+    let mut acc = 0u32;
+    for (s, &c) in cell_start.iter_mut().zip(&cell_count) {
+        *s = acc;
+        acc += c;
+    }
+    let mut next = cell_start.clone();
+    let mut sorted_index = vec![0u32; cells.len()];
+    for (i, &k) in keys.iter().enumerate() {
+        sorted_index[next[k] as usize] = i as u32;
+        next[k] += 1;
+    }
+    SortResult {
+        sorted_index,
+        cell_start,
+        cell_count,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn wgsl_u32_const(module: &naga::Module, name: &str) -> u32 {
+        let (_, c) = module
+            .constants
+            .iter()
+            .find(|(_, c)| c.name.as_deref() == Some(name))
+            .unwrap_or_else(|| panic!("no constant {name}"));
+        match module.global_expressions[c.init] {
+            naga::Expression::Literal(naga::Literal::U32(v)) => v,
+            ref e => panic!("constant {name} is {e:?}"),
+        }
+    }
+
+    #[test]
+    fn gpu_grid_constants_match_wgsl() {
+        let (module, _) = shaders::validate(&grid_variant().unwrap().source).unwrap();
+        assert_eq!(wgsl_u32_const(&module, "SCAN_BLOCK"), SCAN_BLOCK);
+        assert_eq!(
+            wgsl_u32_const(&module, "SCAN_BLOCK"),
+            wgsl_u32_const(&module, "WG_SIZE") * wgsl_u32_const(&module, "SCAN_ITEMS")
+        );
+        assert_eq!(wgsl_u32_const(&module, "SMALL_CELL"), SMALL_CELL);
+    }
+
+    #[test]
+    fn gpu_grid_reference_is_a_stable_counting_sort() {
+        let cells = [
+            [5, 0, 0, 0],
+            [-3, 0, 0, 0],
+            [1, 1, 0, 0],
+            [0, 0, 0, 0],
+            [9, 9, 9, 0],
+        ];
+        let r = sort_reference(&cells, [2, 2, 1]);
+        // keys: 1, 0, 3, 0, 3
+        assert_eq!(r.sorted_index, vec![1, 3, 0, 2, 4]);
+        assert_eq!(r.cell_start, vec![0, 2, 3, 3]);
+        assert_eq!(r.cell_count, vec![2, 1, 0, 2]);
+    }
+}

@@ -1,0 +1,327 @@
+//! Compute kernels built from a [`ShaderVariant`]: one pipeline per entry point, with its
+//! bindings found by name from naga's reflection, plus dispatch and read-back helpers.
+//!
+//! Each pipeline uses wgpu's automatic layout (bind group 0 holds exactly the globals its
+//! entry point uses), so one WGSL module can declare every buffer of a stage — with
+//! atomic and plain views of the same buffer under different names — and each kernel
+//! binds only what it touches: [`Kernel::bind`] takes `(global name, buffer)` pairs,
+//! ignores names the kernel does not use and reports the ones it misses.
+
+use crate::gpu::context::GpuContext;
+use crate::gpu::shaders::{self, ShaderVariant};
+use crate::PowderError;
+use std::collections::BTreeMap;
+use std::sync::mpsc;
+
+/// One compute entry point, ready to bind and dispatch.
+#[derive(Clone, Debug)]
+pub struct Kernel {
+    pub name: String,
+    pub pipeline: wgpu::ComputePipeline,
+    pub layout: wgpu::BindGroupLayout,
+    /// (global variable name, binding) of every group-0 global the entry point uses.
+    pub bindings: Vec<(String, u32)>,
+    pub workgroup_size: [u32; 3],
+}
+
+/// The kernels of one shader variant, by entry-point name.
+#[derive(Clone, Debug)]
+pub struct Program {
+    pub name: String,
+    pub kernels: BTreeMap<String, Kernel>,
+}
+
+impl Program {
+    /// Validates the variant with naga, then builds one pipeline per compute entry point.
+    /// wgpu validation errors come back as `PowderError::Run` instead of panicking.
+    pub fn new(ctx: &GpuContext, variant: &ShaderVariant) -> Result<Self, PowderError> {
+        let (module, info) = shaders::validate(&variant.source).map_err(|e| {
+            PowderError::Run(format!(
+                "shader variant `{}` is invalid:\n{e}",
+                variant.name
+            ))
+        })?;
+        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let shader = ctx
+            .device
+            .create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some(&variant.name),
+                source: wgpu::ShaderSource::Wgsl(variant.source.as_str().into()),
+            });
+        let mut kernels = BTreeMap::new();
+        for (index, ep) in module.entry_points.iter().enumerate() {
+            if ep.stage != naga::ShaderStage::Compute {
+                continue;
+            }
+            let uses = info.get_entry_point(index);
+            let mut bindings = Vec::new();
+            let mut storage = 0u32;
+            for (handle, var) in module.global_variables.iter() {
+                if let Some(rb) = &var.binding {
+                    if !uses[handle].is_empty() {
+                        if rb.group != 0 {
+                            return Err(PowderError::Run(format!(
+                                "kernel {}::{}: global `{}` is in bind group {}; kernels \
+                                 use group 0 only",
+                                variant.name,
+                                ep.name,
+                                var.name.as_deref().unwrap_or("?"),
+                                rb.group
+                            )));
+                        }
+                        bindings.push((var.name.clone().unwrap_or_default(), rb.binding));
+                        if matches!(var.space, naga::AddressSpace::Storage { .. }) {
+                            storage += 1;
+                        }
+                    }
+                }
+            }
+            let max_storage = ctx.device.limits().max_storage_buffers_per_shader_stage;
+            if storage > max_storage {
+                return Err(PowderError::Run(format!(
+                    "kernel {}::{} binds {storage} storage buffers; {} allows {max_storage}",
+                    variant.name, ep.name, ctx.summary.name
+                )));
+            }
+            let pipeline = ctx
+                .device
+                .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some(&format!("{}::{}", variant.name, ep.name)),
+                    layout: None,
+                    module: &shader,
+                    entry_point: Some(&ep.name),
+                    compilation_options: Default::default(),
+                    cache: None,
+                });
+            let layout = pipeline.get_bind_group_layout(0);
+            kernels.insert(
+                ep.name.clone(),
+                Kernel {
+                    name: ep.name.clone(),
+                    pipeline,
+                    layout,
+                    bindings,
+                    workgroup_size: ep.workgroup_size,
+                },
+            );
+        }
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(PowderError::Run(format!(
+                "cannot build the `{}` kernels on {}: {e}",
+                variant.name, ctx.summary.name
+            )));
+        }
+        Ok(Self {
+            name: variant.name.clone(),
+            kernels,
+        })
+    }
+
+    /// The kernel called `name` (an entry point of this program).
+    pub fn kernel(&self, name: &str) -> Result<&Kernel, PowderError> {
+        self.kernels.get(name).ok_or_else(|| {
+            PowderError::Run(format!(
+                "shader variant `{}` has no compute entry point `{name}`",
+                self.name
+            ))
+        })
+    }
+}
+
+impl Kernel {
+    /// Bind group 0 for this kernel from `(global name, buffer)` pairs (whole buffers).
+    /// Names the kernel does not use are ignored; a missing one is an error.
+    pub fn bind(
+        &self,
+        device: &wgpu::Device,
+        buffers: &[(&str, &wgpu::Buffer)],
+    ) -> Result<wgpu::BindGroup, PowderError> {
+        let mut entries = Vec::with_capacity(self.bindings.len());
+        for (name, binding) in &self.bindings {
+            let buffer = buffers
+                .iter()
+                .find(|(n, _)| n == name)
+                .map(|(_, b)| *b)
+                .ok_or_else(|| {
+                    PowderError::Run(format!(
+                        "kernel `{}` needs a buffer for `{name}` (binding {binding})",
+                        self.name
+                    ))
+                })?;
+            entries.push(wgpu::BindGroupEntry {
+                binding: *binding,
+                resource: buffer.as_entire_binding(),
+            });
+        }
+        Ok(device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(&self.name),
+            layout: &self.layout,
+            entries: &entries,
+        }))
+    }
+
+    /// Records a 1-D dispatch of `invocations` invocations (rounded up to whole
+    /// workgroups), split over y (and z) when the workgroup count exceeds
+    /// `max_per_dim`; kernels recover the linear index with `global_index` from
+    /// `common.wgsl`. Nothing is recorded for zero invocations.
+    pub fn dispatch(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        bind_group: &wgpu::BindGroup,
+        invocations: u32,
+        max_per_dim: u32,
+    ) {
+        let per_group = self.workgroup_size.iter().product::<u32>().max(1);
+        self.dispatch_workgroups(
+            pass,
+            bind_group,
+            invocations.div_ceil(per_group),
+            max_per_dim,
+        );
+    }
+
+    /// Records a dispatch of `workgroups` workgroups, split as in [`Kernel::dispatch`].
+    pub fn dispatch_workgroups(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        bind_group: &wgpu::BindGroup,
+        workgroups: u32,
+        max_per_dim: u32,
+    ) {
+        if workgroups == 0 {
+            return;
+        }
+        let [x, y, z] = split_workgroups(workgroups, max_per_dim);
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, bind_group, &[]);
+        pass.dispatch_workgroups(x, y, z);
+    }
+}
+
+/// Splits `count` workgroups into `[x, y, z]` with each at most `max_per_dim` and
+/// `x * y * z >= count`, keeping the excess below one row.
+pub fn split_workgroups(count: u32, max_per_dim: u32) -> [u32; 3] {
+    let max = max_per_dim.max(1);
+    if count <= max {
+        return [count, 1, 1];
+    }
+    let rows = count.div_ceil(max);
+    if rows <= max {
+        let x = count.div_ceil(rows);
+        return [x, rows, 1];
+    }
+    let planes = rows.div_ceil(max);
+    let y = rows.div_ceil(planes);
+    [max, y, planes]
+}
+
+/// Creates a buffer usable as storage, copy source and copy destination.
+pub fn storage_buffer(device: &wgpu::Device, label: &str, bytes: u64) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        // Zero-sized bindings are invalid; keep at least one word.
+        size: bytes.max(4).next_multiple_of(4),
+        usage: wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_SRC
+            | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
+/// Creates a uniform buffer holding `data`.
+pub fn uniform_buffer(device: &wgpu::Device, label: &str, data: &[u8]) -> wgpu::Buffer {
+    use wgpu::util::DeviceExt;
+    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents: data,
+        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+    })
+}
+
+/// Appends copies of `sources` (buffer, bytes from its start) into fresh staging buffers
+/// to `encoder`, submits it, waits, and returns the bytes: one submission for all.
+pub fn submit_and_read(
+    ctx: &GpuContext,
+    mut encoder: wgpu::CommandEncoder,
+    sources: &[(&wgpu::Buffer, u64)],
+) -> Result<Vec<Vec<u8>>, PowderError> {
+    let staging: Vec<(wgpu::Buffer, u64)> = sources
+        .iter()
+        .map(|&(src, bytes)| {
+            let size = bytes.max(4).next_multiple_of(4);
+            let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("read-back"),
+                size,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            if bytes > 0 {
+                encoder.copy_buffer_to_buffer(src, 0, &buf, 0, size.min(src.size()));
+            }
+            (buf, bytes)
+        })
+        .collect();
+    ctx.queue.submit([encoder.finish()]);
+    let (tx, rx) = mpsc::channel();
+    for (i, (buf, _)) in staging.iter().enumerate() {
+        let tx = tx.clone();
+        buf.map_async(wgpu::MapMode::Read, .., move |r| {
+            let _ = tx.send((i, r));
+        });
+    }
+    drop(tx);
+    ctx.device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|e| PowderError::Run(format!("GPU wait failed: {e}")))?;
+    for (i, r) in rx.iter() {
+        r.map_err(|e| PowderError::Run(format!("cannot map read-back buffer {i}: {e}")))?;
+    }
+    let mut out = Vec::with_capacity(staging.len());
+    for (buf, bytes) in &staging {
+        let view = buf
+            .get_mapped_range(..)
+            .map_err(|e| PowderError::Run(format!("cannot read mapped buffer: {e}")))?;
+        out.push(view[..*bytes as usize].to_vec());
+        drop(view);
+        buf.unmap();
+    }
+    Ok(out)
+}
+
+/// Reinterprets read-back bytes as u32s.
+pub fn u32s(bytes: &[u8]) -> Vec<u32> {
+    bytemuck::pod_collect_to_vec(bytes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gpu_kernel_split_workgroups() {
+        for &(count, max) in &[
+            (0u32, 65535u32),
+            (1, 65535),
+            (65535, 65535),
+            (65536, 65535),
+            (65537, 65535),
+            (1 << 24, 65535),
+            (u32::MAX, 65535),
+            (50, 7),
+            (49, 7),
+            (343, 7),
+        ] {
+            let [x, y, z] = split_workgroups(count, max);
+            assert!(
+                x <= max && y <= max && z <= max,
+                "{count}/{max}: {x} {y} {z}"
+            );
+            let total = x as u64 * y as u64 * z as u64;
+            assert!(total >= count as u64, "{count}/{max}: {x} {y} {z}");
+            assert!(
+                count == 0 || total - (count as u64) < (x as u64) * (y as u64),
+                "{count}: {x} {y} {z}"
+            );
+        }
+    }
+}

@@ -1,0 +1,402 @@
+//! Memory layout shared by the host and the kernels: the particle position
+//! representation and the uniform blocks, as `#[repr(C)]` bytemuck structs whose WGSL
+//! twins live in `shaders/common.wgsl` / `shaders/grid.wgsl` (the tests check the two
+//! layouts against naga's).
+//!
+//! # Positions: integer cell + f32 offset
+//!
+//! An f32 absolute position carries 24 significant bits: at 1e4 particle diameters from
+//! the origin its spacing is ~1e-3 diameters, as large as the overlaps that decide the
+//! contact forces, so two touching particles far from the origin see garbage overlaps.
+//! The GPU engine therefore stores each particle's position as
+//!
+//! * an integer **cell** `vec4<i32>` ([`CellCoord`]): xyz = cell coordinates on the
+//!   run's grid, w = the particle's material index;
+//! * an f32 **offset** `vec4<f32>` ([`CellOffset`]): xyz = position inside that cell, in
+//!   `[0, h)` for cell width h, w = the particle's radius.
+//!
+//! The grid origin is the domain's min corner and the cell width `h` (>= the largest
+//! interaction distance + the Verlet skin) is fixed for a run; it is also the cell width
+//! of the neighbour grid ([`crate::gpu::grid`]), so the integer cell doubles as the
+//! neighbour-search cell. The vector between two particles is formed as
+//! `(cell_i - cell_j) * h + (off_i - off_j)`: the integer difference is exact, and the
+//! f32 terms are of the size of a cell, so the separation keeps f32's relative precision
+//! (about `h * 2^-24`) wherever the pair sits. A position is resolved to
+//! `h * 2^-24` per axis (half an f32 ulp of `h`), anywhere in a domain of up to `2^31`
+//! cells per axis.
+//!
+//! Use the same `h` on both sides: the kernels see `h` as f32, so a run should pick an
+//! f32-representable cell width ([`gpu_cell_width`]) and use it for the f64 encode too.
+
+use bytemuck::{Pod, Zeroable};
+use glam::DVec3;
+
+/// Integer cell of a particle: xyz = cell coordinates, w = material index.
+/// WGSL: `vec4<i32>`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct CellCoord(pub [i32; 4]);
+
+/// Position inside the cell: xyz in `[0, h)`, w = radius. WGSL: `vec4<f32>`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct CellOffset(pub [f32; 4]);
+
+/// Grid parameters of a run: twin of `GridParams` in `shaders/common.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GridParams {
+    /// Cells per axis.
+    pub dims: [u32; 3],
+    pub n_particles: u32,
+    /// Cell width h.
+    pub cell_width: f32,
+    /// `dims[0] * dims[1] * dims[2]`.
+    pub n_cells: u32,
+    pub _pad: [u32; 2],
+}
+
+/// One level of the exclusive scan: twin of `ScanParams` in `shaders/grid.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct ScanParams {
+    /// Elements at this level.
+    pub n: u32,
+    /// Workgroups doing real work: `ceil(n / SCAN_BLOCK)`.
+    pub n_blocks: u32,
+    pub _pad: [u32; 2],
+}
+
+/// The f32-representable cell width nearest `h`: what the kernels will see.
+pub fn gpu_cell_width(h: f64) -> f64 {
+    h as f32 as f64
+}
+
+/// Splits an absolute position into its cell (relative to `origin`, width `h`) and the
+/// f32 offset inside it, each component in `[0, h)`. The w components are 0; set them
+/// to the material index and the radius (or use [`PackedPosition::new`]).
+///
+/// The offset is rounded to the nearest f32; when that rounds up to `h` itself the
+/// particle moves to the next cell with offset 0, so `0 <= offset < h` always holds.
+/// Cells beyond the i32 range saturate (positions there are not representable).
+pub fn encode(p: DVec3, origin: DVec3, h: f64) -> ([i32; 4], [f32; 4]) {
+    let mut cell = [0i32; 4];
+    let mut offset = [0f32; 4];
+    let h32 = h as f32;
+    for axis in 0..3 {
+        let rel = p[axis] - origin[axis];
+        let mut c = (rel / h).floor();
+        // Offset taken in f64 from the cell's corner; exact up to f64 rounding of rel.
+        let mut o = rel - c * h;
+        // (rel / h).floor() can be off by one next to a cell face.
+        if o < 0.0 {
+            c -= 1.0;
+            o += h;
+        } else if o >= h {
+            c += 1.0;
+            o -= h;
+        }
+        let mut o32 = o as f32;
+        if o32 >= h32 || (o32 as f64) >= h {
+            c += 1.0;
+            o32 = 0.0;
+        }
+        cell[axis] = c as i32;
+        offset[axis] = o32.max(0.0);
+    }
+    (cell, offset)
+}
+
+/// Absolute position of a cell and offset (w components ignored).
+pub fn decode(cell: [i32; 4], offset: [f32; 4], origin: DVec3, h: f64) -> DVec3 {
+    DVec3::new(
+        origin.x + (cell[0] as f64) * h + offset[0] as f64,
+        origin.y + (cell[1] as f64) * h + offset[1] as f64,
+        origin.z + (cell[2] as f64) * h + offset[2] as f64,
+    )
+}
+
+/// A particle's position with its material (cell.w) and radius (offset.w).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct PackedPosition {
+    pub cell: CellCoord,
+    pub offset: CellOffset,
+}
+
+impl PackedPosition {
+    pub fn new(p: DVec3, origin: DVec3, h: f64, material: u32, radius: f64) -> Self {
+        let (mut cell, mut offset) = encode(p, origin, h);
+        cell[3] = material as i32;
+        offset[3] = radius as f32;
+        Self {
+            cell: CellCoord(cell),
+            offset: CellOffset(offset),
+        }
+    }
+
+    pub fn position(&self, origin: DVec3, h: f64) -> DVec3 {
+        decode(self.cell.0, self.offset.0, origin, h)
+    }
+
+    pub fn material(&self) -> u32 {
+        self.cell.0[3] as u32
+    }
+
+    pub fn radius(&self) -> f32 {
+        self.offset.0[3]
+    }
+}
+
+/// The vector from particle j to particle i as the kernels form it, in f32:
+/// `(cell_i - cell_j) * h + (off_i - off_j)`.
+pub fn separation_f32(
+    cell_i: [i32; 4],
+    off_i: [f32; 4],
+    cell_j: [i32; 4],
+    off_j: [f32; 4],
+    h: f32,
+) -> [f32; 3] {
+    let mut d = [0f32; 3];
+    for axis in 0..3 {
+        let dc = cell_i[axis].wrapping_sub(cell_j[axis]) as f32;
+        d[axis] = dc * h + (off_i[axis] - off_j[axis]);
+    }
+    d
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gpu::shaders;
+    use rand::{Rng, SeedableRng};
+    use rand_pcg::Pcg64;
+    use std::mem::{offset_of, size_of};
+
+    fn norm_f32(d: [f32; 3]) -> f32 {
+        (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
+    }
+
+    #[test]
+    fn gpu_layout_round_trip_error_is_below_h_2_pow_minus_23() {
+        let mut rng = Pcg64::seed_from_u64(7);
+        for &h in &[2.2, 1e-4, 3.0e-6, 0.5, 17.0] {
+            let origin = DVec3::new(-3.5, 12.25, -1e3) * h;
+            let bound = h * 2f64.powi(-23);
+            let width = 1e4 * h;
+            let mut worst = 0f64;
+            for k in 0..20_000 {
+                let mut p = origin + DVec3::new(rng.random(), rng.random(), rng.random()) * width;
+                if k % 100 == 0 {
+                    // Exactly on a cell face, and just below one.
+                    let c = (rng.random::<f64>() * 1e4).floor();
+                    p.x = origin.x + c * h;
+                    p.y = origin.y + c * h - h * 1e-12;
+                }
+                let (cell, off) = encode(p, origin, h);
+                for o in &off[..3] {
+                    assert!(
+                        *o >= 0.0 && (*o as f64) < h,
+                        "offset {o} outside [0, {h}) for {p}"
+                    );
+                }
+                let q = decode(cell, off, origin, h);
+                worst = worst.max((q - p).abs().max_element());
+            }
+            assert!(
+                worst <= bound,
+                "h = {h}: worst round-trip error {worst:e} > h 2^-23 = {bound:e}"
+            );
+        }
+    }
+
+    /// Worst relative overlap errors over random pairs of touching spheres (radius 1,
+    /// overlap 1e-3) near cell 1e4 of a grid of width h = 2.2: (f32 cell/offset
+    /// arithmetic vs the stored state in f64, stored state vs the true overlap, f32
+    /// cell/offset vs the true overlap, naive absolute f32 vs the true overlap).
+    fn overlap_errors(axis_aligned: bool) -> [f64; 4] {
+        // The kernels' h is f32: encode with exactly that value (see gpu_cell_width).
+        let h = gpu_cell_width(2.2);
+        let h32 = h as f32;
+        let origin = DVec3::ZERO;
+        let (r, overlap) = (1.0f64, 1e-3f64);
+        let mut rng = Pcg64::seed_from_u64(11);
+        let mut worst = [0f64; 4];
+        for k in 0..20_000 {
+            let centre = DVec3::new(rng.random(), rng.random(), rng.random()) * 100.0 * h
+                + DVec3::splat(1e4 * h);
+            let dir = if axis_aligned {
+                let mut v = DVec3::ZERO;
+                v[k % 3] = if (k / 3) % 2 == 0 { 1.0 } else { -1.0 };
+                v
+            } else {
+                loop {
+                    let v = DVec3::new(rng.random(), rng.random(), rng.random()) * 2.0 - DVec3::ONE;
+                    if v.length() > 0.1 && v.length() < 1.0 {
+                        break v.normalize();
+                    }
+                }
+            };
+            let pi = centre;
+            let pj = centre + dir * (2.0 * r - overlap);
+            let (ci, oi) = encode(pi, origin, h);
+            let (cj, oj) = encode(pj, origin, h);
+            assert!(ci[0] >= 10_000 && ci[0] < 10_200);
+            // GPU way: cell and offset differences in f32.
+            let gpu = (2.0 * r as f32 - norm_f32(separation_f32(ci, oi, cj, oj, h32))) as f64;
+            // The stored state evaluated in f64.
+            let stored = 2.0 * r - (decode(ci, oi, origin, h) - decode(cj, oj, origin, h)).length();
+            // Naive: absolute f32 positions.
+            let naive = (2.0 * r as f32 - (pi.as_vec3() - pj.as_vec3()).length()) as f64;
+            let errs = [
+                (gpu - stored).abs(),
+                (stored - overlap).abs(),
+                (gpu - overlap).abs(),
+                (naive - overlap).abs(),
+            ];
+            for (w, e) in worst.iter_mut().zip(errs) {
+                *w = w.max(e / overlap);
+            }
+        }
+        worst
+    }
+
+    #[test]
+    fn gpu_layout_far_from_origin_overlap_survives_f32() {
+        let (h, overlap) = (gpu_cell_width(2.2), 1e-3);
+        // Storing a position rounds each axis by at most h 2^-24 (half an f32 ulp of the
+        // offset); that moves a pair's distance by at most 2 h 2^-24 along an axis and
+        // 2 sqrt(3) h 2^-24 in general, i.e. 2.6e-4 / 4.5e-4 of this overlap, anywhere in
+        // the domain (it is the position resolution, not a loss far from the origin).
+        let storage_axis = 2.0 * h * 2f64.powi(-24) / overlap;
+        let storage_any = 3f64.sqrt() * storage_axis;
+
+        // Head-on contacts along the axes: the f32 arithmetic on cells and offsets
+        // reproduces the stored state's overlap to < 1e-4.
+        let [arith, stored, total, naive] = overlap_errors(true);
+        eprintln!(
+            "axis-aligned, overlap 1e-3 near cell 1e4: relative error of cell/offset f32 \
+             {arith:.2e} vs the stored state, {total:.2e} vs the true positions \
+             (storage {stored:.2e}); naive absolute f32 {naive:.2e}"
+        );
+        assert!(arith < 1e-4, "cell/offset f32 arithmetic error {arith:e}");
+        assert!(stored <= storage_axis, "storage error {stored:e}");
+        assert!(
+            total < 1e-4 + storage_axis,
+            "cell/offset f32 total error {total:e}"
+        );
+        // Absolute f32 positions near 2.2e4 are spaced 2^-9 ~ 2e-3 apart: the overlap
+        // is lost entirely.
+        assert!(
+            naive > 0.1,
+            "naive f32 unexpectedly kept the overlap: {naive:e}"
+        );
+
+        // Arbitrary directions: forming |d| ~ 2 in f32 (three components, squares, sum,
+        // sqrt) costs about one f32 ulp of 2 (2.4e-7), i.e. ~2e-4 of this overlap.
+        // Still three to four orders of magnitude better than absolute f32.
+        let [arith, stored, total, naive] = overlap_errors(false);
+        eprintln!(
+            "any direction, overlap 1e-3 near cell 1e4: relative error of cell/offset f32 \
+             {arith:.2e} vs the stored state, {total:.2e} vs the true positions \
+             (storage {stored:.2e}); naive absolute f32 {naive:.2e}"
+        );
+        assert!(arith < 3e-4, "cell/offset f32 arithmetic error {arith:e}");
+        assert!(stored <= storage_any, "storage error {stored:e}");
+        assert!(
+            total < 3e-4 + storage_any,
+            "cell/offset f32 total error {total:e}"
+        );
+        assert!(
+            naive > 0.1,
+            "naive f32 unexpectedly kept the overlap: {naive:e}"
+        );
+    }
+
+    #[test]
+    fn gpu_layout_touching_spheres_at_cell_1e4() {
+        // The worked example: radius 1, h = 2.2 (as f32), centres 1.999 apart along x
+        // around cell 1e4 (x ~ 2.2e4). Particle i is stored exactly, j to 1.5e-8.
+        let h = gpu_cell_width(2.2);
+        let origin = DVec3::ZERO;
+        let pi = DVec3::new(10_000.0 * h + 0.625, 10_000.0 * h + 1.0, 10_000.0 * h + 1.0);
+        let pj = pi + DVec3::new(1.999, 0.0, 0.0);
+        let (ci, oi) = encode(pi, origin, h);
+        let (cj, oj) = encode(pj, origin, h);
+        assert_eq!(ci[0], 10_000);
+        assert_eq!(cj[0], 10_001);
+        let gpu = 2.0 - norm_f32(separation_f32(cj, oj, ci, oi, h as f32)) as f64;
+        assert!(
+            ((gpu - 1e-3) / 1e-3).abs() < 1e-4,
+            "cell/offset overlap {gpu:e}"
+        );
+        let naive = 2.0 - (pj.as_vec3() - pi.as_vec3()).length() as f64;
+        assert!(
+            ((naive - 1e-3) / 1e-3).abs() > 0.1,
+            "naive overlap {naive:e}"
+        );
+    }
+
+    #[test]
+    fn gpu_layout_packed_position_carries_material_and_radius() {
+        let p = PackedPosition::new(DVec3::new(1.0, -2.0, 3.5), DVec3::splat(-4.0), 0.75, 3, 0.3);
+        assert_eq!(p.material(), 3);
+        assert_eq!(p.radius(), 0.3f32);
+        assert!(
+            (p.position(DVec3::splat(-4.0), 0.75) - DVec3::new(1.0, -2.0, 3.5)).length() < 1e-6
+        );
+        assert_eq!(size_of::<PackedPosition>(), 32);
+        assert_eq!(bytemuck::bytes_of(&p).len(), 32);
+    }
+
+    /// Size and member offsets of a WGSL struct as naga lays it out.
+    fn wgsl_struct(module: &naga::Module, name: &str) -> (u32, Vec<(String, u32)>) {
+        for (_, ty) in module.types.iter() {
+            if ty.name.as_deref() == Some(name) {
+                if let naga::TypeInner::Struct { members, span } = &ty.inner {
+                    return (
+                        *span,
+                        members
+                            .iter()
+                            .map(|m| (m.name.clone().unwrap_or_default(), m.offset))
+                            .collect(),
+                    );
+                }
+            }
+        }
+        panic!("struct {name} not found in the WGSL module");
+    }
+
+    #[test]
+    fn gpu_layout_rust_structs_match_wgsl() {
+        let grid = shaders::variant("grid").expect("grid variant");
+        let (module, _) = shaders::validate(&grid.source).unwrap();
+        let (size, members) = wgsl_struct(&module, "GridParams");
+        assert_eq!(size as usize, size_of::<GridParams>());
+        let expect = [
+            ("dims", offset_of!(GridParams, dims)),
+            ("n_particles", offset_of!(GridParams, n_particles)),
+            ("cell_width", offset_of!(GridParams, cell_width)),
+            ("n_cells", offset_of!(GridParams, n_cells)),
+        ];
+        for (name, off) in expect {
+            let m = members.iter().find(|(n, _)| n == name).unwrap();
+            assert_eq!(m.1 as usize, off, "GridParams.{name}");
+        }
+        let (size, members) = wgsl_struct(&module, "ScanParams");
+        assert_eq!(size as usize, size_of::<ScanParams>());
+        assert_eq!(
+            members[0],
+            ("n".to_string(), offset_of!(ScanParams, n) as u32)
+        );
+        assert_eq!(
+            members[1],
+            (
+                "n_blocks".to_string(),
+                offset_of!(ScanParams, n_blocks) as u32
+            )
+        );
+        assert_eq!(size_of::<CellCoord>(), 16);
+        assert_eq!(size_of::<CellOffset>(), 16);
+    }
+}
