@@ -11,9 +11,11 @@
 
 use crate::cpu::CpuEngine;
 use crate::error::PowderError;
+use crate::gpu::{GpuContext, GpuEngine};
 use crate::model::{analytic, ContactModel, Dissipation, PairGeometry};
 use crate::output::plot::{Legend, Plot, Series, Style};
 use crate::scene::{Domain, DtSetting, Material, ParticleInit, Scene, Wall};
+use glam::DVec3;
 use serde::Serialize;
 use std::f64::consts::PI;
 
@@ -59,9 +61,10 @@ impl CollideSpec {
 pub struct CollisionEnergy {
     pub initial_kinetic: f64,
     pub final_kinetic: f64,
-    pub dissipated: f64,
-    /// |E_total(end) − E_total(start)| / E_kinetic(start).
-    pub balance_error: f64,
+    /// From the energy ledger (CPU backend; null on the GPU, which keeps none yet).
+    pub dissipated: Option<f64>,
+    /// |E_total(end) − E_total(start)| / E_kinetic(start) (CPU backend).
+    pub balance_error: Option<f64>,
 }
 
 /// JKR characteristic scales of the pair (with the stiffness scale applied).
@@ -112,6 +115,8 @@ pub struct CollideResult {
     pub dt: f64,
     pub steps: u64,
     pub backend: &'static str,
+    /// The GPU adapter (GPU backend).
+    pub adapter: Option<String>,
     pub energy: CollisionEnergy,
 }
 
@@ -256,44 +261,183 @@ impl CollideSpec {
 /// Largest number of steps one collision may take before it is reported as undecided.
 pub const MAX_STEPS: u64 = 50_000_000;
 
-/// Relative motion of the colliding pair: overlap, normal approach speed, unit normal
-/// (from the partner to sphere 1) and the tangential contact-point velocity.
-fn pair_state(e: &CpuEngine, wall: bool) -> (f64, f64, glam::DVec3, glam::DVec3) {
-    let r1 = e.radii()[0];
-    let w1 = e.angular_velocities().first().copied().unwrap_or_default();
-    if wall {
-        let n = glam::DVec3::new(-1.0, 0.0, 0.0);
-        let v = e.velocities()[0];
-        let vc = v - r1 * w1.cross(n);
-        (e.wall_overlap(0, 0), -v.dot(n), n, vc - n * vc.dot(n))
-    } else {
-        let d = e.positions()[0] - e.positions()[1];
-        let n = d.normalize();
-        let v = e.velocities()[0] - e.velocities()[1];
-        let w2 = e.angular_velocities().get(1).copied().unwrap_or_default();
-        let vc = v - r1 * w1.cross(n) - e.radii()[1] * w2.cross(n);
-        (e.overlap(0, 1), -v.dot(n), n, vc - n * vc.dot(n))
+/// Which engine runs the collision.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Backend {
+    /// The f64 CPU reference engine.
+    #[default]
+    Cpu,
+    /// The wgpu engine (the full GPU pipeline, reading the pair back every step).
+    Gpu,
+}
+
+/// The pair as a backend reports it after a step.
+struct PairView {
+    pos: [DVec3; 2],
+    vel: [DVec3; 2],
+    omega: [DVec3; 2],
+    /// Whether the contact persists (JKR necks at negative overlap); `None` when the
+    /// backend cannot say, then δ > 0 decides.
+    in_contact: Option<bool>,
+}
+
+/// What the collision loop needs of an engine.
+trait CollisionRun {
+    fn step(&mut self) -> Result<(), PowderError>;
+    fn view(&self) -> Result<PairView, PowderError>;
+    fn time(&self) -> f64;
+    fn steps(&self) -> u64;
+    /// (kinetic, total) energy; total is `None` where the backend keeps no ledger.
+    fn energy(&self, view: &PairView) -> (f64, Option<f64>, Option<f64>);
+    fn rotates(&self) -> bool;
+}
+
+struct CpuRun {
+    engine: CpuEngine,
+    wall: bool,
+}
+
+impl CollisionRun for CpuRun {
+    fn step(&mut self) -> Result<(), PowderError> {
+        self.engine.step()
+    }
+    fn view(&self) -> Result<PairView, PowderError> {
+        let e = &self.engine;
+        let two = |s: &[DVec3]| {
+            [
+                s.first().copied().unwrap_or_default(),
+                s.get(1).copied().unwrap_or_default(),
+            ]
+        };
+        let history = if self.wall {
+            e.wall_contact_history(0, 0)
+        } else {
+            e.contact_history(0, 1)
+        };
+        Ok(PairView {
+            pos: two(e.positions()),
+            vel: two(e.velocities()),
+            omega: two(e.angular_velocities()),
+            in_contact: Some(history.is_some_and(|h| h.touched)),
+        })
+    }
+    fn time(&self) -> f64 {
+        self.engine.time
+    }
+    fn steps(&self) -> u64 {
+        self.engine.steps
+    }
+    fn energy(&self, _: &PairView) -> (f64, Option<f64>, Option<f64>) {
+        let e = self.engine.energies();
+        (e.kinetic, Some(e.total()), Some(e.dissipated))
+    }
+    fn rotates(&self) -> bool {
+        self.engine.rotates()
+    }
+}
+
+struct GpuRun {
+    engine: GpuEngine,
+}
+
+impl CollisionRun for GpuRun {
+    fn step(&mut self) -> Result<(), PowderError> {
+        self.engine.run_steps(1)
+    }
+    fn view(&self) -> Result<PairView, PowderError> {
+        let s = self.engine.state()?;
+        let two = |v: &[DVec3]| [v[0], v.get(1).copied().unwrap_or_default()];
+        Ok(PairView {
+            pos: two(&s.positions),
+            vel: two(&s.velocities),
+            omega: [DVec3::ZERO; 2],
+            in_contact: None,
+        })
+    }
+    fn time(&self) -> f64 {
+        self.engine.time
+    }
+    fn steps(&self) -> u64 {
+        self.engine.steps
+    }
+    fn energy(&self, view: &PairView) -> (f64, Option<f64>, Option<f64>) {
+        let m = self.engine.masses();
+        let ke = m
+            .iter()
+            .zip(&view.vel)
+            .map(|(m, v)| 0.5 * m * v.length_squared())
+            .sum();
+        (ke, None, None)
+    }
+    fn rotates(&self) -> bool {
+        false
+    }
+}
+
+impl CollideSpec {
+    /// Relative motion of the colliding pair: overlap, normal approach speed, unit normal
+    /// (from the partner to sphere 1) and the tangential contact-point velocity.
+    fn pair_state(&self, p: &PairView, wall_x: f64) -> (f64, f64, DVec3, DVec3) {
+        let r1 = self.radius1;
+        if self.wall {
+            // the plane x = x_w faces −x; x_w = r1 + gap from the scene
+            let n = DVec3::new(-1.0, 0.0, 0.0);
+            let v = p.vel[0];
+            let vc = v - r1 * p.omega[0].cross(n);
+            let delta = r1 - (wall_x - p.pos[0].x);
+            (delta, -v.dot(n), n, vc - n * vc.dot(n))
+        } else {
+            let d = p.pos[0] - p.pos[1];
+            let dist = d.length();
+            let n = d / dist;
+            let v = p.vel[0] - p.vel[1];
+            let vc = v - r1 * p.omega[0].cross(n) - self.radius2 * p.omega[1].cross(n);
+            (r1 + self.radius2 - dist, -v.dot(n), n, vc - n * vc.dot(n))
+        }
     }
 }
 
 /// Runs one collision on the CPU reference backend.
 pub fn collide(spec: &CollideSpec) -> Result<CollideResult, PowderError> {
+    collide_on(spec, Backend::Cpu)
+}
+
+/// Runs one collision on the chosen backend.
+pub fn collide_on(spec: &CollideSpec, backend: Backend) -> Result<CollideResult, PowderError> {
     spec.validate()?;
-    let geom = spec.geometry();
     let dt = spec.dt.unwrap_or_else(|| spec.time_step().default);
-    let mut engine = CpuEngine::new(&spec.scene(dt))?;
+    let scene = spec.scene(dt);
+    let wall_x = scene.walls.first().map_or(0.0, |w| w.point[0]);
+    match backend {
+        Backend::Cpu => {
+            let engine = CpuEngine::new(&scene)?;
+            let run = CpuRun {
+                engine,
+                wall: spec.wall,
+            };
+            run_collision(spec, run, wall_x, dt, "cpu", None)
+        }
+        Backend::Gpu => {
+            let engine = GpuEngine::new(&scene, GpuContext::new()?)?;
+            let adapter = engine.adapter().to_string();
+            run_collision(spec, GpuRun { engine }, wall_x, dt, "gpu", Some(adapter))
+        }
+    }
+}
+
+fn run_collision(
+    spec: &CollideSpec,
+    mut run: impl CollisionRun,
+    wall_x: f64,
+    dt: f64,
+    backend: &'static str,
+    adapter: Option<String>,
+) -> Result<CollideResult, PowderError> {
+    let geom = spec.geometry();
     let reach = spec.model.reach(geom.r_eff());
     let vn0 = spec.normal_speed();
-    let start = engine.energies();
-    let in_contact = |e: &CpuEngine| {
-        if spec.wall {
-            e.wall_contact_history(0, 0)
-        } else {
-            e.contact_history(0, 1)
-        }
-        .is_some_and(|h| h.touched)
-    };
-
+    let view0 = run.view()?;
+    let (ke0, total0, _) = run.energy(&view0);
     let mut touched = false;
     let mut receding = false;
     let mut first_contact = None;
@@ -303,26 +447,32 @@ pub fn collide(spec: &CollideSpec) -> Result<CollideResult, PowderError> {
     let mut vt_in = None;
     let mut e = 0.0;
     let mut vt_out = 0.0;
+    let mut vt_before = spec.pair_state(&view0, wall_x).3;
+    let mut last;
     loop {
-        if engine.steps >= MAX_STEPS {
+        if run.steps() >= MAX_STEPS {
             return Err(PowderError::Run(format!(
                 "the collision at v = {} m/s was not decided after {MAX_STEPS} steps (t = {:e} s): the pair neither separated nor turned back; try a larger --dt or --velocity",
-                spec.velocity, engine.time
+                spec.velocity,
+                run.time()
             )));
         }
-        let (_, _, _, vt_before) = pair_state(&engine, spec.wall);
-        engine.step()?;
-        let (delta, vn, _, vt) = pair_state(&engine, spec.wall);
-        let contact = delta > 0.0 || (touched && in_contact(&engine));
+        run.step()?;
+        let view = run.view()?;
+        let (delta, vn, _, vt) = spec.pair_state(&view, wall_x);
+        let neck = view.in_contact.unwrap_or(delta > 0.0);
+        let contact = delta > 0.0 || (touched && neck);
         if contact {
             if !touched {
                 vt_in = Some(vt_before.length());
             }
             touched = true;
-            first_contact.get_or_insert(engine.time - dt);
-            last_contact = engine.time;
+            first_contact.get_or_insert(run.time() - dt);
+            last_contact = run.time();
             delta_max = delta_max.max(delta);
         }
+        vt_before = vt;
+        last = view;
         if !touched {
             continue;
         }
@@ -333,15 +483,15 @@ pub fn collide(spec: &CollideSpec) -> Result<CollideResult, PowderError> {
             delta_c = Some(delta);
             break;
         }
-        if receding && delta <= -reach && !in_contact(&engine) {
+        if receding && delta <= -reach && !neck {
             e = -vn / vn0;
             vt_out = vt.length();
             break;
         }
     }
     let stuck = delta_c.is_some();
-    let end = engine.energies();
-    let rotates = engine.rotates();
+    let (ke1, total1, dissipated) = run.energy(&last);
+    let rotates = run.rotates();
     let mut result = CollideResult {
         model: model_name(&spec.model),
         velocity: spec.velocity,
@@ -352,7 +502,7 @@ pub fn collide(spec: &CollideSpec) -> Result<CollideResult, PowderError> {
         e_tangential: (rotates && !stuck)
             .then(|| vt_in.filter(|v| *v > 0.0).map(|v| vt_out / v))
             .flatten(),
-        omega_final: rotates.then(|| engine.angular_velocities()[0].length()),
+        omega_final: rotates.then(|| last.omega[0].length()),
         delta_max,
         delta_max_analytic: None,
         chi: None,
@@ -363,13 +513,14 @@ pub fn collide(spec: &CollideSpec) -> Result<CollideResult, PowderError> {
         contact_duration_analytic: None,
         jkr: None,
         dt,
-        steps: engine.steps,
-        backend: "cpu",
+        steps: run.steps(),
+        backend,
+        adapter,
         energy: CollisionEnergy {
-            initial_kinetic: start.kinetic,
-            final_kinetic: end.kinetic,
-            dissipated: end.dissipated,
-            balance_error: (end.total() - start.total()).abs() / start.kinetic,
+            initial_kinetic: ke0,
+            final_kinetic: ke1,
+            dissipated,
+            balance_error: total0.zip(total1).map(|(a, b)| (b - a).abs() / ke0),
         },
     };
     predict(spec, &geom, &mut result);
@@ -501,6 +652,30 @@ pub fn sweep_velocities(text: &str, log: bool) -> Result<Vec<f64>, PowderError> 
             }
         })
         .collect())
+}
+
+/// Runs one collision per velocity on `backend`; results in input order. The CPU
+/// backend spreads them over the cores; the GPU runs them one after another.
+pub fn sweep_on(
+    spec: &CollideSpec,
+    velocities: &[f64],
+    backend: Backend,
+) -> Result<Vec<CollideResult>, PowderError> {
+    if backend == Backend::Gpu {
+        return velocities
+            .iter()
+            .map(|&velocity| {
+                collide_on(
+                    &CollideSpec {
+                        velocity,
+                        ..spec.clone()
+                    },
+                    backend,
+                )
+            })
+            .collect();
+    }
+    sweep(spec, velocities)
 }
 
 /// Runs one collision per velocity, spread over the available cores; results in input order.

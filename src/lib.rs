@@ -14,5 +14,6 @@ pub mod model;
 pub mod output;
 pub mod run;
 pub mod scene;
+pub mod setup;
 
 pub use error::{ParamError, PowderError};

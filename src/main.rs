@@ -52,6 +52,17 @@ fn info_cmd(a: &InfoArgs) -> Result<(), PowderError> {
 enum Backend {
     /// The f64 CPU reference engine.
     Cpu,
+    /// The wgpu engine (hysteretic and LSD models so far).
+    Gpu,
+}
+
+impl Backend {
+    fn collide(self) -> collide::Backend {
+        match self {
+            Backend::Cpu => collide::Backend::Cpu,
+            Backend::Gpu => collide::Backend::Gpu,
+        }
+    }
 }
 
 #[derive(Args)]
@@ -370,7 +381,7 @@ fn print_table(results: &[CollideResult]) {
     );
     for r in results {
         println!(
-            "{:>12.5e} {:>9} {:>10.6} {:>10} {:>6} {:>12.5e} {:>12} {:>12} {:>9} {:>10.2e}",
+            "{:>12.5e} {:>9} {:>10.6} {:>10} {:>6} {:>12.5e} {:>12} {:>12} {:>9} {:>10}",
             r.velocity,
             r.chi.map_or_else(|| "-".into(), |c| format!("{c:.4}")),
             r.e,
@@ -381,11 +392,16 @@ fn print_table(results: &[CollideResult]) {
             r.contact_duration
                 .map_or_else(|| "-".into(), |t| format!("{t:.5e}")),
             r.steps,
-            r.energy.balance_error
+            r.energy
+                .balance_error
+                .map_or_else(|| "-".into(), |b| format!("{b:.2e}"))
         );
     }
     if let Some(r) = results.first() {
-        println!("backend {}, dt = {:.4e} s", r.backend, r.dt);
+        match &r.adapter {
+            Some(a) => println!("backend {} ({a}), dt = {:.4e} s", r.backend, r.dt),
+            None => println!("backend {}, dt = {:.4e} s", r.backend, r.dt),
+        }
     }
 }
 
@@ -418,9 +434,9 @@ fn collide_cmd(a: &CollideArgs) -> Result<(), PowderError> {
             }
             let vs = collide::sweep_velocities(text, a.log)?;
             spec.validate()?;
-            collide::sweep(&spec, &vs)?
+            collide::sweep_on(&spec, &vs, a.backend.collide())?
         }
-        None => vec![collide::collide(&spec)?],
+        None => vec![collide::collide_on(&spec, a.backend.collide())?],
     };
     if let Some(path) = &a.plot {
         collide::restitution_plot(&spec, &results, a.log).write_svg(path)?;
@@ -454,9 +470,50 @@ fn print_snapshot(s: &Snapshot) {
     );
 }
 
+fn run_gpu_cmd(
+    a: &RunArgs,
+    scene: &Scene,
+    ctx: powder::gpu::GpuContext,
+) -> Result<(), PowderError> {
+    let summary = powder::run::run_gpu(scene, ctx, a.steps, |step, time, ke| {
+        eprintln!("step {step:>9}  t = {time:.4e} s  E_kin {ke:.4e} J");
+    })?;
+    if a.json {
+        let text = serde_json::to_string_pretty(&summary)
+            .map_err(|e| PowderError::Run(format!("cannot encode JSON: {e}")))?;
+        println!("{text}");
+        return Ok(());
+    }
+    println!("scene            {}", summary.scene);
+    println!(
+        "backend          gpu: {} ({} particles)",
+        summary.adapter, summary.particles
+    );
+    println!("dt               {:.4e} s", summary.dt);
+    println!(
+        "steps            {} (t = {:.4e} s)",
+        summary.steps, summary.time
+    );
+    println!(
+        "wall time        {:.2} s ({:.3e} particle-steps/s)",
+        summary.wall_seconds, summary.particle_steps_per_second
+    );
+    println!(
+        "kinetic energy   {:.4e} J (initially {:.4e} J)",
+        summary.kinetic_final, summary.kinetic_initial
+    );
+    println!("note             the GPU engine keeps no energy ledger or contact statistics yet");
+    Ok(())
+}
+
 fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
     let scene = Scene::load(&a.scene)?;
-    let Backend::Cpu = a.backend;
+    if a.backend == Backend::Gpu {
+        match powder::gpu::GpuContext::new() {
+            Ok(ctx) => return run_gpu_cmd(a, &scene, ctx),
+            Err(e) => eprintln!("notice: {e}\nnotice: running on the CPU backend instead"),
+        }
+    }
     let summary = run_cpu(&scene, a.steps, print_snapshot)?;
     if a.json {
         let text = serde_json::to_string_pretty(&summary)

@@ -6,7 +6,8 @@
 use crate::cpu::cells::CellGrid;
 use crate::error::PowderError;
 use crate::model::{ContactHistory, ContactModel, Kinematics, PairGeometry, Response, TimeStep};
-use crate::scene::{DtSetting, Scene};
+use crate::scene::Scene;
+use crate::setup::Resolved;
 use glam::DVec3;
 use std::collections::HashMap;
 
@@ -128,95 +129,33 @@ pub struct CpuEngine {
     domain: (DVec3, DVec3),
 }
 
-/// Mass and radius of the lightest particle of each material (for the time-step rule).
-fn lightest_particles(scene: &Scene, mass: &[f64]) -> Vec<Option<(f64, f64)>> {
-    let mut out: Vec<Option<(f64, f64)>> = vec![None; scene.materials.len()];
-    for (p, &m) in scene.particles.iter().zip(mass) {
-        let slot = &mut out[p.material];
-        if slot.is_none_or(|(lm, _)| m < lm) {
-            *slot = Some((m, p.radius));
-        }
-    }
-    out
-}
-
 impl CpuEngine {
     /// Builds the engine from a validated scene, resolving pair models and the time step.
     pub fn new(scene: &Scene) -> Result<Self, PowderError> {
-        let n_materials = scene.materials.len();
+        let Resolved {
+            n_materials,
+            models,
+            wall_models,
+            mass,
+            dt,
+            time_step,
+            r_max,
+            max_reach,
+            rotation,
+        } = Resolved::new(scene)?;
         let n = scene.particles.len();
-        let mut models = Vec::with_capacity(n_materials * n_materials);
-        for a in 0..n_materials {
-            for b in 0..n_materials {
-                models.push(scene.pair_model(a, b)?);
-            }
-        }
-        let mut wall_models = Vec::with_capacity(scene.walls.len() * n_materials);
-        for w in &scene.walls {
-            for b in 0..n_materials {
-                wall_models.push(scene.pair_model(w.material, b)?);
-            }
-        }
-        let mut pos = Vec::with_capacity(n);
-        let mut vel = Vec::with_capacity(n);
-        let mut radius = Vec::with_capacity(n);
-        let mut mass = Vec::with_capacity(n);
-        let mut material = Vec::with_capacity(n);
-        for p in &scene.particles {
-            let rho = scene.materials[p.material].density;
-            pos.push(DVec3::from_array(p.position));
-            vel.push(DVec3::from_array(p.velocity));
-            radius.push(p.radius);
-            mass.push(rho * 4.0 / 3.0 * std::f64::consts::PI * p.radius.powi(3));
-            material.push(p.material);
-        }
-        // Time step: the most demanding pair of materials, with the lightest particles of
-        // each (walls count as infinite mass).
-        let lightest = lightest_particles(scene, &mass);
-        let mut time_step: Option<TimeStep> = None;
-        let mut consider = |ts: TimeStep| {
-            if time_step.as_ref().is_none_or(|t| ts.max < t.max) {
-                time_step = Some(ts);
-            }
-        };
-        let v_imp = scene.impact_velocity;
-        for a in 0..n_materials {
-            let Some((ma, ra)) = lightest[a] else {
-                continue;
-            };
-            for b in 0..n_materials {
-                if let Some((mb, rb)) = lightest[b] {
-                    let geom = PairGeometry::spheres(ra, rb, ma, mb);
-                    consider(models[a * n_materials + b].time_step(&geom, v_imp));
-                }
-            }
-            for w in 0..scene.walls.len() {
-                let geom = PairGeometry::wall(ra, ma);
-                consider(wall_models[w * n_materials + a].time_step(&geom, v_imp));
-            }
-        }
-        let time_step =
-            time_step.ok_or_else(|| PowderError::Scene("the scene has no particles".into()))?;
-        let dt = match scene.dt {
-            DtSetting::Auto => time_step.default,
-            DtSetting::Fixed(dt) => {
-                if dt > time_step.max && !scene.force_dt {
-                    return Err(PowderError::Scene(format!(
-                        "dt = {dt:e} s is above the stable limit {:.4e} s ({}); use dt <= {:.4e} s or set force_dt = true",
-                        time_step.max, time_step.reason, time_step.max
-                    )));
-                }
-                dt
-            }
-        };
-        let r_max = radius.iter().copied().fold(0.0, f64::max);
-        // The largest distance beyond touching at which any pair still interacts (the
-        // non-contact range, or how far a JKR neck stretches), at the largest radius.
-        let max_reach = models
+        let pos: Vec<DVec3> = scene
+            .particles
             .iter()
-            .map(|m| m.reach(0.5 * r_max))
-            .chain(wall_models.iter().map(|m| m.reach(r_max)))
-            .fold(0.0, f64::max);
+            .map(|p| DVec3::from_array(p.position))
+            .collect();
+        let vel: Vec<DVec3> = scene
+            .particles
+            .iter()
+            .map(|p| DVec3::from_array(p.velocity))
+            .collect();
+        let radius: Vec<f64> = scene.particles.iter().map(|p| p.radius).collect();
+        let material: Vec<usize> = scene.particles.iter().map(|p| p.material).collect();
         let cutoff = 2.0 * r_max + max_reach;
         let domain = (
             DVec3::from_array(scene.domain.min),
@@ -232,10 +171,6 @@ impl CpuEngine {
             })
             .collect();
         let cutoff_pad = radius.iter().map(|r| r + max_reach).collect();
-        let rotation = models
-            .iter()
-            .chain(&wall_models)
-            .any(ContactModel::needs_rotation);
         let (omega, torque, inertia) = if rotation {
             (
                 vec![DVec3::ZERO; n],

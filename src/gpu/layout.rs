@@ -165,6 +165,105 @@ pub fn separation_f32(
     d
 }
 
+/// One row of the pair-model table of `shaders/model_hysteretic.wgsl` (`HystereticPair`).
+/// LSD is the special case k1 = kp = k with the LSD flag.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct HystereticPair {
+    pub k1: f32,
+    pub kp: f32,
+    pub kc: f32,
+    /// kp/(kp − k1)·φf (a huge finite number when kp = k1: WGSL may assume no infinities).
+    pub dmaxp_per_a12: f32,
+    pub phi_f: f32,
+    pub fa: f32,
+    /// Non-contact stiffness; 0 encodes zero range (kca = ∞).
+    pub kca: f32,
+    pub gamma0: f32,
+    pub flags: u32,
+    pub _pad: [u32; 3],
+}
+
+/// Flags of [`HystereticPair`], as in the WGSL.
+pub const HYST_JUMP_IN: u32 = 1;
+pub const HYST_SQRT_RULE: u32 = 2;
+pub const HYST_LSD: u32 = 4;
+
+impl HystereticPair {
+    pub fn hysteretic(p: &crate::model::HystereticParams) -> Self {
+        use crate::model::{AdhesionMode, K2Rule};
+        let dmaxp = if p.kp > p.k1 {
+            p.kp / (p.kp - p.k1) * p.phi_f
+        } else {
+            1e30
+        };
+        let mut flags = 0;
+        if p.adhesion == AdhesionMode::JumpIn {
+            flags |= HYST_JUMP_IN;
+        }
+        if p.k2_rule == K2Rule::Sqrt {
+            flags |= HYST_SQRT_RULE;
+        }
+        Self {
+            k1: p.k1 as f32,
+            kp: p.kp as f32,
+            kc: p.kc as f32,
+            dmaxp_per_a12: dmaxp.min(1e30) as f32,
+            phi_f: p.phi_f as f32,
+            fa: p.fa as f32,
+            kca: if p.kca.is_finite() { p.kca as f32 } else { 0.0 },
+            gamma0: p.gamma0 as f32,
+            flags,
+            _pad: [0; 3],
+        }
+    }
+
+    pub fn lsd(p: &crate::model::LsdParams) -> Self {
+        Self {
+            k1: p.k as f32,
+            kp: p.k as f32,
+            dmaxp_per_a12: 1e30,
+            gamma0: p.gamma0 as f32,
+            flags: HYST_LSD,
+            ..Default::default()
+        }
+    }
+}
+
+/// Per-run step parameters: twin of `StepParams` in `shaders/step.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct StepParams {
+    pub gravity: [f32; 3],
+    pub dt: f32,
+    pub max_neighbours: u32,
+    pub n_materials: u32,
+    pub n_walls: u32,
+    pub reach: f32,
+}
+
+/// A planar wall: a point as cell + offset and the unit normal. Twin of `Wall` in
+/// `shaders/step.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct WallGpu {
+    pub cell: [i32; 4],
+    pub offset: [f32; 4],
+    pub normal: [f32; 4],
+}
+
+impl WallGpu {
+    pub fn new(point: DVec3, normal: DVec3, origin: DVec3, h: f64) -> Self {
+        let (cell, offset) = encode(point, origin, h);
+        let n = normal.normalize();
+        Self {
+            cell,
+            offset,
+            normal: [n.x as f32, n.y as f32, n.z as f32, 0.0],
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -398,5 +497,57 @@ mod tests {
         );
         assert_eq!(size_of::<CellCoord>(), 16);
         assert_eq!(size_of::<CellOffset>(), 16);
+    }
+
+    #[test]
+    fn gpu_layout_step_structs_match_wgsl() {
+        let (module, _) = shaders::validate(&shaders::step_variant().source).unwrap();
+        let check = |name: &str, size: usize, expect: &[(&str, usize)]| {
+            let (wsize, members) = wgsl_struct(&module, name);
+            assert_eq!(wsize as usize, size, "{name} size");
+            for (field, off) in expect {
+                let m = members
+                    .iter()
+                    .find(|(n, _)| n == field)
+                    .unwrap_or_else(|| panic!("{name}.{field}"));
+                assert_eq!(m.1 as usize, *off, "{name}.{field}");
+            }
+        };
+        check(
+            "StepParams",
+            size_of::<StepParams>(),
+            &[
+                ("gravity", offset_of!(StepParams, gravity)),
+                ("dt", offset_of!(StepParams, dt)),
+                ("max_neighbours", offset_of!(StepParams, max_neighbours)),
+                ("n_materials", offset_of!(StepParams, n_materials)),
+                ("n_walls", offset_of!(StepParams, n_walls)),
+                ("reach", offset_of!(StepParams, reach)),
+            ],
+        );
+        check(
+            "HystereticPair",
+            size_of::<HystereticPair>(),
+            &[
+                ("k1", offset_of!(HystereticPair, k1)),
+                ("kp", offset_of!(HystereticPair, kp)),
+                ("kc", offset_of!(HystereticPair, kc)),
+                ("dmaxp_per_a12", offset_of!(HystereticPair, dmaxp_per_a12)),
+                ("phi_f", offset_of!(HystereticPair, phi_f)),
+                ("fa", offset_of!(HystereticPair, fa)),
+                ("kca", offset_of!(HystereticPair, kca)),
+                ("gamma0", offset_of!(HystereticPair, gamma0)),
+                ("flags", offset_of!(HystereticPair, flags)),
+            ],
+        );
+        check(
+            "Wall",
+            size_of::<WallGpu>(),
+            &[
+                ("cell", offset_of!(WallGpu, cell)),
+                ("offset", offset_of!(WallGpu, offset)),
+                ("normal", offset_of!(WallGpu, normal)),
+            ],
+        );
     }
 }

@@ -40,12 +40,14 @@
 //!   output; the CPU engine stays the reference the GPU one is tested against.
 
 pub mod context;
+pub mod engine;
 pub mod grid;
 pub mod kernel;
 pub mod layout;
 pub mod shaders;
 
 pub use context::{AdapterPreference, AdapterSummary, GpuContext, LimitsSummary};
+pub use engine::{GpuEngine, GpuState};
 pub use grid::{ExclusiveScan, GridSort, SortResult};
 pub use layout::{decode, encode, CellCoord, CellOffset, GridParams, PackedPosition};
 pub use shaders::{all_variants, validate, ShaderVariant};

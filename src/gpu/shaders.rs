@@ -22,6 +22,18 @@
 pub const COMMON: &str = include_str!("../../shaders/common.wgsl");
 /// The counting sort of particles by cell (see `shaders/grid.wgsl`).
 pub const GRID: &str = include_str!("../../shaders/grid.wgsl");
+/// The hysteretic and LSD force laws in f32 (a snippet of the step).
+pub const MODEL_HYSTERETIC: &str = include_str!("../../shaders/model_hysteretic.wgsl");
+/// One time step: drift, gather, neighbours, history remap, forces, kick.
+pub const STEP: &str = include_str!("../../shaders/step.wgsl");
+
+/// The step for the normal-force models (hysteretic, LSD).
+pub fn step_variant() -> ShaderVariant {
+    ShaderVariant {
+        name: "step_hysteretic".into(),
+        source: compose("shaders/step.wgsl", STEP, &[MODEL_HYSTERETIC]),
+    }
+}
 
 /// A shader stage: one file of `shaders/`.
 #[derive(Clone, Copy, Debug)]
@@ -64,13 +76,15 @@ pub fn compose(stage_path: &str, stage_source: &str, snippets: &[&str]) -> Strin
 
 /// Every shader module the engine builds.
 pub fn all_variants() -> Vec<ShaderVariant> {
-    STAGES
+    let mut all: Vec<ShaderVariant> = STAGES
         .iter()
         .map(|st| ShaderVariant {
             name: st.name.to_string(),
             source: compose(st.path, st.source, &[]),
         })
-        .collect()
+        .collect();
+    all.push(step_variant());
+    all
 }
 
 /// The variant called `name`.

@@ -1,0 +1,151 @@
+// model_hysteretic.wgsl — the piece-wise linear hysteretic adhesive elasto-plastic model
+// (paper 000 §2.2–2.3) and the linear spring–dashpot, in f32. The f64 reference is
+// `src/model/hysteretic.rs` / `src/model/lsd.rs`; tests tie the two together.
+//
+// Sign convention as in Rust: delta > 0 is overlap, delta_dot the approach speed, a
+// positive force is repulsive.
+
+// Parameters of one pair of materials (a row of the pair table). Twin of
+// `gpu::layout::HystereticPair`. LSD is the special case k1 = kp = k (no plasticity),
+// kc = fa = 0: the same code path.
+struct HystereticPair {
+    k1: f32,
+    kp: f32,
+    kc: f32,
+    // Plastic flow limit overlap over the reduced radius: kp/(kp - k1) * phi_f
+    // (infinite when kp = k1); multiplied by a12 per pair.
+    dmaxp_per_a12: f32,
+    // phi_f: the limit branch's force-free overlap over a12.
+    phi_f: f32,
+    fa: f32,
+    // Non-contact stiffness; 0 encodes zero range (kca = inf).
+    kca: f32,
+    gamma0: f32,
+    // Bit 0: jump-in adhesion (else reversible); bit 1: sqrt k2 rule (else linear);
+    // bit 2: LSD (force k1*delta + gamma0*delta_dot, no history).
+    flags: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+const HYST_JUMP_IN: u32 = 1u;
+const HYST_SQRT_RULE: u32 = 2u;
+const HYST_LSD: u32 = 4u;
+
+// The contact's history: delta_max and the "has touched" flag.
+struct HystHistory {
+    delta_max: f32,
+    touched: bool,
+}
+
+struct HystForce {
+    force: f32,
+    history: HystHistory,
+}
+
+fn hyst_range(p: HystereticPair) -> f32 {
+    if (p.fa > 0.0 && p.kca > 0.0) {
+        return p.fa / p.kca;
+    }
+    return 0.0;
+}
+
+fn hyst_k2(p: HystereticPair, delta_max: f32, dmaxp: f32) -> f32 {
+    let x = delta_max / dmaxp;
+    if (x >= 1.0) {
+        return p.kp;
+    }
+    var shape = max(x, 0.0);
+    if ((p.flags & HYST_SQRT_RULE) != 0u) {
+        shape = sqrt(shape);
+    }
+    return p.k1 + (p.kp - p.k1) * shape;
+}
+
+fn hyst_delta0(p: HystereticPair, delta_max: f32, dmaxp: f32, a12: f32) -> f32 {
+    if (delta_max >= dmaxp) {
+        return p.phi_f * a12;
+    }
+    return (1.0 - p.k1 / hyst_k2(p, delta_max, dmaxp)) * delta_max;
+}
+
+// The delta_max whose k2 line passes through (delta, -kc*delta): where the tensile branch
+// hands over to re-loading (see `delta_max_on_tensile_branch` in Rust).
+fn hyst_tensile_history(p: HystereticPair, delta: f32, dmaxp: f32, a12: f32) -> f32 {
+    if (p.kp <= p.k1) {
+        return 0.0;
+    }
+    if (delta >= p.kp * p.phi_f * a12 / (p.kp + p.kc)) {
+        return dmaxp;
+    }
+    if ((p.flags & HYST_SQRT_RULE) == 0u) {
+        let s = (p.kp - p.k1) / dmaxp;
+        return 0.5 * delta + sqrt(0.25 * delta * delta + (p.k1 + p.kc) * delta / s);
+    }
+    // sqrt rule: s*u^3 - s*delta*u - (k1 + kc)*delta = 0, u = sqrt(delta_max): bisection
+    // (f32 converges in 24 halvings; 40 leaves margin).
+    let s = (p.kp - p.k1) / sqrt(dmaxp);
+    var lo = sqrt(delta);
+    var hi = sqrt(dmaxp);
+    for (var i = 0; i < 40; i++) {
+        let mid = 0.5 * (lo + hi);
+        if (s * mid * mid * mid - s * delta * mid - (p.k1 + p.kc) * delta > 0.0) {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    let u = 0.5 * (lo + hi);
+    return u * u;
+}
+
+// The mechanical contact force f_hys for delta > 0 (paper 000 eq. 5), updating delta_max.
+fn hyst_contact_force(p: HystereticPair, delta: f32, a12: f32, h: ptr<function, HystHistory>) -> f32 {
+    let dmaxp = p.dmaxp_per_a12 * a12;
+    if (delta >= (*h).delta_max) {
+        (*h).delta_max = delta;
+        if (delta < dmaxp) {
+            return p.k1 * delta;
+        }
+        return p.kp * (delta - p.phi_f * a12);
+    }
+    let k2 = hyst_k2(p, (*h).delta_max, dmaxp);
+    let elastic = k2 * (delta - hyst_delta0(p, (*h).delta_max, dmaxp, a12));
+    if (elastic >= p.k1 * delta && (*h).delta_max < dmaxp) {
+        return p.k1 * delta;
+    }
+    if (elastic <= -p.kc * delta) {
+        (*h).delta_max = min(hyst_tensile_history(p, delta, dmaxp, a12), (*h).delta_max);
+        return -p.kc * delta;
+    }
+    return elastic;
+}
+
+// Total normal force of the pair (contact + non-contact adhesion + viscosity).
+fn hyst_force(p: HystereticPair, delta: f32, delta_dot: f32, a12: f32, history: HystHistory) -> HystForce {
+    var h = history;
+    if ((p.flags & HYST_LSD) != 0u) {
+        if (delta > 0.0) {
+            return HystForce(p.k1 * delta + p.gamma0 * delta_dot, HystHistory(0.0, true));
+        }
+        return HystForce(0.0, HystHistory(0.0, false));
+    }
+    let range = hyst_range(p);
+    if (delta > 0.0) {
+        h.touched = true;
+        let f = hyst_contact_force(p, delta, a12, &h) - p.fa + p.gamma0 * delta_dot;
+        return HystForce(f, h);
+    }
+    if (delta > -range) {
+        h.delta_max = 0.0;
+        if (delta == 0.0) {
+            h.touched = true;
+        }
+        if ((p.flags & HYST_JUMP_IN) == 0u || h.touched) {
+            return HystForce(-p.kca * delta - p.fa, h);
+        }
+        return HystForce(0.0, h);
+    }
+    return HystForce(0.0, HystHistory(0.0, false));
+}

@@ -1,0 +1,253 @@
+// step.wgsl — one time step of the GPU engine (after the grid sort of grid.wgsl), for the
+// normal-force models of model_hysteretic.wgsl (hysteretic, LSD). Composed as
+// common.wgsl + model_hysteretic.wgsl + this file.
+//
+// Pass order, recorded by `gpu::engine` into one encoder per batch of steps:
+//   kick_drift   per particle (state A)  v += dt/2·a; offset += dt·v, carried into the cell
+//   <grid sort of A's cells>             sorted_index, cell_start, cell_count
+//   gather       per particle            B[k] = A[sorted_index[k]]; vpred = v + dt/2·a
+//   neighbours   per particle (B)        full neighbour list from the 27 cells
+//   remap        per particle (B)        each new slot finds its history in A by the
+//                                        partner's persistent id
+//   force        per particle (B)        sums its own contacts in slot order (no atomics:
+//                                        deterministic), walls, gravity -> acc
+//   kick         per particle (B)        v += dt/2·a
+// then A and B swap roles. Every pair is evaluated from both sides with bitwise mirrored
+// inputs, so both copies of its history evolve identically.
+
+struct StepParams {
+    gravity: vec3<f32>,
+    dt: f32,
+    // Neighbour-list capacity per particle.
+    max_neighbours: u32,
+    n_materials: u32,
+    n_walls: u32,
+    // Largest distance beyond touching at which any pair interacts.
+    reach: f32,
+}
+
+struct Wall {
+    // A point of the plane as cell + offset (like particle positions).
+    cell: vec4<i32>,
+    offset: vec4<f32>,
+    // Unit normal into the domain (xyz).
+    normal: vec4<f32>,
+}
+
+@group(0) @binding(20) var<uniform> step: StepParams;
+
+// State A (read) and B (written by gather, then the current state).
+@group(0) @binding(21) var<storage, read_write> a_cell: array<vec4<i32>>;
+@group(0) @binding(22) var<storage, read_write> a_off: array<vec4<f32>>;
+@group(0) @binding(23) var<storage, read_write> a_vel: array<vec4<f32>>;
+@group(0) @binding(24) var<storage, read_write> a_acc: array<vec4<f32>>;
+@group(0) @binding(25) var<storage, read> a_pid: array<u32>;
+@group(0) @binding(26) var<storage, read> a_count: array<u32>;
+@group(0) @binding(27) var<storage, read> a_hist: array<vec2<f32>>;
+@group(0) @binding(28) var<storage, read> a_hist_pid: array<u32>;
+@group(0) @binding(29) var<storage, read> a_wall_hist: array<vec2<f32>>;
+
+@group(0) @binding(31) var<storage, read_write> b_cell: array<vec4<i32>>;
+@group(0) @binding(32) var<storage, read_write> b_off: array<vec4<f32>>;
+@group(0) @binding(33) var<storage, read_write> b_vel: array<vec4<f32>>;
+@group(0) @binding(34) var<storage, read_write> b_acc: array<vec4<f32>>;
+@group(0) @binding(35) var<storage, read_write> b_pid: array<u32>;
+@group(0) @binding(36) var<storage, read_write> b_count: array<u32>;
+@group(0) @binding(37) var<storage, read_write> b_hist: array<vec2<f32>>;
+@group(0) @binding(38) var<storage, read_write> b_hist_pid: array<u32>;
+@group(0) @binding(39) var<storage, read_write> b_wall_hist: array<vec2<f32>>;
+
+// Per-step scratch: predicted velocity, the old index of each new slot, the neighbour list.
+@group(0) @binding(40) var<storage, read_write> vpred: array<vec4<f32>>;
+@group(0) @binding(41) var<storage, read_write> old_index: array<u32>;
+@group(0) @binding(42) var<storage, read_write> nbr: array<u32>;
+
+// From the grid sort.
+@group(0) @binding(43) var<storage, read> sorted_index: array<u32>;
+@group(0) @binding(44) var<storage, read> cell_start: array<u32>;
+@group(0) @binding(45) var<storage, read> cell_count: array<u32>;
+
+// Pair models: materials x materials, then walls x materials.
+@group(0) @binding(46) var<storage, read> pairs: array<HystereticPair>;
+@group(0) @binding(47) var<storage, read> walls: array<Wall>;
+
+// Monitor: [0] = largest neighbour count seen (atomicMax), [1] = persistent id of a particle
+// that overflowed the capacity (+1; 0 = none), [2] = non-finite force count.
+@group(0) @binding(48) var<storage, read_write> monitor: array<atomic<u32>, 4>;
+
+// Separation x_i - x_j from cell + offset positions.
+fn separation(ci: vec4<i32>, oi: vec4<f32>, cj: vec4<i32>, oj: vec4<f32>) -> vec3<f32> {
+    return vec3<f32>(ci.xyz - cj.xyz) * grid.cell_width + (oi.xyz - oj.xyz);
+}
+
+@compute @workgroup_size(WG_SIZE)
+fn kick_drift(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    let i = global_index(wid, nwg, lid);
+    if (i >= grid.n_particles) {
+        return;
+    }
+    let h = grid.cell_width;
+    let v = a_vel[i].xyz + 0.5 * step.dt * a_acc[i].xyz;
+    a_vel[i] = vec4<f32>(v, a_vel[i].w);
+    var o = a_off[i].xyz + step.dt * v;
+    let shift = floor(o / h);
+    o = o - shift * h;
+    // rounding can leave o == h: move it into the next cell
+    let over = o >= vec3<f32>(h);
+    o = select(o, vec3<f32>(0.0), over);
+    let carry = vec3<i32>(shift) + select(vec3<i32>(0), vec3<i32>(1), over);
+    a_cell[i] = vec4<i32>(a_cell[i].xyz + carry, a_cell[i].w);
+    a_off[i] = vec4<f32>(o, a_off[i].w);
+}
+
+@compute @workgroup_size(WG_SIZE)
+fn gather(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    let k = global_index(wid, nwg, lid);
+    if (k >= grid.n_particles) {
+        return;
+    }
+    let o = sorted_index[k];
+    b_cell[k] = a_cell[o];
+    b_off[k] = a_off[o];
+    b_vel[k] = a_vel[o];
+    b_acc[k] = a_acc[o];
+    b_pid[k] = a_pid[o];
+    old_index[k] = o;
+    vpred[k] = vec4<f32>(a_vel[o].xyz + 0.5 * step.dt * a_acc[o].xyz, 0.0);
+    for (var w = 0u; w < step.n_walls; w++) {
+        b_wall_hist[k * step.n_walls + w] = a_wall_hist[o * step.n_walls + w];
+    }
+}
+
+@compute @workgroup_size(WG_SIZE)
+fn neighbours(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    let k = global_index(wid, nwg, lid);
+    if (k >= grid.n_particles) {
+        return;
+    }
+    let ck = b_cell[k];
+    let ok = b_off[k];
+    let hi = vec3<i32>(grid.dims) - vec3<i32>(1);
+    let home = clamp(ck.xyz, vec3<i32>(0), hi);
+    var count = 0u;
+    for (var dz = -1; dz <= 1; dz++) {
+        for (var dy = -1; dy <= 1; dy++) {
+            for (var dx = -1; dx <= 1; dx++) {
+                let c = home + vec3<i32>(dx, dy, dz);
+                if (any(c < vec3<i32>(0)) || any(c > hi)) {
+                    continue;
+                }
+                let key = cell_key(c, grid.dims);
+                let start = cell_start[key];
+                let end = start + cell_count[key];
+                for (var j = start; j < end; j++) {
+                    if (j == k) {
+                        continue;
+                    }
+                    let d = separation(ck, ok, b_cell[j], b_off[j]);
+                    let reach = ok.w + b_off[j].w + step.reach;
+                    if (dot(d, d) < reach * reach) {
+                        if (count < step.max_neighbours) {
+                            nbr[k * step.max_neighbours + count] = j;
+                        }
+                        count += 1u;
+                    }
+                }
+            }
+        }
+    }
+    if (count > step.max_neighbours) {
+        atomicMax(&monitor[1], b_pid[k] + 1u);
+        count = step.max_neighbours;
+    }
+    atomicMax(&monitor[0], count);
+    b_count[k] = count;
+}
+
+@compute @workgroup_size(WG_SIZE)
+fn remap(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    let k = global_index(wid, nwg, lid);
+    if (k >= grid.n_particles) {
+        return;
+    }
+    let cap = step.max_neighbours;
+    let o = old_index[k];
+    let old_n = a_count[o];
+    for (var s = 0u; s < b_count[k]; s++) {
+        let partner = b_pid[nbr[k * cap + s]];
+        var h = vec2<f32>(0.0);
+        for (var m = 0u; m < old_n; m++) {
+            if (a_hist_pid[o * cap + m] == partner) {
+                h = a_hist[o * cap + m];
+                break;
+            }
+        }
+        b_hist[k * cap + s] = h;
+        b_hist_pid[k * cap + s] = partner;
+    }
+}
+
+fn history_in(h: vec2<f32>) -> HystHistory {
+    return HystHistory(h.x, h.y != 0.0);
+}
+
+fn history_out(h: HystHistory) -> vec2<f32> {
+    return vec2<f32>(h.delta_max, select(0.0, 1.0, h.touched));
+}
+
+@compute @workgroup_size(WG_SIZE)
+fn force(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    let k = global_index(wid, nwg, lid);
+    if (k >= grid.n_particles) {
+        return;
+    }
+    let cap = step.max_neighbours;
+    let ck = b_cell[k];
+    let ok = b_off[k];
+    let rk = ok.w;
+    let vk = vpred[k].xyz;
+    let mat_k = u32(ck.w);
+    var f = vec3<f32>(0.0);
+    for (var s = 0u; s < b_count[k]; s++) {
+        let j = nbr[k * cap + s];
+        let cj = b_cell[j];
+        let oj = b_off[j];
+        let d = separation(ck, ok, cj, oj);
+        let dist = length(d);
+        let delta = rk + oj.w - dist;
+        var n = vec3<f32>(0.0, 0.0, 1.0);
+        if (dist > 0.0) {
+            n = d / dist;
+        }
+        let delta_dot = -dot(vk - vpred[j].xyz, n);
+        let a12 = 2.0 * rk * oj.w / (rk + oj.w);
+        let p = pairs[mat_k * step.n_materials + u32(cj.w)];
+        let r = hyst_force(p, delta, delta_dot, a12, history_in(b_hist[k * cap + s]));
+        b_hist[k * cap + s] = history_out(r.history);
+        f += r.force * n;
+    }
+    for (var w = 0u; w < step.n_walls; w++) {
+        let wall = walls[w];
+        let delta = rk - dot(separation(ck, ok, wall.cell, wall.offset), wall.normal.xyz);
+        let p = pairs[step.n_materials * step.n_materials + w * step.n_materials + mat_k];
+        let slot = k * step.n_walls + w;
+        let r = hyst_force(p, delta, -dot(vk, wall.normal.xyz), 2.0 * rk, history_in(b_wall_hist[slot]));
+        b_wall_hist[slot] = history_out(r.history);
+        f += r.force * wall.normal.xyz;
+    }
+    // vel.w holds the mass
+    let acc = f / b_vel[k].w + step.gravity;
+    if (any(acc != acc) || any(abs(acc) > vec3<f32>(3.0e38))) {
+        atomicAdd(&monitor[2], 1u);
+    }
+    b_acc[k] = vec4<f32>(acc, 0.0);
+}
+
+@compute @workgroup_size(WG_SIZE)
+fn kick(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    let k = global_index(wid, nwg, lid);
+    if (k >= grid.n_particles) {
+        return;
+    }
+    b_vel[k] = vec4<f32>(b_vel[k].xyz + 0.5 * step.dt * b_acc[k].xyz, b_vel[k].w);
+}

@@ -1,0 +1,437 @@
+//! The GPU engine: the time step of `shaders/step.wgsl` driven from the host, for the
+//! normal-force models (hysteretic, LSD) with walls and gravity.
+//!
+//! The particle state lives in two buffer sets, A and B. Each step drifts A, sorts it by
+//! cell, gathers it into B in sorted order, rebuilds B's neighbour lists from the grid,
+//! remaps every contact's history from A by the partner's persistent id, computes the
+//! forces and kicks; then the roles swap. Many steps are recorded per submission and the
+//! host reads back only a 16-byte monitor per batch (neighbour-capacity overflow, non-finite
+//! forces) and whatever output needs.
+//!
+//! Every step re-sorts and rebuilds the neighbour lists (no Verlet skin yet): correct for
+//! any motion, and the history remap is exercised every step.
+
+use crate::error::PowderError;
+use crate::gpu::context::GpuContext;
+use crate::gpu::grid::GridSort;
+use crate::gpu::kernel::{storage_buffer, submit_and_read, u32s, uniform_buffer, Kernel, Program};
+use crate::gpu::layout::{encode, gpu_cell_width, HystereticPair, StepParams, WallGpu};
+use crate::gpu::shaders;
+use crate::model::ContactModel;
+use crate::scene::Scene;
+use crate::setup::Resolved;
+use glam::DVec3;
+
+/// Steps recorded into one submission.
+pub const STEPS_PER_SUBMIT: u64 = 64;
+
+/// One set of particle-state buffers (A or B).
+struct StateSet {
+    cell: wgpu::Buffer,
+    off: wgpu::Buffer,
+    vel: wgpu::Buffer,
+    acc: wgpu::Buffer,
+    pid: wgpu::Buffer,
+    count: wgpu::Buffer,
+    hist: wgpu::Buffer,
+    hist_pid: wgpu::Buffer,
+    wall_hist: wgpu::Buffer,
+}
+
+impl StateSet {
+    fn new(device: &wgpu::Device, tag: &str, n: u64, cap: u64, walls: u64) -> Self {
+        let b = |name: &str, bytes: u64| storage_buffer(device, &format!("{tag}.{name}"), bytes);
+        Self {
+            cell: b("cell", 16 * n),
+            off: b("off", 16 * n),
+            vel: b("vel", 16 * n),
+            acc: b("acc", 16 * n),
+            pid: b("pid", 4 * n),
+            count: b("count", 4 * n),
+            hist: b("hist", 8 * n * cap),
+            hist_pid: b("hist_pid", 4 * n * cap),
+            wall_hist: b("wall_hist", 8 * n * walls.max(1)),
+        }
+    }
+
+    fn named<'a>(&'a self, side: &str) -> Vec<(String, &'a wgpu::Buffer)> {
+        [
+            ("cell", &self.cell),
+            ("off", &self.off),
+            ("vel", &self.vel),
+            ("acc", &self.acc),
+            ("pid", &self.pid),
+            ("count", &self.count),
+            ("hist", &self.hist),
+            ("hist_pid", &self.hist_pid),
+            ("wall_hist", &self.wall_hist),
+        ]
+        .into_iter()
+        .map(|(n, b)| (format!("{side}_{n}"), b))
+        .collect()
+    }
+}
+
+/// Kernels bound for one parity (which set plays A).
+struct Bound {
+    kick_drift: wgpu::BindGroup,
+    gather: wgpu::BindGroup,
+    neighbours: wgpu::BindGroup,
+    remap: wgpu::BindGroup,
+    force: wgpu::BindGroup,
+    kick: wgpu::BindGroup,
+}
+
+/// A snapshot read back from the device, in the scene's particle order.
+#[derive(Clone, Debug)]
+pub struct GpuState {
+    pub positions: Vec<DVec3>,
+    pub velocities: Vec<DVec3>,
+}
+
+/// The GPU simulation of one scene.
+pub struct GpuEngine {
+    ctx: GpuContext,
+    pub time: f64,
+    pub steps: u64,
+    dt: f64,
+    n: u32,
+    cap: u32,
+    origin: DVec3,
+    h: f64,
+    radius: Vec<f64>,
+    mass: Vec<f64>,
+    grid: GridSort,
+    sets: [StateSet; 2],
+    /// Which set is current (plays A in the next step).
+    cur: usize,
+    monitor: wgpu::Buffer,
+    kernels: [Kernel; 6],
+    bound: [Bound; 2],
+    max_per_dim: u32,
+}
+
+/// The pair-table row of a contact model, or why the GPU cannot run it yet.
+fn pair_row(model: &ContactModel) -> Result<HystereticPair, PowderError> {
+    match model {
+        ContactModel::Hysteretic(p) => Ok(HystereticPair::hysteretic(p)),
+        ContactModel::Lsd(p) => Ok(HystereticPair::lsd(p)),
+        ContactModel::Jkr(_) => Err(PowderError::Run(
+            "the GPU backend does not run the JKR/Hertz family yet (only the hysteretic and LSD models); use --backend cpu"
+                .into(),
+        )),
+    }
+}
+
+impl GpuEngine {
+    /// Uploads the scene and builds the pipelines.
+    pub fn new(scene: &Scene, ctx: GpuContext) -> Result<Self, PowderError> {
+        let r = Resolved::new(scene)?;
+        let n = scene.particles.len();
+        let mut pairs: Vec<HystereticPair> =
+            r.models.iter().map(pair_row).collect::<Result<_, _>>()?;
+        for m in &r.wall_models {
+            pairs.push(pair_row(m)?);
+        }
+        let r_min = scene
+            .particles
+            .iter()
+            .map(|p| p.radius)
+            .fold(f64::INFINITY, f64::min);
+        let q = r.r_max / r_min;
+        // Neighbours within r_i + r_j + reach: about 5·(1 + q)² for size ratio q.
+        let cap = ((5.0 * (1.0 + q) * (1.0 + q)).ceil() as u32).clamp(16, 1024);
+        let origin = DVec3::from_array(scene.domain.min);
+        let extent = DVec3::from_array(scene.domain.max) - origin;
+        let cutoff = 2.0 * r.r_max + r.max_reach;
+        let target_cells = (4 * n).max(64) as f64;
+        let h = gpu_cell_width(
+            cutoff.max((extent.x * extent.y * extent.z / target_cells).cbrt()) * (1.0 + 1e-6),
+        );
+        let dim = |e: f64| ((e / h).ceil() as u32).clamp(1, 1 << 20);
+        let dims = [dim(extent.x), dim(extent.y), dim(extent.z)];
+        let bytes_needed = n as u64 * cap as u64 * 8;
+        if bytes_needed > ctx.max_storage_binding() {
+            return Err(PowderError::Run(format!(
+                "{n} particles with {cap} neighbour slots each need {bytes_needed} bytes of contact history, over the adapter's storage binding limit of {} bytes; at most {} particles fit",
+                ctx.max_storage_binding(),
+                ctx.max_storage_binding() / (cap as u64 * 8)
+            )));
+        }
+        let grid = GridSort::new(&ctx, n as u32, dims, h as f32)?;
+        let device = &ctx.device;
+        let n_walls = scene.walls.len() as u64;
+        let sets = [
+            StateSet::new(device, "A", n as u64, cap as u64, n_walls),
+            StateSet::new(device, "B", n as u64, cap as u64, n_walls),
+        ];
+        // Initial state, in scene order (the first sort orders it).
+        let mut cells = Vec::with_capacity(n);
+        let mut offs = Vec::with_capacity(n);
+        let mut vels = Vec::with_capacity(n);
+        for (p, m) in scene.particles.iter().zip(&r.mass) {
+            let (mut c, mut o) = encode(DVec3::from_array(p.position), origin, h);
+            c[3] = p.material as i32;
+            o[3] = p.radius as f32;
+            cells.push(c);
+            offs.push(o);
+            let v = p.velocity;
+            vels.push([v[0] as f32, v[1] as f32, v[2] as f32, *m as f32]);
+        }
+        let pid: Vec<u32> = (0..n as u32).collect();
+        let g = scene.gravity;
+        let acc0: Vec<[f32; 4]> = vec![[g[0] as f32, g[1] as f32, g[2] as f32, 0.0]; n];
+        let q0 = &ctx.queue;
+        let s0 = &sets[0];
+        q0.write_buffer(&s0.cell, 0, bytemuck::cast_slice(&cells));
+        q0.write_buffer(&s0.off, 0, bytemuck::cast_slice(&offs));
+        q0.write_buffer(&s0.vel, 0, bytemuck::cast_slice(&vels));
+        q0.write_buffer(&s0.acc, 0, bytemuck::cast_slice(&acc0));
+        q0.write_buffer(&s0.pid, 0, bytemuck::cast_slice(&pid));
+        let walls: Vec<WallGpu> = scene
+            .walls
+            .iter()
+            .map(|w| {
+                WallGpu::new(
+                    DVec3::from_array(w.point),
+                    DVec3::from_array(w.normal),
+                    origin,
+                    h,
+                )
+            })
+            .collect();
+        let step = StepParams {
+            gravity: [g[0] as f32, g[1] as f32, g[2] as f32],
+            dt: r.dt as f32,
+            max_neighbours: cap,
+            n_materials: r.n_materials as u32,
+            n_walls: n_walls as u32,
+            reach: r.max_reach as f32,
+        };
+        let step_buf = uniform_buffer(device, "step", bytemuck::bytes_of(&step));
+        let pairs_buf = storage_buffer(
+            device,
+            "pairs",
+            (pairs.len() * std::mem::size_of::<HystereticPair>()) as u64,
+        );
+        q0.write_buffer(&pairs_buf, 0, bytemuck::cast_slice(&pairs));
+        let walls_buf = storage_buffer(
+            device,
+            "walls",
+            (walls.len().max(1) * std::mem::size_of::<WallGpu>()) as u64,
+        );
+        if !walls.is_empty() {
+            q0.write_buffer(&walls_buf, 0, bytemuck::cast_slice(&walls));
+        }
+        let vpred = storage_buffer(device, "vpred", 16 * n as u64);
+        let old_index = storage_buffer(device, "old_index", 4 * n as u64);
+        let nbr = storage_buffer(device, "nbr", 4 * n as u64 * cap as u64);
+        let monitor = storage_buffer(device, "monitor", 16);
+
+        let program = Program::new(&ctx, &shaders::step_variant())?;
+        let names = [
+            "kick_drift",
+            "gather",
+            "neighbours",
+            "remap",
+            "force",
+            "kick",
+        ];
+        let kernels: Vec<Kernel> = names
+            .iter()
+            .map(|k| program.kernel(k).cloned())
+            .collect::<Result<_, _>>()?;
+        let kernels: [Kernel; 6] = kernels
+            .try_into()
+            .map_err(|_| PowderError::Run("kernel set".into()))?;
+        let bind = |a: usize| -> Result<Bound, PowderError> {
+            let b = 1 - a;
+            let mut list: Vec<(String, &wgpu::Buffer)> = sets[a].named("a");
+            list.extend(sets[b].named("b"));
+            list.push(("grid".into(), grid.params()));
+            list.push(("step".into(), &step_buf));
+            list.push(("vpred".into(), &vpred));
+            list.push(("old_index".into(), &old_index));
+            list.push(("nbr".into(), &nbr));
+            list.push(("sorted_index".into(), grid.sorted_index()));
+            list.push(("cell_start".into(), grid.cell_start()));
+            list.push(("cell_count".into(), grid.cell_count()));
+            list.push(("pairs".into(), &pairs_buf));
+            list.push(("walls".into(), &walls_buf));
+            list.push(("monitor".into(), &monitor));
+            let refs: Vec<(&str, &wgpu::Buffer)> =
+                list.iter().map(|(n, b)| (n.as_str(), *b)).collect();
+            Ok(Bound {
+                kick_drift: kernels[0].bind(device, &refs)?,
+                gather: kernels[1].bind(device, &refs)?,
+                neighbours: kernels[2].bind(device, &refs)?,
+                remap: kernels[3].bind(device, &refs)?,
+                force: kernels[4].bind(device, &refs)?,
+                kick: kernels[5].bind(device, &refs)?,
+            })
+        };
+        let bound = [bind(0)?, bind(1)?];
+        let max_per_dim = ctx.limits().max_compute_workgroups_per_dimension;
+        let radius = scene.particles.iter().map(|p| p.radius).collect();
+        let mut engine = Self {
+            time: 0.0,
+            steps: 0,
+            dt: r.dt,
+            n: n as u32,
+            cap,
+            origin,
+            h,
+            radius,
+            mass: r.mass,
+            grid,
+            sets,
+            cur: 0,
+            monitor,
+            kernels,
+            bound,
+            max_per_dim,
+            ctx,
+        };
+        engine.initial_forces()?;
+        Ok(engine)
+    }
+
+    pub fn dt(&self) -> f64 {
+        self.dt
+    }
+
+    pub fn len(&self) -> usize {
+        self.n as usize
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.n == 0
+    }
+
+    /// Neighbour slots per particle.
+    pub fn capacity(&self) -> u32 {
+        self.cap
+    }
+
+    pub fn adapter(&self) -> &str {
+        &self.ctx.summary.name
+    }
+
+    pub fn radii(&self) -> &[f64] {
+        &self.radius
+    }
+
+    pub fn masses(&self) -> &[f64] {
+        &self.mass
+    }
+
+    /// Records one step: drift A, sort, then gather into B and compute B's forces.
+    fn record_step(&self, encoder: &mut wgpu::CommandEncoder, with_drift: bool) {
+        let a = self.cur;
+        let bound = &self.bound[a];
+        let (n, max) = (self.n, self.max_per_dim);
+        if with_drift {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            self.kernels[0].dispatch(&mut pass, &bound.kick_drift, n, max);
+        }
+        self.grid.encode(encoder, &self.sets[a].cell);
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        self.kernels[1].dispatch(&mut pass, &bound.gather, n, max);
+        self.kernels[2].dispatch(&mut pass, &bound.neighbours, n, max);
+        self.kernels[3].dispatch(&mut pass, &bound.remap, n, max);
+        self.kernels[4].dispatch(&mut pass, &bound.force, n, max);
+        if with_drift {
+            self.kernels[5].dispatch(&mut pass, &bound.kick, n, max);
+        }
+    }
+
+    /// The forces of the initial state (no drift, no kick), so the first step kicks with them.
+    fn initial_forces(&mut self) -> Result<(), PowderError> {
+        let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+        self.ctx.queue.write_buffer(&self.monitor, 0, &[0u8; 16]);
+        self.record_step(&mut encoder, false);
+        self.cur = 1 - self.cur;
+        self.check_monitor(encoder)
+    }
+
+    fn check_monitor(&self, encoder: wgpu::CommandEncoder) -> Result<(), PowderError> {
+        let out = submit_and_read(&self.ctx, encoder, &[(&self.monitor, 16)])?;
+        let m = u32s(&out[0]);
+        if m[1] != 0 {
+            return Err(PowderError::Run(format!(
+                "step {}: particle {} has more than {} neighbours within reach, the neighbour-list capacity; the scene is denser or more polydisperse than the capacity rule 5·(1 + r_max/r_min)² expects",
+                self.steps,
+                m[1] - 1,
+                self.cap
+            )));
+        }
+        if m[2] != 0 {
+            return Err(PowderError::Run(format!(
+                "step {}: {} particles got a non-finite acceleration; the time step may be too large",
+                self.steps, m[2]
+            )));
+        }
+        Ok(())
+    }
+
+    /// Runs `steps` steps, `STEPS_PER_SUBMIT` per submission, checking the monitor after each.
+    pub fn run_steps(&mut self, steps: u64) -> Result<(), PowderError> {
+        let mut left = steps;
+        while left > 0 {
+            let batch = left.min(STEPS_PER_SUBMIT);
+            self.ctx.queue.write_buffer(&self.monitor, 0, &[0u8; 16]);
+            let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+            for _ in 0..batch {
+                self.record_step(&mut encoder, true);
+                self.cur = 1 - self.cur;
+            }
+            self.steps += batch;
+            self.time += batch as f64 * self.dt;
+            left -= batch;
+            self.check_monitor(encoder)?;
+        }
+        Ok(())
+    }
+
+    /// Reads positions and velocities back, in the scene's particle order.
+    pub fn state(&self) -> Result<GpuState, PowderError> {
+        let s = &self.sets[self.cur];
+        let n = self.n as u64;
+        let encoder = self.ctx.device.create_command_encoder(&Default::default());
+        let out = submit_and_read(
+            &self.ctx,
+            encoder,
+            &[
+                (&s.cell, 16 * n),
+                (&s.off, 16 * n),
+                (&s.vel, 16 * n),
+                (&s.pid, 4 * n),
+            ],
+        )?;
+        let cells: Vec<[i32; 4]> = bytemuck::pod_collect_to_vec(&out[0]);
+        let offs: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&out[1]);
+        let vels: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&out[2]);
+        let pid = u32s(&out[3]);
+        let mut positions = vec![DVec3::ZERO; self.n as usize];
+        let mut velocities = vec![DVec3::ZERO; self.n as usize];
+        for k in 0..self.n as usize {
+            let i = pid[k] as usize;
+            positions[i] = crate::gpu::layout::decode(cells[k], offs[k], self.origin, self.h);
+            velocities[i] = DVec3::new(vels[k][0] as f64, vels[k][1] as f64, vels[k][2] as f64);
+        }
+        Ok(GpuState {
+            positions,
+            velocities,
+        })
+    }
+
+    /// Kinetic energy of a read-back state, J.
+    pub fn kinetic_energy(&self, state: &GpuState) -> f64 {
+        state
+            .velocities
+            .iter()
+            .zip(&self.mass)
+            .map(|(v, m)| 0.5 * m * v.length_squared())
+            .sum()
+    }
+}

@@ -1,0 +1,122 @@
+//! What every backend derives from a scene before stepping: the pair-model tables, the
+//! particle masses, the time step and the largest interaction reach. One place, so the
+//! CPU and GPU engines run exactly the same physics set-up.
+
+use crate::error::PowderError;
+use crate::model::{ContactModel, PairGeometry, TimeStep};
+use crate::scene::{DtSetting, Scene};
+
+/// A scene resolved for stepping.
+#[derive(Clone, Debug)]
+pub struct Resolved {
+    pub n_materials: usize,
+    /// Pair models, n_materials × n_materials (row = first particle's material).
+    pub models: Vec<ContactModel>,
+    /// Wall models, walls × n_materials.
+    pub wall_models: Vec<ContactModel>,
+    /// Particle masses, kg, in scene order.
+    pub mass: Vec<f64>,
+    /// The time step used and the rule it was checked against.
+    pub dt: f64,
+    pub time_step: TimeStep,
+    /// Largest radius, m.
+    pub r_max: f64,
+    /// Largest distance beyond touching at which any pair interacts (the non-contact
+    /// range, or how far a JKR neck stretches), at the largest radius, m.
+    pub max_reach: f64,
+    /// Whether some contact model needs angular velocities.
+    pub rotation: bool,
+}
+
+impl Resolved {
+    pub fn new(scene: &Scene) -> Result<Self, PowderError> {
+        let n_materials = scene.materials.len();
+        let mut models = Vec::with_capacity(n_materials * n_materials);
+        for a in 0..n_materials {
+            for b in 0..n_materials {
+                models.push(scene.pair_model(a, b)?);
+            }
+        }
+        let mut wall_models = Vec::with_capacity(scene.walls.len() * n_materials);
+        for w in &scene.walls {
+            for b in 0..n_materials {
+                wall_models.push(scene.pair_model(w.material, b)?);
+            }
+        }
+        let mass: Vec<f64> = scene
+            .particles
+            .iter()
+            .map(|p| {
+                scene.materials[p.material].density * 4.0 / 3.0
+                    * std::f64::consts::PI
+                    * p.radius.powi(3)
+            })
+            .collect();
+        // Time step: the most demanding pair of materials, with the lightest particles of
+        // each (walls count as infinite mass).
+        let mut lightest: Vec<Option<(f64, f64)>> = vec![None; n_materials];
+        for (p, &m) in scene.particles.iter().zip(&mass) {
+            let slot = &mut lightest[p.material];
+            if slot.is_none_or(|(lm, _)| m < lm) {
+                *slot = Some((m, p.radius));
+            }
+        }
+        let mut time_step: Option<TimeStep> = None;
+        let mut consider = |ts: TimeStep| {
+            if time_step.as_ref().is_none_or(|t| ts.max < t.max) {
+                time_step = Some(ts);
+            }
+        };
+        let v_imp = scene.impact_velocity;
+        for a in 0..n_materials {
+            let Some((ma, ra)) = lightest[a] else {
+                continue;
+            };
+            for b in 0..n_materials {
+                if let Some((mb, rb)) = lightest[b] {
+                    let geom = PairGeometry::spheres(ra, rb, ma, mb);
+                    consider(models[a * n_materials + b].time_step(&geom, v_imp));
+                }
+            }
+            for w in 0..scene.walls.len() {
+                let geom = PairGeometry::wall(ra, ma);
+                consider(wall_models[w * n_materials + a].time_step(&geom, v_imp));
+            }
+        }
+        let time_step =
+            time_step.ok_or_else(|| PowderError::Scene("the scene has no particles".into()))?;
+        let dt = match scene.dt {
+            DtSetting::Auto => time_step.default,
+            DtSetting::Fixed(dt) => {
+                if dt > time_step.max && !scene.force_dt {
+                    return Err(PowderError::Scene(format!(
+                        "dt = {dt:e} s is above the stable limit {:.4e} s ({}); use dt <= {:.4e} s or set force_dt = true",
+                        time_step.max, time_step.reason, time_step.max
+                    )));
+                }
+                dt
+            }
+        };
+        let r_max = scene.particles.iter().map(|p| p.radius).fold(0.0, f64::max);
+        let max_reach = models
+            .iter()
+            .map(|m| m.reach(0.5 * r_max))
+            .chain(wall_models.iter().map(|m| m.reach(r_max)))
+            .fold(0.0, f64::max);
+        let rotation = models
+            .iter()
+            .chain(&wall_models)
+            .any(ContactModel::needs_rotation);
+        Ok(Self {
+            n_materials,
+            models,
+            wall_models,
+            mass,
+            dt,
+            time_step,
+            r_max,
+            max_reach,
+            rotation,
+        })
+    }
+}
