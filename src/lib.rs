@@ -7,6 +7,7 @@
 //! * [`output`] — plots and atomically written files.
 
 pub mod collide;
+pub mod compare;
 pub mod cpu;
 pub mod error;
 pub mod gpu;

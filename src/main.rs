@@ -25,6 +25,8 @@ enum Command {
     Run(RunArgs),
     /// Collide two spheres head-on and compare with the papers' closed forms.
     Collide(Box<CollideArgs>),
+    /// Run a scene on both backends and report their deviations over time.
+    Compare(CompareArgs),
     /// Show the GPU adapter the GPU engine would use (POWDER_ADAPTER overrides it).
     Info(InfoArgs),
 }
@@ -75,6 +77,26 @@ struct RunArgs {
     #[arg(long)]
     steps: Option<u64>,
     /// Print the summary as JSON on stdout.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Args)]
+struct CompareArgs {
+    /// Scene file (TOML).
+    scene: PathBuf,
+    /// Steps to run (default: the scene's duration, at most 2000).
+    #[arg(long)]
+    steps: Option<u64>,
+    /// Steps between samples (default: steps/10).
+    #[arg(long)]
+    every: Option<u64>,
+    /// A threshold, KEY=VALUE with KEY one of position (over the smallest radius, default
+    /// 1e-3), velocity (over the largest speed, 1e-2), kinetic (relative, 1e-2), contacts
+    /// (relative count difference, 0.05); repeatable.
+    #[arg(long = "tolerance", value_name = "KEY=VALUE")]
+    tolerance: Vec<String>,
+    /// Print JSON on stdout.
     #[arg(long)]
     json: bool,
 }
@@ -470,6 +492,87 @@ fn print_snapshot(s: &Snapshot) {
     );
 }
 
+/// Runs `compare`; `Ok(false)` when a threshold was exceeded.
+fn compare_cmd(a: &CompareArgs) -> Result<bool, PowderError> {
+    use powder::compare::{compare, Tolerances};
+    let mut tol = Tolerances::default();
+    for t in &a.tolerance {
+        let bad = || {
+            PowderError::from(ParamError::new(
+                "tolerance",
+                format!("`{t}` is not KEY=VALUE with KEY position, velocity, kinetic or contacts and VALUE >= 0"),
+            ))
+        };
+        let (key, value) = t.split_once('=').ok_or_else(bad)?;
+        let value: f64 = value.trim().parse().map_err(|_| bad())?;
+        if value.is_nan() || value < 0.0 {
+            return Err(bad());
+        }
+        match key.trim() {
+            "position" => tol.position = value,
+            "velocity" => tol.velocity = value,
+            "kinetic" => tol.kinetic = value,
+            "contacts" => tol.contacts = value,
+            _ => return Err(bad()),
+        }
+    }
+    let scene = Scene::load(&a.scene)?;
+    let ctx = powder::gpu::GpuContext::new()?;
+    let total = powder::setup::Resolved::new(&scene)
+        .map(|r| ((scene.duration / r.dt).ceil() as u64).clamp(1, 2000))?;
+    let steps = a.steps.unwrap_or(total);
+    let every = a.every.unwrap_or((steps / 10).max(1));
+    let c = compare(&scene, ctx, steps, every, tol)?;
+    if a.json {
+        let text = serde_json::to_string_pretty(&c)
+            .map_err(|e| PowderError::Run(format!("cannot encode JSON: {e}")))?;
+        println!("{text}");
+    } else {
+        println!(
+            "compare `{}`: {} particles, dt = {:.4e} s, CPU (f64) against GPU ({})",
+            c.scene, c.particles, c.dt, c.adapter
+        );
+        println!(
+            "{:>9} {:>11} {:>11} {:>11} {:>11} {:>11} {:>9} {:>9} {:>11} {:>11}  exceeded",
+            "step",
+            "t (s)",
+            "pos/r_min",
+            "vel/v_max",
+            "E_kin cpu",
+            "rel. E_kin",
+            "Z cpu",
+            "Z gpu",
+            "δmax cpu",
+            "δmax gpu"
+        );
+        for s in &c.samples {
+            println!(
+                "{:>9} {:>11.4e} {:>11.3e} {:>11.3e} {:>11.4e} {:>11.3e} {:>9} {:>9} {:>11.4e} {:>11.4e}  {}",
+                s.step,
+                s.time,
+                s.position,
+                s.velocity,
+                s.kinetic_cpu,
+                s.kinetic,
+                s.contacts_cpu,
+                s.contacts_gpu,
+                s.max_overlap_cpu,
+                s.max_overlap_gpu,
+                s.exceeded.join(",")
+            );
+        }
+        println!(
+            "thresholds: position {:e}, velocity {:e}, kinetic {:e}, contacts {:e} -> {}",
+            c.tolerances.position,
+            c.tolerances.velocity,
+            c.tolerances.kinetic,
+            c.tolerances.contacts,
+            if c.passed { "PASS" } else { "FAIL" }
+        );
+    }
+    Ok(c.passed)
+}
+
 fn run_gpu_cmd(
     a: &RunArgs,
     scene: &Scene,
@@ -573,6 +676,11 @@ fn main() -> ExitCode {
         Command::Run(a) => run_cmd(a),
         Command::Collide(a) => collide_cmd(a),
         Command::Info(a) => info_cmd(a),
+        Command::Compare(a) => match compare_cmd(a) {
+            Ok(true) => Ok(()),
+            Ok(false) => return ExitCode::from(1),
+            Err(e) => Err(e),
+        },
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

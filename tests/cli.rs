@@ -475,3 +475,89 @@ fn collide_hertz_and_jkr_errors_name_the_option() {
         assert!(!err.contains("panicked"), "{err}");
     }
 }
+
+/// Whether a GPU adapter exists; outside CI the GPU commands' tests are skipped without one.
+fn gpu_available() -> bool {
+    let ok = powder(&["info"]).0;
+    if !ok && std::env::var_os("CI").is_some() {
+        panic!("CI needs a GPU adapter (lavapipe)");
+    }
+    ok
+}
+
+#[test]
+fn compare_reports_deviations_and_fails_beyond_thresholds() {
+    if !gpu_available() {
+        return;
+    }
+    let scene = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/examples/cohesive_cluster.toml"
+    );
+    let (ok, out, err) = powder(&[
+        "compare", scene, "--steps", "2000", "--every", "500", "--json",
+    ]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["passed"], true);
+    assert_eq!(v["samples"].as_array().unwrap().len(), 4);
+    for key in [
+        "position",
+        "velocity",
+        "kinetic",
+        "contacts_cpu",
+        "contacts_gpu",
+        "max_overlap_gpu",
+    ] {
+        assert!(v["samples"][0].get(key).is_some(), "missing {key}");
+    }
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_powder"))
+        .args([
+            "compare",
+            scene,
+            "--steps",
+            "500",
+            "--tolerance",
+            "position=1e-15",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "beyond a threshold: exit code 1"
+    );
+    assert!(String::from_utf8_lossy(&out.stdout).contains("FAIL"));
+    let (ok, _, err) = powder(&["compare", scene, "--tolerance", "speed=1"]);
+    assert!(!ok && err.contains("KEY=VALUE"), "{err}");
+}
+
+#[test]
+fn info_names_the_adapter() {
+    if !gpu_available() {
+        return;
+    }
+    let (ok, out, err) = powder(&["info", "--json"]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert!(v["name"].is_string() && v["backend"].is_string(), "{out}");
+}
+
+#[test]
+fn collide_and_run_on_the_gpu_backend() {
+    if !gpu_available() {
+        return;
+    }
+    let (ok, out, err) = hysteretic(&["--velocity", "0.05", "--backend", "gpu", "--json"]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["backend"], "gpu");
+    assert!(v["adapter"].is_string());
+    let scene = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/examples/cohesive_cluster.toml"
+    );
+    let (ok, out, err) = powder(&["run", scene, "--backend", "gpu", "--steps", "300"]);
+    assert!(ok, "{err}");
+    assert!(out.contains("backend          gpu"), "{out}");
+}
