@@ -246,6 +246,7 @@ impl CollideSpec {
             duration: f64::INFINITY,
             output_every: u64::MAX,
             impact_velocity: vn,
+            checkpoint_every: u64::MAX,
             materials: vec![Material {
                 name: "collide".into(),
                 density: self.density,

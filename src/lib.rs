@@ -6,6 +6,7 @@
 //! * [`collide`] — the head-on two-sphere collision used to check models against theory;
 //! * [`output`] — plots and atomically written files.
 
+pub mod checkpoint;
 pub mod collide;
 pub mod compare;
 pub mod cpu;

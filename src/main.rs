@@ -6,7 +6,6 @@ use powder::model::{
     AdhesionMode, ContactModel, Dissipation, HystereticParams, JkrParams, K2Rule, LsdParams,
     Pulloff,
 };
-use powder::run::{run_cpu, Snapshot};
 use powder::scene::Scene;
 use powder::{ParamError, PowderError};
 use std::path::PathBuf;
@@ -73,9 +72,19 @@ struct RunArgs {
     scene: PathBuf,
     #[arg(long, value_enum, default_value = "cpu")]
     backend: Backend,
-    /// Stop after this many steps (default: the scene's duration).
+    /// Stop after this many steps in total (default: the scene's duration).
     #[arg(long)]
     steps: Option<u64>,
+    /// Output directory: VTK snapshots and a .pvd collection for ParaView, series.csv,
+    /// checkpoint.bin, summary.json (default: out/<scene name>).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Write no output files.
+    #[arg(long, conflicts_with_all = ["out", "resume"])]
+    no_output: bool,
+    /// Resume from a checkpoint of the same scene (bitwise identical continuation).
+    #[arg(long)]
+    resume: Option<PathBuf>,
     /// Print the summary as JSON on stdout.
     #[arg(long)]
     json: bool,
@@ -478,20 +487,6 @@ fn collide_cmd(a: &CollideArgs) -> Result<(), PowderError> {
     Ok(())
 }
 
-fn print_snapshot(s: &Snapshot) {
-    eprintln!(
-        "step {:>9}  t = {:.4e} s  E_kin {:.4e}  E_el {:.4e}  E_diss {:.4e}  E_tot {:.6e} J  Z = {:.3}  max δ/a12 = {:.3e}",
-        s.step,
-        s.time,
-        s.energies.kinetic,
-        s.energies.elastic,
-        s.energies.dissipated,
-        s.energies.total(),
-        s.contacts.coordination,
-        s.contacts.max_overlap_ratio
-    );
-}
-
 /// Runs `compare`; `Ok(false)` when a threshold was exceeded.
 fn compare_cmd(a: &CompareArgs) -> Result<bool, PowderError> {
     use powder::compare::{compare, Tolerances};
@@ -609,6 +604,9 @@ fn run_gpu_cmd(
     Ok(())
 }
 
+/// Set when `run` stopped on Ctrl-C (exit status 130, as shells report SIGINT).
+static INTERRUPTED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
 fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
     let scene = Scene::load(&a.scene)?;
     if a.backend == Backend::Gpu {
@@ -617,7 +615,50 @@ fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
             Err(e) => eprintln!("notice: {e}\nnotice: running on the CPU backend instead"),
         }
     }
-    let summary = run_cpu(&scene, a.steps, print_snapshot)?;
+    let interrupt = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    {
+        let flag = interrupt.clone();
+        // a second Ctrl-C while the first is being handled is ignored: the checkpoint
+        // being written must not be cut
+        let _ = ctrlc::set_handler(move || flag.store(true, std::sync::atomic::Ordering::Relaxed));
+    }
+    let out_dir = if a.no_output {
+        None
+    } else {
+        Some(
+            a.out
+                .clone()
+                .unwrap_or_else(|| PathBuf::from("out").join(&scene.name)),
+        )
+    };
+    if let Some(d) = &out_dir {
+        std::fs::create_dir_all(d).map_err(|e| {
+            PowderError::io(
+                format!("cannot create the output directory `{}`", d.display()),
+                e,
+            )
+        })?;
+    }
+    let opts = powder::run::RunOptions {
+        out_dir,
+        resume: a.resume.clone(),
+        max_steps: a.steps,
+        progress_bar: std::io::IsTerminal::is_terminal(&std::io::stderr()),
+        verbose: true,
+        interrupt: Some(interrupt),
+    };
+    let summary = powder::run::run_cpu_with(&scene, &opts, |_| {})?;
+    if summary.interrupted {
+        INTERRUPTED.store(true, std::sync::atomic::Ordering::Relaxed);
+        eprintln!(
+            "interrupted at step {}: checkpoint written to {}/checkpoint.bin; resume with --resume",
+            summary.steps,
+            summary
+                .out_dir
+                .as_deref()
+                .unwrap_or("(no output directory)")
+        );
+    }
     if a.json {
         let text = serde_json::to_string_pretty(&summary)
             .map_err(|e| PowderError::Run(format!("cannot encode JSON: {e}")))?;
@@ -661,6 +702,22 @@ fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
         "overlap          max {:.4e} m (max δ/a12 {:.4e}, mean δ/a12 {:.4e})",
         l.contacts.max_overlap, l.contacts.max_overlap_ratio, l.contacts.mean_overlap_ratio
     );
+    println!(
+        "solid fraction   {:.4} of the domain, {:.4} of the particles' bounding box",
+        summary.solid_fraction_domain, summary.solid_fraction_bounding_box
+    );
+    for (w, f) in summary.wall_forces.iter().enumerate() {
+        println!(
+            "wall {w} force     ({:.4e}, {:.4e}, {:.4e}) N",
+            f[0], f[1], f[2]
+        );
+    }
+    if let Some(d) = &summary.out_dir {
+        println!(
+            "outputs          {d}/ ({}.pvd for ParaView, series.csv, checkpoint.bin, summary.json)",
+            summary.scene
+        );
+    }
     if summary.outside_domain > 0 {
         println!(
             "warning          {} particles ended outside the domain box",
@@ -683,6 +740,7 @@ fn main() -> ExitCode {
         },
     };
     match result {
+        Ok(()) if INTERRUPTED.load(std::sync::atomic::Ordering::Relaxed) => ExitCode::from(130),
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e}");

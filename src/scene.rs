@@ -19,10 +19,12 @@
 //! duration = 0.05               # required, s, > 0: simulated time
 //! dt = "auto"                   # "auto" (default: from the stiffest contact) or a time step in s, > 0
 //! force_dt = false              # default false; true accepts a dt above the stability limit
-//! output_every = 1000           # default 1000, >= 1: steps between progress/summary lines
+//! output_every = 1000           # default 1000, >= 1: steps between outputs (progress line,
+//!                               # VTK snapshot, CSV row of `powder run`)
 //! gravity = [0.0, 0.0, -9.81]   # m/s^2, default [0, 0, 0]
 //! impact_velocity = 1.0         # m/s, > 0, default 1: largest expected impact speed; sets the
 //!                               # Hertz/JKR contact time of the automatic time step
+//! checkpoint_every = 10000      # default 10 * output_every, >= 1: steps between checkpoints
 //!
 //! [[material]]                  # at least one; referred to by name
 //! name = "powder"               # required, unique
@@ -221,6 +223,8 @@ pub struct Scene {
     /// Largest expected impact speed, m/s (default 1): sets the Hertz/JKR contact time
     /// for the automatic time step.
     pub impact_velocity: f64,
+    /// Steps between checkpoints of `powder run` (default 10 × output_every).
+    pub checkpoint_every: u64,
     pub materials: Vec<Material>,
     pub interactions: Vec<Interaction>,
     pub walls: Vec<Wall>,
@@ -301,6 +305,7 @@ const SIMULATION_KEYS: &[&str] = &[
     "output_every",
     "gravity",
     "impact_velocity",
+    "checkpoint_every",
 ];
 const MATERIAL_KEYS: &[&str] = &["name", "density", "model"];
 const INTERACTION_KEYS: &[&str] = &["materials", "model"];
@@ -874,6 +879,7 @@ fn parse_scene(src: &Src) -> Res<Scene> {
         dt: sim.dt,
         force_dt: sim.force_dt,
         impact_velocity: sim.impact_velocity,
+        checkpoint_every: sim.checkpoint_every,
         duration: sim.duration,
         output_every: sim.output_every,
         materials,
@@ -918,6 +924,7 @@ struct SimSettings {
     force_dt: bool,
     output_every: u64,
     impact_velocity: f64,
+    checkpoint_every: u64,
     gravity: [f64; 3],
 }
 
@@ -965,7 +972,15 @@ fn parse_simulation(root: &Tbl) -> Res<SimSettings> {
             "the largest expected impact speed in m/s",
         )?
         .unwrap_or(1.0);
+    let checkpoint_every = t.u64("checkpoint_every")?.unwrap_or(10 * output_every);
+    if checkpoint_every == 0 {
+        return Err(t.err_key(
+            "checkpoint_every",
+            "`checkpoint_every` in [simulation] must be >= 1 (steps between checkpoints), got 0",
+        ));
+    }
     Ok(SimSettings {
+        checkpoint_every,
         impact_velocity,
         duration,
         dt,

@@ -22,6 +22,7 @@ fn scene(
         duration: 1.0,
         output_every: 1000,
         impact_velocity: 1.0,
+        checkpoint_every: 10_000,
         materials: vec![Material {
             name: "m".into(),
             density: 2000.0,

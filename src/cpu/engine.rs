@@ -12,7 +12,7 @@ use glam::DVec3;
 use std::collections::HashMap;
 
 /// What a contact remembers between steps.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize)]
 struct ContactRecord {
     history: ContactHistory,
     /// Overlap, forces and stored energy at the end of the last step, for the work
@@ -94,6 +94,24 @@ pub struct ContactStats {
     /// Largest overlap over the pair's reduced radius a12.
     pub max_overlap_ratio: f64,
     pub mean_overlap_ratio: f64,
+}
+
+/// Everything that evolves in a CPU run: what a checkpoint stores to resume bitwise.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct CpuState {
+    pub time: f64,
+    pub steps: u64,
+    dt: f64,
+    pos: Vec<DVec3>,
+    vel: Vec<DVec3>,
+    acc: Vec<DVec3>,
+    force: Vec<DVec3>,
+    omega: Vec<DVec3>,
+    torque: Vec<DVec3>,
+    /// Contacts in key order (the maps are rebuilt in visiting order every step).
+    contacts: Vec<((u32, u32), ContactRecord)>,
+    wall_contacts: Vec<((u32, u32), ContactRecord)>,
+    dissipated: f64,
 }
 
 /// The CPU reference simulation.
@@ -221,6 +239,74 @@ impl CpuEngine {
 
     pub fn dt(&self) -> f64 {
         self.dt
+    }
+
+    /// The evolving state, for a checkpoint.
+    pub fn state(&self) -> CpuState {
+        let sorted = |m: &HashMap<(u32, u32), ContactRecord>| {
+            let mut v: Vec<_> = m.iter().map(|(k, r)| (*k, *r)).collect();
+            v.sort_by_key(|(k, _)| *k);
+            v
+        };
+        CpuState {
+            time: self.time,
+            steps: self.steps,
+            dt: self.dt,
+            pos: self.pos.clone(),
+            vel: self.vel.clone(),
+            acc: self.acc.clone(),
+            force: self.force.clone(),
+            omega: self.omega.clone(),
+            torque: self.torque.clone(),
+            contacts: sorted(&self.contacts),
+            wall_contacts: sorted(&self.wall_contacts),
+            dissipated: self.dissipated,
+        }
+    }
+
+    /// Continues from a checkpointed state of the same scene. The state must come from
+    /// this scene (same particle count, time step and rotation); the checkpoint file
+    /// checks the scene's identity before this is called.
+    pub fn restore(&mut self, s: CpuState) -> Result<(), PowderError> {
+        let n = self.pos.len();
+        if s.pos.len() != n
+            || s.vel.len() != n
+            || s.acc.len() != n
+            || s.omega.len() != self.omega.len()
+        {
+            return Err(PowderError::Run(format!(
+                "the checkpoint holds {} particles{} but the scene has {n}{}",
+                s.pos.len(),
+                if s.omega.is_empty() {
+                    ""
+                } else {
+                    " with rotation"
+                },
+                if self.omega.is_empty() {
+                    ""
+                } else {
+                    " with rotation"
+                }
+            )));
+        }
+        if s.dt.to_bits() != self.dt.to_bits() {
+            return Err(PowderError::Run(format!(
+                "the checkpoint was run with dt = {:e} s but the scene gives dt = {:e} s",
+                s.dt, self.dt
+            )));
+        }
+        self.time = s.time;
+        self.steps = s.steps;
+        self.pos = s.pos;
+        self.vel = s.vel;
+        self.acc = s.acc;
+        self.force = s.force;
+        self.omega = s.omega;
+        self.torque = s.torque;
+        self.contacts = s.contacts.into_iter().collect();
+        self.wall_contacts = s.wall_contacts.into_iter().collect();
+        self.dissipated = s.dissipated;
+        Ok(())
     }
 
     /// The time-step rule the scene was checked against.
@@ -455,7 +541,9 @@ impl CpuEngine {
             });
         }
         // Pairs that jumped beyond the cut-off in one step leave with their last force.
-        for ((i, j), c) in old.drain() {
+        let mut leftovers: Vec<_> = old.drain().collect();
+        leftovers.sort_by_key(|(k, _)| *k);
+        for ((i, j), c) in leftovers {
             let motion = Motion {
                 delta: self.overlap(i as usize, j as usize),
                 ..Default::default()
@@ -513,7 +601,9 @@ impl CpuEngine {
                 }
             }
         }
-        for ((w, i), c) in old_w.drain() {
+        let mut leftovers: Vec<_> = old_w.drain().collect();
+        leftovers.sort_by_key(|(k, _)| *k);
+        for ((w, i), c) in leftovers {
             let motion = Motion {
                 delta: self.wall_overlap(w as usize, i as usize),
                 ..Default::default()
@@ -547,13 +637,33 @@ impl CpuEngine {
             e.kinetic += 0.5 * self.mass[i] * self.vel[i].length_squared();
             e.gravitational -= self.mass[i] * self.gravity.dot(self.pos[i]);
         }
-        e.elastic = self
+        // summed in key order, so the value does not depend on the maps' layout
+        let mut stored: Vec<((u32, u32, bool), f64)> = self
             .contacts
-            .values()
-            .chain(self.wall_contacts.values())
-            .map(|c| c.potential)
-            .sum();
+            .iter()
+            .map(|(k, c)| ((k.0, k.1, false), c.potential))
+            .chain(
+                self.wall_contacts
+                    .iter()
+                    .map(|(k, c)| ((k.0, k.1, true), c.potential)),
+            )
+            .collect();
+        stored.sort_by_key(|(k, _)| *k);
+        e.elastic = stored.iter().map(|(_, u)| u).sum();
         e
+    }
+
+    /// Force the particles exert on each wall now, N (normal and tangential parts).
+    pub fn wall_forces(&self) -> Vec<DVec3> {
+        let mut f = vec![DVec3::ZERO; self.walls.len()];
+        let mut keys: Vec<_> = self.wall_contacts.keys().copied().collect();
+        keys.sort();
+        for k in keys {
+            let c = &self.wall_contacts[&k];
+            let w = k.0 as usize;
+            f[w] -= c.force * self.walls[w].normal + c.tangential;
+        }
+        f
     }
 
     /// Contact counts and overlap statistics now.

@@ -15,7 +15,7 @@ use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 /// Per-contact history that survives between steps (and, on the GPU, re-sorting).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct ContactHistory {
     /// Largest overlap reached on the current branch family (δmax).
     pub delta_max: f64,

@@ -1,2 +1,3 @@
 pub mod atomic;
 pub mod plot;
+pub mod vtk;

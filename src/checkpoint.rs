@@ -1,0 +1,124 @@
+//! Checkpoints: the complete evolving state of a CPU run, so a run resumes bitwise
+//! identically. A checkpoint names the powder version and a digest of the scene, and is
+//! refused for another version or another scene. Written atomically.
+
+use crate::cpu::{CpuEngine, CpuState};
+use crate::error::PowderError;
+use crate::output::atomic::write_atomic;
+use crate::scene::Scene;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+const MAGIC: &str = "powder-checkpoint";
+/// Raw bytes that open every checkpoint, checked before anything is decoded.
+const PREFIX: &[u8; 8] = b"POWDERCK";
+
+/// bincode with fixed-width integers and a size limit, so a corrupt length can never ask
+/// for more memory than the file holds.
+fn codec(limit: u64) -> impl bincode::Options {
+    use bincode::Options;
+    bincode::DefaultOptions::new()
+        .with_fixint_encoding()
+        .allow_trailing_bytes()
+        .with_limit(limit)
+}
+/// Bumped whenever the state layout changes.
+const FORMAT: u32 = 1;
+
+#[derive(Serialize, Deserialize)]
+struct Header {
+    magic: String,
+    format: u32,
+    version: String,
+    backend: String,
+    scene: String,
+    scene_digest: u64,
+    steps: u64,
+    time: f64,
+}
+
+/// FNV-1a over the scene's full description (every value, exactly): two scenes share a
+/// digest only if they describe the same run.
+pub fn scene_digest(scene: &Scene) -> u64 {
+    let text = format!("{scene:?}");
+    let mut h: u64 = 0xcbf29ce484222325;
+    for b in text.bytes() {
+        h ^= b as u64;
+        h = h.wrapping_mul(0x100000001b3);
+    }
+    h
+}
+
+/// Writes the engine's state to `path` (atomically).
+pub fn save(path: &Path, scene: &Scene, engine: &CpuEngine) -> Result<(), PowderError> {
+    let state = engine.state();
+    let header = Header {
+        magic: MAGIC.into(),
+        format: FORMAT,
+        version: env!("CARGO_PKG_VERSION").into(),
+        backend: "cpu".into(),
+        scene: scene.name.clone(),
+        scene_digest: scene_digest(scene),
+        steps: state.steps,
+        time: state.time,
+    };
+    use bincode::Options;
+    let encode = |e: bincode::Error| PowderError::Run(format!("cannot encode the checkpoint: {e}"));
+    let mut bytes = PREFIX.to_vec();
+    bytes.extend(codec(u64::MAX).serialize(&header).map_err(encode)?);
+    bytes.extend(codec(u64::MAX).serialize(&state).map_err(encode)?);
+    write_atomic(path, &bytes)
+}
+
+/// Reads a checkpoint of `scene` from `path`.
+pub fn load(path: &Path, scene: &Scene) -> Result<CpuState, PowderError> {
+    let bytes = std::fs::read(path)
+        .map_err(|e| PowderError::io(format!("cannot read checkpoint `{}`", path.display()), e))?;
+    let not_ours = || {
+        PowderError::Run(format!(
+            "`{}` is not a powder checkpoint (or is truncated)",
+            path.display()
+        ))
+    };
+    use bincode::Options;
+    if !bytes.starts_with(PREFIX) {
+        return Err(not_ours());
+    }
+    let limit = bytes.len() as u64;
+    let mut cursor = std::io::Cursor::new(&bytes[PREFIX.len()..]);
+    let header: Header = codec(limit)
+        .deserialize_from(&mut cursor)
+        .map_err(|_| not_ours())?;
+    if header.magic != MAGIC {
+        return Err(not_ours());
+    }
+    if header.format != FORMAT || header.version != env!("CARGO_PKG_VERSION") {
+        return Err(PowderError::Run(format!(
+            "checkpoint `{}` was written by powder {} (format {}); this is powder {} (format {FORMAT}): rerun the scene from the start",
+            path.display(),
+            header.version,
+            header.format,
+            env!("CARGO_PKG_VERSION")
+        )));
+    }
+    if header.backend != "cpu" {
+        return Err(PowderError::Run(format!(
+            "checkpoint `{}` comes from the {} backend; resume it on that backend",
+            path.display(),
+            header.backend
+        )));
+    }
+    if header.scene_digest != scene_digest(scene) {
+        return Err(PowderError::Run(format!(
+            "checkpoint `{}` belongs to scene `{}` (digest {:016x}), not to this scene `{}` (digest {:016x}): a resumed run must use the very scene it started with",
+            path.display(),
+            header.scene,
+            header.scene_digest,
+            scene.name,
+            scene_digest(scene)
+        )));
+    }
+    codec(limit)
+        .deserialize_from(&mut cursor)
+        .map_err(|_| not_ours())
+}

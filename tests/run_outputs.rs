@@ -1,0 +1,146 @@
+//! `powder run` outputs: VTK + pvd, CSV series, summary, checkpoints that resume bitwise,
+//! refusal of foreign checkpoints, Ctrl-C.
+
+use powder::run::{run_cpu_with, RunOptions};
+use powder::scene::Scene;
+use std::path::Path;
+
+fn cluster() -> Scene {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/examples/cohesive_cluster.toml"
+    );
+    let mut s = Scene::load(Path::new(path)).unwrap();
+    s.output_every = 500;
+    s.checkpoint_every = 1000;
+    s
+}
+
+fn run(scene: &Scene, out: &Path, steps: u64, resume: Option<&Path>) -> powder::run::RunSummary {
+    let opts = RunOptions {
+        out_dir: Some(out.to_path_buf()),
+        resume: resume.map(Path::to_path_buf),
+        max_steps: Some(steps),
+        ..Default::default()
+    };
+    run_cpu_with(scene, &opts, |_| {}).unwrap()
+}
+
+#[test]
+fn outputs_are_written_and_a_resumed_run_is_bitwise_identical() {
+    let scene = cluster();
+    let straight = tempfile::tempdir().unwrap();
+    let split = tempfile::tempdir().unwrap();
+    run(&scene, straight.path(), 3000, None);
+    let first = run(&scene, split.path(), 1500, None);
+    assert_eq!(first.steps, 1500);
+    let ckpt = split.path().join("checkpoint.bin");
+    let resumed = run(&scene, split.path(), 3000, Some(&ckpt));
+    assert_eq!(resumed.resumed_from, Some(1500));
+    assert_eq!(resumed.steps, 3000);
+    // identical state ⇒ identical checkpoint bytes
+    let a = std::fs::read(straight.path().join("checkpoint.bin")).unwrap();
+    let b = std::fs::read(split.path().join("checkpoint.bin")).unwrap();
+    assert!(a == b, "resumed run differs from the straight run");
+    // the series and the collection continue seamlessly
+    let csv_a = std::fs::read_to_string(straight.path().join("series.csv")).unwrap();
+    let csv_b = std::fs::read_to_string(split.path().join("series.csv")).unwrap();
+    assert_eq!(csv_a, csv_b);
+    assert_eq!(
+        csv_a.lines().count(),
+        1 + 7,
+        "header + steps 0..=3000 every 500"
+    );
+    let pvd = std::fs::read_to_string(split.path().join("cohesive_cluster.pvd")).unwrap();
+    assert_eq!(pvd.matches("<DataSet").count(), 7);
+    let vtp = std::fs::read_to_string(
+        split
+            .path()
+            .join("snapshots/cohesive_cluster_0000003000.vtp"),
+    )
+    .unwrap();
+    assert!(vtp.contains(r#"NumberOfPoints="200""#));
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(split.path().join("summary.json")).unwrap())
+            .unwrap();
+    assert_eq!(summary["steps"], 3000);
+    assert!(summary["solid_fraction_bounding_box"].as_f64().unwrap() > 0.0);
+}
+
+#[test]
+fn foreign_or_broken_checkpoints_are_refused() {
+    let scene = cluster();
+    let dir = tempfile::tempdir().unwrap();
+    run(&scene, dir.path(), 200, None);
+    let ckpt = dir.path().join("checkpoint.bin");
+    let mut other = scene.clone();
+    other.gravity[2] = -9.8;
+    let opts = RunOptions {
+        resume: Some(ckpt.clone()),
+        ..Default::default()
+    };
+    let err = run_cpu_with(&other, &opts, |_| {}).unwrap_err().to_string();
+    assert!(
+        err.contains("belongs to scene") && err.contains("very scene"),
+        "{err}"
+    );
+    let bytes = std::fs::read(&ckpt).unwrap();
+    for cut in [4, 12, bytes.len() / 2, bytes.len() - 1] {
+        let truncated = dir.path().join("truncated.bin");
+        std::fs::write(&truncated, &bytes[..cut]).unwrap();
+        let opts = RunOptions {
+            resume: Some(truncated),
+            ..Default::default()
+        };
+        let err = run_cpu_with(&scene, &opts, |_| {}).unwrap_err().to_string();
+        assert!(
+            err.contains("not a powder checkpoint"),
+            "cut at {cut}: {err}"
+        );
+    }
+    let broken = dir.path().join("broken.bin");
+    std::fs::write(&broken, b"not a checkpoint").unwrap();
+    let opts = RunOptions {
+        resume: Some(broken),
+        ..Default::default()
+    };
+    let err = run_cpu_with(&scene, &opts, |_| {}).unwrap_err().to_string();
+    assert!(err.contains("not a powder checkpoint"), "{err}");
+    let opts = RunOptions {
+        out_dir: Some("/dev/null/cannot".into()),
+        ..Default::default()
+    };
+    let err = run_cpu_with(&scene, &opts, |_| {}).unwrap_err().to_string();
+    assert!(err.contains("/dev/null/cannot"), "{err}");
+}
+
+#[test]
+fn ctrl_c_writes_a_checkpoint_and_exits_130() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/jkr_deposition.toml");
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_powder"))
+        .args(["run", scene, "--out", dir.path().to_str().unwrap()])
+        .stderr(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    let ok = std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(ok.success());
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(130),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(String::from_utf8_lossy(&out.stderr).contains("interrupted at step"));
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("summary.json")).unwrap())
+            .unwrap();
+    assert_eq!(summary["interrupted"], true);
+    assert!(dir.path().join("checkpoint.bin").exists());
+}
