@@ -68,8 +68,9 @@ impl Backend {
 
 #[derive(Args)]
 struct RunArgs {
-    /// Scene file (TOML); see the README for the schema.
-    scene: PathBuf,
+    /// Scene file (TOML); see the README for the schema. Without one, the built-in
+    /// cohesive cluster (examples/cohesive_cluster.toml) runs.
+    scene: Option<PathBuf>,
     #[arg(long, value_enum, default_value = "cpu")]
     backend: Backend,
     /// Stop after this many steps in total (default: the scene's duration).
@@ -607,8 +608,17 @@ fn run_gpu_cmd(
 /// Set when `run` stopped on Ctrl-C (exit status 130, as shells report SIGINT).
 static INTERRUPTED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
 
+/// The scene runs without a file: the cohesive cluster of examples/.
+const DEFAULT_SCENE: &str = include_str!("../examples/cohesive_cluster.toml");
+
 fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
-    let scene = Scene::load(&a.scene)?;
+    let scene = match &a.scene {
+        Some(path) => Scene::load(path)?,
+        None => {
+            eprintln!("no scene given: running the built-in cohesive cluster (examples/cohesive_cluster.toml)");
+            Scene::from_toml_str(DEFAULT_SCENE, "cohesive_cluster")?
+        }
+    };
     if a.backend == Backend::Gpu {
         match powder::gpu::GpuContext::new() {
             Ok(ctx) => return run_gpu_cmd(a, &scene, ctx),
