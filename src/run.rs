@@ -132,6 +132,59 @@ impl Snapshot {
     }
 }
 
+/// Largest overlap over the reduced radius a12 the run monitor accepts: beyond it the
+/// contact model is outside anything the papers calibrate (overlaps of half a radius).
+pub const MAX_OVERLAP_RATIO: f64 = 0.5;
+/// Largest growth of the total energy (kinetic + stored + gravitational + dissipated),
+/// relative to the run's energy scale, that the monitor accepts: none of the models
+/// injects energy, so growth means the integration has gone wrong.
+pub const MAX_ENERGY_GROWTH: f64 = 0.05;
+
+/// The run monitor: what must stop a run, with the step, the particles and a hint.
+fn monitor(engine: &mut CpuEngine, initial_total: f64, scale: f64) -> Result<(), PowderError> {
+    let hint = format!(
+        "the time step ({:.4e} s; {}) may be too large for this scene",
+        engine.dt(),
+        engine.time_step().reason
+    );
+    if let Some(i) = engine.non_finite() {
+        return Err(PowderError::Run(format!(
+            "step {}: particle {i} has a non-finite position or velocity; {hint}",
+            engine.steps
+        )));
+    }
+    if let Some((ratio, i, partner)) = engine.take_peak_overlap() {
+        if ratio > MAX_OVERLAP_RATIO {
+            let with = match partner {
+                crate::cpu::Partner::Particle(j) => format!("particle {j}"),
+                crate::cpu::Partner::Wall(w) => format!("wall {w}"),
+            };
+            return Err(PowderError::Run(format!(
+                "step {}: particle {i} overlaps {with} by {ratio:.3} of the reduced radius (limit {MAX_OVERLAP_RATIO}); the impact is too violent for the contact stiffness or {hint}",
+                engine.steps
+            )));
+        }
+    }
+    let escaped = engine.escaped(5);
+    if !escaped.is_empty() {
+        return Err(PowderError::Run(format!(
+            "step {}: particles {escaped:?} left the domain box; enlarge [domain] or add walls (or {hint})",
+            engine.steps
+        )));
+    }
+    let total = engine.energies().total();
+    if scale > 0.0 && total - initial_total > MAX_ENERGY_GROWTH * scale {
+        return Err(PowderError::Run(format!(
+            "step {}: the total energy grew by {:.3e} J ({:.1}% of the run's energy scale {:.3e} J), which no contact model can inject; {hint}",
+            engine.steps,
+            total - initial_total,
+            100.0 * (total - initial_total) / scale,
+            scale
+        )));
+    }
+    Ok(())
+}
+
 /// Solid fraction of the particles in the domain box and in the box that encloses them.
 fn solid_fractions(scene: &Scene, engine: &CpuEngine) -> (f64, f64) {
     let vol: f64 = engine
@@ -289,7 +342,34 @@ pub fn run_cpu_with(
         let to_output = scene.output_every - engine.steps % scene.output_every;
         let to_ckpt = scene.checkpoint_every - engine.steps % scene.checkpoint_every;
         let chunk = to_output.min(to_ckpt).min(1000).min(total - engine.steps);
-        engine.run_steps(chunk)?;
+        // The state before the chunk: if the monitor stops the run, the checkpoint holds
+        // the last state that passed it.
+        let before = engine.state();
+        let stepped = engine.run_steps(chunk).and_then(|()| {
+            let now = engine.energies();
+            let scale = scale
+                .max(now.kinetic.abs())
+                .max(now.elastic.abs())
+                .max((now.gravitational - initial.energies.gravitational).abs());
+            monitor(&mut engine, initial.energies.total(), scale)
+        });
+        if let Err(e) = stepped {
+            if let Some(b) = &bar {
+                b.finish_and_clear();
+            }
+            let failed_at = engine.steps;
+            engine.restore(before)?;
+            save(&engine, &rows)?;
+            let note = match &ckpt_path {
+                Some(c) => format!(
+                    "; the state at step {} (before the failure, at most 1000 steps earlier than step {failed_at}) is in {}",
+                    engine.steps,
+                    c.display()
+                ),
+                None => String::new(),
+            };
+            return Err(PowderError::Run(format!("{e}{note}")));
+        }
         if let Some(b) = &bar {
             b.set_position(engine.steps);
         }

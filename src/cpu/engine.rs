@@ -145,6 +145,15 @@ pub struct CpuEngine {
     wall_contacts: HashMap<(u32, u32), ContactRecord>,
     dissipated: f64,
     domain: (DVec3, DVec3),
+    /// Deepest overlap over a12 since the monitor last looked: (ratio, i, partner).
+    peak: Option<(f64, usize, Partner)>,
+}
+
+/// The other side of a contact.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Partner {
+    Particle(usize),
+    Wall(usize),
 }
 
 impl CpuEngine {
@@ -227,6 +236,7 @@ impl CpuEngine {
             wall_contacts: HashMap::new(),
             dissipated: 0.0,
             domain,
+            peak: None,
         };
         let v_pred = engine.vel.clone();
         let w_pred = engine.omega.clone();
@@ -386,6 +396,29 @@ impl CpuEngine {
             .count()
     }
 
+    /// Ids of the particles whose centre is outside the domain box (at most `limit`).
+    pub fn escaped(&self, limit: usize) -> Vec<usize> {
+        let (lo, hi) = self.domain;
+        self.pos
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| p.cmplt(lo).any() || p.cmpgt(hi).any())
+            .map(|(i, _)| i)
+            .take(limit)
+            .collect()
+    }
+
+    /// The particle with a non-finite position or velocity, if any.
+    pub fn non_finite(&self) -> Option<usize> {
+        (0..self.pos.len()).find(|&i| !(self.pos[i].is_finite() && self.vel[i].is_finite()))
+    }
+
+    /// The deepest overlap over the reduced radius a12 reached by any contact in any step
+    /// since the last call: `(ratio, particle, partner)`. Resets the record.
+    pub fn take_peak_overlap(&mut self) -> Option<(f64, usize, Partner)> {
+        self.peak.take()
+    }
+
     fn update_acceleration(&mut self) {
         for i in 0..self.pos.len() {
             self.acc[i] = self.force[i] / self.mass[i] + self.gravity;
@@ -475,6 +508,7 @@ impl CpuEngine {
         let mut new = HashMap::with_capacity(old.len().max(16));
         let mut dissipated = 0.0;
         let mut failure = None;
+        let mut peak = self.peak;
         {
             let pos = &self.pos;
             let radius = &self.radius;
@@ -527,6 +561,10 @@ impl CpuEngine {
                 let record = ContactRecord::new(history, delta, &r, &motion);
                 let edges = model.edges(&geom, k.delta_dot);
                 dissipated += Self::book(prior.as_ref(), &record, &motion, dt, edges);
+                let ratio = delta / geom.a12;
+                if peak.is_none_or(|p: (f64, usize, Partner)| ratio > p.0) {
+                    peak = Some((ratio, i, Partner::Particle(j)));
+                }
                 let f = r.normal.force * n + r.tangential;
                 force[i] += f;
                 force[j] -= f;
@@ -540,6 +578,7 @@ impl CpuEngine {
                 }
             });
         }
+        self.peak = peak;
         // Pairs that jumped beyond the cut-off in one step leave with their last force.
         let mut leftovers: Vec<_> = old.drain().collect();
         leftovers.sort_by_key(|(k, _)| *k);
@@ -592,6 +631,10 @@ impl CpuEngine {
                 let record = ContactRecord::new(history, delta, &r, &motion);
                 let edges = model.edges(&geom, k.delta_dot);
                 dissipated += Self::book(prior.as_ref(), &record, &motion, dt, edges);
+                let ratio = delta / geom.a12;
+                if self.peak.is_none_or(|p| ratio > p.0) {
+                    self.peak = Some((ratio, i, Partner::Wall(w)));
+                }
                 self.force[i] += r.normal.force * n + r.tangential;
                 if rotation {
                     self.torque[i] += -self.radius[i] * n.cross(r.tangential) + r.rolling_torque;

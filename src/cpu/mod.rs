@@ -3,4 +3,4 @@
 pub mod cells;
 pub mod engine;
 
-pub use engine::{ContactStats, CpuEngine, CpuState, Energies};
+pub use engine::{ContactStats, CpuEngine, CpuState, Energies, Partner};

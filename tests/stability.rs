@@ -1,0 +1,304 @@
+//! Stiff and extreme cases, and the run monitor (issue 6): each within a stated tolerance
+//! of the closed forms, or stopped with a message that names the step and the particles.
+
+use powder::collide::{collide, CollideSpec};
+use powder::cpu::CpuEngine;
+use powder::model::analytic::{self, en_no_fa};
+use powder::model::{ContactModel, HystereticParams, JkrParams, LsdParams, PairGeometry};
+use powder::run::{run_cpu_with, RunOptions};
+use powder::scene::{Domain, DtSetting, Material, ParticleInit, Scene};
+
+fn hyst(kp: f64, kc: f64) -> HystereticParams {
+    HystereticParams {
+        kp,
+        kc,
+        ..HystereticParams::paper_figure()
+    }
+}
+
+fn spec(p: HystereticParams, r2: f64, v: f64) -> CollideSpec {
+    CollideSpec {
+        radius2: r2,
+        ..CollideSpec::head_on(ContactModel::Hysteretic(p), 1.1e-3, 2000.0, v)
+    }
+}
+
+fn v_for(p: &HystereticParams, r2: f64, chi: f64) -> f64 {
+    let m = |r: f64| 2000.0 * 4.0 / 3.0 * std::f64::consts::PI * r * r * r;
+    let g = PairGeometry::spheres(1.1e-3, r2, m(1.1e-3), m(r2));
+    analytic::velocity_for_chi(p, g.a12, g.reduced_mass, chi)
+}
+
+#[test]
+fn very_plastic_contacts_kp_over_k1_1000() {
+    let p = hyst(1e5, 10.0);
+    let (eta, beta) = (999.0, 0.1);
+    for chi in [1e-3, 1e-2, 0.1, 0.5, 2.0, 20.0] {
+        let r = collide(&spec(p, 1.1e-3, v_for(&p, 1.1e-3, chi))).unwrap();
+        let e = en_no_fa(eta, beta, chi);
+        assert!(
+            (r.e * r.e - e * e).abs() < 0.01,
+            "chi {chi}: {} vs {e}",
+            r.e
+        );
+    }
+}
+
+#[test]
+fn violent_impacts_up_to_chi_20() {
+    let p = hyst(500.0, 100.0);
+    for chi in [5.0, 10.0, 20.0] {
+        let r = collide(&spec(p, 1.1e-3, v_for(&p, 1.1e-3, chi))).unwrap();
+        let e = en_no_fa(4.0, 1.0, chi);
+        assert!((r.e - e).abs() < 5e-3, "chi {chi}: {} vs {e}", r.e);
+    }
+    // at χ = 20 the overlap exceeds half the radius: δmax = φf·a12 + δmax^p·χ·√(k1/kp)
+    let r = collide(&spec(p, 1.1e-3, v_for(&p, 1.1e-3, 20.0))).unwrap();
+    assert!(
+        r.delta_max / 1.1e-3 > 0.5,
+        "δmax/a {}",
+        r.delta_max / 1.1e-3
+    );
+}
+
+#[test]
+fn adhesivity_just_above_beta_star_sticks_only_near_chi_1() {
+    let eta = 4.0;
+    let beta = 1.05 * analytic::beta_star(eta);
+    let p = hyst(500.0, beta * 100.0);
+    let (lo, hi) = (analytic::chi_c_b(eta, beta), analytic::chi_c_c(eta, beta));
+    assert!(lo < 1.0 && hi > 1.0 && hi - lo < 0.2, "window ({lo}, {hi})");
+    assert!(
+        collide(&spec(p, 1.1e-3, v_for(&p, 1.1e-3, 1.0)))
+            .unwrap()
+            .stuck
+    );
+    assert!(
+        !collide(&spec(p, 1.1e-3, v_for(&p, 1.1e-3, lo - 0.05)))
+            .unwrap()
+            .stuck
+    );
+    assert!(
+        !collide(&spec(p, 1.1e-3, v_for(&p, 1.1e-3, hi + 0.05)))
+            .unwrap()
+            .stuck
+    );
+    // β ≫ β*: sticks over a wide window
+    let strong = hyst(500.0, 1000.0);
+    for chi in [0.4, 1.0, 1.5] {
+        assert!(
+            collide(&spec(strong, 1.1e-3, v_for(&strong, 1.1e-3, chi)))
+                .unwrap()
+                .stuck,
+            "chi {chi}"
+        );
+    }
+}
+
+#[test]
+fn size_ratio_1_to_10() {
+    let p = hyst(500.0, 10.0);
+    for r2 in [0.11e-3, 11e-3] {
+        for chi in [0.1, 0.7, 2.0] {
+            let r = collide(&spec(p, r2, v_for(&p, r2, chi))).unwrap();
+            let e = en_no_fa(4.0, 0.1, chi);
+            assert!((r.e - e).abs() < 5e-3, "r2 {r2} chi {chi}: {} vs {e}", r.e);
+        }
+    }
+}
+
+#[test]
+fn tiny_stiff_silica_spheres() {
+    // silica, radius 1 µm, E = 70 GPa, γ = 0.025 J/m²: dt ~ 1e-11 s
+    let p = JkrParams::jkr(7e10, 0.17, 0.025);
+    let s = CollideSpec::head_on(ContactModel::Jkr(p), 1e-6, 2200.0, 5.0);
+    let r = collide(&s).unwrap();
+    assert!(r.dt < 1e-10 && r.dt > 1e-13, "dt {}", r.dt);
+    let e = r.e_analytic.unwrap();
+    assert!((r.e - e).abs() < 5e-3, "{} vs {e}", r.e);
+    assert!(r.energy.balance_error.unwrap() < 1e-3);
+}
+
+#[test]
+fn adhesion_so_weak_nothing_sticks_and_so_strong_everything_sticks() {
+    let weak = JkrParams::jkr(1e9, 0.3, 1e-6);
+    let strong = JkrParams::jkr(1e9, 0.3, 50.0);
+    for v in [0.05, 0.5, 5.0] {
+        let w = collide(&CollideSpec::head_on(
+            ContactModel::Jkr(weak),
+            1e-6,
+            2000.0,
+            v,
+        ))
+        .unwrap();
+        assert!(!w.stuck && w.e > 0.99, "weak, v {v}: {}", w.e);
+        let s = collide(&CollideSpec::head_on(
+            ContactModel::Jkr(strong),
+            1e-6,
+            2000.0,
+            v,
+        ))
+        .unwrap();
+        assert!(s.stuck, "strong, v {v}");
+    }
+}
+
+/// Paper 000 appendix B: a stuck pair oscillates on its k2 branch with constant amplitude
+/// without viscosity, and settles at a fixed overlap with it.
+#[test]
+fn sticking_oscillations_keep_their_amplitude_or_settle() {
+    let scene = |gamma0: f64| Scene {
+        name: "stick".into(),
+        domain: Domain {
+            min: [-0.01; 3],
+            max: [0.01; 3],
+        },
+        gravity: [0.0; 3],
+        dt: DtSetting::Auto,
+        force_dt: false,
+        duration: 1.0,
+        output_every: 1000,
+        impact_velocity: 1.0,
+        checkpoint_every: 10_000,
+        materials: vec![Material {
+            name: "m".into(),
+            density: 2000.0,
+            model: ContactModel::Hysteretic(HystereticParams {
+                gamma0,
+                ..hyst(500.0, 100.0)
+            }),
+        }],
+        interactions: vec![],
+        walls: vec![],
+        // χ = 0.8: inside the sticking window (0.5, 1.155)
+        particles: vec![
+            ParticleInit {
+                position: [0.0; 3],
+                velocity: [0.1165, 0.0, 0.0],
+                radius: 1.1e-3,
+                material: 0,
+            },
+            ParticleInit {
+                position: [2.2001e-3, 0.0, 0.0],
+                velocity: [-0.1165, 0.0, 0.0],
+                radius: 1.1e-3,
+                material: 0,
+            },
+        ],
+    };
+    let amplitude = |e: &mut CpuEngine, steps: u64| {
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for _ in 0..steps {
+            e.step().unwrap();
+            let d = e.overlap(0, 1);
+            lo = lo.min(d);
+            hi = hi.max(d);
+        }
+        (lo, hi)
+    };
+    let mut undamped = CpuEngine::new(&scene(0.0)).unwrap();
+    amplitude(&mut undamped, 2_000);
+    let (lo1, hi1) = amplitude(&mut undamped, 20_000);
+    let (lo2, hi2) = amplitude(&mut undamped, 20_000);
+    assert!(lo1 > 0.0, "stays in contact");
+    assert!(
+        ((hi2 - lo2) - (hi1 - lo1)).abs() < 1e-3 * (hi1 - lo1),
+        "amplitude kept: {} vs {}",
+        hi2 - lo2,
+        hi1 - lo1
+    );
+    let mut damped = CpuEngine::new(&scene(5e-3)).unwrap();
+    amplitude(&mut damped, 100_000);
+    let (lo, hi) = amplitude(&mut damped, 5_000);
+    assert!(lo > 0.0 && hi - lo < 1e-6 * hi, "settled: {lo}..{hi}");
+}
+
+fn pair_scene(dt: DtSetting, force_dt: bool, v: f64, domain: f64) -> Scene {
+    Scene {
+        name: "pair".into(),
+        domain: Domain {
+            min: [-domain; 3],
+            max: [domain; 3],
+        },
+        gravity: [0.0; 3],
+        dt,
+        force_dt,
+        duration: 0.01,
+        output_every: 100,
+        impact_velocity: 1.0,
+        checkpoint_every: 100,
+        materials: vec![Material {
+            name: "m".into(),
+            density: 2000.0,
+            model: ContactModel::Lsd(LsdParams {
+                k: 100.0,
+                gamma0: 0.0,
+            }),
+        }],
+        interactions: vec![],
+        walls: vec![],
+        particles: vec![
+            ParticleInit {
+                position: [-1.2e-3, 0.0, 0.0],
+                velocity: [v, 0.0, 0.0],
+                radius: 1e-3,
+                material: 0,
+            },
+            ParticleInit {
+                position: [1.2e-3, 0.0, 0.0],
+                velocity: [-v, 0.0, 0.0],
+                radius: 1e-3,
+                material: 0,
+            },
+        ],
+    }
+}
+
+#[test]
+fn the_monitor_stops_runs_that_go_wrong_and_keeps_the_last_good_state() {
+    let dir = tempfile::tempdir().unwrap();
+    // a forced time step far above the limit
+    let s = pair_scene(DtSetting::Fixed(2e-3), true, 0.5, 0.1);
+    let opts = RunOptions {
+        out_dir: Some(dir.path().to_path_buf()),
+        ..Default::default()
+    };
+    let err = run_cpu_with(&s, &opts, |_| {}).unwrap_err().to_string();
+    assert!(
+        err.contains("step") && err.contains("particle") && err.contains("time step"),
+        "{err}"
+    );
+    assert!(err.contains("checkpoint.bin"), "{err}");
+    assert!(dir.path().join("checkpoint.bin").exists());
+    // refused without force_dt, with the limit and the reason
+    let err = CpuEngine::new(&pair_scene(DtSetting::Fixed(2e-3), false, 0.5, 0.1))
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        err.contains("stable limit") && err.contains("force_dt"),
+        "{err}"
+    );
+    // a violent impact: overlap beyond half the reduced radius
+    let err = run_cpu_with(
+        &pair_scene(DtSetting::Auto, false, 3.0, 0.1),
+        &RunOptions::default(),
+        |_| {},
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        err.contains("overlaps particle") && err.contains("reduced radius"),
+        "{err}"
+    );
+    // particles leaving the domain
+    let mut s = pair_scene(DtSetting::Auto, false, -0.5, 3e-3);
+    s.duration = 0.05;
+    let err = run_cpu_with(&s, &RunOptions::default(), |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("left the domain") && err.contains("[0, 1]"),
+        "{err}"
+    );
+}
