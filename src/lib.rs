@@ -12,6 +12,7 @@ pub mod compare;
 pub mod cpu;
 pub mod error;
 pub mod gpu;
+pub mod memory;
 pub mod model;
 pub mod output;
 pub mod run;

@@ -1513,6 +1513,12 @@ fn expand_lattice(t: &Tbl, names: &[&str], out: &mut Vec<ParticleInit>) -> Res<(
             ),
         ));
     }
+    crate::memory::check_particles(
+        total as u64 + out.len() as u64,
+        crate::memory::CPU_BYTES_PER_PARTICLE,
+        "this scene",
+    )
+    .map_err(|m| t.err_key("spacing", format!("{}: {m}", t.ctx)))?;
     let gap = spacing - 2.0 * radius;
     let amp = 0.5 * jitter * gap;
     let mut rng = Pcg64::seed_from_u64(seed);
@@ -1720,6 +1726,12 @@ fn expand_random(t: &Tbl, names: &[&str], out: &mut Vec<ParticleInit>) -> Res<()
             ),
         ));
     }
+    crate::memory::check_particles(
+        count + out.len() as u64,
+        crate::memory::CPU_BYTES_PER_PARTICLE,
+        "this scene",
+    )
+    .map_err(|m| t.err_key("count", format!("{}: {m}", t.ctx)))?;
     let (min, max) = region(t)?;
     let seed = t.u64("seed")?.unwrap_or(1);
     one_of(

@@ -95,3 +95,19 @@ fn jkr_scene_errors_name_the_key() {
         "{e}"
     );
 }
+
+#[test]
+fn more_particles_than_memory_holds_are_refused_with_what_fits() {
+    if powder::memory::available().is_none() {
+        return;
+    }
+    let text = JKR_SCENE.replace(
+        "kind = \"list\"\npositions = [[5e-5, 5e-5, 5e-5]]",
+        "kind = \"random\"\ncount = 90000000\nmin = [0.0, 0.0, 0.0]\nmax = [1e-4, 1e-4, 1e-4]",
+    );
+    let err = Scene::from_toml_str(&text, "huge").unwrap_err().to_string();
+    assert!(
+        err.contains("at most") && err.contains("particles fit") && err.contains("line"),
+        "{err}"
+    );
+}
