@@ -33,9 +33,12 @@ fn v_for(p: &HystereticParams, r2: f64, chi: f64) -> f64 {
 fn very_plastic_contacts_kp_over_k1_1000() {
     let p = hyst(1e5, 10.0);
     let (eta, beta) = (999.0, 0.1);
+    let mut worst: f64 = 0.0;
     for chi in [1e-3, 1e-2, 0.1, 0.5, 2.0, 20.0] {
         let r = collide(&spec(p, 1.1e-3, v_for(&p, 1.1e-3, chi))).unwrap();
         let e = en_no_fa(eta, beta, chi);
+        worst = worst.max((r.e - e).abs());
+        eprintln!("kp/k1 = 1000, chi {chi}: e {} vs {e}", r.e);
         assert!(
             (r.e * r.e - e * e).abs() < 0.01,
             "chi {chi}: {} vs {e}",
@@ -50,6 +53,11 @@ fn violent_impacts_up_to_chi_20() {
     for chi in [5.0, 10.0, 20.0] {
         let r = collide(&spec(p, 1.1e-3, v_for(&p, 1.1e-3, chi))).unwrap();
         let e = en_no_fa(4.0, 1.0, chi);
+        eprintln!(
+            "chi {chi}: e {} vs {e}, delta_max/a {}",
+            r.e,
+            r.delta_max / 1.1e-3
+        );
         assert!((r.e - e).abs() < 5e-3, "chi {chi}: {} vs {e}", r.e);
     }
     // at χ = 20 the overlap exceeds half the radius: δmax = φf·a12 + δmax^p·χ·√(k1/kp)
@@ -102,6 +110,7 @@ fn size_ratio_1_to_10() {
         for chi in [0.1, 0.7, 2.0] {
             let r = collide(&spec(p, r2, v_for(&p, r2, chi))).unwrap();
             let e = en_no_fa(4.0, 0.1, chi);
+            eprintln!("size ratio r2 {r2}, chi {chi}: e {} vs {e}", r.e);
             assert!((r.e - e).abs() < 5e-3, "r2 {r2} chi {chi}: {} vs {e}", r.e);
         }
     }
@@ -115,6 +124,12 @@ fn tiny_stiff_silica_spheres() {
     let r = collide(&s).unwrap();
     assert!(r.dt < 1e-10 && r.dt > 1e-13, "dt {}", r.dt);
     let e = r.e_analytic.unwrap();
+    eprintln!(
+        "silica: dt {:e}, e {} vs {e}, balance {:e}",
+        r.dt,
+        r.e,
+        r.energy.balance_error.unwrap()
+    );
     assert!((r.e - e).abs() < 5e-3, "{} vs {e}", r.e);
     assert!(r.energy.balance_error.unwrap() < 1e-3);
 }
@@ -200,6 +215,11 @@ fn sticking_oscillations_keep_their_amplitude_or_settle() {
     amplitude(&mut undamped, 2_000);
     let (lo1, hi1) = amplitude(&mut undamped, 20_000);
     let (lo2, hi2) = amplitude(&mut undamped, 20_000);
+    eprintln!(
+        "undamped sticking: amplitude {:e} then {:e}",
+        hi1 - lo1,
+        hi2 - lo2
+    );
     assert!(lo1 > 0.0, "stays in contact");
     assert!(
         ((hi2 - lo2) - (hi1 - lo1)).abs() < 1e-3 * (hi1 - lo1),
@@ -210,6 +230,7 @@ fn sticking_oscillations_keep_their_amplitude_or_settle() {
     let mut damped = CpuEngine::new(&scene(5e-3)).unwrap();
     amplitude(&mut damped, 100_000);
     let (lo, hi) = amplitude(&mut damped, 5_000);
+    eprintln!("damped sticking: settled at {lo:e}..{hi:e}");
     assert!(lo > 0.0 && hi - lo < 1e-6 * hi, "settled: {lo}..{hi}");
 }
 
