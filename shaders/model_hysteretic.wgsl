@@ -149,3 +149,29 @@ fn hyst_force(p: HystereticPair, delta: f32, delta_dot: f32, a12: f32, history: 
     }
     return HystForce(0.0, HystHistory(0.0, false));
 }
+
+// ---- the step's interface (see shaders/step.wgsl) ----
+
+alias PairRow = HystereticPair;
+
+// Per-contact history as stored: (delta_max, touched as 0/1).
+alias Hist = vec2<f32>;
+
+fn hist_zero() -> Hist {
+    return vec2<f32>(0.0);
+}
+
+fn history_in(h: Hist) -> HystHistory {
+    return HystHistory(h.x, h.y != 0.0);
+}
+
+fn history_out(h: HystHistory) -> Hist {
+    return vec2<f32>(h.delta_max, select(0.0, 1.0, h.touched));
+}
+
+// Normal force only: a12 = 2·R* (2r for a wall).
+fn pair_contact(p: HystereticPair, k: Kin, hist: ptr<function, Hist>) -> Contact {
+    let r = hyst_force(p, k.delta, k.delta_dot, 2.0 * k.r_eff, history_in(*hist));
+    *hist = history_out(r.history);
+    return Contact(r.force, vec3<f32>(0.0), vec3<f32>(0.0));
+}

@@ -1,27 +1,55 @@
-// step.wgsl — one time step of the GPU engine (after the grid sort of grid.wgsl), for the
-// normal-force models of model_hysteretic.wgsl (hysteretic, LSD). Composed as
-// common.wgsl + model_hysteretic.wgsl + this file.
+// step.wgsl — one time step of the GPU engine (after the grid sort of grid.wgsl).
+// Composed per scene (`src/gpu/shaders.rs`) as
+//   common.wgsl + <model> + [history layout] + <rotation> + this file
+// where <model> is model_hysteretic.wgsl (hysteretic, LSD) or model_jkr.wgsl (JKR,
+// Hertz) and <rotation> is rotation.wgsl (angular velocity, torques) or
+// rotation_off.wgsl (no rotation: no angular buffers declared at all). The model provides
+//   alias PairRow  the pair-table row,          alias Hist  one contact's stored history,
+//   fn hist_zero() -> Hist,                     fn pair_contact(PairRow, Kin, ptr<function, Hist>) -> Contact
+// and the rotation snippet the hooks rot_kick_drift, rot_gather, rot_wpred, rot_store,
+// rot_kick.
 //
 // Pass order, recorded by `gpu::engine` into one encoder per batch of steps:
-//   kick_drift   per particle (state A)  v += dt/2·a; offset += dt·v, carried into the cell
+//   kick_drift   per particle (state A)  v += dt/2·a (omega += dt/2·alpha); offset +=
+//                                        dt·v, carried into the cell
 //   <grid sort of A's cells>             sorted_index, cell_start, cell_count
 //   gather       per particle            B[k] = A[sorted_index[k]]; vpred = v + dt/2·a
+//                                        (wpred = omega + dt/2·alpha)
 //   neighbours   per particle (B)        full neighbour list from the 27 cells
 //   remap        per particle (B)        each new slot finds its history in A by the
 //                                        partner's persistent id
 //   force        per particle (B)        sums its own contacts in slot order (no atomics:
-//                                        deterministic), walls, gravity -> acc
-//   kick         per particle (B)        v += dt/2·a
-// then A and B swap roles. Every pair is evaluated from both sides with bitwise mirrored
-// inputs, so both copies of its history evolve identically.
+//                                        deterministic), walls, gravity -> acc (alpha)
+//   kick         per particle (B)        v += dt/2·a (omega += dt/2·alpha)
+// then A and B swap roles.
+//
+// Both sides of a pair. Every pair is evaluated twice, by i (normal n) and by j (−n), and
+// each side keeps its own copy of the history in its own slot list. The inputs of the
+// two evaluations are bitwise mirrored: the separation, n, v_rel and v_t are exactly
+// negated (negation is exact, and x − y = −(y − x), a·b = (−a)·(−b), fma(−a, b, −c) =
+// −fma(a, b, c) in IEEE arithmetic), every scalar (delta, delta_dot, R*, m*) is
+// bitwise equal (sums and products taken in commutative pairs), and the contact-point
+// velocity is formed as v_rel − (r_i·w_i + r_j·w_j) × n, whose sum is commutative, rather
+// than term by term in side order. So j's evaluation is i's with every vector negated:
+// the normal history (delta_max, touched) is identical on both sides, j's tangential
+// spring is exactly −(i's) (the spring is stored per side, in that side's frame), and
+// the rolling velocity R*(w_i − w_j) × n + ½(r_i − r_j)/(r_i + r_j)·v_t is the same on
+// both sides (two negations each), so xi is identical and j's rolling torque is −(i's).
+// The pair's forces and torques therefore obey action = −reaction bitwise, and the two
+// history copies never drift apart.
 
+// Member order matters on Mesa lavapipe 22.3: with `gravity` first (offset 0), a non-zero
+// gravity.x (even 1e-30) made the step ~3x slower and the driver's memory grow by ~0.3 MB
+// per step (1.4 GB per 5000 steps of a one-particle scene; heaptrack: allocations inside
+// libvulkan_lvp's worker thread); a non-zero y or z did not. With `dt` first it does not
+// happen.
 struct StepParams {
-    gravity: vec3<f32>,
     dt: f32,
     // Neighbour-list capacity per particle.
     max_neighbours: u32,
     n_materials: u32,
     n_walls: u32,
+    gravity: vec3<f32>,
     // Largest distance beyond touching at which any pair interacts.
     reach: f32,
 }
@@ -43,9 +71,9 @@ struct Wall {
 @group(0) @binding(24) var<storage, read_write> a_acc: array<vec4<f32>>;
 @group(0) @binding(25) var<storage, read> a_pid: array<u32>;
 @group(0) @binding(26) var<storage, read> a_count: array<u32>;
-@group(0) @binding(27) var<storage, read> a_hist: array<vec2<f32>>;
+@group(0) @binding(27) var<storage, read> a_hist: array<Hist>;
 @group(0) @binding(28) var<storage, read> a_hist_pid: array<u32>;
-@group(0) @binding(29) var<storage, read> a_wall_hist: array<vec2<f32>>;
+@group(0) @binding(29) var<storage, read> a_wall_hist: array<Hist>;
 
 @group(0) @binding(31) var<storage, read_write> b_cell: array<vec4<i32>>;
 @group(0) @binding(32) var<storage, read_write> b_off: array<vec4<f32>>;
@@ -53,9 +81,9 @@ struct Wall {
 @group(0) @binding(34) var<storage, read_write> b_acc: array<vec4<f32>>;
 @group(0) @binding(35) var<storage, read_write> b_pid: array<u32>;
 @group(0) @binding(36) var<storage, read_write> b_count: array<u32>;
-@group(0) @binding(37) var<storage, read_write> b_hist: array<vec2<f32>>;
+@group(0) @binding(37) var<storage, read_write> b_hist: array<Hist>;
 @group(0) @binding(38) var<storage, read_write> b_hist_pid: array<u32>;
-@group(0) @binding(39) var<storage, read_write> b_wall_hist: array<vec2<f32>>;
+@group(0) @binding(39) var<storage, read_write> b_wall_hist: array<Hist>;
 
 // Per-step scratch: predicted velocity, the old index of each new slot, the neighbour list.
 @group(0) @binding(40) var<storage, read_write> vpred: array<vec4<f32>>;
@@ -68,7 +96,7 @@ struct Wall {
 @group(0) @binding(45) var<storage, read> cell_count: array<u32>;
 
 // Pair models: materials x materials, then walls x materials.
-@group(0) @binding(46) var<storage, read> pairs: array<HystereticPair>;
+@group(0) @binding(46) var<storage, read> pairs: array<PairRow>;
 @group(0) @binding(47) var<storage, read> walls: array<Wall>;
 
 // Monitor: [0] = largest neighbour count seen (atomicMax), [1] = persistent id of a particle
@@ -89,6 +117,7 @@ fn kick_drift(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nw
     let h = grid.cell_width;
     let v = a_vel[i].xyz + 0.5 * step.dt * a_acc[i].xyz;
     a_vel[i] = vec4<f32>(v, a_vel[i].w);
+    rot_kick_drift(i);
     var o = a_off[i].xyz + step.dt * v;
     let shift = floor(o / h);
     o = o - shift * h;
@@ -114,6 +143,7 @@ fn gather(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: v
     b_pid[k] = a_pid[o];
     old_index[k] = o;
     vpred[k] = vec4<f32>(a_vel[o].xyz + 0.5 * step.dt * a_acc[o].xyz, 0.0);
+    rot_gather(k, o);
     for (var w = 0u; w < step.n_walls; w++) {
         b_wall_hist[k * step.n_walls + w] = a_wall_hist[o * step.n_walls + w];
     }
@@ -175,7 +205,7 @@ fn remap(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
     let old_n = a_count[o];
     for (var s = 0u; s < b_count[k]; s++) {
         let partner = b_pid[nbr[k * cap + s]];
-        var h = vec2<f32>(0.0);
+        var h = hist_zero();
         for (var m = 0u; m < old_n; m++) {
             if (a_hist_pid[o * cap + m] == partner) {
                 h = a_hist[o * cap + m];
@@ -187,12 +217,32 @@ fn remap(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
     }
 }
 
-fn history_in(h: vec2<f32>) -> HystHistory {
-    return HystHistory(h.x, h.y != 0.0);
+// The relative motion of one contact, as the model sees it (`model::Kinematics` plus the
+// pair geometry and the time step).
+struct Kin {
+    // Overlap and approach speed.
+    delta: f32,
+    delta_dot: f32,
+    // R* = r_i·r_j/(r_i + r_j) (r for a wall; a12 = 2R*) and m* (m for a wall).
+    r_eff: f32,
+    m_eff: f32,
+    dt: f32,
+    // Unit normal from j (or the wall) to i.
+    n: vec3<f32>,
+    // Tangential velocity of i relative to j at the contact point.
+    v_t: vec3<f32>,
+    // Rolling velocity R*·(w_i − w_j) × n + ½·(r_i − r_j)/(r_i + r_j)·v_t (paper 002 eq. 20).
+    v_roll: vec3<f32>,
 }
 
-fn history_out(h: HystHistory) -> vec2<f32> {
-    return vec2<f32>(h.delta_max, select(0.0, 1.0, h.touched));
+// What one contact does to particle i.
+struct Contact {
+    // Normal force along n, repulsive positive.
+    normal: f32,
+    // Tangential force.
+    tangential: vec3<f32>,
+    // Rolling-resistance torque (the partner gets the negative).
+    rolling: vec3<f32>,
 }
 
 @compute @workgroup_size(WG_SIZE)
@@ -205,39 +255,71 @@ fn force(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
     let ck = b_cell[k];
     let ok = b_off[k];
     let rk = ok.w;
+    // vel.w holds the mass
+    let mk = b_vel[k].w;
     let vk = vpred[k].xyz;
+    let wk = rot_wpred(k);
     let mat_k = u32(ck.w);
     var f = vec3<f32>(0.0);
+    var torque = vec3<f32>(0.0);
     for (var s = 0u; s < b_count[k]; s++) {
         let j = nbr[k * cap + s];
         let cj = b_cell[j];
         let oj = b_off[j];
+        let rj = oj.w;
+        let mj = b_vel[j].w;
         let d = separation(ck, ok, cj, oj);
         let dist = length(d);
-        let delta = rk + oj.w - dist;
+        let delta = rk + rj - dist;
         var n = vec3<f32>(0.0, 0.0, 1.0);
         if (dist > 0.0) {
             n = d / dist;
         }
-        let delta_dot = -dot(vk - vpred[j].xyz, n);
-        let a12 = 2.0 * rk * oj.w / (rk + oj.w);
-        let p = pairs[mat_k * step.n_materials + u32(cj.w)];
-        let r = hyst_force(p, delta, delta_dot, a12, history_in(b_hist[k * cap + s]));
-        b_hist[k * cap + s] = history_out(r.history);
-        f += r.force * n;
+        let v_rel = vk - vpred[j].xyz;
+        let wj = rot_wpred(j);
+        // Mirror-symmetric forms (see the header): (r_i w_i + r_j w_j) is commutative.
+        let v_c = v_rel - cross(rk * wk + rj * wj, n);
+        let v_t = v_c - n * dot(v_c, n);
+        let r_eff = rk * rj / (rk + rj);
+        let kin = Kin(
+            delta,
+            -dot(v_rel, n),
+            r_eff,
+            mk * mj / (mk + mj),
+            step.dt,
+            n,
+            v_t,
+            r_eff * cross(wk - wj, n) + (0.5 * (rk - rj) / (rk + rj)) * v_t,
+        );
+        let slot = k * cap + s;
+        var h = b_hist[slot];
+        let c = pair_contact(pairs[mat_k * step.n_materials + u32(cj.w)], kin, &h);
+        b_hist[slot] = h;
+        f += c.normal * n + c.tangential;
+        if (ROTATION) {
+            torque += -rk * cross(n, c.tangential) + c.rolling;
+        }
     }
     for (var w = 0u; w < step.n_walls; w++) {
         let wall = walls[w];
-        let delta = rk - dot(separation(ck, ok, wall.cell, wall.offset), wall.normal.xyz);
-        let p = pairs[step.n_materials * step.n_materials + w * step.n_materials + mat_k];
+        let n = wall.normal.xyz;
+        let delta = rk - dot(separation(ck, ok, wall.cell, wall.offset), n);
+        let v_c = vk - cross(rk * wk, n);
+        let v_t = v_c - n * dot(v_c, n);
+        // eq. 20 with r_j -> inf: (r_i - r_j)/(r_i + r_j) -> -1
+        let kin = Kin(delta, -dot(vk, n), rk, mk, step.dt, n, v_t, rk * cross(wk, n) - 0.5 * v_t);
         let slot = k * step.n_walls + w;
-        let r = hyst_force(p, delta, -dot(vk, wall.normal.xyz), 2.0 * rk, history_in(b_wall_hist[slot]));
-        b_wall_hist[slot] = history_out(r.history);
-        f += r.force * wall.normal.xyz;
+        var h = b_wall_hist[slot];
+        let c = pair_contact(pairs[step.n_materials * step.n_materials + w * step.n_materials + mat_k], kin, &h);
+        b_wall_hist[slot] = h;
+        f += c.normal * n + c.tangential;
+        if (ROTATION) {
+            torque += -rk * cross(n, c.tangential) + c.rolling;
+        }
     }
-    // vel.w holds the mass
-    let acc = f / b_vel[k].w + step.gravity;
-    if (any(acc != acc) || any(abs(acc) > vec3<f32>(3.0e38))) {
+    let acc = f / mk + step.gravity;
+    let finite_rot = rot_store(k, torque);
+    if (any(acc != acc) || any(abs(acc) > vec3<f32>(3.0e38)) || !finite_rot) {
         atomicAdd(&monitor[2], 1u);
     }
     b_acc[k] = vec4<f32>(acc, 0.0);
@@ -250,4 +332,5 @@ fn kick(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
         return;
     }
     b_vel[k] = vec4<f32>(b_vel[k].xyz + 0.5 * step.dt * b_acc[k].xyz, b_vel[k].w);
+    rot_kick(k);
 }

@@ -339,6 +339,7 @@ impl CollisionRun for CpuRun {
 
 struct GpuRun {
     engine: GpuEngine,
+    wall: bool,
 }
 
 impl CollisionRun for GpuRun {
@@ -347,12 +348,25 @@ impl CollisionRun for GpuRun {
     }
     fn view(&self) -> Result<PairView, PowderError> {
         let s = self.engine.state()?;
-        let two = |v: &[DVec3]| [v[0], v.get(1).copied().unwrap_or_default()];
+        let two = |v: &[DVec3]| {
+            [
+                v.first().copied().unwrap_or_default(),
+                v.get(1).copied().unwrap_or_default(),
+            ]
+        };
+        // the contact's own flag: a JKR neck persists at negative overlap
+        let touched = if self.wall {
+            self.engine.wall_contact_history(0, 0)?.touched
+        } else {
+            self.engine
+                .contact_history(0, 1)?
+                .is_some_and(|h| h.touched)
+        };
         Ok(PairView {
             pos: two(&s.positions),
             vel: two(&s.velocities),
-            omega: [DVec3::ZERO; 2],
-            in_contact: None,
+            omega: two(&s.angular_velocities),
+            in_contact: Some(touched),
         })
     }
     fn time(&self) -> f64 {
@@ -371,7 +385,7 @@ impl CollisionRun for GpuRun {
         (ke, None, None)
     }
     fn rotates(&self) -> bool {
-        false
+        self.engine.rotates()
     }
 }
 
@@ -421,7 +435,11 @@ pub fn collide_on(spec: &CollideSpec, backend: Backend) -> Result<CollideResult,
         Backend::Gpu => {
             let engine = GpuEngine::new(&scene, GpuContext::new()?)?;
             let adapter = engine.adapter().to_string();
-            run_collision(spec, GpuRun { engine }, wall_x, dt, "gpu", Some(adapter))
+            let run = GpuRun {
+                engine,
+                wall: spec.wall,
+            };
+            run_collision(spec, run, wall_x, dt, "gpu", Some(adapter))
         }
     }
 }

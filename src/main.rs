@@ -32,13 +32,90 @@ enum Command {
 
 #[derive(Args)]
 struct InfoArgs {
+    /// A scene: list the GPU kernels and buffers it uses and the bytes per particle.
+    scene: Option<PathBuf>,
     /// Print the adapter summary as JSON on stdout.
     #[arg(long)]
     json: bool,
 }
 
+/// What the GPU engine builds for a scene (`powder info SCENE`).
+#[derive(serde::Serialize)]
+struct SceneInfo {
+    scene: String,
+    adapter: String,
+    particles: usize,
+    step_variant: String,
+    kernels: Vec<String>,
+    rotation: bool,
+    neighbour_slots: u32,
+    buffers: Vec<(String, u64)>,
+    total_bytes: u64,
+    bytes_per_particle: f64,
+}
+
+fn scene_info(
+    path: &std::path::Path,
+    ctx: powder::gpu::GpuContext,
+) -> Result<SceneInfo, PowderError> {
+    let scene = Scene::load(path)?;
+    let adapter = ctx.summary.name.clone();
+    let engine = powder::gpu::GpuEngine::new(&scene, ctx)?;
+    let variant_name = engine.kind().name().to_string();
+    let mut kernels = vec![
+        "grid: clear_counts, cell_keys, count, scan, scatter, sort_within_cells, sort_large_cells"
+            .to_string(),
+    ];
+    if let Some(v) = powder::gpu::shaders::variant(&variant_name) {
+        let (module, _) = powder::gpu::shaders::validate(&v.source).map_err(PowderError::Run)?;
+        kernels.extend(module.entry_points.iter().map(|e| e.name.clone()));
+    }
+    let total = engine.buffer_bytes();
+    Ok(SceneInfo {
+        scene: scene.name.clone(),
+        adapter,
+        particles: engine.len(),
+        step_variant: variant_name,
+        kernels,
+        rotation: engine.rotates(),
+        neighbour_slots: engine.capacity(),
+        buffers: engine.buffers(),
+        total_bytes: total,
+        bytes_per_particle: total as f64 / engine.len().max(1) as f64,
+    })
+}
+
 fn info_cmd(a: &InfoArgs) -> Result<(), PowderError> {
     let ctx = powder::gpu::GpuContext::new()?;
+    if let Some(path) = &a.scene {
+        let info = scene_info(path, ctx)?;
+        if a.json {
+            let text = serde_json::to_string_pretty(&info)
+                .map_err(|e| PowderError::Run(format!("cannot encode JSON: {e}")))?;
+            println!("{text}");
+            return Ok(());
+        }
+        println!(
+            "scene            {} ({} particles) on {}",
+            info.scene, info.particles, info.adapter
+        );
+        println!(
+            "step variant     {} (rotation {})",
+            info.step_variant,
+            if info.rotation { "on" } else { "off" }
+        );
+        println!("kernels          {}", info.kernels.join(", "));
+        println!("neighbour slots  {} per particle", info.neighbour_slots);
+        println!("buffers:");
+        for (name, bytes) in &info.buffers {
+            println!("  {name:<20} {bytes:>14} bytes");
+        }
+        println!(
+            "total            {} bytes = {:.1} bytes per particle",
+            info.total_bytes, info.bytes_per_particle
+        );
+        return Ok(());
+    }
     if a.json {
         let text = serde_json::to_string_pretty(&ctx.summary)
             .map_err(|e| PowderError::Run(format!("cannot encode JSON: {e}")))?;
@@ -53,7 +130,7 @@ fn info_cmd(a: &InfoArgs) -> Result<(), PowderError> {
 enum Backend {
     /// The f64 CPU reference engine.
     Cpu,
-    /// The wgpu engine (hysteretic and LSD models so far).
+    /// The wgpu engine (every model; the energy ledger and the run monitor are CPU-only so far).
     Gpu,
 }
 

@@ -561,3 +561,35 @@ fn collide_and_run_on_the_gpu_backend() {
     assert!(ok, "{err}");
     assert!(out.contains("backend          gpu"), "{out}");
 }
+
+#[test]
+fn info_scene_lists_kernels_buffers_and_leaves_out_rotation() {
+    if !gpu_available() {
+        return;
+    }
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/");
+    let info = |name: &str| {
+        let (ok, out, err) = powder(&["info", &format!("{dir}{name}"), "--json"]);
+        assert!(ok, "{err}");
+        serde_json::from_str::<serde_json::Value>(&out).unwrap()
+    };
+    let plain = info("cohesive_cluster.toml");
+    assert_eq!(plain["rotation"], false);
+    let names: Vec<String> = plain["buffers"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|b| b[0].as_str().unwrap().to_string())
+        .collect();
+    assert!(!names.iter().any(|n| n.contains("omega")), "{names:?}");
+    assert!(plain["bytes_per_particle"].as_f64().unwrap() > 0.0);
+    let kernels = plain["kernels"].as_array().unwrap();
+    assert!(kernels.iter().any(|k| k == "force"));
+    let rolling = info("jkr_deposition.toml");
+    assert_eq!(rolling["rotation"], true);
+    assert!(rolling["buffers"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|b| b[0].as_str().unwrap().contains("omega")));
+}

@@ -177,7 +177,7 @@ mod collisions {
     }
 
     #[test]
-    fn gpu_wall_bounce_and_jkr_refusal() {
+    fn gpu_wall_bounce() {
         if context().is_none() {
             return;
         }
@@ -190,15 +190,529 @@ mod collisions {
             collide_on(&s, Backend::Cpu).unwrap(),
         );
         assert!((g.e - c.e).abs() < 1e-3, "wall: gpu {} cpu {}", g.e, c.e);
-        let jkr = CollideSpec::head_on(
-            ContactModel::Jkr(powder::model::JkrParams::jkr(1e9, 0.3, 0.05)),
-            1e-6,
-            2000.0,
-            1.0,
+    }
+}
+
+/// The JKR family on the GPU (f32) against the CPU reference (f64).
+mod jkr {
+    use super::context;
+    use powder::collide::{collide_on, Backend, CollideResult, CollideSpec};
+    use powder::cpu::CpuEngine;
+    use powder::gpu::{GpuContext, GpuEngine};
+    use powder::model::{analytic, ContactModel, Dissipation, JkrParams, PairGeometry, Pulloff};
+    use powder::scene::Scene;
+
+    const R: f64 = 1e-6;
+    const RHO: f64 = 2000.0;
+
+    fn jkr() -> JkrParams {
+        JkrParams::jkr(1e9, 0.3, 0.05)
+    }
+
+    fn spec(p: JkrParams, v: f64) -> CollideSpec {
+        CollideSpec::head_on(ContactModel::Jkr(p), R, RHO, v)
+    }
+
+    fn both(s: &CollideSpec) -> (CollideResult, CollideResult) {
+        let g = collide_on(s, Backend::Gpu).unwrap();
+        let c = collide_on(s, Backend::Cpu).unwrap();
+        assert_eq!(g.backend, "gpu");
+        (g, c)
+    }
+
+    fn v_stick(p: &JkrParams) -> f64 {
+        let m = RHO * 4.0 / 3.0 * std::f64::consts::PI * R.powi(3);
+        let g = PairGeometry::spheres(R, R, m, m);
+        let w = analytic::jkr_loss(p.pulloff) * p.fc(g.r_eff()) * p.delta0(g.r_eff());
+        analytic::jkr_sticking_velocity(w, g.reduced_mass)
+    }
+
+    #[test]
+    fn gpu_jkr_collisions_match_the_cpu_for_both_pulloff_rules() {
+        if context().is_none() {
+            return;
+        }
+        let mut worst: f64 = 0.0;
+        for pulloff in [Pulloff::Displacement, Pulloff::Force] {
+            let p = JkrParams { pulloff, ..jkr() };
+            for f in [1.1, 1.5, 3.0, 10.0] {
+                let (g, c) = both(&spec(p, f * v_stick(&p)));
+                assert!(!g.stuck && !c.stuck, "{pulloff:?} v/v_stick {f}");
+                let d = (g.e - c.e).abs();
+                eprintln!(
+                    "JKR {pulloff:?} v/v_stick {f}: e gpu {:.6} cpu {:.6} (|diff| {d:.1e}), steps {} / {}, delta_max rel. diff {:.1e}",
+                    g.e,
+                    c.e,
+                    g.steps,
+                    c.steps,
+                    (g.delta_max / c.delta_max - 1.0).abs()
+                );
+                worst = worst.max(d);
+                assert!(
+                    d < 2e-3,
+                    "{pulloff:?} v/v_stick {f}: gpu {} cpu {}",
+                    g.e,
+                    c.e
+                );
+                assert!((g.delta_max / c.delta_max - 1.0).abs() < 1e-4);
+            }
+            for f in [0.5, 0.9] {
+                let (g, c) = both(&spec(p, f * v_stick(&p)));
+                assert!(g.stuck && c.stuck, "{pulloff:?} v/v_stick {f} sticks");
+            }
+        }
+        eprintln!("JKR: worst |e_gpu - e_cpu| = {worst:.2e}");
+    }
+
+    #[test]
+    fn gpu_hertz_tsuji_and_power_law_match_the_cpu() {
+        if context().is_none() {
+            return;
+        }
+        for e in [0.3, 0.9] {
+            let p = JkrParams {
+                dissipation: Dissipation::Tsuji { restitution: e },
+                ..JkrParams::hertz(1e9, 0.3)
+            };
+            for v in [0.05, 0.5] {
+                let (g, c) = both(&spec(p, v));
+                eprintln!(
+                    "Hertz+Tsuji target {e} v {v}: e gpu {:.6} cpu {:.6} (|diff| {:.1e})",
+                    g.e,
+                    c.e,
+                    (g.e - c.e).abs()
+                );
+                assert!((g.e - c.e).abs() < 1e-3, "tsuji {e} v {v}: {} {}", g.e, c.e);
+                assert!((g.e - e).abs() < 0.02 * e + 2e-3);
+            }
+        }
+        // power law (paper 001 eq. 19) on JKR, both signs of the approach speed: alpha = 1 and
+        // a non-integer pair (the WGSL raises |delta_dot| and a, the sign apart)
+        for (d, alpha, beta) in [(1e-9, 1.0, 1.0), (3e-9, 1.0, 1.0), (3e-8, 1.5, 1.2)] {
+            let p = JkrParams {
+                dissipation: Dissipation::PowerLaw { d, alpha, beta },
+                ..jkr()
+            };
+            let (g, c) = both(&spec(p, 3.0));
+            eprintln!(
+                "JKR power law D {d} alpha {alpha} beta {beta}: e gpu {:.6} cpu {:.6} (|diff| {:.1e})",
+                g.e,
+                c.e,
+                (g.e - c.e).abs()
+            );
+            assert!(!c.stuck && c.e < run_undamped_e(3.0));
+            assert!((g.e - c.e).abs() < 2e-3, "power law D {d}: {} {}", g.e, c.e);
+        }
+    }
+
+    fn run_undamped_e(v: f64) -> f64 {
+        collide_on(&spec(jkr(), v), Backend::Cpu).unwrap().e
+    }
+
+    #[test]
+    fn gpu_oblique_wall_impacts_spin_like_the_cpu() {
+        if context().is_none() {
+            return;
+        }
+        // Hertz with friction and Tsuji damping at 30° (sliding then sticking), and JKR with
+        // friction and rolling resistance at 45° and 20°
+        let hertz = JkrParams {
+            friction: 0.3,
+            dissipation: Dissipation::Tsuji { restitution: 0.8 },
+            ..JkrParams::hertz(1e9, 0.3)
+        };
+        let adhesive = JkrParams {
+            friction: 0.5,
+            rolling_hysteresis: 0.5,
+            ..jkr()
+        };
+        let cases = [
+            (hertz, 0.5, 30.0),
+            (hertz, 0.5, 60.0),
+            (adhesive, 20.0 * v_stick(&adhesive), 45.0),
+            (adhesive, 20.0 * v_stick(&adhesive), 20.0),
+        ];
+        for (p, v, angle) in cases {
+            let s = CollideSpec {
+                wall: true,
+                impact_angle: angle,
+                ..spec(p, v)
+            };
+            let (g, c) = both(&s);
+            let (wg, wc) = (g.omega_final.unwrap(), c.omega_final.unwrap());
+            let (tg, tc) = (g.e_tangential.unwrap(), c.e_tangential.unwrap());
+            eprintln!(
+                "oblique {angle}° v {v:.3}: e gpu {:.6} cpu {:.6} (|diff| {:.1e}); e_t gpu {tg:.6} cpu {tc:.6} (|diff| {:.1e}); omega gpu {wg:.6e} cpu {wc:.6e} (rel. {:.1e})",
+                g.e,
+                c.e,
+                (g.e - c.e).abs(),
+                (tg - tc).abs(),
+                (wg / wc - 1.0).abs()
+            );
+            assert!(!g.stuck && !c.stuck);
+            assert!(wc > 0.0, "friction spins the sphere");
+            assert!((g.e - c.e).abs() < 2e-3, "{angle}°: e {} {}", g.e, c.e);
+            assert!((tg - tc).abs() < 2e-3, "{angle}°: e_t {tg} {tc}");
+            assert!((wg / wc - 1.0).abs() < 2e-3, "{angle}°: omega {wg} {wc}");
+        }
+    }
+
+    fn load(text: &str) -> Scene {
+        Scene::from_toml_str(text, "gpu-jkr").unwrap()
+    }
+
+    /// A sphere stuck to a wall by JKR adhesion under a constant force along the wall
+    /// (`tests/engine.rs`, paper 002 §5.3) on the GPU: held below the rolling yield force
+    /// F_yield = 4·Fc·ξcrit/R, rolling on above it.
+    ///
+    /// The domain is 1 mm × 0.1 mm × 0.1 mm instead of the CPU test's 2 cm cube: the GPU
+    /// sizes its cells from the domain and the particle count (about 4 cells per particle,
+    /// 64 at least), so one particle in a 2 cm cube gets 5 mm cells, whose f32 offsets
+    /// resolve 3e-10 m — 1/70 of ξcrit = 2.1e-8 m and more than the sphere moves per step
+    /// while it rocks, so it would not move at all. Here the cells are 54 µm (3e-12 m).
+    #[test]
+    fn gpu_rolling_resistance_holds_below_the_yield_force_and_yields_above() {
+        let Some(ctx) = context() else { return };
+        let r = 5e-6;
+        let p = JkrParams {
+            dissipation: Dissipation::Tsuji { restitution: 0.3 },
+            friction: 0.5,
+            rolling_hysteresis: 0.5,
+            ..JkrParams::jkr(1e8, 0.3, 0.01)
+        };
+        let m = 2000.0 * 4.0 / 3.0 * std::f64::consts::PI * r * r * r;
+        let xi_crit = p.a0(r) / 12.0 * p.rolling_hysteresis;
+        let f_yield = 4.0 * p.fc(r) * xi_crit / r;
+        let text = format!(
+            r#"
+[domain]
+min = [-5e-5, -5e-5, -5e-5]
+max = [1e-3, 5e-5, 5e-5]
+[simulation]
+duration = 1.0
+impact_velocity = 0.01
+[[material]]
+name = "m"
+density = 2000.0
+model = "jkr"
+youngs = 1e8
+poisson = 0.3
+surface_energy = 0.01
+restitution = 0.3
+friction = 0.5
+rolling_hysteresis = 0.5
+[[wall]]
+point = [0.0, 0.0, 0.0]
+normal = [0.0, 0.0, 1.0]
+[[particles]]
+kind = "list"
+positions = [[0.0, 0.0, {z:e}]]
+radius = {r:e}
+"#,
+            z = r - 0.5 * p.delta0(r)
         );
-        let err = collide_on(&jkr, Backend::Gpu).unwrap_err().to_string();
+        let base = load(&text);
+        let mut ctx = Some(ctx);
+        // 20 000 steps (0.2 ms, ~16 periods of the rocking about the rest position; the
+        // CPU test runs 200 000): largest |x| over the run, distance rolled in the second
+        // half, final spin; GPU and CPU
+        let mut travel = |f_hat: f64| {
+            let mut s = base.clone();
+            s.gravity = [f_hat * f_yield / m, 0.0, 0.0];
+            let mut g = GpuEngine::new(&s, ctx.take().or_else(context).unwrap()).unwrap();
+            let mut c = CpuEngine::new(&s).unwrap();
+            assert!(g.rotates() && c.rotates());
+            let (mut x_max, mut x_max_cpu): (f64, f64) = (0.0, 0.0);
+            let (mut x_half, mut x_half_cpu) = (0.0, 0.0);
+            for k in 0..40 {
+                g.run_steps(500).unwrap();
+                c.run_steps(500).unwrap();
+                let x = g.state().unwrap().positions[0].x;
+                x_max = x_max.max(x.abs());
+                x_max_cpu = x_max_cpu.max(c.positions()[0].x.abs());
+                if k == 19 {
+                    x_half = x;
+                    x_half_cpu = c.positions()[0].x;
+                }
+            }
+            let h = g.wall_contact_history(0, 0).unwrap();
+            assert!(h.touched, "stays attached");
+            assert!(h.rolling.length() <= xi_crit * (1.0 + 1e-5));
+            let st = g.state().unwrap();
+            (
+                [x_max, x_max_cpu],
+                [st.positions[0].x - x_half, c.positions()[0].x - x_half_cpu],
+                [st.angular_velocities[0], c.angular_velocities()[0]],
+            )
+        };
+        let (x_max, _, _) = travel(0.5);
+        eprintln!(
+            "rolling, F = 0.5 F_yield: largest |x| gpu {:.4} cpu {:.4} xi_crit",
+            x_max[0] / xi_crit,
+            x_max[1] / xi_crit
+        );
         assert!(
-            err.contains("JKR") && err.contains("--backend cpu"),
+            x_max[0] < 1.1 * xi_crit,
+            "held: moved up to {} m, xi_crit {xi_crit} m",
+            x_max[0]
+        );
+        assert!((x_max[0] / x_max[1] - 1.0).abs() < 1e-2, "{x_max:?}");
+        let (_, dx, w) = travel(2.0);
+        eprintln!(
+            "rolling, F = 2 F_yield: rolled {:.4e} m (gpu) {:.4e} m (cpu) = {:.0} xi_crit in the second half; omega gpu {} cpu {}",
+            dx[0],
+            dx[1],
+            dx[0] / xi_crit,
+            w[0],
+            w[1]
+        );
+        assert!(
+            dx[0] > 1000.0 * xi_crit,
+            "above F_yield it rolls on: {dx:?} m"
+        );
+        assert!((dx[0] / dx[1] - 1.0).abs() < 2e-3, "{dx:?}");
+        // rolling along +x on a floor below: spin about +y
+        assert!(w[0].y > 0.0 && w[0].y > 10.0 * w[0].x.abs().max(w[0].z.abs()));
+        assert!((w[0].y / w[1].y - 1.0).abs() < 2e-3, "{w:?}");
+    }
+
+    /// Adhesive micro-spheres (r = 5 µm) with friction and rolling resistance: a 3×3 layer
+    /// sliding onto the floor just below it, and a second 3×3 layer falling onto the first
+    /// off-centre (oblique sphere–sphere impacts), so within a few hundred steps there are
+    /// sphere–wall and sphere–sphere contacts with sliding, sticking and rolling.
+    fn sticky_pile(friction: f64, rolling: f64) -> Scene {
+        let r = 5e-6;
+        let mut lower = Vec::new();
+        let mut upper = Vec::new();
+        for i in 0..3 {
+            for j in 0..3 {
+                let (x, y) = (1e-5 + 2.4 * r * i as f64, 1e-5 + 2.4 * r * j as f64);
+                lower.push(format!("[{x:e}, {y:e}, {:e}]", 1.01 * r));
+                upper.push(format!(
+                    "[{:e}, {:e}, {:e}]",
+                    x + 0.7 * r,
+                    y + 0.3 * r,
+                    2.95 * r
+                ));
+            }
+        }
+        load(&format!(
+            r#"
+[domain]
+min = [0.0, 0.0, 0.0]
+max = [6e-5, 6e-5, 6e-5]
+[simulation]
+duration = 1.0
+impact_velocity = 0.3
+gravity = [0.0, 0.0, -9.81]
+[[material]]
+name = "micro"
+density = 2500.0
+model = "jkr"
+youngs = 1e8
+poisson = 0.3
+surface_energy = 0.01
+restitution = 0.5
+friction = {friction}
+rolling_hysteresis = {rolling}
+[[wall]]
+point = [0.0, 0.0, 0.0]
+normal = [0.0, 0.0, 1.0]
+[[particles]]
+kind = "list"
+positions = [{}]
+radius = {r:e}
+velocity = [0.1, 0.0, -0.1]
+[[particles]]
+kind = "list"
+positions = [{}]
+radius = {r:e}
+velocity = [-0.1, 0.05, -0.3]
+"#,
+            lower.join(", "),
+            upper.join(", ")
+        ))
+    }
+
+    #[test]
+    fn gpu_jkr_runs_with_rotation_are_bitwise_deterministic_and_mirrored() {
+        let Some(ctx) = context() else { return };
+        let scene = sticky_pile(0.3, 0.5);
+        let run = |ctx: GpuContext| {
+            let mut g = GpuEngine::new(&scene, ctx).unwrap();
+            g.run_steps(2000).unwrap();
+            g
+        };
+        let a = run(ctx);
+        let b = run(context().unwrap());
+        let (sa, sb) = (a.state().unwrap(), b.state().unwrap());
+        let bits = |v: &[glam::DVec3]| {
+            v.iter()
+                .flat_map(|p| p.to_array().map(f64::to_bits))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(bits(&sa.positions), bits(&sb.positions));
+        assert_eq!(bits(&sa.velocities), bits(&sb.velocities));
+        assert_eq!(sa.angular_velocities.len(), scene.particles.len());
+        assert_eq!(bits(&sa.angular_velocities), bits(&sb.angular_velocities));
+        assert!(
+            sa.angular_velocities.iter().any(|w| w.length() > 0.0),
+            "contacts spin the particles"
+        );
+        // Both copies of every contact's history agree: the same flag and ξ, the tangential
+        // spring exactly negated (each side stores it in its own frame).
+        let mut contacts = 0;
+        for i in 0..scene.particles.len() {
+            for j in 0..scene.particles.len() {
+                if i >= j {
+                    continue;
+                }
+                let (Some(hi), Some(hj)) = (
+                    a.contact_history(i, j).unwrap(),
+                    a.contact_history(j, i).unwrap(),
+                ) else {
+                    continue;
+                };
+                assert_eq!(hi.touched, hj.touched, "{i}-{j}");
+                assert_eq!(bits(&[hi.tangential]), bits(&[-hj.tangential]), "{i}-{j}");
+                assert_eq!(bits(&[hi.rolling]), bits(&[hj.rolling]), "{i}-{j}");
+                if hi.touched && hi.tangential.length() > 0.0 && hi.rolling.length() > 0.0 {
+                    contacts += 1;
+                }
+            }
+        }
+        eprintln!("mirrored contacts with spring and xi: {contacts}");
+        assert!(
+            contacts > 0,
+            "the pile has contacts with friction and rolling history"
+        );
+    }
+
+    #[test]
+    fn gpu_sticky_pile_follows_the_cpu_at_first() {
+        let Some(ctx) = context() else { return };
+        let scene = sticky_pile(0.3, 0.5);
+        let mut cpu = CpuEngine::new(&scene).unwrap();
+        let mut gpu = GpuEngine::new(&scene, ctx).unwrap();
+        assert_eq!(cpu.dt(), gpu.dt());
+        let r = scene.particles[0].radius;
+        let worst = |a: &[glam::DVec3], b: &[glam::DVec3]| {
+            a.iter()
+                .zip(b)
+                .map(|(x, y)| x.distance(*y))
+                .fold(0.0, f64::max)
+        };
+        for round in 0..4 {
+            cpu.run_steps(500).unwrap();
+            gpu.run_steps(500).unwrap();
+            let s = gpu.state().unwrap();
+            let dx = worst(cpu.positions(), &s.positions) / r;
+            let dv = worst(cpu.velocities(), &s.velocities);
+            let dw = worst(cpu.angular_velocities(), &s.angular_velocities);
+            let wmax = cpu
+                .angular_velocities()
+                .iter()
+                .map(|w| w.length())
+                .fold(0.0, f64::max);
+            let vmax = cpu
+                .velocities()
+                .iter()
+                .map(|v| v.length())
+                .fold(0.0, f64::max);
+            eprintln!(
+                "sticky pile after {} steps: worst differences: position {dx:.2e} radii, velocity {:.2e} of up to {vmax:.2e} m/s, omega {:.2e} of up to {wmax:.2e} rad/s",
+                500 * (round + 1),
+                dv / vmax,
+                dw / wmax
+            );
+            // measured 4e-5, 8e-5, 1.2e-4, 1.2e-4 radii: mostly the f32 rounding of each
+            // step's displacement in free flight (v·dt is ~300 ulps of the cell offset);
+            // velocities and spins within 2e-5, 1e-3, 3e-4, 6e-3 of their largest values
+            // (a contact that starts or starts sliding one step earlier or later)
+            assert!(dx < 1e-3, "{dx} radii");
+            assert!(dv < 3e-2 * vmax, "velocity {dv} of {vmax}");
+            assert!(dw <= 3e-2 * wmax, "omega {dw} of {wmax}");
+        }
+        assert!(cpu.angular_velocities().iter().any(|w| w.length() > 0.0));
+    }
+
+    #[test]
+    fn gpu_allocates_angular_buffers_only_when_the_scene_rotates() {
+        let Some(ctx) = context() else { return };
+        let names = |g: &GpuEngine| g.buffers().into_iter().map(|(n, _)| n).collect::<Vec<_>>();
+        let angular = ["A.omega", "A.alpha", "B.omega", "B.alpha", "wpred"];
+        let plain = GpuEngine::new(&sticky_pile(0.0, 0.0), ctx).unwrap();
+        assert!(!plain.rotates());
+        let list = names(&plain);
+        for a in angular {
+            assert!(
+                !list.iter().any(|n| n == a),
+                "frictionless JKR allocates {a}"
+            );
+        }
+        assert!(plain.state().unwrap().angular_velocities.is_empty());
+        let friction = GpuEngine::new(&sticky_pile(0.3, 0.0), context().unwrap()).unwrap();
+        let rolling = GpuEngine::new(&sticky_pile(0.3, 0.5), context().unwrap()).unwrap();
+        for g in [&friction, &rolling] {
+            assert!(g.rotates());
+            let list = names(g);
+            for a in angular {
+                assert!(list.iter().any(|n| n == a), "{a} missing");
+            }
+        }
+        // the contact history grows with what the contacts store: touched flag, + spring, + ξ
+        let bytes = |g: &GpuEngine, name: &str| {
+            g.buffers()
+                .into_iter()
+                .find(|(n, _)| n == name)
+                .map(|(_, b)| b)
+                .unwrap()
+        };
+        let slots = plain.len() as u64 * plain.capacity() as u64;
+        assert_eq!(bytes(&plain, "A.hist"), 4 * slots);
+        assert_eq!(bytes(&friction, "A.hist"), 16 * slots);
+        assert_eq!(bytes(&rolling, "A.hist"), 32 * slots);
+        assert!(plain.buffer_bytes() < friction.buffer_bytes());
+        for (n, b) in plain.buffers() {
+            eprintln!("frictionless JKR buffer {n}: {b} bytes");
+        }
+    }
+
+    #[test]
+    fn gpu_refuses_to_mix_model_families() {
+        let Some(ctx) = context() else { return };
+        let scene = load(
+            r#"
+[domain]
+min = [0.0, 0.0, 0.0]
+max = [1e-2, 1e-2, 1e-2]
+[simulation]
+duration = 1.0
+[[material]]
+name = "a"
+density = 2000.0
+model = "lsd"
+k = 100.0
+[[material]]
+name = "b"
+density = 2000.0
+model = "hertz"
+youngs = 1e8
+poisson = 0.3
+[[interaction]]
+materials = ["a", "b"]
+model = "lsd"
+k = 100.0
+[[particles]]
+kind = "list"
+positions = [[0.005, 0.005, 0.005]]
+radius = 1e-3
+material = "b"
+"#,
+        );
+        let err = GpuEngine::new(&scene, ctx).err().unwrap().to_string();
+        assert!(
+            err.contains("mixes") && err.contains("--backend cpu"),
             "{err}"
         );
     }

@@ -1,5 +1,14 @@
 //! The GPU engine: the time step of `shaders/step.wgsl` driven from the host, for the
-//! normal-force models (hysteretic, LSD) with walls and gravity.
+//! hysteretic/LSD models and the JKR family (JKR, Hertz: damping, friction, rolling
+//! resistance, reduced stiffness) with walls and gravity.
+//!
+//! The step's source is composed per scene ([`StepKind`]): the model's force law, the
+//! per-contact history layout its options need (JKR: just the touched flag; with friction
+//! also the tangential spring; with rolling resistance also ξ) and, only when some contact
+//! exerts tangential forces or torques, the angular state (ω with the moment of inertia,
+//! angular acceleration, predicted ω). What a scene does not need is neither declared nor
+//! allocated ([`GpuEngine::buffers`] lists what is). One scene runs one family: mixing
+//! hysteretic/LSD and JKR pairs is refused for now.
 //!
 //! The particle state lives in two buffer sets, A and B. Each step drifts A, sorts it by
 //! cell, gathers it into B in sorted order, rebuilds B's neighbour lists from the grid,
@@ -15,15 +24,29 @@ use crate::error::PowderError;
 use crate::gpu::context::GpuContext;
 use crate::gpu::grid::GridSort;
 use crate::gpu::kernel::{storage_buffer, submit_and_read, u32s, uniform_buffer, Kernel, Program};
-use crate::gpu::layout::{encode, gpu_cell_width, HystereticPair, StepParams, WallGpu};
-use crate::gpu::shaders;
-use crate::model::ContactModel;
+use crate::gpu::layout::{encode, gpu_cell_width, HystereticPair, JkrPair, StepParams, WallGpu};
+use crate::gpu::shaders::StepKind;
+use crate::model::{ContactHistory, ContactModel};
 use crate::scene::Scene;
 use crate::setup::Resolved;
 use glam::DVec3;
 
 /// Steps recorded into one submission.
 pub const STEPS_PER_SUBMIT: u64 = 64;
+
+/// Creates storage buffers and records their names and sizes (for [`GpuEngine::buffers`]).
+struct Allocator<'a> {
+    device: &'a wgpu::Device,
+    list: Vec<(String, u64)>,
+}
+
+impl Allocator<'_> {
+    fn buffer(&mut self, name: &str, bytes: u64) -> wgpu::Buffer {
+        let b = storage_buffer(self.device, name, bytes);
+        self.list.push((name.to_string(), b.size()));
+        b
+    }
+}
 
 /// One set of particle-state buffers (A or B).
 struct StateSet {
@@ -36,11 +59,16 @@ struct StateSet {
     hist: wgpu::Buffer,
     hist_pid: wgpu::Buffer,
     wall_hist: wgpu::Buffer,
+    /// ω (xyz) and the moment of inertia (w); only when the scene rotates.
+    omega: Option<wgpu::Buffer>,
+    /// Angular acceleration torque/I; only when the scene rotates.
+    alpha: Option<wgpu::Buffer>,
 }
 
 impl StateSet {
-    fn new(device: &wgpu::Device, tag: &str, n: u64, cap: u64, walls: u64) -> Self {
-        let b = |name: &str, bytes: u64| storage_buffer(device, &format!("{tag}.{name}"), bytes);
+    fn new(alloc: &mut Allocator, tag: &str, n: u64, cap: u64, walls: u64, kind: StepKind) -> Self {
+        let mut b = |name: &str, bytes: u64| alloc.buffer(&format!("{tag}.{name}"), bytes);
+        let hb = kind.history_bytes();
         Self {
             cell: b("cell", 16 * n),
             off: b("off", 16 * n),
@@ -48,26 +76,31 @@ impl StateSet {
             acc: b("acc", 16 * n),
             pid: b("pid", 4 * n),
             count: b("count", 4 * n),
-            hist: b("hist", 8 * n * cap),
+            hist: b("hist", hb * n * cap),
             hist_pid: b("hist_pid", 4 * n * cap),
-            wall_hist: b("wall_hist", 8 * n * walls.max(1)),
+            // without walls: one element, the smallest binding the kernels accept
+            wall_hist: b("wall_hist", hb * (n * walls).max(1)),
+            omega: kind.rotation().then(|| b("omega", 16 * n)),
+            alpha: kind.rotation().then(|| b("alpha", 16 * n)),
         }
     }
 
     fn named<'a>(&'a self, side: &str) -> Vec<(String, &'a wgpu::Buffer)> {
         [
-            ("cell", &self.cell),
-            ("off", &self.off),
-            ("vel", &self.vel),
-            ("acc", &self.acc),
-            ("pid", &self.pid),
-            ("count", &self.count),
-            ("hist", &self.hist),
-            ("hist_pid", &self.hist_pid),
-            ("wall_hist", &self.wall_hist),
+            ("cell", Some(&self.cell)),
+            ("off", Some(&self.off)),
+            ("vel", Some(&self.vel)),
+            ("acc", Some(&self.acc)),
+            ("pid", Some(&self.pid)),
+            ("count", Some(&self.count)),
+            ("hist", Some(&self.hist)),
+            ("hist_pid", Some(&self.hist_pid)),
+            ("wall_hist", Some(&self.wall_hist)),
+            ("omega", self.omega.as_ref()),
+            ("alpha", self.alpha.as_ref()),
         ]
         .into_iter()
-        .map(|(n, b)| (format!("{side}_{n}"), b))
+        .filter_map(|(n, b)| b.map(|b| (format!("{side}_{n}"), b)))
         .collect()
     }
 }
@@ -87,6 +120,9 @@ struct Bound {
 pub struct GpuState {
     pub positions: Vec<DVec3>,
     pub velocities: Vec<DVec3>,
+    /// Angular velocities; empty when the scene does not rotate (as
+    /// `CpuEngine::angular_velocities`).
+    pub angular_velocities: Vec<DVec3>,
 }
 
 /// The GPU simulation of one scene.
@@ -109,18 +145,48 @@ pub struct GpuEngine {
     kernels: [Kernel; 6],
     bound: [Bound; 2],
     max_per_dim: u32,
+    kind: StepKind,
+    n_walls: u32,
+    /// (name, bytes) of every buffer allocated for the run.
+    buffers: Vec<(String, u64)>,
 }
 
-/// The pair-table row of a contact model, or why the GPU cannot run it yet.
-fn pair_row(model: &ContactModel) -> Result<HystereticPair, PowderError> {
-    match model {
-        ContactModel::Hysteretic(p) => Ok(HystereticPair::hysteretic(p)),
-        ContactModel::Lsd(p) => Ok(HystereticPair::lsd(p)),
-        ContactModel::Jkr(_) => Err(PowderError::Run(
-            "the GPU backend does not run the JKR/Hertz family yet (only the hysteretic and LSD models); use --backend cpu"
-                .into(),
-        )),
+/// The step a scene's pair models need and their pair table as bytes, or why the GPU
+/// cannot run them together.
+fn pair_table(models: &[ContactModel]) -> Result<(StepKind, Vec<u8>), PowderError> {
+    let jkr: Vec<&crate::model::JkrParams> = models
+        .iter()
+        .filter_map(|m| match m {
+            ContactModel::Jkr(p) => Some(p),
+            _ => None,
+        })
+        .collect();
+    if jkr.is_empty() {
+        let rows: Vec<HystereticPair> = models
+            .iter()
+            .map(|m| match m {
+                ContactModel::Hysteretic(p) => HystereticPair::hysteretic(p),
+                ContactModel::Lsd(p) => HystereticPair::lsd(p),
+                ContactModel::Jkr(_) => unreachable!(),
+            })
+            .collect();
+        return Ok((StepKind::Hysteretic, bytemuck::cast_slice(&rows).to_vec()));
     }
+    if jkr.len() != models.len() {
+        return Err(PowderError::Run(
+            "the GPU backend runs one model family per scene: this scene mixes JKR/Hertz pairs with hysteretic/LSD pairs (materials, interactions or walls); use --backend cpu"
+                .into(),
+        ));
+    }
+    let kind = if jkr.iter().any(|p| p.rolling_hysteresis > 0.0) {
+        StepKind::JkrRolling
+    } else if jkr.iter().any(|p| p.friction > 0.0) {
+        StepKind::JkrFriction
+    } else {
+        StepKind::Jkr
+    };
+    let rows: Vec<JkrPair> = jkr.iter().map(|p| JkrPair::new(p)).collect();
+    Ok((kind, bytemuck::cast_slice(&rows).to_vec()))
 }
 
 impl GpuEngine {
@@ -128,11 +194,10 @@ impl GpuEngine {
     pub fn new(scene: &Scene, ctx: GpuContext) -> Result<Self, PowderError> {
         let r = Resolved::new(scene)?;
         let n = scene.particles.len();
-        let mut pairs: Vec<HystereticPair> =
-            r.models.iter().map(pair_row).collect::<Result<_, _>>()?;
-        for m in &r.wall_models {
-            pairs.push(pair_row(m)?);
-        }
+        let all_models: Vec<ContactModel> =
+            r.models.iter().chain(&r.wall_models).copied().collect();
+        let (kind, pairs) = pair_table(&all_models)?;
+        debug_assert_eq!(kind.rotation(), r.rotation);
         let r_min = scene
             .particles
             .iter()
@@ -150,20 +215,31 @@ impl GpuEngine {
         );
         let dim = |e: f64| ((e / h).ceil() as u32).clamp(1, 1 << 20);
         let dims = [dim(extent.x), dim(extent.y), dim(extent.z)];
-        let bytes_needed = n as u64 * cap as u64 * 8;
+        let hist_bytes = kind.history_bytes();
+        let bytes_needed = n as u64 * cap as u64 * hist_bytes;
         if bytes_needed > ctx.max_storage_binding() {
             return Err(PowderError::Run(format!(
-                "{n} particles with {cap} neighbour slots each need {bytes_needed} bytes of contact history, over the adapter's storage binding limit of {} bytes; at most {} particles fit",
+                "{n} particles with {cap} neighbour slots of {hist_bytes} bytes each need {bytes_needed} bytes of contact history, over the adapter's storage binding limit of {} bytes; at most {} particles fit",
                 ctx.max_storage_binding(),
-                ctx.max_storage_binding() / (cap as u64 * 8)
+                ctx.max_storage_binding() / (cap as u64 * hist_bytes)
             )));
         }
         let grid = GridSort::new(&ctx, n as u32, dims, h as f32)?;
         let device = &ctx.device;
         let n_walls = scene.walls.len() as u64;
+        let mut alloc = Allocator {
+            device,
+            list: vec![
+                ("grid.params".into(), grid.params().size()),
+                ("grid.keys".into(), grid.keys().size()),
+                ("grid.cell_count".into(), grid.cell_count().size()),
+                ("grid.cell_start".into(), grid.cell_start().size()),
+                ("grid.sorted_index".into(), grid.sorted_index().size()),
+            ],
+        };
         let sets = [
-            StateSet::new(device, "A", n as u64, cap as u64, n_walls),
-            StateSet::new(device, "B", n as u64, cap as u64, n_walls),
+            StateSet::new(&mut alloc, "A", n as u64, cap as u64, n_walls, kind),
+            StateSet::new(&mut alloc, "B", n as u64, cap as u64, n_walls, kind),
         ];
         // Initial state, in scene order (the first sort orders it).
         let mut cells = Vec::with_capacity(n);
@@ -188,6 +264,16 @@ impl GpuEngine {
         q0.write_buffer(&s0.vel, 0, bytemuck::cast_slice(&vels));
         q0.write_buffer(&s0.acc, 0, bytemuck::cast_slice(&acc0));
         q0.write_buffer(&s0.pid, 0, bytemuck::cast_slice(&pid));
+        if let Some(omega) = &s0.omega {
+            // ω = 0 (scenes start without spin), w = I = 2/5·m·r²
+            let w: Vec<[f32; 4]> = scene
+                .particles
+                .iter()
+                .zip(&r.mass)
+                .map(|(p, m)| [0.0, 0.0, 0.0, (0.4 * m * p.radius * p.radius) as f32])
+                .collect();
+            q0.write_buffer(omega, 0, bytemuck::cast_slice(&w));
+        }
         let walls: Vec<WallGpu> = scene
             .walls
             .iter()
@@ -209,26 +295,26 @@ impl GpuEngine {
             reach: r.max_reach as f32,
         };
         let step_buf = uniform_buffer(device, "step", bytemuck::bytes_of(&step));
-        let pairs_buf = storage_buffer(
-            device,
-            "pairs",
-            (pairs.len() * std::mem::size_of::<HystereticPair>()) as u64,
-        );
-        q0.write_buffer(&pairs_buf, 0, bytemuck::cast_slice(&pairs));
-        let walls_buf = storage_buffer(
-            device,
+        alloc.list.push(("step".into(), step_buf.size()));
+        let pairs_buf = alloc.buffer("pairs", pairs.len() as u64);
+        q0.write_buffer(&pairs_buf, 0, &pairs);
+        let walls_buf = alloc.buffer(
             "walls",
             (walls.len().max(1) * std::mem::size_of::<WallGpu>()) as u64,
         );
         if !walls.is_empty() {
             q0.write_buffer(&walls_buf, 0, bytemuck::cast_slice(&walls));
         }
-        let vpred = storage_buffer(device, "vpred", 16 * n as u64);
-        let old_index = storage_buffer(device, "old_index", 4 * n as u64);
-        let nbr = storage_buffer(device, "nbr", 4 * n as u64 * cap as u64);
-        let monitor = storage_buffer(device, "monitor", 16);
+        let vpred = alloc.buffer("vpred", 16 * n as u64);
+        let wpred = kind
+            .rotation()
+            .then(|| alloc.buffer("wpred", 16 * n as u64));
+        let old_index = alloc.buffer("old_index", 4 * n as u64);
+        let nbr = alloc.buffer("nbr", 4 * n as u64 * cap as u64);
+        let monitor = alloc.buffer("monitor", 16);
+        let buffers = alloc.list;
 
-        let program = Program::new(&ctx, &shaders::step_variant())?;
+        let program = Program::new(&ctx, &kind.variant())?;
         let names = [
             "kick_drift",
             "gather",
@@ -251,6 +337,9 @@ impl GpuEngine {
             list.push(("grid".into(), grid.params()));
             list.push(("step".into(), &step_buf));
             list.push(("vpred".into(), &vpred));
+            if let Some(w) = &wpred {
+                list.push(("wpred".into(), w));
+            }
             list.push(("old_index".into(), &old_index));
             list.push(("nbr".into(), &nbr));
             list.push(("sorted_index".into(), grid.sorted_index()));
@@ -290,6 +379,9 @@ impl GpuEngine {
             kernels,
             bound,
             max_per_dim,
+            kind,
+            n_walls: n_walls as u32,
+            buffers,
             ctx,
         };
         engine.initial_forces()?;
@@ -323,6 +415,32 @@ impl GpuEngine {
 
     pub fn masses(&self) -> &[f64] {
         &self.mass
+    }
+
+    /// Whether particles carry angular velocity (some contact model has friction or
+    /// rolling resistance), as `CpuEngine::rotates`.
+    pub fn rotates(&self) -> bool {
+        self.kind.rotation()
+    }
+
+    /// The step variant this scene runs (its shader module's name is `kind().name()`).
+    pub fn kind(&self) -> StepKind {
+        self.kind
+    }
+
+    /// Every device buffer allocated for the run, as (name, bytes), in allocation order:
+    /// the grid sort's index buffers (`grid.*`; its internal scan and large-cell scratch,
+    /// a few bytes per cell / 32 particles, are not listed), both particle-state sets
+    /// (`A.*`, `B.*`), the uniform step parameters, the pair table, walls, and the per-step
+    /// scratch. Angular buffers (`A.omega`, `A.alpha`, `B.omega`, `B.alpha`, `wpred`)
+    /// appear only when the scene rotates.
+    pub fn buffers(&self) -> Vec<(String, u64)> {
+        self.buffers.clone()
+    }
+
+    /// Total bytes of [`Self::buffers`].
+    pub fn buffer_bytes(&self) -> u64 {
+        self.buffers.iter().map(|(_, b)| b).sum()
     }
 
     /// Records one step: drift A, sort, then gather into B and compute B's forces.
@@ -393,45 +511,157 @@ impl GpuEngine {
         Ok(())
     }
 
-    /// Reads positions and velocities back, in the scene's particle order.
+    /// Reads positions, velocities and (when the scene rotates) angular velocities back,
+    /// in the scene's particle order.
     pub fn state(&self) -> Result<GpuState, PowderError> {
         let s = &self.sets[self.cur];
         let n = self.n as u64;
+        let encoder = self.ctx.device.create_command_encoder(&Default::default());
+        let mut sources = vec![
+            (&s.cell, 16 * n),
+            (&s.off, 16 * n),
+            (&s.vel, 16 * n),
+            (&s.pid, 4 * n),
+        ];
+        if let Some(omega) = &s.omega {
+            sources.push((omega, 16 * n));
+        }
+        let out = submit_and_read(&self.ctx, encoder, &sources)?;
+        let cells: Vec<[i32; 4]> = bytemuck::pod_collect_to_vec(&out[0]);
+        let offs: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&out[1]);
+        let vels: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&out[2]);
+        let pid = u32s(&out[3]);
+        let omegas: Vec<[f32; 4]> = out
+            .get(4)
+            .map(|b| bytemuck::pod_collect_to_vec(b))
+            .unwrap_or_default();
+        let vec3 = |v: [f32; 4]| DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64);
+        let mut positions = vec![DVec3::ZERO; self.n as usize];
+        let mut velocities = vec![DVec3::ZERO; self.n as usize];
+        let mut angular_velocities = vec![DVec3::ZERO; omegas.len()];
+        for k in 0..self.n as usize {
+            let i = pid[k] as usize;
+            positions[i] = crate::gpu::layout::decode(cells[k], offs[k], self.origin, self.h);
+            velocities[i] = vec3(vels[k]);
+            if let Some(w) = omegas.get(k) {
+                angular_velocities[i] = vec3(*w);
+            }
+        }
+        Ok(GpuState {
+            positions,
+            velocities,
+            angular_velocities,
+        })
+    }
+
+    /// Kinetic energy of a read-back state, translational plus rotational (I = 2/5·m·r²,
+    /// as the CPU ledger), J.
+    pub fn kinetic_energy(&self, state: &GpuState) -> f64 {
+        let translational: f64 = state
+            .velocities
+            .iter()
+            .zip(&self.mass)
+            .map(|(v, m)| 0.5 * m * v.length_squared())
+            .sum();
+        let rotational: f64 = state
+            .angular_velocities
+            .iter()
+            .zip(self.mass.iter().zip(&self.radius))
+            .map(|(w, (m, r))| 0.5 * 0.4 * m * r * r * w.length_squared())
+            .sum();
+        translational + rotational
+    }
+
+    /// Decodes one stored history element of this step variant (see
+    /// `gpu::shaders::StepKind`): δmax only for the hysteretic model, the tangential
+    /// spring and ξ only where the layout stores them (JKR keeps no δmax on the device).
+    fn decode_history(&self, b: &[u8]) -> ContactHistory {
+        let f: Vec<f32> = bytemuck::pod_collect_to_vec(b);
+        let v = |o: usize| DVec3::new(f[o] as f64, f[o + 1] as f64, f[o + 2] as f64);
+        match self.kind {
+            StepKind::Hysteretic => ContactHistory {
+                delta_max: f[0] as f64,
+                touched: f[1] != 0.0,
+                ..Default::default()
+            },
+            StepKind::Jkr => ContactHistory {
+                touched: f[0] != 0.0,
+                ..Default::default()
+            },
+            StepKind::JkrFriction => ContactHistory {
+                touched: f[3] != 0.0,
+                tangential: v(0),
+                ..Default::default()
+            },
+            StepKind::JkrRolling => ContactHistory {
+                touched: f[3] != 0.0,
+                tangential: v(0),
+                rolling: v(4),
+                ..Default::default()
+            },
+        }
+    }
+
+    /// The history particle `i` keeps of its contact with particle `j` (persistent ids)
+    /// after the last step, if `j` is in `i`'s neighbour list. Each side keeps its own
+    /// copy: `contact_history(j, i)` has the same flags and ξ, and the negated tangential
+    /// spring (see `shaders/step.wgsl`). For tests and diagnostics: reads buffers back.
+    pub fn contact_history(
+        &self,
+        i: usize,
+        j: usize,
+    ) -> Result<Option<ContactHistory>, PowderError> {
+        let s = &self.sets[self.cur];
+        let (n, cap) = (self.n as u64, self.cap as u64);
+        let hb = self.kind.history_bytes();
         let encoder = self.ctx.device.create_command_encoder(&Default::default());
         let out = submit_and_read(
             &self.ctx,
             encoder,
             &[
-                (&s.cell, 16 * n),
-                (&s.off, 16 * n),
-                (&s.vel, 16 * n),
                 (&s.pid, 4 * n),
+                (&s.count, 4 * n),
+                (&s.hist_pid, 4 * n * cap),
+                (&s.hist, hb * n * cap),
             ],
         )?;
-        let cells: Vec<[i32; 4]> = bytemuck::pod_collect_to_vec(&out[0]);
-        let offs: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&out[1]);
-        let vels: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&out[2]);
-        let pid = u32s(&out[3]);
-        let mut positions = vec![DVec3::ZERO; self.n as usize];
-        let mut velocities = vec![DVec3::ZERO; self.n as usize];
-        for k in 0..self.n as usize {
-            let i = pid[k] as usize;
-            positions[i] = crate::gpu::layout::decode(cells[k], offs[k], self.origin, self.h);
-            velocities[i] = DVec3::new(vels[k][0] as f64, vels[k][1] as f64, vels[k][2] as f64);
-        }
-        Ok(GpuState {
-            positions,
-            velocities,
-        })
+        let pid = u32s(&out[0]);
+        let count = u32s(&out[1]);
+        let hist_pid = u32s(&out[2]);
+        let Some(k) = pid.iter().position(|&p| p as usize == i) else {
+            return Ok(None);
+        };
+        let hb = hb as usize;
+        Ok((0..count[k] as usize)
+            .map(|s| k * cap as usize + s)
+            .find(|&slot| hist_pid[slot] as usize == j)
+            .map(|slot| self.decode_history(&out[3][slot * hb..(slot + 1) * hb])))
     }
 
-    /// Kinetic energy of a read-back state, J.
-    pub fn kinetic_energy(&self, state: &GpuState) -> f64 {
-        state
-            .velocities
+    /// The history of particle `i`'s contact with wall `w` after the last step (zero when
+    /// they are apart). For tests and diagnostics: reads buffers back.
+    pub fn wall_contact_history(&self, w: usize, i: usize) -> Result<ContactHistory, PowderError> {
+        let s = &self.sets[self.cur];
+        let n = self.n as u64;
+        let walls = self.n_walls as usize;
+        if w >= walls {
+            return Err(PowderError::Run(format!(
+                "wall {w} does not exist (the scene has {walls})"
+            )));
+        }
+        let hb = self.kind.history_bytes() as usize;
+        let encoder = self.ctx.device.create_command_encoder(&Default::default());
+        let out = submit_and_read(
+            &self.ctx,
+            encoder,
+            &[(&s.pid, 4 * n), (&s.wall_hist, (hb * walls) as u64 * n)],
+        )?;
+        let pid = u32s(&out[0]);
+        let k = pid
             .iter()
-            .zip(&self.mass)
-            .map(|(v, m)| 0.5 * m * v.length_squared())
-            .sum()
+            .position(|&p| p as usize == i)
+            .ok_or_else(|| PowderError::Run(format!("particle {i} does not exist")))?;
+        let slot = k * walls + w;
+        Ok(self.decode_history(&out[1][slot * hb..(slot + 1) * hb]))
     }
 }

@@ -230,15 +230,102 @@ impl HystereticPair {
     }
 }
 
+/// One row of the pair-model table of `shaders/model_jkr.wgsl` (`JkrPair`): the JKR
+/// family's parameters, derived in f64 from [`JkrParams`](crate::model::JkrParams) and
+/// rounded once. Per-contact quantities that depend on R* (a0, δ0, Fc, ξcrit) are formed in
+/// the kernel from the coefficients here, since R* varies with the particles' radii.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct JkrPair {
+    /// E* (scaled), Pa.
+    pub e_star: f32,
+    /// G* (scaled), Pa.
+    pub g_star: f32,
+    /// Surface energy after scaling, γ·S^(2/5), J/m²; 0 = Hertz.
+    pub gamma: f32,
+    /// (9πγ/E*)^(1/3) (scaled): a0 = a0_coef·R*^(2/3).
+    pub a0_coef: f32,
+    /// δ/δ0 at which a touching contact breaks ([`Pulloff`](crate::model::Pulloff)).
+    pub break_ratio: f32,
+    pub friction: f32,
+    /// Δγ/γ of the rolling resistance; 0 = none.
+    pub rolling_hysteresis: f32,
+    /// Unscaled 3πγ: the rolling model's Fc = this·R*.
+    pub fc_unscaled_per_r: f32,
+    /// Unscaled (9πγ/E*)^(1/3): the rolling model's a0 = this·R*^(2/3).
+    pub a0_unscaled_coef: f32,
+    /// [`JKR_DISSIPATION_NONE`], [`JKR_DISSIPATION_TSUJI`] or [`JKR_DISSIPATION_POWER`].
+    pub dissipation: u32,
+    /// Tsuji: −2√(5/6)·β(e) ≥ 0.
+    pub tsuji: f32,
+    /// Power law: D, α, β.
+    pub power_d: f32,
+    pub power_alpha: f32,
+    pub power_beta: f32,
+    pub _pad: [u32; 2],
+}
+
+/// Dissipation kinds of [`JkrPair`], as in the WGSL.
+pub const JKR_DISSIPATION_NONE: u32 = 0;
+pub const JKR_DISSIPATION_TSUJI: u32 = 1;
+pub const JKR_DISSIPATION_POWER: u32 = 2;
+
+impl JkrPair {
+    pub fn new(p: &crate::model::JkrParams) -> Self {
+        use crate::model::jkr::tsuji_beta;
+        use crate::model::Dissipation;
+        use std::f64::consts::PI;
+        let gamma = p.gamma();
+        let a0_coef = if gamma > 0.0 {
+            (9.0 * PI * gamma / p.e_star()).cbrt()
+        } else {
+            0.0
+        };
+        let a0_unscaled_coef = if p.surface_energy > 0.0 {
+            (9.0 * PI * p.surface_energy / p.e_star_unscaled()).cbrt()
+        } else {
+            0.0
+        };
+        let mut row = Self {
+            e_star: p.e_star() as f32,
+            g_star: p.g_star() as f32,
+            gamma: gamma as f32,
+            a0_coef: a0_coef as f32,
+            break_ratio: p.pulloff.break_overlap_ratio() as f32,
+            friction: p.friction as f32,
+            rolling_hysteresis: p.rolling_hysteresis as f32,
+            fc_unscaled_per_r: (3.0 * PI * p.surface_energy) as f32,
+            a0_unscaled_coef: a0_unscaled_coef as f32,
+            ..Default::default()
+        };
+        match p.dissipation {
+            Dissipation::None => {}
+            Dissipation::Tsuji { restitution } => {
+                row.dissipation = JKR_DISSIPATION_TSUJI;
+                // 2·√(5/6)·(−β): the prefactor of paper 002 eqs. 11 and 16
+                row.tsuji = (-2.0 * (5.0f64 / 6.0).sqrt() * tsuji_beta(restitution)) as f32;
+            }
+            Dissipation::PowerLaw { d, alpha, beta } => {
+                row.dissipation = JKR_DISSIPATION_POWER;
+                row.power_d = d as f32;
+                row.power_alpha = alpha as f32;
+                row.power_beta = beta as f32;
+            }
+        }
+        row
+    }
+}
+
 /// Per-run step parameters: twin of `StepParams` in `shaders/step.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct StepParams {
-    pub gravity: [f32; 3],
     pub dt: f32,
     pub max_neighbours: u32,
     pub n_materials: u32,
     pub n_walls: u32,
+    /// At offset 16, not 0: see the note on the WGSL struct (a lavapipe slowdown and leak).
+    pub gravity: [f32; 3],
     pub reach: f32,
 }
 
@@ -540,6 +627,35 @@ mod tests {
                 ("flags", offset_of!(HystereticPair, flags)),
             ],
         );
+        let (jkr, _) = shaders::validate(&shaders::StepKind::Jkr.variant().source).unwrap();
+        let (wsize, members) = wgsl_struct(&jkr, "JkrPair");
+        assert_eq!(wsize as usize, size_of::<JkrPair>(), "JkrPair size");
+        for (field, off) in [
+            ("e_star", offset_of!(JkrPair, e_star)),
+            ("g_star", offset_of!(JkrPair, g_star)),
+            ("gamma", offset_of!(JkrPair, gamma)),
+            ("a0_coef", offset_of!(JkrPair, a0_coef)),
+            ("break_ratio", offset_of!(JkrPair, break_ratio)),
+            ("friction", offset_of!(JkrPair, friction)),
+            (
+                "rolling_hysteresis",
+                offset_of!(JkrPair, rolling_hysteresis),
+            ),
+            ("fc_unscaled_per_r", offset_of!(JkrPair, fc_unscaled_per_r)),
+            ("a0_unscaled_coef", offset_of!(JkrPair, a0_unscaled_coef)),
+            ("dissipation", offset_of!(JkrPair, dissipation)),
+            ("tsuji", offset_of!(JkrPair, tsuji)),
+            ("power_d", offset_of!(JkrPair, power_d)),
+            ("power_alpha", offset_of!(JkrPair, power_alpha)),
+            ("power_beta", offset_of!(JkrPair, power_beta)),
+        ] {
+            let m = members
+                .iter()
+                .find(|(n, _)| n == field)
+                .unwrap_or_else(|| panic!("JkrPair.{field}"));
+            assert_eq!(m.1 as usize, off, "JkrPair.{field}");
+        }
+        assert_eq!(members.len(), 16, "JkrPair members: {members:?}");
         check(
             "Wall",
             size_of::<WallGpu>(),
@@ -549,5 +665,33 @@ mod tests {
                 ("normal", offset_of!(WallGpu, normal)),
             ],
         );
+    }
+
+    /// The stored history of each step variant is as large as the host allocates
+    /// (`StepKind::history_bytes`): the array stride of `a_hist` and `b_wall_hist` in naga's
+    /// layout.
+    #[test]
+    fn gpu_layout_history_strides_match_wgsl() {
+        for kind in shaders::StepKind::ALL {
+            let (module, _) = shaders::validate(&kind.variant().source).unwrap();
+            for name in ["a_hist", "b_hist", "a_wall_hist", "b_wall_hist"] {
+                let (_, g) = module
+                    .global_variables
+                    .iter()
+                    .find(|(_, g)| g.name.as_deref() == Some(name))
+                    .unwrap_or_else(|| panic!("{}: {name}", kind.name()));
+                match module.types[g.ty].inner {
+                    naga::TypeInner::Array { stride, .. } => {
+                        assert_eq!(
+                            stride as u64,
+                            kind.history_bytes(),
+                            "{}: {name}",
+                            kind.name()
+                        )
+                    }
+                    ref other => panic!("{name} is {other:?}"),
+                }
+            }
+        }
     }
 }

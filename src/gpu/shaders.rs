@@ -24,15 +24,125 @@ pub const COMMON: &str = include_str!("../../shaders/common.wgsl");
 pub const GRID: &str = include_str!("../../shaders/grid.wgsl");
 /// The hysteretic and LSD force laws in f32 (a snippet of the step).
 pub const MODEL_HYSTERETIC: &str = include_str!("../../shaders/model_hysteretic.wgsl");
+/// The JKR family (JKR, Hertz) in f32 (a snippet of the step; needs a history layout).
+pub const MODEL_JKR: &str = include_str!("../../shaders/model_jkr.wgsl");
+/// Angular velocity and torques (a snippet of the step for scenes that rotate).
+pub const ROTATION: &str = include_str!("../../shaders/rotation.wgsl");
+/// The rotation hooks as no-ops (a snippet of the step for scenes that do not rotate).
+pub const ROTATION_OFF: &str = include_str!("../../shaders/rotation_off.wgsl");
 /// One time step: drift, gather, neighbours, history remap, forces, kick.
 pub const STEP: &str = include_str!("../../shaders/step.wgsl");
 
+/// JKR history layout without friction or rolling: only the "touched" flag (4 bytes).
+pub const JKR_HISTORY_TOUCHED: &str = "\
+// JKR history layout: the touched flag only (no friction, no rolling in this scene).
+const JKR_TANGENTIAL: bool = false;
+const JKR_ROLLING: bool = false;
+alias Hist = f32;
+fn hist_zero() -> Hist { return 0.0; }
+fn jkr_unpack(h: Hist) -> JkrHistory { return JkrHistory(h != 0.0, vec3<f32>(0.0), vec3<f32>(0.0)); }
+fn jkr_pack(h: JkrHistory) -> Hist { return select(0.0, 1.0, h.touched); }
+";
+
+/// JKR history layout with the tangential spring: xyz = spring, w = touched (16 bytes).
+pub const JKR_HISTORY_TANGENTIAL: &str = "\
+// JKR history layout: tangential spring (xyz) and touched (w); no rolling in this scene.
+const JKR_TANGENTIAL: bool = true;
+const JKR_ROLLING: bool = false;
+alias Hist = vec4<f32>;
+fn hist_zero() -> Hist { return vec4<f32>(0.0); }
+fn jkr_unpack(h: Hist) -> JkrHistory { return JkrHistory(h.w != 0.0, h.xyz, vec3<f32>(0.0)); }
+fn jkr_pack(h: JkrHistory) -> Hist { return vec4<f32>(h.spring, select(0.0, 1.0, h.touched)); }
+";
+
+/// JKR history layout with the tangential spring and the rolling displacement (32 bytes).
+pub const JKR_HISTORY_ROLLING: &str = "\
+// JKR history layout: tangential spring (spring.xyz), touched (spring.w), rolling
+// displacement (xi.xyz).
+const JKR_TANGENTIAL: bool = true;
+const JKR_ROLLING: bool = true;
+struct JkrStored {
+    spring: vec4<f32>,
+    xi: vec4<f32>,
+}
+alias Hist = JkrStored;
+fn hist_zero() -> Hist { return JkrStored(vec4<f32>(0.0), vec4<f32>(0.0)); }
+fn jkr_unpack(h: Hist) -> JkrHistory { return JkrHistory(h.spring.w != 0.0, h.spring.xyz, h.xi.xyz); }
+fn jkr_pack(h: JkrHistory) -> Hist {
+    return JkrStored(vec4<f32>(h.spring, select(0.0, 1.0, h.touched)), vec4<f32>(h.xi, 0.0));
+}
+";
+
+/// Which step a scene runs: the model family and what its contacts need stored.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum StepKind {
+    /// Hysteretic and LSD pairs: normal force with (δmax, touched) history, no rotation.
+    Hysteretic,
+    /// JKR/Hertz without friction or rolling resistance: the touched flag, no rotation.
+    Jkr,
+    /// JKR/Hertz with friction (no rolling resistance): the tangential spring, rotation.
+    JkrFriction,
+    /// JKR/Hertz with rolling resistance (and friction): spring and ξ, rotation.
+    JkrRolling,
+}
+
+impl StepKind {
+    pub const ALL: [StepKind; 4] = [
+        StepKind::Hysteretic,
+        StepKind::Jkr,
+        StepKind::JkrFriction,
+        StepKind::JkrRolling,
+    ];
+
+    /// The variant's name (also the shader module's label).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Hysteretic => "step_hysteretic",
+            Self::Jkr => "step_jkr",
+            Self::JkrFriction => "step_jkr_friction",
+            Self::JkrRolling => "step_jkr_rolling",
+        }
+    }
+
+    /// Whether particles carry angular velocity (the rotation snippet is composed in).
+    pub fn rotation(self) -> bool {
+        matches!(self, Self::JkrFriction | Self::JkrRolling)
+    }
+
+    /// Bytes of one contact's stored history (`Hist`; checked against naga in
+    /// `layout::tests`).
+    pub fn history_bytes(self) -> u64 {
+        match self {
+            Self::Hysteretic => 8,
+            Self::Jkr => 4,
+            Self::JkrFriction => 16,
+            Self::JkrRolling => 32,
+        }
+    }
+
+    /// The composed module: common, model, history layout, rotation hooks, step.
+    pub fn variant(self) -> ShaderVariant {
+        let rotation = if self.rotation() {
+            ROTATION
+        } else {
+            ROTATION_OFF
+        };
+        let snippets: Vec<&str> = match self {
+            Self::Hysteretic => vec![MODEL_HYSTERETIC, rotation],
+            Self::Jkr => vec![MODEL_JKR, JKR_HISTORY_TOUCHED, rotation],
+            Self::JkrFriction => vec![MODEL_JKR, JKR_HISTORY_TANGENTIAL, rotation],
+            Self::JkrRolling => vec![MODEL_JKR, JKR_HISTORY_ROLLING, rotation],
+        };
+        ShaderVariant {
+            name: self.name().into(),
+            source: compose("shaders/step.wgsl", STEP, &snippets),
+        }
+    }
+}
+
 /// The step for the normal-force models (hysteretic, LSD).
 pub fn step_variant() -> ShaderVariant {
-    ShaderVariant {
-        name: "step_hysteretic".into(),
-        source: compose("shaders/step.wgsl", STEP, &[MODEL_HYSTERETIC]),
-    }
+    StepKind::Hysteretic.variant()
 }
 
 /// A shader stage: one file of `shaders/`.
@@ -83,7 +193,7 @@ pub fn all_variants() -> Vec<ShaderVariant> {
             source: compose(st.path, st.source, &[]),
         })
         .collect();
-    all.push(step_variant());
+    all.extend(StepKind::ALL.iter().map(|k| k.variant()));
     all
 }
 
@@ -154,6 +264,72 @@ mod tests {
         ] {
             assert!(eps.iter().any(|e| e == name), "missing kernel {name}");
         }
+    }
+
+    #[test]
+    fn gpu_shaders_every_step_variant_has_the_step_kernels() {
+        for kind in StepKind::ALL {
+            let v = kind.variant();
+            let (module, _) = validate(&v.source).unwrap();
+            let eps = compute_entry_points(&module);
+            for name in [
+                "kick_drift",
+                "gather",
+                "neighbours",
+                "remap",
+                "force",
+                "kick",
+            ] {
+                assert!(
+                    eps.iter().any(|e| e == name),
+                    "{}: no kernel {name}",
+                    v.name
+                );
+            }
+            // the angular buffers exist only where particles rotate
+            let declared = |name: &str| {
+                module
+                    .global_variables
+                    .iter()
+                    .any(|(_, g)| g.name.as_deref() == Some(name))
+            };
+            for name in ["a_omega", "a_alpha", "b_omega", "b_alpha", "wpred"] {
+                assert_eq!(declared(name), kind.rotation(), "{}: {name}", v.name);
+            }
+            assert!(
+                variant(kind.name()).is_some(),
+                "{} not in all_variants",
+                v.name
+            );
+        }
+    }
+
+    /// The f32 literals of model_jkr.wgsl are the f32 roundings of the Rust constants of
+    /// `jkr::contact_radius_f32` (the two solvers must be the same function).
+    #[test]
+    fn gpu_shaders_jkr_constants_match_the_rust_solver() {
+        use crate::model::jkr::{D_PULLOFF_DISPLACEMENT, NEWTON_ITERATIONS_F32, S_MIN};
+        let literal = |name: &str| -> f64 {
+            let key = format!("const {name}: ");
+            let line = MODEL_JKR
+                .lines()
+                .find(|l| l.starts_with(&key))
+                .unwrap_or_else(|| panic!("{name} not in model_jkr.wgsl"));
+            let value = line.split('=').nth(1).unwrap().trim().trim_end_matches(';');
+            value.trim_end_matches('u').parse().unwrap()
+        };
+        let f32_of = |name: &str| literal(name) as f32;
+        assert_eq!(f32_of("JKR_S_MIN"), S_MIN as f32);
+        assert_eq!(f32_of("JKR_D_MIN"), D_PULLOFF_DISPLACEMENT as f32);
+        assert_eq!(f32_of("JKR_C"), (2.0 * S_MIN) as f32);
+        assert_eq!(f32_of("JKR_B"), (2.0 * S_MIN * S_MIN) as f32);
+        assert_eq!(f32_of("JKR_SQRT3"), 3f64.sqrt() as f32);
+        assert_eq!(f32_of("JKR_SLOPE0"), (18f64.sqrt() * S_MIN) as f32);
+        assert_eq!(f32_of("JKR_PI"), std::f64::consts::PI as f32);
+        assert_eq!(
+            literal("JKR_NEWTON_ITERATIONS") as usize,
+            NEWTON_ITERATIONS_F32
+        );
     }
 
     #[test]

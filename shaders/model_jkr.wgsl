@@ -1,0 +1,261 @@
+// model_jkr.wgsl — the JKR family (JKR, Hertz) in f32: the twin of `src/model/jkr.rs`
+// (papers 001 §II and 002 §2–3). Normal force with contact hysteresis, Tsuji or power-law
+// damping, the tangential spring with the adhesive Coulomb limit and the rolling
+// resistance. Tests tie it to the f64 reference through whole collisions
+// (`tests/gpu_engine.rs`).
+//
+// Sign convention as in Rust: delta > 0 is overlap, delta_dot the approach speed, a
+// positive normal force is repulsive, the unit normal n points from j to i.
+//
+// Needs, from the composition (see `src/gpu/shaders.rs`):
+//   * `Kin` and `Contact` (shaders/step.wgsl): the pair's kinematics and the result;
+//   * the history layout snippet: `alias Hist`, `hist_zero()`, `jkr_unpack`, `jkr_pack`
+//     and the switches JKR_TANGENTIAL / JKR_ROLLING (whether the stored history has room
+//     for the tangential spring / rolling displacement). Without room the kernel never
+//     evaluates that part, so the host only picks a layout that covers every pair.
+
+// One row of the pair table (materials x materials, then walls x materials). Twin of
+// `gpu::layout::JkrPair`, filled from `JkrParams` on the host (in f64, then rounded).
+struct JkrPair {
+    // E* = S·E/(2(1 − nu²)) (scaled), Pa.
+    e_star: f32,
+    // G* = G/(2(2 − nu)), G = S·E/(2(1 + nu)) (scaled), Pa.
+    g_star: f32,
+    // Surface energy per surface after scaling, gamma·S^(2/5), J/m²; 0 = Hertz.
+    gamma: f32,
+    // (9·pi·gamma/E*)^(1/3) (scaled): a0 = a0_coef·R*^(2/3).
+    a0_coef: f32,
+    // delta/delta0 where a touching contact breaks (negative; displacement or force rule).
+    break_ratio: f32,
+    // Sliding friction mu_s; 0 = no tangential force.
+    friction: f32,
+    // Adhesion hysteresis (delta gamma)/gamma of the rolling resistance; 0 = none.
+    rolling_hysteresis: f32,
+    // Unscaled 3·pi·gamma (rolling keeps the unscaled Fc = fc_unscaled_per_r·R*).
+    fc_unscaled_per_r: f32,
+    // Unscaled (9·pi·gamma/E*)^(1/3) (rolling keeps the unscaled a0 in xi_crit).
+    a0_unscaled_coef: f32,
+    // 0: none; 1: Tsuji; 2: power law.
+    dissipation: u32,
+    // Tsuji: −2·sqrt(5/6)·beta(e) >= 0 (beta = ln e/sqrt(ln² e + pi²)).
+    tsuji: f32,
+    // Power law sgn(delta_dot)·D·E*·|delta_dot|^alpha·a^beta.
+    power_d: f32,
+    power_alpha: f32,
+    power_beta: f32,
+    _pad0: u32,
+    _pad1: u32,
+}
+
+alias PairRow = JkrPair;
+
+const JKR_DISSIPATION_TSUJI: u32 = 1u;
+const JKR_DISSIPATION_POWER: u32 = 2u;
+
+const JKR_PI: f32 = 3.1415927;
+// The f32 constants of `jkr::contact_radius_f32` (rounded exactly as Rust rounds its f64
+// constants; `gpu::shaders` tests check each literal against the Rust values):
+// s_min = 6^(−1/3), d_min = −(3/4)^(2/3) (displacement pull-off), c = 2·s_min,
+// b = 2·s_min², sqrt(3), sqrt(18)·s_min.
+const JKR_S_MIN: f32 = 0.5503212;
+const JKR_D_MIN: f32 = -0.82548183;
+const JKR_C: f32 = 1.1006424;
+const JKR_B: f32 = 0.6057069;
+const JKR_SQRT3: f32 = 1.7320508;
+const JKR_SLOPE0: f32 = 2.3348153;
+// Newton iterations in f32 (`jkr::NEWTON_ITERATIONS_F32`).
+const JKR_NEWTON_ITERATIONS: i32 = 3;
+
+// The contact's history, unpacked.
+struct JkrHistory {
+    touched: bool,
+    // Tangential spring s of this side of the pair (the partner's copy is −s).
+    spring: vec3<f32>,
+    // Rolling displacement xi (the same on both sides).
+    xi: vec3<f32>,
+}
+
+fn jkr_history_zero() -> JkrHistory {
+    return JkrHistory(false, vec3<f32>(0.0), vec3<f32>(0.0));
+}
+
+// The normal force and what the tangential and rolling parts need.
+struct JkrNormal {
+    in_contact: bool,
+    // Elastic (conservative) force, repulsive positive.
+    elastic: f32,
+    // Elastic + dissipative force.
+    force: f32,
+    // Contact radius a.
+    a: f32,
+    // a/a0 (scaled; 0 for Hertz).
+    x: f32,
+    // Scaled pull-off force Fc = 3·pi·gamma·R* (0 for Hertz).
+    fc: f32,
+}
+
+// s = sqrt(a/a0) on the stable branch for delta/delta0 (`jkr::contact_radius_f32`): the
+// deflated guarded Newton iteration about the pull-off point, only +, −, ×, ÷, sqrt, min.
+fn jkr_solve_s(delta: f32, delta0: f32) -> f32 {
+    let e = max(delta / delta0 - JKR_D_MIN, 0.0);
+    let r = sqrt(e);
+    let q = 2.0 * r / JKR_SQRT3;
+    var t = min(r / JKR_SLOPE0, q / (JKR_C + sqrt(JKR_C * JKR_C + 2.0 * q)));
+    for (var i = 0; i < JKR_NEWTON_ITERATIONS; i++) {
+        let tc = t + JKR_C;
+        let w = tc * tc + JKR_B;
+        t = (t * t * tc + r * sqrt(w) / JKR_SQRT3) / (w + t * tc);
+    }
+    return JKR_S_MIN + t;
+}
+
+// R*^(2/3) (R* > 0): a0 and xi_crit scale with it.
+fn jkr_r23(r: f32) -> f32 {
+    return pow(r, 2.0 / 3.0);
+}
+
+// The dissipative normal force for contact radius a (`JkrParams::normal_dissipation`).
+fn jkr_dissipation(p: JkrPair, a: f32, delta_dot: f32, m: f32) -> f32 {
+    if (p.dissipation == JKR_DISSIPATION_TSUJI) {
+        // Sn = 2E*·a (paper 002 eq. 13 for Hertz; a exists at negative overlap in JKR)
+        let sn = 2.0 * p.e_star * a;
+        return p.tsuji * sqrt(sn * m) * delta_dot;
+    }
+    if (p.dissipation == JKR_DISSIPATION_POWER) {
+        if (delta_dot == 0.0) {
+            return 0.0;
+        }
+        // WGSL's pow(x, y) is undefined for x < 0 (and for x = 0, y <= 0): raise |delta_dot|
+        // and a >= 0, and apply the sign apart. Exponent 0 gives 1, as powf does.
+        var va = 1.0;
+        if (p.power_alpha != 0.0) {
+            va = pow(abs(delta_dot), p.power_alpha);
+        }
+        var ab = 1.0;
+        if (p.power_beta != 0.0) {
+            ab = select(0.0, pow(a, p.power_beta), a > 0.0);
+        }
+        return sign(delta_dot) * p.power_d * p.e_star * va * ab;
+    }
+    return 0.0;
+}
+
+// Normal force with the JKR contact hysteresis (`JkrParams::normal_force`):
+// * no force before the first touch (delta <= 0, not touched);
+// * from delta > 0 the contact persists (also at negative overlap) until delta falls to
+//   break_ratio·delta0, where it breaks and the whole history is forgotten;
+// * Hertz (gamma = 0): contact only while delta > 0.
+// The elastic force is evaluated in the normalised form F = 4·Fc·(x³ − x^(3/2)), x = a/a0
+// = s², which equals 4E*a³/(3R*) − 4·sqrt(pi·gamma·E*·a³) (a0³ = 9·pi·gamma·R*²/E*) and
+// keeps every intermediate O(Fc) in f32.
+fn jkr_normal(p: JkrPair, k: Kin, h: ptr<function, JkrHistory>) -> JkrNormal {
+    var out = JkrNormal(false, 0.0, 0.0, 0.0, 0.0, 0.0);
+    let r = k.r_eff;
+    if (p.gamma == 0.0) {
+        if (k.delta <= 0.0) {
+            *h = jkr_history_zero();
+            return out;
+        }
+        let a = sqrt(r * k.delta);
+        out.elastic = 4.0 * p.e_star * a * a * a / (3.0 * r);
+        out.a = a;
+    } else {
+        if (!(*h).touched && k.delta <= 0.0) {
+            *h = jkr_history_zero();
+            return out;
+        }
+        let a0 = p.a0_coef * jkr_r23(r);
+        let d0 = a0 * a0 / (3.0 * r);
+        if (k.delta <= p.break_ratio * d0) {
+            *h = jkr_history_zero();
+            return out;
+        }
+        let s = jkr_solve_s(k.delta, d0);
+        let x = s * s;
+        let fc = 3.0 * JKR_PI * p.gamma * r;
+        out.elastic = 4.0 * fc * (x * x * x - x * s);
+        out.a = a0 * x;
+        out.x = x;
+        out.fc = fc;
+    }
+    (*h).touched = true;
+    out.in_contact = true;
+    out.force = out.elastic + jkr_dissipation(p, out.a, k.delta_dot, k.m_eff);
+    return out;
+}
+
+// Rotates v into the plane normal to n keeping its length (`rotate_into_plane`): a rigid
+// rotation of the pair must not change the stored spring energy. Zero when v is (within
+// f32 rounding) along n.
+fn jkr_rotate_into_plane(v: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    let len = length(v);
+    if (len == 0.0) {
+        return vec3<f32>(0.0);
+    }
+    let q = v - n * dot(n, v);
+    let lq = length(q);
+    // f64 uses 1e-12; in f32 the projection of a vector along n is rounding noise of
+    // ~1e-7·len, so anything below 1e-6·len has no direction worth keeping.
+    if (lq > 1e-6 * len) {
+        return q * (len / lq);
+    }
+    return vec3<f32>(0.0);
+}
+
+// Tangential force on i (`JkrParams::tangential_force`, paper 002 eqs. 14–17): the spring
+// rotated into the tangent plane, s += v_t·dt, F = −St·s − c_t·v_t with St = 8G*·a and
+// c_t = tsuji·sqrt(St·m*), truncated to |F| <= mu_s·|F_el + 2Fc| with the spring set
+// consistent with the truncated force.
+fn jkr_tangential(p: JkrPair, k: Kin, nf: JkrNormal, h: ptr<function, JkrHistory>) -> vec3<f32> {
+    var s = jkr_rotate_into_plane((*h).spring, k.n) + k.v_t * k.dt;
+    let st = 8.0 * p.g_star * nf.a;
+    var ct = 0.0;
+    if (p.dissipation == JKR_DISSIPATION_TSUJI) {
+        ct = p.tsuji * sqrt(st * k.m_eff);
+    }
+    var force = -st * s - ct * k.v_t;
+    let limit = p.friction * abs(nf.elastic + 2.0 * nf.fc);
+    let magnitude = length(force);
+    if (magnitude > limit) {
+        force = force * (limit / magnitude);
+        if (st > 0.0) {
+            s = -(force + ct * k.v_t) / st;
+        }
+    }
+    (*h).spring = s;
+    return force;
+}
+
+// Rolling-resistance torque on i (`JkrParams::rolling_torque`, paper 002 eqs. 18–22):
+// xi rotated into the tangent plane, xi += v_roll·dt, truncated at
+// xi_crit = (a0_unscaled/12)·(delta gamma/gamma); torque −kr·(n × xi) with
+// kr = 4·Fc_unscaled·(a/a0)^(3/2).
+fn jkr_rolling(p: JkrPair, k: Kin, nf: JkrNormal, h: ptr<function, JkrHistory>) -> vec3<f32> {
+    var x = jkr_rotate_into_plane((*h).xi, k.n) + k.v_roll * k.dt;
+    let r = k.r_eff;
+    let xi_crit = p.a0_unscaled_coef * jkr_r23(r) / 12.0 * p.rolling_hysteresis;
+    let len = length(x);
+    if (len > xi_crit) {
+        x = x * (xi_crit / len);
+    }
+    (*h).xi = x;
+    let kr = 4.0 * (p.fc_unscaled_per_r * r) * nf.x * sqrt(nf.x);
+    return -kr * cross(k.n, x);
+}
+
+// The step's interface (`ContactModel::respond`): normal force, then the tangential
+// force and the rolling torque while in contact, when the pair has them and the history
+// layout has room for them.
+fn pair_contact(p: JkrPair, k: Kin, hist: ptr<function, Hist>) -> Contact {
+    var h = jkr_unpack(*hist);
+    let nf = jkr_normal(p, k, &h);
+    var c = Contact(nf.force, vec3<f32>(0.0), vec3<f32>(0.0));
+    if (JKR_TANGENTIAL && nf.in_contact && p.friction > 0.0) {
+        c.tangential = jkr_tangential(p, k, nf, &h);
+    }
+    if (JKR_ROLLING && nf.in_contact && p.rolling_hysteresis > 0.0 && p.fc_unscaled_per_r > 0.0) {
+        c.rolling = jkr_rolling(p, k, nf, &h);
+    }
+    *hist = jkr_pack(h);
+    return c;
+}

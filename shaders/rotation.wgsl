@@ -1,0 +1,45 @@
+// rotation.wgsl — angular velocity for scenes whose contacts exert tangential forces or
+// torques (JKR with friction or rolling resistance). Composed into the step instead of
+// rotation_off.wgsl, so a scene without them declares (and allocates) none of this.
+//
+// Per particle, in both state sets like vel/acc: omega.xyz = angular velocity, omega.w =
+// the moment of inertia 2/5·m·r²; alpha.xyz = angular acceleration torque/I. Integrated
+// with the same half kicks as the velocity (CPU: `CpuEngine::step`); wpred is the
+// predicted omega + dt/2·alpha the forces see (as vpred for the velocity).
+
+const ROTATION: bool = true;
+
+@group(0) @binding(50) var<storage, read_write> a_omega: array<vec4<f32>>;
+@group(0) @binding(51) var<storage, read> a_alpha: array<vec4<f32>>;
+@group(0) @binding(52) var<storage, read_write> b_omega: array<vec4<f32>>;
+@group(0) @binding(53) var<storage, read_write> b_alpha: array<vec4<f32>>;
+@group(0) @binding(54) var<storage, read_write> wpred: array<vec4<f32>>;
+
+// kick_drift: omega += dt/2·alpha.
+fn rot_kick_drift(i: u32) {
+    a_omega[i] = vec4<f32>(a_omega[i].xyz + 0.5 * step.dt * a_alpha[i].xyz, a_omega[i].w);
+}
+
+// gather: reorder into B and predict.
+fn rot_gather(k: u32, o: u32) {
+    b_omega[k] = a_omega[o];
+    b_alpha[k] = a_alpha[o];
+    wpred[k] = vec4<f32>(a_omega[o].xyz + 0.5 * step.dt * a_alpha[o].xyz, 0.0);
+}
+
+// The predicted angular velocity of B's particle k.
+fn rot_wpred(k: u32) -> vec3<f32> {
+    return wpred[k].xyz;
+}
+
+// force: stores torque/I; false when it is not finite.
+fn rot_store(k: u32, torque: vec3<f32>) -> bool {
+    let alpha = torque / b_omega[k].w;
+    b_alpha[k] = vec4<f32>(alpha, 0.0);
+    return !(any(alpha != alpha) || any(abs(alpha) > vec3<f32>(3.0e38)));
+}
+
+// kick: omega += dt/2·alpha.
+fn rot_kick(k: u32) {
+    b_omega[k] = vec4<f32>(b_omega[k].xyz + 0.5 * step.dt * b_alpha[k].xyz, b_omega[k].w);
+}

@@ -1,0 +1,19 @@
+// rotation_off.wgsl — the step without angular velocity (no contact model of the scene
+// exerts tangential forces or torques): the hooks of rotation.wgsl as no-ops, with no
+// buffers declared, so none is bound or allocated.
+
+const ROTATION: bool = false;
+
+fn rot_kick_drift(i: u32) {}
+
+fn rot_gather(k: u32, o: u32) {}
+
+fn rot_wpred(k: u32) -> vec3<f32> {
+    return vec3<f32>(0.0);
+}
+
+fn rot_store(k: u32, torque: vec3<f32>) -> bool {
+    return true;
+}
+
+fn rot_kick(k: u32) {}
