@@ -206,7 +206,7 @@ fn run_prints_a_summary_and_rejects_missing_files() {
         env!("CARGO_MANIFEST_DIR"),
         "/examples/cohesive_cluster.toml"
     );
-    let (ok, out, err) = powder(&["run", scene, "--steps", "200"]);
+    let (ok, out, err) = powder(&["run", scene, "--steps", "200", "--no-output"]);
     assert!(ok, "{err}");
     assert!(
         out.contains("energies") && out.contains("per particle"),
