@@ -497,6 +497,28 @@ impl CpuEngine {
             - (new.potential - o.potential)
     }
 
+    /// Books the contacts that left the search range within one step (in key order, so the
+    /// sum is reproducible): they leave with their last force.
+    fn book_departed(
+        old: HashMap<(u32, u32), ContactRecord>,
+        dt: f64,
+        overlap: impl Fn(usize, usize) -> f64,
+    ) -> f64 {
+        let mut departed: Vec<_> = old.into_iter().collect();
+        departed.sort_by_key(|(k, _)| *k);
+        departed
+            .into_iter()
+            .map(|((a, b), c)| {
+                let motion = Motion {
+                    delta: overlap(a as usize, b as usize),
+                    ..Default::default()
+                };
+                let edges = [(0.0, 0.0), (motion.delta, 0.0)];
+                Self::book(Some(&c), &ContactRecord::default(), &motion, dt, edges)
+            })
+            .sum()
+    }
+
     fn compute_forces(&mut self, v_pred: &[DVec3], w_pred: &[DVec3]) -> Result<(), PowderError> {
         let dt = self.dt;
         self.force.iter_mut().for_each(|f| *f = DVec3::ZERO);
@@ -579,17 +601,7 @@ impl CpuEngine {
             });
         }
         self.peak = peak;
-        // Pairs that jumped beyond the cut-off in one step leave with their last force.
-        let mut leftovers: Vec<_> = old.drain().collect();
-        leftovers.sort_by_key(|(k, _)| *k);
-        for ((i, j), c) in leftovers {
-            let motion = Motion {
-                delta: self.overlap(i as usize, j as usize),
-                ..Default::default()
-            };
-            let edges = [(0.0, 0.0), (motion.delta, 0.0)];
-            dissipated += Self::book(Some(&c), &ContactRecord::default(), &motion, dt, edges);
-        }
+        dissipated += Self::book_departed(old, dt, |i, j| self.overlap(i, j));
         self.contacts = new;
 
         let mut old_w = std::mem::take(&mut self.wall_contacts);
@@ -644,16 +656,7 @@ impl CpuEngine {
                 }
             }
         }
-        let mut leftovers: Vec<_> = old_w.drain().collect();
-        leftovers.sort_by_key(|(k, _)| *k);
-        for ((w, i), c) in leftovers {
-            let motion = Motion {
-                delta: self.wall_overlap(w as usize, i as usize),
-                ..Default::default()
-            };
-            let edges = [(0.0, 0.0), (motion.delta, 0.0)];
-            dissipated += Self::book(Some(&c), &ContactRecord::default(), &motion, dt, edges);
-        }
+        dissipated += Self::book_departed(old_w, dt, |w, i| self.wall_overlap(w, i));
         self.wall_contacts = new_w;
         self.dissipated += dissipated;
         if let Some(msg) = failure {
