@@ -11,15 +11,21 @@
 //
 // Pass order, recorded by `gpu::engine` into one encoder per batch of steps:
 //   kick_drift   per particle (state A)  v += dt/2·a (omega += dt/2·alpha); offset +=
-//                                        dt·v, carried into the cell
-//   <grid sort of A's cells>             sorted_index, cell_start, cell_count
-//   gather       per particle            B[k] = A[sorted_index[k]]; vpred = v + dt/2·a
-//                                        (wpred = omega + dt/2·alpha)
-//   neighbours   per particle (B)        full neighbour list from the 27 cells
-//   remap        per particle (B)        each new slot finds its history in A by the
-//                                        partner's persistent id
+//                                        dt·v, carried into the cell; disp += dt·v and
+//                                        atomicMax of |disp| (Verlet skin)
+//   decide       one invocation          rebuild this step when max |disp| > skin/2
+//   <grid sort of A's cells>             sorted_index, cell_start, cell_count (only on a
+//                                        rebuild: indirect dispatches, zero workgroups else)
+//   gather       per particle            B[k] = A[sorted_index[k]] on a rebuild, else
+//                                        A[k]; vpred = v + dt/2·a (wpred = omega + dt/2·alpha)
+//   neighbours   per particle (B)        on a rebuild: full neighbour list from the 27
+//                                        cells, cut-off r_i + r_j + reach + skin
+//   remap        per particle (B)        on a rebuild each new slot finds its history in A
+//                                        by the partner's persistent id; else the lists'
+//                                        counts and history are copied
 //   force        per particle (B)        sums its own contacts in slot order (no atomics:
-//                                        deterministic), walls, gravity -> acc (alpha)
+//                                        deterministic; candidates beyond reach skipped),
+//                                        walls, gravity -> acc (alpha)
 //   kick         per particle (B)        v += dt/2·a (omega += dt/2·alpha)
 // then A and B swap roles.
 //
@@ -74,6 +80,8 @@ struct Wall {
 @group(0) @binding(27) var<storage, read> a_hist: array<Hist>;
 @group(0) @binding(28) var<storage, read> a_hist_pid: array<u32>;
 @group(0) @binding(29) var<storage, read> a_wall_hist: array<Hist>;
+// Displacement (xyz) accumulated since the last neighbour-list rebuild.
+@group(0) @binding(30) var<storage, read_write> a_disp: array<vec4<f32>>;
 
 @group(0) @binding(31) var<storage, read_write> b_cell: array<vec4<i32>>;
 @group(0) @binding(32) var<storage, read_write> b_off: array<vec4<f32>>;
@@ -84,6 +92,7 @@ struct Wall {
 @group(0) @binding(37) var<storage, read_write> b_hist: array<Hist>;
 @group(0) @binding(38) var<storage, read_write> b_hist_pid: array<u32>;
 @group(0) @binding(39) var<storage, read_write> b_wall_hist: array<Hist>;
+@group(0) @binding(55) var<storage, read_write> b_disp: array<vec4<f32>>;
 
 // Per-step scratch: predicted velocity, the old index of each new slot, the neighbour list.
 @group(0) @binding(40) var<storage, read_write> vpred: array<vec4<f32>>;
@@ -103,39 +112,98 @@ struct Wall {
 // that overflowed the capacity (+1; 0 = none), [2] = non-finite force count.
 @group(0) @binding(48) var<storage, read_write> monitor: array<atomic<u32>, 4>;
 
+// Verlet skin state, persistent across batches: [0] = largest |displacement| since the
+// last rebuild as f32 bits (atomicMax: the bit patterns of non-negative f32 order as the
+// values), [1] = 1 when this step rebuilds (written by decide), [2] = rebuilds so far,
+// [3] = the skin as f32 bits.
+@group(0) @binding(56) var<storage, read_write> skin: array<atomic<u32>, 4>;
+// Indirect dispatch arguments of the grid sort (`GridSort::encode_indirect`): decide
+// copies full_args (a full sort) or writes zeros (no sort this step).
+@group(0) @binding(57) var<storage, read_write> args: array<u32>;
+@group(0) @binding(58) var<storage, read> full_args: array<u32>;
+
+fn skin_width() -> f32 {
+    return bitcast<f32>(atomicLoad(&skin[3]));
+}
+
+fn rebuilding() -> bool {
+    return atomicLoad(&skin[1]) != 0u;
+}
+
 // Separation x_i - x_j from cell + offset positions.
 fn separation(ci: vec4<i32>, oi: vec4<f32>, cj: vec4<i32>, oj: vec4<f32>) -> vec3<f32> {
     return vec3<f32>(ci.xyz - cj.xyz) * grid.cell_width + (oi.xyz - oj.xyz);
 }
 
+// The workgroup's largest |displacement| (f32 bits), merged into skin[0] once per group.
+var<workgroup> wg_moved: atomic<u32>;
+
 @compute @workgroup_size(WG_SIZE)
 fn kick_drift(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let i = global_index(wid, nwg, lid);
-    if (i >= grid.n_particles) {
-        return;
+    if (lid == 0u) {
+        atomicStore(&wg_moved, 0u);
     }
-    let h = grid.cell_width;
-    let v = a_vel[i].xyz + 0.5 * step.dt * a_acc[i].xyz;
-    a_vel[i] = vec4<f32>(v, a_vel[i].w);
-    rot_kick_drift(i);
-    var o = a_off[i].xyz + step.dt * v;
-    let shift = floor(o / h);
-    o = o - shift * h;
-    // rounding can leave o == h: move it into the next cell
-    let over = o >= vec3<f32>(h);
-    o = select(o, vec3<f32>(0.0), over);
-    let carry = vec3<i32>(shift) + select(vec3<i32>(0), vec3<i32>(1), over);
-    a_cell[i] = vec4<i32>(a_cell[i].xyz + carry, a_cell[i].w);
-    a_off[i] = vec4<f32>(o, a_off[i].w);
+    workgroupBarrier();
+    if (i < grid.n_particles) {
+        let h = grid.cell_width;
+        let v = a_vel[i].xyz + 0.5 * step.dt * a_acc[i].xyz;
+        a_vel[i] = vec4<f32>(v, a_vel[i].w);
+        rot_kick_drift(i);
+        let disp = a_disp[i].xyz + step.dt * v;
+        a_disp[i] = vec4<f32>(disp, 0.0);
+        // length() >= 0 (or NaN, whose bits order above +inf: it forces a rebuild)
+        atomicMax(&wg_moved, bitcast<u32>(length(disp)));
+        var o = a_off[i].xyz + step.dt * v;
+        let shift = floor(o / h);
+        o = o - shift * h;
+        // rounding can leave o == h: move it into the next cell
+        let over = o >= vec3<f32>(h);
+        o = select(o, vec3<f32>(0.0), over);
+        let carry = vec3<i32>(shift) + select(vec3<i32>(0), vec3<i32>(1), over);
+        a_cell[i] = vec4<i32>(a_cell[i].xyz + carry, a_cell[i].w);
+        a_off[i] = vec4<f32>(o, a_off[i].w);
+    }
+    workgroupBarrier();
+    if (lid == 0u) {
+        atomicMax(&skin[0], atomicLoad(&wg_moved));
+    }
 }
 
+// One invocation, after kick_drift: rebuild unless every particle moved at most half the
+// skin since the last rebuild (then no pair can have closed by more than the skin, so
+// every pair within r_i + r_j + reach is still in the lists built with
+// r_i + r_j + reach + skin). Writes the flag (neighbours returns at once without it,
+// gather and remap branch on it) and the grid sort's indirect arguments (zero workgroups
+// without a rebuild), and starts the next maximum afresh.
+@compute @workgroup_size(1)
+fn decide() {
+    let moved = bitcast<f32>(atomicLoad(&skin[0]));
+    let rebuild = !(moved <= 0.5 * skin_width());
+    atomicStore(&skin[0], 0u);
+    atomicStore(&skin[1], select(0u, 1u, rebuild));
+    if (rebuild) {
+        atomicAdd(&skin[2], 1u);
+    }
+    for (var i = 0u; i < arrayLength(&full_args); i++) {
+        args[i] = select(0u, full_args[i], rebuild);
+    }
+}
+
+// B[k] = A[sorted_index[k]] after a rebuild, B[k] = A[k] otherwise (the lists, built in
+// sorted order, stay valid: the order does not change between rebuilds).
 @compute @workgroup_size(WG_SIZE)
 fn gather(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let k = global_index(wid, nwg, lid);
     if (k >= grid.n_particles) {
         return;
     }
-    let o = sorted_index[k];
+    let rebuild = rebuilding();
+    var o = k;
+    if (rebuild) {
+        o = sorted_index[k];
+    }
+    b_disp[k] = select(a_disp[o], vec4<f32>(0.0), rebuild);
     b_cell[k] = a_cell[o];
     b_off[k] = a_off[o];
     b_vel[k] = a_vel[o];
@@ -152,7 +220,7 @@ fn gather(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: v
 @compute @workgroup_size(WG_SIZE)
 fn neighbours(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let k = global_index(wid, nwg, lid);
-    if (k >= grid.n_particles) {
+    if (k >= grid.n_particles || !rebuilding()) {
         return;
     }
     let ck = b_cell[k];
@@ -175,7 +243,7 @@ fn neighbours(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nw
                         continue;
                     }
                     let d = separation(ck, ok, b_cell[j], b_off[j]);
-                    let reach = ok.w + b_off[j].w + step.reach;
+                    let reach = ok.w + b_off[j].w + step.reach + skin_width();
                     if (dot(d, d) < reach * reach) {
                         if (count < step.max_neighbours) {
                             nbr[k * step.max_neighbours + count] = j;
@@ -201,6 +269,16 @@ fn remap(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
         return;
     }
     let cap = step.max_neighbours;
+    if (!rebuilding()) {
+        // same order, same lists: carry the history over
+        let n = a_count[k];
+        b_count[k] = n;
+        for (var s = 0u; s < n; s++) {
+            b_hist[k * cap + s] = a_hist[k * cap + s];
+            b_hist_pid[k * cap + s] = a_hist_pid[k * cap + s];
+        }
+        return;
+    }
     let o = old_index[k];
     let old_n = a_count[o];
     for (var s = 0u; s < b_count[k]; s++) {
@@ -271,6 +349,13 @@ fn force(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
         let d = separation(ck, ok, cj, oj);
         let dist = length(d);
         let delta = rk + rj - dist;
+        let slot = k * cap + s;
+        if (delta < -step.reach) {
+            // a list candidate (within the skin) out of every model's range: no force,
+            // and the history a pair out of range has (the models reset it there too)
+            b_hist[slot] = hist_zero();
+            continue;
+        }
         var n = vec3<f32>(0.0, 0.0, 1.0);
         if (dist > 0.0) {
             n = d / dist;
@@ -291,7 +376,6 @@ fn force(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
             v_t,
             r_eff * cross(wk - wj, n) + (0.5 * (rk - rj) / (rk + rj)) * v_t,
         );
-        let slot = k * cap + s;
         var h = b_hist[slot];
         let c = pair_contact(pairs[mat_k * step.n_materials + u32(cj.w)], kin, &h);
         b_hist[slot] = h;

@@ -470,6 +470,8 @@ pub struct GpuRunSummary {
     pub particle_steps_per_second: f64,
     pub kinetic_initial: f64,
     pub kinetic_final: f64,
+    /// Neighbour-list rebuilds (Verlet skin), the initial build included.
+    pub rebuilds: u64,
 }
 
 /// Runs `scene` on the GPU engine, calling `progress(step, time, kinetic)` every
@@ -506,5 +508,6 @@ pub fn run_gpu(
         particle_steps_per_second: engine.len() as f64 * engine.steps as f64 / wall.max(1e-9),
         kinetic_initial,
         kinetic_final,
+        rebuilds: engine.rebuilds()?,
     })
 }

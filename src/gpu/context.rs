@@ -246,6 +246,11 @@ pub fn enumerate_adapters() -> Vec<wgpu::Adapter> {
 fn new_instance() -> wgpu::Instance {
     let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
     desc.backends = BACKENDS;
+    // wgpu validates every indirect dispatch with an extra dispatch; ours only ever replay
+    // sizes the host computed within the device limits, or zeros (the skipped rebuild), so
+    // the check only costs: measured 2.8e5 -> 5.5e5 particle-steps/s on lavapipe.
+    desc.flags
+        .remove(wgpu::InstanceFlags::VALIDATION_INDIRECT_CALL);
     wgpu::Instance::new(desc)
 }
 

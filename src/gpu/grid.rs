@@ -19,7 +19,7 @@
 //! are dispatches of one compute pass in the caller's encoder: no submission in between.
 
 use crate::gpu::context::GpuContext;
-use crate::gpu::kernel::{self, Kernel, Program};
+use crate::gpu::kernel::{self, split_workgroups, Kernel, Program};
 use crate::gpu::layout::{GridParams, ScanParams};
 use crate::gpu::shaders;
 use crate::PowderError;
@@ -54,6 +54,12 @@ fn check_binding(
         )));
     }
     Ok(())
+}
+
+/// Workgroups of a 1-D dispatch of `invocations` invocations of `kernel` (as
+/// [`Kernel::dispatch`] rounds).
+fn workgroups(kernel: &Kernel, invocations: u32) -> u32 {
+    invocations.div_ceil(kernel.workgroup_size.iter().product::<u32>().max(1))
 }
 
 /// Exclusive prefix sum of `n` u32s from one buffer into another, in levels of
@@ -168,19 +174,24 @@ impl ExclusiveScan {
 
     /// Records the scan's dispatches into `pass`.
     pub fn record(&self, pass: &mut wgpu::ComputePass<'_>) {
-        for level in &self.levels {
-            self.scan_blocks.dispatch_workgroups(
-                pass,
-                &level.blocks,
-                level.n_blocks,
-                self.max_per_dim,
-            );
+        for (kernel, bind_group, workgroups) in self.plan() {
+            kernel.dispatch_workgroups(pass, bind_group, workgroups, self.max_per_dim);
         }
+    }
+
+    /// The scan's dispatches in recording order: (kernel, bind group, workgroups).
+    fn plan(&self) -> Vec<(&Kernel, &wgpu::BindGroup, u32)> {
+        let mut plan: Vec<(&Kernel, &wgpu::BindGroup, u32)> = self
+            .levels
+            .iter()
+            .map(|level| (&self.scan_blocks, &level.blocks, level.n_blocks))
+            .collect();
         for level in self.levels.iter().rev() {
             if let Some(add) = &level.add {
-                self.scan_add.dispatch(pass, add, level.n, self.max_per_dim);
+                plan.push((&self.scan_add, add, workgroups(&self.scan_add, level.n)));
             }
         }
+        plan
     }
 }
 
@@ -450,26 +461,99 @@ impl GridSort {
                 ],
             )
             .expect("cell_keys binds grid, cells and keys");
-        let (n, c, max) = (self.n_particles, self.n_cells, self.max_per_dim);
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("grid sort"),
             timestamp_writes: None,
         });
-        // One invocation at least: it also empties the large-cell queue.
-        self.clear_counts
-            .dispatch(&mut pass, &self.bg_clear, c, max);
-        self.cell_keys.dispatch(&mut pass, &bg_keys, n, max);
-        self.count.dispatch(&mut pass, &self.bg_count, n, max);
-        self.scan.record(&mut pass);
-        self.scatter.dispatch(&mut pass, &self.bg_scatter, n, max);
-        self.sort_within_cells
-            .dispatch(&mut pass, &self.bg_sort_small, c, max);
-        self.sort_large_cells.dispatch_workgroups(
-            &mut pass,
-            &self.bg_sort_large,
-            self.large_groups,
-            max,
+        for (kernel, bind_group, groups) in self.plan() {
+            let bind_group = bind_group.unwrap_or(&bg_keys);
+            kernel.dispatch_workgroups(&mut pass, bind_group, groups, self.max_per_dim);
+        }
+    }
+
+    /// The sort's dispatches in recording order: (kernel, bind group, workgroups before
+    /// splitting); `None` stands for the `cell_keys` bind group, made per `cells` buffer.
+    fn plan(&self) -> Vec<(&Kernel, Option<&wgpu::BindGroup>, u32)> {
+        let (n, c) = (self.n_particles, self.n_cells);
+        let mut plan = vec![
+            // One invocation at least: it also empties the large-cell queue.
+            (
+                &self.clear_counts,
+                Some(&self.bg_clear),
+                workgroups(&self.clear_counts, c),
+            ),
+            (&self.cell_keys, None, workgroups(&self.cell_keys, n)),
+            (
+                &self.count,
+                Some(&self.bg_count),
+                workgroups(&self.count, n),
+            ),
+        ];
+        plan.extend(
+            self.scan
+                .plan()
+                .into_iter()
+                .map(|(k, b, g)| (k, Some(b), g)),
         );
+        plan.push((
+            &self.scatter,
+            Some(&self.bg_scatter),
+            workgroups(&self.scatter, n),
+        ));
+        plan.push((
+            &self.sort_within_cells,
+            Some(&self.bg_sort_small),
+            workgroups(&self.sort_within_cells, c),
+        ));
+        plan.push((
+            &self.sort_large_cells,
+            Some(&self.bg_sort_large),
+            self.large_groups,
+        ));
+        plan.retain(|&(_, _, g)| g > 0);
+        plan
+    }
+
+    /// The `[x, y, z]` workgroup counts of the sort's dispatches, in the order
+    /// [`Self::encode_indirect`] reads them: the arguments of a full sort.
+    pub fn indirect_args(&self) -> Vec<[u32; 3]> {
+        self.plan()
+            .into_iter()
+            .map(|(_, _, g)| split_workgroups(g, self.max_per_dim))
+            .collect()
+    }
+
+    /// Records the sort as [`Self::encode`] does, but every dispatch indirect: dispatch
+    /// `i` reads its `[x, y, z]` from `args` at byte `offset + 12·i` (a buffer with
+    /// `INDIRECT` usage holding [`Self::indirect_args`] to sort, or zeros to skip the
+    /// sort and keep the previous result).
+    pub fn encode_indirect(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        cells: &wgpu::Buffer,
+        args: &wgpu::Buffer,
+        offset: u64,
+    ) {
+        let bg_keys = self
+            .cell_keys
+            .bind(
+                &self.device,
+                &[
+                    ("grid", &self.params),
+                    ("cells", cells),
+                    ("keys", &self.keys),
+                ],
+            )
+            .expect("cell_keys binds grid, cells and keys");
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("grid sort (indirect)"),
+            timestamp_writes: None,
+        });
+        for (i, (kernel, bind_group, _)) in self.plan().into_iter().enumerate() {
+            pass.set_pipeline(&kernel.pipeline);
+            pass.set_bind_group(0, bind_group.unwrap_or(&bg_keys), &[]);
+            pass.dispatch_workgroups_indirect(args, offset + 12 * i as u64);
+        }
     }
 
     /// Uploads `cells`, sorts, and reads the result back (one submission): for tests
