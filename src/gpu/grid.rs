@@ -435,6 +435,20 @@ impl GridSort {
         &self.params
     }
 
+    /// The bind group of `cell_keys` for this cell buffer.
+    fn keys_bind_group(&self, cells: &wgpu::Buffer) -> wgpu::BindGroup {
+        self.cell_keys
+            .bind(
+                &self.device,
+                &[
+                    ("grid", &self.params),
+                    ("cells", cells),
+                    ("keys", &self.keys),
+                ],
+            )
+            .expect("cell_keys binds grid, cells and keys")
+    }
+
     /// Records the whole sort into `encoder` as one compute pass. `cells` holds one
     /// `vec4<i32>` per particle (storage usage).
     ///
@@ -450,17 +464,7 @@ impl GridSort {
             cells.size(),
             cells.usage()
         );
-        let bg_keys = self
-            .cell_keys
-            .bind(
-                &self.device,
-                &[
-                    ("grid", &self.params),
-                    ("cells", cells),
-                    ("keys", &self.keys),
-                ],
-            )
-            .expect("cell_keys binds grid, cells and keys");
+        let bg_keys = self.keys_bind_group(cells);
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("grid sort"),
             timestamp_writes: None,
@@ -534,17 +538,7 @@ impl GridSort {
         args: &wgpu::Buffer,
         offset: u64,
     ) {
-        let bg_keys = self
-            .cell_keys
-            .bind(
-                &self.device,
-                &[
-                    ("grid", &self.params),
-                    ("cells", cells),
-                    ("keys", &self.keys),
-                ],
-            )
-            .expect("cell_keys binds grid, cells and keys");
+        let bg_keys = self.keys_bind_group(cells);
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("grid sort (indirect)"),
             timestamp_writes: None,
