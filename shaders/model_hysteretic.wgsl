@@ -42,6 +42,9 @@ struct HystHistory {
 struct HystForce {
     force: f32,
     history: HystHistory,
+    // Stored energy (energy ledger): ½·k2·(delta − delta0)² along the current un-/re-
+    // loading line plus the adhesion potential (`HystereticParams::force`).
+    potential: f32,
 }
 
 fn hyst_range(p: HystereticPair) -> f32 {
@@ -122,20 +125,39 @@ fn hyst_contact_force(p: HystereticPair, delta: f32, a12: f32, h: ptr<function, 
     return elastic;
 }
 
+// Potential of the reversible non-contact adhesion, zero beyond the range
+// (`adhesion_potential` in Rust; kca = 0 encodes zero range).
+fn hyst_adhesion_potential(p: HystereticPair, delta: f32) -> f32 {
+    var well = 0.0;
+    if (p.kca > 0.0) {
+        well = 0.5 * p.fa * p.fa / p.kca;
+    }
+    if (delta > 0.0) {
+        return -p.fa * delta - well;
+    }
+    return -0.5 * p.kca * delta * delta - p.fa * delta - well;
+}
+
 // Total normal force of the pair (contact + non-contact adhesion + viscosity).
 fn hyst_force(p: HystereticPair, delta: f32, delta_dot: f32, a12: f32, history: HystHistory) -> HystForce {
     var h = history;
     if ((p.flags & HYST_LSD) != 0u) {
         if (delta > 0.0) {
-            return HystForce(p.k1 * delta + p.gamma0 * delta_dot, HystHistory(0.0, true));
+            return HystForce(p.k1 * delta + p.gamma0 * delta_dot, HystHistory(0.0, false), 0.5 * p.k1 * delta * delta);
         }
-        return HystForce(0.0, HystHistory(0.0, false));
+        return HystForce(0.0, HystHistory(0.0, false), 0.0);
     }
     let range = hyst_range(p);
     if (delta > 0.0) {
         h.touched = true;
         let f = hyst_contact_force(p, delta, a12, &h) - p.fa + p.gamma0 * delta_dot;
-        return HystForce(f, h);
+        let dmaxp = p.dmaxp_per_a12 * a12;
+        let d = delta - hyst_delta0(p, h.delta_max, dmaxp, a12);
+        var u = 0.5 * hyst_k2(p, h.delta_max, dmaxp) * d * d;
+        if (p.fa > 0.0) {
+            u += hyst_adhesion_potential(p, delta);
+        }
+        return HystForce(f, h, u);
     }
     if (delta > -range) {
         h.delta_max = 0.0;
@@ -143,11 +165,11 @@ fn hyst_force(p: HystereticPair, delta: f32, delta_dot: f32, a12: f32, history: 
             h.touched = true;
         }
         if ((p.flags & HYST_JUMP_IN) == 0u || h.touched) {
-            return HystForce(-p.kca * delta - p.fa, h);
+            return HystForce(-p.kca * delta - p.fa, h, hyst_adhesion_potential(p, delta));
         }
-        return HystForce(0.0, h);
+        return HystForce(0.0, h, 0.0);
     }
-    return HystForce(0.0, HystHistory(0.0, false));
+    return HystForce(0.0, HystHistory(0.0, false), 0.0);
 }
 
 // ---- the step's interface (see shaders/step.wgsl) ----
@@ -173,5 +195,19 @@ fn history_out(h: HystHistory) -> Hist {
 fn pair_contact(p: HystereticPair, k: Kin, hist: ptr<function, Hist>) -> Contact {
     let r = hyst_force(p, k.delta, k.delta_dot, 2.0 * k.r_eff, history_in(*hist));
     *hist = history_out(r.history);
-    return Contact(r.force, vec3<f32>(0.0), vec3<f32>(0.0));
+    return Contact(r.force, vec3<f32>(0.0), vec3<f32>(0.0), r.potential, r.history.touched);
+}
+
+// Where a contact starts and ends and the force just inside those edges, for the energy
+// ledger (`ContactModel::edges`): (entry delta, entry force, exit delta, exit force).
+// With a non-contact range both edges are at -range with zero force; without one the
+// force jumps at delta = 0 by the adhesion -fa and the viscous gamma0·delta_dot (LSD:
+// fa = 0).
+fn pair_edges(p: HystereticPair, k: Kin) -> vec4<f32> {
+    let range = hyst_range(p);
+    if (range > 0.0) {
+        return vec4<f32>(-range, 0.0, -range, 0.0);
+    }
+    let f = -p.fa + p.gamma0 * k.delta_dot;
+    return vec4<f32>(0.0, f, 0.0, f);
 }

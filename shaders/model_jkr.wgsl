@@ -43,8 +43,9 @@ struct JkrPair {
     power_d: f32,
     power_alpha: f32,
     power_beta: f32,
+    // P(x_break) (`jkr::potential_shape`): the stored energy is Fc·delta0·(P(x) − P(x_break)).
+    p_break: f32,
     _pad0: u32,
-    _pad1: u32,
 }
 
 alias PairRow = JkrPair;
@@ -92,6 +93,9 @@ struct JkrNormal {
     x: f32,
     // Scaled pull-off force Fc = 3·pi·gamma·R* (0 for Hertz).
     fc: f32,
+    // Stored energy relative to the break point (`JkrParams::normal_force`):
+    // Fc·delta0·(P(x) − P(x_break)); Hertz 8/15·E*·sqrt(R*)·delta^(5/2).
+    potential: f32,
 }
 
 // s = sqrt(a/a0) on the stable branch for delta/delta0 (`jkr::contact_radius_f32`): the
@@ -149,7 +153,7 @@ fn jkr_dissipation(p: JkrPair, a: f32, delta_dot: f32, m: f32) -> f32 {
 // = s², which equals 4E*a³/(3R*) − 4·sqrt(pi·gamma·E*·a³) (a0³ = 9·pi·gamma·R*²/E*) and
 // keeps every intermediate O(Fc) in f32.
 fn jkr_normal(p: JkrPair, k: Kin, h: ptr<function, JkrHistory>) -> JkrNormal {
-    var out = JkrNormal(false, 0.0, 0.0, 0.0, 0.0, 0.0);
+    var out = JkrNormal(false, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
     let r = k.r_eff;
     if (p.gamma == 0.0) {
         if (k.delta <= 0.0) {
@@ -159,6 +163,7 @@ fn jkr_normal(p: JkrPair, k: Kin, h: ptr<function, JkrHistory>) -> JkrNormal {
         let a = sqrt(r * k.delta);
         out.elastic = 4.0 * p.e_star * a * a * a / (3.0 * r);
         out.a = a;
+        out.potential = 0.4 * out.elastic * k.delta;
     } else {
         if (!(*h).touched && k.delta <= 0.0) {
             *h = jkr_history_zero();
@@ -177,11 +182,40 @@ fn jkr_normal(p: JkrPair, k: Kin, h: ptr<function, JkrHistory>) -> JkrNormal {
         out.a = a0 * x;
         out.x = x;
         out.fc = fc;
+        out.potential = fc * d0 * (jkr_potential_shape(x, s) - p.p_break);
     }
     (*h).touched = true;
     out.in_contact = true;
     out.force = out.elastic + jkr_dissipation(p, out.a, k.delta_dot, k.m_eff);
     return out;
+}
+
+// P(x) = (24/5)x⁵ − 8x^(7/2) + 2x² with s = sqrt(x) (`jkr::potential_shape`).
+fn jkr_potential_shape(x: f32, s: f32) -> f32 {
+    let x2 = x * x;
+    return 4.8 * x2 * x2 * x - 8.0 * x2 * x * s + 2.0 * x2;
+}
+
+// Where a contact starts and ends and the force just inside those edges, for the energy
+// ledger (`JkrParams::edge_forces`): (entry delta, entry force, exit delta, exit force).
+fn pair_edges(p: JkrPair, k: Kin) -> vec4<f32> {
+    if (p.gamma == 0.0) {
+        // Hertz: a = 0 at the single edge delta = 0
+        let f = jkr_dissipation(p, 0.0, k.delta_dot, k.m_eff);
+        return vec4<f32>(0.0, f, 0.0, f);
+    }
+    let r = k.r_eff;
+    let a0 = p.a0_coef * jkr_r23(r);
+    let d0 = a0 * a0 / (3.0 * r);
+    let fc = 3.0 * JKR_PI * p.gamma * r;
+    let s_in = jkr_solve_s(0.0, d0);
+    let x_in = s_in * s_in;
+    let f_in = 4.0 * fc * (x_in * x_in * x_in - x_in * s_in) + jkr_dissipation(p, a0 * x_in, k.delta_dot, k.m_eff);
+    let d_out = p.break_ratio * d0;
+    let s_out = jkr_solve_s(d_out, d0);
+    let x_out = s_out * s_out;
+    let f_out = 4.0 * fc * (x_out * x_out * x_out - x_out * s_out) + jkr_dissipation(p, a0 * x_out, k.delta_dot, k.m_eff);
+    return vec4<f32>(0.0, f_in, d_out, f_out);
 }
 
 // Rotates v into the plane normal to n keeping its length (`rotate_into_plane`): a rigid
@@ -249,13 +283,18 @@ fn jkr_rolling(p: JkrPair, k: Kin, nf: JkrNormal, h: ptr<function, JkrHistory>) 
 fn pair_contact(p: JkrPair, k: Kin, hist: ptr<function, Hist>) -> Contact {
     var h = jkr_unpack(*hist);
     let nf = jkr_normal(p, k, &h);
-    var c = Contact(nf.force, vec3<f32>(0.0), vec3<f32>(0.0));
+    var c = Contact(nf.force, vec3<f32>(0.0), vec3<f32>(0.0), nf.potential, false);
     if (JKR_TANGENTIAL && nf.in_contact && p.friction > 0.0) {
         c.tangential = jkr_tangential(p, k, nf, &h);
+        // ½·St·|s|², St = 8G*·a
+        c.potential += 4.0 * p.g_star * nf.a * dot(h.spring, h.spring);
     }
     if (JKR_ROLLING && nf.in_contact && p.rolling_hysteresis > 0.0 && p.fc_unscaled_per_r > 0.0) {
         c.rolling = jkr_rolling(p, k, nf, &h);
+        // ½·kr·|xi|², kr = 4·Fc_unscaled·(a/a0)^(3/2)
+        c.potential += 2.0 * (p.fc_unscaled_per_r * k.r_eff) * nf.x * sqrt(nf.x) * dot(h.xi, h.xi);
     }
+    c.engaged = h.touched;
     *hist = jkr_pack(h);
     return c;
 }

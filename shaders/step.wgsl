@@ -215,6 +215,7 @@ fn gather(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: v
     for (var w = 0u; w < step.n_walls; w++) {
         b_wall_hist[k * step.n_walls + w] = a_wall_hist[o * step.n_walls + w];
     }
+    ledger_gather_walls(k, o);
 }
 
 @compute @workgroup_size(WG_SIZE)
@@ -276,6 +277,7 @@ fn remap(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
         for (var s = 0u; s < n; s++) {
             b_hist[k * cap + s] = a_hist[k * cap + s];
             b_hist_pid[k * cap + s] = a_hist_pid[k * cap + s];
+            ledger_carry(k * cap + s, k * cap + s);
         }
         return;
     }
@@ -284,15 +286,18 @@ fn remap(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
     for (var s = 0u; s < b_count[k]; s++) {
         let partner = b_pid[nbr[k * cap + s]];
         var h = hist_zero();
+        ledger_clear(k * cap + s);
         for (var m = 0u; m < old_n; m++) {
             if (a_hist_pid[o * cap + m] == partner) {
                 h = a_hist[o * cap + m];
+                ledger_carry(k * cap + s, o * cap + m);
                 break;
             }
         }
         b_hist[k * cap + s] = h;
         b_hist_pid[k * cap + s] = partner;
     }
+    ledger_dropped(b_pid[k], o, old_n, k);
 }
 
 // The relative motion of one contact, as the model sees it (`model::Kinematics` plus the
@@ -321,6 +326,10 @@ struct Contact {
     tangential: vec3<f32>,
     // Rolling-resistance torque (the partner gets the negative).
     rolling: vec3<f32>,
+    // Stored energy of the contact (energy ledger; `Response::potential`).
+    potential: f32,
+    // The history's touched flag (energy ledger: the contact is engaged).
+    engaged: bool,
 }
 
 @compute @workgroup_size(WG_SIZE)
@@ -340,6 +349,7 @@ fn force(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
     let mat_k = u32(ck.w);
     var f = vec3<f32>(0.0);
     var torque = vec3<f32>(0.0);
+    var ledger_acc = ledger_new();
     for (var s = 0u; s < b_count[k]; s++) {
         let j = nbr[k * cap + s];
         let cj = b_cell[j];
@@ -354,6 +364,7 @@ fn force(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
             // a list candidate (within the skin) out of every model's range: no force,
             // and the history a pair out of range has (the models reset it there too)
             b_hist[slot] = hist_zero();
+            ledger_departed(&ledger_acc, slot, delta);
             continue;
         }
         var n = vec3<f32>(0.0, 0.0, 1.0);
@@ -377,8 +388,10 @@ fn force(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
             r_eff * cross(wk - wj, n) + (0.5 * (rk - rj) / (rk + rj)) * v_t,
         );
         var h = b_hist[slot];
-        let c = pair_contact(pairs[mat_k * step.n_materials + u32(cj.w)], kin, &h);
+        let row = pairs[mat_k * step.n_materials + u32(cj.w)];
+        let c = pair_contact(row, kin, &h);
         b_hist[slot] = h;
+        ledger_pair(&ledger_acc, slot, row, kin, c, dot(c.tangential, v_t) + dot(c.rolling, wk - wj));
         f += c.normal * n + c.tangential;
         if (ROTATION) {
             torque += -rk * cross(n, c.tangential) + c.rolling;
@@ -394,8 +407,10 @@ fn force(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
         let kin = Kin(delta, -dot(vk, n), rk, mk, step.dt, n, v_t, rk * cross(wk, n) - 0.5 * v_t);
         let slot = k * step.n_walls + w;
         var h = b_wall_hist[slot];
-        let c = pair_contact(pairs[step.n_materials * step.n_materials + w * step.n_materials + mat_k], kin, &h);
+        let row = pairs[step.n_materials * step.n_materials + w * step.n_materials + mat_k];
+        let c = pair_contact(row, kin, &h);
         b_wall_hist[slot] = h;
+        ledger_wall(&ledger_acc, slot, row, kin, c, dot(c.tangential, v_t) + dot(c.rolling, wk));
         f += c.normal * n + c.tangential;
         if (ROTATION) {
             torque += -rk * cross(n, c.tangential) + c.rolling;
@@ -407,6 +422,7 @@ fn force(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
         atomicAdd(&monitor[2], 1u);
     }
     b_acc[k] = vec4<f32>(acc, 0.0);
+    ledger_store(b_pid[k], ledger_acc);
 }
 
 @compute @workgroup_size(WG_SIZE)

@@ -61,9 +61,9 @@ impl CollideSpec {
 pub struct CollisionEnergy {
     pub initial_kinetic: f64,
     pub final_kinetic: f64,
-    /// From the energy ledger (CPU backend; null on the GPU, which keeps none yet).
+    /// From the energy ledger (both backends; the GPU keeps it on the device in f32).
     pub dissipated: Option<f64>,
-    /// |E_total(end) − E_total(start)| / E_kinetic(start) (CPU backend).
+    /// |E_total(end) − E_total(start)| / E_kinetic(start).
     pub balance_error: Option<f64>,
 }
 
@@ -376,13 +376,21 @@ impl CollisionRun for GpuRun {
         self.engine.steps
     }
     fn energy(&self, view: &PairView) -> (f64, Option<f64>, Option<f64>) {
-        let m = self.engine.masses();
-        let ke = m
-            .iter()
-            .zip(&view.vel)
-            .map(|(m, v)| 0.5 * m * v.length_squared())
-            .sum();
-        (ke, None, None)
+        let n = self.engine.len();
+        let state = crate::gpu::GpuState {
+            positions: view.pos[..n].to_vec(),
+            velocities: view.vel[..n].to_vec(),
+            angular_velocities: if self.engine.rotates() {
+                view.omega[..n].to_vec()
+            } else {
+                Vec::new()
+            },
+        };
+        match self.engine.energies(&state) {
+            Ok(e) => (e.kinetic, Some(e.total()), Some(e.dissipated)),
+            // a run without the ledger: kinetic energy only
+            Err(_) => (self.engine.kinetic_energy(&state), None, None),
+        }
     }
     fn rotates(&self) -> bool {
         self.engine.rotates()

@@ -3,18 +3,19 @@
 //! Both engines start from the same scene and step with the same dt; every `every` steps
 //! the GPU state is read back and compared with the CPU reference: positions (over the
 //! smallest radius), velocities (over the largest CPU speed), contact counts and the
-//! largest overlap (from the positions of each, with the same contact rule), and the
-//! kinetic energy. Granular flows are chaotic, so f32 and f64 trajectories separate
-//! exponentially once collisions chain up; compare over the early steps, or judge the
-//! aggregate quantities (energy, contacts) later on.
+//! largest overlap (each engine's own contact statistics), the energy ledger (kinetic,
+//! stored, dissipated) and the per-contact history values (δmax, tangential spring,
+//! rolling displacement) of every contact both engines hold. Granular flows are chaotic,
+//! so f32 and f64 trajectories separate exponentially once collisions chain up; compare
+//! over the early steps, or judge the aggregate quantities (energy, contacts) later on.
 
-use crate::cpu::cells::CellGrid;
 use crate::cpu::CpuEngine;
 use crate::error::PowderError;
 use crate::gpu::{GpuContext, GpuEngine};
+use crate::model::ContactHistory;
 use crate::scene::Scene;
-use glam::DVec3;
 use serde::Serialize;
+use std::collections::HashMap;
 
 /// Largest deviations allowed before `compare` fails.
 #[derive(Clone, Copy, Debug, Serialize)]
@@ -27,6 +28,16 @@ pub struct Tolerances {
     pub kinetic: f64,
     /// Difference in the number of contacts, relative to the CPU count (at least 1).
     pub contacts: f64,
+    /// Stored and dissipated energy differences over the energy in play (the CPU's
+    /// kinetic + |stored| + dissipated, at least 1e-30 J).
+    pub energy: f64,
+    /// History values of the contacts with overlap both engines hold: the RMS difference
+    /// of δmax over the RMS of the CPU's δmax, and likewise for the tangential spring and
+    /// the rolling displacement (vectors); the largest of the three. RMS rather than the
+    /// worst contact: on the tensile branch δmax ∝ √δ near δ = 0, so a contact about to
+    /// open turns an f32 rounding of its overlap into a large δmax difference (the worst
+    /// one is reported as `history_max`).
+    pub history: f64,
 }
 
 impl Default for Tolerances {
@@ -36,6 +47,8 @@ impl Default for Tolerances {
             velocity: 1e-2,
             kinetic: 1e-2,
             contacts: 0.05,
+            energy: 1e-2,
+            history: 1e-2,
         }
     }
 }
@@ -55,6 +68,20 @@ pub struct Sample {
     pub contacts: f64,
     pub max_overlap_cpu: f64,
     pub max_overlap_gpu: f64,
+    pub elastic_cpu: f64,
+    pub elastic_gpu: f64,
+    pub dissipated_cpu: f64,
+    pub dissipated_gpu: f64,
+    /// max(|Δ stored|, |Δ dissipated|) over the energy in play.
+    pub energy: f64,
+    /// Contacts with overlap both engines hold whose history was compared.
+    pub history_pairs: usize,
+    /// Contacts with overlap on the CPU that the GPU does not list.
+    pub history_missing: usize,
+    /// The relative RMS history deviation (see [`Tolerances::history`]).
+    pub history: f64,
+    /// The largest single-contact deviation, over the largest CPU value of its quantity.
+    pub history_max: f64,
     /// Which thresholds this sample exceeds.
     pub exceeded: Vec<&'static str>,
 }
@@ -72,38 +99,55 @@ pub struct Comparison {
     pub passed: bool,
 }
 
-/// Contacts (δ > 0 with a particle or a wall) and the largest overlap of a configuration.
-fn contacts(scene: &Scene, pos: &[DVec3], radius: &[f64], r_max: f64) -> (usize, f64) {
-    let mut grid = CellGrid::new(
-        DVec3::from_array(scene.domain.min),
-        DVec3::from_array(scene.domain.max),
-        2.0 * r_max * (1.0 + 1e-9),
-        pos.len(),
-    );
-    grid.rebuild(pos);
-    let mut count = 0;
-    let mut max: f64 = 0.0;
-    grid.for_each_pair(pos, |i, j| {
-        let d = radius[i] + radius[j] - pos[i].distance(pos[j]);
-        if d > 0.0 {
-            count += 1;
-            max = max.max(d);
+/// History deviations of the contacts with overlap that the CPU holds.
+struct HistoryDeviation {
+    compared: usize,
+    missing: usize,
+    rms: f64,
+    max: f64,
+}
+
+/// Compares δmax (hysteretic), the tangential spring and ξ of every CPU contact with
+/// overlap against the GPU's copy of the same side.
+fn history_deviation(
+    cpu: &[((u32, u32), f64, ContactHistory)],
+    gpu: &[((u32, u32), ContactHistory)],
+    hysteretic: bool,
+) -> HistoryDeviation {
+    let gpu: HashMap<(u32, u32), ContactHistory> = gpu.iter().copied().collect();
+    let (mut compared, mut missing) = (0, 0);
+    // per quantity: largest difference, largest value, Σ difference², Σ value²
+    let mut q = [[0.0f64; 4]; 3];
+    let mut add = |k: usize, diff: f64, value: f64| {
+        q[k][0] = q[k][0].max(diff);
+        q[k][1] = q[k][1].max(value);
+        q[k][2] += diff * diff;
+        q[k][3] += value * value;
+    };
+    for (key, _, c) in cpu.iter().filter(|c| c.1 > 0.0) {
+        let Some(g) = gpu.get(key) else {
+            missing += 1;
+            continue;
+        };
+        compared += 1;
+        if hysteretic {
+            add(0, (g.delta_max - c.delta_max).abs(), c.delta_max);
         }
-    });
-    for w in &scene.walls {
-        let (p, n) = (
-            DVec3::from_array(w.point),
-            DVec3::from_array(w.normal).normalize(),
+        add(
+            1,
+            g.tangential.distance(c.tangential),
+            c.tangential.length(),
         );
-        for (x, r) in pos.iter().zip(radius) {
-            let d = r - (*x - p).dot(n);
-            if d > 0.0 {
-                count += 1;
-                max = max.max(d);
-            }
-        }
+        add(2, g.rolling.distance(c.rolling), c.rolling.length());
     }
-    (count, max)
+    let of =
+        |f: &dyn Fn(&[f64; 4]) -> f64| q.iter().filter(|x| x[1] > 0.0).map(f).fold(0.0, f64::max);
+    HistoryDeviation {
+        compared,
+        missing,
+        rms: of(&|x| (x[2] / x[3]).sqrt()),
+        max: of(&|x| x[0] / x[1]),
+    }
 }
 
 /// Runs `scene` on both backends for `steps` steps, sampling every `every` steps.
@@ -118,7 +162,7 @@ pub fn compare(
     let mut gpu = GpuEngine::new(scene, ctx)?;
     let radius = cpu.radii().to_vec();
     let r_min = radius.iter().copied().fold(f64::INFINITY, f64::min);
-    let r_max = radius.iter().copied().fold(0.0, f64::max);
+    let hysteretic = gpu.kind() == crate::gpu::shaders::StepKind::Hysteretic;
     let every = every.max(1);
     let mut samples = Vec::new();
     let mut done = 0;
@@ -148,13 +192,23 @@ pub fn compare(
             .map(|(a, b)| a.distance(*b))
             .fold(0.0, f64::max)
             / v_scale;
-        let kinetic_cpu = cpu.energies().kinetic;
-        let kinetic_gpu = gpu.kinetic_energy(&g);
+        let (ec, eg) = (cpu.energies(), gpu.energies(&g)?);
+        let (kinetic_cpu, kinetic_gpu) = (ec.kinetic, eg.kinetic);
         let kinetic =
             (kinetic_cpu - kinetic_gpu).abs() / kinetic_cpu.abs().max(kinetic_gpu.abs()).max(1e-30);
-        let (contacts_cpu, max_overlap_cpu) = contacts(scene, cpu.positions(), &radius, r_max);
-        let (contacts_gpu, max_overlap_gpu) = contacts(scene, &g.positions, &radius, r_max);
+        let in_play = (ec.kinetic + ec.elastic.abs() + ec.dissipated).max(1e-30);
+        let energy = (ec.elastic - eg.elastic)
+            .abs()
+            .max((ec.dissipated - eg.dissipated).abs())
+            / in_play;
+        let (sc, sg) = (cpu.contact_stats(), gpu.contact_stats()?);
+        let (contacts_cpu, contacts_gpu) = (
+            sc.contacts + sc.wall_contacts,
+            sg.contacts + sg.wall_contacts,
+        );
         let contacts = contacts_cpu.abs_diff(contacts_gpu) as f64 / contacts_cpu.max(1) as f64;
+        let h = history_deviation(&cpu.contacts(), &gpu.contact_histories()?, hysteretic);
+        let history = h.rms;
         let mut exceeded = Vec::new();
         if position > tol.position {
             exceeded.push("position");
@@ -168,6 +222,12 @@ pub fn compare(
         if contacts > tol.contacts {
             exceeded.push("contacts");
         }
+        if energy > tol.energy {
+            exceeded.push("energy");
+        }
+        if history > tol.history {
+            exceeded.push("history");
+        }
         samples.push(Sample {
             step: cpu.steps,
             time: cpu.time,
@@ -179,8 +239,17 @@ pub fn compare(
             contacts_cpu,
             contacts_gpu,
             contacts,
-            max_overlap_cpu,
-            max_overlap_gpu,
+            max_overlap_cpu: sc.max_overlap,
+            max_overlap_gpu: sg.max_overlap,
+            elastic_cpu: ec.elastic,
+            elastic_gpu: eg.elastic,
+            dissipated_cpu: ec.dissipated,
+            dissipated_gpu: eg.dissipated,
+            energy,
+            history_pairs: h.compared,
+            history_missing: h.missing,
+            history,
+            history_max: h.max,
             exceeded,
         });
     }

@@ -61,7 +61,7 @@ fn scene_info(
     let scene = Scene::load(path)?;
     let adapter = ctx.summary.name.clone();
     let engine = powder::gpu::GpuEngine::new(&scene, ctx)?;
-    let variant_name = engine.kind().name().to_string();
+    let variant_name = engine.variant_name();
     let mut kernels = vec![
         "grid: clear_counts, cell_keys, count, scan, scatter, sort_within_cells, sort_large_cells"
             .to_string(),
@@ -180,7 +180,9 @@ struct CompareArgs {
     every: Option<u64>,
     /// A threshold, KEY=VALUE with KEY one of position (over the smallest radius, default
     /// 1e-3), velocity (over the largest speed, 1e-2), kinetic (relative, 1e-2), contacts
-    /// (relative count difference, 0.05); repeatable.
+    /// (relative count difference, 0.05), energy (stored and dissipated energy difference
+    /// over the energy in play, 1e-2), history (δmax, tangential spring, rolling
+    /// displacement of the common contacts, relative, 1e-2); repeatable.
     #[arg(long = "tolerance", value_name = "KEY=VALUE")]
     tolerance: Vec<String>,
     /// Print JSON on stdout.
@@ -573,7 +575,7 @@ fn compare_cmd(a: &CompareArgs) -> Result<bool, PowderError> {
         let bad = || {
             PowderError::from(ParamError::new(
                 "tolerance",
-                format!("`{t}` is not KEY=VALUE with KEY position, velocity, kinetic or contacts and VALUE >= 0"),
+                format!("`{t}` is not KEY=VALUE with KEY position, velocity, kinetic, contacts, energy or history and VALUE >= 0"),
             ))
         };
         let (key, value) = t.split_once('=').ok_or_else(bad)?;
@@ -586,6 +588,8 @@ fn compare_cmd(a: &CompareArgs) -> Result<bool, PowderError> {
             "velocity" => tol.velocity = value,
             "kinetic" => tol.kinetic = value,
             "contacts" => tol.contacts = value,
+            "energy" => tol.energy = value,
+            "history" => tol.history = value,
             _ => return Err(bad()),
         }
     }
@@ -606,40 +610,47 @@ fn compare_cmd(a: &CompareArgs) -> Result<bool, PowderError> {
             c.scene, c.particles, c.dt, c.adapter
         );
         println!(
-            "{:>9} {:>11} {:>11} {:>11} {:>11} {:>11} {:>9} {:>9} {:>11} {:>11}  exceeded",
+            "{:>7} {:>10} {:>9} {:>9} {:>9} {:>5} {:>5} {:>10} {:>10} {:>9} {:>9} {:>9}  exceeded",
             "step",
             "t (s)",
-            "pos/r_min",
-            "vel/v_max",
-            "E_kin cpu",
-            "rel. E_kin",
-            "Z cpu",
-            "Z gpu",
-            "δmax cpu",
-            "δmax gpu"
+            "pos/rmin",
+            "vel/vmax",
+            "rel.Ekin",
+            "Zcpu",
+            "Zgpu",
+            "δ cpu",
+            "E_dis cpu",
+            "rel.E",
+            "history",
+            "pairs"
         );
         for s in &c.samples {
             println!(
-                "{:>9} {:>11.4e} {:>11.3e} {:>11.3e} {:>11.4e} {:>11.3e} {:>9} {:>9} {:>11.4e} {:>11.4e}  {}",
+                "{:>7} {:>10.3e} {:>9.2e} {:>9.2e} {:>9.2e} {:>5} {:>5} {:>10.3e} {:>10.3e} {:>9.2e} {:>9.2e} {:>9}  {}",
                 s.step,
                 s.time,
                 s.position,
                 s.velocity,
-                s.kinetic_cpu,
                 s.kinetic,
                 s.contacts_cpu,
                 s.contacts_gpu,
                 s.max_overlap_cpu,
-                s.max_overlap_gpu,
+                s.dissipated_cpu,
+                s.energy,
+                s.history,
+                s.history_pairs,
                 s.exceeded.join(",")
             );
         }
+        let t = &c.tolerances;
         println!(
-            "thresholds: position {:e}, velocity {:e}, kinetic {:e}, contacts {:e} -> {}",
-            c.tolerances.position,
-            c.tolerances.velocity,
-            c.tolerances.kinetic,
-            c.tolerances.contacts,
+            "thresholds: position {:e}, velocity {:e}, kinetic {:e}, contacts {:e}, energy {:e}, history {:e} -> {}",
+            t.position,
+            t.velocity,
+            t.kinetic,
+            t.contacts,
+            t.energy,
+            t.history,
             if c.passed { "PASS" } else { "FAIL" }
         );
     }

@@ -29,6 +29,12 @@ struct ContactRecord {
 }
 
 impl ContactRecord {
+    /// Whether the contact takes part in the energy ledger: touched, or exerting a force,
+    /// or storing energy (a pair merely within search range is not engaged).
+    fn engaged(&self) -> bool {
+        self.history.touched || self.potential != 0.0 || self.force != 0.0
+    }
+
     fn new(history: ContactHistory, delta: f64, r: &Response, m: &Motion) -> Self {
         Self {
             history,
@@ -85,7 +91,8 @@ pub struct ContactStats {
     pub contacts: usize,
     /// Particle–wall contacts (δ > 0).
     pub wall_contacts: usize,
-    /// Pairs interacting without touching (non-contact adhesion range).
+    /// Contacts engaged without overlap (δ ≤ 0): inside the non-contact adhesion range, or
+    /// a JKR neck stretched to negative overlap (particle–particle and particle–wall).
     pub non_contact: usize,
     /// Mean number of mechanical contacts per particle (walls included), 2·C/N + W/N.
     pub coordination: f64,
@@ -476,8 +483,8 @@ impl CpuEngine {
         dt: f64,
         edges: [(f64, f64); 2],
     ) -> f64 {
-        let was_in = old.is_some_and(|o| o.history.touched || o.potential != 0.0 || o.force != 0.0);
-        let is_in = new.history.touched || new.potential != 0.0 || new.force != 0.0;
+        let was_in = old.is_some_and(ContactRecord::engaged);
+        let is_in = new.engaged();
         let blank = ContactRecord::default();
         let o = old.unwrap_or(&blank);
         let (d0, f0) = if was_in { (o.delta, o.force) } else { edges[0] };
@@ -712,6 +719,18 @@ impl CpuEngine {
         f
     }
 
+    /// Every particle–particle contact the engine keeps (in the search range or engaged), as
+    /// ((i, j), overlap, history) in key order; the history is i's side (n from j to i).
+    pub fn contacts(&self) -> Vec<((u32, u32), f64, ContactHistory)> {
+        let mut list: Vec<_> = self
+            .contacts
+            .iter()
+            .map(|(k, c)| (*k, c.delta, c.history))
+            .collect();
+        list.sort_by_key(|c| c.0);
+        list
+    }
+
     /// Contact counts and overlap statistics now.
     pub fn contact_stats(&self) -> ContactStats {
         let mut s = ContactStats::default();
@@ -724,7 +743,7 @@ impl CpuEngine {
                 s.max_overlap = s.max_overlap.max(c.delta);
                 s.max_overlap_ratio = s.max_overlap_ratio.max(c.delta / a12);
                 sum_ratio += c.delta / a12;
-            } else {
+            } else if c.engaged() {
                 s.non_contact += 1;
             }
         }
@@ -735,7 +754,7 @@ impl CpuEngine {
                 s.max_overlap = s.max_overlap.max(c.delta);
                 s.max_overlap_ratio = s.max_overlap_ratio.max(c.delta / a12);
                 sum_ratio += c.delta / a12;
-            } else {
+            } else if c.engaged() {
                 s.non_contact += 1;
             }
         }

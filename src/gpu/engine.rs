@@ -38,6 +38,7 @@
 //! over the first 20 000 steps).
 //! Every run stays bitwise deterministic (the decision is a pure function of the state).
 
+use crate::cpu::{ContactStats, Energies};
 use crate::error::PowderError;
 use crate::gpu::context::GpuContext;
 use crate::gpu::grid::GridSort;
@@ -87,10 +88,20 @@ struct StateSet {
     omega: Option<wgpu::Buffer>,
     /// Angular acceleration torque/I; only when the scene rotates.
     alpha: Option<wgpu::Buffer>,
+    /// The energy ledger's per-slot state of pair and wall contacts (`shaders/ledger.wgsl`);
+    /// only when the run keeps the ledger.
+    ledger: Option<wgpu::Buffer>,
+    wall_ledger: Option<wgpu::Buffer>,
 }
 
 impl StateSet {
-    fn new(alloc: &mut Allocator, tag: &str, n: u64, cap: u64, walls: u64, kind: StepKind) -> Self {
+    fn new(
+        alloc: &mut Allocator,
+        tag: &str,
+        (n, cap, walls): (u64, u64, u64),
+        kind: StepKind,
+        ledger: bool,
+    ) -> Self {
         let mut b = |name: &str, bytes: u64| alloc.buffer(&format!("{tag}.{name}"), bytes);
         let hb = kind.history_bytes();
         Self {
@@ -107,6 +118,8 @@ impl StateSet {
             disp: b("disp", 16 * n),
             omega: kind.rotation().then(|| b("omega", 16 * n)),
             alpha: kind.rotation().then(|| b("alpha", 16 * n)),
+            ledger: ledger.then(|| b("ledger", 16 * n * cap)),
+            wall_ledger: ledger.then(|| b("wall_ledger", 16 * (n * walls).max(1))),
         }
     }
 
@@ -124,6 +137,8 @@ impl StateSet {
             ("disp", Some(&self.disp)),
             ("omega", self.omega.as_ref()),
             ("alpha", self.alpha.as_ref()),
+            ("ledger", self.ledger.as_ref()),
+            ("wall_ledger", self.wall_ledger.as_ref()),
         ]
         .into_iter()
         .filter_map(|(n, b)| b.map(|b| (format!("{side}_{n}"), b)))
@@ -150,6 +165,24 @@ pub struct GpuState {
     /// Angular velocities; empty when the scene does not rotate (as
     /// `CpuEngine::angular_velocities`).
     pub angular_velocities: Vec<DVec3>,
+}
+
+/// One contact's history keyed by (particle, partner) persistent ids.
+pub type KeyedHistory = ((u32, u32), ContactHistory);
+
+/// Choices of a GPU run that are not part of the scene.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GpuOptions {
+    /// Keep the energy ledger and contact statistics on the device
+    /// ([`GpuEngine::energies`], [`GpuEngine::contact_stats`]): 32 bytes per neighbour slot
+    /// and 48 per particle more, and a little work per contact. Default on.
+    pub ledger: bool,
+}
+
+impl Default for GpuOptions {
+    fn default() -> Self {
+        Self { ledger: true }
+    }
 }
 
 /// The GPU simulation of one scene.
@@ -181,6 +214,12 @@ pub struct GpuEngine {
     n_walls: u32,
     /// (name, bytes) of every buffer allocated for the run.
     buffers: Vec<(String, u64)>,
+    gravity: DVec3,
+    /// Per particle (by persistent id): contact counts, overlaps, dissipated and stored
+    /// energy (`particle_ledger` in `shaders/ledger.wgsl`); only with the ledger.
+    particle_ledger: Option<wgpu::Buffer>,
+    /// Engaged contacts that left the neighbour lists within one step (monitor[3]).
+    dropped: u64,
 }
 
 /// The step a scene's pair models need and their pair table as bytes, or why the GPU
@@ -222,8 +261,18 @@ fn pair_table(models: &[ContactModel]) -> Result<(StepKind, Vec<u8>), PowderErro
 }
 
 impl GpuEngine {
-    /// Uploads the scene and builds the pipelines.
+    /// Uploads the scene and builds the pipelines, with the energy ledger.
     pub fn new(scene: &Scene, ctx: GpuContext) -> Result<Self, PowderError> {
+        Self::with_options(scene, ctx, GpuOptions::default())
+    }
+
+    /// Uploads the scene and builds the pipelines the options ask for.
+    pub fn with_options(
+        scene: &Scene,
+        ctx: GpuContext,
+        options: GpuOptions,
+    ) -> Result<Self, PowderError> {
+        let ledger = options.ledger;
         let r = Resolved::new(scene)?;
         let n = scene.particles.len();
         let all_models: Vec<ContactModel> =
@@ -272,10 +321,12 @@ impl GpuEngine {
                 ("grid.sorted_index".into(), grid.sorted_index().size()),
             ],
         };
+        let sizes = (n as u64, cap as u64, n_walls);
         let sets = [
-            StateSet::new(&mut alloc, "A", n as u64, cap as u64, n_walls, kind),
-            StateSet::new(&mut alloc, "B", n as u64, cap as u64, n_walls, kind),
+            StateSet::new(&mut alloc, "A", sizes, kind, ledger),
+            StateSet::new(&mut alloc, "B", sizes, kind, ledger),
         ];
+        let particle_ledger = ledger.then(|| alloc.buffer("particle_ledger", 48 * n as u64));
         // Initial state, in scene order (the first sort orders it).
         let mut cells = Vec::with_capacity(n);
         let mut offs = Vec::with_capacity(n);
@@ -364,7 +415,7 @@ impl GpuEngine {
         alloc.list.push(("args".into(), args.size()));
         let buffers = alloc.list;
 
-        let program = Program::new(&ctx, &kind.variant())?;
+        let program = Program::new(&ctx, &kind.variant(ledger))?;
         let names = [
             "kick_drift",
             "decide",
@@ -403,6 +454,9 @@ impl GpuEngine {
             list.push(("skin".into(), &skin_buf));
             list.push(("args".into(), &args));
             list.push(("full_args".into(), &full_args));
+            if let Some(l) = &particle_ledger {
+                list.push(("particle_ledger".into(), l));
+            }
             let refs: Vec<(&str, &wgpu::Buffer)> =
                 list.iter().map(|(n, b)| (n.as_str(), *b)).collect();
             Ok(Bound {
@@ -439,6 +493,9 @@ impl GpuEngine {
             kind,
             n_walls: n_walls as u32,
             buffers,
+            gravity: DVec3::from_array(scene.gravity),
+            particle_ledger,
+            dropped: 0,
             ctx,
         };
         engine.initial_forces()?;
@@ -480,7 +537,17 @@ impl GpuEngine {
         self.kind.rotation()
     }
 
-    /// The step variant this scene runs (its shader module's name is `kind().name()`).
+    /// Whether the run keeps the energy ledger and contact statistics ([`GpuOptions`]).
+    pub fn has_ledger(&self) -> bool {
+        self.particle_ledger.is_some()
+    }
+
+    /// The name of the step's shader module (`StepKind::variant_name`).
+    pub fn variant_name(&self) -> String {
+        self.kind.variant_name(self.has_ledger())
+    }
+
+    /// The step variant this scene runs (see [`Self::variant_name`]).
     pub fn kind(&self) -> StepKind {
         self.kind
     }
@@ -536,17 +603,31 @@ impl GpuEngine {
     }
 
     /// The forces of the initial state (no drift, no kick), so the first step kicks with them.
+    /// Contacts present at the start carry stored energy, not dissipation: the ledger's
+    /// dissipation (booked from the contacts' entry edges) is zeroed afterwards, as on the CPU.
     fn initial_forces(&mut self) -> Result<(), PowderError> {
         let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
         self.ctx.queue.write_buffer(&self.monitor, 0, &[0u8; 16]);
         self.record_step(&mut encoder, false);
         self.cur = 1 - self.cur;
-        self.check_monitor(encoder)
+        self.check_monitor(encoder)?;
+        if let Some(buf) = &self.particle_ledger {
+            let mut rows = self.read_particle_ledger()?;
+            for p in rows.chunks_mut(3) {
+                p[2][0] = 0.0;
+                p[2][1] = 0.0;
+            }
+            self.ctx
+                .queue
+                .write_buffer(buf, 0, bytemuck::cast_slice(&rows));
+        }
+        Ok(())
     }
 
-    fn check_monitor(&self, encoder: wgpu::CommandEncoder) -> Result<(), PowderError> {
+    fn check_monitor(&mut self, encoder: wgpu::CommandEncoder) -> Result<(), PowderError> {
         let out = submit_and_read(&self.ctx, encoder, &[(&self.monitor, 16)])?;
         let m = u32s(&out[0]);
+        self.dropped += m[3] as u64;
         if m[1] != 0 {
             return Err(PowderError::Run(format!(
                 "step {}: particle {} has more than {} neighbours within reach + skin, the neighbour-list capacity; the scene is denser or more polydisperse than the capacity rule 5·(1 + r_max/r_min)²·(1 + skin/2r_min)³ expects",
@@ -624,6 +705,74 @@ impl GpuEngine {
             velocities,
             angular_velocities,
         })
+    }
+
+    /// Engaged contacts (touching, or inside a non-contact adhesion range) that left the
+    /// neighbour lists within a single step: each moved more than the skin (0.1·r_min) in
+    /// one step. The ledger books them without the normal work of that last step; a
+    /// non-zero count means the time step is far too large for the speeds in the scene.
+    pub fn dropped_contacts(&self) -> u64 {
+        self.dropped
+    }
+
+    /// The per-particle ledger rows (3 × vec4 per persistent id), or an error naming why
+    /// there are none.
+    fn read_particle_ledger(&self) -> Result<Vec<[f32; 4]>, PowderError> {
+        let Some(buf) = &self.particle_ledger else {
+            return Err(PowderError::Run(
+                "this GPU run keeps no energy ledger (GpuOptions { ledger: false })".into(),
+            ));
+        };
+        let encoder = self.ctx.device.create_command_encoder(&Default::default());
+        let out = submit_and_read(&self.ctx, encoder, &[(buf, 48 * self.n as u64)])?;
+        Ok(bytemuck::pod_collect_to_vec(&out[0]))
+    }
+
+    /// The energy ledger for a read-back state (kinetic and gravitational from it; stored
+    /// and dissipated read from the device and summed in f64 in particle order), J. The
+    /// same quantities as `CpuEngine::energies`.
+    pub fn energies(&self, state: &GpuState) -> Result<Energies, PowderError> {
+        let rows = self.read_particle_ledger()?;
+        let mut e = Energies {
+            kinetic: self.kinetic_energy(state),
+            ..Default::default()
+        };
+        for (x, m) in state.positions.iter().zip(&self.mass) {
+            e.gravitational -= m * self.gravity.dot(*x);
+        }
+        for p in rows.chunks(3) {
+            e.dissipated += p[2][0] as f64 - p[2][1] as f64;
+            e.elastic += p[2][2] as f64;
+        }
+        Ok(e)
+    }
+
+    /// Contact counts and overlap statistics after the last step, as
+    /// `CpuEngine::contact_stats` (each pair is seen from both sides on the device).
+    pub fn contact_stats(&self) -> Result<ContactStats, PowderError> {
+        let rows = self.read_particle_ledger()?;
+        let mut counts = [0.0f64; 4];
+        let mut sums = [0.0f64; 2];
+        let mut s = ContactStats::default();
+        for p in rows.chunks(3) {
+            for c in 0..4 {
+                counts[c] += p[0][c] as f64;
+            }
+            s.max_overlap = s.max_overlap.max(p[1][0] as f64);
+            s.max_overlap_ratio = s.max_overlap_ratio.max(p[1][1] as f64);
+            sums[0] += p[1][2] as f64;
+            sums[1] += p[1][3] as f64;
+        }
+        s.contacts = (counts[0] / 2.0).round() as usize;
+        s.wall_contacts = counts[1].round() as usize;
+        s.non_contact = (counts[2] / 2.0 + counts[3]).round() as usize;
+        let n = (self.n as f64).max(1.0);
+        s.coordination = (2 * s.contacts + s.wall_contacts) as f64 / n;
+        let touching = s.contacts + s.wall_contacts;
+        if touching > 0 {
+            s.mean_overlap_ratio = (sums[0] / 2.0 + sums[1]) / touching as f64;
+        }
+        Ok(s)
     }
 
     /// Kinetic energy of a read-back state, translational plus rotational (I = 2/5·m·r²,
@@ -708,6 +857,37 @@ impl GpuEngine {
             .map(|s| k * cap as usize + s)
             .find(|&slot| hist_pid[slot] as usize == j)
             .map(|slot| self.decode_history(&out[3][slot * hb..(slot + 1) * hb])))
+    }
+
+    /// Every listed contact's history, as ((i, j), history of i's side) by persistent ids,
+    /// sorted: both orientations of each pair appear (each side keeps its own copy).
+    /// For comparisons and diagnostics: reads the lists back.
+    pub fn contact_histories(&self) -> Result<Vec<KeyedHistory>, PowderError> {
+        let s = &self.sets[self.cur];
+        let (n, cap) = (self.n as u64, self.cap as u64);
+        let hb = self.kind.history_bytes();
+        let encoder = self.ctx.device.create_command_encoder(&Default::default());
+        let out = submit_and_read(
+            &self.ctx,
+            encoder,
+            &[
+                (&s.pid, 4 * n),
+                (&s.count, 4 * n),
+                (&s.hist_pid, 4 * n * cap),
+                (&s.hist, hb * n * cap),
+            ],
+        )?;
+        let (pid, count, hist_pid) = (u32s(&out[0]), u32s(&out[1]), u32s(&out[2]));
+        let hb = hb as usize;
+        let mut list = Vec::new();
+        for k in 0..n as usize {
+            for slot in k * cap as usize..k * cap as usize + count[k] as usize {
+                let h = self.decode_history(&out[3][slot * hb..(slot + 1) * hb]);
+                list.push(((pid[k], hist_pid[slot]), h));
+            }
+        }
+        list.sort_by_key(|c| c.0);
+        Ok(list)
     }
 
     /// The history of particle `i`'s contact with wall `w` after the last step (zero when

@@ -262,7 +262,10 @@ pub struct JkrPair {
     pub power_d: f32,
     pub power_alpha: f32,
     pub power_beta: f32,
-    pub _pad: [u32; 2],
+    /// P(x_break) of [`potential_shape`](crate::model::jkr::potential_shape): the stored
+    /// energy of a contact is Fc·δ0·(P(x) − P(x_break)) (energy ledger).
+    pub p_break: f32,
+    pub _pad: u32,
 }
 
 /// Dissipation kinds of [`JkrPair`], as in the WGSL.
@@ -296,6 +299,7 @@ impl JkrPair {
             rolling_hysteresis: p.rolling_hysteresis as f32,
             fc_unscaled_per_r: (3.0 * PI * p.surface_energy) as f32,
             a0_unscaled_coef: a0_unscaled_coef as f32,
+            p_break: crate::model::jkr::potential_shape(p.pulloff.break_radius_ratio()) as f32,
             ..Default::default()
         };
         match p.dissipation {
@@ -627,7 +631,7 @@ mod tests {
                 ("flags", offset_of!(HystereticPair, flags)),
             ],
         );
-        let (jkr, _) = shaders::validate(&shaders::StepKind::Jkr.variant().source).unwrap();
+        let (jkr, _) = shaders::validate(&shaders::StepKind::Jkr.variant(true).source).unwrap();
         let (wsize, members) = wgsl_struct(&jkr, "JkrPair");
         assert_eq!(wsize as usize, size_of::<JkrPair>(), "JkrPair size");
         for (field, off) in [
@@ -648,6 +652,7 @@ mod tests {
             ("power_d", offset_of!(JkrPair, power_d)),
             ("power_alpha", offset_of!(JkrPair, power_alpha)),
             ("power_beta", offset_of!(JkrPair, power_beta)),
+            ("p_break", offset_of!(JkrPair, p_break)),
         ] {
             let m = members
                 .iter()
@@ -673,7 +678,7 @@ mod tests {
     #[test]
     fn gpu_layout_history_strides_match_wgsl() {
         for kind in shaders::StepKind::ALL {
-            let (module, _) = shaders::validate(&kind.variant().source).unwrap();
+            let (module, _) = shaders::validate(&kind.variant(true).source).unwrap();
             for name in ["a_hist", "b_hist", "a_wall_hist", "b_wall_hist"] {
                 let (_, g) = module
                     .global_variables

@@ -30,6 +30,10 @@ pub const MODEL_JKR: &str = include_str!("../../shaders/model_jkr.wgsl");
 pub const ROTATION: &str = include_str!("../../shaders/rotation.wgsl");
 /// The rotation hooks as no-ops (a snippet of the step for scenes that do not rotate).
 pub const ROTATION_OFF: &str = include_str!("../../shaders/rotation_off.wgsl");
+/// The energy ledger and contact statistics (a snippet of the step, when a run wants them).
+pub const LEDGER: &str = include_str!("../../shaders/ledger.wgsl");
+/// The ledger hooks as no-ops (a snippet of the step for runs without the ledger).
+pub const LEDGER_OFF: &str = include_str!("../../shaders/ledger_off.wgsl");
 /// One time step: drift, gather, neighbours, history remap, forces, kick.
 pub const STEP: &str = include_str!("../../shaders/step.wgsl");
 
@@ -94,7 +98,7 @@ impl StepKind {
         StepKind::JkrRolling,
     ];
 
-    /// The variant's name (also the shader module's label).
+    /// The name of the variant without the energy ledger (with it: `_ledger` appended).
     pub fn name(self) -> &'static str {
         match self {
             Self::Hysteretic => "step_hysteretic",
@@ -120,29 +124,41 @@ impl StepKind {
         }
     }
 
-    /// The composed module: common, model, history layout, rotation hooks, step.
-    pub fn variant(self) -> ShaderVariant {
+    /// The variant's name (also the shader module's label).
+    pub fn variant_name(self, ledger: bool) -> String {
+        if ledger {
+            format!("{}_ledger", self.name())
+        } else {
+            self.name().to_string()
+        }
+    }
+
+    /// The composed module: common, model, history layout, rotation hooks, ledger hooks,
+    /// step.
+    pub fn variant(self, ledger: bool) -> ShaderVariant {
         let rotation = if self.rotation() {
             ROTATION
         } else {
             ROTATION_OFF
         };
-        let snippets: Vec<&str> = match self {
+        let ledger_snippet = if ledger { LEDGER } else { LEDGER_OFF };
+        let mut snippets: Vec<&str> = match self {
             Self::Hysteretic => vec![MODEL_HYSTERETIC, rotation],
             Self::Jkr => vec![MODEL_JKR, JKR_HISTORY_TOUCHED, rotation],
             Self::JkrFriction => vec![MODEL_JKR, JKR_HISTORY_TANGENTIAL, rotation],
             Self::JkrRolling => vec![MODEL_JKR, JKR_HISTORY_ROLLING, rotation],
         };
+        snippets.push(ledger_snippet);
         ShaderVariant {
-            name: self.name().into(),
+            name: self.variant_name(ledger),
             source: compose("shaders/step.wgsl", STEP, &snippets),
         }
     }
 }
 
-/// The step for the normal-force models (hysteretic, LSD).
+/// The step for the normal-force models (hysteretic, LSD), with the energy ledger.
 pub fn step_variant() -> ShaderVariant {
-    StepKind::Hysteretic.variant()
+    StepKind::Hysteretic.variant(true)
 }
 
 /// A shader stage: one file of `shaders/`.
@@ -193,7 +209,9 @@ pub fn all_variants() -> Vec<ShaderVariant> {
             source: compose(st.path, st.source, &[]),
         })
         .collect();
-    all.extend(StepKind::ALL.iter().map(|k| k.variant()));
+    for ledger in [false, true] {
+        all.extend(StepKind::ALL.iter().map(|k| k.variant(ledger)));
+    }
     all
 }
 
@@ -268,8 +286,11 @@ mod tests {
 
     #[test]
     fn gpu_shaders_every_step_variant_has_the_step_kernels() {
-        for kind in StepKind::ALL {
-            let v = kind.variant();
+        for (kind, ledger) in StepKind::ALL
+            .into_iter()
+            .flat_map(|k| [(k, false), (k, true)])
+        {
+            let v = kind.variant(ledger);
             let (module, _) = validate(&v.source).unwrap();
             let eps = compute_entry_points(&module);
             for name in [
@@ -296,8 +317,18 @@ mod tests {
             for name in ["a_omega", "a_alpha", "b_omega", "b_alpha", "wpred"] {
                 assert_eq!(declared(name), kind.rotation(), "{}: {name}", v.name);
             }
+            // and the ledger's only where the run keeps one
+            for name in [
+                "a_ledger",
+                "b_ledger",
+                "a_wall_ledger",
+                "b_wall_ledger",
+                "particle_ledger",
+            ] {
+                assert_eq!(declared(name), ledger, "{}: {name}", v.name);
+            }
             assert!(
-                variant(kind.name()).is_some(),
+                variant(&kind.variant_name(ledger)).is_some(),
                 "{} not in all_variants",
                 v.name
             );

@@ -1,0 +1,182 @@
+// ledger.wgsl — the energy ledger and contact statistics on the device, composed into the
+// step instead of ledger_off.wgsl when a run wants them (`GpuOptions::ledger`). The twin
+// of the CPU engine's ledger (`CpuEngine::book`, `CpuEngine::contact_stats`).
+//
+// Energy dissipated by one contact over a step = the work done on it minus the change of
+// its stored energy: 0.5·(f0 + f1)·(delta1 − delta0) − ½·dt·(P0 + P1) − (U1 − U0), with
+// P = tangential force · tangential velocity + rolling torque · relative angular velocity.
+// A step that crosses the contact's entry or exit edge integrates the normal work only
+// over the part inside, from the force just inside the edge (`pair_edges` of the model),
+// so the force jumps of JKR and jump-in adhesion are booked right. Both sides of a pair
+// evaluate bitwise mirrored inputs (see step.wgsl), so each books half of the same value;
+// a wall contact books all of it.
+//
+// What the next step needs of a contact is kept per slot next to its history and moves
+// with it through re-sorts: (delta, f, U − ½·dt·P, 1), or zeros while it is not engaged
+// (engaged: the model's touched flag, a force or a stored energy, as `is_in` on the CPU).
+//
+// Per particle, indexed by its persistent id (each invocation writes only its own
+// particle, so no atomics and bitwise reproducible sums), three vec4:
+//   [0] (pairs overlapping, walls overlapping, pairs engaged without overlap, walls
+//        engaged without overlap), counted from this particle's side;
+//   [1] (largest overlap, largest overlap/a12, sum over pairs of overlap/a12, sum over
+//        walls of overlap/a12);
+//   [2] (dissipated energy so far: Kahan sum and its compensation; the particle's share
+//        of the stored energy: half of each pair's, all of each wall's; 0).
+// The host reads [0..3] back only when asked and sums in f64 in id order.
+
+const LEDGER: bool = true;
+
+@group(0) @binding(60) var<storage, read> a_ledger: array<vec4<f32>>;
+@group(0) @binding(61) var<storage, read_write> b_ledger: array<vec4<f32>>;
+@group(0) @binding(62) var<storage, read> a_wall_ledger: array<vec4<f32>>;
+@group(0) @binding(63) var<storage, read_write> b_wall_ledger: array<vec4<f32>>;
+@group(0) @binding(64) var<storage, read_write> particle_ledger: array<vec4<f32>>;
+
+// What the force kernel gathers for one particle during a step.
+struct LedgerAcc {
+    dissipated: f32,
+    stored: f32,
+    counts: vec4<f32>,
+    // largest overlap, largest overlap/a12, sums of overlap/a12 over pairs and walls
+    overlaps: vec4<f32>,
+}
+
+fn ledger_new() -> LedgerAcc {
+    return LedgerAcc(0.0, 0.0, vec4<f32>(0.0), vec4<f32>(0.0));
+}
+
+// The energy one contact dissipated this step, and its new slot value.
+fn ledger_book(old: vec4<f32>, p: PairRow, k: Kin, c: Contact, power: f32) -> vec4<f32> {
+    let was_in = old.w != 0.0;
+    let is_in = c.engaged || c.potential != 0.0 || c.normal != 0.0;
+    var d0 = old.x;
+    var f0 = old.y;
+    var d1 = k.delta;
+    var f1 = c.normal;
+    if (was_in != is_in) {
+        let edges = pair_edges(p, k);
+        if (!was_in) {
+            d0 = edges.x;
+            f0 = edges.y;
+        }
+        if (!is_in) {
+            d1 = edges.z;
+            f1 = edges.w;
+        }
+    }
+    var normal = 0.0;
+    if (was_in || is_in) {
+        normal = 0.5 * (f0 + f1) * (d1 - d0);
+    }
+    // old.z = U0 − ½·dt·P0 (zero when the contact was not engaged)
+    let dissipated = normal - 0.5 * k.dt * power - c.potential + old.z;
+    return vec4<f32>(dissipated, 0.0, 0.0, select(0.0, 1.0, is_in));
+}
+
+fn ledger_count(acc: ptr<function, LedgerAcc>, k: Kin, engaged: bool, wall: bool) {
+    let o = select(0u, 1u, wall);
+    if (k.delta > 0.0) {
+        let ratio = k.delta / (2.0 * k.r_eff);
+        (*acc).counts[o] += 1.0;
+        (*acc).overlaps.x = max((*acc).overlaps.x, k.delta);
+        (*acc).overlaps.y = max((*acc).overlaps.y, ratio);
+        (*acc).overlaps[2u + o] += ratio;
+    } else if (engaged) {
+        (*acc).counts[2u + o] += 1.0;
+    }
+}
+
+// One evaluated particle–particle contact in slot `slot` (after pair_contact).
+fn ledger_pair(acc: ptr<function, LedgerAcc>, slot: u32, p: PairRow, k: Kin, c: Contact, power: f32) {
+    let booked = ledger_book(b_ledger[slot], p, k, c, power);
+    (*acc).dissipated += 0.5 * booked.x;
+    (*acc).stored += 0.5 * c.potential;
+    let engaged = booked.w != 0.0;
+    b_ledger[slot] = select(vec4<f32>(0.0), vec4<f32>(k.delta, c.normal, c.potential - 0.5 * k.dt * power, 1.0), engaged);
+    ledger_count(acc, k, engaged, false);
+}
+
+// One evaluated wall contact.
+fn ledger_wall(acc: ptr<function, LedgerAcc>, slot: u32, p: PairRow, k: Kin, c: Contact, power: f32) {
+    let booked = ledger_book(b_wall_ledger[slot], p, k, c, power);
+    (*acc).dissipated += booked.x;
+    (*acc).stored += c.potential;
+    let engaged = booked.w != 0.0;
+    b_wall_ledger[slot] = select(vec4<f32>(0.0), vec4<f32>(k.delta, c.normal, c.potential - 0.5 * k.dt * power, 1.0), engaged);
+    ledger_count(acc, k, engaged, true);
+}
+
+// A listed pair beyond every model's reach: if it was engaged it leaves with its last
+// force, as the CPU's `book_departed`: 0.5·f0·(delta − delta0) + U0 − ½·dt·P0.
+fn ledger_departed(acc: ptr<function, LedgerAcc>, slot: u32, delta: f32) {
+    let old = b_ledger[slot];
+    if (old.w != 0.0) {
+        (*acc).dissipated += 0.5 * (0.5 * old.y * (delta - old.x) + old.z);
+    }
+    b_ledger[slot] = vec4<f32>(0.0);
+}
+
+// Kahan summation of the step's dissipation into the particle's running total: the f32
+// total of a long run would otherwise lose the small per-step increments.
+fn ledger_store(pid: u32, acc: LedgerAcc) {
+    let e = particle_ledger[3u * pid + 2u];
+    let y = acc.dissipated - e.y;
+    let t = e.x + y;
+    let comp = (t - e.x) - y;
+    particle_ledger[3u * pid] = acc.counts;
+    particle_ledger[3u * pid + 1u] = acc.overlaps;
+    particle_ledger[3u * pid + 2u] = vec4<f32>(t, comp, acc.stored, 0.0);
+}
+
+// remap: the slot's ledger follows its history.
+fn ledger_carry(new_slot: u32, old_slot: u32) {
+    b_ledger[new_slot] = a_ledger[old_slot];
+}
+
+fn ledger_clear(new_slot: u32) {
+    b_ledger[new_slot] = vec4<f32>(0.0);
+}
+
+// gather: the wall contacts follow their particle.
+fn ledger_gather_walls(k: u32, o: u32) {
+    for (var w = 0u; w < step.n_walls; w++) {
+        b_wall_ledger[k * step.n_walls + w] = a_wall_ledger[o * step.n_walls + w];
+    }
+}
+
+// remap on a rebuild: an engaged contact of the old list whose partner is not in the new
+// list moved out of reach + skin within one step (only a violent step does that). It is
+// booked as having left at its last overlap (U0 − ½·dt·P0; the CPU also adds the normal
+// work 0.5·f0·(delta − delta0) at its current overlap, which is not at hand here) and
+// counted in monitor[3], so the host can say so.
+fn ledger_dropped(pid: u32, o: u32, old_n: u32, k: u32) {
+    let cap = step.max_neighbours;
+    var lost = 0.0;
+    for (var m = 0u; m < old_n; m++) {
+        let old = a_ledger[o * cap + m];
+        if (old.w == 0.0) {
+            continue;
+        }
+        let partner = a_hist_pid[o * cap + m];
+        var found = false;
+        for (var s = 0u; s < b_count[k]; s++) {
+            if (b_hist_pid[k * cap + s] == partner) {
+                found = true;
+                break;
+            }
+        }
+        if (!found) {
+            lost += 0.5 * old.z;
+            atomicAdd(&monitor[3], 1u);
+        }
+    }
+    if (lost != 0.0) {
+        var e = particle_ledger[3u * pid + 2u];
+        let y = lost - e.y;
+        let t = e.x + y;
+        e.y = (t - e.x) - y;
+        e.x = t;
+        particle_ledger[3u * pid + 2u] = e;
+    }
+}

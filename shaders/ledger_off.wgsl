@@ -1,0 +1,28 @@
+// ledger_off.wgsl — the step without the energy ledger and contact statistics: the hooks
+// of ledger.wgsl as no-ops, with no buffers declared, so none is bound or allocated.
+
+const LEDGER: bool = false;
+
+struct LedgerAcc {
+    unused: f32,
+}
+
+fn ledger_new() -> LedgerAcc {
+    return LedgerAcc(0.0);
+}
+
+fn ledger_pair(acc: ptr<function, LedgerAcc>, slot: u32, p: PairRow, k: Kin, c: Contact, power: f32) {}
+
+fn ledger_wall(acc: ptr<function, LedgerAcc>, slot: u32, p: PairRow, k: Kin, c: Contact, power: f32) {}
+
+fn ledger_departed(acc: ptr<function, LedgerAcc>, slot: u32, delta: f32) {}
+
+fn ledger_store(pid: u32, acc: LedgerAcc) {}
+
+fn ledger_carry(new_slot: u32, old_slot: u32) {}
+
+fn ledger_clear(new_slot: u32) {}
+
+fn ledger_gather_walls(k: u32, o: u32) {}
+
+fn ledger_dropped(pid: u32, o: u32, old_n: u32, k: u32) {}

@@ -1,0 +1,207 @@
+//! The GPU energy ledger and contact statistics against the CPU reference (lavapipe in CI),
+//! and `compare`'s energy and history checks.
+
+use powder::compare::{compare, Tolerances};
+use powder::cpu::CpuEngine;
+use powder::gpu::{GpuContext, GpuEngine, GpuOptions};
+use powder::scene::Scene;
+
+fn context() -> Option<GpuContext> {
+    match GpuContext::new() {
+        Ok(ctx) => Some(ctx),
+        Err(e) if std::env::var_os("CI").is_none() => {
+            eprintln!("skipping GPU test: {e}");
+            None
+        }
+        Err(e) => panic!("CI needs a GPU adapter (lavapipe): {e}"),
+    }
+}
+
+fn example(name: &str) -> Scene {
+    Scene::load(std::path::Path::new(&format!(
+        "{}/examples/{name}",
+        env!("CARGO_MANIFEST_DIR")
+    )))
+    .unwrap()
+}
+
+/// Adhesive micro-spheres with friction, rolling resistance and Tsuji damping thrown
+/// onto a plate and into each other: every part of the JKR ledger (normal work across
+/// the touch and pull-off jumps, tangential and rolling springs and their slip).
+fn jkr_cluster() -> Scene {
+    // two layers of 3 x 3 spheres (r = 5 µm) starting in contact (overlap 0.001 r, below
+    // the equilibrium overlap δ0 = 0.003 r: bound by adhesion from the start) 0.01 r above
+    // the plate, each with its own velocity (up to 0.1 m/s, with tangential parts)
+    let (r, gap) = (5e-6, -5e-9);
+    let (mut pos, mut vel) = (Vec::new(), Vec::new());
+    for layer in 0..2 {
+        for j in 0..3 {
+            for i in 0..3 {
+                let at = |k: i32| 1e-5 + k as f64 * (2.0 * r + gap);
+                let z = r + 5e-8 + layer as f64 * (2.0 * r + gap);
+                pos.push(format!("[{:e}, {:e}, {z:e}]", at(i), at(j)));
+                let (vx, vy) = (0.03 * (1 - i) as f64, 0.02 * (j - 1) as f64);
+                vel.push(format!(
+                    "[{vx:e}, {vy:e}, {:e}]",
+                    -0.1 + 0.04 * (i + j) as f64
+                ));
+            }
+        }
+    }
+    Scene::from_toml_str(
+        &format!(
+            r#"
+[domain]
+min = [0.0, 0.0, 0.0]
+max = [6e-5, 6e-5, 6e-5]
+[simulation]
+duration = 1e-3
+impact_velocity = 0.2
+gravity = [0.0, 0.0, -9.81]
+[[material]]
+name = "micro"
+density = 2500.0
+model = "jkr"
+youngs = 1e8
+poisson = 0.3
+surface_energy = 0.01
+restitution = 0.5
+friction = 0.3
+rolling_hysteresis = 0.5
+[[wall]]
+point = [0.0, 0.0, 0.0]
+normal = [0.0, 0.0, 1.0]
+[[particles]]
+kind = "list"
+radius = {r:e}
+positions = [{}]
+velocities = [{}]
+"#,
+            pos.join(", "),
+            vel.join(", ")
+        ),
+        "jkr_cluster",
+    )
+    .unwrap()
+}
+
+/// Stored energy, dissipation and the contact statistics of the GPU follow the CPU's
+/// while the trajectories agree, and the GPU's total energy is conserved as well as the
+/// CPU's.
+fn ledgers_agree(scene: &Scene, rounds: usize, steps: u64, energy_tol: f64) {
+    let Some(ctx) = context() else { return };
+    let mut cpu = CpuEngine::new(scene).unwrap();
+    let mut gpu = GpuEngine::new(scene, ctx).unwrap();
+    let total0 = cpu.energies().total();
+    let mut last_dissipated = 0.0;
+    for round in 0..rounds {
+        cpu.run_steps(steps).unwrap();
+        gpu.run_steps(steps).unwrap();
+        let ec = cpu.energies();
+        let eg = gpu.energies(&gpu.state().unwrap()).unwrap();
+        let (sc, sg) = (cpu.contact_stats(), gpu.contact_stats().unwrap());
+        eprintln!(
+            "{} round {round}:\n  cpu {ec:?}\n  gpu {eg:?}\n  cpu {sc:?}\n  gpu {sg:?}",
+            scene.name
+        );
+        let in_play = ec.kinetic + ec.elastic.abs() + ec.dissipated;
+        for (what, c, g) in [
+            ("kinetic", ec.kinetic, eg.kinetic),
+            ("stored", ec.elastic, eg.elastic),
+            ("dissipated", ec.dissipated, eg.dissipated),
+        ] {
+            assert!(
+                (c - g).abs() <= energy_tol * in_play,
+                "round {round}: {what} cpu {c:e} gpu {g:e} (energy in play {in_play:e})"
+            );
+        }
+        // the ledger closes on the device too: kinetic + stored + gravitational +
+        // dissipated stays at its start value to the integration error (CPU: same bound)
+        for (who, e) in [("cpu", ec), ("gpu", eg)] {
+            assert!(
+                (e.total() - total0).abs() < 1e-2 * in_play.max(1e-300),
+                "{who} round {round}: total {:e} vs {total0:e}",
+                e.total()
+            );
+        }
+        assert_eq!(sc.contacts, sg.contacts, "round {round}");
+        assert_eq!(sc.wall_contacts, sg.wall_contacts, "round {round}");
+        assert_eq!(sc.non_contact, sg.non_contact, "round {round}");
+        if sc.contacts + sc.wall_contacts > 0 {
+            let rel = (sc.max_overlap - sg.max_overlap).abs() / sc.max_overlap;
+            assert!(rel < 1e-2, "round {round}: max overlap {rel:e}");
+            let rel = (sc.mean_overlap_ratio - sg.mean_overlap_ratio).abs() / sc.mean_overlap_ratio;
+            assert!(rel < 1e-2, "round {round}: mean overlap {rel:e}");
+        }
+        assert!(eg.dissipated >= last_dissipated - 1e-3 * in_play);
+        last_dissipated = eg.dissipated;
+        assert_eq!(gpu.dropped_contacts(), 0);
+    }
+    assert!(
+        last_dissipated > 0.0,
+        "nothing dissipated: the test saw no contact"
+    );
+}
+
+#[test]
+fn gpu_ledger_matches_the_cpu_in_the_cohesive_cluster() {
+    // (contacts begin after ~4500 steps; trajectories agree to 2e-4 radii until 6000)
+    ledgers_agree(&example("cohesive_cluster.toml"), 6, 1000, 1e-3);
+}
+
+#[test]
+fn gpu_ledger_matches_the_cpu_for_jkr_with_friction_and_rolling() {
+    ledgers_agree(&jkr_cluster(), 4, 500, 1e-3);
+}
+
+/// The ledger is an option: without it no ledger buffer is allocated, the kernels are the
+/// ledger-free variant, the trajectory is bitwise the same, and asking for energies says why
+/// there are none.
+#[test]
+fn gpu_without_ledger_allocates_none_and_moves_the_same() {
+    let Some(ctx) = context() else { return };
+    let Some(ctx2) = context() else { return };
+    let scene = example("cohesive_cluster.toml");
+    let mut with = GpuEngine::new(&scene, ctx).unwrap();
+    let mut without = GpuEngine::with_options(&scene, ctx2, GpuOptions { ledger: false }).unwrap();
+    assert!(with.has_ledger() && !without.has_ledger());
+    assert_eq!(without.variant_name(), "step_hysteretic");
+    assert_eq!(with.variant_name(), "step_hysteretic_ledger");
+    assert!(without.buffers().iter().all(|(n, _)| !n.contains("ledger")));
+    assert!(with.buffers().iter().any(|(n, _)| n == "particle_ledger"));
+    assert!(without.buffer_bytes() < with.buffer_bytes());
+    with.run_steps(5000).unwrap();
+    without.run_steps(5000).unwrap();
+    let (a, b) = (with.state().unwrap(), without.state().unwrap());
+    assert_eq!(a.positions, b.positions);
+    assert_eq!(a.velocities, b.velocities);
+    let e = without.energies(&b).unwrap_err().to_string();
+    assert!(e.contains("no energy ledger"), "{e}");
+}
+
+/// `compare` checks stored and dissipated energy and the contacts' history values.
+#[test]
+fn compare_reports_energies_and_history() {
+    let Some(ctx) = context() else { return };
+    let scene = jkr_cluster();
+    let c = compare(&scene, ctx, 1500, 500, Tolerances::default()).unwrap();
+    for s in &c.samples {
+        eprintln!(
+            "step {}: pos {:.2e} energy {:.2e} history {:.2e} (max {:.2e}) over {} pairs, {} missing, stored {:e}/{:e}, dissipated {:e}/{:e}",
+            s.step, s.position, s.energy, s.history, s.history_max, s.history_pairs, s.history_missing,
+            s.elastic_cpu, s.elastic_gpu, s.dissipated_cpu, s.dissipated_gpu
+        );
+    }
+    assert!(c.passed, "{:?}", c.samples.last());
+    let last = c.samples.last().unwrap();
+    assert!(last.history_pairs > 0 && last.dissipated_cpu > 0.0);
+    // the thresholds bite: a zero tolerance on the history fails where contacts exist
+    let Some(ctx) = context() else { return };
+    let strict = Tolerances {
+        history: 0.0,
+        ..Tolerances::default()
+    };
+    let c = compare(&scene, ctx, 1500, 500, strict).unwrap();
+    assert!(!c.passed);
+    assert!(c.samples.iter().any(|s| s.exceeded.contains(&"history")));
+}
