@@ -58,7 +58,13 @@ struct StepParams {
     gravity: vec3<f32>,
     // Largest distance beyond touching at which any pair interacts.
     reach: f32,
+    // The domain box's extent in cells (the run monitor: a centre beyond it has left).
+    extent_cells: vec3<f32>,
+    _pad: u32,
 }
+
+// The run monitor's overlap limit over a12 (`run::MAX_OVERLAP_RATIO`; a test ties them).
+const MONITOR_MAX_OVERLAP_RATIO: f32 = 0.5;
 
 struct Wall {
     // A point of the plane as cell + offset (like particle positions).
@@ -108,9 +114,14 @@ struct Wall {
 @group(0) @binding(46) var<storage, read> pairs: array<PairRow>;
 @group(0) @binding(47) var<storage, read> walls: array<Wall>;
 
-// Monitor: [0] = largest neighbour count seen (atomicMax), [1] = persistent id of a particle
-// that overflowed the capacity (+1; 0 = none), [2] = non-finite force count.
-@group(0) @binding(48) var<storage, read_write> monitor: array<atomic<u32>, 4>;
+// Monitor, zeroed per batch of steps and read back after it (no per-step read-back):
+// [0] = largest neighbour count seen (atomicMax), [1] = persistent id of a particle that
+// overflowed the capacity (+1; 0 = none), [2] = non-finite acceleration count, [3] = engaged
+// contacts dropped by a rebuild (ledger.wgsl), [4] = largest overlap/a12 of any contact
+// (f32 bits, atomicMax; non-negative f32 bits order as the values), [5] = persistent id
+// (+1) of a particle with a contact beyond MONITOR_MAX_OVERLAP_RATIO, [6] = persistent id
+// (+1) of a particle whose centre left the domain box, [7] unused.
+@group(0) @binding(48) var<storage, read_write> monitor: array<atomic<u32>, 8>;
 
 // Verlet skin state, persistent across batches: [0] = largest |displacement| since the
 // last rebuild as f32 bits (atomicMax: the bit patterns of non-negative f32 order as the
@@ -161,8 +172,13 @@ fn kick_drift(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nw
         let over = o >= vec3<f32>(h);
         o = select(o, vec3<f32>(0.0), over);
         let carry = vec3<i32>(shift) + select(vec3<i32>(0), vec3<i32>(1), over);
-        a_cell[i] = vec4<i32>(a_cell[i].xyz + carry, a_cell[i].w);
+        let cell = a_cell[i].xyz + carry;
+        a_cell[i] = vec4<i32>(cell, a_cell[i].w);
         a_off[i] = vec4<f32>(o, a_off[i].w);
+        let at = vec3<f32>(cell) + o / h;
+        if (any(at < vec3<f32>(0.0)) || any(at > step.extent_cells)) {
+            atomicMax(&monitor[6], a_pid[i] + 1u);
+        }
     }
     workgroupBarrier();
     if (lid == 0u) {
@@ -300,6 +316,9 @@ fn remap(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
     ledger_dropped(b_pid[k], o, old_n, k);
 }
 
+// The workgroup's largest overlap/a12 (f32 bits), merged into monitor[4] once per group.
+var<workgroup> wg_ratio: atomic<u32>;
+
 // The relative motion of one contact, as the model sees it (`model::Kinematics` plus the
 // pair geometry and the time step).
 struct Kin {
@@ -335,9 +354,26 @@ struct Contact {
 @compute @workgroup_size(WG_SIZE)
 fn force(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let k = global_index(wid, nwg, lid);
-    if (k >= grid.n_particles) {
-        return;
+    if (lid == 0u) {
+        atomicStore(&wg_ratio, 0u);
     }
+    workgroupBarrier();
+    if (k < grid.n_particles) {
+        let ratio = particle_forces(k);
+        atomicMax(&wg_ratio, bitcast<u32>(ratio));
+        if (ratio > MONITOR_MAX_OVERLAP_RATIO) {
+            atomicMax(&monitor[5], b_pid[k] + 1u);
+        }
+    }
+    workgroupBarrier();
+    if (lid == 0u) {
+        atomicMax(&monitor[4], atomicLoad(&wg_ratio));
+    }
+}
+
+// The forces on B's particle k (stored as its acceleration); returns its contacts' largest
+// overlap/a12 (0 without overlap) for the run monitor.
+fn particle_forces(k: u32) -> f32 {
     let cap = step.max_neighbours;
     let ck = b_cell[k];
     let ok = b_off[k];
@@ -350,6 +386,7 @@ fn force(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
     var f = vec3<f32>(0.0);
     var torque = vec3<f32>(0.0);
     var ledger_acc = ledger_new();
+    var peak = 0.0;
     for (var s = 0u; s < b_count[k]; s++) {
         let j = nbr[k * cap + s];
         let cj = b_cell[j];
@@ -391,6 +428,7 @@ fn force(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
         let row = pairs[mat_k * step.n_materials + u32(cj.w)];
         let c = pair_contact(row, kin, &h);
         b_hist[slot] = h;
+        peak = max(peak, delta / (2.0 * r_eff));
         ledger_pair(&ledger_acc, slot, row, kin, c, dot(c.tangential, v_t) + dot(c.rolling, wk - wj));
         f += c.normal * n + c.tangential;
         if (ROTATION) {
@@ -410,6 +448,7 @@ fn force(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
         let row = pairs[step.n_materials * step.n_materials + w * step.n_materials + mat_k];
         let c = pair_contact(row, kin, &h);
         b_wall_hist[slot] = h;
+        peak = max(peak, delta / (2.0 * rk));
         ledger_wall(&ledger_acc, slot, row, kin, c, dot(c.tangential, v_t) + dot(c.rolling, wk));
         f += c.normal * n + c.tangential;
         if (ROTATION) {
@@ -423,6 +462,7 @@ fn force(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
     }
     b_acc[k] = vec4<f32>(acc, 0.0);
     ledger_store(b_pid[k], ledger_acc);
+    return peak;
 }
 
 @compute @workgroup_size(WG_SIZE)

@@ -1,11 +1,15 @@
-//! Checkpoints: the complete evolving state of a CPU run, so a run resumes bitwise
-//! identically. A checkpoint names the powder version and a digest of the scene, and is
-//! refused for another version or another scene. Written atomically.
+//! Checkpoints: the complete evolving state of a run (CPU: [`CpuState`]; GPU: the device
+//! buffers of [`GpuSavedState`]), so a run resumes bitwise identically on the same backend
+//! (and, for the GPU, the same adapter). A checkpoint names the powder version, the
+//! backend and a digest of the scene, and is refused for another version, backend or
+//! scene. Written atomically.
 
 use crate::cpu::{CpuEngine, CpuState};
 use crate::error::PowderError;
+use crate::gpu::GpuSavedState;
 use crate::output::atomic::write_atomic;
 use crate::scene::Scene;
+use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -49,29 +53,58 @@ pub fn scene_digest(scene: &Scene) -> u64 {
     h
 }
 
-/// Writes the engine's state to `path` (atomically).
+/// Writes the CPU engine's state to `path` (atomically).
 pub fn save(path: &Path, scene: &Scene, engine: &CpuEngine) -> Result<(), PowderError> {
     let state = engine.state();
+    save_state(path, scene, "cpu", state.steps, state.time, &state)
+}
+
+/// Reads a CPU checkpoint of `scene` from `path`.
+pub fn load(path: &Path, scene: &Scene) -> Result<CpuState, PowderError> {
+    load_state(path, scene, "cpu")
+}
+
+/// Writes a saved GPU state to `path` (atomically).
+pub fn save_gpu(path: &Path, scene: &Scene, state: &GpuSavedState) -> Result<(), PowderError> {
+    save_state(path, scene, "gpu", state.steps, state.time, state)
+}
+
+/// Reads a GPU checkpoint of `scene` from `path`.
+pub fn load_gpu(path: &Path, scene: &Scene) -> Result<GpuSavedState, PowderError> {
+    load_state(path, scene, "gpu")
+}
+
+fn save_state<T: Serialize>(
+    path: &Path,
+    scene: &Scene,
+    backend: &str,
+    steps: u64,
+    time: f64,
+    state: &T,
+) -> Result<(), PowderError> {
     let header = Header {
         magic: MAGIC.into(),
         format: FORMAT,
         version: env!("CARGO_PKG_VERSION").into(),
-        backend: "cpu".into(),
+        backend: backend.into(),
         scene: scene.name.clone(),
         scene_digest: scene_digest(scene),
-        steps: state.steps,
-        time: state.time,
+        steps,
+        time,
     };
     use bincode::Options;
     let encode = |e: bincode::Error| PowderError::Run(format!("cannot encode the checkpoint: {e}"));
     let mut bytes = PREFIX.to_vec();
     bytes.extend(codec(u64::MAX).serialize(&header).map_err(encode)?);
-    bytes.extend(codec(u64::MAX).serialize(&state).map_err(encode)?);
+    bytes.extend(codec(u64::MAX).serialize(state).map_err(encode)?);
     write_atomic(path, &bytes)
 }
 
-/// Reads a checkpoint of `scene` from `path`.
-pub fn load(path: &Path, scene: &Scene) -> Result<CpuState, PowderError> {
+fn load_state<T: DeserializeOwned>(
+    path: &Path,
+    scene: &Scene,
+    backend: &str,
+) -> Result<T, PowderError> {
     let bytes = std::fs::read(path)
         .map_err(|e| PowderError::io(format!("cannot read checkpoint `{}`", path.display()), e))?;
     let not_ours = || {
@@ -101,10 +134,11 @@ pub fn load(path: &Path, scene: &Scene) -> Result<CpuState, PowderError> {
             env!("CARGO_PKG_VERSION")
         )));
     }
-    if header.backend != "cpu" {
+    if header.backend != backend {
         return Err(PowderError::Run(format!(
-            "checkpoint `{}` comes from the {} backend; resume it on that backend",
+            "checkpoint `{}` comes from the {} backend; resume it with --backend {}",
             path.display(),
+            header.backend,
             header.backend
         )));
     }

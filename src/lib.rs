@@ -18,5 +18,6 @@ pub mod output;
 pub mod run;
 pub mod scene;
 pub mod setup;
+pub mod simulation;
 
 pub use error::{ParamError, PowderError};

@@ -130,7 +130,7 @@ fn info_cmd(a: &InfoArgs) -> Result<(), PowderError> {
 enum Backend {
     /// The f64 CPU reference engine.
     Cpu,
-    /// The wgpu engine (every model; the energy ledger and the run monitor are CPU-only so far).
+    /// The wgpu engine (every model; the same outputs, checkpoints and run monitor).
     Gpu,
 }
 
@@ -657,46 +657,6 @@ fn compare_cmd(a: &CompareArgs) -> Result<bool, PowderError> {
     Ok(c.passed)
 }
 
-fn run_gpu_cmd(
-    a: &RunArgs,
-    scene: &Scene,
-    ctx: powder::gpu::GpuContext,
-) -> Result<(), PowderError> {
-    let summary = powder::run::run_gpu(scene, ctx, a.steps, |step, time, ke| {
-        eprintln!("step {step:>9}  t = {time:.4e} s  E_kin {ke:.4e} J");
-    })?;
-    if a.json {
-        let text = serde_json::to_string_pretty(&summary)
-            .map_err(|e| PowderError::Run(format!("cannot encode JSON: {e}")))?;
-        println!("{text}");
-        return Ok(());
-    }
-    println!("scene            {}", summary.scene);
-    println!(
-        "backend          gpu: {} ({} particles)",
-        summary.adapter, summary.particles
-    );
-    println!("dt               {:.4e} s", summary.dt);
-    println!(
-        "steps            {} (t = {:.4e} s)",
-        summary.steps, summary.time
-    );
-    println!(
-        "wall time        {:.2} s ({:.3e} particle-steps/s)",
-        summary.wall_seconds, summary.particle_steps_per_second
-    );
-    println!(
-        "kinetic energy   {:.4e} J (initially {:.4e} J)",
-        summary.kinetic_final, summary.kinetic_initial
-    );
-    println!(
-        "neighbour lists  rebuilt {} times (Verlet skin; the initial build included)",
-        summary.rebuilds
-    );
-    println!("note             the GPU engine keeps no energy ledger or contact statistics yet");
-    Ok(())
-}
-
 /// Set when `run` stopped on Ctrl-C (exit status 130, as shells report SIGINT).
 static INTERRUPTED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
 
@@ -711,12 +671,16 @@ fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
             Scene::from_toml_str(DEFAULT_SCENE, "cohesive_cluster")?
         }
     };
-    if a.backend == Backend::Gpu {
-        match powder::gpu::GpuContext::new() {
-            Ok(ctx) => return run_gpu_cmd(a, &scene, ctx),
-            Err(e) => eprintln!("notice: {e}\nnotice: running on the CPU backend instead"),
-        }
-    }
+    let gpu = match a.backend {
+        Backend::Gpu => match powder::gpu::GpuContext::new() {
+            Ok(ctx) => Some(ctx),
+            Err(e) => {
+                eprintln!("notice: {e}\nnotice: running on the CPU backend instead");
+                None
+            }
+        },
+        Backend::Cpu => None,
+    };
     let interrupt = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
     {
         let flag = interrupt.clone();
@@ -749,7 +713,10 @@ fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
         verbose: true,
         interrupt: Some(interrupt),
     };
-    let summary = powder::run::run_cpu_with(&scene, &opts, |_| {})?;
+    let summary = match gpu {
+        Some(ctx) => powder::run::run_gpu_with(&scene, ctx, &opts, |_| {})?,
+        None => powder::run::run_cpu_with(&scene, &opts, |_| {})?,
+    };
     if summary.interrupted {
         INTERRUPTED.store(true, std::sync::atomic::Ordering::Relaxed);
         eprintln!(
@@ -770,8 +737,14 @@ fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
     let l = &summary.last;
     println!("scene            {}", summary.scene);
     println!(
-        "backend          {} ({} particles)",
-        summary.backend, summary.particles
+        "backend          {}{} ({} particles)",
+        summary.backend,
+        summary
+            .adapter
+            .as_ref()
+            .map(|a| format!(": {a}"))
+            .unwrap_or_default(),
+        summary.particles
     );
     println!(
         "dt               {:.4e} s ({})",
@@ -825,6 +798,9 @@ fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
             "warning          {} particles ended outside the domain box",
             summary.outside_domain
         );
+    }
+    for note in &summary.notes {
+        println!("note             {note}");
     }
     Ok(())
 }

@@ -1,12 +1,15 @@
-//! Running a scene headless: step to the end, report progress at the scene's cadence,
-//! and summarise (energies, coordination, overlaps).
+//! Running a scene headless on either backend: step to the end, report progress at the
+//! scene's cadence, write outputs and checkpoints, watch the run (the monitor), and
+//! summarise (energies, coordination, overlaps). One loop drives both backends through
+//! [`Simulation`].
 
-use crate::checkpoint;
 use crate::cpu::{ContactStats, CpuEngine, Energies};
 use crate::error::PowderError;
+use crate::gpu::{GpuContext, GpuEngine};
 use crate::output::atomic::write_atomic;
 use crate::output::vtk;
 use crate::scene::Scene;
+use crate::simulation::{Observation, Simulation};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -26,6 +29,8 @@ pub struct Snapshot {
 pub struct RunSummary {
     pub scene: String,
     pub backend: &'static str,
+    /// The GPU adapter (GPU backend).
+    pub adapter: Option<String>,
     pub particles: usize,
     pub dt: f64,
     pub dt_rule: String,
@@ -49,14 +54,16 @@ pub struct RunSummary {
     /// Stopped early by an interrupt (Ctrl-C) after writing a last checkpoint.
     pub interrupted: bool,
     pub out_dir: Option<String>,
+    /// Backend remarks (GPU: neighbour-list rebuilds, contacts that left the lists).
+    pub notes: Vec<String>,
 }
 
-fn snapshot(engine: &CpuEngine) -> Snapshot {
+fn snapshot(engine: &impl Simulation, obs: &Observation) -> Snapshot {
     Snapshot {
-        step: engine.steps,
-        time: engine.time,
-        energies: engine.energies(),
-        contacts: engine.contact_stats(),
+        step: engine.steps(),
+        time: engine.time(),
+        energies: obs.energies,
+        contacts: obs.contacts,
     }
 }
 
@@ -141,42 +148,41 @@ pub const MAX_OVERLAP_RATIO: f64 = 0.5;
 pub const MAX_ENERGY_GROWTH: f64 = 0.05;
 
 /// The run monitor: what must stop a run, with the step, the particles and a hint.
-fn monitor(engine: &mut CpuEngine, initial_total: f64, scale: f64) -> Result<(), PowderError> {
+fn monitor(
+    engine: &mut impl Simulation,
+    dt_rule: &str,
+    energies: &Energies,
+    initial_total: f64,
+    scale: f64,
+) -> Result<(), PowderError> {
+    let steps = engine.steps();
     let hint = format!(
-        "the time step ({:.4e} s; {}) may be too large for this scene",
+        "the time step ({:.4e} s; {dt_rule}) may be too large for this scene",
         engine.dt(),
-        engine.time_step().reason
     );
     if let Some(i) = engine.non_finite() {
         return Err(PowderError::Run(format!(
-            "step {}: particle {i} has a non-finite position or velocity; {hint}",
-            engine.steps
+            "step {steps}: particle {i} has a non-finite position or velocity; {hint}"
         )));
     }
-    if let Some((ratio, i, partner)) = engine.take_peak_overlap() {
-        if ratio > MAX_OVERLAP_RATIO {
-            let with = match partner {
-                crate::cpu::Partner::Particle(j) => format!("particle {j}"),
-                crate::cpu::Partner::Wall(w) => format!("wall {w}"),
-            };
+    if let Some(peak) = engine.take_peak_overlap() {
+        if peak.ratio > MAX_OVERLAP_RATIO {
             return Err(PowderError::Run(format!(
-                "step {}: particle {i} overlaps {with} by {ratio:.3} of the reduced radius (limit {MAX_OVERLAP_RATIO}); the impact is too violent for the contact stiffness or {hint}",
-                engine.steps
+                "step {steps}: {} by {:.3} of the reduced radius (limit {MAX_OVERLAP_RATIO}); the impact is too violent for the contact stiffness or {hint}",
+                peak.who, peak.ratio
             )));
         }
     }
     let escaped = engine.escaped(5);
     if !escaped.is_empty() {
         return Err(PowderError::Run(format!(
-            "step {}: particles {escaped:?} left the domain box; enlarge [domain] or add walls (or {hint})",
-            engine.steps
+            "step {steps}: particles {escaped:?} left the domain box; enlarge [domain] or add walls (or {hint})"
         )));
     }
-    let total = engine.energies().total();
+    let total = energies.total();
     if scale > 0.0 && total - initial_total > MAX_ENERGY_GROWTH * scale {
         return Err(PowderError::Run(format!(
-            "step {}: the total energy grew by {:.3e} J ({:.1}% of the run's energy scale {:.3e} J), which no contact model can inject; {hint}",
-            engine.steps,
+            "step {steps}: the total energy grew by {:.3e} J ({:.1}% of the run's energy scale {:.3e} J), which no contact model can inject; {hint}",
             total - initial_total,
             100.0 * (total - initial_total) / scale,
             scale
@@ -186,9 +192,8 @@ fn monitor(engine: &mut CpuEngine, initial_total: f64, scale: f64) -> Result<(),
 }
 
 /// Solid fraction of the particles in the domain box and in the box that encloses them.
-fn solid_fractions(scene: &Scene, engine: &CpuEngine) -> (f64, f64) {
-    let vol: f64 = engine
-        .radii()
+fn solid_fractions(scene: &Scene, positions: &[glam::DVec3], radii: &[f64]) -> (f64, f64) {
+    let vol: f64 = radii
         .iter()
         .map(|r| 4.0 / 3.0 * std::f64::consts::PI * r * r * r)
         .sum();
@@ -196,12 +201,24 @@ fn solid_fractions(scene: &Scene, engine: &CpuEngine) -> (f64, f64) {
     let domain = (0..3).map(|a| d.max[a] - d.min[a]).product::<f64>();
     let mut lo = glam::DVec3::splat(f64::INFINITY);
     let mut hi = glam::DVec3::splat(f64::NEG_INFINITY);
-    for (p, r) in engine.positions().iter().zip(engine.radii()) {
+    for (p, r) in positions.iter().zip(radii) {
         lo = lo.min(*p - *r);
         hi = hi.max(*p + *r);
     }
     let b = hi - lo;
     (vol / domain, vol / (b.x * b.y * b.z))
+}
+
+/// Particles whose centre is outside the domain box.
+fn outside_domain(scene: &Scene, positions: &[glam::DVec3]) -> usize {
+    let (lo, hi) = (
+        glam::DVec3::from_array(scene.domain.min),
+        glam::DVec3::from_array(scene.domain.max),
+    );
+    positions
+        .iter()
+        .filter(|p| p.cmplt(lo).any() || p.cmpgt(hi).any())
+        .count()
 }
 
 /// The CSV rows of an earlier run up to `step` (on resume), header excluded.
@@ -249,13 +266,38 @@ fn earlier_snapshots(dir: &Path, name: &str, step: u64, dt: f64) -> Vec<(f64, St
 pub fn run_cpu_with(
     scene: &Scene,
     opts: &RunOptions,
+    progress: impl FnMut(&Snapshot),
+) -> Result<RunSummary, PowderError> {
+    let engine = CpuEngine::new(scene)?;
+    let rule = engine.time_step().reason.clone();
+    run_with(scene, engine, &rule, opts, progress)
+}
+
+/// Runs `scene` on the GPU engine (energy ledger on) with the same outputs, checkpoints
+/// and monitor as the CPU backend.
+pub fn run_gpu_with(
+    scene: &Scene,
+    ctx: GpuContext,
+    opts: &RunOptions,
+    progress: impl FnMut(&Snapshot),
+) -> Result<RunSummary, PowderError> {
+    let rule = crate::setup::Resolved::new(scene)?.time_step.reason;
+    let engine = GpuEngine::new(scene, ctx)?;
+    run_with(scene, engine, &rule, opts, progress)
+}
+
+/// The run loop of both backends: `dt_rule` says where dt came from (for hints).
+pub fn run_with<S: Simulation>(
+    scene: &Scene,
+    mut engine: S,
+    dt_rule: &str,
+    opts: &RunOptions,
     mut progress: impl FnMut(&Snapshot),
 ) -> Result<RunSummary, PowderError> {
-    let mut engine = CpuEngine::new(scene)?;
     let mut resumed_from = None;
     if let Some(ckpt) = &opts.resume {
-        engine.restore(checkpoint::load(ckpt, scene)?)?;
-        resumed_from = Some(engine.steps);
+        engine.read_checkpoint(ckpt, scene)?;
+        resumed_from = Some(engine.steps());
     }
     let total = ((scene.duration / engine.dt()).ceil() as u64).max(1);
     let total = opts.max_steps.map_or(total, |m| m.min(total));
@@ -274,28 +316,29 @@ pub fn run_cpu_with(
         s.keep_until(earlier_snapshots(d, &scene.name, step, engine.dt()));
     }
     let header = csv_header(scene.walls.len());
-    let write_outputs = |engine: &CpuEngine,
+    let radii = engine.radii().to_vec();
+    let write_outputs = |obs: &Observation,
                          snap: &Snapshot,
                          rows: &mut Vec<String>,
                          series: &mut Option<vtk::Series>|
      -> Result<(), PowderError> {
         rows.retain(|r| !r.starts_with(&format!("{},", snap.step)));
-        rows.push(csv_row(snap, &engine.wall_forces()));
+        rows.push(csv_row(snap, &obs.wall_forces));
         if let Some(s) = series.as_mut() {
             s.write(
                 snap.step,
                 snap.time,
                 &vtk::Particles {
-                    positions: engine.positions(),
-                    velocities: engine.velocities(),
-                    radii: engine.radii(),
-                    angular_velocities: engine.angular_velocities(),
+                    positions: &obs.positions,
+                    velocities: &obs.velocities,
+                    radii: &radii,
+                    angular_velocities: &obs.angular_velocities,
                 },
             )?;
         }
         Ok(())
     };
-    let save = |engine: &CpuEngine, rows: &[String]| -> Result<(), PowderError> {
+    let save = |engine: &S, rows: &[String]| -> Result<(), PowderError> {
         if let (Some(c), Some(p)) = (&ckpt_path, &csv_path) {
             let mut text = header.clone();
             text.push('\n');
@@ -304,7 +347,7 @@ pub fn run_cpu_with(
                 text.push('\n');
             }
             write_atomic(p, text.as_bytes())?;
-            checkpoint::save(c, scene, engine)?;
+            engine.write_checkpoint(c, scene)?;
         }
         Ok(())
     };
@@ -317,7 +360,7 @@ pub fn run_cpu_with(
             )
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
         );
-        bar.set_position(engine.steps);
+        bar.set_position(engine.steps());
         bar
     });
     let say = |snap: &Snapshot| match &bar {
@@ -325,56 +368,66 @@ pub fn run_cpu_with(
         None => eprintln!("{}", snap.line()),
     };
 
-    let initial = snapshot(&engine);
+    let obs = engine.observe()?;
+    let initial = snapshot(&engine, &obs);
     progress(&initial);
     if opts.verbose {
         say(&initial);
     }
     if resumed_from.is_none() {
-        write_outputs(&engine, &initial, &mut rows, &mut series)?;
+        write_outputs(&obs, &initial, &mut rows, &mut series)?;
     }
     let started = std::time::Instant::now();
-    let start_steps = engine.steps;
+    let start_steps = engine.steps();
     let mut scale = initial.energies.kinetic.abs() + initial.energies.elastic.abs();
     let mut interrupted = false;
-    // Chunks end at outputs, checkpoints and at most 1000 steps apart (for Ctrl-C).
-    while engine.steps < total {
-        let to_output = scene.output_every - engine.steps % scene.output_every;
-        let to_ckpt = scene.checkpoint_every - engine.steps % scene.checkpoint_every;
-        let chunk = to_output.min(to_ckpt).min(1000).min(total - engine.steps);
+    let mut last_obs = obs;
+    // Chunks end at outputs, checkpoints and at most 1000 steps apart (for Ctrl-C and the
+    // monitor).
+    while engine.steps() < total {
+        let steps = engine.steps();
+        let to_output = scene.output_every - steps % scene.output_every;
+        let to_ckpt = scene.checkpoint_every - steps % scene.checkpoint_every;
+        let chunk = to_output.min(to_ckpt).min(1000).min(total - steps);
         // The state before the chunk: if the monitor stops the run, the checkpoint holds
         // the last state that passed it.
-        let before = engine.state();
+        let before = engine.save()?;
         let stepped = engine.run_steps(chunk).and_then(|()| {
-            let now = engine.energies();
+            let obs = engine.observe()?;
+            let now = obs.energies;
             let scale = scale
                 .max(now.kinetic.abs())
                 .max(now.elastic.abs())
                 .max((now.gravitational - initial.energies.gravitational).abs());
-            monitor(&mut engine, initial.energies.total(), scale)
+            monitor(&mut engine, dt_rule, &now, initial.energies.total(), scale)?;
+            Ok(obs)
         });
-        if let Err(e) = stepped {
-            if let Some(b) = &bar {
-                b.finish_and_clear();
+        let obs = match stepped {
+            Ok(obs) => obs,
+            Err(e) => {
+                if let Some(b) = &bar {
+                    b.finish_and_clear();
+                }
+                let failed_at = engine.steps();
+                engine.restore(before)?;
+                save(&engine, &rows)?;
+                let note = match &ckpt_path {
+                    Some(c) => format!(
+                        "; the state at step {} (before the failure, at most 1000 steps earlier than step {failed_at}) is in {}",
+                        engine.steps(),
+                        c.display()
+                    ),
+                    None => String::new(),
+                };
+                return Err(PowderError::Run(format!("{e}{note}")));
             }
-            let failed_at = engine.steps;
-            engine.restore(before)?;
-            save(&engine, &rows)?;
-            let note = match &ckpt_path {
-                Some(c) => format!(
-                    "; the state at step {} (before the failure, at most 1000 steps earlier than step {failed_at}) is in {}",
-                    engine.steps,
-                    c.display()
-                ),
-                None => String::new(),
-            };
-            return Err(PowderError::Run(format!("{e}{note}")));
-        }
+        };
         if let Some(b) = &bar {
-            b.set_position(engine.steps);
+            b.set_position(engine.steps());
         }
-        if engine.steps % scene.output_every == 0 || engine.steps == total {
-            let snap = snapshot(&engine);
+        let steps = engine.steps();
+        if steps.is_multiple_of(scene.output_every) || steps == total {
+            let snap = snapshot(&engine, &obs);
             scale = scale
                 .max(snap.energies.kinetic.abs())
                 .max(snap.energies.elastic.abs())
@@ -383,9 +436,10 @@ pub fn run_cpu_with(
             if opts.verbose {
                 say(&snap);
             }
-            write_outputs(&engine, &snap, &mut rows, &mut series)?;
+            write_outputs(&obs, &snap, &mut rows, &mut series)?;
         }
-        if engine.steps % scene.checkpoint_every == 0 {
+        last_obs = obs;
+        if steps.is_multiple_of(scene.checkpoint_every) {
             save(&engine, &rows)?;
         }
         if opts
@@ -400,35 +454,38 @@ pub fn run_cpu_with(
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
-    let last = snapshot(&engine);
-    if interrupted && engine.steps % scene.output_every != 0 {
-        write_outputs(&engine, &last, &mut rows, &mut series)?;
+    let last = snapshot(&engine, &last_obs);
+    if interrupted && !engine.steps().is_multiple_of(scene.output_every) {
+        write_outputs(&last_obs, &last, &mut rows, &mut series)?;
     }
     save(&engine, &rows)?;
     let wall = started.elapsed().as_secs_f64();
     let drift = (last.energies.total() - initial.energies.total()).abs();
-    let (solid_fraction_domain, solid_fraction_bounding_box) = solid_fractions(scene, &engine);
+    let (solid_fraction_domain, solid_fraction_bounding_box) =
+        solid_fractions(scene, &last_obs.positions, &radii);
     let summary = RunSummary {
         scene: scene.name.clone(),
-        backend: "cpu",
+        backend: engine.backend(),
+        adapter: engine.adapter(),
         particles: engine.len(),
         dt: engine.dt(),
-        dt_rule: engine.time_step().reason.clone(),
-        steps: engine.steps,
-        time: engine.time,
+        dt_rule: dt_rule.to_string(),
+        steps: engine.steps(),
+        time: engine.time(),
         wall_seconds: wall,
-        particle_steps_per_second: engine.len() as f64 * (engine.steps - start_steps) as f64
+        particle_steps_per_second: engine.len() as f64 * (engine.steps() - start_steps) as f64
             / wall.max(1e-9),
         initial,
         last,
         energy_balance_error: if scale > 0.0 { drift / scale } else { 0.0 },
-        outside_domain: engine.outside_domain(),
+        outside_domain: outside_domain(scene, &last_obs.positions),
         solid_fraction_domain,
         solid_fraction_bounding_box,
-        wall_forces: engine.wall_forces().iter().map(|f| f.to_array()).collect(),
+        wall_forces: last_obs.wall_forces.iter().map(|f| f.to_array()).collect(),
         resumed_from,
         interrupted,
         out_dir: out.map(|d| d.display().to_string()),
+        notes: engine.notes()?,
     };
     if let Some(d) = out {
         let text = serde_json::to_string_pretty(&summary)
@@ -453,61 +510,4 @@ pub fn run_cpu(
         },
         progress,
     )
-}
-
-/// What `powder run --backend gpu` reports: the GPU engine keeps no energy ledger or
-/// contact statistics yet, so the summary has the kinetic energy and the throughput.
-#[derive(Clone, Debug, Serialize)]
-pub struct GpuRunSummary {
-    pub scene: String,
-    pub backend: &'static str,
-    pub adapter: String,
-    pub particles: usize,
-    pub dt: f64,
-    pub steps: u64,
-    pub time: f64,
-    pub wall_seconds: f64,
-    pub particle_steps_per_second: f64,
-    pub kinetic_initial: f64,
-    pub kinetic_final: f64,
-    /// Neighbour-list rebuilds (Verlet skin), the initial build included.
-    pub rebuilds: u64,
-}
-
-/// Runs `scene` on the GPU engine, calling `progress(step, time, kinetic)` every
-/// `scene.output_every` steps (each call reads the state back).
-pub fn run_gpu(
-    scene: &Scene,
-    ctx: crate::gpu::GpuContext,
-    max_steps: Option<u64>,
-    mut progress: impl FnMut(u64, f64, f64),
-) -> Result<GpuRunSummary, PowderError> {
-    let mut engine = crate::gpu::GpuEngine::new(scene, ctx)?;
-    let total = ((scene.duration / engine.dt()).ceil() as u64).max(1);
-    let total = max_steps.map_or(total, |m| m.min(total));
-    let kinetic_initial = engine.kinetic_energy(&engine.state()?);
-    progress(0, 0.0, kinetic_initial);
-    let started = std::time::Instant::now();
-    let mut kinetic_final = kinetic_initial;
-    while engine.steps < total {
-        let chunk = scene.output_every.min(total - engine.steps);
-        engine.run_steps(chunk)?;
-        kinetic_final = engine.kinetic_energy(&engine.state()?);
-        progress(engine.steps, engine.time, kinetic_final);
-    }
-    let wall = started.elapsed().as_secs_f64();
-    Ok(GpuRunSummary {
-        scene: scene.name.clone(),
-        backend: "gpu",
-        adapter: engine.adapter().to_string(),
-        particles: engine.len(),
-        dt: engine.dt(),
-        steps: engine.steps,
-        time: engine.time,
-        wall_seconds: wall,
-        particle_steps_per_second: engine.len() as f64 * engine.steps as f64 / wall.max(1e-9),
-        kinetic_initial,
-        kinetic_final,
-        rebuilds: engine.rebuilds()?,
-    })
 }

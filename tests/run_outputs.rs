@@ -1,7 +1,7 @@
 //! `powder run` outputs: VTK + pvd, CSV series, summary, checkpoints that resume bitwise,
 //! refusal of foreign checkpoints, Ctrl-C.
 
-use powder::run::{run_cpu_with, RunOptions};
+use powder::run::{run_cpu_with, run_gpu_with, RunOptions};
 use powder::scene::Scene;
 use std::path::Path;
 
@@ -16,14 +16,86 @@ fn cluster() -> Scene {
     s
 }
 
-fn run(scene: &Scene, out: &Path, steps: u64, resume: Option<&Path>) -> powder::run::RunSummary {
-    let opts = RunOptions {
+fn options(out: &Path, steps: u64, resume: Option<&Path>) -> RunOptions {
+    RunOptions {
         out_dir: Some(out.to_path_buf()),
         resume: resume.map(Path::to_path_buf),
         max_steps: Some(steps),
         ..Default::default()
-    };
-    run_cpu_with(scene, &opts, |_| {}).unwrap()
+    }
+}
+
+fn run(scene: &Scene, out: &Path, steps: u64, resume: Option<&Path>) -> powder::run::RunSummary {
+    run_cpu_with(scene, &options(out, steps, resume), |_| {}).unwrap()
+}
+
+/// The GPU context, or `None` (with a notice) when no adapter exists outside CI.
+fn gpu() -> Option<powder::gpu::GpuContext> {
+    match powder::gpu::GpuContext::new() {
+        Ok(ctx) => Some(ctx),
+        Err(e) if std::env::var_os("CI").is_none() => {
+            eprintln!("skipping GPU test: {e}");
+            None
+        }
+        Err(e) => panic!("CI needs a GPU adapter (lavapipe): {e}"),
+    }
+}
+
+/// The GPU backend writes the same outputs, and its checkpoints resume bitwise on the same
+/// adapter: resumed at step 5500, while the first contacts form (their history and the
+/// energy ledger are part of the state), the run ends with the straight run's bytes.
+#[test]
+fn gpu_outputs_and_bitwise_resume() {
+    let scene = cluster();
+    let (straight, split) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    let Some(ctx) = gpu() else { return };
+    let a = run_gpu_with(&scene, ctx, &options(straight.path(), 6500, None), |_| {}).unwrap();
+    assert_eq!(a.backend, "gpu");
+    assert!(a.adapter.is_some());
+    assert!(a.last.contacts.contacts > 0 && a.last.energies.dissipated > 0.0);
+    assert!(a.energy_balance_error < 1e-3, "{}", a.energy_balance_error);
+    let Some(ctx) = gpu() else { return };
+    run_gpu_with(&scene, ctx, &options(split.path(), 5500, None), |_| {}).unwrap();
+    let ckpt = split.path().join("checkpoint.bin");
+    let Some(ctx) = gpu() else { return };
+    let b = run_gpu_with(
+        &scene,
+        ctx,
+        &options(split.path(), 6500, Some(&ckpt)),
+        |_| {},
+    )
+    .unwrap();
+    assert_eq!(b.resumed_from, Some(5500));
+    let bytes = |d: &Path| std::fs::read(d.join("checkpoint.bin")).unwrap();
+    assert!(
+        bytes(straight.path()) == bytes(split.path()),
+        "resumed GPU run differs"
+    );
+    let csv = |d: &Path| std::fs::read_to_string(d.join("series.csv")).unwrap();
+    assert_eq!(csv(straight.path()), csv(split.path()));
+    assert_eq!(csv(straight.path()).lines().count(), 1 + 14);
+    assert!(split
+        .path()
+        .join("snapshots/cohesive_cluster_0000006500.vtp")
+        .exists());
+    // a GPU checkpoint does not resume on the CPU backend, and the reverse
+    let err = run_cpu_with(&scene, &options(split.path(), 7000, Some(&ckpt)), |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("gpu backend"), "{err}");
+    let cpu_dir = tempfile::tempdir().unwrap();
+    run(&scene, cpu_dir.path(), 100, None);
+    let Some(ctx) = gpu() else { return };
+    let cpu_ckpt = cpu_dir.path().join("checkpoint.bin");
+    let err = run_gpu_with(
+        &scene,
+        ctx,
+        &options(split.path(), 7000, Some(&cpu_ckpt)),
+        |_| {},
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(err.contains("cpu backend"), "{err}");
 }
 
 #[test]

@@ -399,3 +399,75 @@ jitter = 0.3
     );
     assert!(e.contact_stats().coordination > 2.0);
 }
+
+/// The GPU context, or `None` (with a notice) when no adapter exists outside CI.
+fn gpu() -> Option<powder::gpu::GpuContext> {
+    match powder::gpu::GpuContext::new() {
+        Ok(ctx) => Some(ctx),
+        Err(e) if std::env::var_os("CI").is_none() => {
+            eprintln!("skipping GPU test: {e}");
+            None
+        }
+        Err(e) => panic!("CI needs a GPU adapter (lavapipe): {e}"),
+    }
+}
+
+/// The run monitor on the GPU backend: the failures are detected on the device (overlap,
+/// escape, non-finite forces; checked once per batch of steps, no per-step read-back) and
+/// the run stops with a checkpoint of the last state that passed.
+#[test]
+fn the_gpu_monitor_stops_runs_that_go_wrong_and_keeps_the_last_good_state() {
+    use powder::run::run_gpu_with;
+    let dir = tempfile::tempdir().unwrap();
+    let opts = RunOptions {
+        out_dir: Some(dir.path().to_path_buf()),
+        ..Default::default()
+    };
+    // a forced time step far above the limit
+    let Some(ctx) = gpu() else { return };
+    let s = pair_scene(DtSetting::Fixed(2e-3), true, 0.5, 0.1);
+    let err = run_gpu_with(&s, ctx, &opts, |_| {})
+        .unwrap_err()
+        .to_string();
+    eprintln!("forced dt: {err}");
+    assert!(
+        err.contains("step") && err.contains("particle") && err.contains("time step"),
+        "{err}"
+    );
+    assert!(err.contains("checkpoint.bin"), "{err}");
+    let ckpt = dir.path().join("checkpoint.bin");
+    assert!(ckpt.exists());
+    // the checkpoint holds the last good state: it resumes (and fails again further on)
+    let Some(ctx) = gpu() else { return };
+    let resumed = RunOptions {
+        resume: Some(ckpt),
+        ..opts.clone()
+    };
+    let again = run_gpu_with(&s, ctx, &resumed, |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(again.contains("step"), "{again}");
+    // a violent impact: overlap beyond half the reduced radius, seen on the device
+    let Some(ctx) = gpu() else { return };
+    let err = run_gpu_with(
+        &pair_scene(DtSetting::Auto, false, 3.0, 0.1),
+        ctx,
+        &RunOptions::default(),
+        |_| {},
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        err.contains("particle") && err.contains("reduced radius"),
+        "{err}"
+    );
+    // particles leaving the domain
+    let mut s = pair_scene(DtSetting::Auto, false, -0.5, 3e-3);
+    s.duration = 0.05;
+    let Some(ctx) = gpu() else { return };
+    let err = run_gpu_with(&s, ctx, &RunOptions::default(), |_| {})
+        .unwrap_err()
+        .to_string();
+    eprintln!("escape: {err}");
+    assert!(err.contains("left the domain"), "{err}");
+}

@@ -54,6 +54,9 @@ use glam::DVec3;
 /// r_i + r_j + reach + skin, rebuilt once some particle has moved more than skin/2.
 pub const SKIN: f64 = 0.1;
 
+/// Bytes of the device monitor (`monitor` in `shaders/step.wgsl`).
+const MONITOR_BYTES: u64 = 32;
+
 /// Steps recorded into one submission.
 pub const STEPS_PER_SUBMIT: u64 = 64;
 
@@ -220,6 +223,31 @@ pub struct GpuEngine {
     particle_ledger: Option<wgpu::Buffer>,
     /// Engaged contacts that left the neighbour lists within one step (monitor[3]).
     dropped: u64,
+    /// Deepest overlap/a12 since the run monitor last looked, and a particle with a
+    /// contact beyond `run::MAX_OVERLAP_RATIO` if any (monitor[4], [5]).
+    peak: Option<(f64, Option<usize>)>,
+    /// A particle whose centre left the domain box (monitor[6]).
+    escaped: Option<usize>,
+    /// The neighbour lists (they persist between rebuilds, so they are state).
+    nbr: wgpu::Buffer,
+    /// Unit normals of the walls (into the domain).
+    wall_normals: Vec<DVec3>,
+}
+
+/// Everything that evolves in a GPU run, read back from the device: what a checkpoint
+/// stores to resume bitwise on the same adapter, and what the run monitor restores when it
+/// stops a run. The buffers are the current state set (the other set is rewritten by every
+/// step before it is read), the neighbour lists, the Verlet-skin state and the
+/// per-particle ledger.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct GpuSavedState {
+    pub time: f64,
+    pub steps: u64,
+    dropped: u64,
+    /// The adapter it ran on (a resume elsewhere continues, but not bitwise).
+    pub adapter: String,
+    /// (name, bytes), in a fixed order.
+    buffers: Vec<(String, Vec<u8>)>,
 }
 
 /// The step a scene's pair models need and their pair table as bytes, or why the GPU
@@ -379,6 +407,12 @@ impl GpuEngine {
             n_materials: r.n_materials as u32,
             n_walls: n_walls as u32,
             reach: r.max_reach as f32,
+            extent_cells: [
+                (extent.x / h) as f32,
+                (extent.y / h) as f32,
+                (extent.z / h) as f32,
+            ],
+            _pad: 0,
         };
         let step_buf = uniform_buffer(device, "step", bytemuck::bytes_of(&step));
         alloc.list.push(("step".into(), step_buf.size()));
@@ -397,7 +431,7 @@ impl GpuEngine {
             .then(|| alloc.buffer("wpred", 16 * n as u64));
         let old_index = alloc.buffer("old_index", 4 * n as u64);
         let nbr = alloc.buffer("nbr", 4 * n as u64 * cap as u64);
-        let monitor = alloc.buffer("monitor", 16);
+        let monitor = alloc.buffer("monitor", MONITOR_BYTES);
         let skin_buf = alloc.buffer("skin", 16);
         // f32::MAX as the largest displacement: the first step builds the lists
         let skin_init = [f32::MAX.to_bits(), 0, 0, (skin as f32).to_bits()];
@@ -496,6 +530,14 @@ impl GpuEngine {
             gravity: DVec3::from_array(scene.gravity),
             particle_ledger,
             dropped: 0,
+            peak: None,
+            escaped: None,
+            nbr,
+            wall_normals: scene
+                .walls
+                .iter()
+                .map(|w| DVec3::from_array(w.normal).normalize())
+                .collect(),
             ctx,
         };
         engine.initial_forces()?;
@@ -607,7 +649,9 @@ impl GpuEngine {
     /// dissipation (booked from the contacts' entry edges) is zeroed afterwards, as on the CPU.
     fn initial_forces(&mut self) -> Result<(), PowderError> {
         let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
-        self.ctx.queue.write_buffer(&self.monitor, 0, &[0u8; 16]);
+        self.ctx
+            .queue
+            .write_buffer(&self.monitor, 0, &[0u8; MONITOR_BYTES as usize]);
         self.record_step(&mut encoder, false);
         self.cur = 1 - self.cur;
         self.check_monitor(encoder)?;
@@ -625,9 +669,17 @@ impl GpuEngine {
     }
 
     fn check_monitor(&mut self, encoder: wgpu::CommandEncoder) -> Result<(), PowderError> {
-        let out = submit_and_read(&self.ctx, encoder, &[(&self.monitor, 16)])?;
+        let out = submit_and_read(&self.ctx, encoder, &[(&self.monitor, MONITOR_BYTES)])?;
         let m = u32s(&out[0]);
         self.dropped += m[3] as u64;
+        let ratio = f32::from_bits(m[4]) as f64;
+        let beyond = (m[5] != 0).then(|| m[5] as usize - 1);
+        if self.peak.is_none_or(|(r, _)| ratio > r) {
+            self.peak = Some((ratio, beyond.or(self.peak.and_then(|p| p.1))));
+        }
+        if m[6] != 0 && self.escaped.is_none() {
+            self.escaped = Some(m[6] as usize - 1);
+        }
         if m[1] != 0 {
             return Err(PowderError::Run(format!(
                 "step {}: particle {} has more than {} neighbours within reach + skin, the neighbour-list capacity; the scene is denser or more polydisperse than the capacity rule 5·(1 + r_max/r_min)²·(1 + skin/2r_min)³ expects",
@@ -650,7 +702,9 @@ impl GpuEngine {
         let mut left = steps;
         while left > 0 {
             let batch = left.min(STEPS_PER_SUBMIT);
-            self.ctx.queue.write_buffer(&self.monitor, 0, &[0u8; 16]);
+            self.ctx
+                .queue
+                .write_buffer(&self.monitor, 0, &[0u8; MONITOR_BYTES as usize]);
             let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
             for _ in 0..batch {
                 self.record_step(&mut encoder, true);
@@ -705,6 +759,77 @@ impl GpuEngine {
             velocities,
             angular_velocities,
         })
+    }
+
+    /// The state buffers, named as in [`GpuSavedState`].
+    fn state_buffers(&self) -> Vec<(String, &wgpu::Buffer)> {
+        let mut list = self.sets[self.cur].named("a");
+        list.push(("nbr".into(), &self.nbr));
+        list.push(("skin".into(), &self.skin));
+        if let Some(l) = &self.particle_ledger {
+            list.push(("particle_ledger".into(), l));
+        }
+        list
+    }
+
+    /// Reads the complete evolving state back (see [`GpuSavedState`]).
+    pub fn save_state(&self) -> Result<GpuSavedState, PowderError> {
+        let list = self.state_buffers();
+        let encoder = self.ctx.device.create_command_encoder(&Default::default());
+        let sources: Vec<(&wgpu::Buffer, u64)> = list.iter().map(|(_, b)| (*b, b.size())).collect();
+        let out = submit_and_read(&self.ctx, encoder, &sources)?;
+        Ok(GpuSavedState {
+            time: self.time,
+            steps: self.steps,
+            dropped: self.dropped,
+            adapter: self.ctx.summary.name.clone(),
+            buffers: list.into_iter().map(|(n, _)| n).zip(out).collect(),
+        })
+    }
+
+    /// Writes a saved state back: the run continues exactly as it would have from there.
+    /// Refused, naming the buffer, when it does not fit this engine (another scene,
+    /// another step variant or another ledger option).
+    pub fn restore_state(&mut self, saved: GpuSavedState) -> Result<(), PowderError> {
+        let list = self.state_buffers();
+        let names: Vec<&String> = list.iter().map(|(n, _)| n).collect();
+        let saved_names: Vec<&String> = saved.buffers.iter().map(|(n, _)| n).collect();
+        if names != saved_names {
+            return Err(PowderError::Run(format!(
+                "the saved GPU state holds buffers {saved_names:?}, this run needs {names:?} (another scene or step variant)"
+            )));
+        }
+        for ((name, buf), (_, bytes)) in list.iter().zip(&saved.buffers) {
+            if bytes.len() as u64 != buf.size() {
+                return Err(PowderError::Run(format!(
+                    "the saved GPU buffer `{name}` has {} bytes, this run's has {} (another scene?)",
+                    bytes.len(),
+                    buf.size()
+                )));
+            }
+            self.ctx.queue.write_buffer(buf, 0, bytes);
+        }
+        self.ctx.queue.submit([]);
+        self.time = saved.time;
+        self.steps = saved.steps;
+        self.dropped = saved.dropped;
+        self.peak = None;
+        self.escaped = None;
+        Ok(())
+    }
+
+    /// The deepest overlap over a12 of any contact in any step since the last call, and a
+    /// particle with a contact beyond `run::MAX_OVERLAP_RATIO` (0.5) if there was one.
+    /// Resets the record. Measured on the device every step (a workgroup maximum, then one
+    /// atomic per workgroup), read back once per batch of steps.
+    pub fn take_peak_overlap(&mut self) -> Option<(f64, Option<usize>)> {
+        self.peak.take()
+    }
+
+    /// A particle (persistent id) whose centre has left the domain box, checked on the
+    /// device every step; `None` while all are inside.
+    pub fn escaped(&self) -> Option<usize> {
+        self.escaped
     }
 
     /// Engaged contacts (touching, or inside a non-contact adhesion range) that left the
@@ -773,6 +898,33 @@ impl GpuEngine {
             s.mean_overlap_ratio = (sums[0] / 2.0 + sums[1]) / touching as f64;
         }
         Ok(s)
+    }
+
+    /// Force of the particles on each wall after the last step, N: the normal part, from the
+    /// ledger's per-contact normal force (the tangential part is not kept on the device).
+    pub fn wall_forces(&self) -> Result<Vec<DVec3>, PowderError> {
+        let walls = self.wall_normals.len();
+        let mut f = vec![DVec3::ZERO; walls];
+        if walls == 0 {
+            return Ok(f);
+        }
+        let Some(buf) = &self.sets[self.cur].wall_ledger else {
+            return Err(PowderError::Run(
+                "this GPU run keeps no energy ledger (GpuOptions { ledger: false }), which holds the wall forces".into(),
+            ));
+        };
+        let encoder = self.ctx.device.create_command_encoder(&Default::default());
+        let bytes = 16 * self.n as u64 * walls as u64;
+        let out = submit_and_read(&self.ctx, encoder, &[(buf, bytes)])?;
+        let rows: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&out[0]);
+        // slot k·walls + w: (overlap, normal force, .., engaged)
+        for (slot, r) in rows.iter().enumerate() {
+            if r[3] != 0.0 {
+                let w = slot % walls;
+                f[w] -= r[1] as f64 * self.wall_normals[w];
+            }
+        }
+        Ok(f)
     }
 
     /// Kinetic energy of a read-back state, translational plus rotational (I = 2/5·m·r²,

@@ -331,6 +331,9 @@ pub struct StepParams {
     /// At offset 16, not 0: see the note on the WGSL struct (a lavapipe slowdown and leak).
     pub gravity: [f32; 3],
     pub reach: f32,
+    /// The domain box's extent in cells (the run monitor's escape check).
+    pub extent_cells: [f32; 3],
+    pub _pad: u32,
 }
 
 /// A planar wall: a point as cell + offset and the unit normal. Twin of `Wall` in
@@ -614,6 +617,7 @@ mod tests {
                 ("n_materials", offset_of!(StepParams, n_materials)),
                 ("n_walls", offset_of!(StepParams, n_walls)),
                 ("reach", offset_of!(StepParams, reach)),
+                ("extent_cells", offset_of!(StepParams, extent_cells)),
             ],
         );
         check(

@@ -47,7 +47,7 @@ pub mod layout;
 pub mod shaders;
 
 pub use context::{AdapterPreference, AdapterSummary, GpuContext, LimitsSummary};
-pub use engine::{GpuEngine, GpuOptions, GpuState};
+pub use engine::{GpuEngine, GpuOptions, GpuSavedState, GpuState};
 pub use grid::{ExclusiveScan, GridSort, SortResult};
 pub use layout::{decode, encode, CellCoord, CellOffset, GridParams, PackedPosition};
 pub use shaders::{all_variants, validate, ShaderVariant};

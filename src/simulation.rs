@@ -1,0 +1,225 @@
+//! What `powder run` needs of a backend, so one run loop (outputs, checkpoints, the run
+//! monitor) drives both the f64 CPU reference ([`CpuEngine`]) and the GPU engine
+//! ([`GpuEngine`]).
+
+use crate::checkpoint;
+use crate::cpu::{ContactStats, CpuEngine, CpuState, Energies, Partner};
+use crate::error::PowderError;
+use crate::gpu::{GpuEngine, GpuSavedState};
+use crate::scene::Scene;
+use glam::DVec3;
+use std::path::Path;
+
+/// The state of a simulation at one instant, read back in the scene's particle order.
+#[derive(Clone, Debug)]
+pub struct Observation {
+    pub positions: Vec<DVec3>,
+    pub velocities: Vec<DVec3>,
+    /// Empty when the particles do not rotate.
+    pub angular_velocities: Vec<DVec3>,
+    pub energies: Energies,
+    pub contacts: ContactStats,
+    /// Force of the particles on each wall, N (GPU: the normal part only).
+    pub wall_forces: Vec<DVec3>,
+}
+
+/// A deepest overlap the run monitor found: the ratio over a12 and who it involves.
+#[derive(Clone, Debug)]
+pub struct PeakOverlap {
+    pub ratio: f64,
+    /// "particle 3 overlaps particle 7", or what the backend knows.
+    pub who: String,
+}
+
+/// A backend as `powder run` drives it.
+pub trait Simulation {
+    /// A saved state ([`Self::save`]), restored when the run monitor stops a run.
+    type Saved;
+    /// "cpu" or "gpu".
+    fn backend(&self) -> &'static str;
+    /// The GPU adapter, if any.
+    fn adapter(&self) -> Option<String>;
+    fn steps(&self) -> u64;
+    fn time(&self) -> f64;
+    fn dt(&self) -> f64;
+    fn len(&self) -> usize;
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+    fn radii(&self) -> &[f64];
+    /// Advances `n` steps.
+    fn run_steps(&mut self, n: u64) -> Result<(), PowderError>;
+    /// Reads the state, energies, contact statistics and wall forces.
+    fn observe(&self) -> Result<Observation, PowderError>;
+    fn save(&self) -> Result<Self::Saved, PowderError>;
+    fn restore(&mut self, saved: Self::Saved) -> Result<(), PowderError>;
+    /// Writes a checkpoint that resumes bitwise on this backend.
+    fn write_checkpoint(&self, path: &Path, scene: &Scene) -> Result<(), PowderError>;
+    /// Continues from a checkpoint of `scene` written by this backend.
+    fn read_checkpoint(&mut self, path: &Path, scene: &Scene) -> Result<(), PowderError>;
+    /// A particle with a non-finite position or velocity (the GPU engine reports
+    /// non-finite accelerations from `run_steps` already).
+    fn non_finite(&self) -> Option<usize>;
+    /// The deepest overlap over a12 since the last call (every step is watched).
+    fn take_peak_overlap(&mut self) -> Option<PeakOverlap>;
+    /// Up to `limit` particles whose centre has left the domain box.
+    fn escaped(&self, limit: usize) -> Vec<usize>;
+    /// Extra lines for the summary (e.g. neighbour-list rebuilds).
+    fn notes(&self) -> Result<Vec<String>, PowderError>;
+}
+
+impl Simulation for CpuEngine {
+    type Saved = CpuState;
+    fn backend(&self) -> &'static str {
+        "cpu"
+    }
+    fn adapter(&self) -> Option<String> {
+        None
+    }
+    fn steps(&self) -> u64 {
+        self.steps
+    }
+    fn time(&self) -> f64 {
+        self.time
+    }
+    fn dt(&self) -> f64 {
+        CpuEngine::dt(self)
+    }
+    fn len(&self) -> usize {
+        CpuEngine::len(self)
+    }
+    fn radii(&self) -> &[f64] {
+        CpuEngine::radii(self)
+    }
+    fn run_steps(&mut self, n: u64) -> Result<(), PowderError> {
+        CpuEngine::run_steps(self, n)
+    }
+    fn observe(&self) -> Result<Observation, PowderError> {
+        Ok(Observation {
+            positions: self.positions().to_vec(),
+            velocities: self.velocities().to_vec(),
+            angular_velocities: self.angular_velocities().to_vec(),
+            energies: self.energies(),
+            contacts: self.contact_stats(),
+            wall_forces: self.wall_forces(),
+        })
+    }
+    fn save(&self) -> Result<CpuState, PowderError> {
+        Ok(self.state())
+    }
+    fn restore(&mut self, saved: CpuState) -> Result<(), PowderError> {
+        CpuEngine::restore(self, saved)
+    }
+    fn write_checkpoint(&self, path: &Path, scene: &Scene) -> Result<(), PowderError> {
+        checkpoint::save(path, scene, self)
+    }
+    fn read_checkpoint(&mut self, path: &Path, scene: &Scene) -> Result<(), PowderError> {
+        CpuEngine::restore(self, checkpoint::load(path, scene)?)
+    }
+    fn non_finite(&self) -> Option<usize> {
+        CpuEngine::non_finite(self)
+    }
+    fn take_peak_overlap(&mut self) -> Option<PeakOverlap> {
+        CpuEngine::take_peak_overlap(self).map(|(ratio, i, partner)| PeakOverlap {
+            ratio,
+            who: match partner {
+                Partner::Particle(j) => format!("particle {i} overlaps particle {j}"),
+                Partner::Wall(w) => format!("particle {i} overlaps wall {w}"),
+            },
+        })
+    }
+    fn escaped(&self, limit: usize) -> Vec<usize> {
+        CpuEngine::escaped(self, limit)
+    }
+    fn notes(&self) -> Result<Vec<String>, PowderError> {
+        Ok(Vec::new())
+    }
+}
+
+impl Simulation for GpuEngine {
+    type Saved = GpuSavedState;
+    fn backend(&self) -> &'static str {
+        "gpu"
+    }
+    fn adapter(&self) -> Option<String> {
+        Some(GpuEngine::adapter(self).to_string())
+    }
+    fn steps(&self) -> u64 {
+        self.steps
+    }
+    fn time(&self) -> f64 {
+        self.time
+    }
+    fn dt(&self) -> f64 {
+        GpuEngine::dt(self)
+    }
+    fn len(&self) -> usize {
+        GpuEngine::len(self)
+    }
+    fn radii(&self) -> &[f64] {
+        GpuEngine::radii(self)
+    }
+    fn run_steps(&mut self, n: u64) -> Result<(), PowderError> {
+        GpuEngine::run_steps(self, n)
+    }
+    fn observe(&self) -> Result<Observation, PowderError> {
+        let s = self.state()?;
+        Ok(Observation {
+            energies: self.energies(&s)?,
+            contacts: self.contact_stats()?,
+            wall_forces: self.wall_forces()?,
+            positions: s.positions,
+            velocities: s.velocities,
+            angular_velocities: s.angular_velocities,
+        })
+    }
+    fn save(&self) -> Result<GpuSavedState, PowderError> {
+        self.save_state()
+    }
+    fn restore(&mut self, saved: GpuSavedState) -> Result<(), PowderError> {
+        self.restore_state(saved)
+    }
+    fn write_checkpoint(&self, path: &Path, scene: &Scene) -> Result<(), PowderError> {
+        checkpoint::save_gpu(path, scene, &self.save_state()?)
+    }
+    fn read_checkpoint(&mut self, path: &Path, scene: &Scene) -> Result<(), PowderError> {
+        let saved = checkpoint::load_gpu(path, scene)?;
+        if saved.adapter != GpuEngine::adapter(self) {
+            eprintln!(
+                "notice: checkpoint `{}` was written on {}; continuing on {} (not bitwise identical to an uninterrupted run)",
+                path.display(),
+                saved.adapter,
+                GpuEngine::adapter(self)
+            );
+        }
+        self.restore_state(saved)
+    }
+    fn non_finite(&self) -> Option<usize> {
+        None
+    }
+    fn take_peak_overlap(&mut self) -> Option<PeakOverlap> {
+        GpuEngine::take_peak_overlap(self).map(|(ratio, beyond)| PeakOverlap {
+            ratio,
+            who: match beyond {
+                Some(i) => format!("particle {i} overlaps a neighbour or wall"),
+                None => "a contact overlaps".into(),
+            },
+        })
+    }
+    fn escaped(&self, _limit: usize) -> Vec<usize> {
+        GpuEngine::escaped(self).into_iter().collect()
+    }
+    fn notes(&self) -> Result<Vec<String>, PowderError> {
+        let mut notes = vec![format!(
+            "neighbour lists rebuilt {} times (Verlet skin; the initial build included)",
+            self.rebuilds()?
+        )];
+        if self.dropped_contacts() > 0 {
+            notes.push(format!(
+                "{} engaged contacts left the neighbour lists within one step (moved more than the skin in one step): the time step is too large for these speeds",
+                self.dropped_contacts()
+            ));
+        }
+        Ok(notes)
+    }
+}
