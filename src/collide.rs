@@ -282,6 +282,35 @@ struct PairView {
     in_contact: Option<bool>,
 }
 
+/// One step of a traced collision (`powder collide --trace`), in the scene's units.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct TraceRow {
+    /// Time since the start of the run.
+    pub t: f64,
+    /// Overlap δ (> 0: compressed).
+    pub delta: f64,
+    /// Approach speed δ̇ (> 0: approaching).
+    pub delta_dot: f64,
+    /// Normal contact force, repulsive positive.
+    pub force: f64,
+    /// The model's contact radius a (JKR family: the state variable of the krijt/stress
+    /// dissipations, else a_JKR(δ)); 0 out of contact or for other models.
+    pub a: f64,
+    /// The JKR equilibrium radius a_JKR(δ) at this overlap (JKR family, in contact), else 0.
+    pub a_jkr: f64,
+}
+
+impl TraceRow {
+    pub const CSV_HEADER: &'static str = "t,delta,delta_dot,force,a,a_jkr";
+
+    pub fn csv(&self) -> String {
+        format!(
+            "{:e},{:e},{:e},{:e},{:e},{:e}",
+            self.t, self.delta, self.delta_dot, self.force, self.a, self.a_jkr
+        )
+    }
+}
+
 /// What the collision loop needs of an engine.
 trait CollisionRun {
     fn step(&mut self) -> Result<(), PowderError>;
@@ -291,6 +320,8 @@ trait CollisionRun {
     /// (kinetic, total) energy; total is `None` where the backend keeps no ledger.
     fn energy(&self, view: &PairView) -> (f64, Option<f64>, Option<f64>);
     fn rotates(&self) -> bool;
+    /// Force on sphere 1 and the pair's contact history (CPU only, for the trace).
+    fn trace_sample(&self) -> Option<(DVec3, Option<crate::model::ContactHistory>)>;
 }
 
 struct CpuRun {
@@ -334,6 +365,14 @@ impl CollisionRun for CpuRun {
     }
     fn rotates(&self) -> bool {
         self.engine.rotates()
+    }
+    fn trace_sample(&self) -> Option<(DVec3, Option<crate::model::ContactHistory>)> {
+        let history = if self.wall {
+            self.engine.wall_contact_history(0, 0)
+        } else {
+            self.engine.contact_history(0, 1)
+        };
+        Some((self.engine.forces()[0], history))
     }
 }
 
@@ -395,6 +434,9 @@ impl CollisionRun for GpuRun {
     fn rotates(&self) -> bool {
         self.engine.rotates()
     }
+    fn trace_sample(&self) -> Option<(DVec3, Option<crate::model::ContactHistory>)> {
+        None
+    }
 }
 
 impl CollideSpec {
@@ -425,6 +467,21 @@ pub fn collide(spec: &CollideSpec) -> Result<CollideResult, PowderError> {
     collide_on(spec, Backend::Cpu)
 }
 
+/// Runs one collision on the CPU backend and records every step (see [`TraceRow`]).
+pub fn collide_traced(spec: &CollideSpec) -> Result<(CollideResult, Vec<TraceRow>), PowderError> {
+    spec.validate()?;
+    let dt = spec.dt.unwrap_or_else(|| spec.time_step().default);
+    let scene = spec.scene(dt);
+    let wall_x = scene.walls.first().map_or(0.0, |w| w.point[0]);
+    let run = CpuRun {
+        engine: CpuEngine::new(&scene)?,
+        wall: spec.wall,
+    };
+    let mut rows = Vec::new();
+    let result = run_collision(spec, run, wall_x, dt, "cpu", None, Some(&mut rows))?;
+    Ok((result, rows))
+}
+
 /// Runs one collision on the chosen backend.
 pub fn collide_on(spec: &CollideSpec, backend: Backend) -> Result<CollideResult, PowderError> {
     spec.validate()?;
@@ -438,16 +495,21 @@ pub fn collide_on(spec: &CollideSpec, backend: Backend) -> Result<CollideResult,
                 engine,
                 wall: spec.wall,
             };
-            run_collision(spec, run, wall_x, dt, "cpu", None)
+            run_collision(spec, run, wall_x, dt, "cpu", None, None)
         }
         Backend::Gpu => {
+            if let ContactModel::Jkr(p) = &spec.model {
+                if let Some(why) = p.gpu_unsupported() {
+                    return Err(PowderError::Run(why));
+                }
+            }
             let engine = GpuEngine::new(&scene, GpuContext::new()?)?;
             let adapter = engine.adapter().to_string();
             let run = GpuRun {
                 engine,
                 wall: spec.wall,
             };
-            run_collision(spec, run, wall_x, dt, "gpu", Some(adapter))
+            run_collision(spec, run, wall_x, dt, "gpu", Some(adapter), None)
         }
     }
 }
@@ -459,6 +521,7 @@ fn run_collision(
     dt: f64,
     backend: &'static str,
     adapter: Option<String>,
+    mut trace: Option<&mut Vec<TraceRow>>,
 ) -> Result<CollideResult, PowderError> {
     let geom = spec.geometry();
     let reach = spec.model.reach(geom.r_eff());
@@ -486,7 +549,20 @@ fn run_collision(
         }
         run.step()?;
         let view = run.view()?;
-        let (delta, vn, _, vt) = spec.pair_state(&view, wall_x);
+        let (delta, vn, n, vt) = spec.pair_state(&view, wall_x);
+        if let Some(rows) = trace.as_deref_mut() {
+            if let Some((f, history)) = run.trace_sample() {
+                rows.push(trace_row(
+                    spec,
+                    &geom,
+                    run.time(),
+                    delta,
+                    vn,
+                    f.dot(n),
+                    history,
+                ));
+            }
+        }
         let neck = view.in_contact.unwrap_or(delta > 0.0);
         let contact = delta > 0.0 || (touched && neck);
         if contact {
@@ -552,6 +628,103 @@ fn run_collision(
     };
     predict(spec, &geom, &mut result);
     Ok(result)
+}
+
+fn trace_row(
+    spec: &CollideSpec,
+    geom: &PairGeometry,
+    t: f64,
+    delta: f64,
+    delta_dot: f64,
+    force: f64,
+    history: Option<crate::model::ContactHistory>,
+) -> TraceRow {
+    let mut row = TraceRow {
+        t,
+        delta,
+        delta_dot,
+        force,
+        ..Default::default()
+    };
+    if let ContactModel::Jkr(p) = &spec.model {
+        let touched = history.is_some_and(|h| h.touched);
+        if touched || (p.gamma() == 0.0 && delta > 0.0) {
+            let r = geom.r_eff();
+            row.a_jkr = p.contact_radius(delta, r);
+            row.a = match history {
+                Some(h) if h.contact_radius > 0.0 => h.contact_radius,
+                _ => row.a_jkr,
+            };
+        }
+    }
+    row
+}
+
+/// F(δ) and a(δ) of a traced JKR-family collision beside the JKR equilibrium curves, as
+/// F/Fc and a/a0 against δ/δ0 (in contact only).
+pub fn trace_plot(spec: &CollideSpec, result: &CollideResult, rows: &[TraceRow]) -> Option<Plot> {
+    let ContactModel::Jkr(p) = &spec.model else {
+        return None;
+    };
+    let r = spec.geometry().r_eff();
+    if p.gamma() == 0.0 {
+        return None;
+    }
+    let (fc, a0, d0) = (p.fc(r), p.a0(r), p.delta0(r));
+    let inside: Vec<&TraceRow> = rows.iter().filter(|row| row.a > 0.0).collect();
+    let dmax = inside.iter().fold(1.0f64, |m, row| m.max(row.delta / d0));
+    let dmin = p.pulloff_overlap(r) / d0;
+    let samples = 400;
+    let curve: Vec<(f64, f64, f64)> = (0..=samples)
+        .map(|k| {
+            let d = dmin + (dmax - dmin) * k as f64 / samples as f64;
+            let a = p.contact_radius(d * d0, r);
+            (d, p.elastic_force(a, r) / fc, a / a0)
+        })
+        .collect();
+    let series = vec![
+        Series {
+            label: "F/Fc, JKR equilibrium (paper 001 eq. 6)".into(),
+            points: curve.iter().map(|c| (c.0, c.1)).collect(),
+            style: Style::DashedLine,
+        },
+        Series {
+            label: format!("F/Fc, powder collide ({})", p.dissipation.name()),
+            points: inside
+                .iter()
+                .map(|row| (row.delta / d0, row.force / fc))
+                .collect(),
+            style: Style::Line,
+        },
+        Series {
+            label: "a/a0, JKR equilibrium (paper 001 eq. 5)".into(),
+            points: curve.iter().map(|c| (c.0, c.2)).collect(),
+            style: Style::DashedLine,
+        },
+        Series {
+            label: format!("a/a0, powder collide ({})", p.dissipation.name()),
+            points: inside
+                .iter()
+                .map(|row| (row.delta / d0, row.a / a0))
+                .collect(),
+            style: Style::Line,
+        },
+    ];
+    Some(Plot {
+        title: format!(
+            "Head-on JKR collision at v = {} ({} dissipation, e = {:.4})",
+            result.velocity,
+            p.dissipation.name(),
+            result.e
+        ),
+        x_label: format!("overlap delta/delta0  (delta0 = {d0:.4e})"),
+        y_label: format!("F/Fc  and  a/a0  (Fc = {fc:.4e}, a0 = {a0:.4e})"),
+        log_x: false,
+        log_y: false,
+        series,
+        y_range: None,
+        legend: Legend::UpperLeft,
+    })
 }
 
 /// The closed-form restitution of this collision, where one applies.
@@ -782,8 +955,47 @@ pub fn restitution_plot(spec: &CollideSpec, results: &[CollideResult], log: bool
             style: Style::Line,
         });
     }
+    // a dissipative JKR model: the undamped JKR closed form for reference
+    if let ContactModel::Jkr(p) = &spec.model {
+        if series.is_empty() && p.surface_energy > 0.0 && p.dissipation != Dissipation::None {
+            let plain = CollideSpec {
+                model: ContactModel::Jkr(crate::model::JkrParams {
+                    dissipation: Dissipation::None,
+                    ..*p
+                }),
+                ..spec.clone()
+            };
+            let points: Vec<(f64, f64)> = (0..=samples)
+                .filter_map(|k| {
+                    let t = k as f64 / samples as f64;
+                    let v = if log && vmin > 0.0 {
+                        vmin * (vmax / vmin).powf(t)
+                    } else {
+                        vmin + (vmax - vmin) * t
+                    };
+                    closed_form_e(&CollideSpec {
+                        velocity: v,
+                        ..plain.clone()
+                    })
+                    .map(|e| (x_of(v), e))
+                })
+                .collect();
+            series.push(Series {
+                label: "JKR without dissipation (closed form, loss 0.7722 Fc d0)".into(),
+                points,
+                style: Style::DashedLine,
+            });
+        }
+    }
     series.push(Series {
-        label: "powder collide (CPU f64)".into(),
+        label: format!(
+            "powder collide (CPU f64){}",
+            match &spec.model {
+                ContactModel::Jkr(p) if p.dissipation != Dissipation::None =>
+                    format!(", {} dissipation", p.dissipation.name()),
+                _ => String::new(),
+            }
+        ),
         points: results.iter().map(|r| (x_of(r.velocity), r.e)).collect(),
         style: Style::Markers,
     });

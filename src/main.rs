@@ -204,6 +204,10 @@ enum DissipationKind {
     Tsuji,
     /// Paper 001 eq. 19 with --D, --alpha, --beta.
     Powerlaw,
+    /// Krijt viscoelastic JKR (paper 001 eqs. 10-12, B1-B2) with --tvis [--sigma0].
+    Krijt,
+    /// Stress-dependent Krijt (paper 001 eqs. 17-18) with --tvis0-per-radius, --B, --zeta [--sigma0].
+    Stress,
 }
 
 #[derive(Args)]
@@ -265,6 +269,22 @@ struct CollideArgs {
     /// JKR/Hertz power-law dissipation: contact-radius exponent beta.
     #[arg(long)]
     beta: Option<f64>,
+    /// JKR --dissipation krijt: relaxation time T_vis, s (paper 001 eq. 12).
+    #[arg(long)]
+    tvis: Option<f64>,
+    /// JKR --dissipation krijt/stress: crack stress sigma0 ~ gamma/(atomic spacing), Pa
+    /// (paper 001 eq. B2); default 0 = the contact radius follows the JKR curve instantly.
+    #[arg(long)]
+    sigma0: Option<f64>,
+    /// JKR --dissipation stress: C of T_vis,0 = C*R, s/m (paper 001 eq. 18).
+    #[arg(long = "tvis0-per-radius")]
+    tvis0_per_radius: Option<f64>,
+    /// JKR --dissipation stress: pressure coefficient B (paper 001 eq. 17).
+    #[arg(long = "B")]
+    b: Option<f64>,
+    /// JKR --dissipation stress: pressure exponent zeta (paper 001 eq. 17).
+    #[arg(long)]
+    zeta: Option<f64>,
     /// JKR/Hertz: sliding friction coefficient mu_s (0 = frictionless).
     #[arg(long)]
     friction: Option<f64>,
@@ -301,9 +321,15 @@ struct CollideArgs {
     /// Logarithmic sweep spacing (and log velocity axis in --plot).
     #[arg(long)]
     log: bool,
-    /// Draw e against v (and chi) with the closed form on top, as SVG.
+    /// Draw e against v (and chi) with the closed form on top, as SVG; for a single
+    /// --velocity of a JKR model (with surface energy) on the CPU backend: F/Fc and a/a0
+    /// against delta/delta0 beside the JKR equilibrium curves.
     #[arg(long)]
     plot: Option<PathBuf>,
+    /// Write every step of a single collision as CSV: t, delta, delta_dot, F, a, a_JKR(delta)
+    /// (CPU backend).
+    #[arg(long)]
+    trace: Option<PathBuf>,
     /// Time step, s (default tc/50 on the stiffest branch).
     #[arg(long)]
     dt: Option<f64>,
@@ -367,6 +393,11 @@ fn contact_model(a: &CollideArgs) -> Result<ContactModel, PowderError> {
         (a.d.is_some(), "D"),
         (a.alpha.is_some(), "alpha"),
         (a.beta.is_some(), "beta"),
+        (a.tvis.is_some(), "tvis"),
+        (a.sigma0.is_some(), "sigma0"),
+        (a.tvis0_per_radius.is_some(), "tvis0_per_radius"),
+        (a.b.is_some(), "B"),
+        (a.zeta.is_some(), "zeta"),
         (a.friction.is_some(), "friction"),
         (a.rolling_hysteresis.is_some(), "rolling_hysteresis"),
         (a.pulloff.is_some(), "pulloff"),
@@ -418,23 +449,38 @@ fn contact_model(a: &CollideArgs) -> Result<ContactModel, PowderError> {
             let kind = a
                 .dissipation
                 .or(a.restitution.map(|_| DissipationKind::Tsuji));
-            let dissipation = match kind {
-                None => {
-                    for (given, name) in [
-                        (a.d.is_some(), "D"),
-                        (a.alpha.is_some(), "alpha"),
-                        (a.beta.is_some(), "beta"),
-                    ] {
-                        if given {
-                            return Err(ParamError::new(
-                                name,
-                                format!("--{name} needs --dissipation powerlaw"),
-                            )
-                            .into());
-                        }
-                    }
-                    Dissipation::None
+            // each dissipation's own options, refused with the others
+            let owners: [(bool, &'static str, DissipationKind); 8] = [
+                (a.d.is_some(), "D", DissipationKind::Powerlaw),
+                (a.alpha.is_some(), "alpha", DissipationKind::Powerlaw),
+                (a.beta.is_some(), "beta", DissipationKind::Powerlaw),
+                (a.tvis.is_some(), "tvis", DissipationKind::Krijt),
+                (
+                    a.tvis0_per_radius.is_some(),
+                    "tvis0_per_radius",
+                    DissipationKind::Stress,
+                ),
+                (a.b.is_some(), "B", DissipationKind::Stress),
+                (a.zeta.is_some(), "zeta", DissipationKind::Stress),
+                (a.sigma0.is_some(), "sigma0", DissipationKind::Krijt),
+            ];
+            for (given, name, owner) in owners {
+                let fits = Some(owner) == kind
+                    || (name == "sigma0" && kind == Some(DissipationKind::Stress));
+                if given && !fits {
+                    let needs = match name {
+                        "sigma0" => "--dissipation krijt or stress".to_string(),
+                        _ => format!("--dissipation {}", format!("{owner:?}").to_lowercase()),
+                    };
+                    return Err(ParamError::new(
+                        name,
+                        format!("--{} needs {needs}", name.replace('_', "-")),
+                    )
+                    .into());
                 }
+            }
+            let dissipation = match kind {
+                None => Dissipation::None,
                 Some(DissipationKind::Tsuji) => Dissipation::Tsuji {
                     restitution: a.restitution.ok_or_else(|| {
                         PowderError::from(ParamError::new(
@@ -453,6 +499,34 @@ fn contact_model(a: &CollideArgs) -> Result<ContactModel, PowderError> {
                         d: required(a.d, "D", "jkr --dissipation powerlaw")?,
                         alpha: required(a.alpha, "alpha", "jkr --dissipation powerlaw")?,
                         beta: required(a.beta, "beta", "jkr --dissipation powerlaw")?,
+                    }
+                }
+                Some(DissipationKind::Krijt) => {
+                    reject(
+                        a.restitution.is_some(),
+                        "restitution",
+                        "--dissipation krijt",
+                    )?;
+                    Dissipation::Krijt {
+                        tvis: required(a.tvis, "tvis", "jkr --dissipation krijt")?,
+                        sigma0: a.sigma0.unwrap_or(0.0),
+                    }
+                }
+                Some(DissipationKind::Stress) => {
+                    reject(
+                        a.restitution.is_some(),
+                        "restitution",
+                        "--dissipation stress",
+                    )?;
+                    Dissipation::Stress {
+                        tvis0_per_radius: required(
+                            a.tvis0_per_radius,
+                            "tvis0_per_radius",
+                            "jkr --dissipation stress",
+                        )?,
+                        b: required(a.b, "B", "jkr --dissipation stress")?,
+                        zeta: required(a.zeta, "zeta", "jkr --dissipation stress")?,
+                        sigma0: a.sigma0.unwrap_or(0.0),
                     }
                 }
             };
@@ -534,6 +608,52 @@ fn collide_cmd(a: &CollideArgs) -> Result<(), PowderError> {
             eprintln!("note: {note}");
         }
     }
+    if let ContactModel::Jkr(p) = &spec.model {
+        if a.backend == Backend::Gpu {
+            if let Some(why) = p.gpu_unsupported() {
+                return Err(PowderError::Run(why));
+            }
+        }
+    }
+    let single_jkr = a.sweep_velocity.is_none()
+        && matches!(&spec.model, ContactModel::Jkr(p) if p.surface_energy > 0.0);
+    if a.trace.is_some() || (a.plot.is_some() && single_jkr) {
+        if a.sweep_velocity.is_some() {
+            return Err(ParamError::new(
+                "trace",
+                "--trace records one collision: give --velocity, not --sweep-velocity",
+            )
+            .into());
+        }
+        if a.backend == Backend::Gpu {
+            return Err(ParamError::new(
+                "trace",
+                "--trace and the F(delta)/a(delta) --plot of a single JKR collision read the CPU engine: use --backend cpu",
+            )
+            .into());
+        }
+        let (result, rows) = collide::collide_traced(&spec)?;
+        if let Some(path) = &a.trace {
+            let mut text = String::from(collide::TraceRow::CSV_HEADER);
+            text.push('\n');
+            for row in &rows {
+                text.push_str(&row.csv());
+                text.push('\n');
+            }
+            std::fs::write(path, text)
+                .map_err(|e| PowderError::io(format!("cannot write {}", path.display()), e))?;
+            eprintln!("wrote {} ({} steps)", path.display(), rows.len());
+        }
+        if let Some(path) = &a.plot {
+            match collide::trace_plot(&spec, &result, &rows) {
+                Some(plot) => plot.write_svg(path)?,
+                None => collide::restitution_plot(&spec, std::slice::from_ref(&result), a.log)
+                    .write_svg(path)?,
+            }
+            eprintln!("wrote {}", path.display());
+        }
+        return print_results(a, &[result]);
+    }
     let results = match &a.sweep_velocity {
         Some(text) => {
             if a.velocity.is_some() {
@@ -553,6 +673,10 @@ fn collide_cmd(a: &CollideArgs) -> Result<(), PowderError> {
         collide::restitution_plot(&spec, &results, a.log).write_svg(path)?;
         eprintln!("wrote {}", path.display());
     }
+    print_results(a, &results)
+}
+
+fn print_results(a: &CollideArgs, results: &[CollideResult]) -> Result<(), PowderError> {
     if a.json {
         let text = if a.sweep_velocity.is_some() {
             serde_json::to_string_pretty(&results)
@@ -562,7 +686,7 @@ fn collide_cmd(a: &CollideArgs) -> Result<(), PowderError> {
         .map_err(|e| PowderError::Run(format!("cannot encode JSON: {e}")))?;
         println!("{text}");
     } else {
-        print_table(&results);
+        print_table(results);
     }
     Ok(())
 }

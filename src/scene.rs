@@ -54,11 +54,21 @@
 //! surface_energy = 0.05         # jkr only, required, J/m^2, >= 0: gamma per surface, Fc = 3 pi gamma R*
 //! dissipation = "none"          # "none" (default), "tsuji" (paper 002 eqs. 11-16, needs
 //!                               # restitution; the default when restitution is given) or
-//!                               # "powerlaw" (paper 001 eq. 19, needs D, alpha, beta)
+//!                               # "powerlaw" (paper 001 eq. 19, needs D, alpha, beta),
+//!                               # "krijt" (jkr only, paper 001 eqs. 10-12, B1-B2, needs tvis)
+//!                               # or "stress" (jkr only, paper 001 eqs. 17-18, needs
+//!                               # tvis0_per_radius, B, zeta); krijt/stress: CPU only so far
 //! restitution = 0.9             # target restitution e in (0, 1] of "tsuji"
 //! D = 118.0                     # "powerlaw": F = sgn(v) D E* |v|^alpha a^beta
 //! alpha = 3.0
 //! beta = 1.5
+//! tvis = 0.075                  # "krijt": relaxation time T_vis, s, >= 0
+//! tvis0_per_radius = 2.1e-4     # "stress": C, s/m, >= 0: T_vis = C R exp[(B p_c/E*)^zeta]
+//! B = 6.2                       # "stress": >= 0
+//! zeta = 4.0                    # "stress": > 0
+//! sigma0 = 2.9                  # "krijt"/"stress": Pa, >= 0, default 0: crack stress
+//!                               # ~ gamma/(atomic spacing) of the contact-radius dynamics
+//!                               # (eq. B2); 0 = a follows the JKR curve instantly
 //! friction = 0.0                # >= 0, default 0: sliding friction mu_s (adhesive Coulomb
 //!                               # limit |Ft| <= mu_s |F_N + 2 Fc|); > 0 makes particles rotate
 //! rolling_hysteresis = 0.0      # jkr only, >= 0, default 0: Delta gamma / gamma of the
@@ -322,6 +332,11 @@ const JKR_KEYS: &[&str] = &[
     "D",
     "alpha",
     "beta",
+    "tvis",
+    "sigma0",
+    "tvis0_per_radius",
+    "B",
+    "zeta",
     "friction",
     "rolling_hysteresis",
     "pulloff",
@@ -1133,7 +1148,10 @@ fn build_model(t: &Tbl, kind: &str, owner: &str) -> Res<ContactModel> {
             "none"
         };
         let dissipation = match t
-            .choice("dissipation", &["none", "tsuji", "powerlaw"])?
+            .choice(
+                "dissipation",
+                &["none", "tsuji", "powerlaw", "krijt", "stress"],
+            )?
             .unwrap_or(default)
         {
             "tsuji" => Dissipation::Tsuji {
@@ -1149,15 +1167,59 @@ fn build_model(t: &Tbl, kind: &str, owner: &str) -> Res<ContactModel> {
                 alpha: t.f64_req("alpha", "the power-law velocity exponent alpha")?,
                 beta: t.f64_req("beta", "the power-law contact-radius exponent beta")?,
             },
+            "krijt" => Dissipation::Krijt {
+                tvis: t.f64_req(
+                    "tvis",
+                    "the relaxation time T_vis of dissipation = \"krijt\" (paper 001 eq. 12)",
+                )?,
+                sigma0: t.f64("sigma0")?.unwrap_or(0.0),
+            },
+            "stress" => Dissipation::Stress {
+                tvis0_per_radius: t.f64_req(
+                    "tvis0_per_radius",
+                    "C of T_vis,0 = C*R of dissipation = \"stress\" (paper 001 eq. 18)",
+                )?,
+                b: t.f64_req(
+                    "B",
+                    "the pressure coefficient B of dissipation = \"stress\" (paper 001 eq. 17)",
+                )?,
+                zeta: t.f64_req(
+                    "zeta",
+                    "the pressure exponent zeta of dissipation = \"stress\" (paper 001 eq. 17)",
+                )?,
+                sigma0: t.f64("sigma0")?.unwrap_or(0.0),
+            },
             _ => Dissipation::None,
         };
-        for key in ["D", "alpha", "beta"] {
-            if t.has(key) && !matches!(dissipation, Dissipation::PowerLaw { .. }) {
-                return Err(t.err_key(
-                    key,
-                    format!("`{key}` applies to dissipation = \"powerlaw\" only"),
-                ));
+        let owners: [(&str, &[&str]); 6] = [
+            ("D", &["powerlaw"]),
+            ("alpha", &["powerlaw"]),
+            ("beta", &["powerlaw"]),
+            ("tvis", &["krijt"]),
+            ("sigma0", &["krijt", "stress"]),
+            ("tvis0_per_radius", &["stress"]),
+        ];
+        let owners = owners
+            .into_iter()
+            .chain([("B", &["stress"][..]), ("zeta", &["stress"][..])]);
+        for (key, kinds) in owners {
+            if t.has(key) && !kinds.contains(&dissipation.name()) {
+                let which = kinds
+                    .iter()
+                    .map(|k| format!("dissipation = \"{k}\""))
+                    .collect::<Vec<_>>()
+                    .join(" or ");
+                return Err(t.err_key(key, format!("`{key}` applies to {which} only")));
             }
+        }
+        if t.has("restitution") && !matches!(dissipation, Dissipation::Tsuji { .. }) {
+            return Err(t.err_key(
+                "restitution",
+                format!(
+                    "`restitution` applies to dissipation = \"tsuji\" only, not \"{}\"",
+                    dissipation.name()
+                ),
+            ));
         }
         let pulloff = match t.choice("pulloff", &["displacement", "force"])? {
             Some("force") => Pulloff::Force,

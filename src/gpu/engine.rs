@@ -277,6 +277,9 @@ fn pair_table(models: &[ContactModel]) -> Result<(StepKind, Vec<u8>), PowderErro
                 .into(),
         ));
     }
+    if let Some(why) = jkr.iter().find_map(|p| p.gpu_unsupported()) {
+        return Err(PowderError::Run(why));
+    }
     let kind = if jkr.iter().any(|p| p.rolling_hysteresis > 0.0) {
         StepKind::JkrRolling
     } else if jkr.iter().any(|p| p.friction > 0.0) {

@@ -315,6 +315,8 @@ impl JkrPair {
                 row.power_alpha = alpha as f32;
                 row.power_beta = beta as f32;
             }
+            // not ported yet: `pair_table` refuses them (JkrParams::gpu_unsupported)
+            Dissipation::Krijt { .. } | Dissipation::Stress { .. } => {}
         }
         row
     }

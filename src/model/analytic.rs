@@ -423,6 +423,43 @@ pub fn collision_time_factor(s: f64) -> f64 {
     s.powf(-0.4)
 }
 
+/// Hertz centre pressure p_c,H = (2E*/π)·√(δ/R*) (paper 001 eq. 4), Pa; 0 for δ ≤ 0.
+pub fn hertz_centre_pressure(delta: f64, r_eff: f64, e_star: f64) -> f64 {
+    2.0 * e_star / PI * (delta.max(0.0) / r_eff).sqrt()
+}
+
+/// JKR centre pressure p_c,J = 2E*a/(πR*) − √(4γE*/(πa)) (paper 001 eq. 9) at contact
+/// radius `a` (γ per surface), Pa; negative (tensile) for a small contact.
+pub fn jkr_centre_pressure(a: f64, r_eff: f64, e_star: f64, gamma: f64) -> f64 {
+    2.0 * e_star * a / (PI * r_eff) - (4.0 * gamma * e_star / (PI * a)).sqrt()
+}
+
+/// Largest overlap of an undamped Hertz collision, δmax = (15·m*·v²/(16·E*·√R*))^(2/5):
+/// ½m*v² = (8/15)E*√R*·δmax^(5/2). For two equal spheres of mass m (m* = m/2) this is
+/// paper 001 eq. 15, (15/32·m·v²/(E*·√R*))^(2/5).
+pub fn hertz_delta_max(m_eff: f64, r_eff: f64, e_star: f64, v: f64) -> f64 {
+    (15.0 * m_eff * v * v / (16.0 * e_star * r_eff.sqrt())).powf(0.4)
+}
+
+/// Thornton–Ning restitution of an elastic–perfectly-plastic impact (paper 001 eq. 13):
+/// e_TN = (6√3/5)^(1/2)·√(1 − v_Y²/(6v²))·[1 + 2√(6v²/(5v_Y²) − 1/5)]^(−1/4) for
+/// v > v_Y, and 1 for v ≤ v_Y (it is continuous there).
+pub fn thornton_ning_restitution(v: f64, v_yield: f64) -> f64 {
+    if v <= v_yield {
+        return 1.0;
+    }
+    let q = (v_yield / v).powi(2);
+    (6.0 * 3f64.sqrt() / 5.0).sqrt()
+        * (1.0 - q / 6.0).sqrt()
+        * (1.0 + 2.0 * (6.0 / (5.0 * q) - 0.2).sqrt()).powf(-0.25)
+}
+
+/// Restitution with the plastic loss added (paper 001 eq. 14):
+/// e_pl = √(e² − (1 − e_TN²)); 0 when the plastic loss exceeds what is left (sticking).
+pub fn plastic_restitution(e: f64, e_tn: f64) -> f64 {
+    (e * e - (1.0 - e_tn * e_tn)).max(0.0).sqrt()
+}
+
 #[cfg(test)]
 mod jkr_tests {
     use super::*;
@@ -498,5 +535,69 @@ mod jkr_tests {
             p.hertz_contact_time(r, m, v),
             max_relative = 1e-15
         );
+    }
+
+    #[test]
+    fn paper_001_pressures_and_plasticity() {
+        // LJ units, R = 147 (table II): E* = 65.5, γ = 3.17, ρ = 1.09, R* = 73.5
+        let (es, gamma, r): (f64, f64, f64) = (65.5, 3.17, 73.5);
+        let m = 1.09 * 4.0 / 3.0 * PI * 147f64.powi(3);
+        // eq. 15 (particle mass m) equals the m* = m/2 form
+        for v in [0.1, 0.2] {
+            let eq15 = (15.0 / 32.0 * m * v * v / (es * r.sqrt())).powf(0.4);
+            assert_relative_eq!(
+                hertz_delta_max(0.5 * m, r, es, v),
+                eq15,
+                max_relative = 1e-14
+            );
+        }
+        // paper 001 §V A: p_c,H ≈ 0.194 E* at v = 0.1 and 0.255 E* at v = 0.2 (R = 147)
+        let pc = |v: f64| hertz_centre_pressure(hertz_delta_max(0.5 * m, r, es, v), r, es) / es;
+        assert!((pc(0.1) - 0.194).abs() < 0.003, "{}", pc(0.1));
+        assert!((pc(0.2) - 0.255).abs() < 0.003, "{}", pc(0.2));
+        assert_eq!(hertz_centre_pressure(-1.0, r, es), 0.0);
+        // eq. 9 reduces to eq. 4 without adhesion (a² = δR*)
+        let a = 20.0;
+        assert_relative_eq!(
+            jkr_centre_pressure(a, r, es, 0.0),
+            hertz_centre_pressure(a * a / r, r, es),
+            max_relative = 1e-14
+        );
+        // at the JKR equilibrium a0: 2E*a0/(πR*) − √(4γE*/(πa0))
+        let a0 = (9.0 * PI * gamma * r * r / es).cbrt();
+        let p0 = jkr_centre_pressure(a0, r, es, gamma);
+        assert_relative_eq!(
+            p0,
+            2.0 * es * a0 / (PI * r) - (4.0 * gamma * es / (PI * a0)).sqrt(),
+            max_relative = 1e-15
+        );
+        assert!(p0 > 0.0 && p0 < 0.2 * es);
+        // small contacts are in tension
+        assert!(jkr_centre_pressure(0.3 * a0, r, es, gamma) < 0.0);
+        // Thornton–Ning: 1 up to v_Y, continuous there, falling beyond
+        assert_eq!(thornton_ning_restitution(0.1, 0.17), 1.0);
+        assert_relative_eq!(
+            thornton_ning_restitution(0.17 * (1.0 + 1e-12), 0.17),
+            1.0,
+            max_relative = 1e-9
+        );
+        let mut last = 1.0;
+        for k in 1..50 {
+            let e = thornton_ning_restitution(0.17 * (1.0 + 0.2 * k as f64), 0.17);
+            assert!(e < last && e > 0.0);
+            last = e;
+        }
+        // large v: e_TN → (6√3/5)^(1/2)·(2·√(6/5)·v/v_Y)^(−1/4) ∝ v^(−1/4)
+        let (v, vy) = (1e4, 1.0);
+        let asym = (6.0 * 3f64.sqrt() / 5.0).sqrt() * (2.0 * (1.2f64).sqrt() * v / vy).powf(-0.25);
+        assert_relative_eq!(thornton_ning_restitution(v, vy), asym, max_relative = 1e-3);
+        // eq. 14
+        assert_relative_eq!(plastic_restitution(0.9, 1.0), 0.9);
+        assert_relative_eq!(
+            plastic_restitution(0.8, 0.9),
+            (0.64f64 - 0.19).sqrt(),
+            max_relative = 1e-15
+        );
+        assert_eq!(plastic_restitution(0.3, 0.5), 0.0);
     }
 }

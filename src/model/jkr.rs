@@ -23,6 +23,7 @@
 //! x = 1, d = 1, F = 0.
 
 use crate::error::{require_finite, require_non_negative, require_positive, ParamError};
+use crate::model::krijt::{self, KrijtLaw, Relaxation};
 use crate::model::{ContactHistory, NormalForce, PairGeometry};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
@@ -72,6 +73,70 @@ pub enum Dissipation {
         alpha: f64,
         beta: f64,
     },
+    /// The Krijt viscoelastic JKR contact (paper 001 §II C, eqs. 10–12 and appendix B; see
+    /// [`crate::model::krijt`]): the contact radius is its own state variable, driven by
+    /// the crack speed of eq. B2, and a viscous force (2·T_vis·E*/ν²)·a·δ̇ acts. Normal
+    /// direction only. Needs γ > 0 and ν ≠ 0.
+    Krijt {
+        /// Relaxation time T_vis ≥ 0, s.
+        tvis: f64,
+        /// σ0 ≈ γ/(atomic spacing) ≥ 0, Pa, of the crack speed (eq. B2); 0 (default) = the
+        /// contact radius follows the JKR curve instantly.
+        #[serde(default)]
+        sigma0: f64,
+    },
+    /// The stress-dependent Krijt model of paper 001 §V A (eqs. 17–18):
+    /// T_vis = C·R·exp[(B·p_c/E*)^ζ] for p_c > 0 (C·R otherwise), p_c the JKR centre
+    /// pressure (eq. 9), R = 2R* (the particle radius for equal spheres).
+    Stress {
+        /// C ≥ 0, s/m: T_vis,0 = C·R (eq. 18).
+        tvis0_per_radius: f64,
+        /// B ≥ 0 (eq. 17).
+        #[serde(rename = "B", alias = "b")]
+        b: f64,
+        /// ζ > 0 (eq. 17).
+        zeta: f64,
+        /// σ0 ≥ 0, Pa, as for `krijt`.
+        #[serde(default)]
+        sigma0: f64,
+    },
+}
+
+impl Dissipation {
+    /// The Krijt law of the `krijt` and `stress` dissipations.
+    pub fn krijt_law(&self) -> Option<KrijtLaw> {
+        match *self {
+            Self::Krijt { tvis, sigma0 } => Some(KrijtLaw {
+                relaxation: Relaxation::Constant { tvis },
+                sigma0,
+            }),
+            Self::Stress {
+                tvis0_per_radius,
+                b,
+                zeta,
+                sigma0,
+            } => Some(KrijtLaw {
+                relaxation: Relaxation::Stress {
+                    c: tvis0_per_radius,
+                    b,
+                    zeta,
+                },
+                sigma0,
+            }),
+            _ => None,
+        }
+    }
+
+    /// The name used in scenes and on the command line.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::None => "none",
+            Self::Tsuji { .. } => "tsuji",
+            Self::PowerLaw { .. } => "powerlaw",
+            Self::Krijt { .. } => "krijt",
+            Self::Stress { .. } => "stress",
+        }
+    }
 }
 
 /// Where a JKR contact breaks on separation.
@@ -359,6 +424,57 @@ impl JkrParams {
                 )?;
                 require_finite("beta", beta)?;
             }
+            Dissipation::Krijt { tvis, sigma0 } => {
+                require_non_negative("tvis", tvis, "the relaxation time tvis")?;
+                require_non_negative(
+                    "sigma0",
+                    sigma0,
+                    "the crack stress sigma0 (about gamma / atomic spacing; 0 = no delay of a)",
+                )?;
+            }
+            Dissipation::Stress {
+                tvis0_per_radius,
+                b,
+                zeta,
+                sigma0,
+            } => {
+                require_non_negative(
+                    "tvis0_per_radius",
+                    tvis0_per_radius,
+                    "C = tvis0_per_radius of T_vis,0 = C*R (paper 001 eq. 18)",
+                )?;
+                require_non_negative("B", b, "the pressure coefficient B (paper 001 eq. 17)")?;
+                require_positive(
+                    "zeta",
+                    zeta,
+                    "the pressure exponent zeta (paper 001 eq. 17)",
+                )?;
+                require_non_negative(
+                    "sigma0",
+                    sigma0,
+                    "the crack stress sigma0 (about gamma / atomic spacing; 0 = no delay of a)",
+                )?;
+            }
+        }
+        if self.dissipation.krijt_law().is_some() {
+            if self.surface_energy <= 0.0 {
+                return Err(ParamError::new(
+                    "dissipation",
+                    format!(
+                        "dissipation = \"{}\" needs surface_energy > 0: the crack speed of paper 001 eq. B2 is a function of G_eff/gamma",
+                        self.dissipation.name()
+                    ),
+                ));
+            }
+            if self.poisson == 0.0 {
+                return Err(ParamError::new(
+                    "poisson",
+                    format!(
+                        "dissipation = \"{}\" needs poisson != 0: the viscous force 2*T_vis*E*/nu^2*a*v of paper 001 eq. 12 divides by nu^2",
+                        self.dissipation.name()
+                    ),
+                ));
+            }
         }
         require_non_negative("friction", self.friction, "the sliding friction friction")?;
         require_non_negative(
@@ -491,9 +607,48 @@ impl JkrParams {
         4.0 * es * a3 / (3.0 * r_eff) - 4.0 * (PI * self.gamma() * es * a3).sqrt()
     }
 
-    /// The dissipative normal force for contact radius `a`, approach speed `delta_dot` and
-    /// reduced mass `m`, repulsive positive (it opposes δ̇).
-    fn normal_dissipation(&self, a: f64, delta_dot: f64, m: f64) -> f64 {
+    /// The material constants of the Krijt law (after the stiffness scale).
+    pub fn krijt_material(&self) -> krijt::Material {
+        krijt::Material {
+            e_star: self.e_star(),
+            gamma: self.gamma(),
+            poisson: self.poisson,
+        }
+    }
+
+    /// Why the GPU backend cannot run this model yet, if it cannot.
+    pub fn gpu_unsupported(&self) -> Option<String> {
+        self.dissipation.krijt_law().map(|_| {
+            format!(
+                "dissipation = \"{}\" (Krijt contact-radius dynamics, paper 001) is not yet on the GPU; use --backend cpu",
+                self.dissipation.name()
+            )
+        })
+    }
+
+    /// A bound on the viscous coefficient c = 2·T_vis·E*·a/ν² of the `krijt`/`stress`
+    /// dissipations in a collision at impact speed `v` (a at the larger of δ0 and the
+    /// Hertz δmax of paper 001 eq. 15, T_vis at that radius), kg/s; 0 otherwise.
+    pub fn viscous_coefficient_estimate(&self, geom: &PairGeometry, v: f64) -> f64 {
+        let Some(law) = self.dissipation.krijt_law() else {
+            return 0.0;
+        };
+        if self.gamma() == 0.0 {
+            return 0.0;
+        }
+        let r = geom.r_eff();
+        let dmax = crate::model::analytic::hertz_delta_max(geom.reduced_mass, r, self.e_star(), v)
+            .max(self.delta0(r));
+        let a = self.contact_radius(dmax, r);
+        let m = self.krijt_material();
+        let tvis = law.relaxation_time_at(a, r, &m);
+        krijt::viscous_force(tvis, a, 1.0, &m)
+    }
+
+    /// The dissipative normal force for contact radius `a` and approach speed `delta_dot`,
+    /// repulsive positive (it opposes δ̇).
+    fn normal_dissipation(&self, a: f64, delta_dot: f64, geom: &PairGeometry) -> f64 {
+        let m = geom.reduced_mass;
         match self.dissipation {
             Dissipation::None => 0.0,
             Dissipation::Tsuji { restitution } => {
@@ -513,6 +668,14 @@ impl JkrParams {
                         * a.powf(beta)
                 }
             }
+            Dissipation::Krijt { .. } | Dissipation::Stress { .. } => {
+                let Some(law) = self.dissipation.krijt_law() else {
+                    return 0.0;
+                };
+                let mat = self.krijt_material();
+                let tvis = law.relaxation_time_at(a, geom.r_eff(), &mat);
+                krijt::viscous_force(tvis, a, delta_dot, &mat)
+            }
         }
     }
 
@@ -522,10 +685,9 @@ impl JkrParams {
     /// the work of a step that crosses an edge from there rather than from zero.
     pub fn edge_forces(&self, geom: &PairGeometry, delta_dot: f64) -> [(f64, f64); 2] {
         let r = 0.5 * geom.a12;
-        let m = geom.reduced_mass;
         let at = |delta: f64| {
             let a = self.contact_radius(delta, r);
-            self.elastic_force(a, r) + self.normal_dissipation(a, delta_dot, m)
+            self.elastic_force(a, r) + self.normal_dissipation(a, delta_dot, geom)
         };
         let exit = self.pulloff_overlap(r);
         [(0.0, at(0.0)), (exit, at(exit))]
@@ -549,11 +711,33 @@ impl JkrParams {
     /// energy lost in an undamped touch/pull-off cycle (≈ 0.7722·Fc·δ0 with displacement
     /// pull-off, ≈ 0.3814·Fc·δ0 with force pull-off), so kinetic + potential energy drops by
     /// W at the touch and is continuous at the break.
+    ///
+    /// `krijt`/`stress` dissipation: see [`Self::normal_force_step`]; here with dt = 0 (the
+    /// contact radius is not advanced).
     pub fn normal_force(
         &self,
         delta: f64,
         delta_dot: f64,
         geom: &PairGeometry,
+        history: &mut ContactHistory,
+    ) -> NormalForce {
+        self.normal_force_step(delta, delta_dot, geom, 0.0, history)
+    }
+
+    /// [`Self::normal_force`] over a time step `dt`, which the `krijt` and `stress`
+    /// dissipations need: their contact radius a is the state `history.contact_radius`
+    /// (a_JKR(0) = (2/3)^(2/3)·a0 at the first touch), advanced by one backward-Euler step
+    /// of the crack speed (paper 001 eq. B2) to the current overlap; the elastic force is
+    /// F_E(a, δ) = 4E*a³/(3R*) − 2E*a(a²/R* − δ), the stored energy the JKR energy of
+    /// eq. 7 at (a, δ) from its value at the break point, and the dissipative force
+    /// (2·T_vis·E*/ν²)·a·δ̇ (eq. 12). See [`crate::model::krijt`]. The contact breaks at
+    /// the same overlap as JKR ([`Pulloff`]). The other dissipations ignore dt.
+    pub fn normal_force_step(
+        &self,
+        delta: f64,
+        delta_dot: f64,
+        geom: &PairGeometry,
+        dt: f64,
         history: &mut ContactHistory,
     ) -> NormalForce {
         let r = 0.5 * geom.a12;
@@ -579,17 +763,38 @@ impl JkrParams {
                 return NormalForce::default();
             }
             let a0 = self.a0(r);
-            let a = self.contact_radius(delta, r);
-            let x = a / a0;
-            let potential = self.fc(r)
-                * d0
-                * (potential_shape(x) - potential_shape(self.pulloff.break_radius_ratio()));
-            (a, self.elastic_force(a, r), potential)
+            let a_eq = self.contact_radius(delta, r);
+            if let Some(law) = self.dissipation.krijt_law() {
+                let mat = self.krijt_material();
+                let a_old = if history.contact_radius > 0.0 {
+                    history.contact_radius
+                } else {
+                    X_TOUCH * a0
+                };
+                let a = law.step_radius(a_old, a_eq, delta, dt, r, &mat);
+                history.contact_radius = a;
+                let es = mat.e_star;
+                let reference = krijt::stored_energy(
+                    self.pulloff.break_radius_ratio() * a0,
+                    self.pulloff.break_overlap_ratio() * d0,
+                    r,
+                    es,
+                    gamma,
+                );
+                let potential = krijt::stored_energy(a, delta, r, es, gamma) - reference;
+                (a, krijt::elastic_force(a, delta, r, es), potential)
+            } else {
+                let x = a_eq / a0;
+                let potential = self.fc(r)
+                    * d0
+                    * (potential_shape(x) - potential_shape(self.pulloff.break_radius_ratio()));
+                (a_eq, self.elastic_force(a_eq, r), potential)
+            }
         };
         history.touched = true;
         history.delta_max = history.delta_max.max(delta);
         NormalForce {
-            force: conservative + self.normal_dissipation(a, delta_dot, geom.reduced_mass),
+            force: conservative + self.normal_dissipation(a, delta_dot, geom),
             conservative,
             potential,
             in_contact: true,
@@ -1456,6 +1661,127 @@ mod tests {
             max_relative = 1e-15
         );
         assert_eq!(p.equilibrium_stiffness(r), 0.0);
+    }
+
+    #[test]
+    fn krijt_state_force_and_potential() {
+        let krijt = |tvis, sigma0| JkrParams {
+            dissipation: Dissipation::Krijt { tvis, sigma0 },
+            ..params()
+        };
+        let p = krijt(1e-9, 1e3);
+        let (r, g) = (reff(), geom());
+        let (a0, d0) = (p.a0(r), p.delta0(r));
+        let mut h = ContactHistory::default();
+        // nothing before the touch; at the touch a starts at a_JKR(0) = (2/3)^(2/3)·a0
+        assert_eq!(
+            p.normal_force_step(-0.1 * d0, 1.0, &g, 1e-9, &mut h),
+            NormalForce::default()
+        );
+        let f = p.normal_force_step(1e-12 * d0, 0.0, &g, 0.0, &mut h);
+        assert_relative_eq!(f.contact_radius, X_TOUCH * a0, max_relative = 1e-12);
+        assert_relative_eq!(h.contact_radius, X_TOUCH * a0, max_relative = 1e-12);
+        assert_relative_eq!(f.conservative, -8.0 / 9.0 * p.fc(r), max_relative = 1e-6);
+        // at equilibrium a the force and the stored energy are the JKR ones
+        for d in [-0.5, 0.3, 1.0, 4.0] {
+            let mut h = ContactHistory {
+                touched: true,
+                contact_radius: p.contact_radius(d * d0, r),
+                ..Default::default()
+            };
+            let f = p.normal_force_step(d * d0, 0.0, &g, 1.0, &mut h);
+            let j = touched_force(&params(), d * d0);
+            assert_relative_eq!(f.conservative, j.conservative, epsilon = 1e-9 * p.fc(r));
+            assert_relative_eq!(f.potential, j.potential, epsilon = 1e-9 * p.fc(r) * d0);
+        }
+        // with a delay, a lags: loading from the touch radius it stays below a_JKR(δ)
+        let q = krijt(1e-3, 1e6);
+        let mut h = ContactHistory::default();
+        q.normal_force_step(1e-12 * d0, 0.0, &g, 0.0, &mut h);
+        let f = q.normal_force_step(2.0 * d0, 0.0, &g, 1e-9, &mut h);
+        assert!(
+            f.contact_radius > X_TOUCH * a0 && f.contact_radius < p.contact_radius(2.0 * d0, r)
+        );
+        // then F_E(a, δ) is above the JKR force (a smaller punch), and the viscous force
+        // is 2·T_vis·E*/ν²·a·δ̇
+        assert!(f.conservative > touched_force(&params(), 2.0 * d0).conservative);
+        let moving = q.normal_force_step(2.0 * d0, 0.5, &g, 0.0, &mut h);
+        let visc = 2.0 * 1e-3 * q.e_star() / (0.17f64 * 0.17) * moving.contact_radius * 0.5;
+        assert_relative_eq!(
+            moving.force - moving.conservative,
+            visc,
+            max_relative = 1e-12
+        );
+        // breaking resets the state
+        q.normal_force_step(-0.9 * d0, -1.0, &g, 1e-9, &mut h);
+        assert_eq!(h, ContactHistory::default());
+        // validation: the rule and the parameter are named
+        let bad = |d: Dissipation| {
+            JkrParams {
+                dissipation: d,
+                ..params()
+            }
+            .validate()
+            .unwrap_err()
+        };
+        assert_eq!(
+            bad(Dissipation::Krijt {
+                tvis: -1.0,
+                sigma0: 0.0
+            })
+            .param,
+            "tvis"
+        );
+        assert_eq!(
+            bad(Dissipation::Krijt {
+                tvis: 1.0,
+                sigma0: -1.0
+            })
+            .param,
+            "sigma0"
+        );
+        let st = |c, b, zeta| Dissipation::Stress {
+            tvis0_per_radius: c,
+            b,
+            zeta,
+            sigma0: 0.0,
+        };
+        assert_eq!(bad(st(-1.0, 6.2, 4.0)).param, "tvis0_per_radius");
+        assert_eq!(bad(st(2e-4, f64::NAN, 4.0)).param, "B");
+        assert_eq!(bad(st(2e-4, 6.2, 0.0)).param, "zeta");
+        let e = JkrParams {
+            dissipation: st(2e-4, 6.2, 4.0),
+            ..JkrParams::hertz(1e9, 0.3)
+        }
+        .validate()
+        .unwrap_err();
+        assert!(
+            e.param == "dissipation" && e.message.contains("surface_energy"),
+            "{e}"
+        );
+        let e = JkrParams {
+            dissipation: Dissipation::Krijt {
+                tvis: 1.0,
+                sigma0: 0.0,
+            },
+            ..JkrParams::jkr(1e9, 0.0, 0.1)
+        }
+        .validate()
+        .unwrap_err();
+        assert_eq!(e.param, "poisson");
+        // serde names: kind = "krijt" / "stress", B
+        let s = JkrParams {
+            dissipation: st(2.1e-4, 6.2, 4.0),
+            ..params()
+        };
+        let json = serde_json::to_string(&s).unwrap();
+        assert!(
+            json.contains("\"kind\":\"stress\"") && json.contains("\"B\":6.2"),
+            "{json}"
+        );
+        assert_eq!(serde_json::from_str::<JkrParams>(&json).unwrap(), s);
+        assert!(s.gpu_unsupported().unwrap().contains("not yet on the GPU"));
+        assert!(params().gpu_unsupported().is_none());
     }
 
     #[test]

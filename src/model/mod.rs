@@ -4,6 +4,7 @@
 pub mod analytic;
 pub mod hysteretic;
 pub mod jkr;
+pub mod krijt;
 pub mod lsd;
 
 pub use hysteretic::{AdhesionMode, HystereticParams, K2Rule};
@@ -27,6 +28,10 @@ pub struct ContactHistory {
     pub tangential: DVec3,
     /// Rolling displacement ξ, kept in the current tangent plane (JKR rolling resistance).
     pub rolling: DVec3,
+    /// Contact radius a as its own state variable (the `krijt` and `stress` dissipations
+    /// of JKR, see [`krijt`]), m; 0 = unset (set to a_JKR(0) at the first touch).
+    #[serde(default)]
+    pub contact_radius: f64,
 }
 
 /// The normal force of one contact and what the energy bookkeeping needs.
@@ -142,7 +147,7 @@ impl ContactModel {
     ) -> Response {
         match self {
             Self::Jkr(p) => {
-                let normal = p.normal_force(k.delta, k.delta_dot, geom, history);
+                let normal = p.normal_force_step(k.delta, k.delta_dot, geom, dt, history);
                 let mut r = Response {
                     normal,
                     potential: normal.potential,
@@ -256,17 +261,19 @@ impl ContactModel {
             Self::Jkr(p) => {
                 let r = geom.r_eff();
                 let hertz = p.hertz_contact_time(r, mr, impact_velocity);
+                // the krijt/stress viscous force is explicit: the gamma0 rule below
+                let visc = p.viscous_coefficient_estimate(geom, impact_velocity);
                 if p.surface_energy > 0.0 {
                     let eq = std::f64::consts::PI * (mr / p.equilibrium_stiffness(r)).sqrt();
                     // the force jumps at touch and pull-off: the adhesive zone (depth ~δ0)
                     // must be crossed in many steps, or the loss W is off by O(Fc·v·dt)
                     let zone = p.delta0(r) / impact_velocity;
                     if zone < eq.min(hertz) {
-                        (zone, format!("tc = delta0/v, the time to cross the JKR adhesive zone delta0 = {:.4e} m at the impact velocity {impact_velocity} m/s", p.delta0(r)), 0.0)
+                        (zone, format!("tc = delta0/v, the time to cross the JKR adhesive zone delta0 = {:.4e} m at the impact velocity {impact_velocity} m/s", p.delta0(r)), visc)
                     } else if eq < hertz {
-                        (eq, format!("tc = pi*sqrt(m*/k_eq), the JKR oscillation about the equilibrium overlap (k_eq = {:.4e} N/m)", p.equilibrium_stiffness(r)), 0.0)
+                        (eq, format!("tc = pi*sqrt(m*/k_eq), the JKR oscillation about the equilibrium overlap (k_eq = {:.4e} N/m)", p.equilibrium_stiffness(r)), visc)
                     } else {
-                        (hertz, format!("tc = Hertz contact time at the impact velocity {impact_velocity} m/s"), 0.0)
+                        (hertz, format!("tc = Hertz contact time at the impact velocity {impact_velocity} m/s"), visc)
                     }
                 } else {
                     (

@@ -1,0 +1,444 @@
+//! The Krijt viscoelastic JKR contact (paper 001 §II C, eqs. 10–12 and appendix B) and the
+//! stress-dependent relaxation time of Yoshida, Kokubo & Tanaka (paper 001 §V A,
+//! eqs. 17–18), in f64. Wired in as the `krijt` and `stress` dissipations of
+//! [`crate::model::jkr`]; the conventions are those of that module (δ > 0 overlap,
+//! δ̇ approach speed, repulsive force positive, γ per surface so that Fc = 3πγR*).
+//!
+//! # State
+//! The contact radius a is a per-contact state variable
+//! ([`crate::model::ContactHistory::contact_radius`], 0 = unset), not the JKR root a(δ).
+//!
+//! * **Initial condition** (first touch, paper 001 appendix B following Krijt et al.):
+//!   a = a_JKR(δ = 0) = (4πγR*²/E*)^(1/3) = (2/3)^(2/3)·a0. The surfaces snap together
+//!   at the touch; eq. B2 itself says so: at δ = 0 and a → 0, G_eff → 0, so β < 0.02,
+//!   where the crack speed of eq. B2 diverges.
+//! * **Crack speed** (eq. B2): ȧ = v_c·f(β), β = G_eff/γ, v_c = 2E*γ/(σ0²·T_vis), with
+//!   G_eff = E*(a² − δR*)²/(4πaR*²) (eq. B1; G_eff = γ on the JKR curve). f(β) > 0 for
+//!   β < 1 (the contact grows), < 0 for β > 1, and diverges at β = 0.02 and β = 50 (the
+//!   zeros of the logarithms in eq. B2). We use the signed β = sgn(a² − δR*)·G_eff/γ: for
+//!   a² < δR* the edge is compressed (negative stress intensity) and the contact closes
+//!   at the limiting speed.
+//! * **Integration** ([`advance_radius`]): backward (implicit) Euler,
+//!   a_new = a_old + dt·ȧ(a_new, δ_new), solved by bisection between a_old and the JKR
+//!   root a_eq(δ_new). ȧ is stiff (it diverges at both ends of its range, and v_c·dt can
+//!   exceed the contact size by orders of magnitude), so an explicit update would
+//!   overshoot or blow up. On the stable JKR branch (a above the turning point
+//!   √(−δR*/3)) β grows monotonically with a at fixed δ and f falls with β, so the
+//!   backward-Euler residual a − a_old − dt·ȧ(a) increases monotonically: the root is
+//!   unique, lies between a_old and a_eq (it never overshoots the equilibrium), and
+//!   bisection always finds it; for dt → ∞ it gives a_eq, for dt → 0 it keeps a_old.
+//!   Because a_new never passes a_eq, G − γ keeps one sign over the step, so the crack
+//!   dissipation of every step (below) is ≥ 0 by construction.
+//!
+//! # Forces and stored energy
+//! * Elastic force for any (a, δ) (eq. 11 with the JKR pressure distribution):
+//!   F_E = 4E*a³/(3R*) − 2E*a(a²/R* − δ); on the JKR curve it is the JKR force (eq. 6).
+//! * Dissipative force (eq. 12): F_dis = (2·T_vis·E*/ν²)·a·δ̇, ν the Poisson ratio.
+//! * Stored energy: the JKR energy of eq. 7 for any (a, δ),
+//!   U(a, δ) = E*a³[(a/R*)²/5 − 2δ/(3R*) + (δ/a)²] − 2πγa², measured from its value at
+//!   the JKR break point (so it equals the JKR potential of [`crate::model::jkr`] on the
+//!   equilibrium curve). ∂U/∂δ|_a = F_E exactly, and ∂U/∂a|_δ = 4πa(G_eff − γ): the
+//!   elastic force does no work that is not stored, and the crack motion dissipates
+//!   4πa(γ − G_eff)·ȧ ≥ 0. The engine's ledger (work minus change of stored energy) thus
+//!   books exactly the viscous work, the crack dissipation, the JKR touch loss and the
+//!   energy left in the neck at the break.
+//!
+//! # Relaxation time
+//! * `krijt`: a constant T_vis (paper 001 uses T_vis = 0.075·R/147 in LJ units).
+//! * `stress` (eqs. 17–18): T_vis = C·R·exp[(B·p_c/E*)^ζ] for p_c > 0, C·R otherwise, with
+//!   p_c the JKR centre pressure of eq. 9 at the current contact radius and R = 2R*
+//!   (the particle radius for equal spheres, the paper's R; 2·r1·r2/(r1 + r2) in general).
+//!   The crack speed of a step uses T_vis at the start of the step (a_old), the force the
+//!   one at the new radius.
+
+use crate::model::analytic;
+use std::f64::consts::PI;
+
+/// β below which the crack speed of eq. B2 diverges (ln(0.98/(1 − β)) = 0).
+pub const BETA_MIN: f64 = 0.02;
+/// β above which the crack speed of eq. B2 diverges (ln(0.98/(1 − 1/β)) = 0).
+pub const BETA_MAX: f64 = 50.0;
+/// Bisection iterations of [`advance_radius`] at most (it stops earlier once the bracket
+/// is below 1e-13 of a).
+pub const BISECTION_ITERATIONS: usize = 64;
+
+/// How the relaxation time T_vis is set.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Relaxation {
+    /// A constant T_vis, s.
+    Constant { tvis: f64 },
+    /// T_vis = C·R·exp[(B·p_c/E*)^ζ] for p_c > 0, C·R otherwise (eqs. 17–18).
+    Stress { c: f64, b: f64, zeta: f64 },
+}
+
+/// The Krijt law of one material pair.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct KrijtLaw {
+    pub relaxation: Relaxation,
+    /// σ0 ≈ γ/(atomic spacing), Pa; 0 = the contact radius follows the JKR curve instantly.
+    pub sigma0: f64,
+}
+
+/// The material constants the law needs (after the stiffness scale).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Material {
+    pub e_star: f64,
+    /// γ per surface, J/m².
+    pub gamma: f64,
+    /// Poisson's ratio ν (eq. 12 divides by ν²).
+    pub poisson: f64,
+}
+
+impl KrijtLaw {
+    /// T_vis for centre pressure `pc` and pair radius `a12` = 2R*, s.
+    pub fn relaxation_time(&self, pc: f64, e_star: f64, a12: f64) -> f64 {
+        match self.relaxation {
+            Relaxation::Constant { tvis } => tvis,
+            Relaxation::Stress { c, b, zeta } => {
+                let t0 = c * a12;
+                if pc > 0.0 {
+                    t0 * (b * pc / e_star).powf(zeta).exp()
+                } else {
+                    t0
+                }
+            }
+        }
+    }
+
+    /// T_vis at contact radius `a` (centre pressure of eq. 9 at a).
+    pub fn relaxation_time_at(&self, a: f64, r_eff: f64, m: &Material) -> f64 {
+        match self.relaxation {
+            Relaxation::Constant { tvis } => tvis,
+            Relaxation::Stress { .. } => {
+                let pc = analytic::jkr_centre_pressure(a, r_eff, m.e_star, m.gamma);
+                self.relaxation_time(pc, m.e_star, 2.0 * r_eff)
+            }
+        }
+    }
+
+    /// v_c = 2E*γ/(σ0²·T_vis), m/s, the speed scale of eq. B2; infinite for σ0 = 0 or
+    /// T_vis = 0 (no delay).
+    pub fn crack_speed_scale(&self, tvis: f64, m: &Material) -> f64 {
+        let den = self.sigma0 * self.sigma0 * tvis;
+        if den > 0.0 {
+            2.0 * m.e_star * m.gamma / den
+        } else {
+            f64::INFINITY
+        }
+    }
+
+    /// One step of the contact radius: from `a_old` to the backward-Euler solution at
+    /// overlap `delta` (see the module notes). `a_eq` is the JKR root a(δ).
+    pub fn step_radius(
+        &self,
+        a_old: f64,
+        a_eq: f64,
+        delta: f64,
+        dt: f64,
+        r_eff: f64,
+        m: &Material,
+    ) -> f64 {
+        let tvis = self.relaxation_time_at(a_old, r_eff, m);
+        let vc = self.crack_speed_scale(tvis, m);
+        advance_radius(a_old, a_eq, dt * vc, |a| {
+            energy_release_ratio(a, delta, r_eff, m.e_star, m.gamma)
+        })
+    }
+}
+
+/// The dimensionless crack speed f(β) = σ0²·T_vis·ȧ/(2E*γ) of eq. B2: +∞ for β ≤ 0.02,
+/// −∞ for β ≥ 50, 0 at β = 1.
+pub fn crack_speed_shape(beta: f64) -> f64 {
+    if beta <= BETA_MIN {
+        f64::INFINITY
+    } else if beta <= 0.29 {
+        0.15 / (beta * (0.98 / (1.0 - beta)).ln())
+    } else if beta < 1.0 {
+        let x = 1.0 / beta - 1.0;
+        (0.1035 * x + 0.3421) * x.powf(1.1160)
+    } else if beta == 1.0 {
+        0.0
+    } else if beta < 3.7 {
+        let x = beta - 1.0;
+        -(0.2112 * x + 0.3939) * x.powf(1.1403)
+    } else if beta < BETA_MAX {
+        -0.24 * beta / (0.98 / (1.0 - 1.0 / beta)).ln()
+    } else {
+        f64::NEG_INFINITY
+    }
+}
+
+/// G_eff = E*(a² − δR*)²/(4πaR*²) (eq. B1), J/m².
+pub fn effective_surface_energy(a: f64, delta: f64, r_eff: f64, e_star: f64) -> f64 {
+    let u = a * a - delta * r_eff;
+    e_star * u * u / (4.0 * PI * a * r_eff * r_eff)
+}
+
+/// The signed ratio β = sgn(a² − δR*)·G_eff/γ (negative where the contact edge is
+/// compressed, a² < δR*).
+pub fn energy_release_ratio(a: f64, delta: f64, r_eff: f64, e_star: f64, gamma: f64) -> f64 {
+    let g = effective_surface_energy(a, delta, r_eff, e_star) / gamma;
+    if a * a >= delta * r_eff {
+        g
+    } else {
+        -g
+    }
+}
+
+/// Backward-Euler step of ȧ = v_c·f(β(a)): the root of a − a_old − `vc_dt`·f(β(a)) between
+/// a_old and the equilibrium `a_eq` (where β = 1), by bisection. `vc_dt` = v_c·dt ≥ 0
+/// (infinite: a_eq). `beta` must increase with a on that interval (the stable JKR branch).
+pub fn advance_radius(a_old: f64, a_eq: f64, vc_dt: f64, beta: impl Fn(f64) -> f64) -> f64 {
+    if vc_dt.is_infinite() || a_old == a_eq {
+        return a_eq;
+    }
+    if vc_dt <= 0.0 {
+        return a_old;
+    }
+    let residual = |a: f64| {
+        let f = crack_speed_shape(beta(a));
+        if f.is_infinite() {
+            // the crack runs at the limiting speed: only the sign matters
+            -f
+        } else {
+            a - a_old - vc_dt * f
+        }
+    };
+    // residual(a_old) = −vc_dt·f(a_old) and residual(a_eq) = a_eq − a_old have opposite
+    // signs; keep lo where it is negative
+    let (mut lo, mut hi) = if a_old < a_eq {
+        (a_old, a_eq)
+    } else {
+        (a_eq, a_old)
+    };
+    for _ in 0..BISECTION_ITERATIONS {
+        if hi - lo <= 1e-13 * hi {
+            break;
+        }
+        let mid = 0.5 * (lo + hi);
+        let r = residual(mid);
+        if r == 0.0 {
+            return mid;
+        }
+        // the residual increases with a
+        if r < 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// Elastic force for any contact radius and overlap, F_E = 4E*a³/(3R*) − 2E*a(a²/R* − δ)
+/// (eq. 11 with the JKR pressure distribution), repulsive positive.
+pub fn elastic_force(a: f64, delta: f64, r_eff: f64, e_star: f64) -> f64 {
+    4.0 * e_star * a * a * a / (3.0 * r_eff) - 2.0 * e_star * a * (a * a / r_eff - delta)
+}
+
+/// The JKR energy of eq. 7 for any (a, δ): E*a³[(a/R*)²/5 − 2δ/(3R*) + (δ/a)²] − 2πγa²,
+/// J (elastic energy plus surface energy; its δ-derivative at fixed a is
+/// [`elastic_force`], its a-derivative 4πa(G_eff − γ)).
+pub fn stored_energy(a: f64, delta: f64, r_eff: f64, e_star: f64, gamma: f64) -> f64 {
+    if a <= 0.0 {
+        return 0.0;
+    }
+    let x = a / r_eff;
+    e_star * a * a * a * (0.2 * x * x - 2.0 * delta / (3.0 * r_eff) + (delta / a).powi(2))
+        - 2.0 * PI * gamma * a * a
+}
+
+/// Dissipative force of eq. 12, (2·T_vis·E*/ν²)·a·δ̇, repulsive positive (it opposes δ̇).
+pub fn viscous_force(tvis: f64, a: f64, delta_dot: f64, m: &Material) -> f64 {
+    2.0 * tvis * m.e_star / (m.poisson * m.poisson) * a * delta_dot
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    // Paper 001, LJ units, R = 147 (table II): γ = 3.17, E* = 65.5, ν = 0.25.
+    const GAMMA: f64 = 3.17;
+    const ES: f64 = 65.5;
+    const R_EFF: f64 = 73.5;
+
+    fn mat() -> Material {
+        Material {
+            e_star: ES,
+            gamma: GAMMA,
+            poisson: 0.25,
+        }
+    }
+
+    fn a0() -> f64 {
+        (9.0 * PI * GAMMA * R_EFF * R_EFF / ES).cbrt()
+    }
+
+    /// δ(a) on the JKR curve (paper 001 eq. 5).
+    fn jkr_delta(a: f64) -> f64 {
+        a * a / R_EFF - 2.0 * (PI * GAMMA * a / ES).sqrt()
+    }
+
+    #[test]
+    fn crack_speed_shape_is_continuous_and_signed() {
+        // the four branches of eq. B2 meet within 1 % at β = 0.29 and 3.7, and are 0 at 1
+        let below = crack_speed_shape(0.29);
+        let above = crack_speed_shape(0.29 + 1e-12);
+        assert_relative_eq!(below, above, max_relative = 1e-2);
+        let below = crack_speed_shape(3.7 - 1e-12);
+        let above = crack_speed_shape(3.7);
+        assert_relative_eq!(below, above, max_relative = 1e-2);
+        assert_eq!(crack_speed_shape(1.0), 0.0);
+        assert!(crack_speed_shape(1.0 - 1e-9).abs() < 1e-8);
+        assert!(crack_speed_shape(1.0 + 1e-9).abs() < 1e-8);
+        // sign and monotone decrease over the whole range
+        let mut last = f64::INFINITY;
+        for i in 1..2000 {
+            let b = BETA_MIN * (BETA_MAX / BETA_MIN).powf(i as f64 / 2000.0);
+            let f = crack_speed_shape(b);
+            assert!(f.is_finite());
+            assert_eq!(f > 0.0, b < 1.0, "β = {b}");
+            // the eq. B2 branches jump by < 1 % where they meet
+            assert!(
+                f < last * (1.0 + 1e-2) || f < 0.0,
+                "β = {b}: {f} after {last}"
+            );
+            last = f;
+        }
+        assert_eq!(crack_speed_shape(0.01), f64::INFINITY);
+        assert_eq!(crack_speed_shape(-1.0), f64::INFINITY);
+        assert_eq!(crack_speed_shape(60.0), f64::NEG_INFINITY);
+    }
+
+    #[test]
+    fn equilibrium_and_jkr_limits() {
+        for x in [0.35, 0.5, 0.8, 1.0, 1.5, 3.0] {
+            let a = x * a0();
+            let d = jkr_delta(a);
+            // eq. B1 gives γ on the JKR curve, and F_E is the JKR force
+            assert_relative_eq!(
+                effective_surface_energy(a, d, R_EFF, ES),
+                GAMMA,
+                max_relative = 1e-12
+            );
+            let fj =
+                4.0 * ES * a.powi(3) / (3.0 * R_EFF) - 4.0 * (PI * GAMMA * ES * a.powi(3)).sqrt();
+            assert_relative_eq!(
+                elastic_force(a, d, R_EFF, ES),
+                fj,
+                max_relative = 1e-9,
+                epsilon = 1e-9
+            );
+        }
+    }
+
+    #[test]
+    fn stored_energy_derivatives() {
+        // ∂U/∂δ = F_E and ∂U/∂a = 4πa(G − γ), also off the JKR curve
+        for (x, d) in [(0.8, 0.3), (1.2, 2.0), (0.5, -0.5), (1.0, 1.7)] {
+            let a = x * a0();
+            let h = 1e-6;
+            let du_dd = (stored_energy(a, d + h, R_EFF, ES, GAMMA)
+                - stored_energy(a, d - h, R_EFF, ES, GAMMA))
+                / (2.0 * h);
+            assert_relative_eq!(du_dd, elastic_force(a, d, R_EFF, ES), max_relative = 1e-6);
+            let ha = 1e-6 * a;
+            let du_da = (stored_energy(a + ha, d, R_EFF, ES, GAMMA)
+                - stored_energy(a - ha, d, R_EFF, ES, GAMMA))
+                / (2.0 * ha);
+            let g = effective_surface_energy(a, d, R_EFF, ES);
+            assert_relative_eq!(
+                du_da,
+                4.0 * PI * a * (g - GAMMA),
+                max_relative = 1e-5,
+                epsilon = 1e-6
+            );
+        }
+    }
+
+    #[test]
+    fn backward_euler_relaxes_without_overshoot() {
+        let law = KrijtLaw {
+            relaxation: Relaxation::Constant { tvis: 0.075 },
+            sigma0: GAMMA / 1.09,
+        };
+        let m = mat();
+        let a_eq = a0();
+        let delta = jkr_delta(a_eq);
+        for start in [0.5, 0.9, 1.1, 1.6] {
+            let mut a = start * a_eq;
+            let mut gap = (a - a_eq).abs();
+            for _ in 0..200 {
+                let next = law.step_radius(a, a_eq, delta, 0.01, R_EFF, &m);
+                // moves toward the equilibrium, never past it
+                assert!((next - a_eq).abs() <= gap * (1.0 + 1e-12));
+                assert_eq!(next >= a_eq, a >= a_eq, "overshoot from {start}");
+                // the backward-Euler equation holds
+                let tvis = 0.075;
+                let f = crack_speed_shape(energy_release_ratio(next, delta, R_EFF, ES, GAMMA));
+                let vc = law.crack_speed_scale(tvis, &m);
+                if f.is_finite() && next != a_eq {
+                    assert_relative_eq!(
+                        next - a,
+                        0.01 * vc * f,
+                        max_relative = 1e-6,
+                        epsilon = 1e-10 * a_eq
+                    );
+                }
+                gap = (next - a_eq).abs();
+                a = next;
+            }
+            assert!(gap < 0.05 * a_eq, "from {start}: gap {gap}");
+        }
+        // huge steps: straight to a_eq; σ0 = 0: no delay at all
+        let big = law.step_radius(0.5 * a_eq, a_eq, delta, 1e12, R_EFF, &m);
+        assert_relative_eq!(big, a_eq, max_relative = 1e-6);
+        let instant = KrijtLaw { sigma0: 0.0, ..law };
+        assert_eq!(
+            instant.step_radius(0.5 * a_eq, a_eq, delta, 1e-9, R_EFF, &m),
+            a_eq
+        );
+        // dt = 0 keeps the radius
+        assert_eq!(
+            law.step_radius(0.5 * a_eq, a_eq, delta, 0.0, R_EFF, &m),
+            0.5 * a_eq
+        );
+    }
+
+    #[test]
+    fn stress_relaxation_time() {
+        let law = KrijtLaw {
+            relaxation: Relaxation::Stress {
+                c: 2.1e-4,
+                b: 6.2,
+                zeta: 4.0,
+            },
+            sigma0: 0.0,
+        };
+        let a12 = 147.0;
+        // p_c <= 0: C·R
+        assert_relative_eq!(law.relaxation_time(-1.0, ES, a12), 2.1e-4 * 147.0);
+        assert_relative_eq!(law.relaxation_time(0.0, ES, a12), 2.1e-4 * 147.0);
+        // p_c = 0.2 E*: C·R·exp(1.24⁴)
+        assert_relative_eq!(
+            law.relaxation_time(0.2 * ES, ES, a12),
+            2.1e-4 * 147.0 * (1.24f64.powi(4)).exp(),
+            max_relative = 1e-12
+        );
+        // at the equilibrium a0, p_c from eq. 9
+        let m = mat();
+        let pc = analytic::jkr_centre_pressure(a0(), R_EFF, ES, GAMMA);
+        assert_relative_eq!(
+            law.relaxation_time_at(a0(), R_EFF, &m),
+            law.relaxation_time(pc, ES, a12),
+            max_relative = 1e-15
+        );
+        // viscous force of eq. 12: 2·T·E*/ν² · a · δ̇
+        assert_relative_eq!(
+            viscous_force(0.075, 10.0, 0.1, &m),
+            2.0 * 0.075 * ES / 0.0625 * 10.0 * 0.1,
+            max_relative = 1e-15
+        );
+    }
+}

@@ -1,0 +1,314 @@
+//! The Krijt and stress-dependent dissipations of JKR (paper 001 §II C, §V A, appendix B)
+//! through `collide`, in paper 001's Lennard-Jones units (R = 147, E* = 65.5 from its
+//! table II, γ = 3.17, ν = 0.25, ρ = 1.09; any consistent unit system works).
+
+use powder::collide::{collide, collide_traced, CollideResult, CollideSpec, TraceRow};
+use powder::model::{analytic, krijt, ContactModel, Dissipation, JkrParams, PairGeometry};
+
+const GAMMA: f64 = 3.17;
+const NU: f64 = 0.25;
+const RHO: f64 = 1.09;
+const R: f64 = 147.0;
+const E_STAR: f64 = 65.5;
+/// σ0 = γ/(atomic spacing), spacing D ≈ 1.091σ (paper 001 appendix C).
+const SIGMA0: f64 = GAMMA / 1.091;
+/// T_vis = 0.075·R/147 (paper 001 §IV B 3).
+const TVIS: f64 = 0.075;
+
+fn params(dissipation: Dissipation) -> JkrParams {
+    JkrParams {
+        dissipation,
+        ..JkrParams::jkr(2.0 * (1.0 - NU * NU) * E_STAR, NU, GAMMA)
+    }
+}
+
+fn krijt(tvis: f64) -> JkrParams {
+    params(Dissipation::Krijt {
+        tvis,
+        sigma0: SIGMA0,
+    })
+}
+
+/// Paper 001 §V A fit: C ≈ 2.1e-4, B ≈ 6.2, ζ = 4.
+fn stress() -> JkrParams {
+    params(Dissipation::Stress {
+        tvis0_per_radius: 2.1e-4,
+        b: 6.2,
+        zeta: 4.0,
+        sigma0: SIGMA0,
+    })
+}
+
+fn spec(p: JkrParams, v: f64) -> CollideSpec {
+    CollideSpec::head_on(ContactModel::Jkr(p), R, RHO, v)
+}
+
+fn run(p: JkrParams, v: f64) -> CollideResult {
+    collide(&spec(p, v)).unwrap()
+}
+
+fn geometry() -> PairGeometry {
+    spec(krijt(TVIS), 0.1).geometry()
+}
+
+#[test]
+fn vanishing_relaxation_time_recovers_jkr() {
+    for v in [0.05, 0.1, 0.2] {
+        let jkr = run(params(Dissipation::None), v);
+        let (k, rows) = collide_traced(&spec(krijt(1e-9), v)).unwrap();
+        // measured: |Δe| < 2e-8 (the viscous force is ∝ T_vis and a relaxes instantly)
+        assert!((k.e - jkr.e).abs() < 1e-6, "v {v}: {} vs {}", k.e, jkr.e);
+        let worst = rows
+            .iter()
+            .filter(|r| r.a > 0.0)
+            .map(|r| (r.a / r.a_jkr - 1.0).abs())
+            .fold(0.0, f64::max);
+        // measured: ≤ 6.4e-9 (the backward-Euler lag at T_vis = 1e-9)
+        assert!(worst < 1e-7, "v {v}: a off a_JKR by {worst:e}");
+    }
+    // the JKR restitution itself: the closed form 0.7722·Fc·δ0 loss
+    let g = geometry();
+    let p = params(Dissipation::None);
+    let w = analytic::jkr_loss(p.pulloff) * p.fc(g.r_eff()) * p.delta0(g.r_eff());
+    let e = analytic::jkr_restitution(w, g.reduced_mass, 0.1).unwrap();
+    assert!((run(krijt(1e-9), 0.1).e - e).abs() < 2e-3);
+}
+
+#[test]
+fn restitution_falls_as_the_relaxation_time_grows() {
+    // measured at v = 0.1: T_vis 0.01 → 0.9487, 0.075 → 0.8883, 0.3 → 0.6860 (JKR 0.9587)
+    let es: Vec<f64> = [0.01, 0.075, 0.3]
+        .iter()
+        .map(|&t| run(krijt(t), 0.1).e)
+        .collect();
+    let jkr = run(params(Dissipation::None), 0.1).e;
+    assert!(
+        jkr > es[0] && es[0] > es[1] && es[1] > es[2],
+        "{jkr} {es:?}"
+    );
+    assert!((es[1] - 0.8883).abs() < 5e-3, "{es:?}");
+}
+
+#[test]
+fn stress_dependent_relaxation_falls_faster_with_speed() {
+    // constant T_vis = C·R (the stress model's low-pressure value) against eq. 17;
+    // measured: constant 0.9295 → 0.9650 (rising), stress 0.8671 → 0.6423 (v 0.1 → 0.2)
+    let c = krijt(2.1e-4 * R);
+    let (c1, c2) = (run(c, 0.1).e, run(c, 0.2).e);
+    let (s1, s2) = (run(stress(), 0.1).e, run(stress(), 0.2).e);
+    eprintln!("constant C*R: {c1:.4} -> {c2:.4}; stress: {s1:.4} -> {s2:.4}");
+    assert!(c2 > c1, "constant T_vis: e rises with v ({c1} -> {c2})");
+    assert!(s2 < s1 - 0.1, "stress: e falls with v ({s1} -> {s2})");
+    assert!(s1 < c1 && s2 < c2);
+}
+
+/// (worst a/a_JKR − 1 while loading, least a/a_JKR − 1 while unloading) from a trace,
+/// away from δ = 0 and from the turning point.
+fn lag_and_lead(rows: &[TraceRow]) -> (f64, f64, usize, usize) {
+    let p = krijt(TVIS);
+    let d0 = p.delta0(geometry().r_eff());
+    let turn = rows
+        .iter()
+        .position(|r| r.delta_dot < 0.0)
+        .expect("the pair turns back");
+    let loading: Vec<f64> = rows[..turn]
+        .iter()
+        .filter(|r| r.a > 0.0 && r.delta > 0.1 * d0)
+        .map(|r| r.a / r.a_jkr - 1.0)
+        .collect();
+    // unloading, from a few steps past the turning point (a lags the reversal itself)
+    let unloading: Vec<f64> = rows[turn + 5..]
+        .iter()
+        .filter(|r| r.a > 0.0 && r.delta > 0.1 * d0)
+        .map(|r| r.a / r.a_jkr - 1.0)
+        .collect();
+    (
+        loading.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+        unloading.iter().copied().fold(f64::INFINITY, f64::min),
+        loading.len(),
+        unloading.len(),
+    )
+}
+
+#[test]
+fn contact_radius_lags_on_loading_and_leads_on_unloading() {
+    // paper 001 fig. 6: a < a_JKR while loading, a > a_JKR while unloading. Measured at
+    // v = 0.1 (σ0 = γ/1.091): loading a/a_JKR − 1 in [−8.9e-4, −1.7e-6], unloading up to
+    // +8.4e-4 (the delay is small, as paper 001 notes for the Krijt model)
+    let (_, rows) = collide_traced(&spec(krijt(TVIS), 0.1)).unwrap();
+    let (load, unload, nl, nu) = lag_and_lead(&rows);
+    assert!(nl > 100 && nu > 100, "{nl} {nu}");
+    assert!(load < 0.0, "loading: a/a_JKR - 1 up to {load:e}");
+    assert!(unload > 0.0, "unloading: a/a_JKR - 1 down to {unload:e}");
+    // a ten times larger σ0² (slower crack) gives a larger delay
+    let slow = params(Dissipation::Krijt {
+        tvis: TVIS,
+        sigma0: SIGMA0 * 10f64.sqrt(),
+    });
+    let (_, rows_slow) = collide_traced(&spec(slow, 0.1)).unwrap();
+    let d0 = krijt(TVIS).delta0(geometry().r_eff());
+    let peak = |rows: &[TraceRow]| {
+        rows.iter()
+            .filter(|r| r.a > 0.0 && r.delta > 0.1 * d0)
+            .map(|r| (r.a / r.a_jkr - 1.0).abs())
+            .fold(0.0, f64::max)
+    };
+    eprintln!(
+        "peak |a/a_JKR - 1|: {:e} (sigma0), {:e} (sqrt(10)*sigma0)",
+        peak(&rows),
+        peak(&rows_slow)
+    );
+    assert!(
+        peak(&rows_slow) > 3.0 * peak(&rows),
+        "{} vs {}",
+        peak(&rows_slow),
+        peak(&rows)
+    );
+}
+
+#[test]
+fn energy_ledger_closes_and_books_the_viscous_work() {
+    let g = geometry();
+    let r = g.r_eff();
+    for (p, v) in [(krijt(TVIS), 0.1), (krijt(0.3), 0.1), (stress(), 0.15)] {
+        let (res, rows) = collide_traced(&spec(p, v)).unwrap();
+        assert!(!res.stuck);
+        let ke0 = res.energy.initial_kinetic;
+        let booked = res.energy.dissipated.unwrap();
+        // the ledger closes: kinetic + stored + dissipated is conserved
+        assert!(res.energy.balance_error.unwrap() < 1e-4, "{:?}", res.energy);
+        assert!((booked - (ke0 - res.energy.final_kinetic)).abs() < 1e-4 * ke0);
+        // and what it books is the JKR touch/pull-off loss W plus the viscous work of
+        // eq. 12, integrated here from the trace (F − F_E(a, δ))·δ̇. Measured: booked
+        // 7647.5 vs W 2918.5 + viscous 4667.2 (T_vis 0.075), 18911 vs 2918 + 15827
+        // (0.3), 30620 vs 2918 + 27558 (stress, v 0.15): the rest, 60–170, is the crack
+        // dissipation, the neck energy left at the break and the first-order error of the
+        // force jump at the touch (≈ 1.5 % of W at the default dt, see collide_jkr.rs)
+        let es = p.e_star();
+        let mut viscous = 0.0;
+        for w in rows.windows(2) {
+            let fv = |row: &TraceRow| {
+                if row.a > 0.0 {
+                    row.force - krijt::elastic_force(row.a, row.delta, r, es)
+                } else {
+                    0.0
+                }
+            };
+            viscous += 0.5 * (fv(&w[0]) + fv(&w[1])) * (w[1].delta - w[0].delta);
+        }
+        let w_jkr = analytic::jkr_loss(p.pulloff) * p.fc(r) * p.delta0(r);
+        eprintln!("booked {booked:.2}, JKR loss {w_jkr:.2} + viscous {viscous:.2}");
+        assert!(viscous > 0.0);
+        assert!(
+            booked > w_jkr + viscous && booked - (w_jkr + viscous) < 0.03 * w_jkr + 5e-3 * booked,
+            "booked {booked} vs {w_jkr} + {viscous}"
+        );
+    }
+}
+
+#[test]
+fn default_time_step_is_converged() {
+    // measured: |e(dt) − e(dt/5)| = 4e-5 (krijt) and 2e-4 (stress) at v = 0.1, 0.15
+    for (p, v) in [(krijt(TVIS), 0.1), (stress(), 0.15)] {
+        let coarse = run(p, v);
+        let fine = collide(&CollideSpec {
+            dt: Some(coarse.dt / 5.0),
+            ..spec(p, v)
+        })
+        .unwrap();
+        assert!(
+            (coarse.e - fine.e).abs() < 2e-3,
+            "{} vs {}",
+            coarse.e,
+            fine.e
+        );
+    }
+}
+
+#[test]
+fn lj_example_restitution_peaks_at_low_speed_then_declines() {
+    // paper 001 fig. 11 (stress model) and fig. 13 (power law D = 118, α = 3, β = 1.5):
+    // sticking at the lowest speeds, a peak near v ≈ 0.1, then a decline. Measured:
+    // stress    v 0.02 0.04 0.06 0.1 0.15 0.2 0.3: 0, 0.606, 0.809, 0.867, 0.790, 0.642, 0.431
+    // powerlaw                                     0, 0.652, 0.817, 0.843, 0.783, 0.706, 0.565
+    // krijt (T_vis 0.075): 0, 0.541, 0.786, 0.888, 0.920, 0.930, 0.938 (no decline)
+    let vs = [0.02, 0.04, 0.06, 0.1, 0.15, 0.2];
+    let power = params(Dissipation::PowerLaw {
+        d: 118.0,
+        alpha: 3.0,
+        beta: 1.5,
+    });
+    for (name, p) in [("stress", stress()), ("powerlaw", power)] {
+        let es: Vec<f64> = vs.iter().map(|&v| run(p, v).e).collect();
+        eprintln!("{name}: {es:?}");
+        assert_eq!(es[0], 0.0, "{name}: sticks at v = 0.02");
+        let (imax, emax) = es
+            .iter()
+            .enumerate()
+            .fold((0, 0.0), |m, (i, &e)| if e > m.1 { (i, e) } else { m });
+        assert!(
+            imax > 1 && imax < vs.len() - 1,
+            "{name}: peak at v = {}",
+            vs[imax]
+        );
+        assert!(emax > 0.8 && emax < 0.9, "{name}: peak e = {emax}");
+        assert!(es[vs.len() - 1] < emax - 0.1, "{name}: {es:?}");
+    }
+    // the constant-T_vis Krijt model keeps rising over the same range
+    let es: Vec<f64> = vs.iter().map(|&v| run(krijt(TVIS), v).e).collect();
+    assert!(es.windows(2).all(|w| w[1] >= w[0]), "{es:?}");
+}
+
+#[test]
+fn gpu_backend_refuses_until_ported() {
+    for p in [krijt(TVIS), stress()] {
+        let err = powder::collide::collide_on(&spec(p, 0.1), powder::collide::Backend::Gpu)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("not yet on the GPU"), "{err}");
+    }
+}
+
+#[test]
+fn scene_keys_parse_and_errors_name_the_key() {
+    let scene = |extra: &str| {
+        let text = format!(
+            "[domain]\nmin = [-400.0, -200.0, -200.0]\nmax = [400.0, 200.0, 200.0]\n\
+             [simulation]\nduration = 1.0\nimpact_velocity = 0.1\n\
+             [[material]]\nname = \"m\"\ndensity = 1.09\nmodel = \"jkr\"\n\
+             youngs = 122.8125\npoisson = 0.25\nsurface_energy = 3.17\n{extra}\n\
+             [[particles]]\nkind = \"list\"\npositions = [[-148.0, 0.0, 0.0], [148.0, 0.0, 0.0]]\nradius = 147.0\n"
+        );
+        powder::scene::Scene::from_toml_str(&text, "t")
+    };
+    let s = scene(
+        "dissipation = \"stress\"\ntvis0_per_radius = 2.1e-4\nB = 6.2\nzeta = 4.0\nsigma0 = 2.9",
+    )
+    .unwrap();
+    assert_eq!(
+        s.materials[0].model,
+        ContactModel::Jkr(params(Dissipation::Stress {
+            tvis0_per_radius: 2.1e-4,
+            b: 6.2,
+            zeta: 4.0,
+            sigma0: 2.9
+        }))
+    );
+    let s = scene("dissipation = \"krijt\"\ntvis = 0.075").unwrap();
+    assert_eq!(
+        s.materials[0].model,
+        ContactModel::Jkr(params(Dissipation::Krijt {
+            tvis: 0.075,
+            sigma0: 0.0
+        }))
+    );
+    let err = |extra: &str| scene(extra).unwrap_err().to_string();
+    let e = err("dissipation = \"krijt\"");
+    assert!(e.contains("tvis"), "{e}");
+    let e = err("dissipation = \"krijt\"\ntvis = 0.075\nzeta = 4.0");
+    assert!(e.contains("zeta") && e.contains("\"stress\""), "{e}");
+    let e = err("dissipation = \"stress\"\ntvis0_per_radius = 2e-4\nB = 6.2\nzeta = -1.0");
+    assert!(e.contains("zeta") && e.contains("> 0"), "{e}");
+    let e = err("dissipation = \"krijt\"\ntvis = -1.0");
+    assert!(e.contains("tvis") && e.contains(">= 0"), "{e}");
+}
