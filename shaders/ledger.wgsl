@@ -16,14 +16,17 @@
 // (engaged: the model's touched flag, a force or a stored energy, as `is_in` on the CPU).
 //
 // Per particle, indexed by its persistent id (each invocation writes only its own
-// particle, so no atomics and bitwise reproducible sums), three vec4:
+// particle, so no atomics and bitwise reproducible sums), four vec4:
 //   [0] (pairs overlapping, walls overlapping, pairs engaged without overlap, walls
 //        engaged without overlap), counted from this particle's side;
 //   [1] (largest overlap, largest overlap/a12, sum over pairs of overlap/a12, sum over
 //        walls of overlap/a12);
 //   [2] (dissipated energy so far: Kahan sum and its compensation; the particle's share
-//        of the stored energy: half of each pair's, all of each wall's; 0).
-// The host reads [0..3] back only when asked and sums in f64 in id order.
+//        of the stored energy: half of each pair's, all of each wall's; 0);
+//   [3] (work moving walls did on it so far: Kahan sum and compensation; 0; 0) — the
+//        normal force's work 0.5·(f0 + f1)·(n·v_wall)·dt, exact for walls moving along
+//        their normal (the tangential force's is left out).
+// The host reads them back only when asked and sums in f64 in id order.
 
 const LEDGER: bool = true;
 
@@ -36,6 +39,7 @@ const LEDGER: bool = true;
 // What the force kernel gathers for one particle during a step.
 struct LedgerAcc {
     dissipated: f32,
+    wall_work: f32,
     stored: f32,
     counts: vec4<f32>,
     // largest overlap, largest overlap/a12, sums of overlap/a12 over pairs and walls
@@ -43,7 +47,7 @@ struct LedgerAcc {
 }
 
 fn ledger_new() -> LedgerAcc {
-    return LedgerAcc(0.0, 0.0, vec4<f32>(0.0), vec4<f32>(0.0));
+    return LedgerAcc(0.0, 0.0, 0.0, vec4<f32>(0.0), vec4<f32>(0.0));
 }
 
 // The energy one contact dissipated this step, and its new slot value.
@@ -97,9 +101,13 @@ fn ledger_pair(acc: ptr<function, LedgerAcc>, slot: u32, p: PairRow, k: Kin, c: 
     ledger_count(acc, k, engaged, false);
 }
 
-// One evaluated wall contact.
-fn ledger_wall(acc: ptr<function, LedgerAcc>, slot: u32, p: PairRow, k: Kin, c: Contact, power: f32) {
-    let booked = ledger_book(b_wall_ledger[slot], p, k, c, power);
+// One evaluated wall contact; v_n is the wall's velocity along n.
+fn ledger_wall(acc: ptr<function, LedgerAcc>, slot: u32, p: PairRow, k: Kin, c: Contact, power: f32, v_n: f32) {
+    let old = b_wall_ledger[slot];
+    if (v_n != 0.0) {
+        (*acc).wall_work += 0.5 * (select(0.0, old.y, old.w != 0.0) + c.normal) * v_n * k.dt;
+    }
+    let booked = ledger_book(old, p, k, c, power);
     (*acc).dissipated += booked.x;
     (*acc).stored += c.potential;
     let engaged = booked.w != 0.0;
@@ -120,13 +128,19 @@ fn ledger_departed(acc: ptr<function, LedgerAcc>, slot: u32, delta: f32) {
 // Kahan summation of the step's dissipation into the particle's running total: the f32
 // total of a long run would otherwise lose the small per-step increments.
 fn ledger_store(pid: u32, acc: LedgerAcc) {
-    let e = particle_ledger[3u * pid + 2u];
+    let e = particle_ledger[4u * pid + 2u];
     let y = acc.dissipated - e.y;
     let t = e.x + y;
     let comp = (t - e.x) - y;
-    particle_ledger[3u * pid] = acc.counts;
-    particle_ledger[3u * pid + 1u] = acc.overlaps;
-    particle_ledger[3u * pid + 2u] = vec4<f32>(t, comp, acc.stored, 0.0);
+    particle_ledger[4u * pid] = acc.counts;
+    particle_ledger[4u * pid + 1u] = acc.overlaps;
+    particle_ledger[4u * pid + 2u] = vec4<f32>(t, comp, acc.stored, 0.0);
+    if (acc.wall_work != 0.0) {
+        let ew = particle_ledger[4u * pid + 3u];
+        let yw = acc.wall_work - ew.y;
+        let tw = ew.x + yw;
+        particle_ledger[4u * pid + 3u] = vec4<f32>(tw, (tw - ew.x) - yw, 0.0, 0.0);
+    }
 }
 
 // remap: the slot's ledger follows its history.
@@ -172,11 +186,11 @@ fn ledger_dropped(pid: u32, o: u32, old_n: u32, k: u32) {
         }
     }
     if (lost != 0.0) {
-        var e = particle_ledger[3u * pid + 2u];
+        var e = particle_ledger[4u * pid + 2u];
         let y = lost - e.y;
         let t = e.x + y;
         e.y = (t - e.x) - y;
         e.x = t;
-        particle_ledger[3u * pid + 2u] = e;
+        particle_ledger[4u * pid + 2u] = e;
     }
 }

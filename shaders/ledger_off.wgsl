@@ -13,7 +13,7 @@ fn ledger_new() -> LedgerAcc {
 
 fn ledger_pair(acc: ptr<function, LedgerAcc>, slot: u32, p: PairRow, k: Kin, c: Contact, power: f32) {}
 
-fn ledger_wall(acc: ptr<function, LedgerAcc>, slot: u32, p: PairRow, k: Kin, c: Contact, power: f32) {}
+fn ledger_wall(acc: ptr<function, LedgerAcc>, slot: u32, p: PairRow, k: Kin, c: Contact, power: f32, v_n: f32) {}
 
 fn ledger_departed(acc: ptr<function, LedgerAcc>, slot: u32, delta: f32) {}
 

@@ -60,19 +60,28 @@ struct StepParams {
     reach: f32,
     // The domain box's extent in cells (the run monitor: a centre beyond it has left).
     extent_cells: vec3<f32>,
-    _pad: u32,
+    // 1 when some wall is servo-controlled: the force kernel then writes wall_push.
+    servo_walls: u32,
 }
 
 // The run monitor's overlap limit over a12 (`run::MAX_OVERLAP_RATIO`; a test ties them).
 const MONITOR_MAX_OVERLAP_RATIO: f32 = 0.5;
 
 struct Wall {
-    // A point of the plane as cell + offset (like particle positions).
+    // A point of the plane as cell + offset (like particle positions); moves with the wall.
     cell: vec4<i32>,
     offset: vec4<f32>,
     // Unit normal into the domain (xyz).
     normal: vec4<f32>,
+    // Velocity over the current step (xyz): written by the host for prescribed motion (per
+    // batch, split at the schedule's switch times), by wall_servo for servo control.
+    velocity: vec4<f32>,
+    // x: 0 fixed, 1 prescribed, 2 servo; y: the servo's force (N), z: its gain (m/s per
+    // N), w: its largest speed (m/s).
+    motion: vec4<f32>,
 }
+
+const WALL_SERVO: f32 = 2.0;
 
 @group(0) @binding(20) var<uniform> step: StepParams;
 
@@ -112,7 +121,10 @@ struct Wall {
 
 // Pair models: materials x materials, then walls x materials.
 @group(0) @binding(46) var<storage, read> pairs: array<PairRow>;
-@group(0) @binding(47) var<storage, read> walls: array<Wall>;
+@group(0) @binding(47) var<storage, read_write> walls: array<Wall>;
+// The normal force of each (particle, wall) contact this step, slot k·n_walls + w (only
+// written when some wall is servo-controlled; summed by wall_servo).
+@group(0) @binding(59) var<storage, read_write> wall_push: array<f32>;
 
 // Monitor, zeroed per batch of steps and read back after it (no per-step read-back):
 // [0] = largest neighbour count seen (atomicMax), [1] = persistent id of a particle that
@@ -439,17 +451,22 @@ fn particle_forces(k: u32) -> f32 {
         let wall = walls[w];
         let n = wall.normal.xyz;
         let delta = rk - dot(separation(ck, ok, wall.cell, wall.offset), n);
-        let v_c = vk - cross(rk * wk, n);
+        // relative to the (possibly moving) wall
+        let v_rel = vk - wall.velocity.xyz;
+        let v_c = v_rel - cross(rk * wk, n);
         let v_t = v_c - n * dot(v_c, n);
         // eq. 20 with r_j -> inf: (r_i - r_j)/(r_i + r_j) -> -1
-        let kin = Kin(delta, -dot(vk, n), rk, mk, step.dt, n, v_t, rk * cross(wk, n) - 0.5 * v_t);
+        let kin = Kin(delta, -dot(v_rel, n), rk, mk, step.dt, n, v_t, rk * cross(wk, n) - 0.5 * v_t);
         let slot = k * step.n_walls + w;
         var h = b_wall_hist[slot];
         let row = pairs[step.n_materials * step.n_materials + w * step.n_materials + mat_k];
         let c = pair_contact(row, kin, &h);
         b_wall_hist[slot] = h;
         peak = max(peak, delta / (2.0 * rk));
-        ledger_wall(&ledger_acc, slot, row, kin, c, dot(c.tangential, v_t) + dot(c.rolling, wk));
+        ledger_wall(&ledger_acc, slot, row, kin, c, dot(c.tangential, v_t) + dot(c.rolling, wk), dot(n, wall.velocity.xyz));
+        if (step.servo_walls != 0u) {
+            wall_push[slot] = c.normal;
+        }
         f += c.normal * n + c.tangential;
         if (ROTATION) {
             torque += -rk * cross(n, c.tangential) + c.rolling;
@@ -473,4 +490,58 @@ fn kick(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     }
     b_vel[k] = vec4<f32>(b_vel[k].xyz + 0.5 * step.dt * b_acc[k].xyz, b_vel[k].w);
     rot_kick(k);
+}
+
+// Moving walls, after kick_drift (dispatched only when some wall moves): each moving wall's
+// point advances by its velocity over the step, carried into its cell like a particle's.
+@compute @workgroup_size(1)
+fn wall_move() {
+    let h = grid.cell_width;
+    for (var w = 0u; w < step.n_walls; w++) {
+        if (walls[w].motion.x == 0.0) {
+            continue;
+        }
+        var o = walls[w].offset.xyz + step.dt * walls[w].velocity.xyz;
+        let shift = floor(o / h);
+        o = o - shift * h;
+        let over = o >= vec3<f32>(h);
+        o = select(o, vec3<f32>(0.0), over);
+        let carry = vec3<i32>(shift) + select(vec3<i32>(0), vec3<i32>(1), over);
+        walls[w].cell = vec4<i32>(walls[w].cell.xyz + carry, 0);
+        walls[w].offset = vec4<f32>(o, 0.0);
+    }
+}
+
+// Servo control, after force (dispatched only when some wall is servo-controlled): one
+// workgroup sums each servo wall's normal force over the particles in a fixed order (a
+// strided sum per invocation, then a tree), so the result is reproducible, and sets the
+// wall's velocity for the next step: clamp(gain·(force − pushed), ±max_speed) along n.
+var<workgroup> wg_push: array<f32, WG_SIZE>;
+
+@compute @workgroup_size(WG_SIZE)
+fn wall_servo(@builtin(local_invocation_index) lid: u32) {
+    for (var w = 0u; w < step.n_walls; w++) {
+        // uniform control flow: every invocation reads the same wall
+        let m = walls[w].motion;
+        if (m.x != WALL_SERVO) {
+            continue;
+        }
+        var sum = 0.0;
+        for (var k = lid; k < grid.n_particles; k += WG_SIZE) {
+            sum += wall_push[k * step.n_walls + w];
+        }
+        wg_push[lid] = sum;
+        workgroupBarrier();
+        for (var half = WG_SIZE / 2u; half > 0u; half /= 2u) {
+            if (lid < half) {
+                wg_push[lid] += wg_push[lid + half];
+            }
+            workgroupBarrier();
+        }
+        if (lid == 0u) {
+            let speed = clamp(m.z * (m.y - wg_push[0]), -m.w, m.w);
+            walls[w].velocity = vec4<f32>(speed * walls[w].normal.xyz, 0.0);
+        }
+        workgroupBarrier();
+    }
 }

@@ -218,6 +218,7 @@ impl CollideSpec {
             walls.push(Wall {
                 point: [xw, 0.0, 0.0],
                 normal: [-1.0, 0.0, 0.0],
+                motion: Default::default(),
                 material: 0,
             });
             xw

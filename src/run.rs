@@ -85,28 +85,33 @@ pub struct RunOptions {
     pub interrupt: Option<Arc<AtomicBool>>,
 }
 
-/// Header of `series.csv`.
-pub fn csv_header(n_walls: usize) -> String {
+/// Header of `series.csv`: per wall the force of the particles on it and, for a moving
+/// wall, where its plane passes (the scene point moved with the wall).
+pub fn csv_header(walls: &[crate::scene::Wall]) -> String {
     let mut h = String::from(
-        "step,time,kinetic,elastic,gravitational,dissipated,total,contacts,wall_contacts,non_contact,coordination,max_overlap,max_overlap_ratio,mean_overlap_ratio",
+        "step,time,kinetic,elastic,gravitational,dissipated,wall_work,total,contacts,wall_contacts,non_contact,coordination,max_overlap,max_overlap_ratio,mean_overlap_ratio",
     );
-    for w in 0..n_walls {
+    for (w, wall) in walls.iter().enumerate() {
         h.push_str(&format!(",wall{w}_fx,wall{w}_fy,wall{w}_fz"));
+        if wall.motion.moves() {
+            h.push_str(&format!(",wall{w}_x,wall{w}_y,wall{w}_z"));
+        }
     }
     h
 }
 
-fn csv_row(s: &Snapshot, wall_forces: &[glam::DVec3]) -> String {
+fn csv_row(s: &Snapshot, obs: &Observation, walls: &[crate::scene::Wall]) -> String {
     let e = &s.energies;
     let c = &s.contacts;
     let mut row = format!(
-        "{},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{},{:e},{:e},{:e},{:e}",
+        "{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{},{:e},{:e},{:e},{:e}",
         s.step,
         s.time,
         e.kinetic,
         e.elastic,
         e.gravitational,
         e.dissipated,
+        e.wall_work,
         e.total(),
         c.contacts,
         c.wall_contacts,
@@ -116,8 +121,13 @@ fn csv_row(s: &Snapshot, wall_forces: &[glam::DVec3]) -> String {
         c.max_overlap_ratio,
         c.mean_overlap_ratio
     );
-    for f in wall_forces {
+    for (w, wall) in walls.iter().enumerate() {
+        let f = obs.wall_forces[w];
         row.push_str(&format!(",{:e},{:e},{:e}", f.x, f.y, f.z));
+        if wall.motion.moves() {
+            let p = obs.wall_points[w];
+            row.push_str(&format!(",{:e},{:e},{:e}", p.x, p.y, p.z));
+        }
     }
     row
 }
@@ -315,7 +325,7 @@ pub fn run_with<S: Simulation>(
     if let (Some(s), Some(d), Some(step)) = (series.as_mut(), out, resumed_from) {
         s.keep_until(earlier_snapshots(d, &scene.name, step, engine.dt()));
     }
-    let header = csv_header(scene.walls.len());
+    let header = csv_header(&scene.walls);
     let radii = engine.radii().to_vec();
     let write_outputs = |obs: &Observation,
                          snap: &Snapshot,
@@ -323,7 +333,7 @@ pub fn run_with<S: Simulation>(
                          series: &mut Option<vtk::Series>|
      -> Result<(), PowderError> {
         rows.retain(|r| !r.starts_with(&format!("{},", snap.step)));
-        rows.push(csv_row(snap, &obs.wall_forces));
+        rows.push(csv_row(snap, obs, &scene.walls));
         if let Some(s) = series.as_mut() {
             s.write(
                 snap.step,

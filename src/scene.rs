@@ -86,6 +86,13 @@
 //! point = [0.0, 0.0, 0.0]       # required, m: a point on the plane
 //! normal = [0.0, 0.0, 1.0]      # required: points into the domain; need not be unit, non-zero
 //! material = "powder"           # default: the first [[material]]
+//! # at most one kind of motion (default: fixed); a moving wall has an infinite mass:
+//! # velocity = [0.0, 0.0, -0.01] # m/s, prescribed from t = 0; or a schedule:
+//! # velocities = [[0.0, 0.0, -0.01], [0.0, 0.0, 0.01]]  # m/s, piecewise constant,
+//! # times = [0.0, 0.05]          #   velocities[k] from times[k] s (at rest before times[0]); or
+//! # servo_force = 0.5            # N > 0: move along the normal to hold this normal force,
+//! # servo_gain = 1e-3            #   m/s per N > 0: speed = clamp(gain·(servo_force − F), ±max)
+//! # servo_max_speed = 0.01       #   m/s > 0 (stable while gain·k_bed·dt < 1)
 //!
 //! [[particles]]                 # one or more blocks, expanded in file order; particle ids
 //!                               # (0-based) follow the order of expansion
@@ -191,13 +198,62 @@ pub struct Interaction {
     pub model: ContactModel,
 }
 
+/// How a wall moves (it is never pushed by the particles: an infinite mass).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub enum WallMotion {
+    /// At rest.
+    #[default]
+    Fixed,
+    /// Piecewise-constant prescribed velocity: (from time s, velocity m/s), by increasing
+    /// time; at rest before the first time.
+    Prescribed(Vec<(f64, [f64; 3])>),
+    /// Servo control along the normal: each step the wall moves with speed
+    /// clamp(gain·(force − F), ±max_speed) along its normal, F being the normal force the
+    /// particles exerted on it the step before; it holds `force` (N).
+    Servo {
+        force: f64,
+        gain: f64,
+        max_speed: f64,
+    },
+}
+
+impl WallMotion {
+    /// The prescribed velocity at time `t` (zero for fixed and servo walls).
+    pub fn prescribed_velocity(&self, t: f64) -> [f64; 3] {
+        match self {
+            WallMotion::Prescribed(phases) => phases
+                .iter()
+                .rev()
+                .find(|(from, _)| t >= *from)
+                .map_or([0.0; 3], |(_, v)| *v),
+            _ => [0.0; 3],
+        }
+    }
+
+    /// The next time after `t` at which the prescribed velocity changes.
+    pub fn next_switch(&self, t: f64) -> Option<f64> {
+        match self {
+            WallMotion::Prescribed(phases) => {
+                phases.iter().map(|(from, _)| *from).find(|&from| from > t)
+            }
+            _ => None,
+        }
+    }
+
+    pub fn moves(&self) -> bool {
+        !matches!(self, WallMotion::Fixed)
+    }
+}
+
 /// An infinite plane wall.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Wall {
-    /// A point on the plane, m.
+    /// A point on the plane at time 0, m.
     pub point: [f64; 3],
     /// Unit normal pointing into the domain.
     pub normal: [f64; 3],
+    /// How it moves (default: fixed).
+    pub motion: WallMotion,
     /// Index into [`Scene::materials`].
     pub material: usize,
 }
@@ -364,7 +420,17 @@ fn model_keys(kind: &str) -> &'static [&'static str] {
         _ => HERTZ_KEYS,
     }
 }
-const WALL_KEYS: &[&str] = &["point", "normal", "material"];
+const WALL_KEYS: &[&str] = &[
+    "point",
+    "normal",
+    "material",
+    "velocity",
+    "velocities",
+    "times",
+    "servo_force",
+    "servo_gain",
+    "servo_max_speed",
+];
 const PARTICLE_KINDS: &[&str] = &["list", "lattice", "random"];
 const LIST_KEYS: &[&str] = &[
     "kind",
@@ -1321,6 +1387,82 @@ fn parse_interactions(root: &Tbl, names: &[&str]) -> Res<Vec<Interaction>> {
     Ok(out)
 }
 
+/// `velocity`, or `velocities` with `times`, or `servo_*`: at most one kind of motion.
+fn parse_wall_motion(t: &Tbl) -> Res<WallMotion> {
+    let servo = ["servo_force", "servo_gain", "servo_max_speed"];
+    let kinds = [
+        t.has("velocity"),
+        t.has("velocities") || t.has("times"),
+        servo.iter().any(|k| t.has(k)),
+    ];
+    if kinds.iter().filter(|&&k| k).count() > 1 {
+        return Err(t.err_table(format!(
+            "{} mixes kinds of motion: give `velocity` (constant), or `velocities` with `times` (a schedule), or `servo_force`, `servo_gain` and `servo_max_speed` (force control)",
+            t.ctx
+        )));
+    }
+    if let Some(v) = t.vec3("velocity")? {
+        return Ok(WallMotion::Prescribed(vec![(0.0, v)]));
+    }
+    if kinds[1] {
+        let velocities = t.vec3_list("velocities")?.ok_or_else(|| {
+            t.missing(
+                "velocities",
+                "the wall velocities [[vx, vy, vz], ...] in m/s, one per entry of `times`",
+            )
+        })?;
+        let times = t.f64_list("times")?.ok_or_else(|| {
+            t.missing(
+                "times",
+                "the times in s from which each of `velocities` applies, increasing",
+            )
+        })?;
+        if velocities.len() != times.len() || times.is_empty() {
+            return Err(t.err_key(
+                "times",
+                format!(
+                    "`times` in {} has {} entries and `velocities` {}: give one start time per velocity",
+                    t.ctx,
+                    times.len(),
+                    velocities.len()
+                ),
+            ));
+        }
+        if times[0] < 0.0 || times.windows(2).any(|w| w[1] <= w[0]) {
+            return Err(t.err_key(
+                "times",
+                format!(
+                    "`times` in {} must start at >= 0 s and increase strictly, got {times:?}",
+                    t.ctx
+                ),
+            ));
+        }
+        return Ok(WallMotion::Prescribed(
+            times.into_iter().zip(velocities).collect(),
+        ));
+    }
+    if kinds[2] {
+        let force = t.positive_req(
+            "servo_force",
+            "the normal force in N the servo-controlled wall holds",
+        )?;
+        let gain = t.positive_req(
+            "servo_gain",
+            "the servo gain in m/s per N of force error (stable while gain·k_bed·dt < 1)",
+        )?;
+        let max_speed = t.positive_req(
+            "servo_max_speed",
+            "the largest speed in m/s of the servo-controlled wall",
+        )?;
+        return Ok(WallMotion::Servo {
+            force,
+            gain,
+            max_speed,
+        });
+    }
+    Ok(WallMotion::Fixed)
+}
+
 fn parse_walls(root: &Tbl, names: &[&str]) -> Res<Vec<Wall>> {
     let mut out = Vec::new();
     for (i, (span, entries)) in root.tables("wall")?.into_iter().enumerate() {
@@ -1348,9 +1490,11 @@ fn parse_walls(root: &Tbl, names: &[&str]) -> Res<Vec<Wall>> {
             ));
         }
         let material = material_ref(&t, names)?;
+        let motion = parse_wall_motion(&t)?;
         out.push(Wall {
             point,
             normal: [n[0] / len, n[1] / len, n[2] / len],
+            motion,
             material,
         });
     }

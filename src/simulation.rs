@@ -21,6 +21,8 @@ pub struct Observation {
     pub contacts: ContactStats,
     /// Force of the particles on each wall, N (GPU: the normal part only).
     pub wall_forces: Vec<DVec3>,
+    /// Where each wall's plane passes now (its scene point, moved with the wall), m.
+    pub wall_points: Vec<DVec3>,
 }
 
 /// A deepest overlap the run monitor found: the ratio over a12 and who it involves.
@@ -102,6 +104,7 @@ impl Simulation for CpuEngine {
             energies: self.energies(),
             contacts: self.contact_stats(),
             wall_forces: self.wall_forces(),
+            wall_points: self.walls_now().iter().map(|w| w.0).collect(),
         })
     }
     fn save(&self) -> Result<CpuState, PowderError> {
@@ -168,6 +171,7 @@ impl Simulation for GpuEngine {
             energies: self.energies(&s)?,
             contacts: self.contact_stats()?,
             wall_forces: self.wall_forces()?,
+            wall_points: self.walls_now()?.iter().map(|w| w.0).collect(),
             positions: s.positions,
             velocities: s.velocities,
             angular_velocities: s.angular_velocities,

@@ -47,6 +47,7 @@ fn floor() -> Wall {
     Wall {
         point: [0.0, 0.0, 0.0],
         normal: [0.0, 0.0, 1.0],
+        motion: Default::default(),
         material: 0,
     }
 }

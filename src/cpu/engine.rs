@@ -59,10 +59,14 @@ struct Motion {
 }
 
 /// A planar wall: an infinite-mass body with the contact model of its material pair.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 struct WallPlane {
+    /// A point of the plane now (it moves with the wall).
     point: DVec3,
     normal: DVec3,
+    motion: crate::scene::WallMotion,
+    /// Velocity over the current step.
+    velocity: DVec3,
 }
 
 /// Energies of the whole system, J.
@@ -75,12 +79,15 @@ pub struct Energies {
     pub gravitational: f64,
     /// Dissipated so far (plastic, adhesive hysteresis, viscous).
     pub dissipated: f64,
+    /// Work done on the particles by moving walls so far.
+    pub wall_work: f64,
 }
 
 impl Energies {
-    /// The conserved sum.
+    /// The conserved sum: kinetic + stored + gravitational + dissipated − the work moving
+    /// walls did on the particles.
     pub fn total(&self) -> f64 {
-        self.kinetic + self.elastic + self.gravitational + self.dissipated
+        self.kinetic + self.elastic + self.gravitational + self.dissipated - self.wall_work
     }
 }
 
@@ -119,6 +126,10 @@ pub struct CpuState {
     contacts: Vec<((u32, u32), ContactRecord)>,
     wall_contacts: Vec<((u32, u32), ContactRecord)>,
     dissipated: f64,
+    /// Wall points and velocities (moving walls) and the work they did.
+    wall_points: Vec<DVec3>,
+    wall_velocities: Vec<DVec3>,
+    wall_work: f64,
 }
 
 /// The CPU reference simulation.
@@ -151,6 +162,7 @@ pub struct CpuEngine {
     contacts: HashMap<(u32, u32), ContactRecord>,
     wall_contacts: HashMap<(u32, u32), ContactRecord>,
     dissipated: f64,
+    wall_work: f64,
     domain: (DVec3, DVec3),
     /// Deepest overlap over a12 since the monitor last looked: (ratio, i, partner).
     peak: Option<(f64, usize, Partner)>,
@@ -202,6 +214,8 @@ impl CpuEngine {
             .map(|w| WallPlane {
                 point: DVec3::from_array(w.point),
                 normal: DVec3::from_array(w.normal).normalize(),
+                motion: w.motion.clone(),
+                velocity: DVec3::ZERO,
             })
             .collect();
         let cutoff_pad = radius.iter().map(|r| r + max_reach).collect();
@@ -242,6 +256,7 @@ impl CpuEngine {
             contacts: HashMap::new(),
             wall_contacts: HashMap::new(),
             dissipated: 0.0,
+            wall_work: 0.0,
             domain,
             peak: None,
         };
@@ -278,6 +293,9 @@ impl CpuEngine {
             contacts: sorted(&self.contacts),
             wall_contacts: sorted(&self.wall_contacts),
             dissipated: self.dissipated,
+            wall_points: self.walls.iter().map(|w| w.point).collect(),
+            wall_velocities: self.walls.iter().map(|w| w.velocity).collect(),
+            wall_work: self.wall_work,
         }
     }
 
@@ -323,6 +341,22 @@ impl CpuEngine {
         self.contacts = s.contacts.into_iter().collect();
         self.wall_contacts = s.wall_contacts.into_iter().collect();
         self.dissipated = s.dissipated;
+        if s.wall_points.len() != self.walls.len() {
+            return Err(PowderError::Run(format!(
+                "the checkpoint holds {} walls but the scene has {}",
+                s.wall_points.len(),
+                self.walls.len()
+            )));
+        }
+        for (w, (p, v)) in self
+            .walls
+            .iter_mut()
+            .zip(s.wall_points.into_iter().zip(s.wall_velocities))
+        {
+            w.point = p;
+            w.velocity = v;
+        }
+        self.wall_work = s.wall_work;
         Ok(())
     }
 
@@ -443,6 +477,31 @@ impl CpuEngine {
             v_pred.push(v_half + 0.5 * dt * self.acc[i]);
             self.vel[i] = v_half;
         }
+        // Moving walls: the velocity over this step (prescribed at its start, or the servo
+        // law from the force of the step before), then the move; the work the walls do
+        // on the particles is integrated with the force before and after the step.
+        let push_before = self.moving_walls().then(|| self.wall_forces());
+        if let Some(before) = &push_before {
+            for (w, wall) in self.walls.iter_mut().enumerate() {
+                wall.velocity = match &wall.motion {
+                    crate::scene::WallMotion::Fixed => DVec3::ZERO,
+                    crate::scene::WallMotion::Prescribed(_) => {
+                        DVec3::from_array(wall.motion.prescribed_velocity(self.time))
+                    }
+                    crate::scene::WallMotion::Servo {
+                        force,
+                        gain,
+                        max_speed,
+                    } => {
+                        // the normal force the particles exert (they push against −n)
+                        let pushed = -before[w].dot(wall.normal);
+                        let speed = (gain * (force - pushed)).clamp(-max_speed, *max_speed);
+                        speed * wall.normal
+                    }
+                };
+                wall.point += dt * wall.velocity;
+            }
+        }
         let mut w_pred = Vec::with_capacity(self.omega.len());
         for i in 0..self.omega.len() {
             let alpha = self.torque[i] / self.inertia[i];
@@ -450,6 +509,13 @@ impl CpuEngine {
             w_pred.push(self.omega[i] + 0.5 * dt * alpha);
         }
         self.compute_forces(&v_pred, &w_pred)?;
+        if let Some(before) = push_before {
+            let after = self.wall_forces();
+            for (w, wall) in self.walls.iter().enumerate() {
+                // the wall pushes the particles with −(force on the wall)
+                self.wall_work -= 0.5 * (before[w] + after[w]).dot(wall.velocity) * dt;
+            }
+        }
         self.update_acceleration();
         for i in 0..self.pos.len() {
             self.vel[i] += 0.5 * dt * self.acc[i];
@@ -460,6 +526,17 @@ impl CpuEngine {
         self.time += dt;
         self.steps += 1;
         Ok(())
+    }
+
+    /// Whether some wall moves.
+    fn moving_walls(&self) -> bool {
+        self.walls.iter().any(|w| w.motion.moves())
+    }
+
+    /// Where each wall's plane passes now (a point of it) and its velocity over the last
+    /// step.
+    pub fn walls_now(&self) -> Vec<(DVec3, DVec3)> {
+        self.walls.iter().map(|w| (w.point, w.velocity)).collect()
     }
 
     /// Runs `n` steps.
@@ -615,7 +692,9 @@ impl CpuEngine {
         let mut new_w = HashMap::with_capacity(old_w.len());
         for (w, wall) in self.walls.iter().enumerate() {
             let n = wall.normal;
-            for (i, v) in v_pred.iter().enumerate() {
+            for (i, v_particle) in v_pred.iter().enumerate() {
+                // relative to the (possibly moving) wall
+                let v = &(*v_particle - wall.velocity);
                 let delta = self.radius[i] - (self.pos[i] - wall.point).dot(n);
                 let model = &self.wall_models[w * self.n_materials + self.material[i]];
                 let key = (w as u32, i as u32);
@@ -681,6 +760,7 @@ impl CpuEngine {
     pub fn energies(&self) -> Energies {
         let mut e = Energies {
             dissipated: self.dissipated,
+            wall_work: self.wall_work,
             ..Default::default()
         };
         for i in 0..self.omega.len() {

@@ -158,6 +158,9 @@ struct Bound {
     remap: wgpu::BindGroup,
     force: wgpu::BindGroup,
     kick: wgpu::BindGroup,
+    /// The moving-wall kernels, only for scenes with moving / servo-controlled walls.
+    wall_move: Option<(Kernel, wgpu::BindGroup)>,
+    wall_servo: Option<(Kernel, wgpu::BindGroup)>,
 }
 
 /// A snapshot read back from the device, in the scene's particle order.
@@ -178,7 +181,7 @@ pub type KeyedHistory = ((u32, u32), ContactHistory);
 pub struct GpuOptions {
     /// Keep the energy ledger and contact statistics on the device
     /// ([`GpuEngine::energies`], [`GpuEngine::contact_stats`]): 32 bytes per neighbour slot
-    /// and 48 per particle more, and a little work per contact. Default on.
+    /// and 64 per particle more, and a little work per contact. Default on.
     pub ledger: bool,
 }
 
@@ -232,6 +235,13 @@ pub struct GpuEngine {
     nbr: wgpu::Buffer,
     /// Unit normals of the walls (into the domain).
     wall_normals: Vec<DVec3>,
+    /// How each wall moves, and the walls on the device (they move: state).
+    wall_motion: Vec<crate::scene::WallMotion>,
+    walls: wgpu::Buffer,
+    /// The prescribed walls' points in f64, integrated on the host (v·dt per step, as the
+    /// CPU does) and written to the device at every batch, so f32 rounding of the device's
+    /// per-step moves never accumulates.
+    wall_points: Vec<DVec3>,
 }
 
 /// Everything that evolves in a GPU run, read back from the device: what a checkpoint
@@ -248,6 +258,8 @@ pub struct GpuSavedState {
     pub adapter: String,
     /// (name, bytes), in a fixed order.
     buffers: Vec<(String, Vec<u8>)>,
+    /// The host's f64 points of the walls.
+    wall_points: Vec<DVec3>,
 }
 
 /// The step a scene's pair models need and their pair table as bytes, or why the GPU
@@ -357,7 +369,7 @@ impl GpuEngine {
             StateSet::new(&mut alloc, "A", sizes, kind, ledger),
             StateSet::new(&mut alloc, "B", sizes, kind, ledger),
         ];
-        let particle_ledger = ledger.then(|| alloc.buffer("particle_ledger", 48 * n as u64));
+        let particle_ledger = ledger.then(|| alloc.buffer("particle_ledger", 64 * n as u64));
         // Initial state, in scene order (the first sort orders it).
         let mut cells = Vec::with_capacity(n);
         let mut offs = Vec::with_capacity(n);
@@ -394,15 +406,13 @@ impl GpuEngine {
         let walls: Vec<WallGpu> = scene
             .walls
             .iter()
-            .map(|w| {
-                WallGpu::new(
-                    DVec3::from_array(w.point),
-                    DVec3::from_array(w.normal),
-                    origin,
-                    h,
-                )
-            })
+            .map(|w| WallGpu::from_scene(w, origin, h))
             .collect();
+        let moving_walls = scene.walls.iter().any(|w| w.motion.moves());
+        let servo_walls = scene
+            .walls
+            .iter()
+            .any(|w| matches!(w.motion, crate::scene::WallMotion::Servo { .. }));
         let step = StepParams {
             gravity: [g[0] as f32, g[1] as f32, g[2] as f32],
             dt: r.dt as f32,
@@ -415,7 +425,7 @@ impl GpuEngine {
                 (extent.y / h) as f32,
                 (extent.z / h) as f32,
             ],
-            _pad: 0,
+            servo_walls: servo_walls as u32,
         };
         let step_buf = uniform_buffer(device, "step", bytemuck::bytes_of(&step));
         alloc.list.push(("step".into(), step_buf.size()));
@@ -428,6 +438,11 @@ impl GpuEngine {
         if !walls.is_empty() {
             q0.write_buffer(&walls_buf, 0, bytemuck::cast_slice(&walls));
         }
+        // the servo's per-contact normal forces (one element without servo walls)
+        let wall_push = alloc.buffer(
+            "wall_push",
+            4 * if servo_walls { n as u64 * n_walls } else { 1 },
+        );
         let vpred = alloc.buffer("vpred", 16 * n as u64);
         let wpred = kind
             .rotation()
@@ -452,7 +467,23 @@ impl GpuEngine {
         alloc.list.push(("args".into(), args.size()));
         let buffers = alloc.list;
 
-        let program = Program::new(&ctx, &kind.variant(ledger))?;
+        let mut wanted = vec![
+            "kick_drift",
+            "decide",
+            "gather",
+            "neighbours",
+            "remap",
+            "force",
+            "kick",
+        ];
+        // the wall kernels only where walls move (not compiled otherwise)
+        if moving_walls {
+            wanted.push("wall_move");
+        }
+        if servo_walls {
+            wanted.push("wall_servo");
+        }
+        let program = Program::with_entry_points(&ctx, &kind.variant(ledger), Some(&wanted))?;
         let names = [
             "kick_drift",
             "decide",
@@ -487,6 +518,7 @@ impl GpuEngine {
             list.push(("cell_count".into(), grid.cell_count()));
             list.push(("pairs".into(), &pairs_buf));
             list.push(("walls".into(), &walls_buf));
+            list.push(("wall_push".into(), &wall_push));
             list.push(("monitor".into(), &monitor));
             list.push(("skin".into(), &skin_buf));
             list.push(("args".into(), &args));
@@ -504,6 +536,14 @@ impl GpuEngine {
                 remap: kernels[4].bind(device, &refs)?,
                 force: kernels[5].bind(device, &refs)?,
                 kick: kernels[6].bind(device, &refs)?,
+                wall_move: match program.kernels.get("wall_move") {
+                    Some(k) => Some((k.clone(), k.bind(device, &refs)?)),
+                    None => None,
+                },
+                wall_servo: match program.kernels.get("wall_servo") {
+                    Some(k) => Some((k.clone(), k.bind(device, &refs)?)),
+                    None => None,
+                },
             })
         };
         let bound = [bind(0)?, bind(1)?];
@@ -540,6 +580,13 @@ impl GpuEngine {
                 .walls
                 .iter()
                 .map(|w| DVec3::from_array(w.normal).normalize())
+                .collect(),
+            wall_motion: scene.walls.iter().map(|w| w.motion.clone()).collect(),
+            walls: walls_buf,
+            wall_points: scene
+                .walls
+                .iter()
+                .map(|w| DVec3::from_array(w.point))
                 .collect(),
             ctx,
         };
@@ -623,6 +670,9 @@ impl GpuEngine {
             let mut pass = encoder.begin_compute_pass(&Default::default());
             if with_drift {
                 self.kernels[0].dispatch(&mut pass, &bound.kick_drift, n, max);
+                if let Some((k, b)) = &bound.wall_move {
+                    k.dispatch_workgroups(&mut pass, b, 1, max);
+                }
             }
             self.kernels[1].dispatch_workgroups(&mut pass, &bound.decide, 1, max);
         }
@@ -634,6 +684,9 @@ impl GpuEngine {
         self.kernels[3].dispatch(&mut pass, &bound.neighbours, n, max);
         self.kernels[4].dispatch(&mut pass, &bound.remap, n, max);
         self.kernels[5].dispatch(&mut pass, &bound.force, n, max);
+        if let Some((k, b)) = &bound.wall_servo {
+            k.dispatch_workgroups(&mut pass, b, 1, max);
+        }
         if with_drift {
             self.kernels[6].dispatch(&mut pass, &bound.kick, n, max);
         }
@@ -660,7 +713,7 @@ impl GpuEngine {
         self.check_monitor(encoder)?;
         if let Some(buf) = &self.particle_ledger {
             let mut rows = self.read_particle_ledger()?;
-            for p in rows.chunks_mut(3) {
+            for p in rows.chunks_mut(4) {
                 p[2][0] = 0.0;
                 p[2][1] = 0.0;
             }
@@ -700,11 +753,78 @@ impl GpuEngine {
         Ok(())
     }
 
+    /// Writes the prescribed walls' exact points and their velocities at the current time;
+    /// returns how many steps the velocities stay valid (until the next switch of a
+    /// schedule), at least 1.
+    fn prescribe_walls(&self) -> u64 {
+        let mut valid = u64::MAX;
+        for (w, m) in self.wall_motion.iter().enumerate() {
+            if !matches!(m, crate::scene::WallMotion::Prescribed(_)) {
+                continue;
+            }
+            let v = m.prescribed_velocity(self.time);
+            let mut wall = WallGpu::new(
+                self.wall_points[w],
+                self.wall_normals[w],
+                self.origin,
+                self.h,
+            );
+            wall.velocity = [v[0] as f32, v[1] as f32, v[2] as f32, 0.0];
+            wall.motion = [crate::gpu::layout::WALL_PRESCRIBED, 0.0, 0.0, 0.0];
+            let at = (w * std::mem::size_of::<WallGpu>()) as u64;
+            self.ctx
+                .queue
+                .write_buffer(&self.walls, at, bytemuck::bytes_of(&wall));
+            if let Some(t) = m.next_switch(self.time) {
+                // steps that start before the switch keep this velocity (as on the CPU)
+                valid = valid.min((((t - self.time) / self.dt).ceil() as u64).max(1));
+            }
+        }
+        valid
+    }
+
+    /// Advances the host's points of the prescribed walls by `steps` steps.
+    fn advance_prescribed_walls(&mut self, steps: u64) {
+        for (w, m) in self.wall_motion.iter().enumerate() {
+            if matches!(m, crate::scene::WallMotion::Prescribed(_)) {
+                let v = DVec3::from_array(m.prescribed_velocity(self.time));
+                for _ in 0..steps {
+                    self.wall_points[w] += self.dt * v;
+                }
+            }
+        }
+    }
+
+    /// Each wall's point now (where its plane passes) and its velocity over the last step,
+    /// read back from the device.
+    pub fn walls_now(&self) -> Result<Vec<(DVec3, DVec3)>, PowderError> {
+        if self.wall_normals.is_empty() {
+            return Ok(Vec::new());
+        }
+        let encoder = self.ctx.device.create_command_encoder(&Default::default());
+        let out = submit_and_read(&self.ctx, encoder, &[(&self.walls, self.walls.size())])?;
+        let walls: Vec<WallGpu> = bytemuck::pod_collect_to_vec(&out[0]);
+        Ok(walls
+            .iter()
+            .take(self.wall_normals.len())
+            .map(|w| {
+                let p = crate::gpu::layout::decode(w.cell, w.offset, self.origin, self.h);
+                let v = DVec3::new(
+                    w.velocity[0] as f64,
+                    w.velocity[1] as f64,
+                    w.velocity[2] as f64,
+                );
+                (p, v)
+            })
+            .collect())
+    }
+
     /// Runs `steps` steps, `STEPS_PER_SUBMIT` per submission, checking the monitor after each.
     pub fn run_steps(&mut self, steps: u64) -> Result<(), PowderError> {
         let mut left = steps;
         while left > 0 {
-            let batch = left.min(STEPS_PER_SUBMIT);
+            let batch = left.min(STEPS_PER_SUBMIT).min(self.prescribe_walls());
+            self.advance_prescribed_walls(batch);
             self.ctx
                 .queue
                 .write_buffer(&self.monitor, 0, &[0u8; MONITOR_BYTES as usize]);
@@ -769,6 +889,7 @@ impl GpuEngine {
         let mut list = self.sets[self.cur].named("a");
         list.push(("nbr".into(), &self.nbr));
         list.push(("skin".into(), &self.skin));
+        list.push(("walls".into(), &self.walls));
         if let Some(l) = &self.particle_ledger {
             list.push(("particle_ledger".into(), l));
         }
@@ -787,6 +908,7 @@ impl GpuEngine {
             dropped: self.dropped,
             adapter: self.ctx.summary.name.clone(),
             buffers: list.into_iter().map(|(n, _)| n).zip(out).collect(),
+            wall_points: self.wall_points.clone(),
         })
     }
 
@@ -813,6 +935,9 @@ impl GpuEngine {
             self.ctx.queue.write_buffer(buf, 0, bytes);
         }
         self.ctx.queue.submit([]);
+        if saved.wall_points.len() == self.wall_points.len() {
+            self.wall_points = saved.wall_points;
+        }
         self.time = saved.time;
         self.steps = saved.steps;
         self.dropped = saved.dropped;
@@ -843,7 +968,7 @@ impl GpuEngine {
         self.dropped
     }
 
-    /// The per-particle ledger rows (3 × vec4 per persistent id), or an error naming why
+    /// The per-particle ledger rows (4 × vec4 per persistent id), or an error naming why
     /// there are none.
     fn read_particle_ledger(&self) -> Result<Vec<[f32; 4]>, PowderError> {
         let Some(buf) = &self.particle_ledger else {
@@ -852,7 +977,7 @@ impl GpuEngine {
             ));
         };
         let encoder = self.ctx.device.create_command_encoder(&Default::default());
-        let out = submit_and_read(&self.ctx, encoder, &[(buf, 48 * self.n as u64)])?;
+        let out = submit_and_read(&self.ctx, encoder, &[(buf, 64 * self.n as u64)])?;
         Ok(bytemuck::pod_collect_to_vec(&out[0]))
     }
 
@@ -868,9 +993,10 @@ impl GpuEngine {
         for (x, m) in state.positions.iter().zip(&self.mass) {
             e.gravitational -= m * self.gravity.dot(*x);
         }
-        for p in rows.chunks(3) {
+        for p in rows.chunks(4) {
             e.dissipated += p[2][0] as f64 - p[2][1] as f64;
             e.elastic += p[2][2] as f64;
+            e.wall_work += p[3][0] as f64 - p[3][1] as f64;
         }
         Ok(e)
     }
@@ -882,7 +1008,7 @@ impl GpuEngine {
         let mut counts = [0.0f64; 4];
         let mut sums = [0.0f64; 2];
         let mut s = ContactStats::default();
-        for p in rows.chunks(3) {
+        for p in rows.chunks(4) {
             for c in 0..4 {
                 counts[c] += p[0][c] as f64;
             }

@@ -35,6 +35,16 @@ impl Program {
     /// Validates the variant with naga, then builds one pipeline per compute entry point.
     /// wgpu validation errors come back as `PowderError::Run` instead of panicking.
     pub fn new(ctx: &GpuContext, variant: &ShaderVariant) -> Result<Self, PowderError> {
+        Self::with_entry_points(ctx, variant, None)
+    }
+
+    /// As [`Self::new`], building pipelines only for the entry points in `only` (all when
+    /// `None`): a kernel a scene does not run is not compiled.
+    pub fn with_entry_points(
+        ctx: &GpuContext,
+        variant: &ShaderVariant,
+        only: Option<&[&str]>,
+    ) -> Result<Self, PowderError> {
         let (module, info) = shaders::validate(&variant.source).map_err(|e| {
             PowderError::Run(format!(
                 "shader variant `{}` is invalid:\n{e}",
@@ -50,7 +60,9 @@ impl Program {
             });
         let mut kernels = BTreeMap::new();
         for (index, ep) in module.entry_points.iter().enumerate() {
-            if ep.stage != naga::ShaderStage::Compute {
+            if ep.stage != naga::ShaderStage::Compute
+                || only.is_some_and(|names| !names.contains(&ep.name.as_str()))
+            {
                 continue;
             }
             let uses = info.get_entry_point(index);

@@ -335,7 +335,8 @@ pub struct StepParams {
     pub reach: f32,
     /// The domain box's extent in cells (the run monitor's escape check).
     pub extent_cells: [f32; 3],
-    pub _pad: u32,
+    /// 1 when some wall is servo-controlled.
+    pub servo_walls: u32,
 }
 
 /// A planar wall: a point as cell + offset and the unit normal. Twin of `Wall` in
@@ -346,7 +347,17 @@ pub struct WallGpu {
     pub cell: [i32; 4],
     pub offset: [f32; 4],
     pub normal: [f32; 4],
+    /// Velocity over the current step (xyz).
+    pub velocity: [f32; 4],
+    /// x: [`WALL_FIXED`], [`WALL_PRESCRIBED`] or [`WALL_SERVO`]; y, z, w: the servo's
+    /// force (N), gain (m/s per N) and largest speed (m/s).
+    pub motion: [f32; 4],
 }
+
+/// Wall motion kinds of [`WallGpu::motion`], as in the WGSL.
+pub const WALL_FIXED: f32 = 0.0;
+pub const WALL_PRESCRIBED: f32 = 1.0;
+pub const WALL_SERVO: f32 = 2.0;
 
 impl WallGpu {
     pub fn new(point: DVec3, normal: DVec3, origin: DVec3, h: f64) -> Self {
@@ -356,7 +367,30 @@ impl WallGpu {
             cell,
             offset,
             normal: [n.x as f32, n.y as f32, n.z as f32, 0.0],
+            velocity: [0.0; 4],
+            motion: [WALL_FIXED, 0.0, 0.0, 0.0],
         }
+    }
+
+    /// A scene wall at time 0.
+    pub fn from_scene(w: &crate::scene::Wall, origin: DVec3, h: f64) -> Self {
+        use crate::scene::WallMotion;
+        let mut g = Self::new(
+            DVec3::from_array(w.point),
+            DVec3::from_array(w.normal),
+            origin,
+            h,
+        );
+        g.motion = match w.motion {
+            WallMotion::Fixed => [WALL_FIXED, 0.0, 0.0, 0.0],
+            WallMotion::Prescribed(_) => [WALL_PRESCRIBED, 0.0, 0.0, 0.0],
+            WallMotion::Servo {
+                force,
+                gain,
+                max_speed,
+            } => [WALL_SERVO, force as f32, gain as f32, max_speed as f32],
+        };
+        g
     }
 }
 
@@ -620,6 +654,7 @@ mod tests {
                 ("n_walls", offset_of!(StepParams, n_walls)),
                 ("reach", offset_of!(StepParams, reach)),
                 ("extent_cells", offset_of!(StepParams, extent_cells)),
+                ("servo_walls", offset_of!(StepParams, servo_walls)),
             ],
         );
         check(
@@ -674,6 +709,8 @@ mod tests {
                 ("cell", offset_of!(WallGpu, cell)),
                 ("offset", offset_of!(WallGpu, offset)),
                 ("normal", offset_of!(WallGpu, normal)),
+                ("velocity", offset_of!(WallGpu, velocity)),
+                ("motion", offset_of!(WallGpu, motion)),
             ],
         );
     }

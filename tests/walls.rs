@@ -1,0 +1,199 @@
+//! Moving walls (prescribed velocity schedules and servo control) on both backends: the
+//! wall follows its schedule, the servo holds its force, the energy ledger closes with the
+//! walls' work, and the GPU follows the CPU.
+
+use powder::cpu::CpuEngine;
+use powder::gpu::{GpuContext, GpuEngine};
+use powder::scene::Scene;
+
+fn gpu() -> Option<GpuContext> {
+    match GpuContext::new() {
+        Ok(ctx) => Some(ctx),
+        Err(e) if std::env::var_os("CI").is_none() => {
+            eprintln!("skipping GPU test: {e}");
+            None
+        }
+        Err(e) => panic!("CI needs a GPU adapter (lavapipe): {e}"),
+    }
+}
+
+/// A column of three damped hysteretic spheres (r = 1 mm) 0.1 µm apart from each other and the
+/// floor, without gravity, under a lid 0.5 mm above the top one; `lid` is the lid's
+/// motion keys.
+fn column_text(lid: &str) -> String {
+    format!(
+        r#"
+[domain]
+min = [-0.003, -0.003, 0.0]
+max = [0.003, 0.003, 0.01]
+[simulation]
+duration = 0.2
+[[material]]
+name = "m"
+density = 2000.0
+model = "hysteretic"
+k1 = 100.0
+kp = 500.0
+kc = 100.0
+phi_f = 0.05
+gamma0 = 2e-3
+[[wall]]
+point = [0.0, 0.0, 0.0]
+normal = [0.0, 0.0, 1.0]
+[[wall]]
+point = [0.0, 0.0, 0.0065]
+normal = [0.0, 0.0, -1.0]
+{lid}
+[[particles]]
+kind = "list"
+radius = 1e-3
+positions = [[0.0, 0.0, 0.0010001], [0.0, 0.0, 0.0030002], [0.0, 0.0, 0.0050003]]
+"#
+    )
+}
+
+fn column(lid: &str) -> Scene {
+    Scene::from_toml_str(&column_text(lid), "column").unwrap()
+}
+
+fn lid_force_z(f: &[glam::DVec3]) -> f64 {
+    f[1].z
+}
+
+/// The lid comes down 1 mm at 1 cm/s, goes back up: the force on it rises while it
+/// presses, turns tensile on the way back (the adhesive branch −kc·δ holds the top sphere)
+/// and vanishes once it lets go; the ledger closes with the lid's work.
+#[test]
+fn a_prescribed_lid_loads_and_unloads_and_the_ledger_closes() {
+    let scene = column("velocities = [[0.0, 0.0, -0.01], [0.0, 0.0, 0.01]]\ntimes = [0.0, 0.1]");
+    let mut cpu = CpuEngine::new(&scene).unwrap();
+    let dt = cpu.dt();
+    let total0 = cpu.energies().total();
+    let steps = |t: f64| (t / dt).round() as u64;
+    let mut trace = Vec::new();
+    for _ in 0..40 {
+        cpu.run_steps(steps(0.005)).unwrap();
+        trace.push((
+            cpu.time,
+            cpu.walls_now()[1].0.z,
+            lid_force_z(&cpu.wall_forces()),
+        ));
+    }
+    // the lid follows its schedule exactly: down 1 mm by 0.1 s, back by 0.2 s
+    for (t, z, _) in &trace {
+        let expected = if *t <= 0.1 {
+            0.0065 - 0.01 * t
+        } else {
+            0.0055 + 0.01 * (t - 0.1)
+        };
+        // (the switch falls within a step: down for up to one step too long, so up to
+        // two steps of travel off after it)
+        assert!(
+            (z - expected).abs() < 0.01 * dt * 2.01,
+            "t {t}: lid at {z}, expected {expected}"
+        );
+    }
+    // (the force of the particles on a lid facing -z is +z while they push it)
+    let peak = trace.iter().map(|t| t.2).fold(0.0, f64::max);
+    let pull = trace.iter().map(|t| t.2).fold(0.0, f64::min);
+    eprintln!("lid: peak push {peak:e} N, largest pull {pull:e} N");
+    assert!(peak > 0.01, "the lid never pressed: {peak}");
+    assert!(pull < 0.0, "no adhesive pull on unloading: {pull}");
+    let e = cpu.energies();
+    assert!(e.wall_work > 0.0 && e.dissipated > 0.0, "{e:?}");
+    assert!(
+        (e.total() - total0).abs() < 1e-3 * e.wall_work,
+        "ledger: total {:e} vs {total0:e}, wall work {:e}",
+        e.total(),
+        e.wall_work
+    );
+
+    // the GPU follows: lid position, lid force, wall work and dissipation
+    let Some(ctx) = gpu() else { return };
+    let mut g = GpuEngine::new(&scene, ctx).unwrap();
+    let mut c = CpuEngine::new(&scene).unwrap();
+    for _ in 0..8 {
+        c.run_steps(steps(0.025)).unwrap();
+        g.run_steps(steps(0.025)).unwrap();
+        let (wc, wg) = (c.walls_now()[1].0.z, g.walls_now().unwrap()[1].0.z);
+        assert!((wc - wg).abs() < 1e-8, "lid at {wc} (cpu) vs {wg} (gpu)");
+        let (fc, fg) = (
+            lid_force_z(&c.wall_forces()),
+            lid_force_z(&g.wall_forces().unwrap()),
+        );
+        eprintln!(
+            "t {:.3}: lid {wc:.9e} / {wg:.9e}, force {fc:e} / {fg:e}, top sphere z {:e} / {:e}",
+            c.time,
+            c.positions()[2].z,
+            g.state().unwrap().positions[2].z
+        );
+        assert!(
+            (fc - fg).abs() < 1e-3 * peak,
+            "lid force {fc} (cpu) vs {fg} (gpu)"
+        );
+        let (ec, eg) = (c.energies(), g.energies(&g.state().unwrap()).unwrap());
+        assert!(
+            (ec.wall_work - eg.wall_work).abs() < 1e-3 * e.wall_work,
+            "{ec:?} {eg:?}"
+        );
+        assert!(
+            (ec.dissipated - eg.dissipated).abs() < 1e-3 * e.wall_work,
+            "{ec:?} {eg:?}"
+        );
+    }
+}
+
+/// A servo-controlled lid holds its force: it comes down, presses the column and settles
+/// at the target on both backends.
+#[test]
+fn a_servo_lid_holds_its_force() {
+    let scene = column("servo_force = 0.02\nservo_gain = 2.0\nservo_max_speed = 0.02");
+    let mut cpu = CpuEngine::new(&scene).unwrap();
+    let n = (0.2 / cpu.dt()) as u64;
+    cpu.run_steps(n).unwrap();
+    let f = lid_force_z(&cpu.wall_forces());
+    eprintln!(
+        "servo lid (cpu): {f:e} N at z = {:e}",
+        cpu.walls_now()[1].0.z
+    );
+    assert!((f - 0.02).abs() < 1e-3 * 0.02, "cpu servo force {f}");
+    let e = cpu.energies();
+    assert!(e.wall_work > 0.0, "{e:?}");
+    let start = CpuEngine::new(&scene).unwrap().energies().total();
+    assert!((e.total() - start).abs() < 1e-3 * e.wall_work, "{e:?}");
+    let Some(ctx) = gpu() else { return };
+    let mut g = GpuEngine::new(&scene, ctx).unwrap();
+    g.run_steps(n).unwrap();
+    let fg = lid_force_z(&g.wall_forces().unwrap());
+    eprintln!(
+        "servo lid (gpu): {fg:e} N at z = {:e}",
+        g.walls_now().unwrap()[1].0.z
+    );
+    assert!((fg - 0.02).abs() < 1e-3 * 0.02, "gpu servo force {fg}");
+}
+
+/// Bad wall motions are refused with the reason.
+#[test]
+fn bad_wall_motions_are_refused() {
+    let err = |lid: &str| {
+        Scene::from_toml_str(&column_text(lid), "column")
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_else(|| panic!("accepted: {lid}"))
+    };
+    let e = err("velocity = [0.0, 0.0, -0.01]\nservo_force = 1.0");
+    assert!(e.contains("mixes kinds of motion"), "{e}");
+    let e = err("velocities = [[0.0, 0.0, -0.01]]\ntimes = [0.0, 0.1]");
+    assert!(
+        e.contains("`times`") && e.contains("one start time per velocity"),
+        "{e}"
+    );
+    let e = err("velocities = [[0.0, 0.0, -0.01], [0.0, 0.0, 0.01]]\ntimes = [0.1, 0.1]");
+    assert!(e.contains("increase strictly"), "{e}");
+    let e = err("velocities = [[0.0, 0.0, -0.01]]");
+    assert!(e.contains("times"), "{e}");
+    let e = err("servo_force = 1.0\nservo_gain = 0.1");
+    assert!(e.contains("servo_max_speed"), "{e}");
+    let e = err("servo_force = -1.0\nservo_gain = 0.1\nservo_max_speed = 0.01");
+    assert!(e.contains("servo_force"), "{e}");
+}
