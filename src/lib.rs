@@ -4,8 +4,11 @@
 //! * [`cpu`] — the f64 CPU reference backend (linked cells, per-contact history, Verlet);
 //! * [`scene`] — the TOML scene description and its validation;
 //! * [`collide`] — the head-on two-sphere collision used to check models against theory;
-//! * [`output`] — plots and atomically written files.
+//! * [`output`] — plots and atomically written files;
+//! * [`mod@bench`] and [`accuracy`] — throughput against N, and error against run time.
 
+pub mod accuracy;
+pub mod bench;
 pub mod checkpoint;
 pub mod collide;
 pub mod compare;

@@ -28,6 +28,162 @@ enum Command {
     Compare(CompareArgs),
     /// Show the GPU adapter the GPU engine would use (POWDER_ADAPTER overrides it).
     Info(InfoArgs),
+    /// Measure particle-steps per second and GPU bytes per particle against N.
+    Bench(BenchArgs),
+    /// Error against run time (work-precision) over the time step, on both backends.
+    Accuracy(AccuracyArgs),
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum BackendChoice {
+    Cpu,
+    Gpu,
+    Both,
+}
+
+impl BackendChoice {
+    fn list(self) -> Vec<collide::Backend> {
+        match self {
+            BackendChoice::Cpu => vec![collide::Backend::Cpu],
+            BackendChoice::Gpu => vec![collide::Backend::Gpu],
+            BackendChoice::Both => vec![collide::Backend::Cpu, collide::Backend::Gpu],
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum BenchCase {
+    /// Frictionless hysteretic packing.
+    Hysteretic,
+    /// JKR packing with friction and rolling resistance.
+    Jkr,
+    Both,
+}
+
+#[derive(Args)]
+#[command(allow_negative_numbers = true)]
+struct BenchArgs {
+    /// Particle counts, comma-separated (e.g. 1e3,1e4,1e5,1e6).
+    #[arg(long, default_value = "1e3,1e4,1e5,1e6")]
+    sizes: String,
+    /// Timed steps per size.
+    #[arg(long, default_value_t = 128)]
+    steps: u64,
+    /// Untimed warm-up steps before the timed ones.
+    #[arg(long, default_value_t = 32)]
+    warmup: u64,
+    #[arg(long, value_enum, default_value = "both")]
+    backend: BackendChoice,
+    #[arg(long = "case", value_enum, default_value = "both")]
+    case: BenchCase,
+    /// Time budget per case and backend, s: a size predicted (from the previous size's
+    /// rate) to take longer is skipped, and so are the larger ones.
+    #[arg(long = "max-seconds", default_value_t = 120.0)]
+    max_seconds: f64,
+    /// Multiplies the packing's random velocities (more neighbour-list rebuilds).
+    #[arg(long = "velocity-scale", default_value_t = 1.0)]
+    velocity_scale: f64,
+    /// Seed of the packing's jitter and velocities.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Write the report (rows, machine, adapter, version, commit, date) as JSON.
+    #[arg(long)]
+    json: Option<PathBuf>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum AccuracyCase {
+    /// The hysteretic pair over a chi sweep against the closed forms.
+    Pair,
+    /// A small cohesive packing against a fine-dt CPU reference.
+    Packing,
+    Both,
+}
+
+#[derive(Args)]
+#[command(allow_negative_numbers = true)]
+struct AccuracyArgs {
+    /// Time steps as divisors of the contact time tc: dt = tc/D, comma-separated (D >= 10).
+    #[arg(long, default_value = "10,20,50,100,200,400")]
+    divisors: String,
+    #[arg(long, value_enum, default_value = "both")]
+    backend: BackendChoice,
+    #[arg(long = "case", value_enum, default_value = "both")]
+    case: AccuracyCase,
+    /// Packing: the reference's divisor (CPU, f64, dt = tc/D); above every --divisors.
+    #[arg(long = "reference-divisor", default_value_t = 800.0)]
+    reference_divisor: f64,
+    /// Packing: particles (a lattice with random jitter and velocities).
+    #[arg(long, default_value_t = 216)]
+    particles: usize,
+    /// Packing: the physical time compared, in units of tc.
+    #[arg(long = "packing-time", default_value_t = 20)]
+    packing_time: u64,
+    /// Pair: points of the chi sweep (log-spaced over chi = 0.1 ... 5).
+    #[arg(long = "chi-points", default_value_t = 8)]
+    chi_points: usize,
+    /// Write the report as JSON.
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// Draw the work-precision diagram (log-log error against wall time) as SVG.
+    #[arg(long)]
+    plot: Option<PathBuf>,
+}
+
+fn write_json<T: serde::Serialize>(path: &std::path::Path, value: &T) -> Result<(), PowderError> {
+    let text = serde_json::to_string_pretty(value)
+        .map_err(|e| PowderError::Run(format!("cannot encode JSON: {e}")))?;
+    powder::output::atomic::write_atomic(path, text.as_bytes())?;
+    eprintln!("wrote {}", path.display());
+    Ok(())
+}
+
+fn bench_cmd(a: &BenchArgs) -> Result<(), PowderError> {
+    use powder::bench::{self, BenchOptions, Case};
+    let opts = BenchOptions {
+        sizes: bench::parse_sizes(&a.sizes)?,
+        cases: match a.case {
+            BenchCase::Hysteretic => vec![Case::Hysteretic],
+            BenchCase::Jkr => vec![Case::Jkr],
+            BenchCase::Both => vec![Case::Hysteretic, Case::Jkr],
+        },
+        backends: a.backend.list(),
+        steps: a.steps,
+        warmup: a.warmup,
+        max_seconds: a.max_seconds,
+        velocity_scale: a.velocity_scale,
+        seed: a.seed,
+    };
+    opts.validate()?;
+    println!("{}", bench::table_header());
+    let report = bench::bench(&opts, |row| println!("{}", bench::table_line(row)))?;
+    let p = &report.provenance;
+    println!(
+        "machine: {} ({} logical CPUs, {} usable, load average {} at the start); powder {}{}; {}",
+        p.machine.cpu_model.as_deref().unwrap_or("unknown CPU"),
+        p.machine
+            .logical_cpus
+            .map_or_else(|| "?".into(), |c| c.to_string()),
+        p.machine.available_parallelism,
+        p.machine
+            .load_average
+            .map_or_else(|| "?".into(), |l| format!("{l:.2}")),
+        p.powder_version,
+        p.git_commit
+            .as_deref()
+            .map_or_else(String::new, |c| format!(" ({c})")),
+        p.date
+    );
+    if let Some(ad) = &report.adapter {
+        println!(
+            "adapter: {} ({}, {}, {} {})",
+            ad.name, ad.backend, ad.device_type, ad.driver, ad.driver_info
+        );
+    }
+    if let Some(path) = &a.json {
+        write_json(path, &report)?;
+    }
+    Ok(())
 }
 
 #[derive(Args)]
@@ -691,6 +847,84 @@ fn print_results(a: &CollideArgs, results: &[CollideResult]) -> Result<(), Powde
     Ok(())
 }
 
+fn accuracy_cmd(a: &AccuracyArgs) -> Result<(), PowderError> {
+    use powder::accuracy::{self, AccuracyOptions};
+    let opts = AccuracyOptions {
+        divisors: accuracy::parse_divisors(&a.divisors)?,
+        backends: a.backend.list(),
+        pair: a.case != AccuracyCase::Packing,
+        packing: a.case != AccuracyCase::Pair,
+        reference_divisor: a.reference_divisor,
+        particles: a.particles,
+        packing_time: a.packing_time,
+        chi_points: a.chi_points,
+        seed: 1,
+    };
+    opts.validate()?;
+    println!(
+        "{:<8} {:<4} {:>6} {:>11} {:>8} {:>10} {:>10} {:>10} {:>10}",
+        "case", "back", "dt/tc", "dt (s)", "steps", "wall s", "error", "max dx/r", "dE_kin"
+    );
+    let report = accuracy::accuracy(&opts, |p| {
+        let opt = |x: Option<f64>| x.map_or_else(|| "-".to_string(), |v| format!("{v:.3e}"));
+        println!(
+            "{:<8} {:<4} {:>6} {:>11.4e} {:>8} {:>10.3e} {:>10.3e} {:>10} {:>10}",
+            p.case,
+            p.backend,
+            format!("1/{}", p.divisor),
+            p.dt,
+            p.steps,
+            p.wall_seconds,
+            p.error,
+            opt(p.max_position_error),
+            opt(p.kinetic_error)
+        );
+    })?;
+    if let Some(pk) = &report.packing {
+        println!(
+            "packing: {} particles, T = {:.4e} s = {} tc (tc = {:.4e} s), reference CPU f64 at dt = tc/{} ({} steps, {:.2} s), {:.2} contacts per particle at T",
+            pk.particles,
+            pk.time,
+            a.packing_time,
+            pk.tc,
+            pk.reference_divisor,
+            pk.reference_steps,
+            pk.reference_wall_seconds,
+            pk.reference_contacts_per_particle
+        );
+    }
+    if let Some(pr) = &report.pair {
+        println!(
+            "pair: hysteretic k1 = {}, kp = {}, kc = {} N/m, phi_f = {}, {} impacts over chi = {} ... {} (tc = {:.4e} s); error = max |e - e_closed|",
+            pr.k1,
+            pr.kp,
+            pr.kc,
+            pr.phi_f,
+            pr.chi.len(),
+            pr.chi[0],
+            pr.chi[pr.chi.len() - 1],
+            pr.tc
+        );
+    }
+    for n in &report.notes {
+        println!("note: {n}");
+    }
+    if let Some(ad) = &report.adapter {
+        println!(
+            "adapter: {} ({}, {} {})",
+            ad.name, ad.backend, ad.driver, ad.driver_info
+        );
+    }
+    if let Some(path) = &a.plot {
+        accuracy::work_precision_plot(&report).write_svg(path)?;
+        eprintln!("wrote {}", path.display());
+    }
+    if let Some(path) = &a.json {
+        write_json(path, &report)?;
+    }
+    Ok(())
+}
+
 /// Runs `compare`; `Ok(false)` when a threshold was exceeded.
 fn compare_cmd(a: &CompareArgs) -> Result<bool, PowderError> {
     use powder::compare::{compare, Tolerances};
@@ -935,6 +1169,8 @@ fn main() -> ExitCode {
         Command::Run(a) => run_cmd(a),
         Command::Collide(a) => collide_cmd(a),
         Command::Info(a) => info_cmd(a),
+        Command::Bench(a) => bench_cmd(a),
+        Command::Accuracy(a) => accuracy_cmd(a),
         Command::Compare(a) => match compare_cmd(a) {
             Ok(true) => Ok(()),
             Ok(false) => return ExitCode::from(1),

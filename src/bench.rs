@@ -1,0 +1,852 @@
+//! `powder bench`: throughput (particle-steps per second, wall time per step) and GPU memory
+//! per particle against the particle count, on both backends.
+//!
+//! Two cases, both a dense, settled-ish packing built in code so the same scene runs on
+//! both backends ([`packing`]): particles in contact on a simple cubic lattice (overlaps of
+//! 0.1–0.3 % of the diameter), with a small random jitter and small random velocities, in a
+//! box (floor and four side walls) under gravity:
+//!
+//! * [`Case::Hysteretic`] — the frictionless hysteretic adhesive elasto-plastic model with
+//!   the paper's parameters and viscous damping (the cohesive cluster's material);
+//! * [`Case::Jkr`] — JKR micro-spheres with Tsuji damping, friction and rolling resistance
+//!   (the JKR deposition example's material), so the GPU runs its largest step variant.
+//!
+//! Each size is warmed up, then a fixed number of steps is timed. A size is skipped — with a
+//! note saying why — when it would not fit in memory ([`crate::memory`]), when the adapter
+//! refuses it (e.g. the contact history beyond its storage binding limit), or when the rate
+//! measured at the previous size predicts more than the per-case time budget; larger sizes
+//! of that case and backend are then skipped too. Timings are measured, never asserted.
+
+use crate::collide::Backend;
+use crate::cpu::cells::CellGrid;
+use crate::cpu::CpuEngine;
+use crate::error::{ParamError, PowderError};
+use crate::gpu::{GpuContext, GpuEngine};
+use crate::model::{
+    AdhesionMode, ContactModel, Dissipation, HystereticParams, JkrParams, K2Rule, Pulloff,
+};
+use crate::scene::{Domain, DtSetting, Material, ParticleInit, Scene, Wall};
+use glam::DVec3;
+use rand::{Rng, SeedableRng};
+use rand_pcg::Pcg64;
+use serde::Serialize;
+use std::time::Instant;
+
+/// Overlap of lattice neighbours, as a fraction of the diameter: the packing starts in
+/// contact (a simple cubic lattice, six contacts per inner particle), as a settled one is.
+pub const LATTICE_OVERLAP: f64 = 0.002;
+
+/// Which benchmark scene.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Case {
+    /// Frictionless hysteretic packing (radius 1.1 mm, k1 = 100, kp = 500, kc = 100 N/m,
+    /// φf = 0.05, γ0 = 10⁻³ kg/s; random velocities up to 2 cm/s).
+    Hysteretic,
+    /// JKR packing with friction and rolling (radius 5 µm, E = 10⁸ Pa, ν = 0.3,
+    /// γ = 0.01 J/m², Tsuji e = 0.5, μs = 0.3, Δγ/γ = 0.5; random velocities up to 2 cm/s).
+    Jkr,
+}
+
+impl Case {
+    /// The name used in tables, JSON and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Case::Hysteretic => "hysteretic",
+            Case::Jkr => "jkr",
+        }
+    }
+}
+
+/// The name of a backend in tables and JSON.
+pub fn backend_name(b: Backend) -> &'static str {
+    match b {
+        Backend::Cpu => "cpu",
+        Backend::Gpu => "gpu",
+    }
+}
+
+/// A dense packing of `n` particles of `case`'s material: a simple cubic lattice (x fastest,
+/// then y, then z; as many layers as needed over a square base of ⌈∛n⌉² sites) whose
+/// neighbours overlap by [`LATTICE_OVERLAP`] of the diameter, each particle displaced by up
+/// to a quarter of that per axis (so every lattice neighbour and the walls stay in contact,
+/// with overlaps of 0.1–0.3 % of the diameter), with random velocities up to
+/// `velocity_scale` × 2 cm/s per component, in a box with a floor and four side walls under
+/// gravity; seeded, so a given (case, n, seed) is always the same scene.
+pub fn packing(case: Case, n: usize, velocity_scale: f64, seed: u64) -> Result<Scene, PowderError> {
+    if n == 0 {
+        return Err(ParamError::new("sizes", "a packing needs at least one particle").into());
+    }
+    crate::error::require_non_negative("velocity-scale", velocity_scale, "the velocity scale")?;
+    let (radius, density, model, impact_velocity, v0) = match case {
+        Case::Hysteretic => (
+            1.1e-3,
+            2000.0,
+            ContactModel::Hysteretic(HystereticParams {
+                k1: 100.0,
+                kp: 500.0,
+                kc: 100.0,
+                phi_f: 0.05,
+                fa: 0.0,
+                kca: 100.0,
+                adhesion: AdhesionMode::default(),
+                gamma0: 1e-3,
+                k2_rule: K2Rule::default(),
+            }),
+            1.0,
+            0.02,
+        ),
+        Case::Jkr => (
+            5e-6,
+            2500.0,
+            ContactModel::Jkr(JkrParams {
+                youngs: 1e8,
+                poisson: 0.3,
+                surface_energy: 0.01,
+                dissipation: Dissipation::Tsuji { restitution: 0.5 },
+                friction: 0.3,
+                rolling_hysteresis: 0.5,
+                pulloff: Pulloff::default(),
+                stiffness_scale: 1.0,
+            }),
+            0.1,
+            0.02,
+        ),
+    };
+    let v0 = v0 * velocity_scale;
+    let side = ((n as f64).cbrt().ceil() as usize).max(1);
+    let layers = n.div_ceil(side * side);
+    let spacing = 2.0 * radius * (1.0 - LATTICE_OVERLAP);
+    let overlap = 2.0 * radius - spacing;
+    let width = side as f64 * spacing;
+    // room above the packing for particles thrown up by the random velocities
+    let height = (layers + 3) as f64 * spacing;
+    let mut rng = Pcg64::seed_from_u64(seed);
+    let mut particles = Vec::with_capacity(n);
+    for k in 0..n {
+        let (i, j, l) = (k % side, (k / side) % side, k / (side * side));
+        let mut position = [0.0; 3];
+        for (axis, site) in [i, j, l].into_iter().enumerate() {
+            let jitter = rng.random_range(-0.25..=0.25) * overlap;
+            position[axis] = (site as f64 + 0.5) * spacing + jitter;
+        }
+        let velocity = [0, 1, 2].map(|_| {
+            if v0 > 0.0 {
+                rng.random_range(-v0..=v0)
+            } else {
+                0.0
+            }
+        });
+        particles.push(ParticleInit {
+            position,
+            velocity,
+            radius,
+            material: 0,
+        });
+    }
+    let wall = |point: [f64; 3], normal: [f64; 3]| Wall {
+        point,
+        normal,
+        material: 0,
+    };
+    Ok(Scene {
+        name: format!("bench_{}_{n}", case.name()),
+        domain: Domain {
+            min: [0.0; 3],
+            max: [width, width, height],
+        },
+        gravity: [0.0, 0.0, -9.81],
+        dt: DtSetting::Auto,
+        force_dt: false,
+        duration: 1.0,
+        output_every: 1000,
+        impact_velocity,
+        checkpoint_every: 10_000,
+        materials: vec![Material {
+            name: case.name().into(),
+            density,
+            model,
+        }],
+        interactions: Vec::new(),
+        walls: vec![
+            wall([0.0; 3], [0.0, 0.0, 1.0]),
+            wall([0.0; 3], [1.0, 0.0, 0.0]),
+            wall([width, 0.0, 0.0], [-1.0, 0.0, 0.0]),
+            wall([0.0; 3], [0.0, 1.0, 0.0]),
+            wall([0.0, width, 0.0], [0.0, -1.0, 0.0]),
+        ],
+        particles,
+    })
+}
+
+/// Particle–particle contacts (δ > 0) per particle of a configuration (2·pairs/N).
+pub fn coordination(scene: &Scene, positions: &[DVec3], radius: &[f64]) -> f64 {
+    let r_max = radius.iter().copied().fold(0.0, f64::max);
+    let mut grid = CellGrid::new(
+        DVec3::from_array(scene.domain.min),
+        DVec3::from_array(scene.domain.max),
+        2.0 * r_max * (1.0 + 1e-9),
+        positions.len(),
+    );
+    grid.rebuild(positions);
+    let mut pairs = 0usize;
+    grid.for_each_pair(positions, |i, j| {
+        if positions[i].distance(positions[j]) < radius[i] + radius[j] {
+            pairs += 1;
+        }
+    });
+    2.0 * pairs as f64 / positions.len().max(1) as f64
+}
+
+/// The machine a measurement ran on.
+#[derive(Clone, Debug, Serialize)]
+pub struct Machine {
+    /// `model name` of /proc/cpuinfo (null where unreadable).
+    pub cpu_model: Option<String>,
+    /// `processor` entries of /proc/cpuinfo.
+    pub logical_cpus: Option<usize>,
+    /// Threads this process may use (`std::thread::available_parallelism`).
+    pub available_parallelism: usize,
+    /// `MemAvailable` at the start, bytes.
+    pub memory_available: Option<u64>,
+    /// The 1-minute load average at the start (/proc/loadavg): other work on a shared
+    /// machine slows every timing down.
+    pub load_average: Option<f64>,
+    /// `std::env::consts::OS`.
+    pub os: &'static str,
+    /// `std::env::consts::ARCH`.
+    pub arch: &'static str,
+}
+
+impl Machine {
+    /// Reads /proc/cpuinfo and /proc/meminfo (Linux; null fields elsewhere).
+    pub fn detect() -> Self {
+        let cpuinfo = std::fs::read_to_string("/proc/cpuinfo").ok();
+        let cpu_model = cpuinfo.as_deref().and_then(|t| {
+            t.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split_once(':'))
+                .map(|(_, v)| v.trim().to_string())
+        });
+        let logical_cpus = cpuinfo
+            .as_deref()
+            .map(|t| t.lines().filter(|l| l.starts_with("processor")).count())
+            .filter(|&c| c > 0);
+        Self {
+            cpu_model,
+            logical_cpus,
+            available_parallelism: std::thread::available_parallelism()
+                .map(|n| n.get())
+                .unwrap_or(1),
+            memory_available: crate::memory::available(),
+            load_average: std::fs::read_to_string("/proc/loadavg")
+                .ok()
+                .and_then(|t| t.split_whitespace().next()?.parse().ok()),
+            os: std::env::consts::OS,
+            arch: std::env::consts::ARCH,
+        }
+    }
+}
+
+/// The GPU adapter a measurement ran on (from [`crate::gpu::AdapterSummary`]).
+#[derive(Clone, Debug, Serialize)]
+pub struct Adapter {
+    /// E.g. `llvmpipe (LLVM 15.0.6, 256 bits)`.
+    pub name: String,
+    /// `vulkan`, `metal`, `dx12` or `gl`.
+    pub backend: String,
+    /// `DiscreteGpu`, `IntegratedGpu`, `VirtualGpu`, `Cpu` (software) or `Other`.
+    pub device_type: String,
+    /// Driver name.
+    pub driver: String,
+    /// Driver version and details.
+    pub driver_info: String,
+}
+
+impl Adapter {
+    /// The adapter of an open context.
+    pub fn of(ctx: &GpuContext) -> Self {
+        let s = &ctx.summary;
+        Self {
+            name: s.name.clone(),
+            backend: s.backend.clone(),
+            device_type: s.device_type.clone(),
+            driver: s.driver.clone(),
+            driver_info: s.driver_info.clone(),
+        }
+    }
+}
+
+/// Where a measurement comes from: powder's version, the source tree's commit, the date.
+#[derive(Clone, Debug, Serialize)]
+pub struct Provenance {
+    /// The crate version.
+    pub powder_version: &'static str,
+    /// `git rev-parse HEAD` of the source tree this binary was built from, if it is still
+    /// there and a git checkout (with `-dirty` when it has uncommitted changes).
+    pub git_commit: Option<String>,
+    /// UTC, ISO 8601.
+    pub date: String,
+    /// Where it ran.
+    pub machine: Machine,
+}
+
+impl Provenance {
+    /// Collects the version, commit, date and machine now.
+    pub fn now() -> Self {
+        Self {
+            powder_version: env!("CARGO_PKG_VERSION"),
+            git_commit: git_commit(),
+            date: utc_now(),
+            machine: Machine::detect(),
+        }
+    }
+}
+
+fn git_commit() -> Option<String> {
+    let dir = env!("CARGO_MANIFEST_DIR");
+    let run = |args: &[&str]| {
+        std::process::Command::new("git")
+            .arg("-C")
+            .arg(dir)
+            .args(args)
+            .output()
+            .ok()
+            .filter(|o| o.status.success())
+            .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+    };
+    let head = run(&["rev-parse", "HEAD"]).filter(|h| !h.is_empty())?;
+    let dirty =
+        run(&["status", "--porcelain", "--untracked-files=no"]).is_some_and(|s| !s.is_empty());
+    Some(if dirty { format!("{head}-dirty") } else { head })
+}
+
+/// The current UTC time as `YYYY-MM-DDTHH:MM:SSZ`.
+pub fn utc_now() -> String {
+    let secs = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_secs() as i64)
+        .unwrap_or(0);
+    utc_date(secs)
+}
+
+/// Seconds since the Unix epoch as `YYYY-MM-DDTHH:MM:SSZ`.
+pub fn utc_date(secs: i64) -> String {
+    let (days, rem) = (secs.div_euclid(86_400), secs.rem_euclid(86_400));
+    // civil_from_days (H. Hinnant)
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = doy - (153 * mp + 2) / 5 + 1;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 };
+    let y = yoe + era * 400 + i64::from(m <= 2);
+    format!(
+        "{y:04}-{m:02}-{d:02}T{:02}:{:02}:{:02}Z",
+        rem / 3600,
+        rem / 60 % 60,
+        rem % 60
+    )
+}
+
+/// What to measure.
+#[derive(Clone, Debug)]
+pub struct BenchOptions {
+    /// Particle counts (run in ascending order).
+    pub sizes: Vec<usize>,
+    /// The packings to run.
+    pub cases: Vec<Case>,
+    /// The backends to run each on.
+    pub backends: Vec<Backend>,
+    /// Timed steps per size.
+    pub steps: u64,
+    /// Untimed steps before the timed ones (pipelines, caches, first neighbour lists).
+    pub warmup: u64,
+    /// Budget per case and backend: a size whose predicted run time (from the previous
+    /// size's rate) exceeds it is skipped, and so are the larger ones, s.
+    pub max_seconds: f64,
+    /// Multiplies the packing's random velocities (1 = the benchmark; larger values force
+    /// more neighbour-list rebuilds, to measure what a rebuild costs).
+    pub velocity_scale: f64,
+    /// Seed of the packings' jitter and velocities.
+    pub seed: u64,
+}
+
+impl Default for BenchOptions {
+    fn default() -> Self {
+        Self {
+            sizes: vec![1_000, 10_000, 100_000, 1_000_000],
+            cases: vec![Case::Hysteretic, Case::Jkr],
+            backends: vec![Backend::Cpu, Backend::Gpu],
+            steps: 128,
+            warmup: 32,
+            max_seconds: 120.0,
+            velocity_scale: 1.0,
+            seed: 1,
+        }
+    }
+}
+
+impl BenchOptions {
+    /// Checks the options, naming the offending one.
+    pub fn validate(&self) -> Result<(), PowderError> {
+        if self.sizes.is_empty() {
+            return Err(ParamError::new("sizes", "give at least one particle count").into());
+        }
+        if let Some(&n) = self.sizes.iter().find(|&&n| n == 0) {
+            return Err(
+                ParamError::new("sizes", format!("particle counts must be >= 1, got {n}")).into(),
+            );
+        }
+        if self
+            .sizes
+            .iter()
+            .any(|&n| n as u64 > crate::scene::MAX_BLOCK_PARTICLES)
+        {
+            return Err(ParamError::new(
+                "sizes",
+                format!(
+                    "particle counts must be <= {}",
+                    crate::scene::MAX_BLOCK_PARTICLES
+                ),
+            )
+            .into());
+        }
+        if self.cases.is_empty() || self.backends.is_empty() {
+            return Err(ParamError::new("case", "nothing to measure").into());
+        }
+        if self.steps == 0 {
+            return Err(ParamError::new("steps", "time at least one step").into());
+        }
+        crate::error::require_positive("max-seconds", self.max_seconds, "the time budget")?;
+        crate::error::require_non_negative(
+            "velocity-scale",
+            self.velocity_scale,
+            "the velocity scale",
+        )?;
+        Ok(())
+    }
+}
+
+/// One (case, backend, size) of the benchmark.
+#[derive(Clone, Debug, Serialize)]
+pub struct BenchRow {
+    /// `hysteretic` or `jkr`.
+    pub case: &'static str,
+    /// `cpu` or `gpu`.
+    pub backend: &'static str,
+    /// N.
+    pub particles: usize,
+    /// `ran`, `skipped` (by the time or memory budget, or after a larger size stopped) or
+    /// `failed` (the engine refused or stopped, e.g. over the adapter's storage binding
+    /// limit); the reason is in `note`.
+    pub status: &'static str,
+    /// Why a size was skipped or failed.
+    pub note: Option<String>,
+    /// Time step, s.
+    pub dt: Option<f64>,
+    /// Timed steps (after `warmup` untimed ones).
+    pub steps: u64,
+    /// Building the engine (upload, pipelines, first neighbour lists), s.
+    pub setup_seconds: Option<f64>,
+    /// Wall time of the timed steps, s.
+    pub wall_seconds: Option<f64>,
+    /// `wall_seconds / steps`, s.
+    pub seconds_per_step: Option<f64>,
+    /// `particles · steps / wall_seconds`.
+    pub particle_steps_per_second: Option<f64>,
+    /// Device buffers of the GPU engine (`GpuEngine::buffer_bytes`), bytes.
+    pub gpu_bytes: Option<u64>,
+    /// `gpu_bytes / particles`.
+    pub gpu_bytes_per_particle: Option<f64>,
+    /// GPU neighbour slots per particle.
+    pub neighbour_slots: Option<u32>,
+    /// Neighbour-list rebuilds during the timed steps (GPU, Verlet skin); the CPU engine
+    /// re-bins its linked cells every step, so it reports `steps`.
+    pub rebuilds: Option<u64>,
+    /// Particle–particle contacts per particle at the end (shows the packing is dense).
+    pub contacts_per_particle: Option<f64>,
+}
+
+impl BenchRow {
+    fn skipped(case: Case, backend: Backend, n: usize, steps: u64, note: String) -> Self {
+        Self {
+            case: case.name(),
+            backend: backend_name(backend),
+            particles: n,
+            status: "skipped",
+            note: Some(note),
+            dt: None,
+            steps,
+            setup_seconds: None,
+            wall_seconds: None,
+            seconds_per_step: None,
+            particle_steps_per_second: None,
+            gpu_bytes: None,
+            gpu_bytes_per_particle: None,
+            neighbour_slots: None,
+            rebuilds: None,
+            contacts_per_particle: None,
+        }
+    }
+}
+
+/// The whole benchmark, as `--json` writes it.
+#[derive(Clone, Debug, Serialize)]
+pub struct BenchReport {
+    /// Version, commit, date and machine (flattened into the top level of the JSON).
+    #[serde(flatten)]
+    pub provenance: Provenance,
+    /// The GPU adapter (null when the GPU backend was not measured or has no adapter).
+    pub adapter: Option<Adapter>,
+    /// Timed steps per size (the other options as in [`BenchOptions`]).
+    pub steps: u64,
+    /// Untimed steps before the timed ones.
+    pub warmup: u64,
+    /// Time budget per case and backend, s.
+    pub max_seconds: f64,
+    /// Multiplier of the packings' random velocities.
+    pub velocity_scale: f64,
+    /// Seed of the packings.
+    pub seed: u64,
+    /// One row per (case, backend, size), in that order.
+    pub rows: Vec<BenchRow>,
+}
+
+fn run_cpu(scene: &Scene, case: Case, opts: &BenchOptions) -> Result<BenchRow, PowderError> {
+    let n = scene.particles.len();
+    let t0 = Instant::now();
+    let mut engine = CpuEngine::new(scene)?;
+    let setup = t0.elapsed().as_secs_f64();
+    engine.run_steps(opts.warmup)?;
+    let t1 = Instant::now();
+    engine.run_steps(opts.steps)?;
+    let wall = t1.elapsed().as_secs_f64();
+    let z = coordination(scene, engine.positions(), engine.radii());
+    Ok(BenchRow {
+        case: case.name(),
+        backend: "cpu",
+        particles: n,
+        status: "ran",
+        note: None,
+        dt: Some(engine.dt()),
+        steps: opts.steps,
+        setup_seconds: Some(setup),
+        wall_seconds: Some(wall),
+        seconds_per_step: Some(wall / opts.steps as f64),
+        particle_steps_per_second: Some(n as f64 * opts.steps as f64 / wall.max(1e-12)),
+        gpu_bytes: None,
+        gpu_bytes_per_particle: None,
+        neighbour_slots: None,
+        rebuilds: Some(opts.steps),
+        contacts_per_particle: Some(z),
+    })
+}
+
+fn run_gpu(
+    scene: &Scene,
+    case: Case,
+    ctx: GpuContext,
+    opts: &BenchOptions,
+) -> Result<BenchRow, PowderError> {
+    let n = scene.particles.len();
+    let t0 = Instant::now();
+    let mut engine = GpuEngine::new(scene, ctx)?;
+    let setup = t0.elapsed().as_secs_f64();
+    engine.run_steps(opts.warmup)?;
+    let before = engine.rebuilds()?;
+    let t1 = Instant::now();
+    // run_steps waits for the device after every batch, so the clock sees the work done
+    engine.run_steps(opts.steps)?;
+    let wall = t1.elapsed().as_secs_f64();
+    let rebuilds = engine.rebuilds()? - before;
+    let state = engine.state()?;
+    let z = coordination(scene, &state.positions, engine.radii());
+    let bytes = engine.buffer_bytes();
+    Ok(BenchRow {
+        case: case.name(),
+        backend: "gpu",
+        particles: n,
+        status: "ran",
+        note: None,
+        dt: Some(engine.dt()),
+        steps: opts.steps,
+        setup_seconds: Some(setup),
+        wall_seconds: Some(wall),
+        seconds_per_step: Some(wall / opts.steps as f64),
+        particle_steps_per_second: Some(n as f64 * opts.steps as f64 / wall.max(1e-12)),
+        gpu_bytes: Some(bytes),
+        gpu_bytes_per_particle: Some(bytes as f64 / n as f64),
+        neighbour_slots: Some(engine.capacity()),
+        rebuilds: Some(rebuilds),
+        contacts_per_particle: Some(z),
+    })
+}
+
+/// Runs the benchmark, calling `progress` after every row. A GPU backend without an
+/// adapter is an error when it is the only backend asked for; with the CPU also asked
+/// for, its rows are skipped with the reason.
+pub fn bench(
+    opts: &BenchOptions,
+    mut progress: impl FnMut(&BenchRow),
+) -> Result<BenchReport, PowderError> {
+    opts.validate()?;
+    let mut sizes = opts.sizes.clone();
+    sizes.sort_unstable();
+    sizes.dedup();
+    let provenance = Provenance::now();
+    let mut adapter = None;
+    let mut gpu_error = None;
+    if opts.backends.contains(&Backend::Gpu) {
+        match GpuContext::new() {
+            Ok(ctx) => adapter = Some(Adapter::of(&ctx)),
+            Err(e) if opts.backends.len() == 1 => return Err(e),
+            Err(e) => gpu_error = Some(e.to_string()),
+        }
+    }
+    let software = adapter.as_ref().is_some_and(|a| a.device_type == "Cpu");
+    let mut rows = Vec::new();
+    for &case in &opts.cases {
+        for &backend in &opts.backends {
+            // (particles, s per particle-step, setup s per particle, bytes per particle)
+            let mut last: Option<(usize, f64, f64, f64)> = None;
+            let mut stopped: Option<String> = None;
+            for &n in &sizes {
+                let skip = |note: String| BenchRow::skipped(case, backend, n, opts.steps, note);
+                let row = if let Some(why) = &stopped {
+                    skip(format!("not run: {why}"))
+                } else if let (Backend::Gpu, Some(e)) = (backend, &gpu_error) {
+                    skip(format!("no GPU adapter: {e}"))
+                } else if let Some(why) = predicted_over_budget(last, n, opts) {
+                    stopped = Some(format!("N = {n} was skipped by the time budget"));
+                    skip(why)
+                } else if let Err(why) = fits(backend, n, last, software) {
+                    stopped = Some(format!("N = {n} did not fit in memory"));
+                    skip(why)
+                } else {
+                    let scene = packing(case, n, opts.velocity_scale, opts.seed)?;
+                    let result = match backend {
+                        Backend::Cpu => run_cpu(&scene, case, opts),
+                        Backend::Gpu => run_gpu(&scene, case, GpuContext::new()?, opts),
+                    };
+                    match result {
+                        Ok(row) => row,
+                        Err(e) => {
+                            stopped = Some(format!("N = {n} failed"));
+                            BenchRow {
+                                status: "failed",
+                                ..skip(format!("failed: {e}"))
+                            }
+                        }
+                    }
+                };
+                if let (Some(wall), Some(setup)) = (row.wall_seconds, row.setup_seconds) {
+                    let work = (n as f64 * opts.steps as f64).max(1.0);
+                    last = Some((
+                        n,
+                        wall / work,
+                        setup / n as f64,
+                        row.gpu_bytes_per_particle.unwrap_or(0.0),
+                    ));
+                }
+                progress(&row);
+                rows.push(row);
+            }
+        }
+    }
+    Ok(BenchReport {
+        provenance,
+        adapter,
+        steps: opts.steps,
+        warmup: opts.warmup,
+        max_seconds: opts.max_seconds,
+        velocity_scale: opts.velocity_scale,
+        seed: opts.seed,
+        rows,
+    })
+}
+
+/// Why size `n` would exceed the time budget, predicted from the last measured size
+/// (stepping time scaled linearly in N; set-up likewise).
+fn predicted_over_budget(
+    last: Option<(usize, f64, f64, f64)>,
+    n: usize,
+    opts: &BenchOptions,
+) -> Option<String> {
+    let (n_prev, per_particle_step, setup_per_particle, _) = last?;
+    let predicted =
+        n as f64 * ((opts.warmup + opts.steps) as f64 * per_particle_step + setup_per_particle);
+    (predicted > opts.max_seconds).then(|| {
+        format!(
+            "skipped: predicted {predicted:.0} s from the rate at N = {n_prev}, over the budget of {} s per case (--max-seconds)",
+            opts.max_seconds
+        )
+    })
+}
+
+/// Whether `n` particles fit in the host memory (the CPU engine; the GPU engine's buffers
+/// when the adapter is a software one, whose device memory is host memory).
+fn fits(
+    backend: Backend,
+    n: usize,
+    last: Option<(usize, f64, f64, f64)>,
+    software: bool,
+) -> Result<(), String> {
+    // the scene itself (ParticleInit) and the set-up's copies
+    let scene_bytes = 256;
+    let (per_particle, what) = match backend {
+        Backend::Cpu => (
+            crate::memory::CPU_BYTES_PER_PARTICLE + scene_bytes,
+            "the CPU engine",
+        ),
+        Backend::Gpu if software => {
+            let device = last.map_or(4096.0, |l| l.3.max(1.0) * 1.25);
+            (
+                device as u64 + scene_bytes,
+                "the GPU engine's buffers (a software adapter: in host memory)",
+            )
+        }
+        Backend::Gpu => (scene_bytes, "the scene"),
+    };
+    crate::memory::check_particles(n as u64, per_particle, what)
+        .map_err(|e| format!("skipped: {e}"))
+}
+
+/// Parses `--sizes`: comma-separated counts, each an integer or a float like `1e5`.
+pub fn parse_sizes(text: &str) -> Result<Vec<usize>, PowderError> {
+    let bad = |item: &str, why: &str| {
+        PowderError::from(ParamError::new(
+            "sizes",
+            format!("`{item}` {why}; expected comma-separated particle counts, e.g. 1e3,1e4,1e5"),
+        ))
+    };
+    let mut sizes = Vec::new();
+    for item in text.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+        let value: f64 = item.parse().map_err(|_| bad(item, "is not a number"))?;
+        if !(value >= 1.0 && value.is_finite() && value.fract() == 0.0) {
+            return Err(bad(item, "is not a whole number >= 1"));
+        }
+        sizes.push(value as usize);
+    }
+    if sizes.is_empty() {
+        return Err(bad(text, "holds no count"));
+    }
+    Ok(sizes)
+}
+
+fn opt(x: Option<f64>, f: impl Fn(f64) -> String) -> String {
+    x.map_or_else(|| "-".into(), f)
+}
+
+/// The table `powder bench` prints (one header, then [`table_line`] per row).
+pub fn table_header() -> String {
+    format!(
+        "{:<11} {:<4} {:>9} {:>6} {:>8} {:>9} {:>10} {:>12} {:>9} {:>8} {:>6}  note",
+        "case",
+        "back",
+        "particles",
+        "steps",
+        "setup s",
+        "wall s",
+        "s/step",
+        "p-steps/s",
+        "GPU B/p",
+        "rebuilds",
+        "Z"
+    )
+}
+
+/// One row of the table.
+pub fn table_line(r: &BenchRow) -> String {
+    format!(
+        "{:<11} {:<4} {:>9} {:>6} {:>8} {:>9} {:>10} {:>12} {:>9} {:>8} {:>6}  {}",
+        r.case,
+        r.backend,
+        r.particles,
+        r.steps,
+        opt(r.setup_seconds, |v| format!("{v:.2}")),
+        opt(r.wall_seconds, |v| format!("{v:.3}")),
+        opt(r.seconds_per_step, |v| format!("{v:.3e}")),
+        opt(r.particle_steps_per_second, |v| format!("{v:.3e}")),
+        opt(r.gpu_bytes_per_particle, |v| format!("{v:.0}")),
+        r.rebuilds.map_or_else(|| "-".into(), |v| v.to_string()),
+        opt(r.contacts_per_particle, |v| format!("{v:.2}")),
+        r.note.as_deref().unwrap_or("")
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn packings_do_not_overlap_and_fill_the_count() {
+        for case in [Case::Hysteretic, Case::Jkr] {
+            let s = packing(case, 130, 1.0, 3).unwrap();
+            assert_eq!(s.particles.len(), 130);
+            let pos: Vec<DVec3> = s
+                .particles
+                .iter()
+                .map(|p| DVec3::from_array(p.position))
+                .collect();
+            let r: Vec<f64> = s.particles.iter().map(|p| p.radius).collect();
+            // a 6 x 6 base: 3 full layers and 22 sites (3 rows of 6 and 4) on top; every
+            // lattice neighbour in contact and nothing else: x bonds 3·30 + 3·5 + 3,
+            // y bonds 3·30 + 4·3 + 2·2, z bonds 2·36 + 22
+            let bonds = (90 + 15 + 3) + (90 + 12 + 4) + (72 + 22);
+            let z = coordination(&s, &pos, &r);
+            assert_eq!(z, 2.0 * bonds as f64 / 130.0);
+            for (i, p) in pos.iter().enumerate() {
+                for q in &pos[i + 1..] {
+                    assert!(p.distance(*q) > 2.0 * r[i] * (1.0 - 0.003));
+                }
+            }
+            // in contact with the walls too, by at most 0.3 % of the diameter
+            for p in &s.particles {
+                for a in 0..3 {
+                    assert!(p.position[a] - p.radius > s.domain.min[a] - 0.006 * p.radius);
+                    assert!(p.position[a] + p.radius < s.domain.max[a] + 0.006 * p.radius);
+                }
+            }
+            // the same seed gives the same scene, another seed another
+            assert_eq!(packing(case, 130, 1.0, 3).unwrap(), s);
+            assert_ne!(packing(case, 130, 1.0, 4).unwrap(), s);
+        }
+    }
+
+    #[test]
+    fn sizes_parse_and_bad_ones_are_named() {
+        assert_eq!(parse_sizes("1e3, 20000,5").unwrap(), vec![1000, 20000, 5]);
+        for bad in ["", "0", "1.5", "abc", "-3"] {
+            let e = parse_sizes(bad).unwrap_err().to_string();
+            assert!(e.contains("sizes"), "{bad}: {e}");
+        }
+    }
+
+    #[test]
+    fn utc_dates_are_iso() {
+        assert_eq!(utc_date(0), "1970-01-01T00:00:00Z");
+        assert_eq!(utc_date(951_827_696), "2000-02-29T12:34:56Z");
+        assert_eq!(utc_date(1_735_689_599), "2024-12-31T23:59:59Z");
+        let d = utc_now();
+        assert_eq!(d.len(), 20, "{d}");
+        assert!(d.starts_with("20") && d.ends_with('Z'), "{d}");
+    }
+
+    #[test]
+    fn budget_prediction_skips_what_would_take_too_long() {
+        let opts = BenchOptions {
+            max_seconds: 10.0,
+            steps: 100,
+            warmup: 0,
+            ..Default::default()
+        };
+        // 1e-6 s per particle-step: 1e4 particles x 100 steps = 1 s, 1e6 = 100 s
+        let last = Some((1000, 1e-6, 0.0, 0.0));
+        assert!(predicted_over_budget(last, 10_000, &opts).is_none());
+        let why = predicted_over_budget(last, 1_000_000, &opts).unwrap();
+        assert!(why.contains("--max-seconds"), "{why}");
+        assert!(predicted_over_budget(None, 1_000_000, &opts).is_none());
+    }
+}

@@ -1,0 +1,228 @@
+//! `powder bench` and `powder accuracy`: smoke tests of the documented JSON (tiny sizes, few
+//! steps). Timings are measured, never asserted; only that they are positive.
+
+use std::process::Command;
+
+fn powder(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_powder"))
+        .args(args)
+        .env("NODEVICE_SELECT", "1")
+        .output()
+        .expect("the binary runs");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// Whether a GPU adapter exists; outside CI the GPU parts are skipped without one.
+fn gpu_available() -> bool {
+    let ok = powder(&["info"]).0;
+    if !ok && std::env::var_os("CI").is_some() {
+        panic!("CI needs a GPU adapter (lavapipe)");
+    }
+    ok
+}
+
+fn read_json(path: &std::path::Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+#[test]
+fn bench_json_reports_both_backends_and_cases() {
+    let gpu = gpu_available();
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("bench.json");
+    let backend = if gpu { "both" } else { "cpu" };
+    let (ok, out, err) = powder(&[
+        "bench",
+        "--sizes",
+        "27,64",
+        "--steps",
+        "8",
+        "--warmup",
+        "2",
+        "--backend",
+        backend,
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(out.contains("p-steps/s"), "{out}");
+    let v = read_json(&json);
+    for key in [
+        "powder_version",
+        "date",
+        "machine",
+        "adapter",
+        "rows",
+        "steps",
+    ] {
+        assert!(v.get(key).is_some(), "missing `{key}`");
+    }
+    assert!(v["machine"]["available_parallelism"].as_u64().unwrap() >= 1);
+    let rows = v["rows"].as_array().unwrap();
+    let backends: &[&str] = if gpu { &["cpu", "gpu"] } else { &["cpu"] };
+    assert_eq!(rows.len(), 2 * 2 * backends.len());
+    for case in ["hysteretic", "jkr"] {
+        for &b in backends {
+            for n in [27, 64] {
+                let r = rows
+                    .iter()
+                    .find(|r| r["case"] == case && r["backend"] == b && r["particles"] == n)
+                    .unwrap_or_else(|| panic!("no row {case} {b} {n}"));
+                assert_eq!(r["status"], "ran", "{r}");
+                assert_eq!(r["steps"], 8);
+                assert!(r["particle_steps_per_second"].as_f64().unwrap() > 0.0);
+                assert!(r["seconds_per_step"].as_f64().unwrap() > 0.0);
+                // a packing in contact: 3 x 3 x 3 sites have 54 bonds
+                if n == 27 {
+                    assert!(r["contacts_per_particle"].as_f64().unwrap() > 2.0, "{r}");
+                }
+                let bytes = r["gpu_bytes_per_particle"].as_f64();
+                if b == "gpu" {
+                    assert!(bytes.unwrap() > 100.0, "{r}");
+                    assert!(r["rebuilds"].as_u64().is_some());
+                } else {
+                    assert!(bytes.is_none());
+                }
+            }
+        }
+    }
+    if gpu {
+        assert!(v["adapter"]["name"].as_str().is_some());
+        // the same packing needs more device memory per particle with friction and rolling
+        let bpp = |case: &str| {
+            rows.iter()
+                .find(|r| r["case"] == case && r["backend"] == "gpu" && r["particles"] == 64)
+                .unwrap()["gpu_bytes_per_particle"]
+                .as_f64()
+                .unwrap()
+        };
+        assert!(bpp("jkr") > bpp("hysteretic"));
+    }
+}
+
+#[test]
+fn bench_skips_sizes_beyond_the_time_budget_with_a_note() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("bench.json");
+    let (ok, _, err) = powder(&[
+        "bench",
+        "--sizes",
+        "8,1e7,1e8",
+        "--steps",
+        "4",
+        "--warmup",
+        "0",
+        "--backend",
+        "cpu",
+        "--case",
+        "hysteretic",
+        "--max-seconds",
+        "0.5",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let rows = read_json(&json)["rows"].as_array().unwrap().clone();
+    assert_eq!(rows.len(), 3);
+    assert_eq!(rows[0]["status"], "ran");
+    for r in &rows[1..] {
+        assert_eq!(r["status"], "skipped", "{r}");
+        assert!(r["particle_steps_per_second"].is_null());
+    }
+    let note = rows[1]["note"].as_str().unwrap();
+    assert!(
+        note.contains("--max-seconds") || note.contains("memory"),
+        "{note}"
+    );
+    assert!(rows[2]["note"].as_str().unwrap().contains("not run"));
+}
+
+#[test]
+fn accuracy_json_plot_and_convergence() {
+    let gpu = gpu_available();
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("acc.json");
+    let svg = dir.path().join("acc.svg");
+    let (ok, out, err) = powder(&[
+        "accuracy",
+        "--divisors",
+        "10,20",
+        "--reference-divisor",
+        "80",
+        "--packing-time",
+        "4",
+        "--particles",
+        "27",
+        "--chi-points",
+        "3",
+        "--backend",
+        if gpu { "both" } else { "cpu" },
+        "--json",
+        json.to_str().unwrap(),
+        "--plot",
+        svg.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(out.contains("error"), "{out}");
+    assert!(std::fs::read_to_string(&svg).unwrap().contains("<svg"));
+    let v = read_json(&json);
+    for key in ["powder_version", "machine", "pair", "packing", "points"] {
+        assert!(v.get(key).is_some(), "missing `{key}`");
+    }
+    let points = v["points"].as_array().unwrap();
+    assert_eq!(points.len(), 2 * 2 * if gpu { 2 } else { 1 });
+    let get = |case: &str, b: &str, d: f64| {
+        points
+            .iter()
+            .find(|p| p["case"] == case && p["backend"] == b && p["divisor"] == d)
+            .unwrap_or_else(|| panic!("no point {case} {b} {d}"))
+    };
+    for p in points {
+        assert!(p["wall_seconds"].as_f64().unwrap() > 0.0);
+        assert!(p["error"].as_f64().unwrap().is_finite());
+    }
+    // the CPU converges: halving dt shrinks both errors (second order for the pair: the
+    // measured ratio is about 6; the packing about 4)
+    for case in ["pair", "packing"] {
+        let coarse = get(case, "cpu", 10.0)["error"].as_f64().unwrap();
+        let fine = get(case, "cpu", 20.0)["error"].as_f64().unwrap();
+        assert!(fine < 0.5 * coarse, "{case}: {coarse} -> {fine}");
+    }
+    assert!(get("packing", "cpu", 10.0)["kinetic_error"]
+        .as_f64()
+        .is_some());
+}
+
+#[test]
+fn bad_bench_and_accuracy_input_is_an_error_not_a_panic() {
+    let cases: [(&[&str], &str); 6] = [
+        (&["bench", "--sizes", "0"], "sizes"),
+        (&["bench", "--sizes", "1e3,abc"], "sizes"),
+        (&["bench", "--steps", "0", "--sizes", "10"], "steps"),
+        (
+            &["bench", "--max-seconds", "-1", "--sizes", "10"],
+            "max-seconds",
+        ),
+        (&["accuracy", "--divisors", "5,10"], "divisors"),
+        (
+            &[
+                "accuracy",
+                "--divisors",
+                "10,1000",
+                "--reference-divisor",
+                "800",
+            ],
+            "reference-divisor",
+        ),
+    ];
+    for (args, needle) in cases {
+        let (ok, _, err) = powder(args);
+        assert!(!ok, "{args:?} should fail");
+        assert!(err.contains(needle), "{args:?}: `{err}` lacks `{needle}`");
+        assert!(!err.contains("panicked"), "{err}");
+    }
+}
