@@ -500,7 +500,9 @@ def machine_info(args):
         ("mpirun", ["mpirun", "--version"], r"(.+)"),
     ):
         try:
-            r = subprocess.run(cmd, capture_output=True, text=True, timeout=60)
+            # cwd: `liggghts -h` leaves a log.liggghts behind
+            r = subprocess.run(cmd, capture_output=True, text=True, timeout=60,
+                               cwd=tempfile.gettempdir())
             m = re.search(pat, r.stdout + r.stderr)
             versions[name] = m.group(1).strip() if m else "unknown"
         except (OSError, subprocess.TimeoutExpired):
