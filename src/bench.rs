@@ -146,6 +146,7 @@ pub fn packing(case: Case, n: usize, velocity_scale: f64, seed: u64) -> Result<S
     let wall = |point: [f64; 3], normal: [f64; 3]| Wall {
         point,
         normal,
+        motion: Default::default(),
         material: 0,
     };
     Ok(Scene {
@@ -371,6 +372,9 @@ pub struct BenchOptions {
     pub velocity_scale: f64,
     /// Seed of the packings' jitter and velocities.
     pub seed: u64,
+    /// Keep the GPU energy ledger and contact statistics (`GpuOptions::ledger`) during the
+    /// timed steps; off by default, so the rate is the step's own cost.
+    pub ledger: bool,
 }
 
 impl Default for BenchOptions {
@@ -384,6 +388,7 @@ impl Default for BenchOptions {
             max_seconds: 120.0,
             velocity_scale: 1.0,
             seed: 1,
+            ledger: false,
         }
     }
 }
@@ -552,7 +557,13 @@ fn run_gpu(
 ) -> Result<BenchRow, PowderError> {
     let n = scene.particles.len();
     let t0 = Instant::now();
-    let mut engine = GpuEngine::new(scene, ctx)?;
+    let mut engine = GpuEngine::with_options(
+        scene,
+        ctx,
+        crate::gpu::GpuOptions {
+            ledger: opts.ledger,
+        },
+    )?;
     let setup = t0.elapsed().as_secs_f64();
     engine.run_steps(opts.warmup)?;
     let before = engine.rebuilds()?;

@@ -86,6 +86,9 @@ struct BenchArgs {
     /// Seed of the packing's jitter and velocities.
     #[arg(long, default_value_t = 1)]
     seed: u64,
+    /// Keep the GPU energy ledger during the timed steps (off: the step's own cost).
+    #[arg(long)]
+    ledger: bool,
     /// Write the report (rows, machine, adapter, version, commit, date) as JSON.
     #[arg(long)]
     json: Option<PathBuf>,
@@ -153,6 +156,7 @@ fn bench_cmd(a: &BenchArgs) -> Result<(), PowderError> {
         max_seconds: a.max_seconds,
         velocity_scale: a.velocity_scale,
         seed: a.seed,
+        ledger: a.ledger,
     };
     opts.validate()?;
     println!("{}", bench::table_header());
