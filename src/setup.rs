@@ -83,6 +83,13 @@ impl Resolved {
                 consider(wall_models[w * n_materials + a].time_step(&geom, v_imp));
             }
         }
+        // the Rayleigh time of each JKR/Hertz material's smallest sphere
+        for (a, material) in scene.materials.iter().enumerate() {
+            if let (ContactModel::Jkr(p), Some((_, r))) = (&material.model, lightest[a]) {
+                let t_r = p.rayleigh_time(r, material.density);
+                consider(TimeStep::rayleigh(t_r, &material.name, r));
+            }
+        }
         let time_step =
             time_step.ok_or_else(|| PowderError::Scene("the scene has no particles".into()))?;
         let dt = match scene.dt {

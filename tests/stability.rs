@@ -471,3 +471,56 @@ fn the_gpu_monitor_stops_runs_that_go_wrong_and_keeps_the_last_good_state() {
     eprintln!("escape: {err}");
     assert!(err.contains("left the domain"), "{err}");
 }
+
+/// The Rayleigh time bounds dt for elastic spheres when slow impacts make the Hertz
+/// contact time long: silica spheres (r = 1 µm) meeting at 0.1 mm/s.
+#[test]
+fn the_rayleigh_time_bounds_dt_for_slow_hertz_contacts() {
+    let text = |dt: &str| {
+        format!(
+            r#"
+[domain]
+min = [-1e-5, -1e-5, -1e-5]
+max = [1e-5, 1e-5, 1e-5]
+[simulation]
+duration = 1e-6
+impact_velocity = 1e-4
+dt = {dt}
+[[material]]
+name = "silica"
+density = 2650.0
+model = "hertz"
+youngs = 7e10
+poisson = 0.17
+[[particles]]
+kind = "list"
+radius = 1e-6
+positions = [[0.0, 0.0, 0.0], [3e-6, 0.0, 0.0]]
+"#
+        )
+    };
+    let scene = Scene::from_toml_str(&text("\"auto\""), "slow").unwrap();
+    let r = powder::setup::Resolved::new(&scene).unwrap();
+    // T_R = pi·r·sqrt(rho/G)/(0.1631·nu + 0.8766), G = E/(2(1 + nu))
+    let g: f64 = 7e10 / (2.0 * 1.17);
+    let t_r = std::f64::consts::PI * 1e-6 * (2650.0_f64 / g).sqrt() / (0.1631 * 0.17 + 0.8766);
+    eprintln!(
+        "T_R = {t_r:e} s; dt = {:e} s ({})",
+        r.dt, r.time_step.reason
+    );
+    assert!(
+        r.time_step.reason.contains("Rayleigh"),
+        "{}",
+        r.time_step.reason
+    );
+    assert!((r.time_step.max - 0.4 * t_r).abs() < 1e-9 * t_r);
+    assert!((r.dt - 0.2 * t_r).abs() < 1e-9 * t_r);
+    let err = Scene::from_toml_str(&text(&format!("{:e}", 0.5 * t_r)), "slow")
+        .and_then(|s| powder::setup::Resolved::new(&s).map(|_| ()))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("Rayleigh") && err.contains("force_dt"),
+        "{err}"
+    );
+}

@@ -908,6 +908,14 @@ impl JkrParams {
         2.87 * (m_eff * m_eff / (r_eff * es * es * v)).powf(0.2)
     }
 
+    /// Rayleigh time π·r·√(ρ/G)/(0.1631·ν + 0.8766) of a sphere of radius `radius` and
+    /// density `density` (scaled shear modulus G = S·E/(2(1 + ν))): the time a Rayleigh
+    /// surface wave needs to cross it, the classic DEM bound on dt for elastic spheres, s.
+    pub fn rayleigh_time(&self, radius: f64, density: f64) -> f64 {
+        let g = self.stiffness_scale * self.youngs / (2.0 * (1.0 + self.poisson));
+        std::f64::consts::PI * radius * (density / g).sqrt() / (0.1631 * self.poisson + 0.8766)
+    }
+
     /// Stiffness dF/dδ at the equilibrium overlap δ0: 1.2·Fc/δ0 (dF/dx = 6Fc and
     /// dδ/dx = 5δ0 at x = 1), N/m; 0 for Hertz.
     pub fn equilibrium_stiffness(&self, r_eff: f64) -> f64 {

@@ -308,6 +308,25 @@ impl ContactModel {
     }
 }
 
+/// Largest accepted dt without `--force` from the Rayleigh time T_R: 0.4·T_R (the upper end
+/// of the 0.2–0.4·T_R range DEM codes recommend); the default is half of it.
+pub const MAX_RAYLEIGH_FRACTION: f64 = 0.4;
+
+impl TimeStep {
+    /// The Rayleigh-time rule for the smallest sphere of a JKR/Hertz material.
+    pub fn rayleigh(t_r: f64, material: &str, radius: f64) -> Self {
+        let max = MAX_RAYLEIGH_FRACTION * t_r;
+        TimeStep {
+            default: 0.5 * max,
+            max,
+            contact_time: t_r,
+            reason: format!(
+                "dt <= {MAX_RAYLEIGH_FRACTION}*T_R with the Rayleigh time T_R = pi*r*sqrt(rho/G)/(0.1631*nu + 0.8766) = {t_r:.4e} s of the smallest `{material}` sphere (r = {radius:e} m)"
+            ),
+        }
+    }
+}
+
 /// Default dt = tc/50 (MercuryDPM, paper 002: Δtcol/δt ≈ 50).
 pub const DEFAULT_DT_FRACTION: f64 = 50.0;
 /// Largest accepted dt without `--force`: tc/10. Velocity Verlet is stable up to
