@@ -39,6 +39,7 @@ fn scene() -> Scene {
         domain: Domain {
             min: [0.0; 3],
             max: [0.02, 0.02, 0.03],
+            periodic: [false; 3],
         },
         gravity: [0.0, 0.0, -9.81],
         dt: DtSetting::Auto,

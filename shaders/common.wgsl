@@ -19,12 +19,11 @@ struct GridParams {
     // Number of cells per axis.
     dims: vec3<u32>,
     n_particles: u32,
-    // Cell width h (>= largest interaction distance + Verlet skin), fixed for a run.
-    cell_width: f32,
+    // Cell width h per axis (>= largest interaction distance + Verlet skin), fixed for a
+    // run; equal on all axes unless a periodic axis fixes it to its period / cell count.
+    cell_width: vec3<f32>,
     // dims.x * dims.y * dims.z.
     n_cells: u32,
-    _pad0: u32,
-    _pad1: u32,
 }
 
 @group(0) @binding(0) var<uniform> grid: GridParams;

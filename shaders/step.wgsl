@@ -62,6 +62,30 @@ struct StepParams {
     extent_cells: vec3<f32>,
     // 1 when some wall is servo-controlled: the force kernel then writes wall_push.
     servo_walls: u32,
+    // 1 on periodic axes: cells wrap around (the axis holds a whole number >= 3 of cells,
+    // so dims·cell_width is the period) and separations take the nearest image.
+    periodic: vec3<u32>,
+    _pad: u32,
+}
+
+fn periodic_axes() -> vec3<bool> {
+    return step.periodic != vec3<u32>(0u);
+}
+
+// A cell difference wrapped to the nearest periodic image on periodic axes.
+fn nearest_image(dc: vec3<i32>) -> vec3<i32> {
+    let n = vec3<i32>(grid.dims);
+    let half = n / vec3<i32>(2);
+    let p = periodic_axes();
+    var w = select(dc, dc - n, p & (dc > half));
+    w = select(w, w + n, p & (w < -half));
+    return w;
+}
+
+// A cell coordinate wrapped into the grid on periodic axes.
+fn wrap_cell(c: vec3<i32>) -> vec3<i32> {
+    let n = vec3<i32>(grid.dims);
+    return select(c, ((c % n) + n) % n, periodic_axes());
 }
 
 // The run monitor's overlap limit over a12 (`run::MAX_OVERLAP_RATIO`; a test ties them).
@@ -155,7 +179,7 @@ fn rebuilding() -> bool {
 
 // Separation x_i - x_j from cell + offset positions.
 fn separation(ci: vec4<i32>, oi: vec4<f32>, cj: vec4<i32>, oj: vec4<f32>) -> vec3<f32> {
-    return vec3<f32>(ci.xyz - cj.xyz) * grid.cell_width + (oi.xyz - oj.xyz);
+    return vec3<f32>(nearest_image(ci.xyz - cj.xyz)) * grid.cell_width + (oi.xyz - oj.xyz);
 }
 
 // The workgroup's largest |displacement| (f32 bits), merged into skin[0] once per group.
@@ -184,11 +208,12 @@ fn kick_drift(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nw
         let over = o >= vec3<f32>(h);
         o = select(o, vec3<f32>(0.0), over);
         let carry = vec3<i32>(shift) + select(vec3<i32>(0), vec3<i32>(1), over);
-        let cell = a_cell[i].xyz + carry;
+        let cell = wrap_cell(a_cell[i].xyz + carry);
         a_cell[i] = vec4<i32>(cell, a_cell[i].w);
         a_off[i] = vec4<f32>(o, a_off[i].w);
         let at = vec3<f32>(cell) + o / h;
-        if (any(at < vec3<f32>(0.0)) || any(at > step.extent_cells)) {
+        let outside = (at < vec3<f32>(0.0)) | (at > step.extent_cells);
+        if (any(outside & !periodic_axes())) {
             atomicMax(&monitor[6], a_pid[i] + 1u);
         }
     }
@@ -260,7 +285,7 @@ fn neighbours(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nw
     for (var dz = -1; dz <= 1; dz++) {
         for (var dy = -1; dy <= 1; dy++) {
             for (var dx = -1; dx <= 1; dx++) {
-                let c = home + vec3<i32>(dx, dy, dz);
+                let c = wrap_cell(home + vec3<i32>(dx, dy, dz));
                 if (any(c < vec3<i32>(0)) || any(c > hi)) {
                     continue;
                 }

@@ -154,6 +154,7 @@ pub fn packing(case: Case, n: usize, velocity_scale: f64, seed: u64) -> Result<S
         domain: Domain {
             min: [0.0; 3],
             max: [width, width, height],
+            periodic: [false; 3],
         },
         gravity: [0.0, 0.0, -9.81],
         dt: DtSetting::Auto,

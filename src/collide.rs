@@ -240,6 +240,7 @@ impl CollideSpec {
             domain: Domain {
                 min: [-side, -side, -side],
                 max: [x2 + side, side, side],
+                periodic: [false; 3],
             },
             gravity: [0.0; 3],
             dt: DtSetting::Fixed(dt),

@@ -172,11 +172,19 @@ pub fn compare(
         gpu.run_steps(chunk)?;
         done += chunk;
         let g = gpu.state()?;
+        // (the nearest periodic image: a particle at a periodic face may have wrapped on
+        // one backend and not yet on the other)
+        let box_ = (
+            glam::DVec3::from_array(scene.domain.min),
+            glam::DVec3::from_array(scene.domain.max),
+        );
         let position = cpu
             .positions()
             .iter()
             .zip(&g.positions)
-            .map(|(a, b)| a.distance(*b))
+            .map(|(a, b)| {
+                crate::cpu::engine::minimum_image(*a - *b, scene.domain.periodic, box_).length()
+            })
             .fold(0.0, f64::max)
             / r_min;
         let v_scale = cpu

@@ -12,6 +12,8 @@
 //!
 //! ```toml
 //! [domain]                      # required: the box the particles live in, m
+//! # periodic = [true, true, false] # optional, default none: periodic axes (minimum image;
+//! #                              #   no wall may face, and no gravity point along, one)
 //! min = [0.0, 0.0, 0.0]         # required, m
 //! max = [0.01, 0.01, 0.02]      # required, m; max > min on every axis
 //!
@@ -166,10 +168,20 @@ pub const MAX_PLACEMENT_ATTEMPTS: usize = 1000;
 pub const MAX_BLOCK_PARTICLES: u64 = 100_000_000;
 
 /// The box the particles live in, m.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Domain {
     pub min: [f64; 3],
     pub max: [f64; 3],
+    /// Periodic axes: a particle leaving through one face enters through the opposite one,
+    /// and pairs interact across the faces (minimum image).
+    pub periodic: [bool; 3],
+}
+
+impl Domain {
+    /// Whether any axis is periodic.
+    pub fn any_periodic(&self) -> bool {
+        self.periodic.iter().any(|&p| p)
+    }
 }
 
 /// How the time step is chosen.
@@ -363,7 +375,7 @@ const TOP_KEYS: &[&str] = &[
     "wall",
     "particles",
 ];
-const DOMAIN_KEYS: &[&str] = &["min", "max"];
+const DOMAIN_KEYS: &[&str] = &["min", "max", "periodic"];
 const SIMULATION_KEYS: &[&str] = &[
     "duration",
     "dt",
@@ -968,6 +980,7 @@ fn parse_scene(src: &Src) -> Res<Scene> {
         walls,
         particles,
     };
+    check_periodic(src, &scene)?;
     check_particles(src, &scene, &origin)?;
     check_pair_models(src, &scene)?;
     Ok(scene)
@@ -996,7 +1009,23 @@ fn parse_domain(root: &Tbl) -> Res<Domain> {
             ));
         }
     }
-    Ok(Domain { min, max })
+    let mut periodic = [false; 3];
+    if let Some(node) = t.get("periodic") {
+        let expected = "an array of 3 booleans [x, y, z], e.g. [true, true, false]";
+        let Val::Array(items) = &node.val else {
+            return Err(t.type_err("periodic", node, expected));
+        };
+        if items.len() != 3 {
+            return Err(t.type_err("periodic", node, expected));
+        }
+        for (a, item) in items.iter().enumerate() {
+            match item.val {
+                Val::Bool(b) => periodic[a] = b,
+                _ => return Err(t.type_err("periodic", node, expected)),
+            }
+        }
+    }
+    Ok(Domain { min, max, periodic })
 }
 
 struct SimSettings {
@@ -2090,6 +2119,39 @@ impl Grid {
 // Whole-scene checks
 // ---------------------------------------------------------------------------------------
 
+/// Periodic axes: no wall may face one (its normal would have a component along it) and
+/// gravity may not point along one (the potential energy would be unbounded).
+fn check_periodic(src: &Src, scene: &Scene) -> Res<()> {
+    let d = &scene.domain;
+    for (a, axis) in AXES.iter().enumerate() {
+        if !d.periodic[a] {
+            continue;
+        }
+        if scene.gravity[a] != 0.0 {
+            return Err(src.err(
+                None,
+                format!(
+                    "gravity {} has a component along the periodic axis {axis}: particles would fall forever and the gravitational energy is unbounded; make the axis non-periodic (with walls) or gravity perpendicular to it",
+                    fmt_vec(scene.gravity)
+                ),
+            ));
+        }
+        for (w, wall) in scene.walls.iter().enumerate() {
+            if wall.normal[a].abs() > 1e-12 {
+                return Err(src.err(
+                    None,
+                    format!(
+                        "[[wall]] #{} (normal {}) faces the periodic axis {axis}: a wall across a periodic axis would cut the periodic images; make the axis non-periodic or remove the wall",
+                        w + 1,
+                        fmt_vec(wall.normal)
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 fn check_particles(src: &Src, scene: &Scene, origin: &Origin) -> Res<()> {
     let ps = &scene.particles;
     if ps.is_empty() {
@@ -2103,7 +2165,13 @@ fn check_particles(src: &Src, scene: &Scene, origin: &Origin) -> Res<()> {
         let tol = OVERLAP_TOLERANCE * p.radius;
         for (a, axis) in AXES.iter().enumerate() {
             let x = p.position[a];
-            if !(x - p.radius >= d.min[a] - tol && x + p.radius <= d.max[a] + tol) {
+            // on a periodic axis the centre must lie in [min, max); the sphere may cross
+            let inside = if d.periodic[a] {
+                x >= d.min[a] && x < d.max[a]
+            } else {
+                x - p.radius >= d.min[a] - tol && x + p.radius <= d.max[a] + tol
+            };
+            if !inside {
                 return Err(src.err(
                     None,
                     format!(

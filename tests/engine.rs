@@ -15,6 +15,7 @@ fn scene(
         domain: Domain {
             min: [-0.01; 3],
             max: [0.01; 3],
+            periodic: [false; 3],
         },
         gravity: [0.0, 0.0, gravity],
         dt: DtSetting::Auto,

@@ -167,6 +167,7 @@ fn sticking_oscillations_keep_their_amplitude_or_settle() {
         domain: Domain {
             min: [-0.01; 3],
             max: [0.01; 3],
+            periodic: [false; 3],
         },
         gravity: [0.0; 3],
         dt: DtSetting::Auto,
@@ -240,6 +241,7 @@ fn pair_scene(dt: DtSetting, force_dt: bool, v: f64, domain: f64) -> Scene {
         domain: Domain {
             min: [-domain; 3],
             max: [domain; 3],
+            periodic: [false; 3],
         },
         gravity: [0.0; 3],
         dt,

@@ -14,6 +14,8 @@ pub struct CellGrid {
     head: Vec<usize>,
     /// Next particle in the same cell.
     next: Vec<usize>,
+    /// Periodic axes: neighbour cells wrap around (needs at least 3 cells on the axis).
+    periodic: [bool; 3],
 }
 
 const EMPTY: usize = usize::MAX;
@@ -34,7 +36,25 @@ impl CellGrid {
             dims,
             head: vec![EMPTY; dims[0] * dims[1] * dims[2]],
             next: Vec::new(),
+            periodic: [false; 3],
         }
+    }
+
+    /// As [`Self::new`] with periodic axes; `None` when a periodic axis has fewer than 3
+    /// cells (the box is shorter than 3 cut-offs there: a pair would meet two images).
+    pub fn periodic(
+        min: DVec3,
+        max: DVec3,
+        cutoff: f64,
+        particles: usize,
+        periodic: [bool; 3],
+    ) -> Option<Self> {
+        let mut g = Self::new(min, max, cutoff, particles);
+        if (0..3).any(|a| periodic[a] && g.dims[a] < 3) {
+            return None;
+        }
+        g.periodic = periodic;
+        Some(g)
     }
 
     fn coord(&self, p: DVec3) -> [usize; 3] {
@@ -72,24 +92,31 @@ impl CellGrid {
     /// Calls `f(i, j)` once for every candidate pair i < j, in a fixed order
     /// (i ascending, then neighbour cells in a fixed order, then cell order).
     pub fn for_each_pair(&self, positions: &[DVec3], mut f: impl FnMut(usize, usize)) {
+        // the neighbour cell along axis a, wrapped on periodic axes, or None off the grid
+        let along = |a: usize, c: usize, d: i64| -> Option<usize> {
+            let n = self.dims[a] as i64;
+            let x = c as i64 + d;
+            if self.periodic[a] {
+                Some(x.rem_euclid(n) as usize)
+            } else {
+                (0..n).contains(&x).then_some(x as usize)
+            }
+        };
         for (i, &p) in positions.iter().enumerate() {
             let c = self.coord(p);
             for dz in -1i64..=1 {
-                let z = c[2] as i64 + dz;
-                if z < 0 || z >= self.dims[2] as i64 {
+                let Some(z) = along(2, c[2], dz) else {
                     continue;
-                }
+                };
                 for dy in -1i64..=1 {
-                    let y = c[1] as i64 + dy;
-                    if y < 0 || y >= self.dims[1] as i64 {
+                    let Some(y) = along(1, c[1], dy) else {
                         continue;
-                    }
+                    };
                     for dx in -1i64..=1 {
-                        let x = c[0] as i64 + dx;
-                        if x < 0 || x >= self.dims[0] as i64 {
+                        let Some(x) = along(0, c[0], dx) else {
                             continue;
-                        }
-                        let mut j = self.head[self.index([x as usize, y as usize, z as usize])];
+                        };
+                        let mut j = self.head[self.index([x, y, z])];
                         while j != EMPTY {
                             if j > i {
                                 f(i, j);

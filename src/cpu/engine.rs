@@ -164,8 +164,21 @@ pub struct CpuEngine {
     dissipated: f64,
     wall_work: f64,
     domain: (DVec3, DVec3),
+    /// Periodic axes (positions wrap into the domain, pairs use the minimum image).
+    periodic: [bool; 3],
     /// Deepest overlap over a12 since the monitor last looked: (ratio, i, partner).
     peak: Option<(f64, usize, Partner)>,
+}
+
+/// `d` with each periodic axis's component replaced by its nearest periodic image.
+pub fn minimum_image(mut d: DVec3, periodic: [bool; 3], domain: (DVec3, DVec3)) -> DVec3 {
+    for a in 0..3 {
+        if periodic[a] {
+            let l = domain.1[a] - domain.0[a];
+            d[a] -= l * (d[a] / l).round();
+        }
+    }
+    d
 }
 
 /// The other side of a contact.
@@ -207,7 +220,14 @@ impl CpuEngine {
             DVec3::from_array(scene.domain.min),
             DVec3::from_array(scene.domain.max),
         );
-        let grid = CellGrid::new(domain.0, domain.1, cutoff * (1.0 + 1e-9), n);
+        let periodic = scene.domain.periodic;
+        let grid = CellGrid::periodic(domain.0, domain.1, cutoff * (1.0 + 1e-9), n, periodic)
+            .ok_or_else(|| {
+                PowderError::Scene(format!(
+                    "the domain is shorter than 3 interaction cut-offs ({:.4e} m) along a periodic axis: a pair would meet two periodic images; enlarge [domain] or make the axis non-periodic",
+                    cutoff
+                ))
+            })?;
         let walls = scene
             .walls
             .iter()
@@ -258,6 +278,7 @@ impl CpuEngine {
             dissipated: 0.0,
             wall_work: 0.0,
             domain,
+            periodic,
             peak: None,
         };
         let v_pred = engine.vel.clone();
@@ -417,9 +438,29 @@ impl CpuEngine {
             .map(|c| c.history)
     }
 
-    /// Overlap δ = r_i + r_j − |x_i − x_j| of a pair.
+    /// Overlap δ = r_i + r_j − |x_i − x_j| of a pair (minimum image on periodic axes).
     pub fn overlap(&self, i: usize, j: usize) -> f64 {
-        self.radius[i] + self.radius[j] - self.pos[i].distance(self.pos[j])
+        self.radius[i] + self.radius[j] - self.separation(i, j).length()
+    }
+
+    /// x_i − x_j, the nearest periodic image on periodic axes.
+    pub fn separation(&self, i: usize, j: usize) -> DVec3 {
+        minimum_image(self.pos[i] - self.pos[j], self.periodic, self.domain)
+    }
+
+    /// Wraps positions into the domain along periodic axes.
+    fn wrap_positions(&mut self) {
+        let (lo, hi) = self.domain;
+        for a in 0..3 {
+            if self.periodic[a] {
+                let l = hi[a] - lo[a];
+                for p in &mut self.pos {
+                    let x = lo[a] + (p[a] - lo[a]).rem_euclid(l);
+                    // rem_euclid can round up to l itself
+                    p[a] = if x >= hi[a] { lo[a] } else { x };
+                }
+            }
+        }
     }
 
     /// Overlap of particle `i` with wall `w`.
@@ -476,6 +517,9 @@ impl CpuEngine {
             self.pos[i] += dt * v_half;
             v_pred.push(v_half + 0.5 * dt * self.acc[i]);
             self.vel[i] = v_half;
+        }
+        if self.periodic.iter().any(|&p| p) {
+            self.wrap_positions();
         }
         // Moving walls: the velocity over this step (prescribed at its start, or the servo
         // law from the force of the step before), then the move; the work the walls do
@@ -621,10 +665,11 @@ impl CpuEngine {
             let pad = &self.cutoff_pad;
             let force = &mut self.force;
             let torque = &mut self.torque;
+            let (periodic, domain) = (self.periodic, self.domain);
             let (models, nm, mass, material) =
                 (&self.models, self.n_materials, &self.mass, &self.material);
             self.grid.for_each_pair(pos, |i, j| {
-                let d = pos[i] - pos[j];
+                let d = minimum_image(pos[i] - pos[j], periodic, domain);
                 let dist2 = d.length_squared();
                 let reach = pad[i] + radius[j];
                 if dist2 >= reach * reach {

@@ -43,7 +43,7 @@ use crate::error::PowderError;
 use crate::gpu::context::GpuContext;
 use crate::gpu::grid::GridSort;
 use crate::gpu::kernel::{storage_buffer, submit_and_read, u32s, uniform_buffer, Kernel, Program};
-use crate::gpu::layout::{encode, gpu_cell_width, HystereticPair, JkrPair, StepParams, WallGpu};
+use crate::gpu::layout::{encode3, gpu_cell_width, HystereticPair, JkrPair, StepParams, WallGpu};
 use crate::gpu::shaders::StepKind;
 use crate::model::{ContactHistory, ContactModel};
 use crate::scene::Scene;
@@ -200,7 +200,8 @@ pub struct GpuEngine {
     n: u32,
     cap: u32,
     origin: DVec3,
-    h: f64,
+    /// Cell width per axis (the f32 values the kernels use), m.
+    h: DVec3,
     radius: Vec<f64>,
     mass: Vec<f64>,
     grid: GridSort,
@@ -337,11 +338,34 @@ impl GpuEngine {
         let extent = DVec3::from_array(scene.domain.max) - origin;
         let cutoff = 2.0 * r.r_max + r.max_reach + skin;
         let target_cells = (4 * n).max(64) as f64;
-        let h = gpu_cell_width(
+        let h0 = gpu_cell_width(
             cutoff.max((extent.x * extent.y * extent.z / target_cells).cbrt()) * (1.0 + 1e-6),
         );
-        let dim = |e: f64| ((e / h).ceil() as u32).clamp(1, 1 << 20);
-        let dims = [dim(extent.x), dim(extent.y), dim(extent.z)];
+        // A periodic axis holds a whole number of cells, at least 3 (so the 27 cells around
+        // a particle are distinct and a pair meets one image): its cells are period/count
+        // wide, rounded to f32, so the device's period is dims·h (within 2^-24 of the
+        // scene's; see README).
+        let periodic = scene.domain.periodic;
+        let mut h = DVec3::splat(h0);
+        let mut dims = [0u32; 3];
+        for a in 0..3 {
+            if periodic[a] {
+                let count = (extent[a] / (cutoff * (1.0 + 1e-6))).floor();
+                if count < 3.0 {
+                    return Err(PowderError::Scene(format!(
+                        "the domain is {:.4e} m long along the periodic axis {}, shorter than 3 interaction cut-offs plus the Verlet skin ({:.4e} m): a pair would meet two periodic images; enlarge [domain] or make the axis non-periodic",
+                        extent[a],
+                        ["x", "y", "z"][a],
+                        3.0 * cutoff
+                    )));
+                }
+                let count = count.min((extent[a] / h0).ceil()).max(3.0);
+                h[a] = gpu_cell_width(extent[a] / count);
+                dims[a] = count as u32;
+            } else {
+                dims[a] = ((extent[a] / h0).ceil() as u32).clamp(1, 1 << 20);
+            }
+        }
         let hist_bytes = kind.history_bytes();
         let bytes_needed = n as u64 * cap as u64 * hist_bytes;
         if bytes_needed > ctx.max_storage_binding() {
@@ -351,7 +375,8 @@ impl GpuEngine {
                 ctx.max_storage_binding() / (cap as u64 * hist_bytes)
             )));
         }
-        let grid = GridSort::new(&ctx, n as u32, dims, h as f32)?;
+        let grid =
+            GridSort::with_cell_widths(&ctx, n as u32, dims, [h.x as f32, h.y as f32, h.z as f32])?;
         let device = &ctx.device;
         let n_walls = scene.walls.len() as u64;
         let mut alloc = Allocator {
@@ -375,7 +400,7 @@ impl GpuEngine {
         let mut offs = Vec::with_capacity(n);
         let mut vels = Vec::with_capacity(n);
         for (p, m) in scene.particles.iter().zip(&r.mass) {
-            let (mut c, mut o) = encode(DVec3::from_array(p.position), origin, h);
+            let (mut c, mut o) = encode3(DVec3::from_array(p.position), origin, h);
             c[3] = p.material as i32;
             o[3] = p.radius as f32;
             cells.push(c);
@@ -421,11 +446,13 @@ impl GpuEngine {
             n_walls: n_walls as u32,
             reach: r.max_reach as f32,
             extent_cells: [
-                (extent.x / h) as f32,
-                (extent.y / h) as f32,
-                (extent.z / h) as f32,
+                (extent.x / h.x) as f32,
+                (extent.y / h.y) as f32,
+                (extent.z / h.z) as f32,
             ],
             servo_walls: servo_walls as u32,
+            periodic: periodic.map(u32::from),
+            _pad: 0,
         };
         let step_buf = uniform_buffer(device, "step", bytemuck::bytes_of(&step));
         alloc.list.push(("step".into(), step_buf.size()));
@@ -808,7 +835,7 @@ impl GpuEngine {
             .iter()
             .take(self.wall_normals.len())
             .map(|w| {
-                let p = crate::gpu::layout::decode(w.cell, w.offset, self.origin, self.h);
+                let p = crate::gpu::layout::decode3(w.cell, w.offset, self.origin, self.h);
                 let v = DVec3::new(
                     w.velocity[0] as f64,
                     w.velocity[1] as f64,
@@ -871,7 +898,7 @@ impl GpuEngine {
         let mut angular_velocities = vec![DVec3::ZERO; omegas.len()];
         for k in 0..self.n as usize {
             let i = pid[k] as usize;
-            positions[i] = crate::gpu::layout::decode(cells[k], offs[k], self.origin, self.h);
+            positions[i] = crate::gpu::layout::decode3(cells[k], offs[k], self.origin, self.h);
             velocities[i] = vec3(vels[k]);
             if let Some(w) = omegas.get(k) {
                 angular_velocities[i] = vec3(*w);

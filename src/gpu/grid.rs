@@ -253,7 +253,7 @@ pub struct GridSort {
     n_particles: u32,
     dims: [u32; 3],
     n_cells: u32,
-    cell_width: f32,
+    cell_width: [f32; 3],
     max_per_dim: u32,
     large_groups: u32,
     cell_keys: Kernel,
@@ -285,6 +285,16 @@ impl GridSort {
         dims: [u32; 3],
         cell_width: f32,
     ) -> Result<Self, PowderError> {
+        Self::with_cell_widths(ctx, n_particles, dims, [cell_width; 3])
+    }
+
+    /// As [`Self::new`] with a cell width per axis.
+    pub fn with_cell_widths(
+        ctx: &GpuContext,
+        n_particles: u32,
+        dims: [u32; 3],
+        cell_width: [f32; 3],
+    ) -> Result<Self, PowderError> {
         if dims.contains(&0) || dims.iter().any(|&d| d > i32::MAX as u32) {
             return Err(PowderError::Run(format!(
                 "grid dims {dims:?}: each axis needs 1 to {} cells",
@@ -298,9 +308,9 @@ impl GridSort {
                 dims[0], dims[1], dims[2]
             ))
         })?;
-        if !(cell_width.is_finite() && cell_width > 0.0) {
+        if !cell_width.iter().all(|h| h.is_finite() && *h > 0.0) {
             return Err(PowderError::Run(format!(
-                "cell width must be finite and > 0, got {cell_width}"
+                "cell widths must be finite and > 0, got {cell_width:?}"
             )));
         }
         let grid_name = format!("grid sort of {}x{}x{} cells", dims[0], dims[1], dims[2]);
@@ -324,7 +334,6 @@ impl GridSort {
                 n_particles,
                 cell_width,
                 n_cells,
-                _pad: [0; 2],
             }),
         );
         let n4 = n_particles as u64 * 4;
@@ -406,7 +415,7 @@ impl GridSort {
         self.n_cells
     }
 
-    pub fn cell_width(&self) -> f32 {
+    pub fn cell_width(&self) -> [f32; 3] {
         self.cell_width
     }
 

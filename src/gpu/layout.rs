@@ -49,11 +49,11 @@ pub struct GridParams {
     /// Cells per axis.
     pub dims: [u32; 3],
     pub n_particles: u32,
-    /// Cell width h.
-    pub cell_width: f32,
+    /// Cell width per axis (equal unless periodic axes fix it to the period over the
+    /// cell count).
+    pub cell_width: [f32; 3],
     /// `dims[0] * dims[1] * dims[2]`.
     pub n_cells: u32,
-    pub _pad: [u32; 2],
 }
 
 /// One level of the exclusive scan: twin of `ScanParams` in `shaders/grid.wgsl`.
@@ -80,10 +80,16 @@ pub fn gpu_cell_width(h: f64) -> f64 {
 /// particle moves to the next cell with offset 0, so `0 <= offset < h` always holds.
 /// Cells beyond the i32 range saturate (positions there are not representable).
 pub fn encode(p: DVec3, origin: DVec3, h: f64) -> ([i32; 4], [f32; 4]) {
+    encode3(p, origin, DVec3::splat(h))
+}
+
+/// [`encode`] with a cell width per axis.
+pub fn encode3(p: DVec3, origin: DVec3, hs: DVec3) -> ([i32; 4], [f32; 4]) {
     let mut cell = [0i32; 4];
     let mut offset = [0f32; 4];
-    let h32 = h as f32;
     for axis in 0..3 {
+        let h = hs[axis];
+        let h32 = h as f32;
         let rel = p[axis] - origin[axis];
         let mut c = (rel / h).floor();
         // Offset taken in f64 from the cell's corner; exact up to f64 rounding of rel.
@@ -109,10 +115,15 @@ pub fn encode(p: DVec3, origin: DVec3, h: f64) -> ([i32; 4], [f32; 4]) {
 
 /// Absolute position of a cell and offset (w components ignored).
 pub fn decode(cell: [i32; 4], offset: [f32; 4], origin: DVec3, h: f64) -> DVec3 {
+    decode3(cell, offset, origin, DVec3::splat(h))
+}
+
+/// [`decode`] with a cell width per axis.
+pub fn decode3(cell: [i32; 4], offset: [f32; 4], origin: DVec3, h: DVec3) -> DVec3 {
     DVec3::new(
-        origin.x + (cell[0] as f64) * h + offset[0] as f64,
-        origin.y + (cell[1] as f64) * h + offset[1] as f64,
-        origin.z + (cell[2] as f64) * h + offset[2] as f64,
+        origin.x + (cell[0] as f64) * h.x + offset[0] as f64,
+        origin.y + (cell[1] as f64) * h.y + offset[1] as f64,
+        origin.z + (cell[2] as f64) * h.z + offset[2] as f64,
     )
 }
 
@@ -337,6 +348,9 @@ pub struct StepParams {
     pub extent_cells: [f32; 3],
     /// 1 when some wall is servo-controlled.
     pub servo_walls: u32,
+    /// 1 on periodic axes.
+    pub periodic: [u32; 3],
+    pub _pad: u32,
 }
 
 /// A planar wall: a point as cell + offset and the unit normal. Twin of `Wall` in
@@ -360,8 +374,8 @@ pub const WALL_PRESCRIBED: f32 = 1.0;
 pub const WALL_SERVO: f32 = 2.0;
 
 impl WallGpu {
-    pub fn new(point: DVec3, normal: DVec3, origin: DVec3, h: f64) -> Self {
-        let (cell, offset) = encode(point, origin, h);
+    pub fn new(point: DVec3, normal: DVec3, origin: DVec3, h: DVec3) -> Self {
+        let (cell, offset) = encode3(point, origin, h);
         let n = normal.normalize();
         Self {
             cell,
@@ -373,7 +387,7 @@ impl WallGpu {
     }
 
     /// A scene wall at time 0.
-    pub fn from_scene(w: &crate::scene::Wall, origin: DVec3, h: f64) -> Self {
+    pub fn from_scene(w: &crate::scene::Wall, origin: DVec3, h: DVec3) -> Self {
         use crate::scene::WallMotion;
         let mut g = Self::new(
             DVec3::from_array(w.point),
@@ -655,6 +669,7 @@ mod tests {
                 ("reach", offset_of!(StepParams, reach)),
                 ("extent_cells", offset_of!(StepParams, extent_cells)),
                 ("servo_walls", offset_of!(StepParams, servo_walls)),
+                ("periodic", offset_of!(StepParams, periodic)),
             ],
         );
         check(
