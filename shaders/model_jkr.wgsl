@@ -2,7 +2,8 @@
 // (papers 001 §II and 002 §2–3). Normal force with contact hysteresis, Tsuji or power-law
 // damping, the tangential spring with the adhesive Coulomb limit and the rolling
 // resistance. Tests tie it to the f64 reference through whole collisions
-// (`tests/gpu_engine.rs`).
+// (`tests/gpu_engine.rs`). The `krijt` and `stress` dissipations (the contact radius as
+// per-contact state) live in model_krijt.wgsl.
 //
 // Sign convention as in Rust: delta > 0 is overlap, delta_dot the approach speed, a
 // positive normal force is repulsive, the unit normal n points from j to i.
@@ -12,7 +13,9 @@
 //   * the history layout snippet: `alias Hist`, `hist_zero()`, `jkr_unpack`, `jkr_pack`
 //     and the switches JKR_TANGENTIAL / JKR_ROLLING (whether the stored history has room
 //     for the tangential spring / rolling displacement). Without room the kernel never
-//     evaluates that part, so the host only picks a layout that covers every pair.
+//     evaluates that part, so the host only picks a layout that covers every pair;
+//   * model_krijt.wgsl (the switch KRIJT, `krijt_normal`, `krijt_viscous`) where the
+//     history stores the contact radius, model_krijt_off.wgsl (no-op hooks) elsewhere.
 
 // One row of the pair table (materials x materials, then walls x materials). Twin of
 // `gpu::layout::JkrPair`, filled from `JkrParams` on the host (in f64, then rounded).
@@ -45,13 +48,24 @@ struct JkrPair {
     power_beta: f32,
     // P(x_break) (`jkr::potential_shape`): the stored energy is Fc·delta0·(P(x) − P(x_break)).
     p_break: f32,
-    _pad0: u32,
+    // Krijt and stress (model_krijt.wgsl): 2E*/nu² of the viscous force (eq. 12),
+    visc: f32,
+    // T_vis (krijt) or C of T_vis,0 = C·R (stress, eq. 18),
+    tvis: f32,
+    // 2E*·gamma/sigma0² of the crack speed (eq. B2; 0 = sigma0 = 0, no delay of a),
+    crack: f32,
+    // B and zeta of eq. 17 (stress).
+    stress_b: f32,
+    stress_zeta: f32,
 }
 
 alias PairRow = JkrPair;
 
 const JKR_DISSIPATION_TSUJI: u32 = 1u;
 const JKR_DISSIPATION_POWER: u32 = 2u;
+// The contact radius is state (model_krijt.wgsl): constant T_vis, stress-dependent T_vis.
+const JKR_DISSIPATION_KRIJT: u32 = 3u;
+const JKR_DISSIPATION_STRESS: u32 = 4u;
 
 const JKR_PI: f32 = 3.1415927;
 // The f32 constants of `jkr::contact_radius_f32` (rounded exactly as Rust rounds its f64
@@ -74,10 +88,13 @@ struct JkrHistory {
     spring: vec3<f32>,
     // Rolling displacement xi (the same on both sides).
     xi: vec3<f32>,
+    // Contact radius a of the Krijt dissipations (0 = unset; only stored by the layouts
+    // of the JkrKrijt* steps).
+    a: f32,
 }
 
 fn jkr_history_zero() -> JkrHistory {
-    return JkrHistory(false, vec3<f32>(0.0), vec3<f32>(0.0));
+    return JkrHistory(false, vec3<f32>(0.0), vec3<f32>(0.0), 0.0);
 }
 
 // The normal force and what the tangential and rolling parts need.
@@ -118,8 +135,12 @@ fn jkr_r23(r: f32) -> f32 {
     return pow(r, 2.0 / 3.0);
 }
 
-// The dissipative normal force for contact radius a (`JkrParams::normal_dissipation`).
-fn jkr_dissipation(p: JkrPair, a: f32, delta_dot: f32, m: f32) -> f32 {
+// The dissipative normal force for contact radius a (`JkrParams::normal_dissipation`);
+// a0 and R* for the Krijt viscous force.
+fn jkr_dissipation(p: JkrPair, a: f32, a0: f32, delta_dot: f32, m: f32, r: f32) -> f32 {
+    if (KRIJT && p.dissipation >= JKR_DISSIPATION_KRIJT) {
+        return krijt_viscous(p, a, a0, r, delta_dot);
+    }
     if (p.dissipation == JKR_DISSIPATION_TSUJI) {
         // Sn = 2E*·a (paper 002 eq. 13 for Hertz; a exists at negative overlap in JKR)
         let sn = 2.0 * p.e_star * a;
@@ -151,10 +172,12 @@ fn jkr_dissipation(p: JkrPair, a: f32, delta_dot: f32, m: f32) -> f32 {
 // * Hertz (gamma = 0): contact only while delta > 0.
 // The elastic force is evaluated in the normalised form F = 4·Fc·(x³ − x^(3/2)), x = a/a0
 // = s², which equals 4E*a³/(3R*) − 4·sqrt(pi·gamma·E*·a³) (a0³ = 9·pi·gamma·R*²/E*) and
-// keeps every intermediate O(Fc) in f32.
+// keeps every intermediate O(Fc) in f32. With the Krijt dissipations the contact radius
+// is the state (*h).a instead of the JKR root (`krijt_normal`).
 fn jkr_normal(p: JkrPair, k: Kin, h: ptr<function, JkrHistory>) -> JkrNormal {
     var out = JkrNormal(false, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
     let r = k.r_eff;
+    var a0 = 0.0;
     if (p.gamma == 0.0) {
         if (k.delta <= 0.0) {
             *h = jkr_history_zero();
@@ -169,24 +192,32 @@ fn jkr_normal(p: JkrPair, k: Kin, h: ptr<function, JkrHistory>) -> JkrNormal {
             *h = jkr_history_zero();
             return out;
         }
-        let a0 = p.a0_coef * jkr_r23(r);
+        a0 = p.a0_coef * jkr_r23(r);
         let d0 = a0 * a0 / (3.0 * r);
         if (k.delta <= p.break_ratio * d0) {
             *h = jkr_history_zero();
             return out;
         }
         let s = jkr_solve_s(k.delta, d0);
-        let x = s * s;
+        var x = s * s;
         let fc = 3.0 * JKR_PI * p.gamma * r;
-        out.elastic = 4.0 * fc * (x * x * x - x * s);
+        if (KRIJT && p.dissipation >= JKR_DISSIPATION_KRIJT) {
+            let kn = krijt_normal(p, k, a0, d0, fc, x, (*h).a);
+            x = kn.x;
+            (*h).a = a0 * x;
+            out.elastic = kn.y;
+            out.potential = kn.z;
+        } else {
+            out.elastic = 4.0 * fc * (x * x * x - x * s);
+            out.potential = fc * d0 * (jkr_potential_shape(x, s) - p.p_break);
+        }
         out.a = a0 * x;
         out.x = x;
         out.fc = fc;
-        out.potential = fc * d0 * (jkr_potential_shape(x, s) - p.p_break);
     }
     (*h).touched = true;
     out.in_contact = true;
-    out.force = out.elastic + jkr_dissipation(p, out.a, k.delta_dot, k.m_eff);
+    out.force = out.elastic + jkr_dissipation(p, out.a, a0, k.delta_dot, k.m_eff, r);
     return out;
 }
 
@@ -197,11 +228,12 @@ fn jkr_potential_shape(x: f32, s: f32) -> f32 {
 }
 
 // Where a contact starts and ends and the force just inside those edges, for the energy
-// ledger (`JkrParams::edge_forces`): (entry delta, entry force, exit delta, exit force).
+// ledger (`JkrParams::edge_forces`): (entry delta, entry force, exit delta, exit force),
+// with the JKR radius at both edges also for the Krijt dissipations (as on the CPU).
 fn pair_edges(p: JkrPair, k: Kin) -> vec4<f32> {
     if (p.gamma == 0.0) {
         // Hertz: a = 0 at the single edge delta = 0
-        let f = jkr_dissipation(p, 0.0, k.delta_dot, k.m_eff);
+        let f = jkr_dissipation(p, 0.0, 0.0, k.delta_dot, k.m_eff, k.r_eff);
         return vec4<f32>(0.0, f, 0.0, f);
     }
     let r = k.r_eff;
@@ -210,11 +242,11 @@ fn pair_edges(p: JkrPair, k: Kin) -> vec4<f32> {
     let fc = 3.0 * JKR_PI * p.gamma * r;
     let s_in = jkr_solve_s(0.0, d0);
     let x_in = s_in * s_in;
-    let f_in = 4.0 * fc * (x_in * x_in * x_in - x_in * s_in) + jkr_dissipation(p, a0 * x_in, k.delta_dot, k.m_eff);
+    let f_in = 4.0 * fc * (x_in * x_in * x_in - x_in * s_in) + jkr_dissipation(p, a0 * x_in, a0, k.delta_dot, k.m_eff, r);
     let d_out = p.break_ratio * d0;
     let s_out = jkr_solve_s(d_out, d0);
     let x_out = s_out * s_out;
-    let f_out = 4.0 * fc * (x_out * x_out * x_out - x_out * s_out) + jkr_dissipation(p, a0 * x_out, k.delta_dot, k.m_eff);
+    let f_out = 4.0 * fc * (x_out * x_out * x_out - x_out * s_out) + jkr_dissipation(p, a0 * x_out, a0, k.delta_dot, k.m_eff, r);
     return vec4<f32>(0.0, f_in, d_out, f_out);
 }
 

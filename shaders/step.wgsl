@@ -2,7 +2,8 @@
 // Composed per scene (`src/gpu/shaders.rs`) as
 //   common.wgsl + <model> + [history layout] + <rotation> + this file
 // where <model> is model_hysteretic.wgsl (hysteretic, LSD) or model_jkr.wgsl (JKR,
-// Hertz) and <rotation> is rotation.wgsl (angular velocity, torques) or
+// Hertz) with model_krijt.wgsl (the Krijt contact-radius dynamics) or its no-op hooks
+// model_krijt_off.wgsl, and <rotation> is rotation.wgsl (angular velocity, torques) or
 // rotation_off.wgsl (no rotation: no angular buffers declared at all). The model provides
 //   alias PairRow  the pair-table row,          alias Hist  one contact's stored history,
 //   fn hist_zero() -> Hist,                     fn pair_contact(PairRow, Kin, ptr<function, Hist>) -> Contact

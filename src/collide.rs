@@ -500,11 +500,6 @@ pub fn collide_on(spec: &CollideSpec, backend: Backend) -> Result<CollideResult,
             run_collision(spec, run, wall_x, dt, "cpu", None, None)
         }
         Backend::Gpu => {
-            if let ContactModel::Jkr(p) = &spec.model {
-                if let Some(why) = p.gpu_unsupported() {
-                    return Err(PowderError::Run(why));
-                }
-            }
             let engine = GpuEngine::new(&scene, GpuContext::new()?)?;
             let adapter = engine.adapter().to_string();
             let run = GpuRun {

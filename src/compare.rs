@@ -5,7 +5,7 @@
 //! smallest radius), velocities (over the largest CPU speed), contact counts and the
 //! largest overlap (each engine's own contact statistics), the energy ledger (kinetic,
 //! stored, dissipated) and the per-contact history values (δmax, tangential spring,
-//! rolling displacement) of every contact both engines hold. Granular flows are chaotic,
+//! rolling displacement, Krijt contact radius) of every contact both engines hold. Granular flows are chaotic,
 //! so f32 and f64 trajectories separate exponentially once collisions chain up; compare
 //! over the early steps, or judge the aggregate quantities (energy, contacts) later on.
 
@@ -33,7 +33,8 @@ pub struct Tolerances {
     pub energy: f64,
     /// History values of the contacts with overlap both engines hold: the RMS difference
     /// of δmax over the RMS of the CPU's δmax, and likewise for the tangential spring and
-    /// the rolling displacement (vectors); the largest of the three. RMS rather than the
+    /// the rolling displacement (vectors) and the Krijt contact radius; the largest of the
+    /// four. RMS rather than the
     /// worst contact: on the tensile branch δmax ∝ √δ near δ = 0, so a contact about to
     /// open turns an f32 rounding of its overlap into a large δmax difference (the worst
     /// one is reported as `history_max`).
@@ -107,8 +108,8 @@ struct HistoryDeviation {
     max: f64,
 }
 
-/// Compares δmax (hysteretic), the tangential spring and ξ of every CPU contact with
-/// overlap against the GPU's copy of the same side.
+/// Compares δmax (hysteretic), the tangential spring, ξ and the Krijt contact radius of
+/// every CPU contact with overlap against the GPU's copy of the same side.
 fn history_deviation(
     cpu: &[((u32, u32), f64, ContactHistory)],
     gpu: &[((u32, u32), ContactHistory)],
@@ -117,7 +118,7 @@ fn history_deviation(
     let gpu: HashMap<(u32, u32), ContactHistory> = gpu.iter().copied().collect();
     let (mut compared, mut missing) = (0, 0);
     // per quantity: largest difference, largest value, Σ difference², Σ value²
-    let mut q = [[0.0f64; 4]; 3];
+    let mut q = [[0.0f64; 4]; 4];
     let mut add = |k: usize, diff: f64, value: f64| {
         q[k][0] = q[k][0].max(diff);
         q[k][1] = q[k][1].max(value);
@@ -139,6 +140,11 @@ fn history_deviation(
             c.tangential.length(),
         );
         add(2, g.rolling.distance(c.rolling), c.rolling.length());
+        add(
+            3,
+            (g.contact_radius - c.contact_radius).abs(),
+            c.contact_radius,
+        );
     }
     let of =
         |f: &dyn Fn(&[f64; 4]) -> f64| q.iter().filter(|x| x[1] > 0.0).map(f).fold(0.0, f64::max);

@@ -768,13 +768,6 @@ fn collide_cmd(a: &CollideArgs) -> Result<(), PowderError> {
             eprintln!("note: {note}");
         }
     }
-    if let ContactModel::Jkr(p) = &spec.model {
-        if a.backend == Backend::Gpu {
-            if let Some(why) = p.gpu_unsupported() {
-                return Err(PowderError::Run(why));
-            }
-        }
-    }
     let single_jkr = a.sweep_velocity.is_none()
         && matches!(&spec.model, ContactModel::Jkr(p) if p.surface_energy > 0.0);
     if a.trace.is_some() || (a.plot.is_some() && single_jkr) {

@@ -556,6 +556,74 @@ fn collide_and_run_on_the_gpu_backend() {
     assert!(out.contains("backend          gpu"), "{out}");
 }
 
+/// The Krijt and stress dissipations through the full GPU pipeline: `collide --backend gpu`
+/// (with the ledger's keys) and `run --backend gpu` of the LJ example scenes.
+#[test]
+fn krijt_and_stress_collide_and_run_on_the_gpu_backend() {
+    if !gpu_available() {
+        return;
+    }
+    let lj = [
+        "collide",
+        "--model",
+        "jkr",
+        "--youngs",
+        "122.8125",
+        "--poisson",
+        "0.25",
+        "--surface-energy",
+        "3.17",
+        "--radius",
+        "147",
+        "--density",
+        "1.09",
+        "--velocity",
+        "0.1",
+        "--sigma0",
+        "2.906",
+        "--backend",
+        "gpu",
+        "--json",
+    ];
+    for (extra, e_cpu) in [
+        (&["--dissipation", "krijt", "--tvis", "0.075"][..], 0.8883),
+        (
+            &[
+                "--dissipation",
+                "stress",
+                "--tvis0-per-radius",
+                "2.1e-4",
+                "--B",
+                "6.2",
+                "--zeta",
+                "4",
+            ][..],
+            0.8671,
+        ),
+    ] {
+        let args: Vec<&str> = lj.iter().chain(extra).copied().collect();
+        let (ok, out, err) = powder(&args);
+        assert!(ok, "{err}");
+        let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+        assert_collide_keys(&v, &out);
+        assert_eq!(v["backend"], "gpu");
+        // the CPU's e (README table) to 2e-4, and the device ledger closes
+        let e = v["e"].as_f64().unwrap();
+        assert!((e - e_cpu).abs() < 2e-4, "{extra:?}: e {e}");
+        assert!(
+            v["energy"]["balance_error"].as_f64().unwrap() < 5e-4,
+            "{out}"
+        );
+        assert!(v["energy"]["dissipated"].as_f64().unwrap() > 0.0, "{out}");
+    }
+    for name in ["lj_krijt_pair.toml", "lj_stress_pair.toml"] {
+        let scene = format!("{}/examples/{name}", env!("CARGO_MANIFEST_DIR"));
+        let (ok, out, err) = powder(&["run", &scene, "--backend", "gpu", "--no-output"]);
+        assert!(ok, "{name}: {err}");
+        assert!(out.contains("backend          gpu"), "{out}");
+    }
+}
+
 #[test]
 fn info_scene_lists_kernels_buffers_and_leaves_out_rotation() {
     if !gpu_available() {

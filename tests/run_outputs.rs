@@ -98,6 +98,38 @@ fn gpu_outputs_and_bitwise_resume() {
     assert!(err.contains("cpu backend"), "{err}");
 }
 
+/// A GPU checkpoint taken in the middle of a Krijt contact carries the contact radius (part
+/// of the per-contact history): the resumed run ends with the straight run's bytes.
+#[test]
+fn gpu_krijt_checkpoint_mid_contact_resumes_bitwise() {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/lj_krijt_pair.toml");
+    let mut scene = Scene::load(Path::new(path)).unwrap();
+    scene.output_every = 100;
+    scene.checkpoint_every = 300;
+    let (straight, split) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    let Some(ctx) = gpu() else { return };
+    // contact from t ≈ 20 (step ≈ 60) for about 230 (≈ 670 steps)
+    let a = run_gpu_with(&scene, ctx, &options(straight.path(), 500, None), |_| {}).unwrap();
+    assert!(a.last.contacts.contacts > 0, "in contact at step 500");
+    let Some(ctx) = gpu() else { return };
+    run_gpu_with(&scene, ctx, &options(split.path(), 300, None), |_| {}).unwrap();
+    let ckpt = split.path().join("checkpoint.bin");
+    let Some(ctx) = gpu() else { return };
+    let b = run_gpu_with(
+        &scene,
+        ctx,
+        &options(split.path(), 500, Some(&ckpt)),
+        |_| {},
+    )
+    .unwrap();
+    assert_eq!(b.resumed_from, Some(300));
+    let bytes = |d: &Path| std::fs::read(d.join("checkpoint.bin")).unwrap();
+    assert!(
+        bytes(straight.path()) == bytes(split.path()),
+        "resumed GPU Krijt run differs"
+    );
+}
+
 #[test]
 fn outputs_are_written_and_a_resumed_run_is_bitwise_identical() {
     let scene = cluster();

@@ -1,10 +1,12 @@
 //! The GPU engine: the time step of `shaders/step.wgsl` driven from the host, for the
-//! hysteretic/LSD models and the JKR family (JKR, Hertz: damping, friction, rolling
-//! resistance, reduced stiffness) with walls and gravity.
+//! hysteretic/LSD models and the JKR family (JKR, Hertz: damping including the Krijt and
+//! stress-dependent dissipations, friction, rolling resistance, reduced stiffness) with
+//! walls and gravity.
 //!
 //! The step's source is composed per scene ([`StepKind`]): the model's force law, the
 //! per-contact history layout its options need (JKR: just the touched flag; with friction
-//! also the tangential spring; with rolling resistance also ξ) and, only when some contact
+//! also the tangential spring; with rolling resistance also ξ; with the `krijt`/`stress`
+//! dissipations also the contact radius a and the Krijt snippet) and, only when some contact
 //! exerts tangential forces or torques, the angular state (ω with the moment of inertia,
 //! angular acceleration, predicted ω). What a scene does not need is neither declared nor
 //! allocated ([`GpuEngine::buffers`] lists what is). One scene runs one family: mixing
@@ -290,16 +292,12 @@ fn pair_table(models: &[ContactModel]) -> Result<(StepKind, Vec<u8>), PowderErro
                 .into(),
         ));
     }
-    if let Some(why) = jkr.iter().find_map(|p| p.gpu_unsupported()) {
-        return Err(PowderError::Run(why));
-    }
-    let kind = if jkr.iter().any(|p| p.rolling_hysteresis > 0.0) {
-        StepKind::JkrRolling
-    } else if jkr.iter().any(|p| p.friction > 0.0) {
-        StepKind::JkrFriction
-    } else {
-        StepKind::Jkr
-    };
+    // the history stores what some pair needs: the spring, ξ, the Krijt contact radius
+    let kind = StepKind::jkr(
+        jkr.iter().any(|p| p.friction > 0.0),
+        jkr.iter().any(|p| p.rolling_hysteresis > 0.0),
+        jkr.iter().any(|p| p.dissipation.krijt_law().is_some()),
+    );
     let rows: Vec<JkrPair> = jkr.iter().map(|p| JkrPair::new(p)).collect();
     Ok((kind, bytemuck::cast_slice(&rows).to_vec()))
 }
@@ -1103,7 +1101,8 @@ impl GpuEngine {
 
     /// Decodes one stored history element of this step variant (see
     /// `gpu::shaders::StepKind`): δmax only for the hysteretic model, the tangential
-    /// spring and ξ only where the layout stores them (JKR keeps no δmax on the device).
+    /// spring, ξ and the Krijt contact radius only where the layout stores them (JKR keeps
+    /// no δmax on the device).
     fn decode_history(&self, b: &[u8]) -> ContactHistory {
         let f: Vec<f32> = bytemuck::pod_collect_to_vec(b);
         let v = |o: usize| DVec3::new(f[o] as f64, f[o + 1] as f64, f[o + 2] as f64);
@@ -1122,10 +1121,22 @@ impl GpuEngine {
                 tangential: v(0),
                 ..Default::default()
             },
-            StepKind::JkrRolling => ContactHistory {
+            StepKind::JkrRolling | StepKind::JkrKrijtRolling => ContactHistory {
                 touched: f[3] != 0.0,
                 tangential: v(0),
                 rolling: v(4),
+                contact_radius: f[7] as f64,
+                ..Default::default()
+            },
+            StepKind::JkrKrijt => ContactHistory {
+                touched: f[0] != 0.0,
+                contact_radius: f[1] as f64,
+                ..Default::default()
+            },
+            StepKind::JkrKrijtFriction => ContactHistory {
+                touched: f[3] != 0.0,
+                tangential: v(0),
+                contact_radius: f[4] as f64,
                 ..Default::default()
             },
         }

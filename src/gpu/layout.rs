@@ -265,7 +265,8 @@ pub struct JkrPair {
     pub fc_unscaled_per_r: f32,
     /// Unscaled (9πγ/E*)^(1/3): the rolling model's a0 = this·R*^(2/3).
     pub a0_unscaled_coef: f32,
-    /// [`JKR_DISSIPATION_NONE`], [`JKR_DISSIPATION_TSUJI`] or [`JKR_DISSIPATION_POWER`].
+    /// [`JKR_DISSIPATION_NONE`], [`JKR_DISSIPATION_TSUJI`], [`JKR_DISSIPATION_POWER`],
+    /// [`JKR_DISSIPATION_KRIJT`] or [`JKR_DISSIPATION_STRESS`].
     pub dissipation: u32,
     /// Tsuji: −2√(5/6)·β(e) ≥ 0.
     pub tsuji: f32,
@@ -276,13 +277,23 @@ pub struct JkrPair {
     /// P(x_break) of [`potential_shape`](crate::model::jkr::potential_shape): the stored
     /// energy of a contact is Fc·δ0·(P(x) − P(x_break)) (energy ledger).
     pub p_break: f32,
-    pub _pad: u32,
+    /// Krijt and stress (`shaders/model_krijt.wgsl`): 2E*/ν² of the viscous force (eq. 12).
+    pub visc: f32,
+    /// T_vis (krijt) or C of T_vis,0 = C·R (stress, eq. 18).
+    pub tvis: f32,
+    /// 2E*·γ/σ0² of the crack speed (eq. B2), m; 0 for σ0 = 0 (no delay of a).
+    pub crack: f32,
+    /// B and ζ of eq. 17 (stress).
+    pub stress_b: f32,
+    pub stress_zeta: f32,
 }
 
 /// Dissipation kinds of [`JkrPair`], as in the WGSL.
 pub const JKR_DISSIPATION_NONE: u32 = 0;
 pub const JKR_DISSIPATION_TSUJI: u32 = 1;
 pub const JKR_DISSIPATION_POWER: u32 = 2;
+pub const JKR_DISSIPATION_KRIJT: u32 = 3;
+pub const JKR_DISSIPATION_STRESS: u32 = 4;
 
 impl JkrPair {
     pub fn new(p: &crate::model::JkrParams) -> Self {
@@ -326,10 +337,38 @@ impl JkrPair {
                 row.power_alpha = alpha as f32;
                 row.power_beta = beta as f32;
             }
-            // not ported yet: `pair_table` refuses them (JkrParams::gpu_unsupported)
-            Dissipation::Krijt { .. } | Dissipation::Stress { .. } => {}
+            Dissipation::Krijt { tvis, sigma0 } => {
+                row.dissipation = JKR_DISSIPATION_KRIJT;
+                row.tvis = tvis as f32;
+                row.set_krijt(p, sigma0);
+            }
+            Dissipation::Stress {
+                tvis0_per_radius,
+                b,
+                zeta,
+                sigma0,
+            } => {
+                row.dissipation = JKR_DISSIPATION_STRESS;
+                row.tvis = tvis0_per_radius as f32;
+                row.stress_b = b as f32;
+                row.stress_zeta = zeta as f32;
+                row.set_krijt(p, sigma0);
+            }
         }
         row
+    }
+
+    /// The material coefficients of the Krijt law (E* and γ after the stiffness scale, as
+    /// `JkrParams::krijt_material`): 2E*/ν² and 2E*γ/σ0² (capped at f32::MAX: a step of
+    /// the crack that long is no delay at all).
+    fn set_krijt(&mut self, p: &crate::model::JkrParams, sigma0: f64) {
+        let m = p.krijt_material();
+        self.visc = (2.0 * m.e_star / (m.poisson * m.poisson)) as f32;
+        self.crack = if sigma0 > 0.0 {
+            (2.0 * m.e_star * m.gamma / (sigma0 * sigma0)).min(f32::MAX as f64) as f32
+        } else {
+            0.0
+        };
     }
 }
 
@@ -709,6 +748,11 @@ mod tests {
             ("power_alpha", offset_of!(JkrPair, power_alpha)),
             ("power_beta", offset_of!(JkrPair, power_beta)),
             ("p_break", offset_of!(JkrPair, p_break)),
+            ("visc", offset_of!(JkrPair, visc)),
+            ("tvis", offset_of!(JkrPair, tvis)),
+            ("crack", offset_of!(JkrPair, crack)),
+            ("stress_b", offset_of!(JkrPair, stress_b)),
+            ("stress_zeta", offset_of!(JkrPair, stress_zeta)),
         ] {
             let m = members
                 .iter()
@@ -716,7 +760,7 @@ mod tests {
                 .unwrap_or_else(|| panic!("JkrPair.{field}"));
             assert_eq!(m.1 as usize, off, "JkrPair.{field}");
         }
-        assert_eq!(members.len(), 16, "JkrPair members: {members:?}");
+        assert_eq!(members.len(), 20, "JkrPair members: {members:?}");
         check(
             "Wall",
             size_of::<WallGpu>(),

@@ -26,6 +26,11 @@ pub const GRID: &str = include_str!("../../shaders/grid.wgsl");
 pub const MODEL_HYSTERETIC: &str = include_str!("../../shaders/model_hysteretic.wgsl");
 /// The JKR family (JKR, Hertz) in f32 (a snippet of the step; needs a history layout).
 pub const MODEL_JKR: &str = include_str!("../../shaders/model_jkr.wgsl");
+/// The Krijt contact-radius dynamics (the `krijt` and `stress` dissipations of the JKR
+/// family; a snippet of the step for scenes that use them, with a history that stores a).
+pub const MODEL_KRIJT: &str = include_str!("../../shaders/model_krijt.wgsl");
+/// The Krijt hooks as no-ops (a snippet of the JKR steps without a stored contact radius).
+pub const MODEL_KRIJT_OFF: &str = include_str!("../../shaders/model_krijt_off.wgsl");
 /// Angular velocity and torques (a snippet of the step for scenes that rotate).
 pub const ROTATION: &str = include_str!("../../shaders/rotation.wgsl");
 /// The rotation hooks as no-ops (a snippet of the step for scenes that do not rotate).
@@ -44,8 +49,20 @@ const JKR_TANGENTIAL: bool = false;
 const JKR_ROLLING: bool = false;
 alias Hist = f32;
 fn hist_zero() -> Hist { return 0.0; }
-fn jkr_unpack(h: Hist) -> JkrHistory { return JkrHistory(h != 0.0, vec3<f32>(0.0), vec3<f32>(0.0)); }
+fn jkr_unpack(h: Hist) -> JkrHistory { return JkrHistory(h != 0.0, vec3<f32>(0.0), vec3<f32>(0.0), 0.0); }
 fn jkr_pack(h: JkrHistory) -> Hist { return select(0.0, 1.0, h.touched); }
+";
+
+/// JKR history layout of the Krijt dissipations without friction or rolling: the touched
+/// flag (x) and the contact radius a (y) (8 bytes).
+pub const JKR_HISTORY_TOUCHED_RADIUS: &str = "\
+// JKR history layout: touched (x) and the Krijt contact radius (y); no friction, no rolling.
+const JKR_TANGENTIAL: bool = false;
+const JKR_ROLLING: bool = false;
+alias Hist = vec2<f32>;
+fn hist_zero() -> Hist { return vec2<f32>(0.0); }
+fn jkr_unpack(h: Hist) -> JkrHistory { return JkrHistory(h.x != 0.0, vec3<f32>(0.0), vec3<f32>(0.0), h.y); }
+fn jkr_pack(h: JkrHistory) -> Hist { return vec2<f32>(select(0.0, 1.0, h.touched), h.a); }
 ";
 
 /// JKR history layout with the tangential spring: xyz = spring, w = touched (16 bytes).
@@ -55,14 +72,38 @@ const JKR_TANGENTIAL: bool = true;
 const JKR_ROLLING: bool = false;
 alias Hist = vec4<f32>;
 fn hist_zero() -> Hist { return vec4<f32>(0.0); }
-fn jkr_unpack(h: Hist) -> JkrHistory { return JkrHistory(h.w != 0.0, h.xyz, vec3<f32>(0.0)); }
+fn jkr_unpack(h: Hist) -> JkrHistory { return JkrHistory(h.w != 0.0, h.xyz, vec3<f32>(0.0), 0.0); }
 fn jkr_pack(h: JkrHistory) -> Hist { return vec4<f32>(h.spring, select(0.0, 1.0, h.touched)); }
 ";
 
-/// JKR history layout with the tangential spring and the rolling displacement (32 bytes).
+/// JKR history layout of the Krijt dissipations with the tangential spring: spring, touched
+/// and the contact radius as five f32 (20 bytes; scalars, so no padding to 32).
+pub const JKR_HISTORY_TANGENTIAL_RADIUS: &str = "\
+// JKR history layout: tangential spring, touched and the Krijt contact radius; no rolling.
+const JKR_TANGENTIAL: bool = true;
+const JKR_ROLLING: bool = false;
+struct JkrStoredSpring {
+    sx: f32,
+    sy: f32,
+    sz: f32,
+    touched: f32,
+    a: f32,
+}
+alias Hist = JkrStoredSpring;
+fn hist_zero() -> Hist { return JkrStoredSpring(0.0, 0.0, 0.0, 0.0, 0.0); }
+fn jkr_unpack(h: Hist) -> JkrHistory {
+    return JkrHistory(h.touched != 0.0, vec3<f32>(h.sx, h.sy, h.sz), vec3<f32>(0.0), h.a);
+}
+fn jkr_pack(h: JkrHistory) -> Hist {
+    return JkrStoredSpring(h.spring.x, h.spring.y, h.spring.z, select(0.0, 1.0, h.touched), h.a);
+}
+";
+
+/// JKR history layout with the tangential spring and the rolling displacement (32 bytes);
+/// the Krijt contact radius fills the padding (xi.w; 0 without the Krijt dissipations).
 pub const JKR_HISTORY_ROLLING: &str = "\
 // JKR history layout: tangential spring (spring.xyz), touched (spring.w), rolling
-// displacement (xi.xyz).
+// displacement (xi.xyz), Krijt contact radius (xi.w).
 const JKR_TANGENTIAL: bool = true;
 const JKR_ROLLING: bool = true;
 struct JkrStored {
@@ -71,9 +112,9 @@ struct JkrStored {
 }
 alias Hist = JkrStored;
 fn hist_zero() -> Hist { return JkrStored(vec4<f32>(0.0), vec4<f32>(0.0)); }
-fn jkr_unpack(h: Hist) -> JkrHistory { return JkrHistory(h.spring.w != 0.0, h.spring.xyz, h.xi.xyz); }
+fn jkr_unpack(h: Hist) -> JkrHistory { return JkrHistory(h.spring.w != 0.0, h.spring.xyz, h.xi.xyz, h.xi.w); }
 fn jkr_pack(h: JkrHistory) -> Hist {
-    return JkrStored(vec4<f32>(h.spring, select(0.0, 1.0, h.touched)), vec4<f32>(h.xi, 0.0));
+    return JkrStored(vec4<f32>(h.spring, select(0.0, 1.0, h.touched)), vec4<f32>(h.xi, h.a));
 }
 ";
 
@@ -88,15 +129,39 @@ pub enum StepKind {
     JkrFriction,
     /// JKR/Hertz with rolling resistance (and friction): spring and ξ, rotation.
     JkrRolling,
+    /// [`Self::Jkr`] where some pair uses the `krijt`/`stress` dissipation: touched and the
+    /// contact radius a, and the Krijt snippet.
+    JkrKrijt,
+    /// [`Self::JkrFriction`] with the contact radius (`krijt`/`stress`).
+    JkrKrijtFriction,
+    /// [`Self::JkrRolling`] with the contact radius (`krijt`/`stress`; a fills ξ's padding).
+    JkrKrijtRolling,
 }
 
 impl StepKind {
-    pub const ALL: [StepKind; 4] = [
+    pub const ALL: [StepKind; 7] = [
         StepKind::Hysteretic,
         StepKind::Jkr,
         StepKind::JkrFriction,
         StepKind::JkrRolling,
+        StepKind::JkrKrijt,
+        StepKind::JkrKrijtFriction,
+        StepKind::JkrKrijtRolling,
     ];
+
+    /// The JKR step for a scene: with the tangential spring (`friction`), ξ (`rolling`,
+    /// implies the spring) and the Krijt contact radius (`krijt`) stored where some pair
+    /// needs them.
+    pub fn jkr(friction: bool, rolling: bool, krijt: bool) -> Self {
+        match (rolling, friction, krijt) {
+            (true, _, false) => Self::JkrRolling,
+            (true, _, true) => Self::JkrKrijtRolling,
+            (false, true, false) => Self::JkrFriction,
+            (false, true, true) => Self::JkrKrijtFriction,
+            (false, false, false) => Self::Jkr,
+            (false, false, true) => Self::JkrKrijt,
+        }
+    }
 
     /// The name of the variant without the energy ledger (with it: `_ledger` appended).
     pub fn name(self) -> &'static str {
@@ -105,12 +170,26 @@ impl StepKind {
             Self::Jkr => "step_jkr",
             Self::JkrFriction => "step_jkr_friction",
             Self::JkrRolling => "step_jkr_rolling",
+            Self::JkrKrijt => "step_jkr_krijt",
+            Self::JkrKrijtFriction => "step_jkr_krijt_friction",
+            Self::JkrKrijtRolling => "step_jkr_krijt_rolling",
         }
     }
 
     /// Whether particles carry angular velocity (the rotation snippet is composed in).
     pub fn rotation(self) -> bool {
-        matches!(self, Self::JkrFriction | Self::JkrRolling)
+        matches!(
+            self,
+            Self::JkrFriction | Self::JkrRolling | Self::JkrKrijtFriction | Self::JkrKrijtRolling
+        )
+    }
+
+    /// Whether the history stores the Krijt contact radius (model_krijt.wgsl is composed in).
+    pub fn krijt(self) -> bool {
+        matches!(
+            self,
+            Self::JkrKrijt | Self::JkrKrijtFriction | Self::JkrKrijtRolling
+        )
     }
 
     /// Bytes of one contact's stored history (`Hist`; checked against naga in
@@ -121,6 +200,9 @@ impl StepKind {
             Self::Jkr => 4,
             Self::JkrFriction => 16,
             Self::JkrRolling => 32,
+            Self::JkrKrijt => 8,
+            Self::JkrKrijtFriction => 20,
+            Self::JkrKrijtRolling => 32,
         }
     }
 
@@ -133,8 +215,8 @@ impl StepKind {
         }
     }
 
-    /// The composed module: common, model, history layout, rotation hooks, ledger hooks,
-    /// step.
+    /// The composed module: common, model (JKR: with the Krijt snippet or its no-op
+    /// hooks), history layout, rotation hooks, ledger hooks, step.
     pub fn variant(self, ledger: bool) -> ShaderVariant {
         let rotation = if self.rotation() {
             ROTATION
@@ -144,9 +226,17 @@ impl StepKind {
         let ledger_snippet = if ledger { LEDGER } else { LEDGER_OFF };
         let mut snippets: Vec<&str> = match self {
             Self::Hysteretic => vec![MODEL_HYSTERETIC, rotation],
-            Self::Jkr => vec![MODEL_JKR, JKR_HISTORY_TOUCHED, rotation],
-            Self::JkrFriction => vec![MODEL_JKR, JKR_HISTORY_TANGENTIAL, rotation],
-            Self::JkrRolling => vec![MODEL_JKR, JKR_HISTORY_ROLLING, rotation],
+            Self::Jkr => vec![MODEL_JKR, MODEL_KRIJT_OFF, JKR_HISTORY_TOUCHED, rotation],
+            Self::JkrFriction => vec![MODEL_JKR, MODEL_KRIJT_OFF, JKR_HISTORY_TANGENTIAL, rotation],
+            Self::JkrRolling => vec![MODEL_JKR, MODEL_KRIJT_OFF, JKR_HISTORY_ROLLING, rotation],
+            Self::JkrKrijt => vec![MODEL_JKR, MODEL_KRIJT, JKR_HISTORY_TOUCHED_RADIUS, rotation],
+            Self::JkrKrijtFriction => vec![
+                MODEL_JKR,
+                MODEL_KRIJT,
+                JKR_HISTORY_TANGENTIAL_RADIUS,
+                rotation,
+            ],
+            Self::JkrKrijtRolling => vec![MODEL_JKR, MODEL_KRIJT, JKR_HISTORY_ROLLING, rotation],
         };
         snippets.push(ledger_snippet);
         ShaderVariant {
@@ -317,6 +407,24 @@ mod tests {
             for name in ["a_omega", "a_alpha", "b_omega", "b_alpha", "wpred"] {
                 assert_eq!(declared(name), kind.rotation(), "{}: {name}", v.name);
             }
+            // the Krijt dynamics only where the history stores the contact radius
+            let has_fn = |name: &str| {
+                module
+                    .functions
+                    .iter()
+                    .any(|(_, f)| f.name.as_deref() == Some(name))
+            };
+            assert_eq!(
+                has_fn("krijt_advance"),
+                kind.krijt(),
+                "{}: krijt_advance",
+                v.name
+            );
+            assert!(
+                !kind.krijt() || v.source.contains("const KRIJT: bool = true;"),
+                "{}",
+                v.name
+            );
             // and the ledger's only where the run keeps one
             for name in [
                 "a_ledger",
@@ -360,6 +468,38 @@ mod tests {
         assert_eq!(
             literal("JKR_NEWTON_ITERATIONS") as usize,
             NEWTON_ITERATIONS_F32
+        );
+    }
+
+    /// The Krijt constants of model_krijt.wgsl are the f32 roundings of `model::krijt`'s and
+    /// `jkr::X_TOUCH`; the dissipation codes match `gpu::layout`'s.
+    #[test]
+    fn gpu_shaders_krijt_constants_match_the_rust_model() {
+        use crate::gpu::layout::{JKR_DISSIPATION_KRIJT, JKR_DISSIPATION_STRESS};
+        use crate::model::jkr::X_TOUCH;
+        use crate::model::krijt::{BETA_MAX, BETA_MIN};
+        let literal = |source: &str, name: &str| -> f64 {
+            let key = format!("const {name}: ");
+            let line = source
+                .lines()
+                .find(|l| l.starts_with(&key))
+                .unwrap_or_else(|| panic!("{name} not found"));
+            let value = line.split('=').nth(1).unwrap().trim().trim_end_matches(';');
+            value.trim_end_matches('u').parse().unwrap()
+        };
+        let f32_of = |name: &str| literal(MODEL_KRIJT, name) as f32;
+        assert_eq!(f32_of("KRIJT_BETA_MIN"), BETA_MIN as f32);
+        assert_eq!(f32_of("KRIJT_BETA_MAX"), BETA_MAX as f32);
+        assert_eq!(f32_of("KRIJT_X_TOUCH"), X_TOUCH as f32);
+        // 30 halvings take any bracket up to 2^6·x to one f32 ulp of x
+        assert!(literal(MODEL_KRIJT, "KRIJT_BISECTION_ITERATIONS") >= 24.0);
+        assert_eq!(
+            literal(MODEL_JKR, "JKR_DISSIPATION_KRIJT") as u32,
+            JKR_DISSIPATION_KRIJT
+        );
+        assert_eq!(
+            literal(MODEL_JKR, "JKR_DISSIPATION_STRESS") as u32,
+            JKR_DISSIPATION_STRESS
         );
     }
 

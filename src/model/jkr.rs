@@ -616,16 +616,6 @@ impl JkrParams {
         }
     }
 
-    /// Why the GPU backend cannot run this model yet, if it cannot.
-    pub fn gpu_unsupported(&self) -> Option<String> {
-        self.dissipation.krijt_law().map(|_| {
-            format!(
-                "dissipation = \"{}\" (Krijt contact-radius dynamics, paper 001) is not yet on the GPU; use --backend cpu",
-                self.dissipation.name()
-            )
-        })
-    }
-
     /// A bound on the viscous coefficient c = 2·T_vis·E*·a/ν² of the `krijt`/`stress`
     /// dissipations in a collision at impact speed `v` (a at the larger of δ0 and the
     /// Hertz δmax of paper 001 eq. 15, T_vis at that radius), kg/s; 0 otherwise.
@@ -1788,8 +1778,6 @@ mod tests {
             "{json}"
         );
         assert_eq!(serde_json::from_str::<JkrParams>(&json).unwrap(), s);
-        assert!(s.gpu_unsupported().unwrap().contains("not yet on the GPU"));
-        assert!(params().gpu_unsupported().is_none());
     }
 
     #[test]

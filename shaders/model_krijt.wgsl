@@ -1,0 +1,151 @@
+// model_krijt.wgsl — the Krijt viscoelastic JKR contact (paper 001 §II C, eqs. 10–12 and
+// appendix B) and the stress-dependent relaxation time (§V A, eqs. 17–18) in f32: the twin
+// of `src/model/krijt.rs` and of the `krijt`/`stress` branch of
+// `JkrParams::normal_force_step`. Composed after model_jkr.wgsl into the step variants whose
+// history stores the contact radius (`StepKind::JkrKrijt*`); elsewhere model_krijt_off.wgsl
+// supplies the same two hooks as no-ops.
+//
+// The contact radius a is per-contact state (`JkrHistory.a`, 0 = unset), advanced once per
+// evaluation by a backward-Euler step of the crack speed of eq. B2, solved by bisection
+// between the old radius and the JKR root (it never passes the equilibrium).
+//
+// f32 care: everything is evaluated in normalised form, x = a/a0 and d = delta/delta0
+// (a0³ = 9·pi·gamma·R*²/E*, delta0 = a0²/(3R*), Fc = 3·pi·gamma·R*), which keeps every
+// intermediate O(1) or O(Fc):
+//   G_eff/gamma = (3x² − d)²/(4x)                               (eq. B1)
+//   F_E         = 4E*a³/(3R*) − 2E*a(a²/R* − delta) = 2·Fc·x·(d − x²)   (eq. 11)
+//   U           = Fc·delta0·x·(9/5·x⁴ − 2x²·d + d² − 2x)        (eq. 7; = P(x) on the JKR curve)
+//   p_c/E*      = 2·a0/(pi·R*)·(x − 1/(3·sqrt(x)))               (eq. 9)
+//   v_c·dt/a0   = (2E*·gamma/sigma0²)/a0 · dt/T_vis               (eq. B2)
+
+const KRIJT: bool = true;
+
+// The crack speed of eq. B2 diverges below and above these G_eff/gamma (`krijt::BETA_MIN`,
+// `krijt::BETA_MAX`).
+const KRIJT_BETA_MIN: f32 = 0.02;
+const KRIJT_BETA_MAX: f32 = 50.0;
+// a/a0 at the first touch, a_JKR(0)/a0 = (2/3)^(2/3) (`jkr::X_TOUCH`).
+const KRIJT_X_TOUCH: f32 = 0.76314283;
+// Bisection steps of the backward-Euler solve at most (it stops once the bracket has no
+// f32 between its ends; 24–30 halve any bracket of a few a0 to an ulp).
+const KRIJT_BISECTION_ITERATIONS: i32 = 30;
+
+// The dimensionless crack speed f(beta) = sigma0²·T_vis·da/dt/(2E*·gamma) of eq. B2 for
+// KRIJT_BETA_MIN < beta < KRIJT_BETA_MAX (`krijt::crack_speed_shape`), clamped to ±1e30
+// where a logarithm rounds to 0 next to those ends.
+fn krijt_shape(beta: f32) -> f32 {
+    if (beta <= 0.29) {
+        return 0.15 / max(beta * log(0.98 / (1.0 - beta)), 1.5e-31);
+    }
+    if (beta < 1.0) {
+        let x = 1.0 / beta - 1.0;
+        if (x <= 0.0) {
+            return 0.0;
+        }
+        return (0.1035 * x + 0.3421) * pow(x, 1.1160);
+    }
+    if (beta == 1.0) {
+        return 0.0;
+    }
+    if (beta < 3.7) {
+        let x = beta - 1.0;
+        return -(0.2112 * x + 0.3939) * pow(x, 1.1403);
+    }
+    return -0.24 * beta / max(log(0.98 / (1.0 - 1.0 / beta)), 2.4e-31 * beta);
+}
+
+// The signed beta = sgn(a² − delta·R*)·G_eff/gamma for x = a/a0, d = delta/delta0
+// (`krijt::energy_release_ratio`).
+fn krijt_ratio(x: f32, d: f32) -> f32 {
+    let u = 3.0 * x * x - d;
+    let g = u * u / (4.0 * x);
+    return select(-g, g, u >= 0.0);
+}
+
+// The backward-Euler residual x − x_old − c·f(beta(x)); at the limiting crack speeds only
+// its sign matters (`krijt::advance_radius`).
+fn krijt_residual(x: f32, x_old: f32, d: f32, c: f32) -> f32 {
+    let beta = krijt_ratio(x, d);
+    if (beta <= KRIJT_BETA_MIN) {
+        return -1.0;
+    }
+    if (beta >= KRIJT_BETA_MAX) {
+        return 1.0;
+    }
+    return x - x_old - c * krijt_shape(beta);
+}
+
+// The root of the residual between x_old and the JKR root x_eq, by bisection (the
+// residual increases with x on the stable branch, so the root is unique and bracketed).
+fn krijt_advance(x_old: f32, x_eq: f32, d: f32, c: f32) -> f32 {
+    if (x_old == x_eq) {
+        return x_eq;
+    }
+    var lo = min(x_old, x_eq);
+    var hi = max(x_old, x_eq);
+    for (var i = 0; i < KRIJT_BISECTION_ITERATIONS; i++) {
+        let mid = 0.5 * (lo + hi);
+        if (mid <= lo || mid >= hi) {
+            break;
+        }
+        let r = krijt_residual(mid, x_old, d, c);
+        if (r == 0.0) {
+            return mid;
+        }
+        if (r < 0.0) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    return 0.5 * (lo + hi);
+}
+
+// T_vis at x = a/a0 (`KrijtLaw::relaxation_time_at`): constant, or
+// C·R·exp[(B·p_c/E*)^zeta] for p_c > 0 (C·R otherwise) with R = 2R* and p_c of eq. 9.
+fn krijt_tvis(p: JkrPair, x: f32, a0: f32, r: f32) -> f32 {
+    if (p.dissipation != JKR_DISSIPATION_STRESS) {
+        return p.tvis;
+    }
+    let t0 = p.tvis * (2.0 * r);
+    let pc = 2.0 * a0 / (JKR_PI * r) * (x - 1.0 / (3.0 * sqrt(x)));
+    let base = p.stress_b * pc;
+    if (base > 0.0) {
+        return t0 * exp(pow(base, p.stress_zeta));
+    }
+    return t0;
+}
+
+// The contact of a touched Krijt pair at overlap delta (`JkrParams::normal_force_step`):
+// a_old the stored radius (0 at the first touch: a_JKR(0)), x_eq the JKR root a(delta)/a0.
+// Returns (x = a/a0 after the step, the elastic force F_E, the stored energy from the JKR
+// break point Fc·delta0·(U(x, d) − P(x_break))).
+fn krijt_normal(p: JkrPair, k: Kin, a0: f32, d0: f32, fc: f32, x_eq: f32, a_old: f32) -> vec3<f32> {
+    let d = k.delta / d0;
+    var x_old = KRIJT_X_TOUCH;
+    if (a_old > 0.0) {
+        x_old = a_old / a0;
+    }
+    // T_vis at the start of the step drives the crack; v_c·dt/a0 = crack/a0·dt/T_vis,
+    // crack = 2E*·gamma/sigma0² (0: sigma0 = 0, a follows the JKR curve instantly)
+    let tvis = krijt_tvis(p, x_old, a0, k.r_eff);
+    var x = x_eq;
+    if (p.crack > 0.0 && tvis > 0.0) {
+        let c = (p.crack / a0) * (k.dt / tvis);
+        if (c <= 0.0) {
+            x = x_old;
+        } else if (c < 1e30) {
+            x = krijt_advance(x_old, x_eq, d, c);
+        }
+    }
+    let x2 = x * x;
+    let elastic = 2.0 * fc * x * (d - x2);
+    let u = x * (1.8 * x2 * x2 - 2.0 * x2 * d + d * d - 2.0 * x);
+    return vec3<f32>(x, elastic, fc * d0 * (u - p.p_break));
+}
+
+// The viscous force of eq. 12, (2·T_vis·E*/nu²)·a·delta_dot with T_vis at a, repulsive
+// positive (`krijt::viscous_force`); visc = 2E*/nu².
+fn krijt_viscous(p: JkrPair, a: f32, a0: f32, r: f32, delta_dot: f32) -> f32 {
+    return p.visc * krijt_tvis(p, a / a0, a0, r) * a * delta_dot;
+}
