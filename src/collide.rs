@@ -22,9 +22,13 @@ use std::f64::consts::PI;
 /// What to collide.
 #[derive(Clone, Debug)]
 pub struct CollideSpec {
+    /// Normal contact model of the pair (and of sphere–wall contact when `wall`).
     pub model: ContactModel,
+    /// Radius of sphere 1, m.
     pub radius1: f64,
+    /// Radius of sphere 2, m (ignored when `wall`).
     pub radius2: f64,
+    /// Material density of both spheres, kg/m³.
     pub density: f64,
     /// Relative approach speed from beyond the interaction range, m/s.
     pub velocity: f64,
@@ -59,7 +63,9 @@ impl CollideSpec {
 /// The energy ledger of the collision, J.
 #[derive(Clone, Copy, Debug, Serialize)]
 pub struct CollisionEnergy {
+    /// Kinetic energy of the pair at the start (translational + rotational), J.
     pub initial_kinetic: f64,
+    /// Kinetic energy of the pair at the end, J.
     pub final_kinetic: f64,
     /// From the energy ledger (both backends; the GPU keeps it on the device in f32).
     pub dissipated: Option<f64>,
@@ -85,14 +91,19 @@ pub struct JkrScales {
 /// One collision's outcome, measured and predicted.
 #[derive(Clone, Debug, Serialize)]
 pub struct CollideResult {
+    /// Model name: `"hysteretic"`, `"lsd"`, `"hertz"` (JKR without surface energy) or `"jkr"`.
     pub model: &'static str,
+    /// Relative approach speed, m/s (as given in [`CollideSpec::velocity`]).
     pub velocity: f64,
     /// Normal separation speed / normal approach speed; 0 when stuck.
     pub e: f64,
+    /// Whether the pair stuck (e = 0): the relative normal velocity turned back to approaching
+    /// inside the interaction range.
     pub stuck: bool,
     /// Closed-form restitution where one applies (no viscosity for the hysteretic model,
     /// no dissipation for JKR).
     pub e_analytic: Option<f64>,
+    /// Whether the closed form predicts sticking (where `e_analytic` applies).
     pub stuck_analytic: Option<bool>,
     /// Tangential contact-point speed after / before (oblique impacts with friction).
     pub e_tangential: Option<f64>,
@@ -100,6 +111,7 @@ pub struct CollideResult {
     pub omega_final: Option<f64>,
     /// Largest overlap reached, m.
     pub delta_max: f64,
+    /// Closed-form largest overlap, m (hysteretic without viscosity; undamped LSD and Hertz).
     pub delta_max_analytic: Option<f64>,
     /// Scaled impact velocity χ = δmax/δmax^p of the closed form (hysteretic).
     pub chi: Option<f64>,
@@ -107,16 +119,23 @@ pub struct CollideResult {
     pub v_p: Option<f64>,
     /// Overlap where the kinetic energy first vanished when stuck (δc), m.
     pub delta_c: Option<f64>,
+    /// Closed-form sticking overlap δc, m (paper 000 eqs. 36/38/39; hysteretic without fa).
     pub delta_c_analytic: Option<f64>,
     /// Time in mechanical contact, s (JKR: until pull-off); null when stuck.
     pub contact_duration: Option<f64>,
+    /// Closed-form contact duration, s (LSD, paper 000 eq. 3; Hertz).
     pub contact_duration_analytic: Option<f64>,
+    /// JKR scales of the pair (JKR with surface energy > 0).
     pub jkr: Option<JkrScales>,
+    /// Time step used, s.
     pub dt: f64,
+    /// Steps run.
     pub steps: u64,
+    /// The backend that ran the collision: `"cpu"` or `"gpu"`.
     pub backend: &'static str,
     /// The GPU adapter (GPU backend).
     pub adapter: Option<String>,
+    /// Energy ledger of the collision.
     pub energy: CollisionEnergy,
 }
 
@@ -303,8 +322,10 @@ pub struct TraceRow {
 }
 
 impl TraceRow {
+    /// Header line of [`TraceRow::csv`].
     pub const CSV_HEADER: &'static str = "t,delta,delta_dot,force,a,a_jkr";
 
+    /// The row as one CSV line (no newline), columns as in [`TraceRow::CSV_HEADER`].
     pub fn csv(&self) -> String {
         format!(
             "{:e},{:e},{:e},{:e},{:e},{:e}",

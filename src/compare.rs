@@ -57,21 +57,37 @@ impl Default for Tolerances {
 /// The deviations at one sample.
 #[derive(Clone, Debug, Serialize)]
 pub struct Sample {
+    /// Steps taken by both engines when sampled.
     pub step: u64,
+    /// Simulated time, s.
     pub time: f64,
+    /// Largest particle position difference |x_cpu − x_gpu| over the smallest radius.
     pub position: f64,
+    /// Largest velocity difference |v_cpu − v_gpu| over the largest CPU speed (plus 1e-12 m/s).
     pub velocity: f64,
+    /// CPU kinetic energy (translational + rotational), J.
     pub kinetic_cpu: f64,
+    /// GPU kinetic energy (translational + rotational), J.
     pub kinetic_gpu: f64,
+    /// |kinetic_cpu − kinetic_gpu| over the larger of the two (at least 1e-30 J).
     pub kinetic: f64,
+    /// CPU mechanical contacts (δ > 0), particle–particle plus particle–wall.
     pub contacts_cpu: usize,
+    /// GPU mechanical contacts (δ > 0), particle–particle plus particle–wall.
     pub contacts_gpu: usize,
+    /// |contacts_cpu − contacts_gpu| over contacts_cpu (at least 1).
     pub contacts: f64,
+    /// Largest overlap on the CPU, m.
     pub max_overlap_cpu: f64,
+    /// Largest overlap on the GPU, m.
     pub max_overlap_gpu: f64,
+    /// Energy stored in contacts on the CPU (elastic plus adhesion potential), J.
     pub elastic_cpu: f64,
+    /// Energy stored in contacts on the GPU (elastic plus adhesion potential), J.
     pub elastic_gpu: f64,
+    /// Energy dissipated so far on the CPU, J.
     pub dissipated_cpu: f64,
+    /// Energy dissipated so far on the GPU, J.
     pub dissipated_gpu: f64,
     /// max(|Δ stored|, |Δ dissipated|) over the energy in play.
     pub energy: f64,
@@ -90,13 +106,21 @@ pub struct Sample {
 /// The whole comparison.
 #[derive(Clone, Debug, Serialize)]
 pub struct Comparison {
+    /// Name of the scene compared.
     pub scene: String,
+    /// Name of the GPU adapter that ran the GPU side.
     pub adapter: String,
+    /// Number of particles.
     pub particles: usize,
+    /// Time step shared by both engines, s.
     pub dt: f64,
+    /// Steps run in all.
     pub steps: u64,
+    /// The thresholds each sample was checked against.
     pub tolerances: Tolerances,
+    /// One sample every `every` steps (and at the end).
     pub samples: Vec<Sample>,
+    /// True when no sample exceeds a threshold.
     pub passed: bool,
 }
 

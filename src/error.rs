@@ -14,6 +14,7 @@ pub struct ParamError {
 }
 
 impl ParamError {
+    /// A parameter error for `param` with the rule it breaks.
     pub fn new(param: &'static str, message: impl Into<String>) -> Self {
         Self {
             param,
@@ -25,6 +26,7 @@ impl ParamError {
 /// Every error the library hands back.
 #[derive(Debug, Error)]
 pub enum PowderError {
+    /// A contact-model parameter that breaks a rule.
     #[error(transparent)]
     Param(#[from] ParamError),
     /// A scene file that cannot be read, parsed or validated.
@@ -33,15 +35,19 @@ pub enum PowderError {
     /// A run that cannot go on (bad state detected while stepping).
     #[error("{0}")]
     Run(String),
+    /// An I/O failure, with what was being read or written.
     #[error("{context}: {source}")]
     Io {
+        /// What was being done, e.g. the file path and operation.
         context: String,
+        /// The underlying I/O error.
         #[source]
         source: std::io::Error,
     },
 }
 
 impl PowderError {
+    /// A [`PowderError::Io`] with `context` describing what was being done.
     pub fn io(context: impl Into<String>, source: std::io::Error) -> Self {
         Self::Io {
             context: context.into(),
@@ -50,6 +56,7 @@ impl PowderError {
     }
 }
 
+/// The library's result type, [`PowderError`] by default.
 pub type Result<T, E = PowderError> = std::result::Result<T, E>;
 
 /// Checks that a value is finite, naming the parameter otherwise.

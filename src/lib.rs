@@ -7,6 +7,8 @@
 //! * [`output`] — plots and atomically written files;
 //! * [`mod@bench`] and [`accuracy`] — throughput against N, and error against run time.
 
+#![warn(missing_docs)]
+
 pub mod accuracy;
 pub mod bench;
 pub mod checkpoint;

@@ -18,34 +18,51 @@ use std::sync::Arc;
 /// The state of a run at one output instant.
 #[derive(Clone, Copy, Debug, Serialize)]
 pub struct Snapshot {
+    /// Steps taken.
     pub step: u64,
+    /// Simulated time, s.
     pub time: f64,
+    /// Energy ledger, J.
     pub energies: Energies,
+    /// Contact statistics.
     pub contacts: ContactStats,
 }
 
 /// What `powder run` reports at the end.
 #[derive(Clone, Debug, Serialize)]
 pub struct RunSummary {
+    /// Scene name.
     pub scene: String,
+    /// `"cpu"` or `"gpu"`.
     pub backend: &'static str,
     /// The GPU adapter (GPU backend).
     pub adapter: Option<String>,
+    /// Number of particles.
     pub particles: usize,
+    /// Time step, s.
     pub dt: f64,
+    /// The rule dt was checked against (the binding limit, in words).
     pub dt_rule: String,
+    /// Steps taken at the end, in all (a resumed run includes the steps before the checkpoint).
     pub steps: u64,
+    /// Simulated time at the end, s.
     pub time: f64,
+    /// Wall-clock time of this run, s.
     pub wall_seconds: f64,
+    /// Particles × steps of this run over `wall_seconds`, 1/s.
     pub particle_steps_per_second: f64,
+    /// State at the start of this run (the checkpoint's state on resume).
     pub initial: Snapshot,
+    /// State at the end.
     pub last: Snapshot,
     /// |E_total(end) − E_total(start)| relative to the largest of the kinetic, stored and
     /// gravitational energy changes seen (0 when nothing moved).
     pub energy_balance_error: f64,
+    /// Particles whose centre is outside the domain box at the end.
     pub outside_domain: usize,
     /// Particle volume over the domain box, and over the box enclosing the particles.
     pub solid_fraction_domain: f64,
+    /// Particle volume over the box enclosing the particles (centres ± radii).
     pub solid_fraction_bounding_box: f64,
     /// Force on each wall at the end, N.
     pub wall_forces: Vec<[f64; 3]>,
@@ -53,6 +70,7 @@ pub struct RunSummary {
     pub resumed_from: Option<u64>,
     /// Stopped early by an interrupt (Ctrl-C) after writing a last checkpoint.
     pub interrupted: bool,
+    /// The output directory, if outputs were written.
     pub out_dir: Option<String>,
     /// Backend remarks (GPU: neighbour-list rebuilds, contacts that left the lists).
     pub notes: Vec<String>,

@@ -170,7 +170,9 @@ pub const MAX_BLOCK_PARTICLES: u64 = 100_000_000;
 /// The box the particles live in, m.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Domain {
+    /// Lower corner (x, y, z), m.
     pub min: [f64; 3],
+    /// Upper corner (x, y, z), m.
     pub max: [f64; 3],
     /// Periodic axes: a particle leaving through one face enters through the opposite one,
     /// and pairs interact across the faces (minimum image).
@@ -197,16 +199,21 @@ pub enum DtSetting {
 /// A named material: density and its own contact model.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
+    /// Name used in `[[interaction]]` and particle blocks.
     pub name: String,
     /// kg/m^3.
     pub density: f64,
+    /// Contact model between two particles of this material (also between a wall of this
+    /// material and such a particle), unless an [`Interaction`] overrides it.
     pub model: ContactModel,
 }
 
 /// A contact model for a pair of materials (indices into [`Scene::materials`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Interaction {
+    /// The two material indices (either order).
     pub materials: [usize; 2],
+    /// Contact model of the pair, overriding the materials' own.
     pub model: ContactModel,
 }
 
@@ -223,8 +230,11 @@ pub enum WallMotion {
     /// clamp(gain·(force − F), ±max_speed) along its normal, F being the normal force the
     /// particles exerted on it the step before; it holds `force` (N).
     Servo {
+        /// Target normal force on the wall, N.
         force: f64,
+        /// Gain, m/s per N of force error.
         gain: f64,
+        /// Largest wall speed, m/s.
         max_speed: f64,
     },
 }
@@ -252,6 +262,7 @@ impl WallMotion {
         }
     }
 
+    /// Whether the wall is not fixed.
     pub fn moves(&self) -> bool {
         !matches!(self, WallMotion::Fixed)
     }
@@ -288,9 +299,11 @@ pub struct ParticleInit {
 pub struct Scene {
     /// The file stem, or "default".
     pub name: String,
+    /// The domain box.
     pub domain: Domain,
     /// m/s^2.
     pub gravity: [f64; 3],
+    /// How the time step is chosen.
     pub dt: DtSetting,
     /// Accept a dt above the stability limit.
     pub force_dt: bool,
@@ -303,8 +316,11 @@ pub struct Scene {
     pub impact_velocity: f64,
     /// Steps between checkpoints of `powder run` (default 10 × output_every).
     pub checkpoint_every: u64,
+    /// Materials, by index.
     pub materials: Vec<Material>,
+    /// Pair models; they take precedence over the materials' own models.
     pub interactions: Vec<Interaction>,
+    /// Plane walls.
     pub walls: Vec<Wall>,
     /// Fully expanded, in id order.
     pub particles: Vec<ParticleInit>,

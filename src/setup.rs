@@ -9,6 +9,7 @@ use crate::scene::{DtSetting, Scene};
 /// A scene resolved for stepping.
 #[derive(Clone, Debug)]
 pub struct Resolved {
+    /// Number of materials.
     pub n_materials: usize,
     /// Pair models, n_materials × n_materials (row = first particle's material).
     pub models: Vec<ContactModel>,
@@ -18,6 +19,8 @@ pub struct Resolved {
     pub mass: Vec<f64>,
     /// The time step used and the rule it was checked against.
     pub dt: f64,
+    /// The most restrictive time-step rule over all material pairs, walls and the Rayleigh
+    /// guard (default, largest accepted dt, reason).
     pub time_step: TimeStep,
     /// Largest radius, m.
     pub r_max: f64,
@@ -29,6 +32,8 @@ pub struct Resolved {
 }
 
 impl Resolved {
+    /// Resolves `scene`: pair and wall models, masses, the time step (checked against its
+    /// rule unless `force_dt`), the largest radius and reach.
     pub fn new(scene: &Scene) -> Result<Self, PowderError> {
         let n_materials = scene.materials.len();
         let mut models = Vec::with_capacity(n_materials * n_materials);

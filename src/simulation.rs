@@ -13,11 +13,15 @@ use std::path::Path;
 /// The state of a simulation at one instant, read back in the scene's particle order.
 #[derive(Clone, Debug)]
 pub struct Observation {
+    /// Particle centres, m.
     pub positions: Vec<DVec3>,
+    /// Particle velocities, m/s.
     pub velocities: Vec<DVec3>,
     /// Empty when the particles do not rotate.
     pub angular_velocities: Vec<DVec3>,
+    /// Energy ledger, J.
     pub energies: Energies,
+    /// Contact statistics.
     pub contacts: ContactStats,
     /// Force of the particles on each wall, N (GPU: the normal part only).
     pub wall_forces: Vec<DVec3>,
@@ -28,6 +32,7 @@ pub struct Observation {
 /// A deepest overlap the run monitor found: the ratio over a12 and who it involves.
 #[derive(Clone, Debug)]
 pub struct PeakOverlap {
+    /// Largest overlap δ over the pair's a12.
     pub ratio: f64,
     /// "particle 3 overlaps particle 7", or what the backend knows.
     pub who: String,
@@ -41,19 +46,27 @@ pub trait Simulation {
     fn backend(&self) -> &'static str;
     /// The GPU adapter, if any.
     fn adapter(&self) -> Option<String>;
+    /// Steps taken.
     fn steps(&self) -> u64;
+    /// Simulated time, s.
     fn time(&self) -> f64;
+    /// Time step, s.
     fn dt(&self) -> f64;
+    /// Number of particles.
     fn len(&self) -> usize;
+    /// Whether there are no particles.
     fn is_empty(&self) -> bool {
         self.len() == 0
     }
+    /// Particle radii in scene order, m.
     fn radii(&self) -> &[f64];
     /// Advances `n` steps.
     fn run_steps(&mut self, n: u64) -> Result<(), PowderError>;
     /// Reads the state, energies, contact statistics and wall forces.
     fn observe(&self) -> Result<Observation, PowderError>;
+    /// Copies the evolving state (for the run monitor to go back to).
     fn save(&self) -> Result<Self::Saved, PowderError>;
+    /// Returns to a state from [`Self::save`].
     fn restore(&mut self, saved: Self::Saved) -> Result<(), PowderError>;
     /// Writes a checkpoint that resumes bitwise on this backend.
     fn write_checkpoint(&self, path: &Path, scene: &Scene) -> Result<(), PowderError>;

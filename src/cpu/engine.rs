@@ -72,6 +72,7 @@ struct WallPlane {
 /// Energies of the whole system, J.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct Energies {
+    /// Translational plus rotational kinetic energy, J.
     pub kinetic: f64,
     /// Stored in contacts (recoverable elastic energy plus the adhesion potential).
     pub elastic: f64,
@@ -107,13 +108,17 @@ pub struct ContactStats {
     pub max_overlap: f64,
     /// Largest overlap over the pair's reduced radius a12.
     pub max_overlap_ratio: f64,
+    /// Mean overlap over a12 of the mechanical contacts (walls included; a12 = 2r for a wall);
+    /// 0 without contacts.
     pub mean_overlap_ratio: f64,
 }
 
 /// Everything that evolves in a CPU run: what a checkpoint stores to resume bitwise.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct CpuState {
+    /// Simulated time, s.
     pub time: f64,
+    /// Steps taken.
     pub steps: u64,
     dt: f64,
     pos: Vec<DVec3>,
@@ -134,7 +139,9 @@ pub struct CpuState {
 
 /// The CPU reference simulation.
 pub struct CpuEngine {
+    /// Simulated time, s.
     pub time: f64,
+    /// Steps taken.
     pub steps: u64,
     dt: f64,
     time_step: TimeStep,
@@ -184,7 +191,9 @@ pub fn minimum_image(mut d: DVec3, periodic: [bool; 3], domain: (DVec3, DVec3)) 
 /// The other side of a contact.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Partner {
+    /// Another particle, by index.
     Particle(usize),
+    /// A wall, by index into the scene's walls.
     Wall(usize),
 }
 
@@ -290,6 +299,7 @@ impl CpuEngine {
         Ok(engine)
     }
 
+    /// The time step, s.
     pub fn dt(&self) -> f64 {
         self.dt
     }
@@ -386,18 +396,22 @@ impl CpuEngine {
         &self.time_step
     }
 
+    /// Number of particles.
     pub fn len(&self) -> usize {
         self.pos.len()
     }
 
+    /// Whether the scene has no particles.
     pub fn is_empty(&self) -> bool {
         self.pos.is_empty()
     }
 
+    /// Particle centres, m.
     pub fn positions(&self) -> &[DVec3] {
         &self.pos
     }
 
+    /// Particle velocities, m/s.
     pub fn velocities(&self) -> &[DVec3] {
         &self.vel
     }
@@ -412,10 +426,12 @@ impl CpuEngine {
         !self.omega.is_empty()
     }
 
+    /// Particle radii, m.
     pub fn radii(&self) -> &[f64] {
         &self.radius
     }
 
+    /// Particle masses, kg.
     pub fn masses(&self) -> &[f64] {
         &self.mass
     }

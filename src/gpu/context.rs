@@ -35,21 +35,32 @@ pub const INSTALL_HINT: &str = "on Debian/Ubuntu install the software Vulkan dri
 
 /// An open wgpu device, its queue, and the adapter it came from.
 pub struct GpuContext {
+    /// The logical device, created with the adapter's own limits.
     pub device: wgpu::Device,
+    /// The device's command queue.
     pub queue: wgpu::Queue,
+    /// The adapter the device was opened on.
     pub adapter: wgpu::Adapter,
+    /// What the adapter is and offers (for `powder info` and reports).
     pub summary: AdapterSummary,
 }
 
 /// The limits the GPU engine cares about (a subset of [`wgpu::Limits`]).
 #[derive(Clone, Debug, PartialEq, Eq, Serialize)]
 pub struct LimitsSummary {
+    /// Largest storage-buffer binding, bytes.
     pub max_storage_buffer_binding_size: u64,
+    /// Largest buffer, bytes.
     pub max_buffer_size: u64,
+    /// Largest workgroup size along x, invocations.
     pub max_compute_workgroup_size_x: u32,
+    /// Most invocations in one workgroup.
     pub max_compute_invocations_per_workgroup: u32,
+    /// Most workgroups along one dispatch dimension.
     pub max_compute_workgroups_per_dimension: u32,
+    /// Most storage buffers one shader stage may bind.
     pub max_storage_buffers_per_shader_stage: u32,
+    /// Most bind groups one pipeline may use.
     pub max_bind_groups: u32,
 }
 
@@ -70,19 +81,24 @@ impl From<&wgpu::Limits> for LimitsSummary {
 /// What an adapter is and offers, for people (`Display`) and scripts (`Serialize`).
 #[derive(Clone, Debug, PartialEq, Eq, Serialize)]
 pub struct AdapterSummary {
+    /// Adapter name as the driver reports it (e.g. `llvmpipe (LLVM 15.0.6, 256 bits)`).
     pub name: String,
     /// `vulkan`, `metal`, `dx12` or `gl`.
     pub backend: String,
     /// `DiscreteGpu`, `IntegratedGpu`, `VirtualGpu`, `Cpu` or `Other`.
     pub device_type: String,
+    /// Driver name (may be empty).
     pub driver: String,
+    /// Driver version and details (may be empty).
     pub driver_info: String,
     /// Optional wgpu features the adapter offers (none of them is requested).
     pub features: Vec<String>,
+    /// The limits the GPU engine cares about.
     pub limits: LimitsSummary,
 }
 
 impl AdapterSummary {
+    /// Summarises `adapter`: its info, optional features and limits.
     pub fn of(adapter: &wgpu::Adapter) -> Self {
         let info = adapter.get_info();
         Self {

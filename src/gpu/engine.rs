@@ -168,7 +168,9 @@ struct Bound {
 /// A snapshot read back from the device, in the scene's particle order.
 #[derive(Clone, Debug)]
 pub struct GpuState {
+    /// Particle centres, m (f32 on the device, widened to f64).
     pub positions: Vec<DVec3>,
+    /// Particle velocities, m/s (f32 on the device, widened to f64).
     pub velocities: Vec<DVec3>,
     /// Angular velocities; empty when the scene does not rotate (as
     /// `CpuEngine::angular_velocities`).
@@ -196,7 +198,9 @@ impl Default for GpuOptions {
 /// The GPU simulation of one scene.
 pub struct GpuEngine {
     ctx: GpuContext,
+    /// Simulated time, s (kept in f64 on the host).
     pub time: f64,
+    /// Steps taken.
     pub steps: u64,
     dt: f64,
     n: u32,
@@ -254,7 +258,9 @@ pub struct GpuEngine {
 /// per-particle ledger.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct GpuSavedState {
+    /// Simulated time, s.
     pub time: f64,
+    /// Steps taken.
     pub steps: u64,
     dropped: u64,
     /// The adapter it ran on (a resume elsewhere continues, but not bitwise).
@@ -619,14 +625,17 @@ impl GpuEngine {
         Ok(engine)
     }
 
+    /// The time step, s.
     pub fn dt(&self) -> f64 {
         self.dt
     }
 
+    /// Number of particles.
     pub fn len(&self) -> usize {
         self.n as usize
     }
 
+    /// Whether the scene has no particles.
     pub fn is_empty(&self) -> bool {
         self.n == 0
     }
@@ -636,14 +645,17 @@ impl GpuEngine {
         self.cap
     }
 
+    /// Name of the adapter the engine runs on.
     pub fn adapter(&self) -> &str {
         &self.ctx.summary.name
     }
 
+    /// Particle radii in the scene's order, m (f64, as given).
     pub fn radii(&self) -> &[f64] {
         &self.radius
     }
 
+    /// Particle masses in the scene's order, kg (f64).
     pub fn masses(&self) -> &[f64] {
         &self.mass
     }

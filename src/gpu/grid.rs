@@ -163,6 +163,7 @@ impl ExclusiveScan {
         self.n
     }
 
+    /// Whether there is nothing to scan.
     pub fn is_empty(&self) -> bool {
         self.n == 0
     }
@@ -403,18 +404,22 @@ impl GridSort {
         })
     }
 
+    /// Particles the sort was built for.
     pub fn n_particles(&self) -> u32 {
         self.n_particles
     }
 
+    /// Cells per axis.
     pub fn dims(&self) -> [u32; 3] {
         self.dims
     }
 
+    /// Total cells, `dims[0] * dims[1] * dims[2]`.
     pub fn n_cells(&self) -> u32 {
         self.n_cells
     }
 
+    /// Cell width per axis, m (f32, as the kernels see it).
     pub fn cell_width(&self) -> [f32; 3] {
         self.cell_width
     }

@@ -16,18 +16,24 @@ use std::sync::mpsc;
 /// One compute entry point, ready to bind and dispatch.
 #[derive(Clone, Debug)]
 pub struct Kernel {
+    /// Entry-point name in the WGSL module.
     pub name: String,
+    /// The compiled compute pipeline.
     pub pipeline: wgpu::ComputePipeline,
+    /// Bind group 0's layout, derived by wgpu from the globals the entry point uses.
     pub layout: wgpu::BindGroupLayout,
     /// (global variable name, binding) of every group-0 global the entry point uses.
     pub bindings: Vec<(String, u32)>,
+    /// `@workgroup_size` of the entry point (x, y, z).
     pub workgroup_size: [u32; 3],
 }
 
 /// The kernels of one shader variant, by entry-point name.
 #[derive(Clone, Debug)]
 pub struct Program {
+    /// Name of the shader variant the kernels come from.
     pub name: String,
+    /// One kernel per compute entry point, by name.
     pub kernels: BTreeMap<String, Kernel>,
 }
 

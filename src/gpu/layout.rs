@@ -48,6 +48,7 @@ pub struct CellOffset(pub [f32; 4]);
 pub struct GridParams {
     /// Cells per axis.
     pub dims: [u32; 3],
+    /// Particles in the run.
     pub n_particles: u32,
     /// Cell width per axis (equal unless periodic axes fix it to the period over the
     /// cell count).
@@ -64,6 +65,7 @@ pub struct ScanParams {
     pub n: u32,
     /// Workgroups doing real work: `ceil(n / SCAN_BLOCK)`.
     pub n_blocks: u32,
+    /// Padding (size a multiple of 16 bytes); always 0.
     pub _pad: [u32; 2],
 }
 
@@ -131,11 +133,15 @@ pub fn decode3(cell: [i32; 4], offset: [f32; 4], origin: DVec3, h: DVec3) -> DVe
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct PackedPosition {
+    /// Integer cell; w = material index.
     pub cell: CellCoord,
+    /// Offset inside the cell, m; w = radius, m.
     pub offset: CellOffset,
 }
 
 impl PackedPosition {
+    /// Encodes position `p` (m) on the grid at `origin` with cell width `h` (see [`encode`]),
+    /// with `material` in cell.w and `radius` (m, rounded to f32) in offset.w.
     pub fn new(p: DVec3, origin: DVec3, h: f64, material: u32, radius: f64) -> Self {
         let (mut cell, mut offset) = encode(p, origin, h);
         cell[3] = material as i32;
@@ -146,14 +152,17 @@ impl PackedPosition {
         }
     }
 
+    /// The absolute position, m, on the grid at `origin` with cell width `h` (see [`decode`]).
     pub fn position(&self, origin: DVec3, h: f64) -> DVec3 {
         decode(self.cell.0, self.offset.0, origin, h)
     }
 
+    /// The material index (cell.w).
     pub fn material(&self) -> u32 {
         self.cell.0[3] as u32
     }
 
+    /// The radius, m (offset.w).
     pub fn radius(&self) -> f32 {
         self.offset.0[3]
     }
@@ -181,26 +190,37 @@ pub fn separation_f32(
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct HystereticPair {
+    /// Initial (plastic) loading stiffness k1, N/m (paper 000 eq. 5).
     pub k1: f32,
+    /// Largest (limit-branch) un-/re-loading stiffness kp, N/m (paper 000 eqs. 9–11).
     pub kp: f32,
+    /// Slope of the irreversible tensile (adhesive) branch kc, N/m (paper 000 eq. 5).
     pub kc: f32,
     /// kp/(kp − k1)·φf (a huge finite number when kp = k1: WGSL may assume no infinities).
     pub dmaxp_per_a12: f32,
+    /// Plasticity depth φf: δ0 on the limit branch over a12 (paper 000 eqs. 10–11).
     pub phi_f: f32,
+    /// Non-contact adhesion force fa, N (paper 000 eq. 14).
     pub fa: f32,
     /// Non-contact stiffness; 0 encodes zero range (kca = ∞).
     pub kca: f32,
+    /// Viscous damping coefficient γ0, kg/s (paper 000 eq. 2).
     pub gamma0: f32,
+    /// [`HYST_JUMP_IN`], [`HYST_SQRT_RULE`] and [`HYST_LSD`], or-ed.
     pub flags: u32,
+    /// Padding (size a multiple of 16 bytes); always 0.
     pub _pad: [u32; 3],
 }
 
 /// Flags of [`HystereticPair`], as in the WGSL.
 pub const HYST_JUMP_IN: u32 = 1;
+/// The k2 rule is the √ interpolation (paper 000 appendix D) instead of the linear eq. 9.
 pub const HYST_SQRT_RULE: u32 = 2;
+/// The row is a linear spring-dashpot (LSD): f = k·δ + γ0·δ̇ with k = k1 = kp.
 pub const HYST_LSD: u32 = 4;
 
 impl HystereticPair {
+    /// The row of a hysteretic pair, rounded to f32 (kca = ∞ encoded as 0).
     pub fn hysteretic(p: &crate::model::HystereticParams) -> Self {
         use crate::model::{AdhesionMode, K2Rule};
         let dmaxp = if p.kp > p.k1 {
@@ -229,6 +249,7 @@ impl HystereticPair {
         }
     }
 
+    /// The row of an LSD pair: k1 = kp = k, the [`HYST_LSD`] flag.
     pub fn lsd(p: &crate::model::LsdParams) -> Self {
         Self {
             k1: p.k as f32,
@@ -258,6 +279,7 @@ pub struct JkrPair {
     pub a0_coef: f32,
     /// δ/δ0 at which a touching contact breaks ([`Pulloff`](crate::model::Pulloff)).
     pub break_ratio: f32,
+    /// Sliding friction coefficient μs; 0 = no tangential force.
     pub friction: f32,
     /// Δγ/γ of the rolling resistance; 0 = none.
     pub rolling_hysteresis: f32,
@@ -272,7 +294,9 @@ pub struct JkrPair {
     pub tsuji: f32,
     /// Power law: D, α, β.
     pub power_d: f32,
+    /// Power law: exponent α of |v| (paper 001 eqs. 19–20).
     pub power_alpha: f32,
+    /// Power law: exponent β of the contact radius a (paper 001 eqs. 19–20).
     pub power_beta: f32,
     /// P(x_break) of [`potential_shape`](crate::model::jkr::potential_shape): the stored
     /// energy of a contact is Fc·δ0·(P(x) − P(x_break)) (energy ledger).
@@ -283,19 +307,28 @@ pub struct JkrPair {
     pub tvis: f32,
     /// 2E*·γ/σ0² of the crack speed (eq. B2), m; 0 for σ0 = 0 (no delay of a).
     pub crack: f32,
-    /// B and ζ of eq. 17 (stress).
+    /// B of eq. 17 (stress).
     pub stress_b: f32,
+    /// ζ of eq. 17 (stress).
     pub stress_zeta: f32,
 }
 
 /// Dissipation kinds of [`JkrPair`], as in the WGSL.
 pub const JKR_DISSIPATION_NONE: u32 = 0;
+/// Tsuji-type viscous damping from a restitution coefficient (paper 002 eqs. 11–13).
 pub const JKR_DISSIPATION_TSUJI: u32 = 1;
+/// Power-law dissipation F = sgn(v)·D·E*·|v|^α·a^β (paper 001 eqs. 19–20).
 pub const JKR_DISSIPATION_POWER: u32 = 2;
+/// Krijt viscoelastic dissipation with a delayed contact radius, constant T_vis (paper 001
+/// eqs. 10–12, B1–B2).
 pub const JKR_DISSIPATION_KRIJT: u32 = 3;
+/// Krijt dissipation with the stress-dependent T_vis of paper 001 eqs. 17–18.
 pub const JKR_DISSIPATION_STRESS: u32 = 4;
 
 impl JkrPair {
+    /// The row of a JKR/Hertz pair, derived in f64 and rounded once to f32. Krijt and
+    /// stress-dependent dissipation are not ported and leave `dissipation` at
+    /// [`JKR_DISSIPATION_NONE`].
     pub fn new(p: &crate::model::JkrParams) -> Self {
         use crate::model::jkr::tsuji_beta;
         use crate::model::Dissipation;
@@ -376,12 +409,18 @@ impl JkrPair {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct StepParams {
+    /// Time step, s.
     pub dt: f32,
+    /// Neighbour-list slots per particle.
     pub max_neighbours: u32,
+    /// Materials in the pair-model table (n_materials × n_materials rows).
     pub n_materials: u32,
+    /// Walls in the wall buffer.
     pub n_walls: u32,
     /// At offset 16, not 0: see the note on the WGSL struct (a lavapipe slowdown and leak).
     pub gravity: [f32; 3],
+    /// Largest distance beyond touching at which any pair interacts (non-contact range or
+    /// JKR neck), m; pairs farther apart than r_i + r_j + reach exert no force.
     pub reach: f32,
     /// The domain box's extent in cells (the run monitor's escape check).
     pub extent_cells: [f32; 3],
@@ -389,6 +428,7 @@ pub struct StepParams {
     pub servo_walls: u32,
     /// 1 on periodic axes.
     pub periodic: [u32; 3],
+    /// Padding (size a multiple of 16 bytes); always 0.
     pub _pad: u32,
 }
 
@@ -397,8 +437,11 @@ pub struct StepParams {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct WallGpu {
+    /// A point of the plane: integer cell (xyz), w unused.
     pub cell: [i32; 4],
+    /// A point of the plane: offset inside the cell (xyz), m; w unused.
     pub offset: [f32; 4],
+    /// Unit normal pointing into the domain (xyz); w unused.
     pub normal: [f32; 4],
     /// Velocity over the current step (xyz).
     pub velocity: [f32; 4],
@@ -409,10 +452,14 @@ pub struct WallGpu {
 
 /// Wall motion kinds of [`WallGpu::motion`], as in the WGSL.
 pub const WALL_FIXED: f32 = 0.0;
+/// The wall moves with a prescribed velocity schedule.
 pub const WALL_PRESCRIBED: f32 = 1.0;
+/// The wall is servo-controlled to hold a target force.
 pub const WALL_SERVO: f32 = 2.0;
 
 impl WallGpu {
+    /// A fixed wall through `point` (m) with normal `normal` (normalised here), encoded on the
+    /// grid at `origin` with cell widths `h`.
     pub fn new(point: DVec3, normal: DVec3, origin: DVec3, h: DVec3) -> Self {
         let (cell, offset) = encode3(point, origin, h);
         let n = normal.normalize();

@@ -139,6 +139,7 @@ pub enum StepKind {
 }
 
 impl StepKind {
+    /// Every step kind, in declaration order.
     pub const ALL: [StepKind; 7] = [
         StepKind::Hysteretic,
         StepKind::Jkr,
@@ -258,6 +259,7 @@ pub struct Stage {
     pub name: &'static str,
     /// Path of the stage file, for error messages.
     pub path: &'static str,
+    /// The stage's WGSL source, embedded at build time.
     pub source: &'static str,
 }
 
@@ -271,7 +273,9 @@ pub const STAGES: &[Stage] = &[Stage {
 /// A complete WGSL module: common declarations, snippets and one stage.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ShaderVariant {
+    /// Variant name (also the shader module's label).
     pub name: String,
+    /// The composed WGSL source.
     pub source: String,
 }
 

@@ -156,6 +156,8 @@ pub struct HystereticPrediction {
     pub eps_i: f64,
     /// Pull-off restitution εo (eq. 18b).
     pub eps_o: f64,
+    /// Whether the pair sticks (e = 0): the energy left after unloading is not enough to
+    /// leave the contact or the non-contact adhesive well.
     pub stuck: bool,
     /// Largest overlap (eq. 20b, or on the limit branch for v ≥ vp).
     pub delta_max: f64,

@@ -51,9 +51,11 @@ pub struct HystereticParams {
     pub fa: f64,
     /// Non-contact adhesive stiffness kc_a > 0; `f64::INFINITY` gives zero range.
     pub kca: f64,
+    /// How the non-contact adhesion acts before the first mechanical contact (eqs. 14/15).
     pub adhesion: AdhesionMode,
     /// Linear viscous damping coefficient γ0 ≥ 0 (eq. 2), active in mechanical contact.
     pub gamma0: f64,
+    /// Interpolation of the un-/re-loading stiffness k2 between k1 and kp (eq. 9 or D.1).
     pub k2_rule: K2Rule,
 }
 

@@ -64,13 +64,19 @@ pub enum Dissipation {
     /// of a head-on collision equals the target, independent of the impact velocity
     /// (measured: within 2.5e-7 at dt = tc/2e5 and 1.6e-8 at tc/1e6 for e = 0.1…0.95;
     /// `tests::tsuji_damping_calibration`). With adhesion the JKR loss comes on top.
-    Tsuji { restitution: f64 },
+    Tsuji {
+        /// Target coefficient of restitution e ∈ (0, 1].
+        restitution: f64,
+    },
     /// Power-law dissipation F_dis = sgn(δ̇)·D·E*·|δ̇|^α·a^β (paper 001 eq. 19), in any
     /// consistent unit system (D carries the units). Normal direction only.
     PowerLaw {
+        /// Prefactor D, m^(2−α−β)·s^α in SI (so that F_dis is in N).
         #[serde(rename = "D", alias = "d")]
         d: f64,
+        /// Exponent α of the approach speed |δ̇|.
         alpha: f64,
+        /// Exponent β of the contact radius a.
         beta: f64,
     },
     /// The Krijt viscoelastic JKR contact (paper 001 §II C, eqs. 10–12 and appendix B; see
@@ -184,6 +190,7 @@ pub struct JkrParams {
     /// Surface energy γ per surface, J/m² (work of adhesion 2γ); 0 gives Hertz.
     pub surface_energy: f64,
     #[serde(default)]
+    /// Normal (and tangential) dissipation on top of the JKR hysteresis; default none.
     pub dissipation: Dissipation,
     /// Sliding friction coefficient μs ≥ 0; 0 = no tangential force.
     #[serde(default)]
@@ -193,6 +200,7 @@ pub struct JkrParams {
     #[serde(default)]
     pub rolling_hysteresis: f64,
     #[serde(default)]
+    /// Where a stretched contact breaks: displacement (paper 001) or force control.
     pub pulloff: Pulloff,
     /// Stiffness scale S > 0 (typically ≤ 1): E → S·E and γ → γ·S^(2/5) (paper 002 eq. 24).
     #[serde(default = "default_stiffness_scale")]

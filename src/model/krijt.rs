@@ -66,14 +66,25 @@ pub const BISECTION_ITERATIONS: usize = 64;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Relaxation {
     /// A constant T_vis, s.
-    Constant { tvis: f64 },
+    Constant {
+        /// T_vis, s.
+        tvis: f64,
+    },
     /// T_vis = C·R·exp[(B·p_c/E*)^ζ] for p_c > 0, C·R otherwise (eqs. 17–18).
-    Stress { c: f64, b: f64, zeta: f64 },
+    Stress {
+        /// C, s/m: T_vis,0 = C·R (eq. 18).
+        c: f64,
+        /// B, dimensionless (eq. 17).
+        b: f64,
+        /// ζ > 0, dimensionless (eq. 17).
+        zeta: f64,
+    },
 }
 
 /// The Krijt law of one material pair.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct KrijtLaw {
+    /// How T_vis is set.
     pub relaxation: Relaxation,
     /// σ0 ≈ γ/(atomic spacing), Pa; 0 = the contact radius follows the JKR curve instantly.
     pub sigma0: f64,
@@ -82,6 +93,7 @@ pub struct KrijtLaw {
 /// The material constants the law needs (after the stiffness scale).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Material {
+    /// Effective Young's modulus E* = E/(2(1 − ν²)) after the stiffness scale, Pa.
     pub e_star: f64,
     /// γ per surface, J/m².
     pub gamma: f64,

@@ -7,6 +7,7 @@ use crate::model::NormalForce;
 use serde::{Deserialize, Serialize};
 
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+/// Parameters of the linear spring–dashpot model (paper 000 eq. 2).
 pub struct LsdParams {
     /// Spring stiffness k, N/m.
     pub k: f64,
@@ -15,12 +16,15 @@ pub struct LsdParams {
 }
 
 impl LsdParams {
+    /// Checks k > 0 and γ0 ≥ 0 (both finite).
     pub fn validate(&self) -> Result<(), ParamError> {
         require_positive("k", self.k, "the spring stiffness k")?;
         require_non_negative("gamma0", self.gamma0, "the viscous damping gamma0")?;
         Ok(())
     }
 
+    /// Normal force at overlap `delta` (m) and approach speed `delta_dot` (m/s): k·δ + γ0·δ̇
+    /// for δ > 0 (not clamped at zero), nothing otherwise.
     pub fn force(&self, delta: f64, delta_dot: f64) -> NormalForce {
         if delta > 0.0 {
             let conservative = self.k * delta;

@@ -65,6 +65,7 @@ impl PairGeometry {
         0.5 * self.a12
     }
 
+    /// A sphere–sphere pair: radii `r1`, `r2` (m) and masses `m1`, `m2` (kg).
     pub fn spheres(r1: f64, r2: f64, m1: f64, m2: f64) -> Self {
         Self {
             a12: 2.0 * r1 * r2 / (r1 + r2),
@@ -72,6 +73,8 @@ impl PairGeometry {
         }
     }
 
+    /// A sphere–wall pair: sphere radius `r` (m) and mass `m` (kg); the wall has infinite
+    /// radius and mass.
     pub fn wall(r: f64, m: f64) -> Self {
         Self {
             a12: 2.0 * r,
@@ -84,7 +87,9 @@ impl PairGeometry {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "model", rename_all = "kebab-case")]
 pub enum ContactModel {
+    /// The hysteretic adhesive elasto-plastic model (paper 000 eqs. 5–15).
     Hysteretic(HystereticParams),
+    /// The linear spring–dashpot (paper 000 eq. 2).
     Lsd(LsdParams),
     /// JKR (Hertz when the surface energy is zero), with damping, friction and rolling.
     Jkr(JkrParams),
@@ -110,6 +115,7 @@ pub struct Kinematics {
 /// see the engine for the torques).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Response {
+    /// Normal force on i along n (repulsive positive) and its parts.
     pub normal: NormalForce,
     /// Tangential force on i.
     pub tangential: DVec3,
@@ -120,6 +126,7 @@ pub struct Response {
 }
 
 impl ContactModel {
+    /// Checks the parameters against the model's rules; the error names the parameter.
     pub fn validate(&self) -> Result<(), ParamError> {
         match self {
             Self::Hysteretic(p) => p.validate(),
@@ -338,7 +345,10 @@ pub const MAX_VISCOUS_STEP: f64 = 0.2;
 /// The time-step rule of one pair: the default, the largest accepted value and why.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TimeStep {
+    /// Default time step, s: tc/[`DEFAULT_DT_FRACTION`] capped at `max` (Rayleigh rule: max/2).
     pub default: f64,
+    /// Largest accepted time step without `force`, s: the smaller of tc/[`MAX_DT_FRACTION`] and
+    /// [`MAX_VISCOUS_STEP`]·m_r/γ0 ([`MAX_RAYLEIGH_FRACTION`]·T_R for the Rayleigh rule).
     pub max: f64,
     /// Undamped contact time on the stiffest branch.
     pub contact_time: f64,

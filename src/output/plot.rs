@@ -33,16 +33,22 @@ const COLOURS: [RGBColor; 10] = [
 /// How a series is drawn.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Style {
+    /// Solid line through the points.
     Line,
+    /// A marker at each point, no line.
     Markers,
+    /// Dashed line through the points.
     DashedLine,
 }
 
 /// One labelled data series. An empty label keeps the series out of the legend.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Series {
+    /// Legend text; empty = not in the legend.
     pub label: String,
+    /// (x, y) data points, in axis units.
     pub points: Vec<(f64, f64)>,
+    /// How the series is drawn.
     pub style: Style,
 }
 
@@ -53,12 +59,19 @@ pub struct Series {
 /// when `y_range` is given (lines are then clipped to it, markers outside it are dropped).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Plot {
+    /// Caption above the plot.
     pub title: String,
+    /// Label of the x axis.
     pub x_label: String,
+    /// Label of the y axis.
     pub y_label: String,
+    /// Logarithmic x axis (points with x <= 0 are skipped).
     pub log_x: bool,
+    /// Logarithmic y axis (points with y <= 0 are skipped).
     pub log_y: bool,
+    /// The data, drawn in order, each with its own colour.
     pub series: Vec<Series>,
+    /// Fixed y range (lo, hi) instead of the automatic one.
     pub y_range: Option<(f64, f64)>,
     /// Where the legend goes (pick the emptiest corner of the data).
     pub legend: Legend,
@@ -68,9 +81,13 @@ pub struct Plot {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Legend {
     #[default]
+    /// Top right corner.
     UpperRight,
+    /// Top left corner.
     UpperLeft,
+    /// Bottom left corner.
     LowerLeft,
+    /// Bottom right corner.
     LowerRight,
 }
 

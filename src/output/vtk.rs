@@ -10,8 +10,11 @@ use std::path::{Path, PathBuf};
 
 /// One snapshot's particle data.
 pub struct Particles<'a> {
+    /// Particle centres, m.
     pub positions: &'a [DVec3],
+    /// Particle velocities, m/s.
     pub velocities: &'a [DVec3],
+    /// Particle radii, m.
     pub radii: &'a [f64],
     /// Empty when the scene has no rotation.
     pub angular_velocities: &'a [DVec3],
@@ -102,6 +105,7 @@ impl Series {
         self.entries = existing;
     }
 
+    /// The snapshots written so far: (time s, `.vtp` path relative to the output directory).
     pub fn entries(&self) -> &[(f64, String)] {
         &self.entries
     }
