@@ -20,6 +20,7 @@ pub mod gpu;
 pub mod memory;
 pub mod model;
 pub mod output;
+pub mod overrides;
 pub mod run;
 pub mod scene;
 pub mod setup;

@@ -323,6 +323,11 @@ struct RunArgs {
     /// Resume from a checkpoint of the same scene (bitwise identical continuation).
     #[arg(long)]
     resume: Option<PathBuf>,
+    /// Change a scene value, KEY=VALUE with KEY a dotted path (particles[0].count,
+    /// domain.max, simulation.duration) and VALUE a TOML value; repeatable. Scales the
+    /// examples up without editing them.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
     /// Print the summary as JSON on stdout.
     #[arg(long)]
     json: bool,
@@ -1020,10 +1025,13 @@ const DEFAULT_SCENE: &str = include_str!("../examples/cohesive_cluster.toml");
 
 fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
     let scene = match &a.scene {
-        Some(path) => Scene::load(path)?,
+        Some(path) => Scene::load_with(path, &a.set)?,
         None => {
             eprintln!("no scene given: running the built-in cohesive cluster (examples/cohesive_cluster.toml)");
-            Scene::from_toml_str(DEFAULT_SCENE, "cohesive_cluster")?
+            Scene::from_toml_str(
+                &powder::overrides::apply(DEFAULT_SCENE, &a.set)?,
+                "cohesive_cluster",
+            )?
         }
     };
     let gpu = match a.backend {

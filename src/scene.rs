@@ -336,6 +336,11 @@ impl Scene {
 
     /// Reads and parses a scene file; the scene is named after the file stem.
     pub fn load(path: &Path) -> Result<Scene, PowderError> {
+        Self::load_with(path, &[])
+    }
+
+    /// Loads a scene file with `--set KEY=VALUE` overrides applied ([`crate::overrides`]).
+    pub fn load_with(path: &Path, sets: &[String]) -> Result<Scene, PowderError> {
         let text = std::fs::read_to_string(path).map_err(|e| {
             PowderError::io(format!("cannot read scene file `{}`", path.display()), e)
         })?;
@@ -343,6 +348,7 @@ impl Scene {
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_default();
+        let text = crate::overrides::apply(&text, sets)?;
         Self::from_toml_str(&text, &name)
     }
 
