@@ -30,6 +30,7 @@ fn scene() -> Scene {
                     velocity: [0.0; 3],
                     radius: r,
                     material: 0,
+                    insert_at: 0.0,
                 });
             }
         }

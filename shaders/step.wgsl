@@ -134,6 +134,14 @@ const WALL_SERVO: f32 = 2.0;
 @group(0) @binding(39) var<storage, read_write> b_wall_hist: array<Hist>;
 @group(0) @binding(55) var<storage, read_write> b_disp: array<vec4<f32>>;
 
+// Whether each particle (by persistent id) has appeared (pouring: written by the host at the
+// batch where its insertion time comes); one that has not neither moves nor interacts.
+@group(0) @binding(65) var<storage, read> appeared: array<u32>;
+
+fn is_active(pid: u32) -> bool {
+    return appeared[pid] != 0u;
+}
+
 // Per-step scratch: predicted velocity, the old index of each new slot, the neighbour list.
 @group(0) @binding(40) var<storage, read_write> vpred: array<vec4<f32>>;
 @group(0) @binding(41) var<storage, read_write> old_index: array<u32>;
@@ -193,7 +201,7 @@ fn kick_drift(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nw
         atomicStore(&wg_moved, 0u);
     }
     workgroupBarrier();
-    if (i < grid.n_particles) {
+    if (i < grid.n_particles && is_active(a_pid[i])) {
         let h = grid.cell_width;
         let v = a_vel[i].xyz + 0.5 * step.dt * a_acc[i].xyz;
         a_vel[i] = vec4<f32>(v, a_vel[i].w);
@@ -283,6 +291,8 @@ fn neighbours(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nw
     let hi = vec3<i32>(grid.dims) - vec3<i32>(1);
     let home = clamp(ck.xyz, vec3<i32>(0), hi);
     var count = 0u;
+    // a particle that has not appeared lists no neighbours (and is listed by none)
+    let here = is_active(b_pid[k]);
     for (var dz = -1; dz <= 1; dz++) {
         for (var dy = -1; dy <= 1; dy++) {
             for (var dx = -1; dx <= 1; dx++) {
@@ -294,7 +304,7 @@ fn neighbours(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nw
                 let start = cell_start[key];
                 let end = start + cell_count[key];
                 for (var j = start; j < end; j++) {
-                    if (j == k) {
+                    if (j == k || !here || !is_active(b_pid[j])) {
                         continue;
                     }
                     let d = separation(ck, ok, b_cell[j], b_off[j]);
@@ -473,7 +483,9 @@ fn particle_forces(k: u32) -> f32 {
             torque += -rk * cross(n, c.tangential) + c.rolling;
         }
     }
-    for (var w = 0u; w < step.n_walls; w++) {
+    // a particle that has not appeared meets no wall
+    let n_walls = select(0u, step.n_walls, is_active(b_pid[k]));
+    for (var w = 0u; w < n_walls; w++) {
         let wall = walls[w];
         let n = wall.normal.xyz;
         let delta = rk - dot(separation(ck, ok, wall.cell, wall.offset), n);
@@ -512,6 +524,9 @@ fn particle_forces(k: u32) -> f32 {
 fn kick(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let k = global_index(wid, nwg, lid);
     if (k >= grid.n_particles) {
+        return;
+    }
+    if (!is_active(b_pid[k])) {
         return;
     }
     b_vel[k] = vec4<f32>(b_vel[k].xyz + 0.5 * step.dt * b_acc[k].xyz, b_vel[k].w);

@@ -141,6 +141,7 @@ pub fn packing(case: Case, n: usize, velocity_scale: f64, seed: u64) -> Result<S
             velocity,
             radius,
             material: 0,
+            insert_at: 0.0,
         });
     }
     let wall = |point: [f64; 3], normal: [f64; 3]| Wall {

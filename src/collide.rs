@@ -229,6 +229,7 @@ impl CollideSpec {
             velocity: [0.0; 3],
             radius: self.radius1,
             material: 0,
+            insert_at: 0.0,
         }];
         let mut walls = vec![];
         let x2 = if self.wall {
@@ -251,6 +252,7 @@ impl CollideSpec {
                 velocity: [-vn * f2, -vt * f2, 0.0],
                 radius: self.radius2,
                 material: 0,
+                insert_at: 0.0,
             });
             x2
         };

@@ -50,10 +50,7 @@ impl Override {
         let doc: Table = format!("v = {}", value.trim())
             .parse()
             .map_err(|e| bad(set, format!("`{}` is not a TOML value ({e})", value.trim())))?;
-        let value = doc
-            .get("v")
-            .cloned()
-            .ok_or_else(|| bad(set, "no value"))?;
+        let value = doc.get("v").cloned().ok_or_else(|| bad(set, "no value"))?;
         Ok(Self { path, value })
     }
 

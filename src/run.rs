@@ -107,7 +107,7 @@ pub struct RunOptions {
 /// wall, where its plane passes (the scene point moved with the wall).
 pub fn csv_header(walls: &[crate::scene::Wall]) -> String {
     let mut h = String::from(
-        "step,time,kinetic,elastic,gravitational,dissipated,wall_work,total,contacts,wall_contacts,non_contact,coordination,max_overlap,max_overlap_ratio,mean_overlap_ratio",
+        "step,time,kinetic,elastic,gravitational,dissipated,wall_work,inserted,total,contacts,wall_contacts,non_contact,coordination,max_overlap,max_overlap_ratio,mean_overlap_ratio",
     );
     for (w, wall) in walls.iter().enumerate() {
         h.push_str(&format!(",wall{w}_fx,wall{w}_fy,wall{w}_fz"));
@@ -122,7 +122,7 @@ fn csv_row(s: &Snapshot, obs: &Observation, walls: &[crate::scene::Wall]) -> Str
     let e = &s.energies;
     let c = &s.contacts;
     let mut row = format!(
-        "{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{},{:e},{:e},{:e},{:e}",
+        "{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{},{:e},{:e},{:e},{:e}",
         s.step,
         s.time,
         e.kinetic,
@@ -130,6 +130,7 @@ fn csv_row(s: &Snapshot, obs: &Observation, walls: &[crate::scene::Wall]) -> Str
         e.gravitational,
         e.dissipated,
         e.wall_work,
+        e.inserted,
         e.total(),
         c.contacts,
         c.wall_contacts,

@@ -292,6 +292,9 @@ pub struct ParticleInit {
     pub radius: f64,
     /// Index into [`Scene::materials`].
     pub material: usize,
+    /// When the particle appears, s (0: at the start). Before that it neither moves nor
+    /// interacts; it enters with its position and velocity (pouring).
+    pub insert_at: f64,
 }
 
 /// A validated scene (see the module documentation for the file format).
@@ -474,12 +477,33 @@ const LIST_KEYS: &[&str] = &[
     "radii",
     "velocities",
     "velocity",
+    "insert_at",
 ];
 const LATTICE_KEYS: &[&str] = &[
-    "kind", "material", "min", "max", "radius", "spacing", "velocity", "jitter", "seed",
+    "kind",
+    "material",
+    "min",
+    "max",
+    "radius",
+    "spacing",
+    "velocity",
+    "jitter",
+    "seed",
+    "insert_at",
 ];
 const RANDOM_KEYS: &[&str] = &[
-    "kind", "material", "count", "min", "max", "seed", "radius", "size", "velocity",
+    "kind",
+    "material",
+    "count",
+    "min",
+    "max",
+    "seed",
+    "radius",
+    "size",
+    "velocity",
+    "insert_at",
+    "batches",
+    "batch_interval",
 ];
 const DISTRIBUTIONS: &[&str] = &["uniform", "normal", "lognormal", "list"];
 
@@ -1585,6 +1609,16 @@ fn parse_particles(root: &Tbl, names: &[&str]) -> Res<(Vec<ParticleInit>, Origin
         })?;
         t.ctx = format!("[[particles]] #{block} (kind = \"{kind}\")");
         let before = particles.len();
+        let insert_at = t.f64("insert_at")?.unwrap_or(0.0);
+        if insert_at < 0.0 {
+            return Err(t.err_key(
+                "insert_at",
+                format!(
+                    "`insert_at` in {} is {insert_at} s: the time the block's particles appear must be >= 0",
+                    t.ctx
+                ),
+            ));
+        }
         match kind {
             "list" => {
                 t.check_keys(LIST_KEYS, |_| None)?;
@@ -1596,7 +1630,33 @@ fn parse_particles(root: &Tbl, names: &[&str]) -> Res<(Vec<ParticleInit>, Origin
             }
             _ => {
                 t.check_keys(RANDOM_KEYS, |_| None)?;
-                expand_random(&t, names, &mut particles)?;
+                // pouring: `batches` batches of count/batches, `batch_interval` s apart,
+                // each placed afresh in the region
+                let batches = t.u64("batches")?.unwrap_or(1);
+                let interval = t.f64("batch_interval")?.unwrap_or(0.0);
+                if batches == 0 || (batches > 1 && !(interval > 0.0)) {
+                    return Err(t.err_key(
+                        "batches",
+                        format!(
+                            "{}: `batches` must be >= 1, and a pour of several batches needs `batch_interval` > 0 s (the time between them)",
+                            t.ctx
+                        ),
+                    ));
+                }
+                for k in 0..batches {
+                    expand_random(
+                        &t,
+                        names,
+                        &mut particles,
+                        insert_at + k as f64 * interval,
+                        (k, batches),
+                    )?;
+                }
+            }
+        }
+        if kind != "random" {
+            for p in &mut particles[before..] {
+                p.insert_at = insert_at;
             }
         }
         origin.resize(origin.len() + particles.len() - before, block);
@@ -1709,6 +1769,7 @@ fn expand_list(t: &Tbl, names: &[&str], out: &mut Vec<ParticleInit>) -> Res<()> 
             velocity: velocities[i],
             radius: radii[i],
             material,
+            insert_at: 0.0,
         });
     }
     Ok(())
@@ -1798,6 +1859,7 @@ fn expand_lattice(t: &Tbl, names: &[&str], out: &mut Vec<ParticleInit>) -> Res<(
                     velocity,
                     radius,
                     material,
+                    insert_at: 0.0,
                 });
             }
         }
@@ -1969,11 +2031,21 @@ fn parse_size(t: &Tbl) -> Res<SizeDist> {
     })
 }
 
-fn expand_random(t: &Tbl, names: &[&str], out: &mut Vec<ParticleInit>) -> Res<()> {
+/// Places batch `batch.0` of `batch.1` of a random block (count/batches particles, the
+/// first batches taking the remainder) at time `insert_at`, clear of the particles that
+/// appear at the same time.
+fn expand_random(
+    t: &Tbl,
+    names: &[&str],
+    out: &mut Vec<ParticleInit>,
+    insert_at: f64,
+    batch: (u64, u64),
+) -> Res<()> {
     let material = material_ref(t, names)?;
-    let count = t
+    let total = t
         .u64("count")?
         .ok_or_else(|| t.missing("count", "the number of particles to place"))?;
+    let count = total / batch.1 + u64::from(batch.0 < total % batch.1);
     if count > MAX_BLOCK_PARTICLES {
         return Err(t.err_key(
             "count",
@@ -1990,7 +2062,7 @@ fn expand_random(t: &Tbl, names: &[&str], out: &mut Vec<ParticleInit>) -> Res<()
     )
     .map_err(|m| t.err_key("count", format!("{}: {m}", t.ctx)))?;
     let (min, max) = region(t)?;
-    let seed = t.u64("seed")?.unwrap_or(1);
+    let seed = t.u64("seed")?.unwrap_or(1).wrapping_add(batch.0);
     one_of(
         t,
         "radius",
@@ -2020,7 +2092,10 @@ fn expand_random(t: &Tbl, names: &[&str], out: &mut Vec<ParticleInit>) -> Res<()
     let rmax = out.iter().map(|p| p.radius).fold(block_rmax, f64::max);
     let mut grid = Grid::new(2.0 * rmax);
     for (i, p) in out.iter().enumerate() {
-        grid.insert(i, p.position);
+        // particles that appear at another time may occupy the same place
+        if p.insert_at == insert_at {
+            grid.insert(i, p.position);
+        }
     }
     let before = out.len();
     for (k, &r) in radii.iter().enumerate() {
@@ -2040,6 +2115,7 @@ fn expand_random(t: &Tbl, names: &[&str], out: &mut Vec<ParticleInit>) -> Res<()
                     velocity,
                     radius: r,
                     material,
+                    insert_at,
                 });
                 placed = true;
                 break;
@@ -2217,7 +2293,8 @@ fn check_particles(src: &Src, scene: &Scene, origin: &Origin) -> Res<()> {
             .filter(|&j| {
                 let q = &ps[j];
                 let overlap = p.radius + q.radius - dist2(p.position, q.position).sqrt();
-                overlap > OVERLAP_TOLERANCE * p.radius.min(q.radius)
+                // particles that appear at different times may share a place (pouring)
+                q.insert_at == p.insert_at && overlap > OVERLAP_TOLERANCE * p.radius.min(q.radius)
             })
             .min();
         if let Some(j) = first {

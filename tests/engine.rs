@@ -42,6 +42,7 @@ fn particle(position: [f64; 3], velocity: [f64; 3]) -> ParticleInit {
         radius: 1e-3,
         material: 0,
     }
+    insert_at: 0.0,
 }
 
 fn floor() -> Wall {
@@ -250,6 +251,7 @@ fn rolling_resistance_holds_below_the_yield_force_and_yields_above() {
                 velocity: [0.0; 3],
                 radius: r,
                 material: 0,
+                insert_at: 0.0,
             }],
             vec![floor()],
             0.0,

@@ -193,12 +193,14 @@ fn sticking_oscillations_keep_their_amplitude_or_settle() {
                 velocity: [0.1165, 0.0, 0.0],
                 radius: 1.1e-3,
                 material: 0,
+                insert_at: 0.0,
             },
             ParticleInit {
                 position: [2.2001e-3, 0.0, 0.0],
                 velocity: [-0.1165, 0.0, 0.0],
                 radius: 1.1e-3,
                 material: 0,
+                insert_at: 0.0,
             },
         ],
     };
@@ -266,12 +268,14 @@ fn pair_scene(dt: DtSetting, force_dt: bool, v: f64, domain: f64) -> Scene {
                 velocity: [v, 0.0, 0.0],
                 radius: 1e-3,
                 material: 0,
+                insert_at: 0.0,
             },
             ParticleInit {
                 position: [1.2e-3, 0.0, 0.0],
                 velocity: [-v, 0.0, 0.0],
                 radius: 1e-3,
                 material: 0,
+                insert_at: 0.0,
             },
         ],
     }

@@ -82,13 +82,17 @@ pub struct Energies {
     pub dissipated: f64,
     /// Work done on the particles by moving walls so far.
     pub wall_work: f64,
+    /// Kinetic + gravitational energy brought in by particles inserted so far (pouring).
+    pub inserted: f64,
 }
 
 impl Energies {
     /// The conserved sum: kinetic + stored + gravitational + dissipated − the work moving
-    /// walls did on the particles.
+    /// walls did on the particles − the energy inserted particles brought in.
     pub fn total(&self) -> f64 {
-        self.kinetic + self.elastic + self.gravitational + self.dissipated - self.wall_work
+        self.kinetic + self.elastic + self.gravitational + self.dissipated
+            - self.wall_work
+            - self.inserted
     }
 }
 
@@ -135,6 +139,9 @@ pub struct CpuState {
     wall_points: Vec<DVec3>,
     wall_velocities: Vec<DVec3>,
     wall_work: f64,
+    /// Which particles have appeared, and the energy they brought.
+    active: Vec<bool>,
+    inserted: f64,
 }
 
 /// The CPU reference simulation.
@@ -173,6 +180,12 @@ pub struct CpuEngine {
     domain: (DVec3, DVec3),
     /// Periodic axes (positions wrap into the domain, pairs use the minimum image).
     periodic: [bool; 3],
+    /// When each particle appears (pouring), s, and whether it has: a particle that has not
+    /// neither moves nor interacts. All true without insertion.
+    insert_at: Vec<f64>,
+    active: Vec<bool>,
+    /// Kinetic + gravitational energy the inserted particles brought in, J.
+    inserted: f64,
     /// Deepest overlap over a12 since the monitor last looked: (ratio, i, partner).
     peak: Option<(f64, usize, Partner)>,
 }
@@ -288,6 +301,9 @@ impl CpuEngine {
             wall_work: 0.0,
             domain,
             periodic,
+            insert_at: scene.particles.iter().map(|p| p.insert_at).collect(),
+            active: scene.particles.iter().map(|p| p.insert_at <= 0.0).collect(),
+            inserted: 0.0,
             peak: None,
         };
         let v_pred = engine.vel.clone();
@@ -327,6 +343,8 @@ impl CpuEngine {
             wall_points: self.walls.iter().map(|w| w.point).collect(),
             wall_velocities: self.walls.iter().map(|w| w.velocity).collect(),
             wall_work: self.wall_work,
+            active: self.active.clone(),
+            inserted: self.inserted,
         }
     }
 
@@ -388,6 +406,10 @@ impl CpuEngine {
             w.velocity = v;
         }
         self.wall_work = s.wall_work;
+        if s.active.len() == self.active.len() {
+            self.active = s.active;
+        }
+        self.inserted = s.inserted;
         Ok(())
     }
 
@@ -527,8 +549,13 @@ impl CpuEngine {
     /// v + a·dt (and ω + α·dt), which keeps the damped oscillator second-order accurate.
     pub fn step(&mut self) -> Result<(), PowderError> {
         let dt = self.dt;
+        self.insert_due();
         let mut v_pred = Vec::with_capacity(self.pos.len());
         for i in 0..self.pos.len() {
+            if !self.active[i] {
+                v_pred.push(self.vel[i]);
+                continue;
+            }
             let v_half = self.vel[i] + 0.5 * dt * self.acc[i];
             self.pos[i] += dt * v_half;
             v_pred.push(v_half + 0.5 * dt * self.acc[i]);
@@ -578,7 +605,9 @@ impl CpuEngine {
         }
         self.update_acceleration();
         for i in 0..self.pos.len() {
-            self.vel[i] += 0.5 * dt * self.acc[i];
+            if self.active[i] {
+                self.vel[i] += 0.5 * dt * self.acc[i];
+            }
         }
         for i in 0..self.omega.len() {
             self.omega[i] += 0.5 * dt * self.torque[i] / self.inertia[i];
@@ -586,6 +615,23 @@ impl CpuEngine {
         self.time += dt;
         self.steps += 1;
         Ok(())
+    }
+
+    /// Activates the particles whose insertion time has come (at the start of a step whose
+    /// time has reached it), booking the energy they bring.
+    fn insert_due(&mut self) {
+        for i in 0..self.pos.len() {
+            if !self.active[i] && self.insert_at[i] <= self.time {
+                self.active[i] = true;
+                self.inserted += 0.5 * self.mass[i] * self.vel[i].length_squared()
+                    - self.mass[i] * self.gravity.dot(self.pos[i]);
+            }
+        }
+    }
+
+    /// Whether particle `i` has appeared (pouring: see `ParticleInit::insert_at`).
+    pub fn is_active(&self, i: usize) -> bool {
+        self.active[i]
     }
 
     /// Whether some wall moves.
@@ -684,7 +730,11 @@ impl CpuEngine {
             let (periodic, domain) = (self.periodic, self.domain);
             let (models, nm, mass, material) =
                 (&self.models, self.n_materials, &self.mass, &self.material);
+            let active = &self.active;
             self.grid.for_each_pair(pos, |i, j| {
+                if !(active[i] && active[j]) {
+                    return;
+                }
                 let d = minimum_image(pos[i] - pos[j], periodic, domain);
                 let dist2 = d.length_squared();
                 let reach = pad[i] + radius[j];
@@ -754,6 +804,9 @@ impl CpuEngine {
         for (w, wall) in self.walls.iter().enumerate() {
             let n = wall.normal;
             for (i, v_particle) in v_pred.iter().enumerate() {
+                if !self.active[i] {
+                    continue;
+                }
                 // relative to the (possibly moving) wall
                 let v = &(*v_particle - wall.velocity);
                 let delta = self.radius[i] - (self.pos[i] - wall.point).dot(n);
@@ -822,12 +875,14 @@ impl CpuEngine {
         let mut e = Energies {
             dissipated: self.dissipated,
             wall_work: self.wall_work,
+            inserted: self.inserted,
             ..Default::default()
         };
         for i in 0..self.omega.len() {
             e.kinetic += 0.5 * self.inertia[i] * self.omega[i].length_squared();
         }
-        for i in 0..self.pos.len() {
+        // particles that have not appeared yet do not count
+        for i in (0..self.pos.len()).filter(|&i| self.active[i]) {
             e.kinetic += 0.5 * self.mass[i] * self.vel[i].length_squared();
             e.gravitational -= self.mass[i] * self.gravity.dot(self.pos[i]);
         }

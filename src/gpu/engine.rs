@@ -249,6 +249,15 @@ pub struct GpuEngine {
     /// CPU does) and written to the device at every batch, so f32 rounding of the device's
     /// per-step moves never accumulates.
     wall_points: Vec<DVec3>,
+    /// Pouring: when each particle (persistent id) appears, whether it has (mirrored in
+    /// the device's `active` buffer, written at the batch where that changes), the energy
+    /// it brings (½mv² − m·g·x at its insertion, which it keeps until then) and the sum
+    /// brought so far.
+    insert_at: Vec<f64>,
+    active: Vec<bool>,
+    active_buf: wgpu::Buffer,
+    insert_energy: Vec<f64>,
+    inserted: f64,
 }
 
 /// Everything that evolves in a GPU run, read back from the device: what a checkpoint
@@ -269,6 +278,9 @@ pub struct GpuSavedState {
     buffers: Vec<(String, Vec<u8>)>,
     /// The host's f64 points of the walls.
     wall_points: Vec<DVec3>,
+    /// Which particles have appeared, and the energy they brought.
+    active: Vec<bool>,
+    inserted: f64,
 }
 
 /// The step a scene's pair models need and their pair table as bytes, or why the GPU
@@ -469,6 +481,11 @@ impl GpuEngine {
         if !walls.is_empty() {
             q0.write_buffer(&walls_buf, 0, bytemuck::cast_slice(&walls));
         }
+        // which particles have appeared (pouring), by persistent id
+        let active: Vec<bool> = scene.particles.iter().map(|p| p.insert_at <= 0.0).collect();
+        let active_buf = alloc.buffer("active", 4 * n as u64);
+        let flags: Vec<u32> = active.iter().map(|&a| a as u32).collect();
+        q0.write_buffer(&active_buf, 0, bytemuck::cast_slice(&flags));
         // the servo's per-contact normal forces (one element without servo walls)
         let wall_push = alloc.buffer(
             "wall_push",
@@ -550,6 +567,7 @@ impl GpuEngine {
             list.push(("pairs".into(), &pairs_buf));
             list.push(("walls".into(), &walls_buf));
             list.push(("wall_push".into(), &wall_push));
+            list.push(("appeared".into(), &active_buf));
             list.push(("monitor".into(), &monitor));
             list.push(("skin".into(), &skin_buf));
             list.push(("args".into(), &args));
@@ -579,6 +597,7 @@ impl GpuEngine {
         };
         let bound = [bind(0)?, bind(1)?];
         let radius = scene.particles.iter().map(|p| p.radius).collect();
+        let mass = r.mass.clone();
         let mut engine = Self {
             time: 0.0,
             steps: 0,
@@ -588,7 +607,7 @@ impl GpuEngine {
             origin,
             h,
             radius,
-            mass: r.mass,
+            mass: mass.clone(),
             grid,
             sets,
             cur: 0,
@@ -619,6 +638,19 @@ impl GpuEngine {
                 .iter()
                 .map(|w| DVec3::from_array(w.point))
                 .collect(),
+            insert_at: scene.particles.iter().map(|p| p.insert_at).collect(),
+            insert_energy: scene
+                .particles
+                .iter()
+                .zip(&mass)
+                .map(|(p, m)| {
+                    0.5 * m * DVec3::from_array(p.velocity).length_squared()
+                        - m * DVec3::from_array(scene.gravity).dot(DVec3::from_array(p.position))
+                })
+                .collect(),
+            active,
+            active_buf,
+            inserted: 0.0,
             ctx,
         };
         engine.initial_forces()?;
@@ -820,6 +852,34 @@ impl GpuEngine {
         valid
     }
 
+    /// Activates the particles whose insertion time has come (at the start of a step whose
+    /// time has reached it, as on the CPU), writing the device's flags when they change;
+    /// returns how many steps until the next insertion (at least 1).
+    fn insert_due(&mut self) -> u64 {
+        let mut changed = false;
+        let mut next = u64::MAX;
+        for i in 0..self.active.len() {
+            if self.active[i] {
+                continue;
+            }
+            if self.insert_at[i] <= self.time {
+                self.active[i] = true;
+                self.inserted += self.insert_energy[i];
+                changed = true;
+            } else {
+                let steps = ((self.insert_at[i] - self.time) / self.dt).ceil() as u64;
+                next = next.min(steps.max(1));
+            }
+        }
+        if changed {
+            let flags: Vec<u32> = self.active.iter().map(|&a| a as u32).collect();
+            self.ctx
+                .queue
+                .write_buffer(&self.active_buf, 0, bytemuck::cast_slice(&flags));
+        }
+        next
+    }
+
     /// Advances the host's points of the prescribed walls by `steps` steps.
     fn advance_prescribed_walls(&mut self, steps: u64) {
         for (w, m) in self.wall_motion.iter().enumerate() {
@@ -860,7 +920,10 @@ impl GpuEngine {
     pub fn run_steps(&mut self, steps: u64) -> Result<(), PowderError> {
         let mut left = steps;
         while left > 0 {
-            let batch = left.min(STEPS_PER_SUBMIT).min(self.prescribe_walls());
+            let batch = left
+                .min(STEPS_PER_SUBMIT)
+                .min(self.prescribe_walls())
+                .min(self.insert_due());
             self.advance_prescribed_walls(batch);
             self.ctx
                 .queue
@@ -946,6 +1009,8 @@ impl GpuEngine {
             adapter: self.ctx.summary.name.clone(),
             buffers: list.into_iter().map(|(n, _)| n).zip(out).collect(),
             wall_points: self.wall_points.clone(),
+            active: self.active.clone(),
+            inserted: self.inserted,
         })
     }
 
@@ -975,6 +1040,14 @@ impl GpuEngine {
         if saved.wall_points.len() == self.wall_points.len() {
             self.wall_points = saved.wall_points;
         }
+        if saved.active.len() == self.active.len() {
+            self.active = saved.active;
+            let flags: Vec<u32> = self.active.iter().map(|&a| a as u32).collect();
+            self.ctx
+                .queue
+                .write_buffer(&self.active_buf, 0, bytemuck::cast_slice(&flags));
+        }
+        self.inserted = saved.inserted;
         self.time = saved.time;
         self.steps = saved.steps;
         self.dropped = saved.dropped;
@@ -1025,9 +1098,16 @@ impl GpuEngine {
         let rows = self.read_particle_ledger()?;
         let mut e = Energies {
             kinetic: self.kinetic_energy(state),
+            inserted: self.inserted,
             ..Default::default()
         };
-        for (x, m) in state.positions.iter().zip(&self.mass) {
+        for ((x, m), _) in state
+            .positions
+            .iter()
+            .zip(&self.mass)
+            .zip(&self.active)
+            .filter(|(_, &a)| a)
+        {
             e.gravitational -= m * self.gravity.dot(*x);
         }
         for p in rows.chunks(4) {
@@ -1096,11 +1176,14 @@ impl GpuEngine {
     /// Kinetic energy of a read-back state, translational plus rotational (I = 2/5·m·r²,
     /// as the CPU ledger), J.
     pub fn kinetic_energy(&self, state: &GpuState) -> f64 {
+        // particles that have not appeared yet do not count
         let translational: f64 = state
             .velocities
             .iter()
             .zip(&self.mass)
-            .map(|(v, m)| 0.5 * m * v.length_squared())
+            .zip(&self.active)
+            .filter(|(_, &a)| a)
+            .map(|((v, m), _)| 0.5 * m * v.length_squared())
             .sum();
         let rotational: f64 = state
             .angular_velocities
