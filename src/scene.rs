@@ -1634,7 +1634,7 @@ fn parse_particles(root: &Tbl, names: &[&str]) -> Res<(Vec<ParticleInit>, Origin
                 // each placed afresh in the region
                 let batches = t.u64("batches")?.unwrap_or(1);
                 let interval = t.f64("batch_interval")?.unwrap_or(0.0);
-                if batches == 0 || (batches > 1 && !(interval > 0.0)) {
+                if batches == 0 || (batches > 1 && (interval.is_nan() || interval <= 0.0)) {
                     return Err(t.err_key(
                         "batches",
                         format!(

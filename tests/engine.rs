@@ -41,8 +41,8 @@ fn particle(position: [f64; 3], velocity: [f64; 3]) -> ParticleInit {
         velocity,
         radius: 1e-3,
         material: 0,
+        insert_at: 0.0,
     }
-    insert_at: 0.0,
 }
 
 fn floor() -> Wall {
