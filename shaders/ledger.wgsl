@@ -130,7 +130,8 @@ fn ledger_departed(acc: ptr<function, LedgerAcc>, slot: u32, delta: f32) {
 fn ledger_store(pid: u32, acc: LedgerAcc) {
     let e = particle_ledger[4u * pid + 2u];
     let y = acc.dissipated - e.y;
-    let t = e.x + y;
+    // (opaque: see step.wgsl; without it the compiler folds the compensation to 0)
+    let t = opaque1(e.x + y);
     let comp = (t - e.x) - y;
     particle_ledger[4u * pid] = acc.counts;
     particle_ledger[4u * pid + 1u] = acc.overlaps;
@@ -138,7 +139,7 @@ fn ledger_store(pid: u32, acc: LedgerAcc) {
     if (acc.wall_work != 0.0) {
         let ew = particle_ledger[4u * pid + 3u];
         let yw = acc.wall_work - ew.y;
-        let tw = ew.x + yw;
+        let tw = opaque1(ew.x + yw);
         particle_ledger[4u * pid + 3u] = vec4<f32>(tw, (tw - ew.x) - yw, 0.0, 0.0);
     }
 }
@@ -188,7 +189,7 @@ fn ledger_dropped(pid: u32, o: u32, old_n: u32, k: u32) {
     if (lost != 0.0) {
         var e = particle_ledger[4u * pid + 2u];
         let y = lost - e.y;
-        let t = e.x + y;
+        let t = opaque1(e.x + y);
         e.y = (t - e.x) - y;
         e.x = t;
         particle_ledger[4u * pid + 2u] = e;

@@ -66,7 +66,18 @@ struct StepParams {
     // 1 on periodic axes: cells wrap around (the axis holds a whole number >= 3 of cells,
     // so dims·cell_width is the period) and separations take the nearest image.
     periodic: vec3<u32>,
-    _pad: u32,
+    // Always 0, but only known at run time: `opaque` hides a value behind it, so the
+    // shader compiler cannot fold Kahan compensations ((x + y) − x) − y to 0 (Mesa's NIR
+    // does, for floating-point operations not marked exact: measured on lavapipe).
+    zero: u32,
+}
+
+fn opaque(x: vec3<f32>) -> vec3<f32> {
+    return select(x, vec3<f32>(0.0), step.zero != 0u);
+}
+
+fn opaque1(x: f32) -> f32 {
+    return select(x, 0.0, step.zero != 0u);
 }
 
 fn periodic_axes() -> vec3<bool> {
@@ -133,6 +144,25 @@ const WALL_SERVO: f32 = 2.0;
 @group(0) @binding(38) var<storage, read_write> b_hist_pid: array<u32>;
 @group(0) @binding(39) var<storage, read_write> b_wall_hist: array<Hist>;
 @group(0) @binding(55) var<storage, read_write> b_disp: array<vec4<f32>>;
+
+// Kahan compensation of the velocity (element 2i) and of the cell offset (2i + 1), per
+// particle in both state sets: the f32 updates v += dt/2·a and o += dt·v add increments of
+// a few ulps (slow particles, small dt), whose rounding would otherwise accumulate
+// systematically; the true values are v − c_v and o − c_o.
+@group(0) @binding(66) var<storage, read_write> a_kahan: array<vec4<f32>>;
+@group(0) @binding(67) var<storage, read_write> b_kahan: array<vec4<f32>>;
+
+// x + dx with Kahan compensation c (x_true = x − c): returns (x', c').
+struct Compensated {
+    x: vec3<f32>,
+    c: vec3<f32>,
+}
+
+fn kahan_add(x: vec3<f32>, c: vec3<f32>, dx: vec3<f32>) -> Compensated {
+    let y = dx - c;
+    let t = opaque(x + y);
+    return Compensated(t, (t - x) - y);
+}
 
 // Whether each particle (by persistent id) has appeared (pouring: written by the host at the
 // batch where its insertion time comes); one that has not neither moves nor interacts.
@@ -203,14 +233,20 @@ fn kick_drift(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nw
     workgroupBarrier();
     if (i < grid.n_particles && is_active(a_pid[i])) {
         let h = grid.cell_width;
-        let v = a_vel[i].xyz + 0.5 * step.dt * a_acc[i].xyz;
+        let kv = kahan_add(a_vel[i].xyz, a_kahan[2u * i].xyz, 0.5 * step.dt * a_acc[i].xyz);
+        let v = kv.x;
         a_vel[i] = vec4<f32>(v, a_vel[i].w);
+        a_kahan[2u * i] = vec4<f32>(kv.c, 0.0);
         rot_kick_drift(i);
         let disp = a_disp[i].xyz + step.dt * v;
         a_disp[i] = vec4<f32>(disp, 0.0);
         // length() >= 0 (or NaN, whose bits order above +inf: it forces a rebuild)
         atomicMax(&wg_moved, bitcast<u32>(length(disp)));
-        var o = a_off[i].xyz + step.dt * v;
+        // the move with the compensated velocity; the cell carry below subtracts whole
+        // cells (exact for an offset within a factor 2 of h), so the compensation stays
+        let ko = kahan_add(a_off[i].xyz, a_kahan[2u * i + 1u].xyz, step.dt * (v - kv.c));
+        a_kahan[2u * i + 1u] = vec4<f32>(ko.c, 0.0);
+        var o = ko.x;
         let shift = floor(o / h);
         o = o - shift * h;
         // rounding can leave o == h: move it into the next cell
@@ -270,6 +306,8 @@ fn gather(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: v
     b_off[k] = a_off[o];
     b_vel[k] = a_vel[o];
     b_acc[k] = a_acc[o];
+    b_kahan[2u * k] = a_kahan[2u * o];
+    b_kahan[2u * k + 1u] = a_kahan[2u * o + 1u];
     b_pid[k] = a_pid[o];
     old_index[k] = o;
     vpred[k] = vec4<f32>(a_vel[o].xyz + 0.5 * step.dt * a_acc[o].xyz, 0.0);
@@ -529,7 +567,9 @@ fn kick(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     if (!is_active(b_pid[k])) {
         return;
     }
-    b_vel[k] = vec4<f32>(b_vel[k].xyz + 0.5 * step.dt * b_acc[k].xyz, b_vel[k].w);
+    let kv = kahan_add(b_vel[k].xyz, b_kahan[2u * k].xyz, 0.5 * step.dt * b_acc[k].xyz);
+    b_vel[k] = vec4<f32>(kv.x, b_vel[k].w);
+    b_kahan[2u * k] = vec4<f32>(kv.c, 0.0);
     rot_kick(k);
 }
 

@@ -89,6 +89,8 @@ struct StateSet {
     wall_hist: wgpu::Buffer,
     /// Displacement since the last neighbour-list rebuild (xyz).
     disp: wgpu::Buffer,
+    /// Kahan compensation of the velocity and the cell offset (2 × vec4 per particle).
+    kahan: wgpu::Buffer,
     /// ω (xyz) and the moment of inertia (w); only when the scene rotates.
     omega: Option<wgpu::Buffer>,
     /// Angular acceleration torque/I; only when the scene rotates.
@@ -121,6 +123,7 @@ impl StateSet {
             // without walls: one element, the smallest binding the kernels accept
             wall_hist: b("wall_hist", hb * (n * walls).max(1)),
             disp: b("disp", 16 * n),
+            kahan: b("kahan", 32 * n),
             omega: kind.rotation().then(|| b("omega", 16 * n)),
             alpha: kind.rotation().then(|| b("alpha", 16 * n)),
             ledger: ledger.then(|| b("ledger", 16 * n * cap)),
@@ -140,6 +143,7 @@ impl StateSet {
             ("hist_pid", Some(&self.hist_pid)),
             ("wall_hist", Some(&self.wall_hist)),
             ("disp", Some(&self.disp)),
+            ("kahan", Some(&self.kahan)),
             ("omega", self.omega.as_ref()),
             ("alpha", self.alpha.as_ref()),
             ("ledger", self.ledger.as_ref()),
@@ -468,7 +472,7 @@ impl GpuEngine {
             ],
             servo_walls: servo_walls as u32,
             periodic: periodic.map(u32::from),
-            _pad: 0,
+            zero: 0,
         };
         let step_buf = uniform_buffer(device, "step", bytemuck::bytes_of(&step));
         alloc.list.push(("step".into(), step_buf.size()));
@@ -952,6 +956,7 @@ impl GpuEngine {
             (&s.off, 16 * n),
             (&s.vel, 16 * n),
             (&s.pid, 4 * n),
+            (&s.kahan, 32 * n),
         ];
         if let Some(omega) = &s.omega {
             sources.push((omega, 16 * n));
@@ -961,8 +966,9 @@ impl GpuEngine {
         let offs: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&out[1]);
         let vels: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&out[2]);
         let pid = u32s(&out[3]);
+        let kahan: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&out[4]);
         let omegas: Vec<[f32; 4]> = out
-            .get(4)
+            .get(5)
             .map(|b| bytemuck::pod_collect_to_vec(b))
             .unwrap_or_default();
         let vec3 = |v: [f32; 4]| DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64);
@@ -971,8 +977,10 @@ impl GpuEngine {
         let mut angular_velocities = vec![DVec3::ZERO; omegas.len()];
         for k in 0..self.n as usize {
             let i = pid[k] as usize;
-            positions[i] = crate::gpu::layout::decode3(cells[k], offs[k], self.origin, self.h);
-            velocities[i] = vec3(vels[k]);
+            // the compensated values: x − c
+            positions[i] = crate::gpu::layout::decode3(cells[k], offs[k], self.origin, self.h)
+                - vec3(kahan[2 * k + 1]);
+            velocities[i] = vec3(vels[k]) - vec3(kahan[2 * k]);
             if let Some(w) = omegas.get(k) {
                 angular_velocities[i] = vec3(*w);
             }

@@ -428,8 +428,9 @@ pub struct StepParams {
     pub servo_walls: u32,
     /// 1 on periodic axes.
     pub periodic: [u32; 3],
-    /// Padding (size a multiple of 16 bytes); always 0.
-    pub _pad: u32,
+    /// Always 0: the kernels read it to hide values from the shader compiler, so Kahan
+    /// compensations are not folded away (see `opaque` in `shaders/step.wgsl`).
+    pub zero: u32,
 }
 
 /// A planar wall: a point as cell + offset and the unit normal. Twin of `Wall` in
