@@ -460,7 +460,13 @@ impl CollisionRun for GpuRun {
         self.engine.rotates()
     }
     fn trace_sample(&self) -> Option<(DVec3, Option<crate::model::ContactHistory>)> {
-        None
+        let force = self.engine.contact_forces().ok()?[0];
+        let history = if self.wall {
+            Some(self.engine.wall_contact_history(0, 0).ok()?)
+        } else {
+            self.engine.contact_history(0, 1).ok()?
+        };
+        Some((force, history))
     }
 }
 
@@ -494,16 +500,38 @@ pub fn collide(spec: &CollideSpec) -> Result<CollideResult, PowderError> {
 
 /// Runs one collision on the CPU backend and records every step (see [`TraceRow`]).
 pub fn collide_traced(spec: &CollideSpec) -> Result<(CollideResult, Vec<TraceRow>), PowderError> {
+    collide_traced_on(spec, Backend::Cpu)
+}
+
+/// Runs one collision on the chosen backend and records every step (see [`TraceRow`]; the
+/// GPU's force is m·a read back each step, its contact radius the device's history).
+pub fn collide_traced_on(
+    spec: &CollideSpec,
+    backend: Backend,
+) -> Result<(CollideResult, Vec<TraceRow>), PowderError> {
     spec.validate()?;
     let dt = spec.dt.unwrap_or_else(|| spec.time_step().default);
     let scene = spec.scene(dt);
     let wall_x = scene.walls.first().map_or(0.0, |w| w.point[0]);
-    let run = CpuRun {
-        engine: CpuEngine::new(&scene)?,
-        wall: spec.wall,
-    };
     let mut rows = Vec::new();
-    let result = run_collision(spec, run, wall_x, dt, "cpu", None, Some(&mut rows))?;
+    let result = match backend {
+        Backend::Cpu => {
+            let run = CpuRun {
+                engine: CpuEngine::new(&scene)?,
+                wall: spec.wall,
+            };
+            run_collision(spec, run, wall_x, dt, "cpu", None, Some(&mut rows))?
+        }
+        Backend::Gpu => {
+            let engine = GpuEngine::new(&scene, GpuContext::new()?)?;
+            let adapter = engine.adapter().to_string();
+            let run = GpuRun {
+                engine,
+                wall: spec.wall,
+            };
+            run_collision(spec, run, wall_x, dt, "gpu", Some(adapter), Some(&mut rows))?
+        }
+    };
     Ok((result, rows))
 }
 

@@ -783,14 +783,7 @@ fn collide_cmd(a: &CollideArgs) -> Result<(), PowderError> {
             )
             .into());
         }
-        if a.backend == Backend::Gpu {
-            return Err(ParamError::new(
-                "trace",
-                "--trace and the F(delta)/a(delta) --plot of a single JKR collision read the CPU engine: use --backend cpu",
-            )
-            .into());
-        }
-        let (result, rows) = collide::collide_traced(&spec)?;
+        let (result, rows) = collide::collide_traced_on(&spec, a.backend.collide())?;
         if let Some(path) = &a.trace {
             let mut text = String::from(collide::TraceRow::CSV_HEADER);
             text.push('\n');

@@ -520,6 +520,32 @@ mod gpu {
             assert_eq!(hist, bytes * slots, "{kind:?}");
         }
     }
+
+    /// `collide --trace` on the GPU: F(δ) and a(δ) step by step follow the CPU's trace.
+    #[test]
+    fn gpu_trace_follows_the_cpu_trace() {
+        if context().is_none() {
+            return;
+        }
+        use powder::collide::collide_traced_on;
+        let s = spec(krijt(TVIS), 0.1);
+        let (_, cpu) = collide_traced_on(&s, Backend::Cpu).unwrap();
+        let (_, gpu) = collide_traced_on(&s, Backend::Gpu).unwrap();
+        assert_eq!(cpu.len(), gpu.len());
+        let f_max = cpu.iter().map(|r| r.force.abs()).fold(0.0, f64::max);
+        let a_max = cpu.iter().map(|r| r.a).fold(0.0, f64::max);
+        let (mut df, mut da) = (0.0f64, 0.0f64);
+        for (c, g) in cpu.iter().zip(&gpu) {
+            df = df.max((c.force - g.force).abs());
+            da = da.max((c.a - g.a).abs());
+        }
+        eprintln!(
+            "trace: max |dF| {:.1e} of {f_max:.3e}, max |da| {:.1e} of {a_max:.3e}",
+            df, da
+        );
+        assert!(f_max > 0.0 && a_max > 0.0);
+        assert!(df < 1e-4 * f_max && da < 1e-4 * a_max, "{df} {da}");
+    }
 }
 
 #[test]

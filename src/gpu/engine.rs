@@ -1181,6 +1181,24 @@ impl GpuEngine {
         Ok(f)
     }
 
+    /// The contact force on each particle after the last step, m·(a − g) from the device's
+    /// accelerations, in the scene's particle order (N). For traces and diagnostics.
+    pub fn contact_forces(&self) -> Result<Vec<DVec3>, PowderError> {
+        let s = &self.sets[self.cur];
+        let n = self.n as u64;
+        let encoder = self.ctx.device.create_command_encoder(&Default::default());
+        let out = submit_and_read(&self.ctx, encoder, &[(&s.acc, 16 * n), (&s.pid, 4 * n)])?;
+        let acc: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&out[0]);
+        let pid = u32s(&out[1]);
+        let mut f = vec![DVec3::ZERO; self.n as usize];
+        for k in 0..self.n as usize {
+            let i = pid[k] as usize;
+            let a = DVec3::new(acc[k][0] as f64, acc[k][1] as f64, acc[k][2] as f64);
+            f[i] = self.mass[i] * (a - self.gravity);
+        }
+        Ok(f)
+    }
+
     /// Kinetic energy of a read-back state, translational plus rotational (I = 2/5·m·r²,
     /// as the CPU ledger), J.
     pub fn kinetic_energy(&self, state: &GpuState) -> f64 {
