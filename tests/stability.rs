@@ -530,3 +530,76 @@ positions = [[0.0, 0.0, 0.0], [3e-6, 0.0, 0.0]]
         "{err}"
     );
 }
+
+/// The stiff and extreme pair cases on the GPU backend (f32 on the device, the full GPU
+/// pipeline): each within a stated tolerance of the closed forms and of the CPU.
+#[test]
+fn stiff_and_extreme_cases_on_the_gpu() {
+    use powder::collide::{collide_on, Backend};
+    if gpu().is_none() {
+        return;
+    }
+    let on_gpu = |s: &CollideSpec| collide_on(s, Backend::Gpu).unwrap();
+    // kp/k1 = 1000 (η = 999, β = 0.1) from slow to violent impacts
+    let p = hyst(1e5, 10.0);
+    for chi in [1e-2, 0.5, 2.0] {
+        let r = on_gpu(&spec(p, 1.1e-3, v_for(&p, 1.1e-3, chi)));
+        let e = en_no_fa(999.0, 0.1, chi);
+        eprintln!("gpu kp/k1 = 1000, chi {chi}: e {} vs {e}", r.e);
+        assert!(
+            (r.e * r.e - e * e).abs() < 0.01,
+            "chi {chi}: {} vs {e}",
+            r.e
+        );
+    }
+    // χ = 20: overlaps beyond half the radius
+    let p = hyst(500.0, 100.0);
+    let r = on_gpu(&spec(p, 1.1e-3, v_for(&p, 1.1e-3, 20.0)));
+    let e = en_no_fa(4.0, 1.0, 20.0);
+    eprintln!(
+        "gpu chi 20: e {} vs {e}, delta_max/a {}",
+        r.e,
+        r.delta_max / 1.1e-3
+    );
+    assert!((r.e - e).abs() < 5e-3 && r.delta_max / 1.1e-3 > 0.5);
+    // β just above β*: sticks at χ = 1 only
+    let beta = 1.05 * analytic::beta_star(4.0);
+    let p = hyst(500.0, beta * 100.0);
+    let (lo, hi) = (analytic::chi_c_b(4.0, beta), analytic::chi_c_c(4.0, beta));
+    assert!(on_gpu(&spec(p, 1.1e-3, v_for(&p, 1.1e-3, 1.0))).stuck);
+    assert!(!on_gpu(&spec(p, 1.1e-3, v_for(&p, 1.1e-3, lo - 0.05))).stuck);
+    assert!(!on_gpu(&spec(p, 1.1e-3, v_for(&p, 1.1e-3, hi + 0.05))).stuck);
+    // size ratio 1:10
+    let p = hyst(500.0, 10.0);
+    for r2 in [0.11e-3, 11e-3] {
+        let r = on_gpu(&spec(p, r2, v_for(&p, r2, 0.7)));
+        let e = en_no_fa(4.0, 0.1, 0.7);
+        eprintln!("gpu size ratio r2 {r2}: e {} vs {e}", r.e);
+        assert!((r.e - e).abs() < 5e-3, "r2 {r2}: {} vs {e}", r.e);
+    }
+    // tiny stiff silica spheres (dt ~ 1e-12 s)
+    let silica = JkrParams::jkr(7e10, 0.17, 0.025);
+    let s = CollideSpec::head_on(ContactModel::Jkr(silica), 1e-6, 2200.0, 5.0);
+    let (g, c) = (on_gpu(&s), collide(&s).unwrap());
+    eprintln!(
+        "gpu silica: e {} (cpu {}, closed form {}), balance {:e}",
+        g.e,
+        c.e,
+        g.e_analytic.unwrap(),
+        g.energy.balance_error.unwrap()
+    );
+    assert!((g.e - c.e).abs() < 1e-3, "{} vs {}", g.e, c.e);
+    assert!(g.energy.balance_error.unwrap() < 1e-3);
+    // adhesion so strong everything sticks (the so-weak case needs 10^6 steps at 0.05 m/s:
+    // the adhesive zone δ0 shrinks with γ and the time step with it; CPU only)
+    let strong = JkrParams::jkr(1e9, 0.3, 50.0);
+    for v in [0.05, 5.0] {
+        let s = on_gpu(&CollideSpec::head_on(
+            ContactModel::Jkr(strong),
+            1e-6,
+            2000.0,
+            v,
+        ));
+        assert!(s.stuck, "strong, v {v}");
+    }
+}
