@@ -377,6 +377,9 @@ pub struct BenchOptions {
     /// Keep the GPU energy ledger and contact statistics (`GpuOptions::ledger`) during the
     /// timed steps; off by default, so the rate is the step's own cost.
     pub ledger: bool,
+    /// After the timed steps, time each pass of the GPU step alone
+    /// (`GpuEngine::profile_passes`).
+    pub profile: bool,
 }
 
 impl Default for BenchOptions {
@@ -391,6 +394,7 @@ impl Default for BenchOptions {
             velocity_scale: 1.0,
             seed: 1,
             ledger: false,
+            profile: false,
         }
     }
 }
@@ -474,6 +478,9 @@ pub struct BenchRow {
     pub rebuilds: Option<u64>,
     /// Particle–particle contacts per particle at the end (shows the packing is dense).
     pub contacts_per_particle: Option<f64>,
+    /// GPU with `--profile`: seconds per dispatch of each pass of the step
+    /// (`GpuEngine::profile_passes`; the sort, `neighbours` and `remap` at a rebuild).
+    pub passes: Option<Vec<(String, f64)>>,
 }
 
 impl BenchRow {
@@ -495,6 +502,7 @@ impl BenchRow {
             neighbour_slots: None,
             rebuilds: None,
             contacts_per_particle: None,
+            passes: None,
         }
     }
 }
@@ -548,6 +556,7 @@ fn run_cpu(scene: &Scene, case: Case, opts: &BenchOptions) -> Result<BenchRow, P
         neighbour_slots: None,
         rebuilds: Some(opts.steps),
         contacts_per_particle: Some(z),
+        passes: None,
     })
 }
 
@@ -577,13 +586,20 @@ fn run_gpu(
     let state = engine.state()?;
     let z = coordination(scene, &state.positions, engine.radii());
     let bytes = engine.buffer_bytes();
+    let (dt, capacity) = (engine.dt(), engine.capacity());
+    let passes = if opts.profile {
+        Some(engine.profile_passes(16)?)
+    } else {
+        None
+    };
     Ok(BenchRow {
+        passes,
         case: case.name(),
         backend: "gpu",
         particles: n,
         status: "ran",
         note: None,
-        dt: Some(engine.dt()),
+        dt: Some(dt),
         steps: opts.steps,
         setup_seconds: Some(setup),
         wall_seconds: Some(wall),
@@ -591,7 +607,7 @@ fn run_gpu(
         particle_steps_per_second: Some(n as f64 * opts.steps as f64 / wall.max(1e-12)),
         gpu_bytes: Some(bytes),
         gpu_bytes_per_particle: Some(bytes as f64 / n as f64),
-        neighbour_slots: Some(engine.capacity()),
+        neighbour_slots: Some(capacity),
         rebuilds: Some(rebuilds),
         contacts_per_particle: Some(z),
     })
@@ -786,7 +802,13 @@ pub fn table_line(r: &BenchRow) -> String {
         r.rebuilds.map_or_else(|| "-".into(), |v| v.to_string()),
         opt(r.contacts_per_particle, |v| format!("{v:.2}")),
         r.note.as_deref().unwrap_or("")
-    )
+    ) + &r.passes.as_ref().map_or(String::new(), |p| {
+        let parts: Vec<String> = p
+            .iter()
+            .map(|(name, s)| format!("{name} {:.1}", s * 1e6))
+            .collect();
+        format!("\n    passes (µs per dispatch): {}", parts.join(", "))
+    })
 }
 
 #[cfg(test)]

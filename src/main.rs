@@ -89,6 +89,9 @@ struct BenchArgs {
     /// Keep the GPU energy ledger during the timed steps (off: the step's own cost).
     #[arg(long)]
     ledger: bool,
+    /// Time each pass of the GPU step alone after the timed steps (which pass costs what).
+    #[arg(long)]
+    profile: bool,
     /// Write the report (rows, machine, adapter, version, commit, date) as JSON.
     #[arg(long)]
     json: Option<PathBuf>,
@@ -157,6 +160,7 @@ fn bench_cmd(a: &BenchArgs) -> Result<(), PowderError> {
         velocity_scale: a.velocity_scale,
         seed: a.seed,
         ledger: a.ledger,
+        profile: a.profile,
     };
     opts.validate()?;
     println!("{}", bench::table_header());

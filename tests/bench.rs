@@ -226,3 +226,45 @@ fn bad_bench_and_accuracy_input_is_an_error_not_a_panic() {
         assert!(!err.contains("panicked"), "{err}");
     }
 }
+
+/// `--profile` times every pass of the GPU step and reports it in the table and the JSON.
+#[test]
+fn bench_profile_reports_every_pass() {
+    if !gpu_available() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("bench.json");
+    let (ok, out, err) = powder(&[
+        "bench",
+        "--sizes",
+        "64",
+        "--steps",
+        "4",
+        "--warmup",
+        "1",
+        "--backend",
+        "gpu",
+        "--case",
+        "hysteretic",
+        "--profile",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(out.contains("passes (µs per dispatch)"), "{out}");
+    let v = read_json(&json);
+    let passes = v["rows"][0]["passes"].as_array().unwrap();
+    let names: Vec<&str> = passes.iter().map(|p| p[0].as_str().unwrap()).collect();
+    for name in [
+        "kick_drift",
+        "grid sort",
+        "neighbours",
+        "remap",
+        "force",
+        "kick",
+    ] {
+        assert!(names.contains(&name), "{names:?}");
+    }
+    assert!(passes.iter().all(|p| p[1].as_f64().unwrap() >= 0.0));
+}

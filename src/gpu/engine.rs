@@ -765,6 +765,69 @@ impl GpuEngine {
         }
     }
 
+    /// What each pass of the step costs on this adapter: every pass is recorded `reps` times
+    /// alone into one submission and timed (minus an empty submission's cost), with the
+    /// rebuild flag forced on so the sort, `neighbours` and `remap` do their full work.
+    /// Returns (pass, seconds per dispatch), in step order. The repeated passes leave the
+    /// state meaningless, so this consumes the engine (profile a throwaway one).
+    pub fn profile_passes(self, reps: u32) -> Result<Vec<(String, f64)>, PowderError> {
+        let reps = reps.max(1);
+        let (n, max) = (self.n, self.max_per_dim);
+        // a rebuild every step: the rebuild-only passes do their full work
+        self.ctx
+            .queue
+            .write_buffer(&self.skin, 4, bytemuck::bytes_of(&1u32));
+        let time = |engine: &Self, record: &dyn Fn(&mut wgpu::CommandEncoder)| {
+            let mut encoder = engine
+                .ctx
+                .device
+                .create_command_encoder(&Default::default());
+            for _ in 0..reps {
+                record(&mut encoder);
+            }
+            let t = std::time::Instant::now();
+            submit_and_read(&engine.ctx, encoder, &[(&engine.monitor, 4)]).map(|_| t.elapsed())
+        };
+        let empty = time(&self, &|_| {})?.as_secs_f64();
+        let b = &self.bound[self.cur];
+        let names = [
+            "kick_drift",
+            "decide",
+            "grid sort",
+            "gather",
+            "neighbours",
+            "remap",
+            "force",
+            "kick",
+        ];
+        let record = |e: &mut wgpu::CommandEncoder, id: usize| {
+            if id == 2 {
+                self.grid.encode(e, &self.sets[self.cur].cell);
+                return;
+            }
+            let (kernel, group, workgroups) = match id {
+                0 => (0, &b.kick_drift, None),
+                1 => (1, &b.decide, Some(1)),
+                3 => (2, &b.gather, None),
+                4 => (3, &b.neighbours, None),
+                5 => (4, &b.remap, None),
+                6 => (5, &b.force, None),
+                _ => (6, &b.kick, None),
+            };
+            let mut pass = e.begin_compute_pass(&Default::default());
+            match workgroups {
+                Some(w) => self.kernels[kernel].dispatch_workgroups(&mut pass, group, w, max),
+                None => self.kernels[kernel].dispatch(&mut pass, group, n, max),
+            }
+        };
+        let mut out = Vec::new();
+        for (id, name) in names.iter().enumerate() {
+            let t = time(&self, &|e: &mut wgpu::CommandEncoder| record(e, id))?.as_secs_f64();
+            out.push((name.to_string(), ((t - empty) / reps as f64).max(0.0)));
+        }
+        Ok(out)
+    }
+
     /// Neighbour-list rebuilds so far (the first, before the first step, included): reads
     /// the device's counter back.
     pub fn rebuilds(&self) -> Result<u64, PowderError> {
