@@ -10,6 +10,33 @@ use crate::scene::Scene;
 use crate::setup::Resolved;
 use glam::DVec3;
 use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
+
+/// A fast, deterministic hash for pair keys (two u32 ids): a multiply-rotate mix. The
+/// standard SipHash cost 10 % of a JKR step (perf) and its random seed made the map's
+/// iteration order differ from run to run.
+#[derive(Clone, Copy, Debug, Default)]
+struct PairHasher(u64);
+
+impl Hasher for PairHasher {
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(b as u64);
+        }
+    }
+    fn write_u32(&mut self, i: u32) {
+        self.write_u64(i as u64);
+    }
+    fn write_u64(&mut self, i: u64) {
+        self.0 = (self.0.rotate_left(23) ^ i).wrapping_mul(0x9e37_79b9_7f4a_7c15);
+    }
+    fn finish(&self) -> u64 {
+        self.0 ^ (self.0 >> 29)
+    }
+}
+
+/// Contacts keyed by the pair's persistent ids.
+type PairMap = HashMap<(u32, u32), ContactRecord, BuildHasherDefault<PairHasher>>;
 
 /// What a contact remembers between steps.
 #[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize)]
@@ -173,8 +200,8 @@ pub struct CpuEngine {
     gravity: DVec3,
     grid: CellGrid,
     cutoff_pad: Vec<f64>,
-    contacts: HashMap<(u32, u32), ContactRecord>,
-    wall_contacts: HashMap<(u32, u32), ContactRecord>,
+    contacts: PairMap,
+    wall_contacts: PairMap,
     dissipated: f64,
     wall_work: f64,
     domain: (DVec3, DVec3),
@@ -295,8 +322,8 @@ impl CpuEngine {
             gravity: DVec3::from_array(scene.gravity),
             grid,
             cutoff_pad,
-            contacts: HashMap::new(),
-            wall_contacts: HashMap::new(),
+            contacts: PairMap::default(),
+            wall_contacts: PairMap::default(),
             dissipated: 0.0,
             wall_work: 0.0,
             domain,
@@ -322,7 +349,7 @@ impl CpuEngine {
 
     /// The evolving state, for a checkpoint.
     pub fn state(&self) -> CpuState {
-        let sorted = |m: &HashMap<(u32, u32), ContactRecord>| {
+        let sorted = |m: &PairMap| {
             let mut v: Vec<_> = m.iter().map(|(k, r)| (*k, *r)).collect();
             v.sort_by_key(|(k, _)| *k);
             v
@@ -664,12 +691,18 @@ impl CpuEngine {
         new: &ContactRecord,
         m: &Motion,
         dt: f64,
-        edges: [(f64, f64); 2],
+        edges: impl FnOnce() -> [(f64, f64); 2],
     ) -> f64 {
         let was_in = old.is_some_and(ContactRecord::engaged);
         let is_in = new.engaged();
         let blank = ContactRecord::default();
         let o = old.unwrap_or(&blank);
+        // the edges only where the step crosses one (JKR's cost a contact-radius solve each)
+        let edges = if was_in != is_in {
+            edges()
+        } else {
+            [(0.0, 0.0); 2]
+        };
         let (d0, f0) = if was_in { (o.delta, o.force) } else { edges[0] };
         let (d1, f1) = if is_in {
             (m.delta, new.force)
@@ -689,11 +722,7 @@ impl CpuEngine {
 
     /// Books the contacts that left the search range within one step (in key order, so the
     /// sum is reproducible): they leave with their last force.
-    fn book_departed(
-        old: HashMap<(u32, u32), ContactRecord>,
-        dt: f64,
-        overlap: impl Fn(usize, usize) -> f64,
-    ) -> f64 {
+    fn book_departed(old: PairMap, dt: f64, overlap: impl Fn(usize, usize) -> f64) -> f64 {
         let mut departed: Vec<_> = old.into_iter().collect();
         departed.sort_by_key(|(k, _)| *k);
         departed
@@ -704,7 +733,7 @@ impl CpuEngine {
                     ..Default::default()
                 };
                 let edges = [(0.0, 0.0), (motion.delta, 0.0)];
-                Self::book(Some(&c), &ContactRecord::default(), &motion, dt, edges)
+                Self::book(Some(&c), &ContactRecord::default(), &motion, dt, || edges)
             })
             .sum()
     }
@@ -717,7 +746,7 @@ impl CpuEngine {
         let rotation = !w_pred.is_empty();
         let omega_of = |i: usize| if rotation { w_pred[i] } else { DVec3::ZERO };
         let mut old = std::mem::take(&mut self.contacts);
-        let mut new = HashMap::with_capacity(old.len().max(16));
+        let mut new = PairMap::with_capacity_and_hasher(old.len().max(16), Default::default());
         let mut dissipated = 0.0;
         let mut failure = None;
         let mut peak = self.peak;
@@ -776,7 +805,7 @@ impl CpuEngine {
                     omega_rel: wi - wj,
                 };
                 let record = ContactRecord::new(history, delta, &r, &motion);
-                let edges = model.edges(&geom, k.delta_dot);
+                let edges = || model.edges(&geom, k.delta_dot);
                 dissipated += Self::book(prior.as_ref(), &record, &motion, dt, edges);
                 let ratio = delta / geom.a12;
                 if peak.is_none_or(|p: (f64, usize, Partner)| ratio > p.0) {
@@ -800,7 +829,7 @@ impl CpuEngine {
         self.contacts = new;
 
         let mut old_w = std::mem::take(&mut self.wall_contacts);
-        let mut new_w = HashMap::with_capacity(old_w.len());
+        let mut new_w = PairMap::with_capacity_and_hasher(old_w.len(), Default::default());
         for (w, wall) in self.walls.iter().enumerate() {
             let n = wall.normal;
             for (i, v_particle) in v_pred.iter().enumerate() {
@@ -841,7 +870,7 @@ impl CpuEngine {
                     omega_rel: wi,
                 };
                 let record = ContactRecord::new(history, delta, &r, &motion);
-                let edges = model.edges(&geom, k.delta_dot);
+                let edges = || model.edges(&geom, k.delta_dot);
                 dissipated += Self::book(prior.as_ref(), &record, &motion, dt, edges);
                 let ratio = delta / geom.a12;
                 if self.peak.is_none_or(|p| ratio > p.0) {

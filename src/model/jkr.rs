@@ -596,7 +596,8 @@ impl JkrParams {
             return (r_eff * delta.max(0.0)).sqrt();
         }
         let a0 = self.a0(r_eff);
-        let d = delta / self.delta0(r_eff);
+        // δ0 = a0²/(3R*) from this a0 (bitwise what `delta0` gives, one cube root fewer)
+        let d = delta / (a0 * a0 / (3.0 * r_eff));
         let s = S_MIN + solve_t_f64(d - D_PULLOFF_DISPLACEMENT);
         a0 * s * s
     }
