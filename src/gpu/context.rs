@@ -8,7 +8,8 @@
 //!   (device type `Cpu`: Mesa lavapipe on Vulkan, llvmpipe on GL) otherwise;
 //! * `software`: only adapters of device type `Cpu`;
 //! * `hardware`: only adapters that are not of device type `Cpu`;
-//! * anything else: adapters whose name contains the string, ignoring case.
+//! * anything else: adapters whose name contains the string, or whose backend it names
+//!   (`vulkan`, `gl`, `metal`, `dx12`), ignoring case.
 //!
 //! Among equally ranked adapters, Vulkan is preferred over Metal, DX12 and GL (the same
 //! device usually shows up both on Vulkan and on GL). The device is created with the
@@ -220,7 +221,12 @@ impl AdapterPreference {
             Self::Auto => true,
             Self::Software => info.device_type == wgpu::DeviceType::Cpu,
             Self::Hardware => info.device_type != wgpu::DeviceType::Cpu,
-            Self::Name(s) => info.name.to_lowercase().contains(&s.to_lowercase()),
+            // part of the adapter's name, or its backend ("vulkan", "gl", "metal", "dx12")
+            Self::Name(s) => {
+                let s = s.to_lowercase();
+                info.name.to_lowercase().contains(&s)
+                    || format!("{:?}", info.backend).to_lowercase() == s
+            }
         }
     }
 }
@@ -405,6 +411,10 @@ mod tests {
         assert!(!AdapterPreference::Hardware.accepts(&gl));
         assert!(AdapterPreference::Name("rtx".into()).accepts(&dgpu));
         assert!(!AdapterPreference::Name("rtx".into()).accepts(&lavapipe));
+        // a backend's name picks that backend's adapters
+        assert!(AdapterPreference::Name("gl".into()).accepts(&gl));
+        assert!(!AdapterPreference::Name("gl".into()).accepts(&lavapipe));
+        assert!(AdapterPreference::Name("Vulkan".into()).accepts(&lavapipe));
     }
 
     #[test]
