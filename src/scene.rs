@@ -100,6 +100,8 @@
 //!                               # (0-based) follow the order of expansion
 //! kind = "list"                 # required: "list", "lattice" or "random"
 //! material = "powder"           # default: the first [[material]]
+//! insert_at = 0.0               # s, >= 0, default 0: when the block's particles appear
+//!                               # (pouring; before that they neither move nor interact)
 //!
 //! # kind = "list": explicit particles
 //! positions = [[0.005, 0.005, 0.005], [0.005, 0.005, 0.008]]   # required, m
@@ -119,8 +121,12 @@
 //! seed = 1                      # default 1: seed of the jitter
 //!
 //! # kind = "random": random sequential placement without overlaps (with every particle
-//! # placed before, of all blocks), spheres fully inside the region; up to 1000 attempts
-//! # per particle. Random sequential addition jams near a solid fraction of ~0.38.
+//! # placed before, of all blocks, that appears at the same time), spheres fully inside the
+//! # region; up to 1000 attempts per particle. Random sequential addition jams near a solid
+//! # fraction of ~0.38.
+//! # batches = 1                 # default 1: pour `count` in this many batches, each placed
+//! # batch_interval = 0.01       #   afresh in the region (seed + k), batch k appearing at
+//! #                             #   insert_at + k·batch_interval s (> 0 with batches > 1)
 //! count = 500                   # required, >= 0
 //! min = [0.0, 0.0, 0.0]         # required, m
 //! max = [0.01, 0.01, 0.01]      # required, m
