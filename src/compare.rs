@@ -132,12 +132,13 @@ struct HistoryDeviation {
     max: f64,
 }
 
-/// Compares δmax (hysteretic), the tangential spring, ξ and the Krijt contact radius of
-/// every CPU contact with overlap against the GPU's copy of the same side.
+/// Compares δmax (pairs of the hysteretic model: `keeps_delta_max`), the tangential
+/// spring, ξ and the Krijt contact radius of every CPU contact with overlap against the
+/// GPU's copy of the same side.
 fn history_deviation(
     cpu: &[((u32, u32), f64, ContactHistory)],
     gpu: &[((u32, u32), ContactHistory)],
-    hysteretic: bool,
+    keeps_delta_max: impl Fn(u32, u32) -> bool,
 ) -> HistoryDeviation {
     let gpu: HashMap<(u32, u32), ContactHistory> = gpu.iter().copied().collect();
     let (mut compared, mut missing) = (0, 0);
@@ -155,7 +156,7 @@ fn history_deviation(
             continue;
         };
         compared += 1;
-        if hysteretic {
+        if keeps_delta_max(key.0, key.1) {
             add(0, (g.delta_max - c.delta_max).abs(), c.delta_max);
         }
         add(
@@ -192,7 +193,18 @@ pub fn compare(
     let mut gpu = GpuEngine::new(scene, ctx)?;
     let radius = cpu.radii().to_vec();
     let r_min = radius.iter().copied().fold(f64::INFINITY, f64::min);
-    let hysteretic = gpu.kind() == crate::gpu::shaders::StepKind::Hysteretic;
+    // the pairs whose model keeps δmax on the device (the hysteretic model; JKR keeps it
+    // on the CPU only)
+    let keeps_delta_max = |i: u32, j: u32| {
+        let (a, b) = (
+            scene.particles[i as usize].material,
+            scene.particles[j as usize].material,
+        );
+        matches!(
+            scene.pair_model(a, b),
+            Ok(crate::model::ContactModel::Hysteretic(_))
+        )
+    };
     let every = every.max(1);
     let mut samples = Vec::new();
     let mut done = 0;
@@ -245,7 +257,7 @@ pub fn compare(
             sg.contacts + sg.wall_contacts,
         );
         let contacts = contacts_cpu.abs_diff(contacts_gpu) as f64 / contacts_cpu.max(1) as f64;
-        let h = history_deviation(&cpu.contacts(), &gpu.contact_histories()?, hysteretic);
+        let h = history_deviation(&cpu.contacts(), &gpu.contact_histories()?, keeps_delta_max);
         let history = h.rms;
         let mut exceeded = Vec::new();
         if position > tol.position {

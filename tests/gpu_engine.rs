@@ -737,7 +737,7 @@ velocity = [-0.1, 0.05, -0.3]
     }
 
     #[test]
-    fn gpu_refuses_to_mix_model_families() {
+    fn gpu_mixes_model_families_but_not_with_krijt() {
         let Some(ctx) = context() else { return };
         let scene = load(
             r#"
@@ -768,9 +768,46 @@ radius = 1e-3
 material = "b"
 "#,
         );
-        let err = GpuEngine::new(&scene, ctx).err().unwrap().to_string();
+        // LSD and Hertz pairs in one scene: the mixed step (tests/gpu_mixed.rs runs one)
+        let e = GpuEngine::new(&scene, ctx).unwrap();
+        assert_eq!(e.kind(), powder::gpu::shaders::StepKind::Mixed);
+        // with a Krijt pair it is refused with the reason
+        let Some(ctx) = context() else { return };
+        let krijt = load(
+            &r#"
+[domain]
+min = [0.0, 0.0, 0.0]
+max = [1e-2, 1e-2, 1e-2]
+[simulation]
+duration = 1.0
+[[material]]
+name = "a"
+density = 2000.0
+model = "lsd"
+k = 100.0
+[[material]]
+name = "b"
+density = 2000.0
+model = "hertz"
+youngs = 1e8
+poisson = 0.3
+[[interaction]]
+materials = ["a", "b"]
+model = "lsd"
+k = 100.0
+[[particles]]
+kind = "list"
+positions = [[0.005, 0.005, 0.005]]
+radius = 1e-3
+material = "b"
+"#.replace(
+                "model = \"hertz\"\nyoungs = 1e8\npoisson = 0.3",
+                "model = \"jkr\"\nyoungs = 1e8\npoisson = 0.3\nsurface_energy = 0.01\ndissipation = \"krijt\"\ntvis = 1e-6",
+            ),
+        );
+        let err = GpuEngine::new(&krijt, ctx).err().unwrap().to_string();
         assert!(
-            err.contains("mixes") && err.contains("--backend cpu"),
+            err.contains("Krijt") && err.contains("--backend cpu"),
             "{err}"
         );
     }

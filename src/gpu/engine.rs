@@ -45,7 +45,9 @@ use crate::error::PowderError;
 use crate::gpu::context::GpuContext;
 use crate::gpu::grid::GridSort;
 use crate::gpu::kernel::{storage_buffer, submit_and_read, u32s, uniform_buffer, Kernel, Program};
-use crate::gpu::layout::{encode3, gpu_cell_width, HystereticPair, JkrPair, StepParams, WallGpu};
+use crate::gpu::layout::{
+    encode3, gpu_cell_width, HystereticPair, JkrPair, MixedPair, StepParams, WallGpu,
+};
 use crate::gpu::shaders::StepKind;
 use crate::model::{ContactHistory, ContactModel};
 use crate::scene::Scene;
@@ -309,10 +311,38 @@ fn pair_table(models: &[ContactModel]) -> Result<(StepKind, Vec<u8>), PowderErro
         return Ok((StepKind::Hysteretic, bytemuck::cast_slice(&rows).to_vec()));
     }
     if jkr.len() != models.len() {
-        return Err(PowderError::Run(
-            "the GPU backend runs one model family per scene: this scene mixes JKR/Hertz pairs with hysteretic/LSD pairs (materials, interactions or walls); use --backend cpu"
-                .into(),
-        ));
+        // a mixed scene: tagged rows holding either parameter set
+        if jkr.iter().any(|p| p.dissipation.krijt_law().is_some()) {
+            return Err(PowderError::Run(
+                "the GPU backend does not mix JKR pairs with Krijt or stress dissipation and hysteretic/LSD pairs in one scene; use --backend cpu"
+                    .into(),
+            ));
+        }
+        let kind = StepKind::mixed(
+            jkr.iter().any(|p| p.friction > 0.0),
+            jkr.iter().any(|p| p.rolling_hysteresis > 0.0),
+        );
+        let rows: Vec<MixedPair> = models
+            .iter()
+            .map(|m| match m {
+                ContactModel::Hysteretic(p) => MixedPair {
+                    kind: 0,
+                    hyst: HystereticPair::hysteretic(p),
+                    ..Default::default()
+                },
+                ContactModel::Lsd(p) => MixedPair {
+                    kind: 0,
+                    hyst: HystereticPair::lsd(p),
+                    ..Default::default()
+                },
+                ContactModel::Jkr(p) => MixedPair {
+                    kind: 1,
+                    jkr: JkrPair::new(p),
+                    ..Default::default()
+                },
+            })
+            .collect();
+        return Ok((kind, bytemuck::cast_slice(&rows).to_vec()));
     }
     // the history stores what some pair needs: the spring, ξ, the Krijt contact radius
     let kind = StepKind::jkr(
@@ -1288,42 +1318,7 @@ impl GpuEngine {
     /// spring, ξ and the Krijt contact radius only where the layout stores them (JKR keeps
     /// no δmax on the device).
     fn decode_history(&self, b: &[u8]) -> ContactHistory {
-        let f: Vec<f32> = bytemuck::pod_collect_to_vec(b);
-        let v = |o: usize| DVec3::new(f[o] as f64, f[o + 1] as f64, f[o + 2] as f64);
-        match self.kind {
-            StepKind::Hysteretic => ContactHistory {
-                delta_max: f[0] as f64,
-                touched: f[1] != 0.0,
-                ..Default::default()
-            },
-            StepKind::Jkr => ContactHistory {
-                touched: f[0] != 0.0,
-                ..Default::default()
-            },
-            StepKind::JkrFriction => ContactHistory {
-                touched: f[3] != 0.0,
-                tangential: v(0),
-                ..Default::default()
-            },
-            StepKind::JkrRolling | StepKind::JkrKrijtRolling => ContactHistory {
-                touched: f[3] != 0.0,
-                tangential: v(0),
-                rolling: v(4),
-                contact_radius: f[7] as f64,
-                ..Default::default()
-            },
-            StepKind::JkrKrijt => ContactHistory {
-                touched: f[0] != 0.0,
-                contact_radius: f[1] as f64,
-                ..Default::default()
-            },
-            StepKind::JkrKrijtFriction => ContactHistory {
-                touched: f[3] != 0.0,
-                tangential: v(0),
-                contact_radius: f[4] as f64,
-                ..Default::default()
-            },
-        }
+        decode_history(self.kind, b)
     }
 
     /// The history particle `i` keeps of its contact with particle `j` (persistent ids)
@@ -1418,5 +1413,58 @@ impl GpuEngine {
             .ok_or_else(|| PowderError::Run(format!("particle {i} does not exist")))?;
         let slot = k * walls + w;
         Ok(self.decode_history(&out[1][slot * hb..(slot + 1) * hb]))
+    }
+}
+
+/// Decodes one stored history element of a step variant (see `gpu::shaders::StepKind`):
+/// δmax only for the hysteretic model, the tangential spring, ξ and the Krijt contact
+/// radius only where the layout stores them (JKR keeps no δmax on the device); a mixed
+/// layout holds the JKR part first and the hysteretic (δmax, touched) after it.
+fn decode_history(kind: StepKind, b: &[u8]) -> ContactHistory {
+    let f: Vec<f32> = bytemuck::pod_collect_to_vec(b);
+    let v = |o: usize| DVec3::new(f[o] as f64, f[o + 1] as f64, f[o + 2] as f64);
+    let mixed = |jkr: StepKind, at: usize| {
+        let mut h = decode_history(jkr, &b[..4 * at]);
+        h.delta_max = f[at] as f64;
+        h.touched |= f[at + 1] != 0.0;
+        h
+    };
+    match kind {
+        StepKind::Mixed => mixed(StepKind::Jkr, 2),
+        StepKind::MixedFriction => mixed(StepKind::JkrFriction, 4),
+        StepKind::MixedRolling => mixed(StepKind::JkrRolling, 8),
+
+        StepKind::Hysteretic => ContactHistory {
+            delta_max: f[0] as f64,
+            touched: f[1] != 0.0,
+            ..Default::default()
+        },
+        StepKind::Jkr => ContactHistory {
+            touched: f[0] != 0.0,
+            ..Default::default()
+        },
+        StepKind::JkrFriction => ContactHistory {
+            touched: f[3] != 0.0,
+            tangential: v(0),
+            ..Default::default()
+        },
+        StepKind::JkrRolling | StepKind::JkrKrijtRolling => ContactHistory {
+            touched: f[3] != 0.0,
+            tangential: v(0),
+            rolling: v(4),
+            contact_radius: f[7] as f64,
+            ..Default::default()
+        },
+        StepKind::JkrKrijt => ContactHistory {
+            touched: f[0] != 0.0,
+            contact_radius: f[1] as f64,
+            ..Default::default()
+        },
+        StepKind::JkrKrijtFriction => ContactHistory {
+            touched: f[3] != 0.0,
+            tangential: v(0),
+            contact_radius: f[4] as f64,
+            ..Default::default()
+        },
     }
 }

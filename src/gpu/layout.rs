@@ -405,6 +405,21 @@ impl JkrPair {
     }
 }
 
+/// One row of the pair table of a mixed scene (`MixedPair` in `gpu::shaders::MIXED`):
+/// a hysteretic/LSD row (`kind` 0) or a JKR-family row (`kind` 1); the other part is zero.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct MixedPair {
+    /// 0: hysteretic/LSD (`hyst`), 1: JKR family (`jkr`).
+    pub kind: u32,
+    /// Padding (the parameter rows start at 16 bytes); always 0.
+    pub _pad: [u32; 3],
+    /// The hysteretic/LSD parameters (kind 0).
+    pub hyst: HystereticPair,
+    /// The JKR-family parameters (kind 1).
+    pub jkr: JkrPair,
+}
+
 /// Per-run step parameters: twin of `StepParams` in `shaders/step.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -775,6 +790,18 @@ mod tests {
             ],
         );
         let (jkr, _) = shaders::validate(&shaders::StepKind::Jkr.variant(true).source).unwrap();
+        let (mixed, _) =
+            shaders::validate(&shaders::StepKind::MixedRolling.variant(true).source).unwrap();
+        let (wsize, members) = wgsl_struct(&mixed, "MixedPair");
+        assert_eq!(wsize as usize, size_of::<MixedPair>(), "MixedPair size");
+        for (field, off) in [
+            ("kind", offset_of!(MixedPair, kind)),
+            ("hyst", offset_of!(MixedPair, hyst)),
+            ("jkr", offset_of!(MixedPair, jkr)),
+        ] {
+            let m = members.iter().find(|(n, _)| n == field).unwrap();
+            assert_eq!(m.1 as usize, off, "MixedPair.{field}");
+        }
         let (wsize, members) = wgsl_struct(&jkr, "JkrPair");
         assert_eq!(wsize as usize, size_of::<JkrPair>(), "JkrPair size");
         for (field, off) in [

@@ -136,11 +136,18 @@ pub enum StepKind {
     JkrKrijtFriction,
     /// [`Self::JkrRolling`] with the contact radius (`krijt`/`stress`; a fills ξ's padding).
     JkrKrijtRolling,
+    /// Hysteretic/LSD and JKR/Hertz pairs in one scene (no Krijt): the JKR touched flag and
+    /// the hysteretic (δmax, touched), no rotation.
+    Mixed,
+    /// As `Mixed`, with friction on some JKR pair: the tangential spring, rotation.
+    MixedFriction,
+    /// As `Mixed`, with rolling resistance on some JKR pair: spring and ξ, rotation.
+    MixedRolling,
 }
 
 impl StepKind {
     /// Every step kind, in declaration order.
-    pub const ALL: [StepKind; 7] = [
+    pub const ALL: [StepKind; 10] = [
         StepKind::Hysteretic,
         StepKind::Jkr,
         StepKind::JkrFriction,
@@ -148,7 +155,20 @@ impl StepKind {
         StepKind::JkrKrijt,
         StepKind::JkrKrijtFriction,
         StepKind::JkrKrijtRolling,
+        StepKind::Mixed,
+        StepKind::MixedFriction,
+        StepKind::MixedRolling,
     ];
+
+    /// The mixed step (hysteretic/LSD with JKR-family pairs) whose JKR history covers what
+    /// its JKR pairs need.
+    pub fn mixed(friction: bool, rolling: bool) -> Self {
+        match (rolling, friction) {
+            (true, _) => Self::MixedRolling,
+            (false, true) => Self::MixedFriction,
+            (false, false) => Self::Mixed,
+        }
+    }
 
     /// The JKR step for a scene: with the tangential spring (`friction`), ξ (`rolling`,
     /// implies the spring) and the Krijt contact radius (`krijt`) stored where some pair
@@ -174,6 +194,9 @@ impl StepKind {
             Self::JkrKrijt => "step_jkr_krijt",
             Self::JkrKrijtFriction => "step_jkr_krijt_friction",
             Self::JkrKrijtRolling => "step_jkr_krijt_rolling",
+            Self::Mixed => "step_mixed",
+            Self::MixedFriction => "step_mixed_friction",
+            Self::MixedRolling => "step_mixed_rolling",
         }
     }
 
@@ -181,7 +204,12 @@ impl StepKind {
     pub fn rotation(self) -> bool {
         matches!(
             self,
-            Self::JkrFriction | Self::JkrRolling | Self::JkrKrijtFriction | Self::JkrKrijtRolling
+            Self::JkrFriction
+                | Self::JkrRolling
+                | Self::JkrKrijtFriction
+                | Self::JkrKrijtRolling
+                | Self::MixedFriction
+                | Self::MixedRolling
         )
     }
 
@@ -204,6 +232,11 @@ impl StepKind {
             Self::JkrKrijt => 8,
             Self::JkrKrijtFriction => 20,
             Self::JkrKrijtRolling => 32,
+            // struct { JKR layout, vec2 }: the vec2 at offset 8, 16, 32 (16-byte aligned
+            // for the vector layouts)
+            Self::Mixed => 16,
+            Self::MixedFriction => 32,
+            Self::MixedRolling => 48,
         }
     }
 
@@ -238,12 +271,132 @@ impl StepKind {
                 rotation,
             ],
             Self::JkrKrijtRolling => vec![MODEL_JKR, MODEL_KRIJT, JKR_HISTORY_ROLLING, rotation],
+            Self::Mixed | Self::MixedFriction | Self::MixedRolling => {
+                let layout = match self {
+                    Self::Mixed => JKR_HISTORY_TOUCHED,
+                    Self::MixedFriction => JKR_HISTORY_TANGENTIAL,
+                    _ => JKR_HISTORY_ROLLING,
+                };
+                return mixed_variant(self, layout, rotation, ledger_snippet, ledger);
+            }
         };
         snippets.push(ledger_snippet);
         ShaderVariant {
             name: self.variant_name(ledger),
             source: compose("shaders/step.wgsl", STEP, &snippets),
         }
+    }
+}
+
+/// `src` with every identifier in `map` renamed (whole identifiers only): composes two
+/// model files whose step interfaces (`PairRow`, `Hist`, `hist_zero`, `pair_contact`,
+/// `pair_edges`) would otherwise clash.
+fn rename_idents(src: &str, map: &[(&str, &str)]) -> String {
+    let mut out = String::with_capacity(src.len() + 64);
+    let mut ident = String::new();
+    let flush = |ident: &mut String, out: &mut String| {
+        let name = map
+            .iter()
+            .find(|(from, _)| *from == ident.as_str())
+            .map_or(ident.as_str(), |(_, to)| to);
+        out.push_str(name);
+        ident.clear();
+    };
+    for c in src.chars() {
+        if c.is_ascii_alphanumeric() || c == '_' {
+            ident.push(c);
+        } else {
+            if !ident.is_empty() {
+                flush(&mut ident, &mut out);
+            }
+            out.push(c);
+        }
+    }
+    if !ident.is_empty() {
+        flush(&mut ident, &mut out);
+    }
+    out
+}
+
+/// The interface of a scene mixing hysteretic/LSD and JKR-family pairs: a tagged pair row
+/// holding both parameter sets and a history holding both layouts; each pair dispatches to
+/// its own model (the renamed interfaces of the two model files).
+pub const MIXED: &str = "\
+// Mixed scenes: hysteretic/LSD pairs (kind 0) and JKR-family pairs (kind 1) in one step.
+struct MixedPair {
+    kind: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+    hyst: HystereticPair,
+    jkr: JkrPair,
+}
+alias PairRow = MixedPair;
+struct MixedHist {
+    jkr: JkrHist,
+    hyst: HystHist,
+}
+alias Hist = MixedHist;
+fn hist_zero() -> Hist { return MixedHist(jkr_hist_zero(), hyst_hist_zero()); }
+fn pair_contact(p: MixedPair, k: Kin, hist: ptr<function, Hist>) -> Contact {
+    if (p.kind == 0u) {
+        var h = (*hist).hyst;
+        let c = hyst_pair_contact(p.hyst, k, &h);
+        (*hist).hyst = h;
+        return c;
+    }
+    var h = (*hist).jkr;
+    let c = jkr_pair_contact(p.jkr, k, &h);
+    (*hist).jkr = h;
+    return c;
+}
+fn pair_edges(p: MixedPair, k: Kin) -> vec4<f32> {
+    if (p.kind == 0u) {
+        return hyst_pair_edges(p.hyst, k);
+    }
+    return jkr_pair_edges(p.jkr, k);
+}
+";
+
+fn mixed_variant(
+    kind: StepKind,
+    jkr_layout: &str,
+    rotation: &str,
+    ledger_snippet: &str,
+    ledger: bool,
+) -> ShaderVariant {
+    let hyst = rename_idents(
+        MODEL_HYSTERETIC,
+        &[
+            ("PairRow", "HystPairRow"),
+            ("Hist", "HystHist"),
+            ("hist_zero", "hyst_hist_zero"),
+            ("pair_contact", "hyst_pair_contact"),
+            ("pair_edges", "hyst_pair_edges"),
+        ],
+    );
+    let jkr_map = [
+        ("PairRow", "JkrPairRow"),
+        ("Hist", "JkrHist"),
+        ("hist_zero", "jkr_hist_zero"),
+        ("pair_contact", "jkr_pair_contact"),
+        ("pair_edges", "jkr_pair_edges"),
+    ];
+    let jkr = rename_idents(MODEL_JKR, &jkr_map);
+    let krijt_off = rename_idents(MODEL_KRIJT_OFF, &jkr_map);
+    let layout = rename_idents(jkr_layout, &jkr_map);
+    let snippets: Vec<&str> = vec![
+        &hyst,
+        &jkr,
+        &krijt_off,
+        &layout,
+        MIXED,
+        rotation,
+        ledger_snippet,
+    ];
+    ShaderVariant {
+        name: kind.variant_name(ledger),
+        source: compose("shaders/step.wgsl", STEP, &snippets),
     }
 }
 

@@ -1,0 +1,115 @@
+//! Scenes that mix the model families on the GPU: hysteretic spheres and adhesive JKR
+//! spheres with friction and rolling resistance in one box, against the CPU reference.
+
+use powder::compare::{compare, Tolerances};
+use powder::gpu::shaders::StepKind;
+use powder::gpu::{GpuContext, GpuEngine};
+use powder::scene::Scene;
+
+fn gpu() -> Option<GpuContext> {
+    match GpuContext::new() {
+        Ok(ctx) => Some(ctx),
+        Err(e) if std::env::var_os("CI").is_none() => {
+            eprintln!("skipping GPU test: {e}");
+            None
+        }
+        Err(e) => panic!("CI needs a GPU adapter (lavapipe): {e}"),
+    }
+}
+
+/// Two jittered lattices of 1 mm spheres in a box, hysteretic below and JKR (friction,
+/// rolling resistance, Tsuji damping) above, thrown down onto them; hysteretic–JKR pairs
+/// and the floor use the hysteretic model.
+fn mixed_scene() -> Scene {
+    Scene::from_toml_str(
+        r#"
+[domain]
+min = [0.0, 0.0, 0.0]
+max = [0.012, 0.012, 0.02]
+[simulation]
+duration = 0.05
+gravity = [0.0, 0.0, -9.81]
+impact_velocity = 0.5
+[[material]]
+name = "plastic"
+density = 2000.0
+model = "hysteretic"
+k1 = 100.0
+kp = 500.0
+kc = 100.0
+phi_f = 0.05
+gamma0 = 1e-3
+[[material]]
+name = "sticky"
+density = 2000.0
+model = "jkr"
+youngs = 1e5
+poisson = 0.3
+surface_energy = 0.05
+restitution = 0.5
+friction = 0.3
+rolling_hysteresis = 0.5
+[[interaction]]
+materials = ["plastic", "sticky"]
+model = "hysteretic"
+k1 = 100.0
+kp = 500.0
+kc = 50.0
+phi_f = 0.05
+gamma0 = 1e-3
+[[wall]]
+point = [0.0, 0.0, 0.0]
+normal = [0.0, 0.0, 1.0]
+material = "plastic"
+[[particles]]
+kind = "lattice"
+material = "plastic"
+min = [0.0011, 0.0011, 0.0011]
+max = [0.0109, 0.0109, 0.0062]
+radius = 1.0e-3
+spacing = 2.1e-3
+jitter = 0.5
+seed = 7
+[[particles]]
+kind = "lattice"
+material = "sticky"
+min = [0.0011, 0.0011, 0.0066]
+max = [0.0109, 0.0109, 0.0118]
+radius = 1.0e-3
+spacing = 2.1e-3
+jitter = 0.5
+velocity = [0.0, 0.0, -0.3]
+seed = 8
+"#,
+        "mixed",
+    )
+    .unwrap()
+}
+
+#[test]
+fn a_mixed_scene_runs_on_the_gpu_and_matches_the_cpu() {
+    let scene = mixed_scene();
+    let Some(ctx) = gpu() else { return };
+    let g = GpuEngine::new(&scene, ctx).unwrap();
+    assert_eq!(g.kind(), StepKind::MixedRolling);
+    assert!(g.rotates());
+    drop(g);
+    let Some(ctx) = gpu() else { return };
+    let c = compare(&scene, ctx, 8000, 1000, Tolerances::default()).unwrap();
+    for s in &c.samples {
+        eprintln!(
+            "step {}: pos {:.2e} vel {:.2e} energy {:.2e} contacts {}/{} history {:.2e} over {}",
+            s.step,
+            s.position,
+            s.velocity,
+            s.energy,
+            s.contacts_cpu,
+            s.contacts_gpu,
+            s.history,
+            s.history_pairs
+        );
+    }
+    let last = c.samples.last().unwrap();
+    assert!(last.contacts_cpu > 5 && last.history_pairs > 0, "{last:?}");
+    assert!(c.passed, "{:?}", last);
+}
