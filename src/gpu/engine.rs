@@ -9,8 +9,9 @@
 //! dissipations also the contact radius a and the Krijt snippet) and, only when some contact
 //! exerts tangential forces or torques, the angular state (ω with the moment of inertia,
 //! angular acceleration, predicted ω). What a scene does not need is neither declared nor
-//! allocated ([`GpuEngine::buffers`] lists what is). One scene runs one family: mixing
-//! hysteretic/LSD and JKR pairs is refused for now.
+//! allocated ([`GpuEngine::buffers`] lists what is). A scene mixing hysteretic/LSD and JKR
+//! pairs runs the mixed variant (tagged pair rows, both history layouts); with a Krijt or
+//! stress-dependent JKR pair among them it is refused.
 //!
 //! The particle state lives in two buffer sets, A and B. Each step drifts A (accumulating
 //! each particle's displacement since the last neighbour-list rebuild), decides on the
