@@ -2,6 +2,8 @@
 //! through `collide`, in paper 001's Lennard-Jones units (R = 147, E* = 65.5 from its
 //! table II, γ = 3.17, ν = 0.25, ρ = 1.09; any consistent unit system works).
 
+mod common;
+
 use powder::collide::{collide, collide_traced, CollideResult, CollideSpec, TraceRow};
 use powder::model::{analytic, krijt, ContactModel, Dissipation, JkrParams, PairGeometry};
 
@@ -266,21 +268,11 @@ mod gpu {
     use powder::collide::{collide_on, Backend, CollideResult, CollideSpec};
     use powder::cpu::CpuEngine;
     use powder::gpu::shaders::StepKind;
-    use powder::gpu::{GpuContext, GpuEngine};
+    use powder::gpu::GpuEngine;
     use powder::model::{Dissipation, JkrParams};
     use powder::scene::Scene;
 
-    /// The GPU context, or `None` (with a notice) when no adapter exists outside CI.
-    fn context() -> Option<GpuContext> {
-        match GpuContext::new() {
-            Ok(ctx) => Some(ctx),
-            Err(e) if std::env::var_os("CI").is_none() => {
-                eprintln!("skipping GPU test: {e}");
-                None
-            }
-            Err(e) => panic!("CI needs a GPU adapter (lavapipe): {e}"),
-        }
-    }
+    use super::common::gpu as context;
 
     fn both(s: &CollideSpec) -> (CollideResult, CollideResult) {
         let g = collide_on(s, Backend::Gpu).unwrap();

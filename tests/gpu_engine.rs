@@ -1,20 +1,11 @@
 //! The GPU engine against the CPU reference on lavapipe (CI) or any adapter.
 
-use powder::cpu::CpuEngine;
-use powder::gpu::{GpuContext, GpuEngine};
-use powder::scene::Scene;
+mod common;
+use common::gpu as context;
 
-/// The GPU context, or `None` (with a notice) when no adapter exists outside CI.
-fn context() -> Option<GpuContext> {
-    match GpuContext::new() {
-        Ok(ctx) => Some(ctx),
-        Err(e) if std::env::var_os("CI").is_none() => {
-            eprintln!("skipping GPU test: {e}");
-            None
-        }
-        Err(e) => panic!("CI needs a GPU adapter (lavapipe): {e}"),
-    }
-}
+use powder::cpu::CpuEngine;
+use powder::gpu::GpuEngine;
+use powder::scene::Scene;
 
 fn example(name: &str) -> Scene {
     Scene::load(std::path::Path::new(&format!(
@@ -256,7 +247,7 @@ mod jkr {
     use super::context;
     use powder::collide::{collide_on, Backend, CollideResult, CollideSpec};
     use powder::cpu::CpuEngine;
-    use powder::gpu::{GpuContext, GpuEngine};
+    use powder::gpu::GpuEngine;
     use powder::model::{analytic, ContactModel, Dissipation, JkrParams, PairGeometry, Pulloff};
     use powder::scene::Scene;
 
@@ -596,7 +587,7 @@ velocity = [-0.1, 0.05, -0.3]
     fn gpu_jkr_runs_with_rotation_are_bitwise_deterministic_and_mirrored() {
         let Some(ctx) = context() else { return };
         let scene = sticky_pile(0.3, 0.5);
-        let run = |ctx: GpuContext| {
+        let run = |ctx: powder::gpu::GpuContext| {
             let mut g = GpuEngine::new(&scene, ctx).unwrap();
             g.run_steps(2000).unwrap();
             g

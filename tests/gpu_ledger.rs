@@ -1,21 +1,13 @@
 //! The GPU energy ledger and contact statistics against the CPU reference (lavapipe in CI),
 //! and `compare`'s energy and history checks.
 
+mod common;
+use common::gpu as context;
+
 use powder::compare::{compare, Tolerances};
 use powder::cpu::CpuEngine;
-use powder::gpu::{GpuContext, GpuEngine, GpuOptions};
+use powder::gpu::{GpuEngine, GpuOptions};
 use powder::scene::Scene;
-
-fn context() -> Option<GpuContext> {
-    match GpuContext::new() {
-        Ok(ctx) => Some(ctx),
-        Err(e) if std::env::var_os("CI").is_none() => {
-            eprintln!("skipping GPU test: {e}");
-            None
-        }
-        Err(e) => panic!("CI needs a GPU adapter (lavapipe): {e}"),
-    }
-}
 
 fn example(name: &str) -> Scene {
     Scene::load(std::path::Path::new(&format!(

@@ -1,21 +1,13 @@
 //! Scenes that mix the model families on the GPU: hysteretic spheres and adhesive JKR
 //! spheres with friction and rolling resistance in one box, against the CPU reference.
 
+mod common;
+use common::gpu;
+
 use powder::compare::{compare, Tolerances};
 use powder::gpu::shaders::StepKind;
-use powder::gpu::{GpuContext, GpuEngine};
+use powder::gpu::GpuEngine;
 use powder::scene::Scene;
-
-fn gpu() -> Option<GpuContext> {
-    match GpuContext::new() {
-        Ok(ctx) => Some(ctx),
-        Err(e) if std::env::var_os("CI").is_none() => {
-            eprintln!("skipping GPU test: {e}");
-            None
-        }
-        Err(e) => panic!("CI needs a GPU adapter (lavapipe): {e}"),
-    }
-}
 
 /// Two jittered lattices of 1 mm spheres in a box, hysteretic below and JKR (friction,
 /// rolling resistance, Tsuji damping) above, thrown down onto them; hysteretic–JKR pairs

@@ -1,22 +1,14 @@
 //! Periodic axes on both backends: pairs meet across a periodic face (minimum image),
 //! particles wrap, and the GPU follows the CPU.
 
+mod common;
+use common::gpu;
+
 use powder::compare::{compare, Tolerances};
 use powder::cpu::CpuEngine;
-use powder::gpu::{GpuContext, GpuEngine};
+use powder::gpu::GpuEngine;
 use powder::model::analytic;
 use powder::scene::Scene;
-
-fn gpu() -> Option<GpuContext> {
-    match GpuContext::new() {
-        Ok(ctx) => Some(ctx),
-        Err(e) if std::env::var_os("CI").is_none() => {
-            eprintln!("skipping GPU test: {e}");
-            None
-        }
-        Err(e) => panic!("CI needs a GPU adapter (lavapipe): {e}"),
-    }
-}
 
 /// Two LSD spheres (r = 1 mm) 1 mm apart *through* the periodic x face of a 1 cm box,
 /// flying toward it: they collide across the face with the closed-form restitution.

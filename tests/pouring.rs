@@ -1,20 +1,12 @@
 //! Pouring: particles inserted over time (`insert_at`, `batches`, `batch_interval`) on both
 //! backends; the energy ledger books what they bring.
 
-use powder::cpu::CpuEngine;
-use powder::gpu::{GpuContext, GpuEngine};
-use powder::scene::Scene;
+mod common;
+use common::gpu;
 
-fn gpu() -> Option<GpuContext> {
-    match GpuContext::new() {
-        Ok(ctx) => Some(ctx),
-        Err(e) if std::env::var_os("CI").is_none() => {
-            eprintln!("skipping GPU test: {e}");
-            None
-        }
-        Err(e) => panic!("CI needs a GPU adapter (lavapipe): {e}"),
-    }
-}
+use powder::cpu::CpuEngine;
+use powder::gpu::GpuEngine;
+use powder::scene::Scene;
 
 /// 60 cohesive spheres poured in 4 batches, 40 ms apart, into the same region above a
 /// floor: each batch is placed clear of itself only, because the earlier ones have fallen

@@ -1,6 +1,9 @@
 //! `powder run` outputs: VTK + pvd, CSV series, summary, checkpoints that resume bitwise,
 //! refusal of foreign checkpoints, Ctrl-C.
 
+mod common;
+use common::gpu;
+
 use powder::run::{run_cpu_with, run_gpu_with, RunOptions};
 use powder::scene::Scene;
 use std::path::Path;
@@ -27,18 +30,6 @@ fn options(out: &Path, steps: u64, resume: Option<&Path>) -> RunOptions {
 
 fn run(scene: &Scene, out: &Path, steps: u64, resume: Option<&Path>) -> powder::run::RunSummary {
     run_cpu_with(scene, &options(out, steps, resume), |_| {}).unwrap()
-}
-
-/// The GPU context, or `None` (with a notice) when no adapter exists outside CI.
-fn gpu() -> Option<powder::gpu::GpuContext> {
-    match powder::gpu::GpuContext::new() {
-        Ok(ctx) => Some(ctx),
-        Err(e) if std::env::var_os("CI").is_none() => {
-            eprintln!("skipping GPU test: {e}");
-            None
-        }
-        Err(e) => panic!("CI needs a GPU adapter (lavapipe): {e}"),
-    }
 }
 
 /// The GPU backend writes the same outputs, and its checkpoints resume bitwise on the same

@@ -1,6 +1,9 @@
 //! Stiff and extreme cases, and the run monitor (issue 6): each within a stated tolerance
 //! of the closed forms, or stopped with a message that names the step and the particles.
 
+mod common;
+use common::gpu;
+
 use powder::collide::{collide, CollideSpec};
 use powder::cpu::CpuEngine;
 use powder::model::analytic::{self, en_no_fa};
@@ -404,18 +407,6 @@ jitter = 0.3
         "drift {drift:e} J over 1e6 steps, released {released:e} J"
     );
     assert!(e.contact_stats().coordination > 2.0);
-}
-
-/// The GPU context, or `None` (with a notice) when no adapter exists outside CI.
-fn gpu() -> Option<powder::gpu::GpuContext> {
-    match powder::gpu::GpuContext::new() {
-        Ok(ctx) => Some(ctx),
-        Err(e) if std::env::var_os("CI").is_none() => {
-            eprintln!("skipping GPU test: {e}");
-            None
-        }
-        Err(e) => panic!("CI needs a GPU adapter (lavapipe): {e}"),
-    }
 }
 
 /// The run monitor on the GPU backend: the failures are detected on the device (overlap,

@@ -2,20 +2,12 @@
 //! wall follows its schedule, the servo holds its force, the energy ledger closes with the
 //! walls' work, and the GPU follows the CPU.
 
-use powder::cpu::CpuEngine;
-use powder::gpu::{GpuContext, GpuEngine};
-use powder::scene::Scene;
+mod common;
+use common::gpu;
 
-fn gpu() -> Option<GpuContext> {
-    match GpuContext::new() {
-        Ok(ctx) => Some(ctx),
-        Err(e) if std::env::var_os("CI").is_none() => {
-            eprintln!("skipping GPU test: {e}");
-            None
-        }
-        Err(e) => panic!("CI needs a GPU adapter (lavapipe): {e}"),
-    }
-}
+use powder::cpu::CpuEngine;
+use powder::gpu::GpuEngine;
+use powder::scene::Scene;
 
 /// A column of three damped hysteretic spheres (r = 1 mm) 0.1 µm apart from each other and the
 /// floor, without gravity, under a lid 0.5 mm above the top one; `lid` is the lid's

@@ -1331,31 +1331,12 @@ impl GpuEngine {
         i: usize,
         j: usize,
     ) -> Result<Option<ContactHistory>, PowderError> {
-        let s = &self.sets[self.cur];
-        let (n, cap) = (self.n as u64, self.cap as u64);
-        let hb = self.kind.history_bytes();
-        let encoder = self.ctx.device.create_command_encoder(&Default::default());
-        let out = submit_and_read(
-            &self.ctx,
-            encoder,
-            &[
-                (&s.pid, 4 * n),
-                (&s.count, 4 * n),
-                (&s.hist_pid, 4 * n * cap),
-                (&s.hist, hb * n * cap),
-            ],
-        )?;
-        let pid = u32s(&out[0]);
-        let count = u32s(&out[1]);
-        let hist_pid = u32s(&out[2]);
-        let Some(k) = pid.iter().position(|&p| p as usize == i) else {
-            return Ok(None);
-        };
-        let hb = hb as usize;
-        Ok((0..count[k] as usize)
-            .map(|s| k * cap as usize + s)
-            .find(|&slot| hist_pid[slot] as usize == j)
-            .map(|slot| self.decode_history(&out[3][slot * hb..(slot + 1) * hb])))
+        let key = (i as u32, j as u32);
+        Ok(self
+            .contact_histories()?
+            .into_iter()
+            .find(|(k, _)| *k == key)
+            .map(|(_, h)| h))
     }
 
     /// Every listed contact's history, as ((i, j), history of i's side) by persistent ids,
