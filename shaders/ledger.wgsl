@@ -30,9 +30,9 @@
 
 const LEDGER: bool = true;
 
-@group(0) @binding(60) var<storage, read> a_ledger: array<vec4<f32>>;
+@group(0) @binding(60) var<storage, read_write> a_ledger: array<vec4<f32>>;
 @group(0) @binding(61) var<storage, read_write> b_ledger: array<vec4<f32>>;
-@group(0) @binding(62) var<storage, read> a_wall_ledger: array<vec4<f32>>;
+@group(0) @binding(62) var<storage, read_write> a_wall_ledger: array<vec4<f32>>;
 @group(0) @binding(63) var<storage, read_write> b_wall_ledger: array<vec4<f32>>;
 @group(0) @binding(64) var<storage, read_write> particle_ledger: array<vec4<f32>>;
 
@@ -93,17 +93,23 @@ fn ledger_count(acc: ptr<function, LedgerAcc>, k: Kin, engaged: bool, wall: bool
 
 // One evaluated particle–particle contact in slot `slot` (after pair_contact).
 fn ledger_pair(acc: ptr<function, LedgerAcc>, slot: u32, p: PairRow, k: Kin, c: Contact, power: f32) {
-    let booked = ledger_book(b_ledger[slot], p, k, c, power);
+    let booked = ledger_book(a_ledger[slot], p, k, c, power);
     (*acc).dissipated += 0.5 * booked.x;
     (*acc).stored += 0.5 * c.potential;
     let engaged = booked.w != 0.0;
-    b_ledger[slot] = select(vec4<f32>(0.0), vec4<f32>(k.delta, c.normal, c.potential - 0.5 * k.dt * power, 1.0), engaged);
+    a_ledger[slot] = select(vec4<f32>(0.0), vec4<f32>(k.delta, c.normal, c.potential - 0.5 * k.dt * power, 1.0), engaged);
     ledger_count(acc, k, engaged, false);
+}
+
+// Whether the wall contact in `slot` was engaged after the last step (the force kernel
+// then evaluates it even beyond reach, so its exit is booked).
+fn ledger_wall_engaged(slot: u32) -> bool {
+    return a_wall_ledger[slot].w != 0.0;
 }
 
 // One evaluated wall contact; v_n is the wall's velocity along n.
 fn ledger_wall(acc: ptr<function, LedgerAcc>, slot: u32, p: PairRow, k: Kin, c: Contact, power: f32, v_n: f32) {
-    let old = b_wall_ledger[slot];
+    let old = a_wall_ledger[slot];
     if (v_n != 0.0) {
         (*acc).wall_work += 0.5 * (select(0.0, old.y, old.w != 0.0) + c.normal) * v_n * k.dt;
     }
@@ -111,18 +117,18 @@ fn ledger_wall(acc: ptr<function, LedgerAcc>, slot: u32, p: PairRow, k: Kin, c: 
     (*acc).dissipated += booked.x;
     (*acc).stored += c.potential;
     let engaged = booked.w != 0.0;
-    b_wall_ledger[slot] = select(vec4<f32>(0.0), vec4<f32>(k.delta, c.normal, c.potential - 0.5 * k.dt * power, 1.0), engaged);
+    a_wall_ledger[slot] = select(vec4<f32>(0.0), vec4<f32>(k.delta, c.normal, c.potential - 0.5 * k.dt * power, 1.0), engaged);
     ledger_count(acc, k, engaged, true);
 }
 
 // A listed pair beyond every model's reach: if it was engaged it leaves with its last
 // force, as the CPU's `book_departed`: 0.5·f0·(delta − delta0) + U0 − ½·dt·P0.
 fn ledger_departed(acc: ptr<function, LedgerAcc>, slot: u32, delta: f32) {
-    let old = b_ledger[slot];
+    let old = a_ledger[slot];
     if (old.w != 0.0) {
         (*acc).dissipated += 0.5 * (0.5 * old.y * (delta - old.x) + old.z);
     }
-    b_ledger[slot] = vec4<f32>(0.0);
+    a_ledger[slot] = vec4<f32>(0.0);
 }
 
 // Kahan summation of the step's dissipation into the particle's running total: the f32
@@ -151,6 +157,17 @@ fn ledger_carry(new_slot: u32, old_slot: u32) {
 
 fn ledger_clear(new_slot: u32) {
     b_ledger[new_slot] = vec4<f32>(0.0);
+}
+
+// copy_back: the new lists' slots (n of them) and the wall contacts return to A.
+fn ledger_copy_back(k: u32, n: u32) {
+    let cap = step.max_neighbours;
+    for (var s = 0u; s < n; s++) {
+        a_ledger[k * cap + s] = b_ledger[k * cap + s];
+    }
+    for (var w = 0u; w < step.n_walls; w++) {
+        a_wall_ledger[k * step.n_walls + w] = b_wall_ledger[k * step.n_walls + w];
+    }
 }
 
 // gather: the wall contacts follow their particle.

@@ -25,4 +25,10 @@ fn ledger_clear(new_slot: u32) {}
 
 fn ledger_gather_walls(k: u32, o: u32) {}
 
+fn ledger_copy_back(k: u32, n: u32) {}
+
+fn ledger_wall_engaged(slot: u32) -> bool {
+    return false;
+}
+
 fn ledger_dropped(pid: u32, o: u32, old_n: u32, k: u32) {}

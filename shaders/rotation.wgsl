@@ -2,7 +2,7 @@
 // torques (JKR with friction or rolling resistance). Composed into the step instead of
 // rotation_off.wgsl, so a scene without them declares (and allocates) none of this.
 //
-// Per particle, in both state sets like vel/acc: omega.xyz = angular velocity, omega.w =
+// Per particle, in both state sets like vel/acc (B only on a rebuild): omega.xyz = angular velocity, omega.w =
 // the moment of inertia 2/5·m·r²; alpha.xyz = angular acceleration torque/I. Integrated
 // with the same half kicks as the velocity (CPU: `CpuEngine::step`); wpred is the
 // predicted omega + dt/2·alpha the forces see (as vpred for the velocity).
@@ -10,36 +10,46 @@
 const ROTATION: bool = true;
 
 @group(0) @binding(50) var<storage, read_write> a_omega: array<vec4<f32>>;
-@group(0) @binding(51) var<storage, read> a_alpha: array<vec4<f32>>;
+@group(0) @binding(51) var<storage, read_write> a_alpha: array<vec4<f32>>;
 @group(0) @binding(52) var<storage, read_write> b_omega: array<vec4<f32>>;
 @group(0) @binding(53) var<storage, read_write> b_alpha: array<vec4<f32>>;
-@group(0) @binding(54) var<storage, read_write> wpred: array<vec4<f32>>;
+@group(0) @binding(54) var<storage, read_write> a_wpred: array<vec4<f32>>;
+@group(0) @binding(68) var<storage, read_write> b_wpred: array<vec4<f32>>;
 
-// kick_drift: omega += dt/2·alpha.
+// kick_drift: omega += dt/2·alpha, and the prediction the forces see.
 fn rot_kick_drift(i: u32) {
-    a_omega[i] = vec4<f32>(a_omega[i].xyz + 0.5 * step.dt * a_alpha[i].xyz, a_omega[i].w);
+    let w = a_omega[i].xyz + 0.5 * step.dt * a_alpha[i].xyz;
+    a_omega[i] = vec4<f32>(w, a_omega[i].w);
+    a_wpred[i] = vec4<f32>(w + 0.5 * step.dt * a_alpha[i].xyz, 0.0);
 }
 
-// gather: reorder into B and predict.
+// gather (on a rebuild): reorder into B.
 fn rot_gather(k: u32, o: u32) {
     b_omega[k] = a_omega[o];
     b_alpha[k] = a_alpha[o];
-    wpred[k] = vec4<f32>(a_omega[o].xyz + 0.5 * step.dt * a_alpha[o].xyz, 0.0);
+    b_wpred[k] = a_wpred[o];
 }
 
-// The predicted angular velocity of B's particle k.
+// copy_back (on a rebuild): B returns to A.
+fn rot_copy_back(k: u32) {
+    a_omega[k] = b_omega[k];
+    a_alpha[k] = b_alpha[k];
+    a_wpred[k] = b_wpred[k];
+}
+
+// The predicted angular velocity of particle k.
 fn rot_wpred(k: u32) -> vec3<f32> {
-    return wpred[k].xyz;
+    return a_wpred[k].xyz;
 }
 
 // force: stores torque/I; false when it is not finite.
 fn rot_store(k: u32, torque: vec3<f32>) -> bool {
-    let alpha = torque / b_omega[k].w;
-    b_alpha[k] = vec4<f32>(alpha, 0.0);
+    let alpha = torque / a_omega[k].w;
+    a_alpha[k] = vec4<f32>(alpha, 0.0);
     return !(any(alpha != alpha) || any(abs(alpha) > vec3<f32>(3.0e38)));
 }
 
 // kick: omega += dt/2·alpha.
 fn rot_kick(k: u32) {
-    b_omega[k] = vec4<f32>(b_omega[k].xyz + 0.5 * step.dt * b_alpha[k].xyz, b_omega[k].w);
+    a_omega[k] = vec4<f32>(a_omega[k].xyz + 0.5 * step.dt * a_alpha[k].xyz, a_omega[k].w);
 }

@@ -8,6 +8,8 @@ fn rot_kick_drift(i: u32) {}
 
 fn rot_gather(k: u32, o: u32) {}
 
+fn rot_copy_back(k: u32) {}
+
 fn rot_wpred(k: u32) -> vec3<f32> {
     return vec3<f32>(0.0);
 }

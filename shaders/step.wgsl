@@ -10,25 +10,30 @@
 // and the rotation snippet the hooks rot_kick_drift, rot_gather, rot_wpred, rot_store,
 // rot_kick.
 //
-// Pass order, recorded by `gpu::engine` into one encoder per batch of steps:
-//   kick_drift   per particle (state A)  v += dt/2·a (omega += dt/2·alpha); offset +=
+// The particle state lives in one buffer set, A, in the order of the last neighbour-list
+// rebuild; set B is scratch that only a rebuild writes. Pass order, recorded by
+// `gpu::engine` into one encoder per batch of steps:
+//   kick_drift   per particle (A)        v += dt/2·a (omega += dt/2·alpha); offset +=
 //                                        dt·v, carried into the cell; disp += dt·v and
-//                                        atomicMax of |disp| (Verlet skin)
+//                                        atomicMax of |disp| (Verlet skin); the predicted
+//                                        velocity vpred = v + dt/2·a (wpred likewise)
 //   decide       one invocation          rebuild this step when max |disp| > skin/2
-//   <grid sort of A's cells>             sorted_index, cell_start, cell_count (only on a
-//                                        rebuild: indirect dispatches, zero workgroups else)
-//   gather       per particle            B[k] = A[sorted_index[k]] on a rebuild, else
-//                                        A[k]; vpred = v + dt/2·a (wpred = omega + dt/2·alpha)
-//   neighbours   per particle (B)        on a rebuild: full neighbour list from the 27
-//                                        cells, cut-off r_i + r_j + reach + skin
-//   remap        per particle (B)        on a rebuild each new slot finds its history in A
-//                                        by the partner's persistent id; else the lists'
-//                                        counts and history are copied
-//   force        per particle (B)        sums its own contacts in slot order (no atomics:
+// only on a rebuild (indirect dispatches: zero workgroups on the other steps):
+//   <grid sort of A's cells>             sorted_index, cell_start, cell_count
+//   gather       per particle            B[k] = A[sorted_index[k]]
+//   neighbours   per particle (B)        full neighbour list from the 27 cells, cut-off
+//                                        r_i + r_j + reach + skin
+//   remap        per particle (B)        each new slot finds its history in A by the
+//                                        partner's persistent id
+//   copy_back,   per particle            A[k] = B[k] (state, then the lists' history),
+//   copy_back_history                    disp = 0
+// every step:
+//   force        per particle (A)        sums its own contacts in slot order (no atomics:
 //                                        deterministic; candidates beyond reach skipped),
 //                                        walls, gravity -> acc (alpha)
-//   kick         per particle (B)        v += dt/2·a (omega += dt/2·alpha)
-// then A and B swap roles.
+//   kick         per particle (A)        v += dt/2·a (omega += dt/2·alpha)
+// Between rebuilds a step touches each particle's state in place, once per pass, and
+// copies nothing (the lists, built in sorted order, stay valid: the order is unchanged).
 //
 // Both sides of a pair. Every pair is evaluated twice, by i (normal n) and by j (−n), and
 // each side keeps its own copy of the history in its own slot list. The inputs of the
@@ -119,20 +124,29 @@ struct Wall {
 
 const WALL_SERVO: f32 = 2.0;
 
+// True for a scene with one material (set per pipeline by `gpu::engine`): every pair reads
+// pair row 0, an address the compiler then knows is the same for all invocations (one load,
+// not a gather of the 64-byte row per lane and pair).
+override ONE_MATERIAL: bool = false;
+
 @group(0) @binding(20) var<uniform> step: StepParams;
 
-// State A (read) and B (written by gather, then the current state).
+// State A (the current state, in the order of the last rebuild) and B (its re-sorted copy,
+// written only by a rebuild's gather, neighbours and remap, then copied back into A).
 @group(0) @binding(21) var<storage, read_write> a_cell: array<vec4<i32>>;
 @group(0) @binding(22) var<storage, read_write> a_off: array<vec4<f32>>;
 @group(0) @binding(23) var<storage, read_write> a_vel: array<vec4<f32>>;
 @group(0) @binding(24) var<storage, read_write> a_acc: array<vec4<f32>>;
-@group(0) @binding(25) var<storage, read> a_pid: array<u32>;
-@group(0) @binding(26) var<storage, read> a_count: array<u32>;
-@group(0) @binding(27) var<storage, read> a_hist: array<Hist>;
-@group(0) @binding(28) var<storage, read> a_hist_pid: array<u32>;
-@group(0) @binding(29) var<storage, read> a_wall_hist: array<Hist>;
+@group(0) @binding(25) var<storage, read_write> a_pid: array<u32>;
+@group(0) @binding(26) var<storage, read_write> a_count: array<u32>;
+@group(0) @binding(27) var<storage, read_write> a_hist: array<Hist>;
+@group(0) @binding(28) var<storage, read_write> a_hist_pid: array<u32>;
+@group(0) @binding(29) var<storage, read_write> a_wall_hist: array<Hist>;
 // Displacement (xyz) accumulated since the last neighbour-list rebuild.
 @group(0) @binding(30) var<storage, read_write> a_disp: array<vec4<f32>>;
+// Predicted velocity v + dt/2·a for the velocity-dependent forces (xyz) and the mass (w),
+// written by kick_drift: the force kernel reads one vec4 per partner for both.
+@group(0) @binding(40) var<storage, read_write> a_vpred: array<vec4<f32>>;
 
 @group(0) @binding(31) var<storage, read_write> b_cell: array<vec4<i32>>;
 @group(0) @binding(32) var<storage, read_write> b_off: array<vec4<f32>>;
@@ -143,7 +157,7 @@ const WALL_SERVO: f32 = 2.0;
 @group(0) @binding(37) var<storage, read_write> b_hist: array<Hist>;
 @group(0) @binding(38) var<storage, read_write> b_hist_pid: array<u32>;
 @group(0) @binding(39) var<storage, read_write> b_wall_hist: array<Hist>;
-@group(0) @binding(55) var<storage, read_write> b_disp: array<vec4<f32>>;
+@group(0) @binding(55) var<storage, read_write> b_vpred: array<vec4<f32>>;
 
 // Kahan compensation of the velocity (element 2i) and of the cell offset (2i + 1), per
 // particle in both state sets: the f32 updates v += dt/2·a and o += dt·v add increments of
@@ -172,8 +186,8 @@ fn is_active(pid: u32) -> bool {
     return appeared[pid] != 0u;
 }
 
-// Per-step scratch: predicted velocity, the old index of each new slot, the neighbour list.
-@group(0) @binding(40) var<storage, read_write> vpred: array<vec4<f32>>;
+// Rebuild scratch: the old index of each new slot; the neighbour lists (kept between
+// rebuilds).
 @group(0) @binding(41) var<storage, read_write> old_index: array<u32>;
 @group(0) @binding(42) var<storage, read_write> nbr: array<u32>;
 
@@ -198,10 +212,11 @@ fn is_active(pid: u32) -> bool {
 // (+1) of a particle whose centre left the domain box, [7] unused.
 @group(0) @binding(48) var<storage, read_write> monitor: array<atomic<u32>, 8>;
 
-// Verlet skin state, persistent across batches: [0] = largest |displacement| since the
-// last rebuild as f32 bits (atomicMax: the bit patterns of non-negative f32 order as the
-// values), [1] = 1 when this step rebuilds (written by decide), [2] = rebuilds so far,
-// [3] = the skin as f32 bits.
+// Verlet skin state, persistent across batches: [0] = 1 once some particle has moved more
+// than skin/2 since the last rebuild (set by kick_drift, only there: a store where it
+// happens rather than a maximum over all particles, which cost workgroup atomics and
+// barriers every step), [1] = 1 when this step rebuilds (written by decide), [2] =
+// rebuilds so far, [3] = the skin as f32 bits.
 @group(0) @binding(56) var<storage, read_write> skin: array<atomic<u32>, 4>;
 // Indirect dispatch arguments of the grid sort (`GridSort::encode_indirect`): decide
 // copies full_args (a full sort) or writes zeros (no sort this step).
@@ -212,36 +227,29 @@ fn skin_width() -> f32 {
     return bitcast<f32>(atomicLoad(&skin[3]));
 }
 
-fn rebuilding() -> bool {
-    return atomicLoad(&skin[1]) != 0u;
-}
-
 // Separation x_i - x_j from cell + offset positions.
 fn separation(ci: vec4<i32>, oi: vec4<f32>, cj: vec4<i32>, oj: vec4<f32>) -> vec3<f32> {
     return vec3<f32>(nearest_image(ci.xyz - cj.xyz)) * grid.cell_width + (oi.xyz - oj.xyz);
 }
 
-// The workgroup's largest |displacement| (f32 bits), merged into skin[0] once per group.
-var<workgroup> wg_moved: atomic<u32>;
-
 @compute @workgroup_size(WG_SIZE)
 fn kick_drift(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let i = global_index(wid, nwg, lid);
-    if (lid == 0u) {
-        atomicStore(&wg_moved, 0u);
-    }
-    workgroupBarrier();
     if (i < grid.n_particles && is_active(a_pid[i])) {
         let h = grid.cell_width;
         let kv = kahan_add(a_vel[i].xyz, a_kahan[2u * i].xyz, 0.5 * step.dt * a_acc[i].xyz);
         let v = kv.x;
         a_vel[i] = vec4<f32>(v, a_vel[i].w);
         a_kahan[2u * i] = vec4<f32>(kv.c, 0.0);
+        // vel.w holds the mass
+        a_vpred[i] = vec4<f32>(v + 0.5 * step.dt * a_acc[i].xyz, a_vel[i].w);
         rot_kick_drift(i);
         let disp = a_disp[i].xyz + step.dt * v;
         a_disp[i] = vec4<f32>(disp, 0.0);
-        // length() >= 0 (or NaN, whose bits order above +inf: it forces a rebuild)
-        atomicMax(&wg_moved, bitcast<u32>(length(disp)));
+        // (NaN forces a rebuild too)
+        if (!(length(disp) <= 0.5 * skin_width())) {
+            atomicStore(&skin[0], 1u);
+        }
         // the move with the compensated velocity; the cell carry below subtracts whole
         // cells (exact for an offset within a factor 2 of h), so the compensation stays
         let ko = kahan_add(a_off[i].xyz, a_kahan[2u * i + 1u].xyz, step.dt * (v - kv.c));
@@ -262,22 +270,17 @@ fn kick_drift(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nw
             atomicMax(&monitor[6], a_pid[i] + 1u);
         }
     }
-    workgroupBarrier();
-    if (lid == 0u) {
-        atomicMax(&skin[0], atomicLoad(&wg_moved));
-    }
 }
 
 // One invocation, after kick_drift: rebuild unless every particle moved at most half the
 // skin since the last rebuild (then no pair can have closed by more than the skin, so
 // every pair within r_i + r_j + reach is still in the lists built with
-// r_i + r_j + reach + skin). Writes the flag (neighbours returns at once without it,
-// gather and remap branch on it) and the grid sort's indirect arguments (zero workgroups
-// without a rebuild), and starts the next maximum afresh.
+// r_i + r_j + reach + skin). Writes the flag and the indirect arguments of the grid sort
+// and of the rebuild's per-particle passes (zero workgroups without a rebuild), and starts
+// the next maximum afresh.
 @compute @workgroup_size(1)
 fn decide() {
-    let moved = bitcast<f32>(atomicLoad(&skin[0]));
-    let rebuild = !(moved <= 0.5 * skin_width());
+    let rebuild = atomicLoad(&skin[0]) != 0u;
     atomicStore(&skin[0], 0u);
     atomicStore(&skin[1], select(0u, 1u, rebuild));
     if (rebuild) {
@@ -288,29 +291,23 @@ fn decide() {
     }
 }
 
-// B[k] = A[sorted_index[k]] after a rebuild, B[k] = A[k] otherwise (the lists, built in
-// sorted order, stay valid: the order does not change between rebuilds).
+// On a rebuild: B[k] = A[sorted_index[k]], everything that moves with the particle.
 @compute @workgroup_size(WG_SIZE)
 fn gather(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let k = global_index(wid, nwg, lid);
     if (k >= grid.n_particles) {
         return;
     }
-    let rebuild = rebuilding();
-    var o = k;
-    if (rebuild) {
-        o = sorted_index[k];
-    }
-    b_disp[k] = select(a_disp[o], vec4<f32>(0.0), rebuild);
+    let o = sorted_index[k];
     b_cell[k] = a_cell[o];
     b_off[k] = a_off[o];
     b_vel[k] = a_vel[o];
     b_acc[k] = a_acc[o];
+    b_vpred[k] = a_vpred[o];
     b_kahan[2u * k] = a_kahan[2u * o];
     b_kahan[2u * k + 1u] = a_kahan[2u * o + 1u];
     b_pid[k] = a_pid[o];
     old_index[k] = o;
-    vpred[k] = vec4<f32>(a_vel[o].xyz + 0.5 * step.dt * a_acc[o].xyz, 0.0);
     rot_gather(k, o);
     for (var w = 0u; w < step.n_walls; w++) {
         b_wall_hist[k * step.n_walls + w] = a_wall_hist[o * step.n_walls + w];
@@ -321,7 +318,7 @@ fn gather(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: v
 @compute @workgroup_size(WG_SIZE)
 fn neighbours(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let k = global_index(wid, nwg, lid);
-    if (k >= grid.n_particles || !rebuilding()) {
+    if (k >= grid.n_particles) {
         return;
     }
     let ck = b_cell[k];
@@ -372,17 +369,6 @@ fn remap(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
         return;
     }
     let cap = step.max_neighbours;
-    if (!rebuilding()) {
-        // same order, same lists: carry the history over
-        let n = a_count[k];
-        b_count[k] = n;
-        for (var s = 0u; s < n; s++) {
-            b_hist[k * cap + s] = a_hist[k * cap + s];
-            b_hist_pid[k * cap + s] = a_hist_pid[k * cap + s];
-            ledger_carry(k * cap + s, k * cap + s);
-        }
-        return;
-    }
     let o = old_index[k];
     let old_n = a_count[o];
     for (var s = 0u; s < b_count[k]; s++) {
@@ -402,8 +388,45 @@ fn remap(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
     ledger_dropped(b_pid[k], o, old_n, k);
 }
 
-// The workgroup's largest overlap/a12 (f32 bits), merged into monitor[4] once per group.
-var<workgroup> wg_ratio: atomic<u32>;
+// On a rebuild, last: A[k] = B[k], in two kernels (one binding both sets of everything
+// would exceed the 32 storage buffers per kernel lavapipe allows): the particle state, and
+// the displacements start afresh; then the new lists' history and the wall contacts.
+@compute @workgroup_size(WG_SIZE)
+fn copy_back(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    let k = global_index(wid, nwg, lid);
+    if (k >= grid.n_particles) {
+        return;
+    }
+    a_cell[k] = b_cell[k];
+    a_off[k] = b_off[k];
+    a_vel[k] = b_vel[k];
+    a_acc[k] = b_acc[k];
+    a_vpred[k] = b_vpred[k];
+    a_kahan[2u * k] = b_kahan[2u * k];
+    a_kahan[2u * k + 1u] = b_kahan[2u * k + 1u];
+    a_pid[k] = b_pid[k];
+    a_disp[k] = vec4<f32>(0.0);
+    rot_copy_back(k);
+}
+
+@compute @workgroup_size(WG_SIZE)
+fn copy_back_history(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    let k = global_index(wid, nwg, lid);
+    if (k >= grid.n_particles) {
+        return;
+    }
+    let cap = step.max_neighbours;
+    let n = b_count[k];
+    a_count[k] = n;
+    for (var s = 0u; s < n; s++) {
+        a_hist[k * cap + s] = b_hist[k * cap + s];
+        a_hist_pid[k * cap + s] = b_hist_pid[k * cap + s];
+    }
+    for (var w = 0u; w < step.n_walls; w++) {
+        a_wall_hist[k * step.n_walls + w] = b_wall_hist[k * step.n_walls + w];
+    }
+    ledger_copy_back(k, n);
+}
 
 // The relative motion of one contact, as the model sees it (`model::Kinematics` plus the
 // pair geometry and the time step).
@@ -440,20 +463,17 @@ struct Contact {
 @compute @workgroup_size(WG_SIZE)
 fn force(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let k = global_index(wid, nwg, lid);
-    if (lid == 0u) {
-        atomicStore(&wg_ratio, 0u);
-    }
-    workgroupBarrier();
     if (k < grid.n_particles) {
         let ratio = particle_forces(k);
-        atomicMax(&wg_ratio, bitcast<u32>(ratio));
-        if (ratio > MONITOR_MAX_OVERLAP_RATIO) {
-            atomicMax(&monitor[5], b_pid[k] + 1u);
+        // the largest overlap/a12 (f32 bits: non-negative ones order as the values); an
+        // atomic only where it grows (a plain read else: no barriers, few atomics)
+        let bits = bitcast<u32>(ratio);
+        if (bits > atomicLoad(&monitor[4])) {
+            atomicMax(&monitor[4], bits);
         }
-    }
-    workgroupBarrier();
-    if (lid == 0u) {
-        atomicMax(&monitor[4], atomicLoad(&wg_ratio));
+        if (ratio > MONITOR_MAX_OVERLAP_RATIO) {
+            atomicMax(&monitor[5], a_pid[k] + 1u);
+        }
     }
 }
 
@@ -461,24 +481,24 @@ fn force(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
 // overlap/a12 (0 without overlap) for the run monitor.
 fn particle_forces(k: u32) -> f32 {
     let cap = step.max_neighbours;
-    let ck = b_cell[k];
-    let ok = b_off[k];
+    let ck = a_cell[k];
+    let ok = a_off[k];
     let rk = ok.w;
     // vel.w holds the mass
-    let mk = b_vel[k].w;
-    let vk = vpred[k].xyz;
+    let mk = a_vel[k].w;
+    let vk = a_vpred[k].xyz;
     let wk = rot_wpred(k);
     let mat_k = u32(ck.w);
     var f = vec3<f32>(0.0);
     var torque = vec3<f32>(0.0);
     var ledger_acc = ledger_new();
     var peak = 0.0;
-    for (var s = 0u; s < b_count[k]; s++) {
+    for (var s = 0u; s < a_count[k]; s++) {
         let j = nbr[k * cap + s];
-        let cj = b_cell[j];
-        let oj = b_off[j];
+        let cj = a_cell[j];
+        let oj = a_off[j];
         let rj = oj.w;
-        let mj = b_vel[j].w;
+        let mj = a_vpred[j].w;
         let d = separation(ck, ok, cj, oj);
         let dist = length(d);
         let delta = rk + rj - dist;
@@ -486,7 +506,7 @@ fn particle_forces(k: u32) -> f32 {
         if (delta < -step.reach) {
             // a list candidate (within the skin) out of every model's range: no force,
             // and the history a pair out of range has (the models reset it there too)
-            b_hist[slot] = hist_zero();
+            a_hist[slot] = hist_zero();
             ledger_departed(&ledger_acc, slot, delta);
             continue;
         }
@@ -494,7 +514,7 @@ fn particle_forces(k: u32) -> f32 {
         if (dist > 0.0) {
             n = d / dist;
         }
-        let v_rel = vk - vpred[j].xyz;
+        let v_rel = vk - a_vpred[j].xyz;
         let wj = rot_wpred(j);
         // Mirror-symmetric forms (see the header): (r_i w_i + r_j w_j) is commutative.
         let v_c = v_rel - cross(rk * wk + rj * wj, n);
@@ -510,10 +530,10 @@ fn particle_forces(k: u32) -> f32 {
             v_t,
             r_eff * cross(wk - wj, n) + (0.5 * (rk - rj) / (rk + rj)) * v_t,
         );
-        var h = b_hist[slot];
-        let row = pairs[mat_k * step.n_materials + u32(cj.w)];
+        var h = a_hist[slot];
+        let row = pairs[select(mat_k * step.n_materials + u32(cj.w), 0u, ONE_MATERIAL)];
         let c = pair_contact(row, kin, &h);
-        b_hist[slot] = h;
+        a_hist[slot] = h;
         peak = max(peak, delta / (2.0 * r_eff));
         ledger_pair(&ledger_acc, slot, row, kin, c, dot(c.tangential, v_t) + dot(c.rolling, wk - wj));
         f += c.normal * n + c.tangential;
@@ -522,8 +542,39 @@ fn particle_forces(k: u32) -> f32 {
         }
     }
     // a particle that has not appeared meets no wall
-    let n_walls = select(0u, step.n_walls, is_active(b_pid[k]));
-    for (var w = 0u; w < n_walls; w++) {
+    let n_walls = select(0u, step.n_walls, is_active(a_pid[k]));
+    // A cheap pass marks the walls within reach (or whose contact the ledger still holds
+    // engaged); only those are evaluated. On a SIMD adapter (lavapipe) a loop iteration
+    // costs as much for a lane that skips it as for one that works, so the loop below runs
+    // as often as the most walls a lane of the group is near, mostly 0 in a packing,
+    // rather than n_walls times. Far walls get the history (and servo push) of a contact
+    // out of range, as the models give. Walls from the 33rd on are always evaluated.
+    var near = 0u;
+    let masked = min(n_walls, 32u);
+    for (var w = 0u; w < masked; w++) {
+        let wall = walls[w];
+        let delta = rk - dot(separation(ck, ok, wall.cell, wall.offset), wall.normal.xyz);
+        let slot = k * step.n_walls + w;
+        if (delta >= -step.reach || ledger_wall_engaged(slot)) {
+            near |= 1u << w;
+        } else {
+            a_wall_hist[slot] = hist_zero();
+            if (step.servo_walls != 0u) {
+                wall_push[slot] = 0.0;
+            }
+        }
+    }
+    var rest = masked;
+    loop {
+        var w = rest;
+        if (near != 0u) {
+            w = firstTrailingBit(near);
+            near &= near - 1u;
+        } else if (rest < n_walls) {
+            rest += 1u;
+        } else {
+            break;
+        }
         let wall = walls[w];
         let n = wall.normal.xyz;
         let delta = rk - dot(separation(ck, ok, wall.cell, wall.offset), n);
@@ -534,10 +585,10 @@ fn particle_forces(k: u32) -> f32 {
         // eq. 20 with r_j -> inf: (r_i - r_j)/(r_i + r_j) -> -1
         let kin = Kin(delta, -dot(v_rel, n), rk, mk, step.dt, n, v_t, rk * cross(wk, n) - 0.5 * v_t);
         let slot = k * step.n_walls + w;
-        var h = b_wall_hist[slot];
+        var h = a_wall_hist[slot];
         let row = pairs[step.n_materials * step.n_materials + w * step.n_materials + mat_k];
         let c = pair_contact(row, kin, &h);
-        b_wall_hist[slot] = h;
+        a_wall_hist[slot] = h;
         peak = max(peak, delta / (2.0 * rk));
         ledger_wall(&ledger_acc, slot, row, kin, c, dot(c.tangential, v_t) + dot(c.rolling, wk), dot(n, wall.velocity.xyz));
         if (step.servo_walls != 0u) {
@@ -553,8 +604,8 @@ fn particle_forces(k: u32) -> f32 {
     if (any(acc != acc) || any(abs(acc) > vec3<f32>(3.0e38)) || !finite_rot) {
         atomicAdd(&monitor[2], 1u);
     }
-    b_acc[k] = vec4<f32>(acc, 0.0);
-    ledger_store(b_pid[k], ledger_acc);
+    a_acc[k] = vec4<f32>(acc, 0.0);
+    ledger_store(a_pid[k], ledger_acc);
     return peak;
 }
 
@@ -564,12 +615,12 @@ fn kick(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     if (k >= grid.n_particles) {
         return;
     }
-    if (!is_active(b_pid[k])) {
+    if (!is_active(a_pid[k])) {
         return;
     }
-    let kv = kahan_add(b_vel[k].xyz, b_kahan[2u * k].xyz, 0.5 * step.dt * b_acc[k].xyz);
-    b_vel[k] = vec4<f32>(kv.x, b_vel[k].w);
-    b_kahan[2u * k] = vec4<f32>(kv.c, 0.0);
+    let kv = kahan_add(a_vel[k].xyz, a_kahan[2u * k].xyz, 0.5 * step.dt * a_acc[k].xyz);
+    a_vel[k] = vec4<f32>(kv.x, a_vel[k].w);
+    a_kahan[2u * k] = vec4<f32>(kv.c, 0.0);
     rot_kick(k);
 }
 

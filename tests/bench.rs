@@ -261,6 +261,7 @@ fn bench_profile_reports_every_pass() {
         "grid sort",
         "neighbours",
         "remap",
+        "copy_back",
         "force",
         "kick",
     ] {

@@ -13,27 +13,29 @@
 //! pairs runs the mixed variant (tagged pair rows, both history layouts); with a Krijt or
 //! stress-dependent JKR pair among them it is refused.
 //!
-//! The particle state lives in two buffer sets, A and B. Each step drifts A (accumulating
-//! each particle's displacement since the last neighbour-list rebuild), decides on the
-//! device whether to rebuild, and on a rebuild sorts A by cell, gathers it into B in
-//! sorted order, rebuilds B's neighbour lists from the grid and remaps every contact's
-//! history from A by the partner's persistent id; without one it gathers A into B in the
-//! same order and copies the lists' history. Then it computes the forces and kicks, and
-//! the roles swap. Many steps are recorded per submission and the host reads back only a
+//! The particle state lives in one buffer set, A, in the order of the last neighbour-list
+//! rebuild. Each step drifts A (accumulating each particle's displacement since the last
+//! rebuild), decides on the device whether to rebuild, and on a rebuild sorts A by cell,
+//! gathers it into the scratch set B in sorted order, rebuilds B's neighbour lists from the
+//! grid, remaps every contact's history from A by the partner's persistent id and copies B
+//! back into A. Then it computes the forces and kicks, in place. A step without a rebuild
+//! (most of them) thus copies nothing: an earlier design gathered A into B every step and
+//! swapped the roles, which cost a third of the non-force time (gather and history copy,
+//! measured with `powder bench --profile`). Many steps are recorded per submission and the host reads back only a
 //! 16-byte monitor per batch (neighbour-capacity overflow, non-finite forces) and whatever
 //! output needs.
 //!
 //! Verlet skin: the lists hold every pair within r_i + r_j + reach + skin (skin =
 //! [`SKIN`]·r_min; the grid cell is at least 2·r_max + reach + skin wide) and are rebuilt
-//! only once some particle has moved more than skin/2 since the last rebuild. The one-
-//! invocation `decide` kernel compares the largest displacement (an `atomicMax` over the
-//! f32 bit patterns, taken in `kick_drift`) with skin/2 and writes a flag and the grid
+//! only once some particle has moved more than skin/2 since the last rebuild. `kick_drift`
+//! raises a flag where a particle's displacement exceeds skin/2; the one-invocation
+//! `decide` kernel reads and clears it and writes the rebuild flag and the grid
 //! sort's indirect dispatch arguments (the full sort's, or zero workgroups): the sort is
 //! recorded with `dispatch_workgroups_indirect` ([`GridSort::encode_indirect`]);
-//! `neighbours` returns at once without the flag, `gather` and `remap` branch on it.
-//! Indirect for the sort rather than a flag read by each of its ~11 kernels: a skipped
-//! sort then launches no workgroups at all, on any adapter, and `GridSort`'s kernels stay
-//! unaware of the skin. On lavapipe both measured alike (3.1·10⁵ particle-steps/s for the
+//! the rebuild's own per-particle passes (gather, neighbours, remap, copy back) are
+//! indirect too. Indirect rather than a flag read by each kernel: a skipped rebuild then
+//! launches no workgroups at all, on any adapter, and `GridSort`'s kernels stay unaware of
+//! the skin. On lavapipe both measured alike (3.1·10⁵ particle-steps/s for the
 //! cohesive cluster, up to 3.8·10⁵ for the indirect one, on a noisy 2-core machine),
 //! because wgpu validates every indirect dispatch with an extra dispatch of its own
 //! (`InstanceFlags::VALIDATION_INDIRECT_CALL`, on by default): clearing that flag where
@@ -45,7 +47,9 @@ use crate::cpu::{ContactStats, Energies};
 use crate::error::PowderError;
 use crate::gpu::context::GpuContext;
 use crate::gpu::grid::GridSort;
-use crate::gpu::kernel::{storage_buffer, submit_and_read, u32s, uniform_buffer, Kernel, Program};
+use crate::gpu::kernel::{
+    split_workgroups, storage_buffer, submit_and_read, u32s, uniform_buffer, Kernel, Program,
+};
 use crate::gpu::layout::{
     encode3, gpu_cell_width, HystereticPair, JkrPair, MixedPair, StepParams, WallGpu,
 };
@@ -79,7 +83,8 @@ impl Allocator<'_> {
     }
 }
 
-/// One set of particle-state buffers (A or B).
+/// One set of particle-state buffers: A (the state) or B (the re-sorted copy a rebuild
+/// builds, then copies back into A).
 struct StateSet {
     cell: wgpu::Buffer,
     off: wgpu::Buffer,
@@ -90,14 +95,18 @@ struct StateSet {
     hist: wgpu::Buffer,
     hist_pid: wgpu::Buffer,
     wall_hist: wgpu::Buffer,
-    /// Displacement since the last neighbour-list rebuild (xyz).
-    disp: wgpu::Buffer,
+    /// Displacement since the last neighbour-list rebuild (xyz); only in A.
+    disp: Option<wgpu::Buffer>,
+    /// Predicted velocity (xyz) and mass (w), written by `kick_drift`.
+    vpred: wgpu::Buffer,
     /// Kahan compensation of the velocity and the cell offset (2 × vec4 per particle).
     kahan: wgpu::Buffer,
     /// ω (xyz) and the moment of inertia (w); only when the scene rotates.
     omega: Option<wgpu::Buffer>,
     /// Angular acceleration torque/I; only when the scene rotates.
     alpha: Option<wgpu::Buffer>,
+    /// Predicted ω; only when the scene rotates.
+    wpred: Option<wgpu::Buffer>,
     /// The energy ledger's per-slot state of pair and wall contacts (`shaders/ledger.wgsl`);
     /// only when the run keeps the ledger.
     ledger: Option<wgpu::Buffer>,
@@ -112,6 +121,8 @@ impl StateSet {
         kind: StepKind,
         ledger: bool,
     ) -> Self {
+        // the displacements since the last rebuild belong to the state only
+        let state = tag == "A";
         let mut b = |name: &str, bytes: u64| alloc.buffer(&format!("{tag}.{name}"), bytes);
         let hb = kind.history_bytes();
         Self {
@@ -125,10 +136,12 @@ impl StateSet {
             hist_pid: b("hist_pid", 4 * n * cap),
             // without walls: one element, the smallest binding the kernels accept
             wall_hist: b("wall_hist", hb * (n * walls).max(1)),
-            disp: b("disp", 16 * n),
+            disp: state.then(|| b("disp", 16 * n)),
+            vpred: b("vpred", 16 * n),
             kahan: b("kahan", 32 * n),
             omega: kind.rotation().then(|| b("omega", 16 * n)),
             alpha: kind.rotation().then(|| b("alpha", 16 * n)),
+            wpred: kind.rotation().then(|| b("wpred", 16 * n)),
             ledger: ledger.then(|| b("ledger", 16 * n * cap)),
             wall_ledger: ledger.then(|| b("wall_ledger", 16 * (n * walls).max(1))),
         }
@@ -145,10 +158,12 @@ impl StateSet {
             ("hist", Some(&self.hist)),
             ("hist_pid", Some(&self.hist_pid)),
             ("wall_hist", Some(&self.wall_hist)),
-            ("disp", Some(&self.disp)),
+            ("disp", self.disp.as_ref()),
+            ("vpred", Some(&self.vpred)),
             ("kahan", Some(&self.kahan)),
             ("omega", self.omega.as_ref()),
             ("alpha", self.alpha.as_ref()),
+            ("wpred", self.wpred.as_ref()),
             ("ledger", self.ledger.as_ref()),
             ("wall_ledger", self.wall_ledger.as_ref()),
         ]
@@ -158,13 +173,15 @@ impl StateSet {
     }
 }
 
-/// Kernels bound for one parity (which set plays A).
+/// The step's kernels, bound to the two sets.
 struct Bound {
     kick_drift: wgpu::BindGroup,
     decide: wgpu::BindGroup,
     gather: wgpu::BindGroup,
     neighbours: wgpu::BindGroup,
     remap: wgpu::BindGroup,
+    copy_back: wgpu::BindGroup,
+    copy_back_history: wgpu::BindGroup,
     force: wgpu::BindGroup,
     kick: wgpu::BindGroup,
     /// The moving-wall kernels, only for scenes with moving / servo-controlled walls.
@@ -218,17 +235,20 @@ pub struct GpuEngine {
     radius: Vec<f64>,
     mass: Vec<f64>,
     grid: GridSort,
-    sets: [StateSet; 2],
-    /// Which set is current (plays A in the next step).
-    cur: usize,
+    /// The state (A).
+    state: StateSet,
+    /// The re-sorted copy a rebuild writes (B; bound in the kernels, never read by the host).
+    _sorted: StateSet,
     monitor: wgpu::Buffer,
-    /// Verlet skin state (see `skin` in `shaders/step.wgsl`): [0] largest displacement
-    /// since the last rebuild (f32 bits), [1] rebuild flag, [2] rebuilds so far, [3] skin.
+    /// Verlet skin state (see `skin` in `shaders/step.wgsl`): [0] some particle moved more
+    /// than skin/2 since the last rebuild, [1] rebuild flag, [2] rebuilds so far, [3] skin.
     skin: wgpu::Buffer,
-    /// The grid sort's indirect dispatch arguments, written by `decide` each step.
+    /// The indirect dispatch arguments of the grid sort and then of the rebuild's
+    /// per-particle passes (at byte [`Self::rebuild_args`]), written by `decide` each step.
     args: wgpu::Buffer,
-    kernels: [Kernel; 7],
-    bound: [Bound; 2],
+    rebuild_args: u64,
+    kernels: [Kernel; 9],
+    bound: Bound,
     max_per_dim: u32,
     kind: StepKind,
     n_walls: u32,
@@ -445,6 +465,7 @@ impl GpuEngine {
             StateSet::new(&mut alloc, "A", sizes, kind, ledger),
             StateSet::new(&mut alloc, "B", sizes, kind, ledger),
         ];
+        let dt32 = r.dt as f32;
         let particle_ledger = ledger.then(|| alloc.buffer("particle_ledger", 64 * n as u64));
         // Initial state, in scene order (the first sort orders it).
         let mut cells = Vec::with_capacity(n);
@@ -468,6 +489,16 @@ impl GpuEngine {
         q0.write_buffer(&s0.off, 0, bytemuck::cast_slice(&offs));
         q0.write_buffer(&s0.vel, 0, bytemuck::cast_slice(&vels));
         q0.write_buffer(&s0.acc, 0, bytemuck::cast_slice(&acc0));
+        // the prediction kick_drift writes each step, for the initial forces
+        let vpred0: Vec<[f32; 4]> = vels
+            .iter()
+            .zip(&acc0)
+            .map(|(v, a)| {
+                let p = |i: usize| v[i] + 0.5 * dt32 * a[i];
+                [p(0), p(1), p(2), v[3]]
+            })
+            .collect();
+        q0.write_buffer(&s0.vpred, 0, bytemuck::cast_slice(&vpred0));
         q0.write_buffer(&s0.pid, 0, bytemuck::cast_slice(&pid));
         if let Some(omega) = &s0.omega {
             // ω = 0 (scenes start without spin), w = I = 2/5·m·r²
@@ -526,36 +557,21 @@ impl GpuEngine {
             "wall_push",
             4 * if servo_walls { n as u64 * n_walls } else { 1 },
         );
-        let vpred = alloc.buffer("vpred", 16 * n as u64);
-        let wpred = kind
-            .rotation()
-            .then(|| alloc.buffer("wpred", 16 * n as u64));
         let old_index = alloc.buffer("old_index", 4 * n as u64);
         let nbr = alloc.buffer("nbr", 4 * n as u64 * cap as u64);
         let monitor = alloc.buffer("monitor", MONITOR_BYTES);
         let skin_buf = alloc.buffer("skin", 16);
-        // f32::MAX as the largest displacement: the first step builds the lists
-        let skin_init = [f32::MAX.to_bits(), 0, 0, (skin as f32).to_bits()];
+        // moved beyond skin/2 (flag set): the first step builds the lists
+        let skin_init = [1, 0, 0, (skin as f32).to_bits()];
         q0.write_buffer(&skin_buf, 0, bytemuck::cast_slice(&skin_init));
-        // the grid sort's indirect arguments for a full sort, and the ones decide writes
-        let full: Vec<u32> = grid.indirect_args().concat();
-        let full_args = alloc.buffer("full_args", 4 * full.len() as u64);
-        q0.write_buffer(&full_args, 0, bytemuck::cast_slice(&full));
-        let args = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("args"),
-            size: (4 * full.len() as u64).max(4),
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
-            mapped_at_creation: false,
-        });
-        alloc.list.push(("args".into(), args.size()));
-        let buffers = alloc.list;
-
         let mut wanted = vec![
             "kick_drift",
             "decide",
             "gather",
             "neighbours",
             "remap",
+            "copy_back",
+            "copy_back_history",
             "force",
             "kick",
         ];
@@ -566,34 +582,47 @@ impl GpuEngine {
         if servo_walls {
             wanted.push("wall_servo");
         }
-        let program = Program::with_entry_points(&ctx, &kind.variant(ledger), Some(&wanted))?;
-        let names = [
-            "kick_drift",
-            "decide",
-            "gather",
-            "neighbours",
-            "remap",
-            "force",
-            "kick",
-        ];
-        let kernels: Vec<Kernel> = names
+        let one_material = f64::from(u8::from(r.n_materials == 1));
+        let program = Program::specialized(
+            &ctx,
+            &kind.variant(ledger),
+            Some(&wanted),
+            &[("ONE_MATERIAL", one_material)],
+        )?;
+        let kernels: Vec<Kernel> = wanted[..9]
             .iter()
             .map(|k| program.kernel(k).cloned())
             .collect::<Result<_, _>>()?;
-        let kernels: [Kernel; 7] = kernels
+        let kernels: [Kernel; 9] = kernels
             .try_into()
             .map_err(|_| PowderError::Run("kernel set".into()))?;
         let max_per_dim = ctx.limits().max_compute_workgroups_per_dimension;
-        let bind = |a: usize| -> Result<Bound, PowderError> {
-            let b = 1 - a;
-            let mut list: Vec<(String, &wgpu::Buffer)> = sets[a].named("a");
-            list.extend(sets[b].named("b"));
+        // the indirect arguments of a rebuild (the grid sort's, then one per-particle
+        // pass's), and the ones decide writes each step (those, or zeros)
+        let sort_args = grid.indirect_args();
+        let per_group = kernels[2].workgroup_size.iter().product::<u32>().max(1);
+        let particle_args = split_workgroups((n as u32).div_ceil(per_group), max_per_dim);
+        let rebuild_args = 12 * sort_args.len() as u64;
+        let full: Vec<u32> = sort_args
+            .into_iter()
+            .chain([particle_args])
+            .flatten()
+            .collect();
+        let full_args = alloc.buffer("full_args", 4 * full.len() as u64);
+        q0.write_buffer(&full_args, 0, bytemuck::cast_slice(&full));
+        let args = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("args"),
+            size: 4 * full.len() as u64,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
+            mapped_at_creation: false,
+        });
+        alloc.list.push(("args".into(), args.size()));
+        let buffers = alloc.list;
+        let bind = || -> Result<Bound, PowderError> {
+            let mut list: Vec<(String, &wgpu::Buffer)> = sets[0].named("a");
+            list.extend(sets[1].named("b"));
             list.push(("grid".into(), grid.params()));
             list.push(("step".into(), &step_buf));
-            list.push(("vpred".into(), &vpred));
-            if let Some(w) = &wpred {
-                list.push(("wpred".into(), w));
-            }
             list.push(("old_index".into(), &old_index));
             list.push(("nbr".into(), &nbr));
             list.push(("sorted_index".into(), grid.sorted_index()));
@@ -618,8 +647,10 @@ impl GpuEngine {
                 gather: kernels[2].bind(device, &refs)?,
                 neighbours: kernels[3].bind(device, &refs)?,
                 remap: kernels[4].bind(device, &refs)?,
-                force: kernels[5].bind(device, &refs)?,
-                kick: kernels[6].bind(device, &refs)?,
+                copy_back: kernels[5].bind(device, &refs)?,
+                copy_back_history: kernels[6].bind(device, &refs)?,
+                force: kernels[7].bind(device, &refs)?,
+                kick: kernels[8].bind(device, &refs)?,
                 wall_move: match program.kernels.get("wall_move") {
                     Some(k) => Some((k.clone(), k.bind(device, &refs)?)),
                     None => None,
@@ -630,7 +661,8 @@ impl GpuEngine {
                 },
             })
         };
-        let bound = [bind(0)?, bind(1)?];
+        let bound = bind()?;
+        let [state, sorted] = sets;
         let radius = scene.particles.iter().map(|p| p.radius).collect();
         let mass = r.mass.clone();
         let mut engine = Self {
@@ -644,11 +676,12 @@ impl GpuEngine {
             radius,
             mass: mass.clone(),
             grid,
-            sets,
-            cur: 0,
+            state,
+            _sorted: sorted,
             monitor,
             skin: skin_buf,
             args,
+            rebuild_args,
             kernels,
             bound,
             max_per_dim,
@@ -763,12 +796,11 @@ impl GpuEngine {
         self.buffers.iter().map(|(_, b)| b).sum()
     }
 
-    /// Records one step: drift A, decide whether to rebuild, sort (only on a rebuild),
-    /// then gather into B, rebuild B's lists (only on a rebuild), carry or remap the
-    /// history and compute B's forces.
+    /// Records one step: drift, decide whether to rebuild, on a rebuild (indirect: no
+    /// workgroups otherwise) sort, gather into B, rebuild B's lists, remap the history
+    /// and copy B back; then the forces and the kick.
     fn record_step(&self, encoder: &mut wgpu::CommandEncoder, with_drift: bool) {
-        let a = self.cur;
-        let bound = &self.bound[a];
+        let bound = &self.bound;
         let (n, max) = (self.n, self.max_per_dim);
         {
             let mut pass = encoder.begin_compute_pass(&Default::default());
@@ -780,19 +812,25 @@ impl GpuEngine {
             }
             self.kernels[1].dispatch_workgroups(&mut pass, &bound.decide, 1, max);
         }
-        // (zero workgroups unless decide chose to rebuild)
         self.grid
-            .encode_indirect(encoder, &self.sets[a].cell, &self.args, 0);
+            .encode_indirect(encoder, &self.state.cell, &self.args, 0);
         let mut pass = encoder.begin_compute_pass(&Default::default());
-        self.kernels[2].dispatch(&mut pass, &bound.gather, n, max);
-        self.kernels[3].dispatch(&mut pass, &bound.neighbours, n, max);
-        self.kernels[4].dispatch(&mut pass, &bound.remap, n, max);
-        self.kernels[5].dispatch(&mut pass, &bound.force, n, max);
+        let rebuild = [
+            &bound.gather,
+            &bound.neighbours,
+            &bound.remap,
+            &bound.copy_back,
+            &bound.copy_back_history,
+        ];
+        for (kernel, group) in self.kernels[2..7].iter().zip(rebuild) {
+            kernel.dispatch_indirect(&mut pass, group, &self.args, self.rebuild_args);
+        }
+        self.kernels[7].dispatch(&mut pass, &bound.force, n, max);
         if let Some((k, b)) = &bound.wall_servo {
             k.dispatch_workgroups(&mut pass, b, 1, max);
         }
         if with_drift {
-            self.kernels[6].dispatch(&mut pass, &bound.kick, n, max);
+            self.kernels[8].dispatch(&mut pass, &bound.kick, n, max);
         }
     }
 
@@ -820,7 +858,7 @@ impl GpuEngine {
             submit_and_read(&engine.ctx, encoder, &[(&engine.monitor, 4)]).map(|_| t.elapsed())
         };
         let empty = time(&self, &|_| {})?.as_secs_f64();
-        let b = &self.bound[self.cur];
+        let b = &self.bound;
         let names = [
             "kick_drift",
             "decide",
@@ -828,12 +866,14 @@ impl GpuEngine {
             "gather",
             "neighbours",
             "remap",
+            "copy_back",
+            "copy_back_history",
             "force",
             "kick",
         ];
         let record = |e: &mut wgpu::CommandEncoder, id: usize| {
             if id == 2 {
-                self.grid.encode(e, &self.sets[self.cur].cell);
+                self.grid.encode(e, &self.state.cell);
                 return;
             }
             let (kernel, group, workgroups) = match id {
@@ -842,8 +882,10 @@ impl GpuEngine {
                 3 => (2, &b.gather, None),
                 4 => (3, &b.neighbours, None),
                 5 => (4, &b.remap, None),
-                6 => (5, &b.force, None),
-                _ => (6, &b.kick, None),
+                6 => (5, &b.copy_back, None),
+                7 => (6, &b.copy_back_history, None),
+                8 => (7, &b.force, None),
+                _ => (8, &b.kick, None),
             };
             let mut pass = e.begin_compute_pass(&Default::default());
             match workgroups {
@@ -876,7 +918,6 @@ impl GpuEngine {
             .queue
             .write_buffer(&self.monitor, 0, &[0u8; MONITOR_BYTES as usize]);
         self.record_step(&mut encoder, false);
-        self.cur = 1 - self.cur;
         self.check_monitor(encoder)?;
         if let Some(buf) = &self.particle_ledger {
             let mut rows = self.read_particle_ledger()?;
@@ -1029,7 +1070,6 @@ impl GpuEngine {
             let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
             for _ in 0..batch {
                 self.record_step(&mut encoder, true);
-                self.cur = 1 - self.cur;
             }
             self.steps += batch;
             self.time += batch as f64 * self.dt;
@@ -1042,7 +1082,7 @@ impl GpuEngine {
     /// Reads positions, velocities and (when the scene rotates) angular velocities back,
     /// in the scene's particle order.
     pub fn state(&self) -> Result<GpuState, PowderError> {
-        let s = &self.sets[self.cur];
+        let s = &self.state;
         let n = self.n as u64;
         let encoder = self.ctx.device.create_command_encoder(&Default::default());
         let mut sources = vec![
@@ -1088,7 +1128,7 @@ impl GpuEngine {
 
     /// The state buffers, named as in [`GpuSavedState`].
     fn state_buffers(&self) -> Vec<(String, &wgpu::Buffer)> {
-        let mut list = self.sets[self.cur].named("a");
+        let mut list = self.state.named("a");
         list.push(("nbr".into(), &self.nbr));
         list.push(("skin".into(), &self.skin));
         list.push(("walls".into(), &self.walls));
@@ -1256,7 +1296,7 @@ impl GpuEngine {
         if walls == 0 {
             return Ok(f);
         }
-        let Some(buf) = &self.sets[self.cur].wall_ledger else {
+        let Some(buf) = &self.state.wall_ledger else {
             return Err(PowderError::Run(
                 "this GPU run keeps no energy ledger (GpuOptions { ledger: false }), which holds the wall forces".into(),
             ));
@@ -1278,7 +1318,7 @@ impl GpuEngine {
     /// The contact force on each particle after the last step, m·(a − g) from the device's
     /// accelerations, in the scene's particle order (N). For traces and diagnostics.
     pub fn contact_forces(&self) -> Result<Vec<DVec3>, PowderError> {
-        let s = &self.sets[self.cur];
+        let s = &self.state;
         let n = self.n as u64;
         let encoder = self.ctx.device.create_command_encoder(&Default::default());
         let out = submit_and_read(&self.ctx, encoder, &[(&s.acc, 16 * n), (&s.pid, 4 * n)])?;
@@ -1343,7 +1383,7 @@ impl GpuEngine {
     /// sorted: both orientations of each pair appear (each side keeps its own copy).
     /// For comparisons and diagnostics: reads the lists back.
     pub fn contact_histories(&self) -> Result<Vec<KeyedHistory>, PowderError> {
-        let s = &self.sets[self.cur];
+        let s = &self.state;
         let (n, cap) = (self.n as u64, self.cap as u64);
         let hb = self.kind.history_bytes();
         let encoder = self.ctx.device.create_command_encoder(&Default::default());
@@ -1373,7 +1413,7 @@ impl GpuEngine {
     /// The history of particle `i`'s contact with wall `w` after the last step (zero when
     /// they are apart). For tests and diagnostics: reads buffers back.
     pub fn wall_contact_history(&self, w: usize, i: usize) -> Result<ContactHistory, PowderError> {
-        let s = &self.sets[self.cur];
+        let s = &self.state;
         let n = self.n as u64;
         let walls = self.n_walls as usize;
         if w >= walls {

@@ -51,6 +51,18 @@ impl Program {
         variant: &ShaderVariant,
         only: Option<&[&str]>,
     ) -> Result<Self, PowderError> {
+        Self::specialized(ctx, variant, only, &[])
+    }
+
+    /// As [`Self::with_entry_points`], with values for the module's pipeline-overridable
+    /// constants (WGSL `override`; those not given keep their defaults): the shader
+    /// compiler folds them, so a scene's pipelines drop the code it cannot reach.
+    pub fn specialized(
+        ctx: &GpuContext,
+        variant: &ShaderVariant,
+        only: Option<&[&str]>,
+        constants: &[(&str, f64)],
+    ) -> Result<Self, PowderError> {
         let (module, info) = shaders::validate(&variant.source).map_err(|e| {
             PowderError::Run(format!(
                 "shader variant `{}` is invalid:\n{e}",
@@ -108,7 +120,10 @@ impl Program {
                     layout: None,
                     module: &shader,
                     entry_point: Some(&ep.name),
-                    compilation_options: Default::default(),
+                    compilation_options: wgpu::PipelineCompilationOptions {
+                        constants,
+                        ..Default::default()
+                    },
                     cache: None,
                 });
             let layout = pipeline.get_bind_group_layout(0);
@@ -196,6 +211,20 @@ impl Kernel {
             invocations.div_ceil(per_group),
             max_per_dim,
         );
+    }
+
+    /// Records a dispatch whose `[x, y, z]` workgroup counts the device reads from `args`
+    /// at byte `offset` (a buffer with `INDIRECT` usage; zeros launch nothing).
+    pub fn dispatch_indirect(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        bind_group: &wgpu::BindGroup,
+        args: &wgpu::Buffer,
+        offset: u64,
+    ) {
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, bind_group, &[]);
+        pass.dispatch_workgroups_indirect(args, offset);
     }
 
     /// Records a dispatch of `workgroups` workgroups, split as in [`Kernel::dispatch`].

@@ -39,7 +39,8 @@ pub const ROTATION_OFF: &str = include_str!("../../shaders/rotation_off.wgsl");
 pub const LEDGER: &str = include_str!("../../shaders/ledger.wgsl");
 /// The ledger hooks as no-ops (a snippet of the step for runs without the ledger).
 pub const LEDGER_OFF: &str = include_str!("../../shaders/ledger_off.wgsl");
-/// One time step: drift, gather, neighbours, history remap, forces, kick.
+/// One time step: drift, (on a rebuild: gather, neighbours, history remap, copy back),
+/// forces, kick.
 pub const STEP: &str = include_str!("../../shaders/step.wgsl");
 
 /// JKR history layout without friction or rolling: only the "touched" flag (4 bytes).
@@ -542,9 +543,12 @@ mod tests {
             let eps = compute_entry_points(&module);
             for name in [
                 "kick_drift",
+                "decide",
                 "gather",
                 "neighbours",
                 "remap",
+                "copy_back",
+                "copy_back_history",
                 "force",
                 "kick",
             ] {
@@ -561,7 +565,9 @@ mod tests {
                     .iter()
                     .any(|(_, g)| g.name.as_deref() == Some(name))
             };
-            for name in ["a_omega", "a_alpha", "b_omega", "b_alpha", "wpred"] {
+            for name in [
+                "a_omega", "a_alpha", "b_omega", "b_alpha", "a_wpred", "b_wpred",
+            ] {
                 assert_eq!(declared(name), kind.rotation(), "{}: {name}", v.name);
             }
             // the Krijt dynamics only where the history stores the contact radius
