@@ -14,6 +14,7 @@
 // rebuild; set B is scratch that only a rebuild writes. Pass order, recorded by
 // `gpu::engine` into one encoder per batch of steps:
 //   kick_drift   per particle (A)        v += dt/2·a (omega += dt/2·alpha); offset +=
+//   (kick_kick_drift after a step of the same batch: its kick first, in the same pass)
 //                                        dt·v, carried into the cell; disp += dt·v and
 //                                        atomicMax of |disp| (Verlet skin); the predicted
 //                                        velocity vpred = v + dt/2·a (wpred likewise)
@@ -85,8 +86,12 @@ fn opaque1(x: f32) -> f32 {
     return select(x, 0.0, step.zero != 0u);
 }
 
+// False for a scene without periodic axes (set per pipeline by `gpu::engine`): the
+// compiler then drops the wrapping from every separation and cell step.
+override PERIODIC: bool = true;
+
 fn periodic_axes() -> vec3<bool> {
-    return step.periodic != vec3<u32>(0u);
+    return vec3<bool>(PERIODIC) & (step.periodic != vec3<u32>(0u));
 }
 
 // A cell difference wrapped to the nearest periodic image on periodic axes.
@@ -182,8 +187,12 @@ fn kahan_add(x: vec3<f32>, c: vec3<f32>, dx: vec3<f32>) -> Compensated {
 // batch where its insertion time comes); one that has not neither moves nor interacts.
 @group(0) @binding(65) var<storage, read> appeared: array<u32>;
 
+// False for a scene without pouring (set per pipeline): every particle is there from the
+// start, and no kernel reads the flags.
+override POURING: bool = true;
+
 fn is_active(pid: u32) -> bool {
-    return appeared[pid] != 0u;
+    return !POURING || appeared[pid] != 0u;
 }
 
 // Rebuild scratch: the old index of each new slot; the neighbour lists (kept between
@@ -234,10 +243,29 @@ fn separation(ci: vec4<i32>, oi: vec4<f32>, cj: vec4<i32>, oj: vec4<f32>) -> vec
 
 @compute @workgroup_size(WG_SIZE)
 fn kick_drift(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
-    let i = global_index(wid, nwg, lid);
+    drift(global_index(wid, nwg, lid), false);
+}
+
+// The previous step's closing kick and this step's kick_drift in one pass (every step of a
+// batch but the first; the batch ends with a kick): bitwise the same as the two kernels,
+// one dispatch and one sweep over the state fewer.
+@compute @workgroup_size(WG_SIZE)
+fn kick_kick_drift(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    drift(global_index(wid, nwg, lid), true);
+}
+
+fn drift(i: u32, pending_kick: bool) {
     if (i < grid.n_particles && is_active(a_pid[i])) {
         let h = grid.cell_width;
-        let kv = kahan_add(a_vel[i].xyz, a_kahan[2u * i].xyz, 0.5 * step.dt * a_acc[i].xyz);
+        var v0 = a_vel[i].xyz;
+        var c0 = a_kahan[2u * i].xyz;
+        if (pending_kick) {
+            let kk = kahan_add(v0, c0, 0.5 * step.dt * a_acc[i].xyz);
+            v0 = kk.x;
+            c0 = kk.c;
+            rot_kick(i);
+        }
+        let kv = kahan_add(v0, c0, 0.5 * step.dt * a_acc[i].xyz);
         let v = kv.x;
         a_vel[i] = vec4<f32>(v, a_vel[i].w);
         a_kahan[2u * i] = vec4<f32>(kv.c, 0.0);

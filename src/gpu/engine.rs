@@ -184,9 +184,21 @@ struct Bound {
     copy_back_history: wgpu::BindGroup,
     force: wgpu::BindGroup,
     kick: wgpu::BindGroup,
+    kick_kick_drift: wgpu::BindGroup,
     /// The moving-wall kernels, only for scenes with moving / servo-controlled walls.
     wall_move: Option<(Kernel, wgpu::BindGroup)>,
     wall_servo: Option<(Kernel, wgpu::BindGroup)>,
+}
+
+/// How a recorded step starts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Drift {
+    /// No drift (the initial forces).
+    None,
+    /// `kick_drift`: the first step of a batch.
+    Plain,
+    /// `kick_kick_drift`: the previous step's closing kick, then the drift.
+    AfterKick,
 }
 
 /// A snapshot read back from the device, in the scene's particle order.
@@ -247,7 +259,7 @@ pub struct GpuEngine {
     /// per-particle passes (at byte [`Self::rebuild_args`]), written by `decide` each step.
     args: wgpu::Buffer,
     rebuild_args: u64,
-    kernels: [Kernel; 9],
+    kernels: [Kernel; 10],
     bound: Bound,
     max_per_dim: u32,
     kind: StepKind,
@@ -574,6 +586,7 @@ impl GpuEngine {
             "copy_back_history",
             "force",
             "kick",
+            "kick_kick_drift",
         ];
         // the wall kernels only where walls move (not compiled otherwise)
         if moving_walls {
@@ -582,18 +595,24 @@ impl GpuEngine {
         if servo_walls {
             wanted.push("wall_servo");
         }
-        let one_material = f64::from(u8::from(r.n_materials == 1));
+        // what the scene does not use, folded out of its pipelines
+        let flag = |b: bool| f64::from(u8::from(b));
+        let pouring = scene.particles.iter().any(|p| p.insert_at > 0.0);
         let program = Program::specialized(
             &ctx,
             &kind.variant(ledger),
             Some(&wanted),
-            &[("ONE_MATERIAL", one_material)],
+            &[
+                ("ONE_MATERIAL", flag(r.n_materials == 1)),
+                ("POURING", flag(pouring)),
+                ("PERIODIC", flag(periodic.iter().any(|&p| p))),
+            ],
         )?;
-        let kernels: Vec<Kernel> = wanted[..9]
+        let kernels: Vec<Kernel> = wanted[..10]
             .iter()
             .map(|k| program.kernel(k).cloned())
             .collect::<Result<_, _>>()?;
-        let kernels: [Kernel; 9] = kernels
+        let kernels: [Kernel; 10] = kernels
             .try_into()
             .map_err(|_| PowderError::Run("kernel set".into()))?;
         let max_per_dim = ctx.limits().max_compute_workgroups_per_dimension;
@@ -651,6 +670,7 @@ impl GpuEngine {
                 copy_back_history: kernels[6].bind(device, &refs)?,
                 force: kernels[7].bind(device, &refs)?,
                 kick: kernels[8].bind(device, &refs)?,
+                kick_kick_drift: kernels[9].bind(device, &refs)?,
                 wall_move: match program.kernels.get("wall_move") {
                     Some(k) => Some((k.clone(), k.bind(device, &refs)?)),
                     None => None,
@@ -798,14 +818,19 @@ impl GpuEngine {
 
     /// Records one step: drift, decide whether to rebuild, on a rebuild (indirect: no
     /// workgroups otherwise) sort, gather into B, rebuild B's lists, remap the history
-    /// and copy B back; then the forces and the kick.
-    fn record_step(&self, encoder: &mut wgpu::CommandEncoder, with_drift: bool) {
+    /// and copy B back; then the forces. The closing kick is recorded with the next step
+    /// (`Drift::AfterKick`) or by [`Self::record_kick`].
+    fn record_step(&self, encoder: &mut wgpu::CommandEncoder, drift: Drift) {
         let bound = &self.bound;
         let (n, max) = (self.n, self.max_per_dim);
         {
             let mut pass = encoder.begin_compute_pass(&Default::default());
-            if with_drift {
-                self.kernels[0].dispatch(&mut pass, &bound.kick_drift, n, max);
+            if drift != Drift::None {
+                let (k, group) = match drift {
+                    Drift::AfterKick => (&self.kernels[9], &bound.kick_kick_drift),
+                    _ => (&self.kernels[0], &bound.kick_drift),
+                };
+                k.dispatch(&mut pass, group, n, max);
                 if let Some((k, b)) = &bound.wall_move {
                     k.dispatch_workgroups(&mut pass, b, 1, max);
                 }
@@ -829,9 +854,12 @@ impl GpuEngine {
         if let Some((k, b)) = &bound.wall_servo {
             k.dispatch_workgroups(&mut pass, b, 1, max);
         }
-        if with_drift {
-            self.kernels[8].dispatch(&mut pass, &bound.kick, n, max);
-        }
+    }
+
+    /// Records the closing kick of a batch's last step.
+    fn record_kick(&self, encoder: &mut wgpu::CommandEncoder) {
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        self.kernels[8].dispatch(&mut pass, &self.bound.kick, self.n, self.max_per_dim);
     }
 
     /// What each pass of the step costs on this adapter: every pass is recorded `reps` times
@@ -917,7 +945,7 @@ impl GpuEngine {
         self.ctx
             .queue
             .write_buffer(&self.monitor, 0, &[0u8; MONITOR_BYTES as usize]);
-        self.record_step(&mut encoder, false);
+        self.record_step(&mut encoder, Drift::None);
         self.check_monitor(encoder)?;
         if let Some(buf) = &self.particle_ledger {
             let mut rows = self.read_particle_ledger()?;
@@ -1068,9 +1096,16 @@ impl GpuEngine {
                 .queue
                 .write_buffer(&self.monitor, 0, &[0u8; MONITOR_BYTES as usize]);
             let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
-            for _ in 0..batch {
-                self.record_step(&mut encoder, true);
+            for i in 0..batch {
+                // each step's closing kick goes with the next step's drift
+                let drift = if i == 0 {
+                    Drift::Plain
+                } else {
+                    Drift::AfterKick
+                };
+                self.record_step(&mut encoder, drift);
             }
+            self.record_kick(&mut encoder);
             self.steps += batch;
             self.time += batch as f64 * self.dt;
             left -= batch;
