@@ -7,9 +7,9 @@
 // P = tangential force · tangential velocity + rolling torque · relative angular velocity.
 // A step that crosses the contact's entry or exit edge integrates the normal work only
 // over the part inside, from the force just inside the edge (`pair_edges` of the model),
-// so the force jumps of JKR and jump-in adhesion are booked right. Both sides of a pair
-// evaluate bitwise mirrored inputs (see step.wgsl), so each books half of the same value;
-// a wall contact books all of it.
+// so the force jumps of JKR and jump-in adhesion are booked right. A pair is evaluated
+// once, by the particle whose half list holds it (see step.wgsl), which books all of it
+// (and counts it twice: once for each particle); so does a wall contact.
 //
 // What the next step needs of a contact is kept per slot next to its history and moves
 // with it through re-sorts: (delta, f, U − ½·dt·P, 1), or zeros while it is not engaged
@@ -18,11 +18,11 @@
 // Per particle, indexed by its persistent id (each invocation writes only its own
 // particle, so no atomics and bitwise reproducible sums), four vec4:
 //   [0] (pairs overlapping, walls overlapping, pairs engaged without overlap, walls
-//        engaged without overlap), counted from this particle's side;
-//   [1] (largest overlap, largest overlap/a12, sum over pairs of overlap/a12, sum over
-//        walls of overlap/a12);
-//   [2] (dissipated energy so far: Kahan sum and its compensation; the particle's share
-//        of the stored energy: half of each pair's, all of each wall's; 0);
+//        engaged without overlap), the pairs counted twice by their evaluator;
+//   [1] (largest overlap, largest overlap/a12, sum over pairs of overlap/a12 (twice, as
+//        the counts), sum over walls of overlap/a12);
+//   [2] (dissipated energy so far: Kahan sum and its compensation; the stored energy of
+//        the pairs it evaluates and of its walls; 0);
 //   [3] (work moving walls did on it so far: Kahan sum and compensation; 0; 0) — the
 //        normal force's work 0.5·(f0 + f1)·(n·v_wall)·dt, exact for walls moving along
 //        their normal (the tangential force's is left out).
@@ -80,22 +80,24 @@ fn ledger_book(old: vec4<f32>, p: PairRow, k: Kin, c: Contact, power: f32) -> ve
 
 fn ledger_count(acc: ptr<function, LedgerAcc>, k: Kin, engaged: bool, wall: bool) {
     let o = select(0u, 1u, wall);
+    // a pair counts for both its particles (its evaluator books both: half lists)
+    let weight = select(2.0, 1.0, wall);
     if (k.delta > 0.0) {
         let ratio = k.delta / (2.0 * k.r_eff);
-        (*acc).counts[o] += 1.0;
+        (*acc).counts[o] += weight;
         (*acc).overlaps.x = max((*acc).overlaps.x, k.delta);
         (*acc).overlaps.y = max((*acc).overlaps.y, ratio);
-        (*acc).overlaps[2u + o] += ratio;
+        (*acc).overlaps[2u + o] += weight * ratio;
     } else if (engaged) {
-        (*acc).counts[2u + o] += 1.0;
+        (*acc).counts[2u + o] += weight;
     }
 }
 
 // One evaluated particle–particle contact in slot `slot` (after pair_contact).
 fn ledger_pair(acc: ptr<function, LedgerAcc>, slot: u32, p: PairRow, k: Kin, c: Contact, power: f32) {
     let booked = ledger_book(a_ledger[slot], p, k, c, power);
-    (*acc).dissipated += 0.5 * booked.x;
-    (*acc).stored += 0.5 * c.potential;
+    (*acc).dissipated += booked.x;
+    (*acc).stored += c.potential;
     let engaged = booked.w != 0.0;
     a_ledger[slot] = select(vec4<f32>(0.0), vec4<f32>(k.delta, c.normal, c.potential - 0.5 * k.dt * power, 1.0), engaged);
     ledger_count(acc, k, engaged, false);
@@ -126,7 +128,7 @@ fn ledger_wall(acc: ptr<function, LedgerAcc>, slot: u32, p: PairRow, k: Kin, c: 
 fn ledger_departed(acc: ptr<function, LedgerAcc>, slot: u32, delta: f32) {
     let old = a_ledger[slot];
     if (old.w != 0.0) {
-        (*acc).dissipated += 0.5 * (0.5 * old.y * (delta - old.x) + old.z);
+        (*acc).dissipated += 0.5 * old.y * (delta - old.x) + old.z;
     }
     a_ledger[slot] = vec4<f32>(0.0);
 }
@@ -177,8 +179,8 @@ fn ledger_gather_walls(k: u32, o: u32) {
     }
 }
 
-// remap on a rebuild: an engaged contact of the old list whose partner is not in the new
-// list moved out of reach + skin within one step (only a violent step does that). It is
+// remap on a rebuild: an engaged contact of the old list whose pair is in no new list
+// moved out of reach + skin within one step (only a violent step does that). It is
 // booked as having left at its last overlap (U0 − ½·dt·P0; the CPU also adds the normal
 // work 0.5·f0·(delta − delta0) at its current overlap, which is not at hand here) and
 // counted in monitor[3], so the host can say so.
@@ -190,6 +192,7 @@ fn ledger_dropped(pid: u32, o: u32, old_n: u32, k: u32) {
         if (old.w == 0.0) {
             continue;
         }
+        // the pair is in k's new list, or in a partner's that lists k (`lower`, resolved)
         let partner = a_hist_pid[o * cap + m];
         var found = false;
         for (var s = 0u; s < b_count[k]; s++) {
@@ -198,8 +201,13 @@ fn ledger_dropped(pid: u32, o: u32, old_n: u32, k: u32) {
                 break;
             }
         }
+        for (var s = 0u; s < lower_count[k] && !found; s++) {
+            if (b_pid[lower[k * cap + s] / cap] == partner) {
+                found = true;
+            }
+        }
         if (!found) {
-            lost += 0.5 * old.z;
+            lost += old.z;
             atomicAdd(&monitor[3], 1u);
         }
     }

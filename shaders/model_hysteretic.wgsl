@@ -183,6 +183,11 @@ fn hist_zero() -> Hist {
     return vec2<f32>(0.0);
 }
 
+// The history seen from the partner's side (the normal history is symmetric).
+fn hist_mirror(h: Hist) -> Hist {
+    return h;
+}
+
 fn history_in(h: Hist) -> HystHistory {
     return HystHistory(h.x, h.y != 0.0);
 }

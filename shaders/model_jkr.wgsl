@@ -312,6 +312,15 @@ fn jkr_rolling(p: JkrPair, k: Kin, nf: JkrNormal, h: ptr<function, JkrHistory>) 
 // The step's interface (`ContactModel::respond`): normal force, then the tangential
 // force and the rolling torque while in contact, when the pair has them and the history
 // layout has room for them.
+// The history seen from the partner's side: its tangential spring is −s (the rolling
+// displacement and the contact radius are the same on both sides). A rebuild that makes
+// the partner the pair's evaluator hands the history over with this.
+fn hist_mirror(h: Hist) -> Hist {
+    var u = jkr_unpack(h);
+    u.spring = -u.spring;
+    return jkr_pack(u);
+}
+
 fn pair_contact(p: JkrPair, k: Kin, hist: ptr<function, Hist>) -> Contact {
     var h = jkr_unpack(*hist);
     let nf = jkr_normal(p, k, &h);

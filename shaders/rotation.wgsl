@@ -2,8 +2,8 @@
 // torques (JKR with friction or rolling resistance). Composed into the step instead of
 // rotation_off.wgsl, so a scene without them declares (and allocates) none of this.
 //
-// Per particle, in both state sets like vel/acc (B only on a rebuild): omega.xyz = angular velocity, omega.w =
-// the moment of inertia 2/5·m·r²; alpha.xyz = angular acceleration torque/I. Integrated
+// Per particle, in both state sets like vel/acc (B only on a rebuild): omega.xyz =
+// angular velocity, omega.w = the moment of inertia 2/5·m·r²; alpha.xyz = angular acceleration torque/I. Integrated
 // with the same half kicks as the velocity (CPU: `CpuEngine::step`); wpred is the
 // predicted omega + dt/2·alpha the forces see (as vpred for the velocity).
 
@@ -15,6 +15,8 @@ const ROTATION: bool = true;
 @group(0) @binding(53) var<storage, read_write> b_alpha: array<vec4<f32>>;
 @group(0) @binding(54) var<storage, read_write> a_wpred: array<vec4<f32>>;
 @group(0) @binding(68) var<storage, read_write> b_wpred: array<vec4<f32>>;
+// Per slot, this step: the torque the evaluated pair exerts on the partner (xyz).
+@group(0) @binding(72) var<storage, read_write> pair_torque: array<vec4<f32>>;
 
 // kick_drift: omega += dt/2·alpha, and the prediction the forces see.
 fn rot_kick_drift(i: u32) {
@@ -42,11 +44,26 @@ fn rot_wpred(k: u32) -> vec3<f32> {
     return a_wpred[k].xyz;
 }
 
-// force: stores torque/I; false when it is not finite.
+// force: the torque of k's own pairs and walls (alpha holds it until collect).
+fn rot_store_partial(k: u32, torque: vec3<f32>) {
+    a_alpha[k] = vec4<f32>(torque, 0.0);
+}
+
+// collect: adds the partners' share and stores (torque)/I; false when it is not finite.
 fn rot_store(k: u32, torque: vec3<f32>) -> bool {
-    let alpha = torque / a_omega[k].w;
+    let alpha = (a_alpha[k].xyz + torque) / a_omega[k].w;
     a_alpha[k] = vec4<f32>(alpha, 0.0);
     return !(any(alpha != alpha) || any(abs(alpha) > vec3<f32>(3.0e38)));
+}
+
+// force: the torque an evaluated pair exerts on the partner (slot of the pair); collect
+// reads it back.
+fn rot_pair_store(slot: u32, torque: vec3<f32>) {
+    pair_torque[slot] = vec4<f32>(torque, 0.0);
+}
+
+fn rot_pair_load(slot: u32) -> vec3<f32> {
+    return pair_torque[slot].xyz;
 }
 
 // kick: omega += dt/2·alpha.

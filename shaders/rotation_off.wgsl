@@ -14,8 +14,16 @@ fn rot_wpred(k: u32) -> vec3<f32> {
     return vec3<f32>(0.0);
 }
 
+fn rot_store_partial(k: u32, torque: vec3<f32>) {}
+
 fn rot_store(k: u32, torque: vec3<f32>) -> bool {
     return true;
+}
+
+fn rot_pair_store(slot: u32, torque: vec3<f32>) {}
+
+fn rot_pair_load(slot: u32) -> vec3<f32> {
+    return vec3<f32>(0.0);
 }
 
 fn rot_kick(k: u32) {}

@@ -608,8 +608,9 @@ velocity = [-0.1, 0.05, -0.3]
             sa.angular_velocities.iter().any(|w| w.length() > 0.0),
             "contacts spin the particles"
         );
-        // Both copies of every contact's history agree: the same flag and ξ, the tangential
-        // spring exactly negated (each side stores it in its own frame).
+        // Each contact has one stored history (its evaluator's, handed over with
+        // `hist_mirror` when a re-sort changes the evaluator); seen from the two sides it
+        // has the same flag and ξ and the tangential spring exactly negated.
         let mut contacts = 0;
         for i in 0..scene.particles.len() {
             for j in 0..scene.particles.len() {

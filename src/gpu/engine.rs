@@ -185,6 +185,7 @@ struct Bound {
     force: wgpu::BindGroup,
     kick: wgpu::BindGroup,
     kick_kick_drift: wgpu::BindGroup,
+    collect: wgpu::BindGroup,
     /// The moving-wall kernels, only for scenes with moving / servo-controlled walls.
     wall_move: Option<(Kernel, wgpu::BindGroup)>,
     wall_servo: Option<(Kernel, wgpu::BindGroup)>,
@@ -259,7 +260,7 @@ pub struct GpuEngine {
     /// per-particle passes (at byte [`Self::rebuild_args`]), written by `decide` each step.
     args: wgpu::Buffer,
     rebuild_args: u64,
-    kernels: [Kernel; 10],
+    kernels: [Kernel; 11],
     bound: Bound,
     max_per_dim: u32,
     kind: StepKind,
@@ -277,8 +278,11 @@ pub struct GpuEngine {
     peak: Option<(f64, Option<usize>)>,
     /// A particle whose centre left the domain box (monitor[6]).
     escaped: Option<usize>,
-    /// The neighbour lists (they persist between rebuilds, so they are state).
+    /// The neighbour lists (they persist between rebuilds, so they are state): each
+    /// particle's half list, and the slots of the pairs its partners before it evaluate.
     nbr: wgpu::Buffer,
+    lower: wgpu::Buffer,
+    lower_count: wgpu::Buffer,
     /// Unit normals of the walls (into the domain).
     wall_normals: Vec<DVec3>,
     /// How each wall moves, and the walls on the device (they move: state).
@@ -571,6 +575,13 @@ impl GpuEngine {
         );
         let old_index = alloc.buffer("old_index", 4 * n as u64);
         let nbr = alloc.buffer("nbr", 4 * n as u64 * cap as u64);
+        // the half lists' other side, and what each evaluated pair leaves for collect
+        let lower = alloc.buffer("lower", 4 * n as u64 * cap as u64);
+        let lower_count = alloc.buffer("lower_count", 4 * n as u64);
+        let pair_force = alloc.buffer("pair_force", 16 * n as u64 * cap as u64);
+        let pair_torque = kind
+            .rotation()
+            .then(|| alloc.buffer("pair_torque", 16 * n as u64 * cap as u64));
         let monitor = alloc.buffer("monitor", MONITOR_BYTES);
         let skin_buf = alloc.buffer("skin", 16);
         // moved beyond skin/2 (flag set): the first step builds the lists
@@ -587,6 +598,7 @@ impl GpuEngine {
             "force",
             "kick",
             "kick_kick_drift",
+            "collect",
         ];
         // the wall kernels only where walls move (not compiled otherwise)
         if moving_walls {
@@ -608,11 +620,11 @@ impl GpuEngine {
                 ("PERIODIC", flag(periodic.iter().any(|&p| p))),
             ],
         )?;
-        let kernels: Vec<Kernel> = wanted[..10]
+        let kernels: Vec<Kernel> = wanted[..11]
             .iter()
             .map(|k| program.kernel(k).cloned())
             .collect::<Result<_, _>>()?;
-        let kernels: [Kernel; 10] = kernels
+        let kernels: [Kernel; 11] = kernels
             .try_into()
             .map_err(|_| PowderError::Run("kernel set".into()))?;
         let max_per_dim = ctx.limits().max_compute_workgroups_per_dimension;
@@ -644,6 +656,12 @@ impl GpuEngine {
             list.push(("step".into(), &step_buf));
             list.push(("old_index".into(), &old_index));
             list.push(("nbr".into(), &nbr));
+            list.push(("lower".into(), &lower));
+            list.push(("lower_count".into(), &lower_count));
+            list.push(("pair_force".into(), &pair_force));
+            if let Some(t) = &pair_torque {
+                list.push(("pair_torque".into(), t));
+            }
             list.push(("sorted_index".into(), grid.sorted_index()));
             list.push(("cell_start".into(), grid.cell_start()));
             list.push(("cell_count".into(), grid.cell_count()));
@@ -671,6 +689,7 @@ impl GpuEngine {
                 force: kernels[7].bind(device, &refs)?,
                 kick: kernels[8].bind(device, &refs)?,
                 kick_kick_drift: kernels[9].bind(device, &refs)?,
+                collect: kernels[10].bind(device, &refs)?,
                 wall_move: match program.kernels.get("wall_move") {
                     Some(k) => Some((k.clone(), k.bind(device, &refs)?)),
                     None => None,
@@ -714,6 +733,8 @@ impl GpuEngine {
             peak: None,
             escaped: None,
             nbr,
+            lower,
+            lower_count,
             wall_normals: scene
                 .walls
                 .iter()
@@ -854,6 +875,7 @@ impl GpuEngine {
         if let Some((k, b)) = &bound.wall_servo {
             k.dispatch_workgroups(&mut pass, b, 1, max);
         }
+        self.kernels[10].dispatch(&mut pass, &bound.collect, n, max);
     }
 
     /// Records the closing kick of a batch's last step.
@@ -897,6 +919,7 @@ impl GpuEngine {
             "copy_back",
             "copy_back_history",
             "force",
+            "collect",
             "kick",
         ];
         let record = |e: &mut wgpu::CommandEncoder, id: usize| {
@@ -913,6 +936,7 @@ impl GpuEngine {
                 6 => (5, &b.copy_back, None),
                 7 => (6, &b.copy_back_history, None),
                 8 => (7, &b.force, None),
+                9 => (10, &b.collect, None),
                 _ => (8, &b.kick, None),
             };
             let mut pass = e.begin_compute_pass(&Default::default());
@@ -1165,6 +1189,8 @@ impl GpuEngine {
     fn state_buffers(&self) -> Vec<(String, &wgpu::Buffer)> {
         let mut list = self.state.named("a");
         list.push(("nbr".into(), &self.nbr));
+        list.push(("lower".into(), &self.lower));
+        list.push(("lower_count".into(), &self.lower_count));
         list.push(("skin".into(), &self.skin));
         list.push(("walls".into(), &self.walls));
         if let Some(l) = &self.particle_ledger {
@@ -1415,7 +1441,7 @@ impl GpuEngine {
     }
 
     /// Every listed contact's history, as ((i, j), history of i's side) by persistent ids,
-    /// sorted: both orientations of each pair appear (each side keeps its own copy).
+    /// sorted: both orientations of each pair appear (one is stored, the other derived).
     /// For comparisons and diagnostics: reads the lists back.
     pub fn contact_histories(&self) -> Result<Vec<KeyedHistory>, PowderError> {
         let s = &self.state;
@@ -1437,8 +1463,15 @@ impl GpuEngine {
         let mut list = Vec::new();
         for k in 0..n as usize {
             for slot in k * cap as usize..k * cap as usize + count[k] as usize {
+                // one stored history per pair, in its evaluator's frame; the partner sees
+                // the tangential spring negated
                 let h = self.decode_history(&out[3][slot * hb..(slot + 1) * hb]);
+                let seen_by_partner = ContactHistory {
+                    tangential: -h.tangential,
+                    ..h
+                };
                 list.push(((pid[k], hist_pid[slot]), h));
+                list.push(((hist_pid[slot], pid[k]), seen_by_partner));
             }
         }
         list.sort_by_key(|c| c.0);

@@ -339,6 +339,7 @@ struct MixedHist {
 }
 alias Hist = MixedHist;
 fn hist_zero() -> Hist { return MixedHist(jkr_hist_zero(), hyst_hist_zero()); }
+fn hist_mirror(h: Hist) -> Hist { return MixedHist(jkr_hist_mirror(h.jkr), hyst_hist_mirror(h.hyst)); }
 fn pair_contact(p: MixedPair, k: Kin, hist: ptr<function, Hist>) -> Contact {
     if (p.kind == 0u) {
         var h = (*hist).hyst;
@@ -372,6 +373,7 @@ fn mixed_variant(
             ("PairRow", "HystPairRow"),
             ("Hist", "HystHist"),
             ("hist_zero", "hyst_hist_zero"),
+            ("hist_mirror", "hyst_hist_mirror"),
             ("pair_contact", "hyst_pair_contact"),
             ("pair_edges", "hyst_pair_edges"),
         ],
@@ -380,6 +382,7 @@ fn mixed_variant(
         ("PairRow", "JkrPairRow"),
         ("Hist", "JkrHist"),
         ("hist_zero", "jkr_hist_zero"),
+        ("hist_mirror", "jkr_hist_mirror"),
         ("pair_contact", "jkr_pair_contact"),
         ("pair_edges", "jkr_pair_edges"),
     ];
