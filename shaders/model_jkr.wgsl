@@ -68,6 +68,35 @@ const JKR_DISSIPATION_KRIJT: u32 = 3u;
 const JKR_DISSIPATION_STRESS: u32 = 4u;
 
 const JKR_PI: f32 = 3.1415927;
+
+// Set per pipeline (`gpu::engine`) when every JKR-family row of the scene has the same
+// dissipation (its code; 255: they differ, each pair reads its own) and the same adhesion
+// (0: all Hertz, 1: all adhesive; 2: they differ). The compiler then drops the branches no
+// pair takes; on a SIMD adapter a branch costs whether a lane takes it or not.
+override JKR_ONE_DISSIPATION: u32 = 255u;
+override JKR_ADHESION: u32 = 2u;
+
+fn jkr_dissipation_is(p: JkrPair, d: u32) -> bool {
+    if (JKR_ONE_DISSIPATION != 255u) {
+        return JKR_ONE_DISSIPATION == d;
+    }
+    return p.dissipation == d;
+}
+
+// The contact radius is state (model_krijt.wgsl).
+fn jkr_radius_dynamics(p: JkrPair) -> bool {
+    if (JKR_ONE_DISSIPATION != 255u) {
+        return JKR_ONE_DISSIPATION >= JKR_DISSIPATION_KRIJT;
+    }
+    return p.dissipation >= JKR_DISSIPATION_KRIJT;
+}
+
+fn jkr_hertz(p: JkrPair) -> bool {
+    if (JKR_ADHESION != 2u) {
+        return JKR_ADHESION == 0u;
+    }
+    return p.gamma == 0.0;
+}
 // The f32 constants of `jkr::contact_radius_f32` (rounded exactly as Rust rounds its f64
 // constants; `gpu::shaders` tests check each literal against the Rust values):
 // s_min = 6^(−1/3), d_min = −(3/4)^(2/3) (displacement pull-off), c = 2·s_min,
@@ -138,15 +167,15 @@ fn jkr_r23(r: f32) -> f32 {
 // The dissipative normal force for contact radius a (`JkrParams::normal_dissipation`);
 // a0 and R* for the Krijt viscous force.
 fn jkr_dissipation(p: JkrPair, a: f32, a0: f32, delta_dot: f32, m: f32, r: f32) -> f32 {
-    if (KRIJT && p.dissipation >= JKR_DISSIPATION_KRIJT) {
+    if (KRIJT && jkr_radius_dynamics(p)) {
         return krijt_viscous(p, a, a0, r, delta_dot);
     }
-    if (p.dissipation == JKR_DISSIPATION_TSUJI) {
+    if (jkr_dissipation_is(p, JKR_DISSIPATION_TSUJI)) {
         // Sn = 2E*·a (paper 002 eq. 13 for Hertz; a exists at negative overlap in JKR)
         let sn = 2.0 * p.e_star * a;
         return p.tsuji * sqrt(sn * m) * delta_dot;
     }
-    if (p.dissipation == JKR_DISSIPATION_POWER) {
+    if (jkr_dissipation_is(p, JKR_DISSIPATION_POWER)) {
         if (delta_dot == 0.0) {
             return 0.0;
         }
@@ -178,7 +207,7 @@ fn jkr_normal(p: JkrPair, k: Kin, h: ptr<function, JkrHistory>) -> JkrNormal {
     var out = JkrNormal(false, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
     let r = k.r_eff;
     var a0 = 0.0;
-    if (p.gamma == 0.0) {
+    if (jkr_hertz(p)) {
         if (k.delta <= 0.0) {
             *h = jkr_history_zero();
             return out;
@@ -201,7 +230,7 @@ fn jkr_normal(p: JkrPair, k: Kin, h: ptr<function, JkrHistory>) -> JkrNormal {
         let s = jkr_solve_s(k.delta, d0);
         var x = s * s;
         let fc = 3.0 * JKR_PI * p.gamma * r;
-        if (KRIJT && p.dissipation >= JKR_DISSIPATION_KRIJT) {
+        if (KRIJT && jkr_radius_dynamics(p)) {
             let kn = krijt_normal(p, k, a0, d0, fc, x, (*h).a);
             x = kn.x;
             (*h).a = a0 * x;
@@ -231,7 +260,7 @@ fn jkr_potential_shape(x: f32, s: f32) -> f32 {
 // ledger (`JkrParams::edge_forces`): (entry delta, entry force, exit delta, exit force),
 // with the JKR radius at both edges also for the Krijt dissipations (as on the CPU).
 fn pair_edges(p: JkrPair, k: Kin) -> vec4<f32> {
-    if (p.gamma == 0.0) {
+    if (jkr_hertz(p)) {
         // Hertz: a = 0 at the single edge delta = 0
         let f = jkr_dissipation(p, 0.0, 0.0, k.delta_dot, k.m_eff, k.r_eff);
         return vec4<f32>(0.0, f, 0.0, f);
@@ -276,7 +305,7 @@ fn jkr_tangential(p: JkrPair, k: Kin, nf: JkrNormal, h: ptr<function, JkrHistory
     var s = jkr_rotate_into_plane((*h).spring, k.n) + k.v_t * k.dt;
     let st = 8.0 * p.g_star * nf.a;
     var ct = 0.0;
-    if (p.dissipation == JKR_DISSIPATION_TSUJI) {
+    if (jkr_dissipation_is(p, JKR_DISSIPATION_TSUJI)) {
         ct = p.tsuji * sqrt(st * k.m_eff);
     }
     var force = -st * s - ct * k.v_t;

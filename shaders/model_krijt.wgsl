@@ -104,7 +104,7 @@ fn krijt_advance(x_old: f32, x_eq: f32, d: f32, c: f32) -> f32 {
 // T_vis at x = a/a0 (`KrijtLaw::relaxation_time_at`): constant, or
 // C·R·exp[(B·p_c/E*)^zeta] for p_c > 0 (C·R otherwise) with R = 2R* and p_c of eq. 9.
 fn krijt_tvis(p: JkrPair, x: f32, a0: f32, r: f32) -> f32 {
-    if (p.dissipation != JKR_DISSIPATION_STRESS) {
+    if (!jkr_dissipation_is(p, JKR_DISSIPATION_STRESS)) {
         return p.tvis;
     }
     let t0 = p.tvis * (2.0 * r);

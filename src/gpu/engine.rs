@@ -607,19 +607,34 @@ impl GpuEngine {
         if servo_walls {
             wanted.push("wall_servo");
         }
-        // what the scene does not use, folded out of its pipelines
+        // what the scene does not use, folded out of its pipelines (the JKR branches: one
+        // dissipation code or 255, all Hertz 0 / all adhesive 1 / both 2)
+        let jkr_rows: Vec<JkrPair> = all_models
+            .iter()
+            .filter_map(|m| match m {
+                ContactModel::Jkr(p) => Some(JkrPair::new(p)),
+                _ => None,
+            })
+            .collect();
+        let same = |f: &dyn Fn(&JkrPair) -> u32, mixed: u32| match jkr_rows.first() {
+            Some(first) if jkr_rows.iter().all(|r| f(r) == f(first)) => f(first),
+            _ => mixed,
+        };
+        let jkr_dissipation = same(&|r| r.dissipation, 255);
+        let jkr_adhesion = same(&|r| u32::from(r.gamma > 0.0), 2);
         let flag = |b: bool| f64::from(u8::from(b));
         let pouring = scene.particles.iter().any(|p| p.insert_at > 0.0);
-        let program = Program::specialized(
-            &ctx,
-            &kind.variant(ledger),
-            Some(&wanted),
-            &[
-                ("ONE_MATERIAL", flag(r.n_materials == 1)),
-                ("POURING", flag(pouring)),
-                ("PERIODIC", flag(periodic.iter().any(|&p| p))),
-            ],
-        )?;
+        let mut constants = vec![
+            ("ONE_MATERIAL", flag(r.n_materials == 1)),
+            ("POURING", flag(pouring)),
+            ("PERIODIC", flag(periodic.iter().any(|&p| p))),
+        ];
+        // (declared only by the steps with the JKR model file)
+        if !jkr_rows.is_empty() {
+            constants.push(("JKR_ONE_DISSIPATION", jkr_dissipation as f64));
+            constants.push(("JKR_ADHESION", jkr_adhesion as f64));
+        }
+        let program = Program::specialized(&ctx, &kind.variant(ledger), Some(&wanted), &constants)?;
         let kernels: Vec<Kernel> = wanted[..11]
             .iter()
             .map(|k| program.kernel(k).cloned())
