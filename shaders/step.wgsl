@@ -369,22 +369,37 @@ fn neighbours(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nw
     var down = 0u;
     // a particle that has not appeared lists no neighbours (and is listed by none)
     let here = is_active(b_pid[k]);
+    // Without wrapping along x, the three cells x−1, x, x+1 of a row are consecutive keys
+    // and their particles one range of the sorted order: 9 ranges instead of 27 cells.
+    let rows = !periodic_axes().x;
+    // (an atomic load: read once, not per candidate)
+    let cutoff = ok.w + step.reach + skin_width();
     for (var dz = -1; dz <= 1; dz++) {
         for (var dy = -1; dy <= 1; dy++) {
             for (var dx = -1; dx <= 1; dx++) {
+                if (rows && dx != 0) {
+                    continue;
+                }
                 let c = wrap_cell(home + vec3<i32>(dx, dy, dz));
                 if (any(c < vec3<i32>(0)) || any(c > hi)) {
                     continue;
                 }
-                let key = cell_key(c, grid.dims);
-                let start = cell_start[key];
-                let end = start + cell_count[key];
+                var start = cell_start[cell_key(c, grid.dims)];
+                var end = start + cell_count[cell_key(c, grid.dims)];
+                if (rows) {
+                    let first = vec3<i32>(max(c.x - 1, 0), c.y, c.z);
+                    let last = vec3<i32>(min(c.x + 1, hi.x), c.y, c.z);
+                    start = cell_start[cell_key(first, grid.dims)];
+                    let key = cell_key(last, grid.dims);
+                    end = cell_start[key] + cell_count[key];
+                }
                 for (var j = start; j < end; j++) {
                     if (j == k || !here || !is_active(b_pid[j])) {
                         continue;
                     }
-                    let d = separation(ck, ok, b_cell[j], b_off[j]);
-                    let reach = ok.w + b_off[j].w + step.reach + skin_width();
+                    let oj = b_off[j];
+                    let d = separation(ck, ok, b_cell[j], oj);
+                    let reach = cutoff + oj.w;
                     if (dot(d, d) < reach * reach) {
                         if (j > k) {
                             if (up < cap) {
