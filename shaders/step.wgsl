@@ -204,8 +204,20 @@ fn is_active(pid: u32) -> bool {
 // slot of the pair in j's list, where `force` leaves the pair's force for `collect`.
 @group(0) @binding(69) var<storage, read_write> lower: array<u32>;
 @group(0) @binding(70) var<storage, read_write> lower_count: array<u32>;
-// Per slot, this step: the force the evaluated pair exerts on the evaluator (xyz).
-@group(0) @binding(71) var<storage, read_write> pair_force: array<vec4<f32>>;
+// Per slot, this step: the force the evaluated pair exerts on the evaluator, xy and z in
+// two bindings (8 and 4 bytes a slot: no more per binding than the smallest history, so
+// the adapter's binding size limit does not bind sooner).
+@group(0) @binding(71) var<storage, read_write> pair_force_xy: array<vec2<f32>>;
+@group(0) @binding(73) var<storage, read_write> pair_force_z: array<f32>;
+
+fn store_pair_force(slot: u32, f: vec3<f32>) {
+    pair_force_xy[slot] = f.xy;
+    pair_force_z[slot] = f.z;
+}
+
+fn load_pair_force(slot: u32) -> vec3<f32> {
+    return vec3<f32>(pair_force_xy[slot], pair_force_z[slot]);
+}
 @group(0) @binding(41) var<storage, read_write> old_index: array<u32>;
 @group(0) @binding(42) var<storage, read_write> nbr: array<u32>;
 
@@ -596,7 +608,7 @@ fn particle_forces(k: u32) -> f32 {
             // a list candidate (within the skin) out of every model's range: no force,
             // and the history a pair out of range has (the models reset it there too)
             a_hist[slot] = hist_zero();
-            pair_force[slot] = vec4<f32>(0.0);
+            store_pair_force(slot, vec3<f32>(0.0));
             rot_pair_store(slot, vec3<f32>(0.0));
             ledger_departed(&ledger_acc, slot, delta);
             continue;
@@ -629,7 +641,7 @@ fn particle_forces(k: u32) -> f32 {
         ledger_pair(&ledger_acc, slot, row, kin, c, dot(c.tangential, v_t) + dot(c.rolling, wk - wj));
         let fp = c.normal * n + c.tangential;
         f += fp;
-        pair_force[slot] = vec4<f32>(fp, 0.0);
+        store_pair_force(slot, fp);
         if (ROTATION) {
             // the partner sees n and the tangential force negated (their cross product
             // unchanged) and the rolling torque negated
@@ -717,7 +729,7 @@ fn collect(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: 
     var torque = vec3<f32>(0.0);
     for (var s = 0u; s < lower_count[k]; s++) {
         let slot = lower[k * cap + s];
-        f -= pair_force[slot].xyz;
+        f -= load_pair_force(slot);
         torque += rot_pair_load(slot);
     }
     // vel.w holds the mass

@@ -453,13 +453,22 @@ impl GpuEngine {
                 dims[a] = ((extent[a] / h0).ceil() as u32).clamp(1, 1 << 20);
             }
         }
-        let hist_bytes = kind.history_bytes();
-        let bytes_needed = n as u64 * cap as u64 * hist_bytes;
+        // the largest buffer with one element per neighbour slot (the last of equals)
+        let (what, slot_bytes) = [
+            ("pair forces", 8),
+            ("contact history", kind.history_bytes()),
+            ("energy ledger", if ledger { 16 } else { 0 }),
+            ("pair torques", if kind.rotation() { 16 } else { 0 }),
+        ]
+        .into_iter()
+        .max_by_key(|&(_, b)| b)
+        .unwrap_or(("contact history", 8));
+        let bytes_needed = n as u64 * cap as u64 * slot_bytes;
         if bytes_needed > ctx.max_storage_binding() {
             return Err(PowderError::Run(format!(
-                "{n} particles with {cap} neighbour slots of {hist_bytes} bytes each need {bytes_needed} bytes of contact history, over the adapter's storage binding limit of {} bytes; at most {} particles fit",
+                "{n} particles with {cap} neighbour slots of {slot_bytes} bytes each need {bytes_needed} bytes of {what}, over the adapter's storage binding limit of {} bytes; at most {} particles fit",
                 ctx.max_storage_binding(),
-                ctx.max_storage_binding() / (cap as u64 * hist_bytes)
+                ctx.max_storage_binding() / (cap as u64 * slot_bytes)
             )));
         }
         let grid =
@@ -578,7 +587,8 @@ impl GpuEngine {
         // the half lists' other side, and what each evaluated pair leaves for collect
         let lower = alloc.buffer("lower", 4 * n as u64 * cap as u64);
         let lower_count = alloc.buffer("lower_count", 4 * n as u64);
-        let pair_force = alloc.buffer("pair_force", 16 * n as u64 * cap as u64);
+        let pair_force_xy = alloc.buffer("pair_force_xy", 8 * n as u64 * cap as u64);
+        let pair_force_z = alloc.buffer("pair_force_z", 4 * n as u64 * cap as u64);
         let pair_torque = kind
             .rotation()
             .then(|| alloc.buffer("pair_torque", 16 * n as u64 * cap as u64));
@@ -673,7 +683,8 @@ impl GpuEngine {
             list.push(("nbr".into(), &nbr));
             list.push(("lower".into(), &lower));
             list.push(("lower_count".into(), &lower_count));
-            list.push(("pair_force".into(), &pair_force));
+            list.push(("pair_force_xy".into(), &pair_force_xy));
+            list.push(("pair_force_z".into(), &pair_force_z));
             if let Some(t) = &pair_torque {
                 list.push(("pair_torque".into(), t));
             }
