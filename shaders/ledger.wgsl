@@ -165,17 +165,17 @@ fn ledger_clear(new_slot: u32) {
 fn ledger_copy_back(k: u32, n: u32) {
     let cap = step.max_neighbours;
     for (var s = 0u; s < n; s++) {
-        a_ledger[k * cap + s] = b_ledger[k * cap + s];
+        a_ledger[slot_index(k, s)] = b_ledger[slot_index(k, s)];
     }
     for (var w = 0u; w < step.n_walls; w++) {
-        a_wall_ledger[k * step.n_walls + w] = b_wall_ledger[k * step.n_walls + w];
+        a_wall_ledger[wall_slot(k, w)] = b_wall_ledger[wall_slot(k, w)];
     }
 }
 
 // gather: the wall contacts follow their particle.
 fn ledger_gather_walls(k: u32, o: u32) {
     for (var w = 0u; w < step.n_walls; w++) {
-        b_wall_ledger[k * step.n_walls + w] = a_wall_ledger[o * step.n_walls + w];
+        b_wall_ledger[wall_slot(k, w)] = a_wall_ledger[wall_slot(o, w)];
     }
 }
 
@@ -188,21 +188,21 @@ fn ledger_dropped(pid: u32, o: u32, old_n: u32, k: u32) {
     let cap = step.max_neighbours;
     var lost = 0.0;
     for (var m = 0u; m < old_n; m++) {
-        let old = a_ledger[o * cap + m];
+        let old = a_ledger[slot_index(o, m)];
         if (old.w == 0.0) {
             continue;
         }
         // the pair is in k's new list, or in a partner's that lists k (`lower`, resolved)
-        let partner = a_hist_pid[o * cap + m];
+        let partner = a_hist_pid[slot_index(o, m)];
         var found = false;
         for (var s = 0u; s < b_count[k]; s++) {
-            if (b_hist_pid[k * cap + s] == partner) {
+            if (b_hist_pid[slot_index(k, s)] == partner) {
                 found = true;
                 break;
             }
         }
         for (var s = 0u; s < lower_count[k] && !found; s++) {
-            if (b_pid[lower[k * cap + s] / cap] == partner) {
+            if (b_pid[slot_particle(lower[slot_index(k, s)])] == partner) {
                 found = true;
             }
         }

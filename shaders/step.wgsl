@@ -196,6 +196,24 @@ fn is_active(pid: u32) -> bool {
     return !POURING || appeared[pid] != 0u;
 }
 
+// Neighbour slot s of particle k: slot-major (all particles' first slots, then all second
+// ones, …), so neighbouring invocations touch neighbouring elements and the few slots in
+// use fill whole cache lines; particle-major (k·cap + s) left most of each particle's
+// capacity-wide stretch unused and measured 1.3–2.5x slower at 10⁵ particles.
+fn slot_index(k: u32, s: u32) -> u32 {
+    return s * grid.n_particles + k;
+}
+
+// The contact of particle k with wall w: wall-major, for the same reason.
+fn wall_slot(k: u32, w: u32) -> u32 {
+    return w * grid.n_particles + k;
+}
+
+// The particle a slot belongs to.
+fn slot_particle(slot: u32) -> u32 {
+    return slot % grid.n_particles;
+}
+
 // Rebuild scratch: the old index of each new slot; the neighbour lists (kept between
 // rebuilds).
 // Half lists (Newton's third law: each pair evaluated once): particle k's list (`nbr`,
@@ -229,7 +247,7 @@ fn load_pair_force(slot: u32) -> vec3<f32> {
 // Pair models: materials x materials, then walls x materials.
 @group(0) @binding(46) var<storage, read> pairs: array<PairRow>;
 @group(0) @binding(47) var<storage, read_write> walls: array<Wall>;
-// The normal force of each (particle, wall) contact this step, slot k·n_walls + w (only
+// The normal force of each (particle, wall) contact this step, at wall_slot(k, w) (only
 // written when some wall is servo-controlled; summed by wall_servo).
 @group(0) @binding(59) var<storage, read_write> wall_push: array<f32>;
 
@@ -359,7 +377,7 @@ fn gather(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: v
     old_index[k] = o;
     rot_gather(k, o);
     for (var w = 0u; w < step.n_walls; w++) {
-        b_wall_hist[k * step.n_walls + w] = a_wall_hist[o * step.n_walls + w];
+        b_wall_hist[wall_slot(k, w)] = a_wall_hist[wall_slot(o, w)];
     }
     ledger_gather_walls(k, o);
 }
@@ -415,12 +433,12 @@ fn neighbours(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nw
                     if (dot(d, d) < reach * reach) {
                         if (j > k) {
                             if (up < cap) {
-                                nbr[k * cap + up] = j;
+                                nbr[slot_index(k, up)] = j;
                             }
                             up += 1u;
                         } else {
                             if (down < cap) {
-                                lower[k * cap + down] = j;
+                                lower[slot_index(k, down)] = j;
                             }
                             down += 1u;
                         }
@@ -446,10 +464,10 @@ fn remap(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
     let cap = step.max_neighbours;
     // the lower list: each partner j < k lists k in its upper list; keep that slot
     for (var s = 0u; s < lower_count[k]; s++) {
-        let j = lower[k * cap + s];
+        let j = lower[slot_index(k, s)];
         for (var m = 0u; m < b_count[j]; m++) {
-            if (nbr[j * cap + m] == k) {
-                lower[k * cap + s] = j * cap + m;
+            if (nbr[slot_index(j, m)] == k) {
+                lower[slot_index(k, s)] = slot_index(j, m);
                 break;
             }
         }
@@ -460,15 +478,15 @@ fn remap(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
     let old_n = a_count[o];
     let me = b_pid[k];
     for (var s = 0u; s < b_count[k]; s++) {
-        let j = nbr[k * cap + s];
+        let j = nbr[slot_index(k, s)];
         let partner = b_pid[j];
         var h = hist_zero();
-        ledger_clear(k * cap + s);
+        ledger_clear(slot_index(k, s));
         var found = false;
         for (var m = 0u; m < old_n; m++) {
-            if (a_hist_pid[o * cap + m] == partner) {
-                h = a_hist[o * cap + m];
-                ledger_carry(k * cap + s, o * cap + m);
+            if (a_hist_pid[slot_index(o, m)] == partner) {
+                h = a_hist[slot_index(o, m)];
+                ledger_carry(slot_index(k, s), slot_index(o, m));
                 found = true;
                 break;
             }
@@ -476,15 +494,15 @@ fn remap(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
         if (!found) {
             let oj = old_index[j];
             for (var m = 0u; m < a_count[oj]; m++) {
-                if (a_hist_pid[oj * cap + m] == me) {
-                    h = hist_mirror(a_hist[oj * cap + m]);
-                    ledger_carry(k * cap + s, oj * cap + m);
+                if (a_hist_pid[slot_index(oj, m)] == me) {
+                    h = hist_mirror(a_hist[slot_index(oj, m)]);
+                    ledger_carry(slot_index(k, s), slot_index(oj, m));
                     break;
                 }
             }
         }
-        b_hist[k * cap + s] = h;
-        b_hist_pid[k * cap + s] = partner;
+        b_hist[slot_index(k, s)] = h;
+        b_hist_pid[slot_index(k, s)] = partner;
     }
     ledger_dropped(me, o, old_n, k);
 }
@@ -520,11 +538,11 @@ fn copy_back_history(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgro
     let n = b_count[k];
     a_count[k] = n;
     for (var s = 0u; s < n; s++) {
-        a_hist[k * cap + s] = b_hist[k * cap + s];
-        a_hist_pid[k * cap + s] = b_hist_pid[k * cap + s];
+        a_hist[slot_index(k, s)] = b_hist[slot_index(k, s)];
+        a_hist_pid[slot_index(k, s)] = b_hist_pid[slot_index(k, s)];
     }
     for (var w = 0u; w < step.n_walls; w++) {
-        a_wall_hist[k * step.n_walls + w] = b_wall_hist[k * step.n_walls + w];
+        a_wall_hist[wall_slot(k, w)] = b_wall_hist[wall_slot(k, w)];
     }
     ledger_copy_back(k, n);
 }
@@ -595,7 +613,7 @@ fn particle_forces(k: u32) -> f32 {
     var ledger_acc = ledger_new();
     var peak = 0.0;
     for (var s = 0u; s < a_count[k]; s++) {
-        let j = nbr[k * cap + s];
+        let j = nbr[slot_index(k, s)];
         let cj = a_cell[j];
         let oj = a_off[j];
         let rj = oj.w;
@@ -603,7 +621,7 @@ fn particle_forces(k: u32) -> f32 {
         let d = separation(ck, ok, cj, oj);
         let dist = length(d);
         let delta = rk + rj - dist;
-        let slot = k * cap + s;
+        let slot = slot_index(k, s);
         if (delta < -step.reach) {
             // a list candidate (within the skin) out of every model's range: no force,
             // and the history a pair out of range has (the models reset it there too)
@@ -663,7 +681,7 @@ fn particle_forces(k: u32) -> f32 {
     for (var w = 0u; w < masked; w++) {
         let wall = walls[w];
         let delta = rk - dot(separation(ck, ok, wall.cell, wall.offset), wall.normal.xyz);
-        let slot = k * step.n_walls + w;
+        let slot = wall_slot(k, w);
         if (delta >= -step.reach || ledger_wall_engaged(slot)) {
             near |= 1u << w;
         } else {
@@ -693,7 +711,7 @@ fn particle_forces(k: u32) -> f32 {
         let v_t = v_c - n * dot(v_c, n);
         // eq. 20 with r_j -> inf: (r_i - r_j)/(r_i + r_j) -> -1
         let kin = Kin(delta, -dot(v_rel, n), rk, mk, step.dt, n, v_t, rk * cross(wk, n) - 0.5 * v_t);
-        let slot = k * step.n_walls + w;
+        let slot = wall_slot(k, w);
         var h = a_wall_hist[slot];
         let row = pairs[step.n_materials * step.n_materials + w * step.n_materials + mat_k];
         let c = pair_contact(row, kin, &h);
@@ -728,7 +746,7 @@ fn collect(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: 
     var f = a_acc[k].xyz;
     var torque = vec3<f32>(0.0);
     for (var s = 0u; s < lower_count[k]; s++) {
-        let slot = lower[k * cap + s];
+        let slot = lower[slot_index(k, s)];
         f -= load_pair_force(slot);
         torque += rot_pair_load(slot);
     }
@@ -792,7 +810,7 @@ fn wall_servo(@builtin(local_invocation_index) lid: u32) {
         }
         var sum = 0.0;
         for (var k = lid; k < grid.n_particles; k += WG_SIZE) {
-            sum += wall_push[k * step.n_walls + w];
+            sum += wall_push[wall_slot(k, w)];
         }
         wg_push[lid] = sum;
         workgroupBarrier();

@@ -1392,10 +1392,10 @@ impl GpuEngine {
         let bytes = 16 * self.n as u64 * walls as u64;
         let out = submit_and_read(&self.ctx, encoder, &[(buf, bytes)])?;
         let rows: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&out[0]);
-        // slot k·walls + w: (overlap, normal force, .., engaged)
+        // slot w·n + k (`wall_slot`): (overlap, normal force, .., engaged)
         for (slot, r) in rows.iter().enumerate() {
             if r[3] != 0.0 {
-                let w = slot % walls;
+                let w = slot / self.n as usize;
                 f[w] -= r[1] as f64 * self.wall_normals[w];
             }
         }
@@ -1488,7 +1488,8 @@ impl GpuEngine {
         let hb = hb as usize;
         let mut list = Vec::new();
         for k in 0..n as usize {
-            for slot in k * cap as usize..k * cap as usize + count[k] as usize {
+            // slot-major, as `slot_index` in shaders/step.wgsl
+            for slot in (0..count[k] as usize).map(|s| s * n as usize + k) {
                 // one stored history per pair, in its evaluator's frame; the partner sees
                 // the tangential spring negated
                 let h = self.decode_history(&out[3][slot * hb..(slot + 1) * hb]);
@@ -1527,7 +1528,8 @@ impl GpuEngine {
             .iter()
             .position(|&p| p as usize == i)
             .ok_or_else(|| PowderError::Run(format!("particle {i} does not exist")))?;
-        let slot = k * walls + w;
+        // wall-major, as `wall_slot` in shaders/step.wgsl
+        let slot = w * n as usize + k;
         Ok(self.decode_history(&out[1][slot * hb..(slot + 1) * hb]))
     }
 }
