@@ -260,6 +260,9 @@ pub struct CpuEngine {
     walls: Vec<WallPlane>,
     /// Wall models, walls × n_materials.
     wall_models: Vec<ContactModel>,
+    /// `range()` of each pair and wall model (the same layout).
+    ranges: Vec<f64>,
+    wall_ranges: Vec<f64>,
     gravity: DVec3,
     /// Cells at least as wide as the largest list distance 2·r_max + reach + skin.
     grid: CellGrid,
@@ -416,6 +419,8 @@ impl CpuEngine {
             mass,
             material,
             n_materials,
+            ranges: models.iter().map(ContactModel::range).collect(),
+            wall_ranges: wall_models.iter().map(ContactModel::range).collect(),
             models,
             walls,
             wall_models,
@@ -965,21 +970,22 @@ impl CpuEngine {
         self.rebuilds += 1;
     }
 
-    fn compute_forces(&mut self) -> Result<(), PowderError> {
+    /// Forces of the particle pairs of the list (visited in key order) for the predicted
+    /// velocities; returns the energy they dissipated over the step.
+    /// `ROT`: particles rotate (`w_pred` holds their angular velocities).
+    #[inline(never)]
+    fn pair_forces<const ROT: bool>(
+        &mut self,
+        v_pred: &[DVec3],
+        w_pred: &[DVec3],
+        failure: &mut Option<String>,
+    ) -> f64 {
         let dt = self.dt;
-        self.force.iter_mut().for_each(|f| *f = DVec3::ZERO);
-        self.torque.iter_mut().for_each(|t| *t = DVec3::ZERO);
-        if self.list_stale() {
-            self.rebuild_list();
-        }
-        let v_pred = std::mem::take(&mut self.v_pred);
-        let w_pred = std::mem::take(&mut self.w_pred);
-        let rotation = !w_pred.is_empty();
-        let omega_of = |i: usize| if rotation { w_pred[i] } else { DVec3::ZERO };
+        let rotation = ROT;
+        let omega_of = |i: usize| if ROT { w_pred[i] } else { DVec3::ZERO };
         let mut dissipated = 0.0;
         // contacts that left the range, in key order
         let mut departed = 0.0;
-        let mut failure = None;
         let mut peak = self.peak;
         {
             let pos = &self.pos;
@@ -991,6 +997,7 @@ impl CpuEngine {
             let any_periodic = periodic.iter().any(|&p| p);
             let (models, nm, mass, material) =
                 (&self.models, self.n_materials, &self.mass, &self.material);
+            let ranges = &self.ranges;
             let list = &mut self.pairs;
             for i in 0..pos.len() {
                 let (s, e) = (list.start[i], list.start[i + 1]);
@@ -1020,8 +1027,8 @@ impl CpuEngine {
                     }
                     let dist = dist2.sqrt();
                     let delta = ri + radius[j] - dist;
-                    let model = &models[mi + material[j]];
-                    if delta <= -model.range() && !live {
+                    let (model, range) = (&models[mi + material[j]], ranges[mi + material[j]]);
+                    if delta <= -range && !live {
                         continue;
                     }
                     let prior = live.then(|| &list.record[k]);
@@ -1029,22 +1036,32 @@ impl CpuEngine {
                     let geom = PairGeometry::spheres(ri, radius[j], mass[i], mass[j]);
                     let wj = omega_of(j);
                     let v_rel = vi - v_pred[j];
-                    let v_c = v_rel - ri * wi.cross(n) - radius[j] * wj.cross(n);
+                    let v_c = if ROT {
+                        v_rel - ri * wi.cross(n) - radius[j] * wj.cross(n)
+                    } else {
+                        v_rel
+                    };
                     let v_t = v_c - n * v_c.dot(n);
+                    // rolling needs rotation: no model reads v_roll without it
+                    let v_roll = if ROT {
+                        geom.r_eff() * (wi - wj).cross(n)
+                            + 0.5 * (ri - radius[j]) / (ri + radius[j]) * v_t
+                    } else {
+                        DVec3::ZERO
+                    };
                     let kin = Kinematics {
                         delta,
                         delta_dot: -v_rel.dot(n),
                         n,
                         v_t,
-                        v_roll: geom.r_eff() * (wi - wj).cross(n)
-                            + 0.5 * (ri - radius[j]) / (ri + radius[j]) * v_t,
+                        v_roll,
                     };
                     let mut history = prior.map(|c| c.history).unwrap_or_default();
                     let r = model.respond(&kin, &geom, dt, &mut history);
                     if !(r.normal.force.is_finite() && r.tangential.is_finite())
                         && failure.is_none()
                     {
-                        failure = Some(format!(
+                        *failure = Some(format!(
                             "non-finite contact force between particles {i} and {j} (overlap {delta:e} m)"
                         ));
                     }
@@ -1068,7 +1085,7 @@ impl CpuEngine {
                         ti += -ri * t + r.rolling_torque;
                         torque[j] += -radius[j] * t - r.rolling_torque;
                     }
-                    if delta > -model.range() || history.touched {
+                    if delta > -range || history.touched {
                         list.record[k] = record;
                         list.live[k] = true;
                     } else {
@@ -1082,8 +1099,22 @@ impl CpuEngine {
             }
         }
         self.peak = peak;
-        dissipated += departed;
+        dissipated + departed
+    }
 
+    /// Forces of the wall contacts (visited in key order (wall, particle), merged with the
+    /// old list); returns the energy they dissipated over the step.
+    #[inline(never)]
+    fn wall_contact_forces(
+        &mut self,
+        v_pred: &[DVec3],
+        w_pred: &[DVec3],
+        failure: &mut Option<String>,
+    ) -> f64 {
+        let dt = self.dt;
+        let rotation = !w_pred.is_empty();
+        let omega_of = |i: usize| if rotation { w_pred[i] } else { DVec3::ZERO };
+        let mut dissipated = 0.0;
         // the wall contacts, visited in key order (wall, particle) and merged with the old
         let old_w = std::mem::take(&mut self.wall_contacts);
         let mut new_w = std::mem::take(&mut self.spare_walls);
@@ -1113,8 +1144,9 @@ impl CpuEngine {
                 // relative to the (possibly moving) wall
                 let v = &(*v_particle - wall.velocity);
                 let delta = self.radius[i] - (self.pos[i] - wall.point).dot(n);
-                let model = &self.wall_models[w * self.n_materials + self.material[i]];
-                if delta <= -model.range() && prior.is_none() {
+                let m = w * self.n_materials + self.material[i];
+                let (model, range) = (&self.wall_models[m], self.wall_ranges[m]);
+                if delta <= -range && prior.is_none() {
                     continue;
                 }
                 let geom = PairGeometry::wall(self.radius[i], self.mass[i]);
@@ -1132,7 +1164,7 @@ impl CpuEngine {
                 let mut history = prior.map(|c| c.history).unwrap_or_default();
                 let r = model.respond(&k, &geom, dt, &mut history);
                 if !(r.normal.force.is_finite() && r.tangential.is_finite()) && failure.is_none() {
-                    failure = Some(format!(
+                    *failure = Some(format!(
                         "non-finite contact force between particle {i} and wall {w} (overlap {delta:e} m)"
                     ));
                 }
@@ -1152,7 +1184,7 @@ impl CpuEngine {
                 if rotation {
                     self.torque[i] += -self.radius[i] * n.cross(r.tangential) + r.rolling_torque;
                 }
-                if delta > -model.range() || history.touched {
+                if delta > -range || history.touched {
                     new_w.key.push(key);
                     new_w.record.push(record);
                 }
@@ -1162,8 +1194,27 @@ impl CpuEngine {
             departed += Self::book_departed(c, self.wall_overlap(w as usize, i as usize), dt);
         }
         dissipated += departed;
+        dissipated += departed;
         self.wall_contacts = new_w;
         self.spare_walls = old_w;
+        dissipated
+    }
+
+    fn compute_forces(&mut self) -> Result<(), PowderError> {
+        self.force.iter_mut().for_each(|f| *f = DVec3::ZERO);
+        self.torque.iter_mut().for_each(|t| *t = DVec3::ZERO);
+        if self.list_stale() {
+            self.rebuild_list();
+        }
+        let v_pred = std::mem::take(&mut self.v_pred);
+        let w_pred = std::mem::take(&mut self.w_pred);
+        let mut failure = None;
+        let mut dissipated = if w_pred.is_empty() {
+            self.pair_forces::<false>(&v_pred, &w_pred, &mut failure)
+        } else {
+            self.pair_forces::<true>(&v_pred, &w_pred, &mut failure)
+        };
+        dissipated += self.wall_contact_forces(&v_pred, &w_pred, &mut failure);
         self.v_pred = v_pred;
         self.w_pred = w_pred;
         self.dissipated += dissipated;
