@@ -519,6 +519,25 @@ impl CpuEngine {
                 s.dt, self.dt
             )));
         }
+        // contact keys: pairs i < j < n and walls (w, i) with i < n, each once
+        let mut pair_keys: Vec<(u32, u32)> = s.contacts.iter().map(|(k, _)| *k).collect();
+        let mut wall_keys: Vec<(u32, u32)> = s.wall_contacts.iter().map(|(k, _)| *k).collect();
+        pair_keys.sort_unstable();
+        wall_keys.sort_unstable();
+        let bad_pair = pair_keys
+            .iter()
+            .find(|&&(i, j)| i >= j || j as usize >= n)
+            .or_else(|| pair_keys.windows(2).find(|w| w[0] == w[1]).map(|w| &w[0]));
+        let bad_wall = wall_keys
+            .iter()
+            .find(|&&(w, i)| w as usize >= self.walls.len() || i as usize >= n)
+            .or_else(|| wall_keys.windows(2).find(|w| w[0] == w[1]).map(|w| &w[0]));
+        if let Some((a, b)) = bad_pair.or(bad_wall) {
+            return Err(PowderError::Run(format!(
+                "the checkpoint holds an invalid or repeated contact ({a}, {b}) for {n} particles and {} walls",
+                self.walls.len()
+            )));
+        }
         self.time = s.time;
         self.steps = s.steps;
         self.pos = s.pos;
@@ -1395,5 +1414,16 @@ mod tests {
             assert_eq!(a.contact_history(i, j), b.contact_history(j, i));
         }
         assert_eq!(a.wall_contact_history(0, 0), b.wall_contact_history(0, 0));
+        // a state whose contacts do not fit the scene is refused
+        let mut bad = a.state();
+        let repeated = bad.contacts[0];
+        bad.contacts.push(repeated);
+        assert!(b.restore(bad).is_err());
+        let mut bad = a.state();
+        bad.contacts[0].0 = (3, 3);
+        assert!(b.restore(bad).is_err());
+        let mut bad = a.state();
+        bad.wall_contacts[0].0 = (99, 0);
+        assert!(b.restore(bad).is_err());
     }
 }
