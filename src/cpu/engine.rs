@@ -272,8 +272,6 @@ pub struct CpuEngine {
     skin: f64,
     /// Candidate pairs with their contacts.
     pairs: PairList,
-    /// The list before the last rebuild, kept for its allocations.
-    spare_pairs: PairList,
     /// Positions at the last rebuild.
     pos_ref: Vec<DVec3>,
     /// The list must be rebuilt before the next force evaluation (start, restore,
@@ -436,7 +434,6 @@ impl CpuEngine {
             cutoff_pad,
             skin,
             pairs: PairList::empty(n),
-            spare_pairs: PairList::default(),
             pos_ref: Vec::new(),
             rebuild_due: true,
             rebuilds: 0,
@@ -940,12 +937,15 @@ impl CpuEngine {
     fn rebuild_list(&mut self) {
         let n = self.pos.len();
         self.grid.rebuild(&self.pos);
+        // the old list is freed after the merge (not kept for its allocations: the list is
+        // most of the engine's memory, and rebuilds are rare)
         let old = std::mem::take(&mut self.pairs);
-        let mut new = std::mem::take(&mut self.spare_pairs);
-        new.start.clear();
-        new.partner.clear();
-        new.live.clear();
-        new.record.clear();
+        let mut new = PairList {
+            start: Vec::with_capacity(n + 1),
+            partner: Vec::with_capacity(old.partner.len()),
+            live: Vec::with_capacity(old.partner.len()),
+            record: Vec::with_capacity(old.partner.len()),
+        };
         new.start.push(0);
         let mut cand = std::mem::take(&mut self.candidates);
         let any_periodic = self.periodic.iter().any(|&p| p);
@@ -1004,7 +1004,6 @@ impl CpuEngine {
         }
         self.candidates = cand;
         self.pairs = new;
-        self.spare_pairs = old;
         self.rebuild_wall_candidates();
         self.pos_ref.clone_from(&self.pos);
         self.rebuild_due = false;
