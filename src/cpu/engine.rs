@@ -17,8 +17,8 @@ use glam::DVec3;
 
 /// Verlet skin of the CPU pair list, in units of the smallest radius: candidate pairs are
 /// those closer than r_i + r_j + reach + skin, and the list is rebuilt once two particles
-/// may together have moved the skin since the last rebuild (as the GPU's
-/// [`crate::gpu::engine::SKIN`]).
+/// may together have moved the skin since the last rebuild (the GPU engine's skin is the
+/// same fraction).
 pub const SKIN: f64 = 0.1;
 
 /// Candidate pairs (a Verlet list): every active pair i < j closer than
