@@ -1077,6 +1077,9 @@ impl CpuEngine {
                 let (vi, wi) = (v_pred[i], omega_of(i));
                 // i's own sums, added to force[i] once
                 let (mut fi, mut ti) = (DVec3::ZERO, DVec3::ZERO);
+                // the pair geometry and rolling factor of the last partner's radius and
+                // mass (the same values: partners of a packing share them)
+                let mut shape: Option<(u64, u64, PairGeometry, f64)> = None;
                 for k in s..e {
                     let j = list.partner[k] as usize;
                     let mut d = pi - pos[j];
@@ -1102,7 +1105,19 @@ impl CpuEngine {
                     }
                     let prior = live.then(|| &list.record[k]);
                     let n = if dist > 0.0 { d / dist } else { DVec3::Z };
-                    let geom = PairGeometry::spheres(ri, radius[j], mass[i], mass[j]);
+                    let (geom, roll) = match shape {
+                        Some((r, m, g, roll))
+                            if r == radius[j].to_bits() && m == mass[j].to_bits() =>
+                        {
+                            (g, roll)
+                        }
+                        _ => {
+                            let g = PairGeometry::spheres(ri, radius[j], mass[i], mass[j]);
+                            let roll = 0.5 * (ri - radius[j]) / (ri + radius[j]);
+                            shape = Some((radius[j].to_bits(), mass[j].to_bits(), g, roll));
+                            (g, roll)
+                        }
+                    };
                     let wj = omega_of(j);
                     let v_rel = vi - v_pred[j];
                     let v_c = if ROT {
@@ -1113,8 +1128,7 @@ impl CpuEngine {
                     let v_t = v_c - n * v_c.dot(n);
                     // rolling needs rotation: no model reads v_roll without it
                     let v_roll = if ROT {
-                        geom.r_eff() * (wi - wj).cross(n)
-                            + 0.5 * (ri - radius[j]) / (ri + radius[j]) * v_t
+                        geom.r_eff() * (wi - wj).cross(n) + roll * v_t
                     } else {
                         DVec3::ZERO
                     };
