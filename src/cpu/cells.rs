@@ -89,9 +89,11 @@ impl CellGrid {
         }
     }
 
-    /// Calls `f(i, j)` once for every candidate pair i < j, in a fixed order
-    /// (i ascending, then neighbour cells in a fixed order, then cell order).
-    pub fn for_each_pair(&self, positions: &[DVec3], mut f: impl FnMut(usize, usize)) {
+    /// Calls `f(j)` for every particle binned in the 27 cells around `p`'s cell (wrapped
+    /// on periodic axes), in a fixed order (neighbour cells in a fixed order, then cell
+    /// order). Every particle closer to `p` than one cell width is among them (each once).
+    #[inline]
+    pub fn for_each_near(&self, p: DVec3, mut f: impl FnMut(usize)) {
         // the neighbour cell along axis a, wrapped on periodic axes, or None off the grid
         let along = |a: usize, c: usize, d: i64| -> Option<usize> {
             let n = self.dims[a] as i64;
@@ -102,30 +104,38 @@ impl CellGrid {
                 (0..n).contains(&x).then_some(x as usize)
             }
         };
-        for (i, &p) in positions.iter().enumerate() {
-            let c = self.coord(p);
-            for dz in -1i64..=1 {
-                let Some(z) = along(2, c[2], dz) else {
+        let c = self.coord(p);
+        for dz in -1i64..=1 {
+            let Some(z) = along(2, c[2], dz) else {
+                continue;
+            };
+            for dy in -1i64..=1 {
+                let Some(y) = along(1, c[1], dy) else {
                     continue;
                 };
-                for dy in -1i64..=1 {
-                    let Some(y) = along(1, c[1], dy) else {
+                for dx in -1i64..=1 {
+                    let Some(x) = along(0, c[0], dx) else {
                         continue;
                     };
-                    for dx in -1i64..=1 {
-                        let Some(x) = along(0, c[0], dx) else {
-                            continue;
-                        };
-                        let mut j = self.head[self.index([x, y, z])];
-                        while j != EMPTY {
-                            if j > i {
-                                f(i, j);
-                            }
-                            j = self.next[j];
-                        }
+                    let mut j = self.head[self.index([x, y, z])];
+                    while j != EMPTY {
+                        f(j);
+                        j = self.next[j];
                     }
                 }
             }
+        }
+    }
+
+    /// Calls `f(i, j)` once for every candidate pair i < j, in a fixed order
+    /// (i ascending, then neighbour cells in a fixed order, then cell order).
+    pub fn for_each_pair(&self, positions: &[DVec3], mut f: impl FnMut(usize, usize)) {
+        for (i, &p) in positions.iter().enumerate() {
+            self.for_each_near(p, |j| {
+                if j > i {
+                    f(i, j);
+                }
+            });
         }
     }
 }

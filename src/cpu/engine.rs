@@ -1,7 +1,12 @@
-//! The f64 CPU reference engine: velocity-Verlet integration, linked-cell contact search,
-//! per-contact history keyed by the pair's persistent particle ids, gravity, planar walls
-//! and an energy ledger (kinetic, stored, gravitational, dissipated) whose sum is conserved
-//! up to the integration error.
+//! The f64 CPU reference engine: velocity-Verlet integration, a Verlet pair list (built
+//! with linked cells, rebuilt when particles may have closed its skin), per-contact history
+//! kept with the pair's list entry (keyed by the persistent particle ids), gravity, planar
+//! walls and an energy ledger (kinetic, stored, gravitational, dissipated) whose sum is
+//! conserved up to the integration error.
+//!
+//! The forces do not depend on the list beyond the contacts it holds: every step visits the
+//! pairs in key order (i, j) and skips those out of range, so a run gives the same bits
+//! whenever the list is rebuilt (a restored checkpoint rebuilds it around its contacts).
 
 use crate::cpu::cells::CellGrid;
 use crate::error::PowderError;
@@ -9,34 +14,92 @@ use crate::model::{ContactHistory, ContactModel, Kinematics, PairGeometry, Respo
 use crate::scene::Scene;
 use crate::setup::Resolved;
 use glam::DVec3;
-use std::collections::HashMap;
-use std::hash::{BuildHasherDefault, Hasher};
 
-/// A fast, deterministic hash for pair keys (two u32 ids): a multiply-rotate mix. The
-/// standard SipHash cost 10 % of a JKR step (perf) and its random seed made the map's
-/// iteration order differ from run to run.
-#[derive(Clone, Copy, Debug, Default)]
-struct PairHasher(u64);
+/// Verlet skin of the CPU pair list, in units of the smallest radius: candidate pairs are
+/// those closer than r_i + r_j + reach + skin, and the list is rebuilt once two particles
+/// may together have moved the skin since the last rebuild (the GPU engine's skin is the
+/// same fraction).
+pub const SKIN: f64 = 0.1;
 
-impl Hasher for PairHasher {
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.write_u64(b as u64);
+/// Candidate pairs (a Verlet list): every active pair i < j closer than
+/// r_i + r_j + reach + skin at the last rebuild, plus every contact kept then, as a half
+/// list sorted by (i, j) in compressed rows, each entry with its contact record. The hot
+/// loop walks it in key order, without hashing.
+#[derive(Clone, Debug, Default)]
+struct PairList {
+    /// Entries of particle i: `start[i]..start[i + 1]` (n + 1 offsets).
+    start: Vec<usize>,
+    /// Partner j > i of each entry.
+    partner: Vec<u32>,
+    /// Whether the entry holds a contact (its record is meaningful).
+    live: Vec<bool>,
+    record: Vec<ContactRecord>,
+}
+
+impl PairList {
+    /// An empty list over `n` particles.
+    fn empty(n: usize) -> Self {
+        Self {
+            start: vec![0; n + 1],
+            ..Default::default()
         }
     }
-    fn write_u32(&mut self, i: u32) {
-        self.write_u64(i as u64);
+
+    /// The list holding exactly `contacts` (sorted by key here) over `n` particles.
+    fn from_contacts(n: usize, mut contacts: Vec<((u32, u32), ContactRecord)>) -> Self {
+        contacts.sort_by_key(|(k, _)| *k);
+        let mut list = Self::empty(n);
+        for &((i, _), _) in &contacts {
+            list.start[i as usize + 1] += 1;
+        }
+        for i in 0..n {
+            list.start[i + 1] += list.start[i];
+        }
+        list.partner = contacts.iter().map(|((_, j), _)| *j).collect();
+        list.live = vec![true; contacts.len()];
+        list.record = contacts.into_iter().map(|(_, r)| r).collect();
+        list
     }
-    fn write_u64(&mut self, i: u64) {
-        self.0 = (self.0.rotate_left(23) ^ i).wrapping_mul(0x9e37_79b9_7f4a_7c15);
+
+    /// The entry of pair (i, j), i < j.
+    fn find(&self, i: usize, j: usize) -> Option<usize> {
+        let (s, e) = (*self.start.get(i)?, *self.start.get(i + 1)?);
+        let j = u32::try_from(j).ok()?;
+        self.partner[s..e].binary_search(&j).ok().map(|k| s + k)
     }
-    fn finish(&self) -> u64 {
-        self.0 ^ (self.0 >> 29)
+
+    /// The contacts, in key order.
+    fn contacts(&self) -> impl Iterator<Item = ((u32, u32), &ContactRecord)> + '_ {
+        (0..self.start.len().saturating_sub(1)).flat_map(move |i| {
+            (self.start[i]..self.start[i + 1])
+                .filter(|&k| self.live[k])
+                .map(move |k| ((i as u32, self.partner[k]), &self.record[k]))
+        })
     }
 }
 
-/// Contacts keyed by the pair's persistent ids.
-type PairMap = HashMap<(u32, u32), ContactRecord, BuildHasherDefault<PairHasher>>;
+/// Particle–wall contacts, sorted by key (wall, particle): every step visits the keys in
+/// this order, so the old records are merged into the new list without hashing.
+#[derive(Clone, Debug, Default)]
+struct WallList {
+    key: Vec<(u32, u32)>,
+    record: Vec<ContactRecord>,
+}
+
+impl WallList {
+    fn clear(&mut self) {
+        self.key.clear();
+        self.record.clear();
+    }
+
+    fn find(&self, key: (u32, u32)) -> Option<&ContactRecord> {
+        self.key.binary_search(&key).ok().map(|k| &self.record[k])
+    }
+
+    fn contacts(&self) -> impl Iterator<Item = ((u32, u32), &ContactRecord)> + '_ {
+        self.key.iter().copied().zip(&self.record)
+    }
+}
 
 /// What a contact remembers between steps.
 #[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize)]
@@ -158,7 +221,7 @@ pub struct CpuState {
     force: Vec<DVec3>,
     omega: Vec<DVec3>,
     torque: Vec<DVec3>,
-    /// Contacts in key order (the maps are rebuilt in visiting order every step).
+    /// Contacts in key order (particle pairs, then particle–wall contacts by (wall, particle)).
     contacts: Vec<((u32, u32), ContactRecord)>,
     wall_contacts: Vec<((u32, u32), ContactRecord)>,
     dissipated: f64,
@@ -197,11 +260,39 @@ pub struct CpuEngine {
     walls: Vec<WallPlane>,
     /// Wall models, walls × n_materials.
     wall_models: Vec<ContactModel>,
+    /// `range()` of each pair and wall model (the same layout).
+    ranges: Vec<f64>,
+    wall_ranges: Vec<f64>,
     gravity: DVec3,
+    /// Cells at least as wide as the largest list distance 2·r_max + reach + skin.
     grid: CellGrid,
+    /// r_i + the largest reach: pairs closer than this + r_j interact.
     cutoff_pad: Vec<f64>,
-    contacts: PairMap,
-    wall_contacts: PairMap,
+    /// Verlet skin, m ([`SKIN`]·r_min, less on a periodic axis too short for it).
+    skin: f64,
+    /// Candidate pairs with their contacts.
+    pairs: PairList,
+    /// Positions at the last rebuild.
+    pos_ref: Vec<DVec3>,
+    /// The list must be rebuilt before the next force evaluation (start, restore,
+    /// insertion).
+    rebuild_due: bool,
+    /// List rebuilds so far (not part of the state).
+    rebuilds: u64,
+    /// Scratch: one particle's new candidates at a rebuild.
+    candidates: Vec<u32>,
+    wall_contacts: WallList,
+    spare_walls: WallList,
+    /// Wall candidates, rebuilt with the pair list: the active particles within
+    /// range + skin of wall w then, or in contact with it, ascending, at
+    /// `wall_candidates[wall_start[w]..wall_start[w + 1]]`.
+    wall_start: Vec<usize>,
+    wall_candidates: Vec<u32>,
+    /// Wall points at the last rebuild.
+    wall_ref: Vec<DVec3>,
+    /// Scratch: predicted velocities of the step.
+    v_pred: Vec<DVec3>,
+    w_pred: Vec<DVec3>,
     dissipated: f64,
     wall_work: f64,
     domain: (DVec3, DVec3),
@@ -270,13 +361,30 @@ impl CpuEngine {
             DVec3::from_array(scene.domain.max),
         );
         let periodic = scene.domain.periodic;
-        let grid = CellGrid::periodic(domain.0, domain.1, cutoff * (1.0 + 1e-9), n, periodic)
-            .ok_or_else(|| {
-                PowderError::Scene(format!(
-                    "the domain is shorter than 3 interaction cut-offs ({:.4e} m) along a periodic axis: a pair would meet two periodic images; enlarge [domain] or make the axis non-periodic",
-                    cutoff
-                ))
-            })?;
+        let r_min = radius.iter().copied().fold(f64::INFINITY, f64::min);
+        // the skin, halved until a periodic axis holds 3 cells of cut-off + skin (without
+        // any skin, the list is rebuilt every step)
+        let mut skin = if r_min.is_finite() { SKIN * r_min } else { 0.0 };
+        let grid = loop {
+            let grid = CellGrid::periodic(
+                domain.0,
+                domain.1,
+                (cutoff + skin) * (1.0 + 1e-9),
+                n,
+                periodic,
+            );
+            match grid {
+                Some(grid) => break grid,
+                None if skin > 1e-3 * cutoff => skin *= 0.5,
+                None if skin > 0.0 => skin = 0.0,
+                None => {
+                    return Err(PowderError::Scene(format!(
+                        "the domain is shorter than 3 interaction cut-offs ({:.4e} m) along a periodic axis: a pair would meet two periodic images; enlarge [domain] or make the axis non-periodic",
+                        cutoff
+                    )))
+                }
+            }
+        };
         let walls = scene
             .walls
             .iter()
@@ -316,14 +424,27 @@ impl CpuEngine {
             mass,
             material,
             n_materials,
+            ranges: models.iter().map(ContactModel::range).collect(),
+            wall_ranges: wall_models.iter().map(ContactModel::range).collect(),
             models,
             walls,
             wall_models,
             gravity: DVec3::from_array(scene.gravity),
             grid,
             cutoff_pad,
-            contacts: PairMap::default(),
-            wall_contacts: PairMap::default(),
+            skin,
+            pairs: PairList::empty(n),
+            pos_ref: Vec::new(),
+            rebuild_due: true,
+            rebuilds: 0,
+            candidates: Vec::new(),
+            wall_contacts: WallList::default(),
+            spare_walls: WallList::default(),
+            wall_start: Vec::new(),
+            wall_candidates: Vec::new(),
+            wall_ref: Vec::new(),
+            v_pred: Vec::new(),
+            w_pred: Vec::new(),
             dissipated: 0.0,
             wall_work: 0.0,
             domain,
@@ -333,9 +454,9 @@ impl CpuEngine {
             inserted: 0.0,
             peak: None,
         };
-        let v_pred = engine.vel.clone();
-        let w_pred = engine.omega.clone();
-        engine.compute_forces(&v_pred, &w_pred)?;
+        engine.v_pred.clone_from(&engine.vel);
+        engine.w_pred.clone_from(&engine.omega);
+        engine.compute_forces()?;
         engine.update_acceleration();
         // Contacts present at the start carry stored energy, not dissipation.
         engine.dissipated = 0.0;
@@ -349,11 +470,6 @@ impl CpuEngine {
 
     /// The evolving state, for a checkpoint.
     pub fn state(&self) -> CpuState {
-        let sorted = |m: &PairMap| {
-            let mut v: Vec<_> = m.iter().map(|(k, r)| (*k, *r)).collect();
-            v.sort_by_key(|(k, _)| *k);
-            v
-        };
         CpuState {
             time: self.time,
             steps: self.steps,
@@ -364,8 +480,12 @@ impl CpuEngine {
             force: self.force.clone(),
             omega: self.omega.clone(),
             torque: self.torque.clone(),
-            contacts: sorted(&self.contacts),
-            wall_contacts: sorted(&self.wall_contacts),
+            contacts: self.pairs.contacts().map(|(k, r)| (k, *r)).collect(),
+            wall_contacts: self
+                .wall_contacts
+                .contacts()
+                .map(|(k, r)| (k, *r))
+                .collect(),
             dissipated: self.dissipated,
             wall_points: self.walls.iter().map(|w| w.point).collect(),
             wall_velocities: self.walls.iter().map(|w| w.velocity).collect(),
@@ -406,6 +526,25 @@ impl CpuEngine {
                 s.dt, self.dt
             )));
         }
+        // contact keys: pairs i < j < n and walls (w, i) with i < n, each once
+        let mut pair_keys: Vec<(u32, u32)> = s.contacts.iter().map(|(k, _)| *k).collect();
+        let mut wall_keys: Vec<(u32, u32)> = s.wall_contacts.iter().map(|(k, _)| *k).collect();
+        pair_keys.sort_unstable();
+        wall_keys.sort_unstable();
+        let bad_pair = pair_keys
+            .iter()
+            .find(|&&(i, j)| i >= j || j as usize >= n)
+            .or_else(|| pair_keys.windows(2).find(|w| w[0] == w[1]).map(|w| &w[0]));
+        let bad_wall = wall_keys
+            .iter()
+            .find(|&&(w, i)| w as usize >= self.walls.len() || i as usize >= n)
+            .or_else(|| wall_keys.windows(2).find(|w| w[0] == w[1]).map(|w| &w[0]));
+        if let Some((a, b)) = bad_pair.or(bad_wall) {
+            return Err(PowderError::Run(format!(
+                "the checkpoint holds an invalid or repeated contact ({a}, {b}) for {n} particles and {} walls",
+                self.walls.len()
+            )));
+        }
         self.time = s.time;
         self.steps = s.steps;
         self.pos = s.pos;
@@ -414,8 +553,16 @@ impl CpuEngine {
         self.force = s.force;
         self.omega = s.omega;
         self.torque = s.torque;
-        self.contacts = s.contacts.into_iter().collect();
-        self.wall_contacts = s.wall_contacts.into_iter().collect();
+        // the list holds the contacts until the next force evaluation rebuilds it around
+        // them (the forces do not depend on the list beyond its contacts)
+        self.pairs = PairList::from_contacts(n, s.contacts);
+        self.rebuild_due = true;
+        let mut walls = s.wall_contacts;
+        walls.sort_by_key(|(k, _)| *k);
+        self.wall_contacts = WallList {
+            key: walls.iter().map(|(k, _)| *k).collect(),
+            record: walls.into_iter().map(|(_, r)| r).collect(),
+        };
         self.dissipated = s.dissipated;
         if s.wall_points.len() != self.walls.len() {
             return Err(PowderError::Run(format!(
@@ -492,14 +639,14 @@ impl CpuEngine {
 
     /// History of the contact between particles `i` and `j` (persistent ids), if any.
     pub fn contact_history(&self, i: usize, j: usize) -> Option<ContactHistory> {
-        let key = (i.min(j) as u32, i.max(j) as u32);
-        self.contacts.get(&key).map(|c| c.history)
+        let k = self.pairs.find(i.min(j), i.max(j))?;
+        self.pairs.live[k].then(|| self.pairs.record[k].history)
     }
 
     /// History of the contact between particle `i` and wall `w`, if any.
     pub fn wall_contact_history(&self, w: usize, i: usize) -> Option<ContactHistory> {
         self.wall_contacts
-            .get(&(w as u32, i as u32))
+            .find((u32::try_from(w).ok()?, u32::try_from(i).ok()?))
             .map(|c| c.history)
     }
 
@@ -577,7 +724,8 @@ impl CpuEngine {
     pub fn step(&mut self) -> Result<(), PowderError> {
         let dt = self.dt;
         self.insert_due();
-        let mut v_pred = Vec::with_capacity(self.pos.len());
+        let mut v_pred = std::mem::take(&mut self.v_pred);
+        v_pred.clear();
         for i in 0..self.pos.len() {
             if !self.active[i] {
                 v_pred.push(self.vel[i]);
@@ -588,6 +736,7 @@ impl CpuEngine {
             v_pred.push(v_half + 0.5 * dt * self.acc[i]);
             self.vel[i] = v_half;
         }
+        self.v_pred = v_pred;
         if self.periodic.iter().any(|&p| p) {
             self.wrap_positions();
         }
@@ -616,13 +765,13 @@ impl CpuEngine {
                 wall.point += dt * wall.velocity;
             }
         }
-        let mut w_pred = Vec::with_capacity(self.omega.len());
+        self.w_pred.clear();
         for i in 0..self.omega.len() {
             let alpha = self.torque[i] / self.inertia[i];
             self.omega[i] += 0.5 * dt * alpha;
-            w_pred.push(self.omega[i] + 0.5 * dt * alpha);
+            self.w_pred.push(self.omega[i] + 0.5 * dt * alpha);
         }
-        self.compute_forces(&v_pred, &w_pred)?;
+        self.compute_forces()?;
         if let Some(before) = push_before {
             let after = self.wall_forces();
             for (w, wall) in self.walls.iter().enumerate() {
@@ -650,6 +799,8 @@ impl CpuEngine {
         for i in 0..self.pos.len() {
             if !self.active[i] && self.insert_at[i] <= self.time {
                 self.active[i] = true;
+                // the list must take the newcomer's pairs
+                self.rebuild_due = true;
                 self.inserted += 0.5 * self.mass[i] * self.vel[i].length_squared()
                     - self.mass[i] * self.gravity.dot(self.pos[i]);
             }
@@ -720,35 +871,190 @@ impl CpuEngine {
             - (new.potential - o.potential)
     }
 
-    /// Books the contacts that left the search range within one step (in key order, so the
-    /// sum is reproducible): they leave with their last force.
-    fn book_departed(old: PairMap, dt: f64, overlap: impl Fn(usize, usize) -> f64) -> f64 {
-        let mut departed: Vec<_> = old.into_iter().collect();
-        departed.sort_by_key(|(k, _)| *k);
-        departed
-            .into_iter()
-            .map(|((a, b), c)| {
-                let motion = Motion {
-                    delta: overlap(a as usize, b as usize),
-                    ..Default::default()
-                };
-                let edges = [(0.0, 0.0), (motion.delta, 0.0)];
-                Self::book(Some(&c), &ContactRecord::default(), &motion, dt, || edges)
-            })
-            .sum()
+    /// Energy booked for a contact that left the interaction range within one step, with
+    /// overlap `delta` now: it leaves with its last force.
+    fn book_departed(c: &ContactRecord, delta: f64, dt: f64) -> f64 {
+        let motion = Motion {
+            delta,
+            ..Default::default()
+        };
+        let edges = [(0.0, 0.0), (motion.delta, 0.0)];
+        Self::book(Some(c), &ContactRecord::default(), &motion, dt, || edges)
     }
 
-    fn compute_forces(&mut self, v_pred: &[DVec3], w_pred: &[DVec3]) -> Result<(), PowderError> {
-        let dt = self.dt;
-        self.force.iter_mut().for_each(|f| *f = DVec3::ZERO);
-        self.torque.iter_mut().for_each(|t| *t = DVec3::ZERO);
+    /// Neighbour-list rebuilds so far (since the engine was built; not part of the state).
+    pub fn rebuilds(&self) -> u64 {
+        self.rebuilds
+    }
+
+    /// Whether the lists may miss a pair or a wall contact now: some pair of active
+    /// particles, or a particle and a wall, may have closed the skin since the last
+    /// rebuild (the two largest displacements together reach 99 % of it), or a rebuild is
+    /// due.
+    fn list_stale(&self) -> bool {
+        if self.rebuild_due
+            || self.pos_ref.len() != self.pos.len()
+            || self.wall_ref.len() != self.walls.len()
+            || self.walls.iter().any(|w| !w.point.is_finite())
+        {
+            return true;
+        }
+        let wall_moved = self
+            .walls
+            .iter()
+            .zip(&self.wall_ref)
+            .map(|(w, r)| (w.point - *r).length())
+            .fold(0.0f64, f64::max);
+        let any_periodic = self.periodic.iter().any(|&p| p);
+        let (mut m1, mut m2) = (0.0f64, 0.0f64);
+        for i in 0..self.pos.len() {
+            if !self.active[i] {
+                continue;
+            }
+            let mut d = self.pos[i] - self.pos_ref[i];
+            if any_periodic {
+                d = minimum_image(d, self.periodic, self.domain);
+            }
+            let d2 = d.length_squared();
+            if d2.is_nan() {
+                return true;
+            }
+            if d2 > m2 {
+                if d2 > m1 {
+                    m2 = m1;
+                    m1 = d2;
+                } else {
+                    m2 = d2;
+                }
+            }
+        }
+        m1.sqrt() + m2.sqrt().max(wall_moved) >= 0.99 * self.skin
+    }
+
+    /// Rebuilds the pair list from the positions now: every active pair closer than
+    /// r_i + r_j + reach + skin, and every contact of the old list (with its record),
+    /// in key order.
+    fn rebuild_list(&mut self) {
+        let n = self.pos.len();
         self.grid.rebuild(&self.pos);
-        let rotation = !w_pred.is_empty();
-        let omega_of = |i: usize| if rotation { w_pred[i] } else { DVec3::ZERO };
-        let mut old = std::mem::take(&mut self.contacts);
-        let mut new = PairMap::with_capacity_and_hasher(old.len().max(16), Default::default());
+        // the old list is freed after the merge (not kept for its allocations: the list is
+        // most of the engine's memory, and rebuilds are rare)
+        let old = std::mem::take(&mut self.pairs);
+        let mut new = PairList {
+            start: Vec::with_capacity(n + 1),
+            partner: Vec::with_capacity(old.partner.len()),
+            live: Vec::with_capacity(old.partner.len()),
+            record: Vec::with_capacity(old.partner.len()),
+        };
+        new.start.push(0);
+        let mut cand = std::mem::take(&mut self.candidates);
+        let any_periodic = self.periodic.iter().any(|&p| p);
+        let (pos, radius, active) = (&self.pos, &self.radius, &self.active);
+        let (periodic, domain) = (self.periodic, self.domain);
+        for i in 0..n {
+            cand.clear();
+            if active[i] {
+                let pi = pos[i];
+                let pad = self.cutoff_pad[i] + self.skin;
+                self.grid.for_each_near(pi, |j| {
+                    if j > i && active[j] {
+                        let mut d = pi - pos[j];
+                        if any_periodic {
+                            d = minimum_image(d, periodic, domain);
+                        }
+                        let reach = pad + radius[j];
+                        if d.length_squared() < reach * reach {
+                            cand.push(j as u32);
+                        }
+                    }
+                });
+                cand.sort_unstable();
+            }
+            // the union of the candidates and the old list's contacts, both sorted
+            let (mut a, mut b) = (0, old.start.get(i).copied().unwrap_or(0));
+            let end = old.start.get(i + 1).copied().unwrap_or(b);
+            loop {
+                while b < end && !old.live[b] {
+                    b += 1;
+                }
+                let kept = (b < end).then(|| old.partner[b]);
+                let next = cand.get(a).copied();
+                let (j, record) = match (next, kept) {
+                    (None, None) => break,
+                    (Some(c), Some(o)) if c == o => {
+                        a += 1;
+                        b += 1;
+                        (c, Some(old.record[b - 1]))
+                    }
+                    (Some(c), o) if o.is_none_or(|o| c < o) => {
+                        a += 1;
+                        (c, None)
+                    }
+                    (_, Some(o)) => {
+                        b += 1;
+                        (o, Some(old.record[b - 1]))
+                    }
+                    (Some(_), None) => unreachable!(),
+                };
+                new.partner.push(j);
+                new.live.push(record.is_some());
+                new.record.push(record.unwrap_or_default());
+            }
+            new.start.push(new.partner.len());
+        }
+        self.candidates = cand;
+        self.pairs = new;
+        self.rebuild_wall_candidates();
+        self.pos_ref.clone_from(&self.pos);
+        self.rebuild_due = false;
+        self.rebuilds += 1;
+    }
+
+    /// The wall candidates from the positions now: per wall, the active particles whose
+    /// overlap exceeds −(range + skin), and those in contact with it, ascending.
+    fn rebuild_wall_candidates(&mut self) {
+        self.wall_start.clear();
+        self.wall_candidates.clear();
+        self.wall_start.push(0);
+        let keys = &self.wall_contacts.key;
+        let mut cursor = 0;
+        for (w, wall) in self.walls.iter().enumerate() {
+            for i in 0..self.pos.len() {
+                if !self.active[i] {
+                    continue;
+                }
+                let key = (w as u32, i as u32);
+                while cursor < keys.len() && keys[cursor] < key {
+                    cursor += 1;
+                }
+                let in_contact = keys.get(cursor) == Some(&key);
+                let delta = self.radius[i] - (self.pos[i] - wall.point).dot(wall.normal);
+                let range = self.wall_ranges[w * self.n_materials + self.material[i]];
+                if in_contact || delta > -(range + self.skin) {
+                    self.wall_candidates.push(i as u32);
+                }
+            }
+            self.wall_start.push(self.wall_candidates.len());
+        }
+        self.wall_ref = self.walls.iter().map(|w| w.point).collect();
+    }
+
+    /// Forces of the particle pairs of the list (visited in key order) for the predicted
+    /// velocities; returns the energy they dissipated over the step.
+    /// `ROT`: particles rotate (`w_pred` holds their angular velocities).
+    #[inline(never)]
+    fn pair_forces<const ROT: bool>(
+        &mut self,
+        v_pred: &[DVec3],
+        w_pred: &[DVec3],
+        failure: &mut Option<String>,
+    ) -> f64 {
+        let dt = self.dt;
+        let rotation = ROT;
+        let omega_of = |i: usize| if ROT { w_pred[i] } else { DVec3::ZERO };
         let mut dissipated = 0.0;
-        let mut failure = None;
+        // contacts that left the range, in key order
+        let mut departed = 0.0;
         let mut peak = self.peak;
         {
             let pos = &self.pos;
@@ -757,92 +1063,174 @@ impl CpuEngine {
             let force = &mut self.force;
             let torque = &mut self.torque;
             let (periodic, domain) = (self.periodic, self.domain);
+            let any_periodic = periodic.iter().any(|&p| p);
             let (models, nm, mass, material) =
                 (&self.models, self.n_materials, &self.mass, &self.material);
-            let active = &self.active;
-            self.grid.for_each_pair(pos, |i, j| {
-                if !(active[i] && active[j]) {
-                    return;
-                }
-                let d = minimum_image(pos[i] - pos[j], periodic, domain);
-                let dist2 = d.length_squared();
-                let reach = pad[i] + radius[j];
-                if dist2 >= reach * reach {
-                    return;
-                }
-                let key = (i as u32, j as u32);
-                let dist = dist2.sqrt();
-                let delta = radius[i] + radius[j] - dist;
-                let model = &models[material[i] * nm + material[j]];
-                let prior = old.remove(&key);
-                if delta <= -model.range() && prior.is_none() {
-                    return;
-                }
-                let n = if dist > 0.0 { d / dist } else { DVec3::Z };
-                let geom = PairGeometry::spheres(radius[i], radius[j], mass[i], mass[j]);
-                let (wi, wj) = (omega_of(i), omega_of(j));
-                let v_rel = v_pred[i] - v_pred[j];
-                let v_c = v_rel - radius[i] * wi.cross(n) - radius[j] * wj.cross(n);
-                let v_t = v_c - n * v_c.dot(n);
-                let k = Kinematics {
-                    delta,
-                    delta_dot: -v_rel.dot(n),
-                    n,
-                    v_t,
-                    v_roll: geom.r_eff() * (wi - wj).cross(n)
-                        + 0.5 * (radius[i] - radius[j]) / (radius[i] + radius[j]) * v_t,
-                };
-                let mut history = prior.map(|c| c.history).unwrap_or_default();
-                let r = model.respond(&k, &geom, dt, &mut history);
-                if !(r.normal.force.is_finite() && r.tangential.is_finite()) && failure.is_none() {
-                    failure = Some(format!(
-                        "non-finite contact force between particles {i} and {j} (overlap {delta:e} m)"
-                    ));
-                }
-                let motion = Motion {
-                    delta,
-                    v_t,
-                    omega_rel: wi - wj,
-                };
-                let record = ContactRecord::new(history, delta, &r, &motion);
-                let edges = || model.edges(&geom, k.delta_dot);
-                dissipated += Self::book(prior.as_ref(), &record, &motion, dt, edges);
-                let ratio = delta / geom.a12;
-                if peak.is_none_or(|p: (f64, usize, Partner)| ratio > p.0) {
-                    peak = Some((ratio, i, Partner::Particle(j)));
-                }
-                let f = r.normal.force * n + r.tangential;
-                force[i] += f;
-                force[j] -= f;
-                if rotation {
-                    let t = n.cross(r.tangential);
-                    torque[i] += -radius[i] * t + r.rolling_torque;
-                    torque[j] += -radius[j] * t - r.rolling_torque;
-                }
-                if delta > -model.range() || history.touched {
-                    new.insert(key, record);
-                }
-            });
-        }
-        self.peak = peak;
-        dissipated += Self::book_departed(old, dt, |i, j| self.overlap(i, j));
-        self.contacts = new;
-
-        let mut old_w = std::mem::take(&mut self.wall_contacts);
-        let mut new_w = PairMap::with_capacity_and_hasher(old_w.len(), Default::default());
-        for (w, wall) in self.walls.iter().enumerate() {
-            let n = wall.normal;
-            for (i, v_particle) in v_pred.iter().enumerate() {
-                if !self.active[i] {
+            let ranges = &self.ranges;
+            let list = &mut self.pairs;
+            for i in 0..pos.len() {
+                let (s, e) = (list.start[i], list.start[i + 1]);
+                if s == e {
                     continue;
                 }
+                let (pi, ri, pad_i, mi) = (pos[i], radius[i], pad[i], material[i] * nm);
+                let (vi, wi) = (v_pred[i], omega_of(i));
+                // i's own sums, added to force[i] once
+                let (mut fi, mut ti) = (DVec3::ZERO, DVec3::ZERO);
+                // the pair geometry and rolling factor of the last partner's radius and
+                // mass (the same values: partners of a packing share them)
+                let mut shape: Option<(u64, u64, PairGeometry, f64)> = None;
+                for k in s..e {
+                    let j = list.partner[k] as usize;
+                    let mut d = pi - pos[j];
+                    if any_periodic {
+                        d = minimum_image(d, periodic, domain);
+                    }
+                    let dist2 = d.length_squared();
+                    let reach = pad_i + radius[j];
+                    let live = list.live[k];
+                    if dist2 >= reach * reach {
+                        if live {
+                            let delta = ri + radius[j] - dist2.sqrt();
+                            departed += Self::book_departed(&list.record[k], delta, dt);
+                            list.live[k] = false;
+                        }
+                        continue;
+                    }
+                    let dist = dist2.sqrt();
+                    let delta = ri + radius[j] - dist;
+                    let (model, range) = (&models[mi + material[j]], ranges[mi + material[j]]);
+                    if delta <= -range && !live {
+                        continue;
+                    }
+                    let prior = live.then(|| &list.record[k]);
+                    let n = if dist > 0.0 { d / dist } else { DVec3::Z };
+                    let (geom, roll) = match shape {
+                        Some((r, m, g, roll))
+                            if r == radius[j].to_bits() && m == mass[j].to_bits() =>
+                        {
+                            (g, roll)
+                        }
+                        _ => {
+                            let g = PairGeometry::spheres(ri, radius[j], mass[i], mass[j]);
+                            let roll = 0.5 * (ri - radius[j]) / (ri + radius[j]);
+                            shape = Some((radius[j].to_bits(), mass[j].to_bits(), g, roll));
+                            (g, roll)
+                        }
+                    };
+                    let wj = omega_of(j);
+                    let v_rel = vi - v_pred[j];
+                    let v_c = if ROT {
+                        v_rel - ri * wi.cross(n) - radius[j] * wj.cross(n)
+                    } else {
+                        v_rel
+                    };
+                    let v_t = v_c - n * v_c.dot(n);
+                    // rolling needs rotation: no model reads v_roll without it
+                    let v_roll = if ROT {
+                        geom.r_eff() * (wi - wj).cross(n) + roll * v_t
+                    } else {
+                        DVec3::ZERO
+                    };
+                    let kin = Kinematics {
+                        delta,
+                        delta_dot: -v_rel.dot(n),
+                        n,
+                        v_t,
+                        v_roll,
+                    };
+                    let mut history = prior.map(|c| c.history).unwrap_or_default();
+                    let r = model.respond(&kin, &geom, dt, &mut history);
+                    if !(r.normal.force.is_finite() && r.tangential.is_finite())
+                        && failure.is_none()
+                    {
+                        *failure = Some(format!(
+                            "non-finite contact force between particles {i} and {j} (overlap {delta:e} m)"
+                        ));
+                    }
+                    let motion = Motion {
+                        delta,
+                        v_t,
+                        omega_rel: wi - wj,
+                    };
+                    let record = ContactRecord::new(history, delta, &r, &motion);
+                    let edges = || model.edges(&geom, kin.delta_dot);
+                    dissipated += Self::book(prior, &record, &motion, dt, edges);
+                    let ratio = delta / geom.a12;
+                    if peak.is_none_or(|p: (f64, usize, Partner)| ratio > p.0) {
+                        peak = Some((ratio, i, Partner::Particle(j)));
+                    }
+                    let f = r.normal.force * n + r.tangential;
+                    fi += f;
+                    force[j] -= f;
+                    if rotation {
+                        let t = n.cross(r.tangential);
+                        ti += -ri * t + r.rolling_torque;
+                        torque[j] += -radius[j] * t - r.rolling_torque;
+                    }
+                    if delta > -range || history.touched {
+                        list.record[k] = record;
+                        list.live[k] = true;
+                    } else {
+                        list.live[k] = false;
+                    }
+                }
+                force[i] += fi;
+                if rotation {
+                    torque[i] += ti;
+                }
+            }
+        }
+        self.peak = peak;
+        dissipated + departed
+    }
+
+    /// Forces of the wall contacts (visited in key order (wall, particle), merged with the
+    /// old list); returns the energy they dissipated over the step.
+    #[inline(never)]
+    fn wall_contact_forces(
+        &mut self,
+        v_pred: &[DVec3],
+        w_pred: &[DVec3],
+        failure: &mut Option<String>,
+    ) -> f64 {
+        let dt = self.dt;
+        let rotation = !w_pred.is_empty();
+        let omega_of = |i: usize| if rotation { w_pred[i] } else { DVec3::ZERO };
+        let mut dissipated = 0.0;
+        // the wall contacts, visited in key order (wall, particle) and merged with the old
+        let old_w = std::mem::take(&mut self.wall_contacts);
+        let mut new_w = std::mem::take(&mut self.spare_walls);
+        new_w.clear();
+        let mut departed = 0.0;
+        let mut cursor = 0;
+        for (w, wall) in self.walls.iter().enumerate() {
+            let n = wall.normal;
+            // the others are out of range and not in contact: skipped anyway
+            let candidates = &self.wall_candidates[self.wall_start[w]..self.wall_start[w + 1]];
+            for &i in candidates {
+                let i = i as usize;
+                let v_particle = &v_pred[i];
+                let key = (w as u32, i as u32);
+                // old contacts not visited (none while particles stay active) leave
+                while cursor < old_w.key.len() && old_w.key[cursor] < key {
+                    let (w, i) = old_w.key[cursor];
+                    let delta = self.wall_overlap(w as usize, i as usize);
+                    departed += Self::book_departed(&old_w.record[cursor], delta, dt);
+                    cursor += 1;
+                }
+                let prior = if old_w.key.get(cursor) == Some(&key) {
+                    cursor += 1;
+                    Some(&old_w.record[cursor - 1])
+                } else {
+                    None
+                };
                 // relative to the (possibly moving) wall
                 let v = &(*v_particle - wall.velocity);
                 let delta = self.radius[i] - (self.pos[i] - wall.point).dot(n);
-                let model = &self.wall_models[w * self.n_materials + self.material[i]];
-                let key = (w as u32, i as u32);
-                let prior = old_w.remove(&key);
-                if delta <= -model.range() && prior.is_none() {
+                let m = w * self.n_materials + self.material[i];
+                let (model, range) = (&self.wall_models[m], self.wall_ranges[m]);
+                if delta <= -range && prior.is_none() {
                     continue;
                 }
                 let geom = PairGeometry::wall(self.radius[i], self.mass[i]);
@@ -860,7 +1248,7 @@ impl CpuEngine {
                 let mut history = prior.map(|c| c.history).unwrap_or_default();
                 let r = model.respond(&k, &geom, dt, &mut history);
                 if !(r.normal.force.is_finite() && r.tangential.is_finite()) && failure.is_none() {
-                    failure = Some(format!(
+                    *failure = Some(format!(
                         "non-finite contact force between particle {i} and wall {w} (overlap {delta:e} m)"
                     ));
                 }
@@ -871,7 +1259,7 @@ impl CpuEngine {
                 };
                 let record = ContactRecord::new(history, delta, &r, &motion);
                 let edges = || model.edges(&geom, k.delta_dot);
-                dissipated += Self::book(prior.as_ref(), &record, &motion, dt, edges);
+                dissipated += Self::book(prior, &record, &motion, dt, edges);
                 let ratio = delta / geom.a12;
                 if self.peak.is_none_or(|p| ratio > p.0) {
                     self.peak = Some((ratio, i, Partner::Wall(w)));
@@ -880,13 +1268,39 @@ impl CpuEngine {
                 if rotation {
                     self.torque[i] += -self.radius[i] * n.cross(r.tangential) + r.rolling_torque;
                 }
-                if delta > -model.range() || history.touched {
-                    new_w.insert(key, record);
+                if delta > -range || history.touched {
+                    new_w.key.push(key);
+                    new_w.record.push(record);
                 }
             }
         }
-        dissipated += Self::book_departed(old_w, dt, |w, i| self.wall_overlap(w, i));
+        for (&(w, i), c) in old_w.key[cursor..].iter().zip(&old_w.record[cursor..]) {
+            departed += Self::book_departed(c, self.wall_overlap(w as usize, i as usize), dt);
+        }
+        dissipated += departed;
+        dissipated += departed;
         self.wall_contacts = new_w;
+        self.spare_walls = old_w;
+        dissipated
+    }
+
+    fn compute_forces(&mut self) -> Result<(), PowderError> {
+        self.force.iter_mut().for_each(|f| *f = DVec3::ZERO);
+        self.torque.iter_mut().for_each(|t| *t = DVec3::ZERO);
+        if self.list_stale() {
+            self.rebuild_list();
+        }
+        let v_pred = std::mem::take(&mut self.v_pred);
+        let w_pred = std::mem::take(&mut self.w_pred);
+        let mut failure = None;
+        let mut dissipated = if w_pred.is_empty() {
+            self.pair_forces::<false>(&v_pred, &w_pred, &mut failure)
+        } else {
+            self.pair_forces::<true>(&v_pred, &w_pred, &mut failure)
+        };
+        dissipated += self.wall_contact_forces(&v_pred, &w_pred, &mut failure);
+        self.v_pred = v_pred;
+        self.w_pred = w_pred;
         self.dissipated += dissipated;
         if let Some(msg) = failure {
             return Err(PowderError::Run(format!(
@@ -915,30 +1329,32 @@ impl CpuEngine {
             e.kinetic += 0.5 * self.mass[i] * self.vel[i].length_squared();
             e.gravitational -= self.mass[i] * self.gravity.dot(self.pos[i]);
         }
-        // summed in key order, so the value does not depend on the maps' layout
-        let mut stored: Vec<((u32, u32, bool), f64)> = self
-            .contacts
-            .iter()
-            .map(|(k, c)| ((k.0, k.1, false), c.potential))
-            .chain(
-                self.wall_contacts
-                    .iter()
-                    .map(|(k, c)| ((k.0, k.1, true), c.potential)),
-            )
-            .collect();
-        stored.sort_by_key(|(k, _)| *k);
-        e.elastic = stored.iter().map(|(_, u)| u).sum();
+        // summed in key order (pairs and wall contacts merged by (first id, second id),
+        // pairs first), so the value does not depend on the lists' layout
+        let mut pairs = self.pairs.contacts().peekable();
+        let mut walls = self.wall_contacts.contacts().peekable();
+        loop {
+            let take_pair = match (pairs.peek(), walls.peek()) {
+                (None, None) => break,
+                (Some(p), Some(w)) => p.0 <= w.0,
+                (p, _) => p.is_some(),
+            };
+            let (_, c) = if take_pair {
+                pairs.next()
+            } else {
+                walls.next()
+            }
+            .expect("peeked");
+            e.elastic += c.potential;
+        }
         e
     }
 
     /// Force the particles exert on each wall now, N (normal and tangential parts).
     pub fn wall_forces(&self) -> Vec<DVec3> {
         let mut f = vec![DVec3::ZERO; self.walls.len()];
-        let mut keys: Vec<_> = self.wall_contacts.keys().copied().collect();
-        keys.sort();
-        for k in keys {
-            let c = &self.wall_contacts[&k];
-            let w = k.0 as usize;
+        for ((w, _), c) in self.wall_contacts.contacts() {
+            let w = w as usize;
             f[w] -= c.force * self.walls[w].normal + c.tangential;
         }
         f
@@ -947,20 +1363,17 @@ impl CpuEngine {
     /// Every particle–particle contact the engine keeps (in the search range or engaged), as
     /// ((i, j), overlap, history) in key order; the history is i's side (n from j to i).
     pub fn contacts(&self) -> Vec<((u32, u32), f64, ContactHistory)> {
-        let mut list: Vec<_> = self
-            .contacts
-            .iter()
-            .map(|(k, c)| (*k, c.delta, c.history))
-            .collect();
-        list.sort_by_key(|c| c.0);
-        list
+        self.pairs
+            .contacts()
+            .map(|(k, c)| (k, c.delta, c.history))
+            .collect()
     }
 
     /// Contact counts and overlap statistics now.
     pub fn contact_stats(&self) -> ContactStats {
         let mut s = ContactStats::default();
         let mut sum_ratio = 0.0;
-        for (&(i, j), c) in &self.contacts {
+        for ((i, j), c) in self.pairs.contacts() {
             if c.delta > 0.0 {
                 s.contacts += 1;
                 let a12 = 2.0 * self.radius[i as usize] * self.radius[j as usize]
@@ -972,7 +1385,7 @@ impl CpuEngine {
                 s.non_contact += 1;
             }
         }
-        for (&(_, i), c) in &self.wall_contacts {
+        for ((_, i), c) in self.wall_contacts.contacts() {
             if c.delta > 0.0 {
                 s.wall_contacts += 1;
                 let a12 = 2.0 * self.radius[i as usize];
@@ -990,5 +1403,109 @@ impl CpuEngine {
             s.mean_overlap_ratio = sum_ratio / touching as f64;
         }
         s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bench::{packing, Case};
+
+    /// Runs `steps` steps with the default skin and without any (a rebuild every step):
+    /// the two runs must agree bitwise (the forces do not depend on the list beyond its
+    /// contacts), and the skinned one must rebuild less often.
+    fn same_without_skin(scene: &Scene, steps: u64) {
+        let mut a = CpuEngine::new(scene).unwrap();
+        let mut b = CpuEngine::new(scene).unwrap();
+        assert!(a.skin > 0.0);
+        b.skin = 0.0;
+        for _ in 0..steps {
+            a.step().unwrap();
+            b.step().unwrap();
+        }
+        let bits = |v: &[DVec3]| v.iter().map(|p| p.to_array().map(f64::to_bits)).collect();
+        let bits: fn(&[DVec3]) -> Vec<[u64; 3]> = bits;
+        assert_eq!(bits(a.positions()), bits(b.positions()));
+        assert_eq!(bits(a.velocities()), bits(b.velocities()));
+        assert_eq!(bits(a.angular_velocities()), bits(b.angular_velocities()));
+        assert_eq!(a.energies(), b.energies());
+        assert_eq!(a.contacts(), b.contacts());
+        assert!(!a.contacts().is_empty());
+        assert!(b.rebuilds() > steps);
+        eprintln!("rebuilds {} of {}", a.rebuilds(), b.rebuilds());
+        assert!(a.rebuilds() > 2 && a.rebuilds() < b.rebuilds() / 2);
+    }
+
+    #[test]
+    fn results_do_not_depend_on_the_skin() {
+        for (case, steps) in [(Case::Hysteretic, 3000), (Case::Jkr, 3000)] {
+            let scene = packing(case, 343, 20.0, 3).unwrap();
+            same_without_skin(&scene, steps);
+        }
+    }
+
+    /// A side wall pushing in and then pulling back (the wall candidates follow it).
+    #[test]
+    fn results_do_not_depend_on_the_skin_moving_wall() {
+        let mut scene = packing(Case::Hysteretic, 343, 1.0, 4).unwrap();
+        let dt = CpuEngine::new(&scene).unwrap().dt();
+        let wall = scene
+            .walls
+            .iter_mut()
+            .find(|w| w.normal == [1.0, 0.0, 0.0])
+            .unwrap();
+        wall.motion = crate::scene::WallMotion::Prescribed(vec![
+            (0.0, [0.05, 0.0, 0.0]),
+            (1500.0 * dt, [-0.1, 0.0, 0.0]),
+        ]);
+        same_without_skin(&scene, 3000);
+    }
+
+    #[test]
+    fn results_do_not_depend_on_the_skin_periodic_and_pouring() {
+        let mut scene = packing(Case::Jkr, 512, 20.0, 5).unwrap();
+        scene.domain.periodic = [true, true, false];
+        // the side walls go: the box wraps along x and y
+        scene.walls.retain(|w| w.normal[2] != 0.0);
+        let dt = CpuEngine::new(&scene).unwrap().dt();
+        for (k, p) in scene.particles.iter_mut().enumerate() {
+            if k % 7 == 3 {
+                p.insert_at = (k % 10) as f64 * 20.0 * dt;
+                p.position[2] += 4.0 * p.radius;
+            }
+        }
+        same_without_skin(&scene, 300);
+    }
+
+    /// A restored state continues bitwise, although the list is rebuilt at once.
+    #[test]
+    fn restore_continues_bitwise() {
+        let scene = packing(Case::Jkr, 343, 20.0, 9).unwrap();
+        let mut a = CpuEngine::new(&scene).unwrap();
+        a.run_steps(150).unwrap();
+        let mut b = CpuEngine::new(&scene).unwrap();
+        b.restore(a.state()).unwrap();
+        assert_eq!(a.contacts(), b.contacts());
+        assert_eq!(a.energies(), b.energies());
+        a.run_steps(150).unwrap();
+        b.run_steps(150).unwrap();
+        assert_eq!(a.positions(), b.positions());
+        assert_eq!(a.energies(), b.energies());
+        assert_eq!(a.contacts(), b.contacts());
+        for (i, j) in [(0, 1), (0, 7), (5, 6)] {
+            assert_eq!(a.contact_history(i, j), b.contact_history(j, i));
+        }
+        assert_eq!(a.wall_contact_history(0, 0), b.wall_contact_history(0, 0));
+        // a state whose contacts do not fit the scene is refused
+        let mut bad = a.state();
+        let repeated = bad.contacts[0];
+        bad.contacts.push(repeated);
+        assert!(b.restore(bad).is_err());
+        let mut bad = a.state();
+        bad.contacts[0].0 = (3, 3);
+        assert!(b.restore(bad).is_err());
+        let mut bad = a.state();
+        bad.wall_contacts[0].0 = (99, 0);
+        assert!(b.restore(bad).is_err());
     }
 }
