@@ -539,7 +539,7 @@ impl JkrParams {
 
     /// Equilibrium contact radius a0 = (9πγR*²/E*)^(1/3) (scaled γ, E*), m.
     pub fn a0(&self, r_eff: f64) -> f64 {
-        (9.0 * PI * self.gamma() * r_eff * r_eff / self.e_star()).cbrt()
+        memo_cbrt(9.0 * PI * self.gamma() * r_eff * r_eff / self.e_star())
     }
 
     /// Equilibrium overlap δ0 = a0²/(3R*) (scaled), m.
@@ -555,7 +555,7 @@ impl JkrParams {
 
     /// Unscaled a0 = (9πγR*²/E*)^(1/3) (the rolling model's ξcrit keeps it), m.
     pub fn a0_unscaled(&self, r_eff: f64) -> f64 {
-        (9.0 * PI * self.surface_energy * r_eff * r_eff / self.e_star_unscaled()).cbrt()
+        memo_cbrt(9.0 * PI * self.surface_energy * r_eff * r_eff / self.e_star_unscaled())
     }
 
     /// The (negative) overlap at which a touching contact breaks, per [`Pulloff`]; 0 for
@@ -1863,4 +1863,31 @@ mod tests {
         assert_eq!(q.pulloff, Pulloff::Force);
         assert_eq!(q.dissipation, Dissipation::Tsuji { restitution: 0.5 });
     }
+}
+
+thread_local! {
+    /// The last two cube roots of [`memo_cbrt`]: (argument bits, root).
+    static CBRT_MEMO: std::cell::Cell<[(u64, f64); 2]> =
+        const { std::cell::Cell::new([(u64::MAX, 0.0); 2]) };
+}
+
+/// `x.cbrt()`, bitwise, remembering the last two arguments: a0 and the unscaled a0 of a
+/// pair are asked for several times per contact and step (δ0, the contact radius, the
+/// rolling stiffness and ξcrit), with the same few radii in a packing.
+fn memo_cbrt(x: f64) -> f64 {
+    CBRT_MEMO.with(|m| {
+        let mut c = m.get();
+        let bits = x.to_bits();
+        if c[0].0 == bits {
+            return c[0].1;
+        }
+        if c[1].0 == bits {
+            return c[1].1;
+        }
+        let y = x.cbrt();
+        c[1] = c[0];
+        c[0] = (bits, y);
+        m.set(c);
+        y
+    })
 }
