@@ -14,7 +14,8 @@
 // rebuild; set B is scratch that only a rebuild writes. Pass order, recorded by
 // `gpu::engine` into one encoder per batch of steps:
 //   kick_drift   per particle (A)        v += dt/2·a (omega += dt/2·alpha); offset +=
-//   (kick_kick_drift after a step of the same batch: its kick first, in the same pass)
+//   (collect_kick_drift after a step of the same batch: its collect and kick first, in
+//   the same pass)
 //                                        dt·v, carried into the cell; disp += dt·v and
 //                                        atomicMax of |disp| (Verlet skin); the predicted
 //                                        velocity vpred = v + dt/2·a (wpred likewise)
@@ -35,7 +36,8 @@
 //   collect      per particle (A)        adds the pairs its partners evaluated (no atomics:
 //                                        deterministic), gravity -> acc (alpha)
 //   kick         per particle (A)        v += dt/2·a (omega += dt/2·alpha)
-// Between rebuilds a step touches each particle's state in place, once per pass, and
+// (collect and kick are recorded as kernels only at the end of a batch; within it they
+// run with the next step's drift.) Between rebuilds a step touches each particle's state in place, once per pass, and
 // copies nothing (the lists, built in sorted order, stay valid: the order is unchanged).
 //
 // One evaluation per pair (Newton's third law). A rebuild splits each particle's
@@ -285,12 +287,18 @@ fn kick_drift(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nw
     drift(global_index(wid, nwg, lid), false);
 }
 
-// The previous step's closing kick and this step's kick_drift in one pass (every step of a
-// batch but the first; the batch ends with a kick): bitwise the same as the two kernels,
-// one dispatch and one sweep over the state fewer.
+// The previous step's collect and closing kick and this step's kick_drift in one pass
+// (every step of a batch but the first; the batch ends with collect and kick): each needs
+// only its own particle's results of the one before (collect reads the pair forces the
+// whole force pass left), so this is bitwise the same as the three kernels, two dispatches
+// and two sweeps over the state fewer.
 @compute @workgroup_size(WG_SIZE)
-fn kick_kick_drift(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
-    drift(global_index(wid, nwg, lid), true);
+fn collect_kick_drift(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    let i = global_index(wid, nwg, lid);
+    if (i < grid.n_particles) {
+        collect_particle(i);
+    }
+    drift(i, true);
 }
 
 fn drift(i: u32, pending_kick: bool) {
@@ -739,10 +747,12 @@ fn particle_forces(k: u32) -> f32 {
 @compute @workgroup_size(WG_SIZE)
 fn collect(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let k = global_index(wid, nwg, lid);
-    if (k >= grid.n_particles) {
-        return;
+    if (k < grid.n_particles) {
+        collect_particle(k);
     }
-    let cap = step.max_neighbours;
+}
+
+fn collect_particle(k: u32) {
     var f = a_acc[k].xyz;
     var torque = vec3<f32>(0.0);
     for (var s = 0u; s < lower_count[k]; s++) {

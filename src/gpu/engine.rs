@@ -184,7 +184,7 @@ struct Bound {
     copy_back_history: wgpu::BindGroup,
     force: wgpu::BindGroup,
     kick: wgpu::BindGroup,
-    kick_kick_drift: wgpu::BindGroup,
+    collect_kick_drift: wgpu::BindGroup,
     collect: wgpu::BindGroup,
     /// The moving-wall kernels, only for scenes with moving / servo-controlled walls.
     wall_move: Option<(Kernel, wgpu::BindGroup)>,
@@ -198,8 +198,8 @@ enum Drift {
     None,
     /// `kick_drift`: the first step of a batch.
     Plain,
-    /// `kick_kick_drift`: the previous step's closing kick, then the drift.
-    AfterKick,
+    /// `collect_kick_drift`: the previous step's collect and closing kick, then the drift.
+    AfterStep,
 }
 
 /// A snapshot read back from the device, in the scene's particle order.
@@ -607,7 +607,7 @@ impl GpuEngine {
             "copy_back_history",
             "force",
             "kick",
-            "kick_kick_drift",
+            "collect_kick_drift",
             "collect",
         ];
         // the wall kernels only where walls move (not compiled otherwise)
@@ -714,7 +714,7 @@ impl GpuEngine {
                 copy_back_history: kernels[6].bind(device, &refs)?,
                 force: kernels[7].bind(device, &refs)?,
                 kick: kernels[8].bind(device, &refs)?,
-                kick_kick_drift: kernels[9].bind(device, &refs)?,
+                collect_kick_drift: kernels[9].bind(device, &refs)?,
                 collect: kernels[10].bind(device, &refs)?,
                 wall_move: match program.kernels.get("wall_move") {
                     Some(k) => Some((k.clone(), k.bind(device, &refs)?)),
@@ -865,8 +865,8 @@ impl GpuEngine {
 
     /// Records one step: drift, decide whether to rebuild, on a rebuild (indirect: no
     /// workgroups otherwise) sort, gather into B, rebuild B's lists, remap the history
-    /// and copy B back; then the forces. The closing kick is recorded with the next step
-    /// (`Drift::AfterKick`) or by [`Self::record_kick`].
+    /// and copy B back; then the forces. Their collect and the closing kick are recorded
+    /// with the next step (`Drift::AfterStep`) or by [`Self::record_finish`].
     fn record_step(&self, encoder: &mut wgpu::CommandEncoder, drift: Drift) {
         let bound = &self.bound;
         let (n, max) = (self.n, self.max_per_dim);
@@ -874,7 +874,7 @@ impl GpuEngine {
             let mut pass = encoder.begin_compute_pass(&Default::default());
             if drift != Drift::None {
                 let (k, group) = match drift {
-                    Drift::AfterKick => (&self.kernels[9], &bound.kick_kick_drift),
+                    Drift::AfterStep => (&self.kernels[9], &bound.collect_kick_drift),
                     _ => (&self.kernels[0], &bound.kick_drift),
                 };
                 k.dispatch(&mut pass, group, n, max);
@@ -901,13 +901,18 @@ impl GpuEngine {
         if let Some((k, b)) = &bound.wall_servo {
             k.dispatch_workgroups(&mut pass, b, 1, max);
         }
-        self.kernels[10].dispatch(&mut pass, &bound.collect, n, max);
     }
 
-    /// Records the closing kick of a batch's last step.
-    fn record_kick(&self, encoder: &mut wgpu::CommandEncoder) {
+    /// Records `collect` (the forces of the step just recorded are then complete) and,
+    /// with `kick`, the closing kick: at the end of a batch, or without the kick after the
+    /// initial forces.
+    fn record_finish(&self, encoder: &mut wgpu::CommandEncoder, kick: bool) {
+        let (n, max) = (self.n, self.max_per_dim);
         let mut pass = encoder.begin_compute_pass(&Default::default());
-        self.kernels[8].dispatch(&mut pass, &self.bound.kick, self.n, self.max_per_dim);
+        self.kernels[10].dispatch(&mut pass, &self.bound.collect, n, max);
+        if kick {
+            self.kernels[8].dispatch(&mut pass, &self.bound.kick, n, max);
+        }
     }
 
     /// What each pass of the step costs on this adapter: every pass is recorded `reps` times
@@ -996,6 +1001,7 @@ impl GpuEngine {
             .queue
             .write_buffer(&self.monitor, 0, &[0u8; MONITOR_BYTES as usize]);
         self.record_step(&mut encoder, Drift::None);
+        self.record_finish(&mut encoder, false);
         self.check_monitor(encoder)?;
         if let Some(buf) = &self.particle_ledger {
             let mut rows = self.read_particle_ledger()?;
@@ -1151,11 +1157,11 @@ impl GpuEngine {
                 let drift = if i == 0 {
                     Drift::Plain
                 } else {
-                    Drift::AfterKick
+                    Drift::AfterStep
                 };
                 self.record_step(&mut encoder, drift);
             }
-            self.record_kick(&mut encoder);
+            self.record_finish(&mut encoder, true);
             self.steps += batch;
             self.time += batch as f64 * self.dt;
             left -= batch;
