@@ -33,6 +33,19 @@ const HYST_JUMP_IN: u32 = 1u;
 const HYST_SQRT_RULE: u32 = 2u;
 const HYST_LSD: u32 = 4u;
 
+// Set per pipeline (`gpu::engine`) when every hysteretic/LSD row of the scene has the same
+// flags (0xffffffff: they differ, each pair reads its own): the compiler then drops the
+// branches of the rules no pair uses; on a SIMD adapter a branch costs whether a lane
+// takes it or not.
+override HYST_ONE_FLAGS: u32 = 0xffffffffu;
+
+fn hyst_flag(p: HystereticPair, bit: u32) -> bool {
+    if (HYST_ONE_FLAGS != 0xffffffffu) {
+        return (HYST_ONE_FLAGS & bit) != 0u;
+    }
+    return (p.flags & bit) != 0u;
+}
+
 // The contact's history: delta_max and the "has touched" flag.
 struct HystHistory {
     delta_max: f32,
@@ -60,7 +73,7 @@ fn hyst_k2(p: HystereticPair, delta_max: f32, dmaxp: f32) -> f32 {
         return p.kp;
     }
     var shape = max(x, 0.0);
-    if ((p.flags & HYST_SQRT_RULE) != 0u) {
+    if (hyst_flag(p, HYST_SQRT_RULE)) {
         shape = sqrt(shape);
     }
     return p.k1 + (p.kp - p.k1) * shape;
@@ -82,7 +95,7 @@ fn hyst_tensile_history(p: HystereticPair, delta: f32, dmaxp: f32, a12: f32) -> 
     if (delta >= p.kp * p.phi_f * a12 / (p.kp + p.kc)) {
         return dmaxp;
     }
-    if ((p.flags & HYST_SQRT_RULE) == 0u) {
+    if (!hyst_flag(p, HYST_SQRT_RULE)) {
         let s = (p.kp - p.k1) / dmaxp;
         return 0.5 * delta + sqrt(0.25 * delta * delta + (p.k1 + p.kc) * delta / s);
     }
@@ -141,7 +154,7 @@ fn hyst_adhesion_potential(p: HystereticPair, delta: f32) -> f32 {
 // Total normal force of the pair (contact + non-contact adhesion + viscosity).
 fn hyst_force(p: HystereticPair, delta: f32, delta_dot: f32, a12: f32, history: HystHistory) -> HystForce {
     var h = history;
-    if ((p.flags & HYST_LSD) != 0u) {
+    if (hyst_flag(p, HYST_LSD)) {
         if (delta > 0.0) {
             return HystForce(p.k1 * delta + p.gamma0 * delta_dot, HystHistory(0.0, false), 0.5 * p.k1 * delta * delta);
         }
@@ -164,7 +177,7 @@ fn hyst_force(p: HystereticPair, delta: f32, delta_dot: f32, a12: f32, history: 
         if (delta == 0.0) {
             h.touched = true;
         }
-        if ((p.flags & HYST_JUMP_IN) == 0u || h.touched) {
+        if (!hyst_flag(p, HYST_JUMP_IN) || h.touched) {
             return HystForce(-p.kca * delta - p.fa, h, hyst_adhesion_potential(p, delta));
         }
         return HystForce(0.0, h, 0.0);

@@ -639,7 +639,22 @@ impl GpuEngine {
             ("POURING", flag(pouring)),
             ("PERIODIC", flag(periodic.iter().any(|&p| p))),
         ];
-        // (declared only by the steps with the JKR model file)
+        // (declared only by the steps with the hysteretic / JKR model file)
+        let hyst_flags: Vec<u32> = all_models
+            .iter()
+            .filter_map(|m| match m {
+                ContactModel::Hysteretic(p) => Some(HystereticPair::hysteretic(p).flags),
+                ContactModel::Lsd(p) => Some(HystereticPair::lsd(p).flags),
+                _ => None,
+            })
+            .collect();
+        if let Some(&first) = hyst_flags.first() {
+            let same = hyst_flags.iter().all(|&f| f == first);
+            constants.push((
+                "HYST_ONE_FLAGS",
+                if same { first as f64 } else { u32::MAX as f64 },
+            ));
+        }
         if !jkr_rows.is_empty() {
             constants.push(("JKR_ONE_DISSIPATION", jkr_dissipation as f64));
             constants.push(("JKR_ADHESION", jkr_adhesion as f64));
