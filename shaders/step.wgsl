@@ -50,9 +50,10 @@
 // is handed over as the partner sees it (`hist_mirror`: the tangential spring, kept in the
 // evaluator's frame, changes sign; the normal history, the rolling displacement and the
 // contact radius are the same on both sides). An earlier design evaluated every pair from
-// both sides with bitwise mirrored inputs; on lavapipe the half lists measured 1.5-2x
-// faster for the force pass (`powder bench --profile`), as SIMD lanes loop over the
-// longest list of their group.
+// both sides with bitwise mirrored inputs; on lavapipe force + collect measured 12 %
+// (hysteretic) and 22 % (JKR with friction and rolling) cheaper than that force pass at
+// 10⁴ particles (`powder bench --profile`; SIMD lanes loop over the longest list of their
+// group, and the model runs once per pair).
 //
 // Member order matters on Mesa lavapipe 22.3: with `gravity` first (offset 0), a non-zero
 // gravity.x (even 1e-30) made the step ~3x slower and the driver's memory grow by ~0.3 MB
@@ -201,7 +202,8 @@ fn is_active(pid: u32) -> bool {
 // Neighbour slot s of particle k: slot-major (all particles' first slots, then all second
 // ones, …), so neighbouring invocations touch neighbouring elements and the few slots in
 // use fill whole cache lines; particle-major (k·cap + s) left most of each particle's
-// capacity-wide stretch unused and measured 1.3–2.5x slower at 10⁵ particles.
+// capacity-wide stretch unused: at 10⁵ particles the step measured 1.5x slower (collect
+// 3x, force 1.4x; `powder bench --profile`).
 fn slot_index(k: u32, s: u32) -> u32 {
     return s * grid.n_particles + k;
 }
