@@ -105,3 +105,83 @@ fn a_mixed_scene_runs_on_the_gpu_and_matches_the_cpu() {
     assert!(last.contacts_cpu > 5 && last.history_pairs > 0, "{last:?}");
     assert!(c.passed, "{:?}", last);
 }
+
+/// Two JKR-family materials whose pairs differ in dissipation law and adhesion (adhesive
+/// JKR with Tsuji damping, Hertz with power-law damping, adhesive JKR between them): the
+/// pipelines cannot fold either choice (`JKR_ONE_DISSIPATION`, `JKR_ADHESION` stay at
+/// "decide per pair"), so this runs the per-pair branches, against the CPU.
+#[test]
+fn jkr_pairs_with_different_laws_match_the_cpu() {
+    let scene = Scene::from_toml_str(
+        r#"
+[domain]
+min = [0.0, 0.0, 0.0]
+max = [0.012, 0.012, 0.02]
+[simulation]
+duration = 0.05
+gravity = [0.0, 0.0, -9.81]
+impact_velocity = 0.5
+[[material]]
+name = "sticky"
+density = 2000.0
+model = "jkr"
+youngs = 1e5
+poisson = 0.3
+surface_energy = 0.05
+restitution = 0.5
+friction = 0.3
+rolling_hysteresis = 0.5
+[[material]]
+name = "smooth"
+density = 2000.0
+model = "hertz"
+youngs = 1e5
+poisson = 0.3
+dissipation = "powerlaw"
+D = 1e-3
+alpha = 1.0
+beta = 1.0
+friction = 0.3
+[[interaction]]
+materials = ["sticky", "smooth"]
+model = "jkr"
+youngs = 1e5
+poisson = 0.3
+surface_energy = 0.02
+restitution = 0.6
+friction = 0.3
+rolling_hysteresis = 0.5
+[[wall]]
+point = [0.0, 0.0, 0.0]
+normal = [0.0, 0.0, 1.0]
+material = "sticky"
+[[particles]]
+kind = "lattice"
+material = "smooth"
+min = [0.0011, 0.0011, 0.0011]
+max = [0.0109, 0.0109, 0.0062]
+radius = 1.0e-3
+spacing = 2.02e-3
+jitter = 0.5
+seed = 7
+[[particles]]
+kind = "lattice"
+material = "sticky"
+min = [0.0011, 0.0011, 0.0066]
+max = [0.0109, 0.0109, 0.0118]
+radius = 1.0e-3
+spacing = 2.02e-3
+jitter = 0.5
+velocity = [0.0, 0.0, -0.5]
+seed = 8
+"#,
+        "laws",
+    )
+    .unwrap();
+    let Some(ctx) = gpu() else { return };
+    let c = compare(&scene, ctx, 12000, 2000, Tolerances::default()).unwrap();
+    let last = c.samples.last().unwrap();
+    eprintln!("{last:?}");
+    assert!(last.contacts_cpu > 5, "{last:?}");
+    assert!(c.passed, "{:?}", last);
+}
