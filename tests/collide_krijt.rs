@@ -447,7 +447,7 @@ mod gpu {
             let c = cpu.contact_history(0, 1).unwrap();
             let g = gpu.contact_history(0, 1).unwrap().unwrap();
             let g_other = gpu.contact_history(1, 0).unwrap().unwrap();
-            // both sides keep bitwise the same radius
+            // the one stored radius, seen from both sides
             assert_eq!(g.contact_radius.to_bits(), g_other.contact_radius.to_bits());
             assert!(c.touched && g.touched, "the pair sticks");
             let rel = (g.contact_radius / c.contact_radius - 1.0).abs();

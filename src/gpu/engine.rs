@@ -1369,7 +1369,7 @@ impl GpuEngine {
     }
 
     /// Contact counts and overlap statistics after the last step, as
-    /// `CpuEngine::contact_stats` (each pair is seen from both sides on the device).
+    /// `CpuEngine::contact_stats` (each pair's evaluator counts it twice on the device).
     pub fn contact_stats(&self) -> Result<ContactStats, PowderError> {
         let rows = self.read_particle_ledger()?;
         let mut counts = [0.0f64; 4];
