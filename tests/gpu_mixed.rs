@@ -9,11 +9,16 @@ use powder::gpu::shaders::StepKind;
 use powder::gpu::GpuEngine;
 use powder::scene::Scene;
 
-/// Two jittered lattices of 1 mm spheres in a box, hysteretic below and JKR (friction,
-/// rolling resistance, Tsuji damping) above, thrown down onto them; hysteretic–JKR pairs
-/// and the floor use the hysteretic model.
-fn mixed_scene() -> Scene {
-    Scene::from_toml_str(
+/// Two jittered lattices of 1 mm spheres in a box over a floor: `lower` below, `upper`
+/// above thrown down at `speed`, with the `materials` blocks (materials and interactions)
+/// and the floor of material `wall`; `spacing` sets the gaps between lattice neighbours.
+fn two_lattices(
+    materials: &str,
+    [lower, upper, wall]: [&str; 3],
+    spacing: f64,
+    speed: f64,
+) -> Scene {
+    let text = format!(
         r#"
 [domain]
 min = [0.0, 0.0, 0.0]
@@ -22,6 +27,41 @@ max = [0.012, 0.012, 0.02]
 duration = 0.05
 gravity = [0.0, 0.0, -9.81]
 impact_velocity = 0.5
+{materials}
+[[wall]]
+point = [0.0, 0.0, 0.0]
+normal = [0.0, 0.0, 1.0]
+material = "{wall}"
+[[particles]]
+kind = "lattice"
+material = "{lower}"
+min = [0.0011, 0.0011, 0.0011]
+max = [0.0109, 0.0109, 0.0062]
+radius = 1.0e-3
+spacing = {spacing:e}
+jitter = 0.5
+seed = 7
+[[particles]]
+kind = "lattice"
+material = "{upper}"
+min = [0.0011, 0.0011, 0.0066]
+max = [0.0109, 0.0109, 0.0118]
+radius = 1.0e-3
+spacing = {spacing:e}
+jitter = 0.5
+velocity = [0.0, 0.0, {vz:e}]
+seed = 8
+"#,
+        vz = -speed
+    );
+    Scene::from_toml_str(&text, "lattices").unwrap()
+}
+
+/// Hysteretic spheres below and JKR (friction, rolling resistance, Tsuji damping) above,
+/// thrown down onto them; hysteretic–JKR pairs and the floor use the hysteretic model.
+fn mixed_scene() -> Scene {
+    two_lattices(
+        r#"
 [[material]]
 name = "plastic"
 density = 2000.0
@@ -49,33 +89,11 @@ kp = 500.0
 kc = 50.0
 phi_f = 0.05
 gamma0 = 1e-3
-[[wall]]
-point = [0.0, 0.0, 0.0]
-normal = [0.0, 0.0, 1.0]
-material = "plastic"
-[[particles]]
-kind = "lattice"
-material = "plastic"
-min = [0.0011, 0.0011, 0.0011]
-max = [0.0109, 0.0109, 0.0062]
-radius = 1.0e-3
-spacing = 2.1e-3
-jitter = 0.5
-seed = 7
-[[particles]]
-kind = "lattice"
-material = "sticky"
-min = [0.0011, 0.0011, 0.0066]
-max = [0.0109, 0.0109, 0.0118]
-radius = 1.0e-3
-spacing = 2.1e-3
-jitter = 0.5
-velocity = [0.0, 0.0, -0.3]
-seed = 8
 "#,
-        "mixed",
+        ["plastic", "sticky", "plastic"],
+        2.1e-3,
+        0.3,
     )
-    .unwrap()
 }
 
 #[test]
@@ -112,15 +130,8 @@ fn a_mixed_scene_runs_on_the_gpu_and_matches_the_cpu() {
 /// "decide per pair"), so this runs the per-pair branches, against the CPU.
 #[test]
 fn jkr_pairs_with_different_laws_match_the_cpu() {
-    let scene = Scene::from_toml_str(
+    let scene = two_lattices(
         r#"
-[domain]
-min = [0.0, 0.0, 0.0]
-max = [0.012, 0.012, 0.02]
-[simulation]
-duration = 0.05
-gravity = [0.0, 0.0, -9.81]
-impact_velocity = 0.5
 [[material]]
 name = "sticky"
 density = 2000.0
@@ -151,33 +162,11 @@ surface_energy = 0.02
 restitution = 0.6
 friction = 0.3
 rolling_hysteresis = 0.5
-[[wall]]
-point = [0.0, 0.0, 0.0]
-normal = [0.0, 0.0, 1.0]
-material = "sticky"
-[[particles]]
-kind = "lattice"
-material = "smooth"
-min = [0.0011, 0.0011, 0.0011]
-max = [0.0109, 0.0109, 0.0062]
-radius = 1.0e-3
-spacing = 2.02e-3
-jitter = 0.5
-seed = 7
-[[particles]]
-kind = "lattice"
-material = "sticky"
-min = [0.0011, 0.0011, 0.0066]
-max = [0.0109, 0.0109, 0.0118]
-radius = 1.0e-3
-spacing = 2.02e-3
-jitter = 0.5
-velocity = [0.0, 0.0, -0.5]
-seed = 8
 "#,
-        "laws",
-    )
-    .unwrap();
+        ["smooth", "sticky", "sticky"],
+        2.02e-3,
+        0.5,
+    );
     let Some(ctx) = gpu() else { return };
     let c = compare(&scene, ctx, 12000, 2000, Tolerances::default()).unwrap();
     let last = c.samples.last().unwrap();
