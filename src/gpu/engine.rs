@@ -175,20 +175,45 @@ impl StateSet {
 
 /// The step's kernels, bound to the two sets.
 struct Bound {
-    kick_drift: wgpu::BindGroup,
-    decide: wgpu::BindGroup,
-    gather: wgpu::BindGroup,
-    neighbours: wgpu::BindGroup,
-    remap: wgpu::BindGroup,
-    copy_back: wgpu::BindGroup,
-    copy_back_history: wgpu::BindGroup,
-    force: wgpu::BindGroup,
-    kick: wgpu::BindGroup,
-    collect_kick_drift: wgpu::BindGroup,
-    collect: wgpu::BindGroup,
+    kick_drift: Pass,
+    decide: Pass,
+    gather: Pass,
+    neighbours: Pass,
+    remap: Pass,
+    copy_back: Pass,
+    copy_back_history: Pass,
+    force: Pass,
+    kick: Pass,
+    collect_kick_drift: Pass,
+    collect: Pass,
     /// The moving-wall kernels, only for scenes with moving / servo-controlled walls.
-    wall_move: Option<(Kernel, wgpu::BindGroup)>,
-    wall_servo: Option<(Kernel, wgpu::BindGroup)>,
+    wall_move: Option<Pass>,
+    wall_servo: Option<Pass>,
+}
+
+/// One kernel with its bind group.
+struct Pass {
+    kernel: Kernel,
+    group: wgpu::BindGroup,
+}
+
+impl Pass {
+    /// One invocation per particle (`n`).
+    fn per_particle(&self, pass: &mut wgpu::ComputePass<'_>, n: u32, max_per_dim: u32) {
+        self.kernel.dispatch(pass, &self.group, n, max_per_dim);
+    }
+
+    /// One workgroup.
+    fn once(&self, pass: &mut wgpu::ComputePass<'_>, max_per_dim: u32) {
+        self.kernel
+            .dispatch_workgroups(pass, &self.group, 1, max_per_dim);
+    }
+
+    /// Workgroup counts from `args` at byte `offset`.
+    fn indirect(&self, pass: &mut wgpu::ComputePass<'_>, args: &wgpu::Buffer, offset: u64) {
+        self.kernel
+            .dispatch_indirect(pass, &self.group, args, offset);
+    }
 }
 
 /// How a recorded step starts.
@@ -260,7 +285,6 @@ pub struct GpuEngine {
     /// per-particle passes (at byte [`Self::rebuild_args`]), written by `decide` each step.
     args: wgpu::Buffer,
     rebuild_args: u64,
-    kernels: [Kernel; 11],
     bound: Bound,
     max_per_dim: u32,
     kind: StepKind,
@@ -324,6 +348,61 @@ pub struct GpuSavedState {
     /// Which particles have appeared, and the energy they brought.
     active: Vec<bool>,
     inserted: f64,
+}
+
+/// The value every item of `values` has, or `mixed` when they differ or there is none.
+fn common_or<T: PartialEq + Copy>(values: impl IntoIterator<Item = T>, mixed: T) -> T {
+    let mut values = values.into_iter();
+    match values.next() {
+        Some(first) if values.all(|v| v == first) => first,
+        _ => mixed,
+    }
+}
+
+/// The step's pipeline-overridable constants for a scene: what it does not use is folded
+/// out of its pipelines (the WGSL `override`s of step.wgsl and the model files). The
+/// model constants go only to variants that declare them (wgpu refuses unknown names).
+fn pipeline_constants(
+    scene: &Scene,
+    r: &Resolved,
+    models: &[ContactModel],
+) -> Vec<(&'static str, f64)> {
+    let flag = |b: bool| f64::from(u8::from(b));
+    let mut constants = vec![
+        ("ONE_MATERIAL", flag(r.n_materials == 1)),
+        (
+            "POURING",
+            flag(scene.particles.iter().any(|p| p.insert_at > 0.0)),
+        ),
+        ("PERIODIC", flag(scene.domain.periodic.iter().any(|&p| p))),
+    ];
+    let hyst: Vec<HystereticPair> = models
+        .iter()
+        .filter_map(|m| match m {
+            ContactModel::Hysteretic(p) => Some(HystereticPair::hysteretic(p)),
+            ContactModel::Lsd(p) => Some(HystereticPair::lsd(p)),
+            _ => None,
+        })
+        .collect();
+    if !hyst.is_empty() {
+        let flags = common_or(hyst.iter().map(|h| h.flags), u32::MAX);
+        constants.push(("HYST_ONE_FLAGS", flags as f64));
+    }
+    let jkr: Vec<JkrPair> = models
+        .iter()
+        .filter_map(|m| match m {
+            ContactModel::Jkr(p) => Some(JkrPair::new(p)),
+            _ => None,
+        })
+        .collect();
+    if !jkr.is_empty() {
+        // one dissipation code or 255; all Hertz 0 / all adhesive 1 / both 2
+        let dissipation = common_or(jkr.iter().map(|j| j.dissipation), 255);
+        let adhesion = common_or(jkr.iter().map(|j| u32::from(j.gamma > 0.0)), 2);
+        constants.push(("JKR_ONE_DISSIPATION", dissipation as f64));
+        constants.push(("JKR_ADHESION", adhesion as f64));
+    }
+    constants
 }
 
 /// The step a scene's pair models need and their pair table as bytes, or why the GPU
@@ -617,61 +696,17 @@ impl GpuEngine {
         if servo_walls {
             wanted.push("wall_servo");
         }
-        // what the scene does not use, folded out of its pipelines (the JKR branches: one
-        // dissipation code or 255, all Hertz 0 / all adhesive 1 / both 2)
-        let jkr_rows: Vec<JkrPair> = all_models
-            .iter()
-            .filter_map(|m| match m {
-                ContactModel::Jkr(p) => Some(JkrPair::new(p)),
-                _ => None,
-            })
-            .collect();
-        let same = |f: &dyn Fn(&JkrPair) -> u32, mixed: u32| match jkr_rows.first() {
-            Some(first) if jkr_rows.iter().all(|r| f(r) == f(first)) => f(first),
-            _ => mixed,
-        };
-        let jkr_dissipation = same(&|r| r.dissipation, 255);
-        let jkr_adhesion = same(&|r| u32::from(r.gamma > 0.0), 2);
-        let flag = |b: bool| f64::from(u8::from(b));
-        let pouring = scene.particles.iter().any(|p| p.insert_at > 0.0);
-        let mut constants = vec![
-            ("ONE_MATERIAL", flag(r.n_materials == 1)),
-            ("POURING", flag(pouring)),
-            ("PERIODIC", flag(periodic.iter().any(|&p| p))),
-        ];
-        // (declared only by the steps with the hysteretic / JKR model file)
-        let hyst_flags: Vec<u32> = all_models
-            .iter()
-            .filter_map(|m| match m {
-                ContactModel::Hysteretic(p) => Some(HystereticPair::hysteretic(p).flags),
-                ContactModel::Lsd(p) => Some(HystereticPair::lsd(p).flags),
-                _ => None,
-            })
-            .collect();
-        if let Some(&first) = hyst_flags.first() {
-            let same = hyst_flags.iter().all(|&f| f == first);
-            constants.push((
-                "HYST_ONE_FLAGS",
-                if same { first as f64 } else { u32::MAX as f64 },
-            ));
-        }
-        if !jkr_rows.is_empty() {
-            constants.push(("JKR_ONE_DISSIPATION", jkr_dissipation as f64));
-            constants.push(("JKR_ADHESION", jkr_adhesion as f64));
-        }
+        let constants = pipeline_constants(scene, &r, &all_models);
         let program = Program::specialized(&ctx, &kind.variant(ledger), Some(&wanted), &constants)?;
-        let kernels: Vec<Kernel> = wanted[..11]
-            .iter()
-            .map(|k| program.kernel(k).cloned())
-            .collect::<Result<_, _>>()?;
-        let kernels: [Kernel; 11] = kernels
-            .try_into()
-            .map_err(|_| PowderError::Run("kernel set".into()))?;
         let max_per_dim = ctx.limits().max_compute_workgroups_per_dimension;
         // the indirect arguments of a rebuild (the grid sort's, then one per-particle
         // pass's), and the ones decide writes each step (those, or zeros)
         let sort_args = grid.indirect_args();
-        let per_group = kernels[2].workgroup_size.iter().product::<u32>().max(1);
+        let per_group = program
+            .kernel("gather")?
+            .workgroup_size
+            .iter()
+            .product::<u32>();
         let particle_args = split_workgroups((n as u32).div_ceil(per_group), max_per_dim);
         let rebuild_args = 12 * sort_args.len() as u64;
         let full: Vec<u32> = sort_args
@@ -719,26 +754,26 @@ impl GpuEngine {
             }
             let refs: Vec<(&str, &wgpu::Buffer)> =
                 list.iter().map(|(n, b)| (n.as_str(), *b)).collect();
+            let pass = |name: &str| -> Result<Pass, PowderError> {
+                let kernel = program.kernel(name)?.clone();
+                let group = kernel.bind(device, &refs)?;
+                Ok(Pass { kernel, group })
+            };
+            let optional = |name: &str| program.kernels.contains_key(name).then(|| pass(name));
             Ok(Bound {
-                kick_drift: kernels[0].bind(device, &refs)?,
-                decide: kernels[1].bind(device, &refs)?,
-                gather: kernels[2].bind(device, &refs)?,
-                neighbours: kernels[3].bind(device, &refs)?,
-                remap: kernels[4].bind(device, &refs)?,
-                copy_back: kernels[5].bind(device, &refs)?,
-                copy_back_history: kernels[6].bind(device, &refs)?,
-                force: kernels[7].bind(device, &refs)?,
-                kick: kernels[8].bind(device, &refs)?,
-                collect_kick_drift: kernels[9].bind(device, &refs)?,
-                collect: kernels[10].bind(device, &refs)?,
-                wall_move: match program.kernels.get("wall_move") {
-                    Some(k) => Some((k.clone(), k.bind(device, &refs)?)),
-                    None => None,
-                },
-                wall_servo: match program.kernels.get("wall_servo") {
-                    Some(k) => Some((k.clone(), k.bind(device, &refs)?)),
-                    None => None,
-                },
+                kick_drift: pass("kick_drift")?,
+                decide: pass("decide")?,
+                gather: pass("gather")?,
+                neighbours: pass("neighbours")?,
+                remap: pass("remap")?,
+                copy_back: pass("copy_back")?,
+                copy_back_history: pass("copy_back_history")?,
+                force: pass("force")?,
+                kick: pass("kick")?,
+                collect_kick_drift: pass("collect_kick_drift")?,
+                collect: pass("collect")?,
+                wall_move: optional("wall_move").transpose()?,
+                wall_servo: optional("wall_servo").transpose()?,
             })
         };
         let bound = bind()?;
@@ -762,7 +797,6 @@ impl GpuEngine {
             skin: skin_buf,
             args,
             rebuild_args,
-            kernels,
             bound,
             max_per_dim,
             kind,
@@ -888,16 +922,16 @@ impl GpuEngine {
         {
             let mut pass = encoder.begin_compute_pass(&Default::default());
             if drift != Drift::None {
-                let (k, group) = match drift {
-                    Drift::AfterStep => (&self.kernels[9], &bound.collect_kick_drift),
-                    _ => (&self.kernels[0], &bound.kick_drift),
+                let first = match drift {
+                    Drift::AfterStep => &bound.collect_kick_drift,
+                    _ => &bound.kick_drift,
                 };
-                k.dispatch(&mut pass, group, n, max);
-                if let Some((k, b)) = &bound.wall_move {
-                    k.dispatch_workgroups(&mut pass, b, 1, max);
+                first.per_particle(&mut pass, n, max);
+                if let Some(p) = &bound.wall_move {
+                    p.once(&mut pass, max);
                 }
             }
-            self.kernels[1].dispatch_workgroups(&mut pass, &bound.decide, 1, max);
+            bound.decide.once(&mut pass, max);
         }
         self.grid
             .encode_indirect(encoder, &self.state.cell, &self.args, 0);
@@ -909,12 +943,12 @@ impl GpuEngine {
             &bound.copy_back,
             &bound.copy_back_history,
         ];
-        for (kernel, group) in self.kernels[2..7].iter().zip(rebuild) {
-            kernel.dispatch_indirect(&mut pass, group, &self.args, self.rebuild_args);
+        for p in rebuild {
+            p.indirect(&mut pass, &self.args, self.rebuild_args);
         }
-        self.kernels[7].dispatch(&mut pass, &bound.force, n, max);
-        if let Some((k, b)) = &bound.wall_servo {
-            k.dispatch_workgroups(&mut pass, b, 1, max);
+        bound.force.per_particle(&mut pass, n, max);
+        if let Some(p) = &bound.wall_servo {
+            p.once(&mut pass, max);
         }
     }
 
@@ -924,9 +958,9 @@ impl GpuEngine {
     fn record_finish(&self, encoder: &mut wgpu::CommandEncoder, kick: bool) {
         let (n, max) = (self.n, self.max_per_dim);
         let mut pass = encoder.begin_compute_pass(&Default::default());
-        self.kernels[10].dispatch(&mut pass, &self.bound.collect, n, max);
+        self.bound.collect.per_particle(&mut pass, n, max);
         if kick {
-            self.kernels[8].dispatch(&mut pass, &self.bound.kick, n, max);
+            self.bound.kick.per_particle(&mut pass, n, max);
         }
     }
 
@@ -973,22 +1007,23 @@ impl GpuEngine {
                 self.grid.encode(e, &self.state.cell);
                 return;
             }
-            let (kernel, group, workgroups) = match id {
-                0 => (0, &b.kick_drift, None),
-                1 => (1, &b.decide, Some(1)),
-                3 => (2, &b.gather, None),
-                4 => (3, &b.neighbours, None),
-                5 => (4, &b.remap, None),
-                6 => (5, &b.copy_back, None),
-                7 => (6, &b.copy_back_history, None),
-                8 => (7, &b.force, None),
-                9 => (10, &b.collect, None),
-                _ => (8, &b.kick, None),
+            let p = match id {
+                0 => &b.kick_drift,
+                1 => &b.decide,
+                3 => &b.gather,
+                4 => &b.neighbours,
+                5 => &b.remap,
+                6 => &b.copy_back,
+                7 => &b.copy_back_history,
+                8 => &b.force,
+                9 => &b.collect,
+                _ => &b.kick,
             };
             let mut pass = e.begin_compute_pass(&Default::default());
-            match workgroups {
-                Some(w) => self.kernels[kernel].dispatch_workgroups(&mut pass, group, w, max),
-                None => self.kernels[kernel].dispatch(&mut pass, group, n, max),
+            if id == 1 {
+                p.once(&mut pass, max);
+            } else {
+                p.per_particle(&mut pass, n, max);
             }
         };
         let mut out = Vec::new();
