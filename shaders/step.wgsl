@@ -255,6 +255,23 @@ fn load_pair_force(slot: u32) -> vec3<f32> {
 // written when some wall is servo-controlled; summed by wall_servo).
 @group(0) @binding(59) var<storage, read_write> wall_push: array<f32>;
 
+// Each wall's point at the last rebuild (`decide`): a moving wall that has since moved more
+// than skin/2 along its normal triggers the next one.
+struct WallRef {
+    cell: vec4<i32>,
+    offset: vec4<f32>,
+}
+
+@group(0) @binding(74) var<storage, read_write> wall_ref: array<WallRef>;
+
+// Per particle (state A), the walls among the first 32 it may touch before the next
+// rebuild, one bit each: those within reach + skin at the rebuild (or whose contact the
+// ledger holds engaged). Between rebuilds a particle moves less than skin/2 and a wall
+// less than skin/2 along its normal, so any other wall stays out of range: `force`
+// evaluates only these (and every wall from the 33rd on), and their history (zeroed at
+// the rebuild) is all a far wall needs.
+@group(0) @binding(75) var<storage, read_write> a_wall_near: array<u32>;
+
 // Monitor, zeroed per batch of steps and read back after it (no per-step read-back):
 // [0] = largest neighbour count seen (atomicMax), [1] = persistent id of a particle that
 // overflowed the capacity (+1; 0 = none), [2] = non-finite acceleration count, [3] = engaged
@@ -354,10 +371,26 @@ fn drift(i: u32, pending_kick: bool) {
 // every pair within r_i + r_j + reach is still in the lists built with
 // r_i + r_j + reach + skin). Writes the flag and the indirect arguments of the grid sort
 // and of the rebuild's per-particle passes (zero workgroups without a rebuild), and starts
-// the next maximum afresh.
+// the next maximum afresh. Moving walls count too (their move since the last rebuild).
 @compute @workgroup_size(1)
 fn decide() {
-    let rebuild = atomicLoad(&skin[0]) != 0u;
+    var rebuild = atomicLoad(&skin[0]) != 0u;
+    // A moving wall that has moved more than skin/2 along its normal since the last rebuild
+    // invalidates the particles' wall candidates as a particle's move does.
+    for (var w = 0u; w < step.n_walls; w++) {
+        let wall = walls[w];
+        if (wall.motion.x != 0.0) {
+            let moved = dot(separation(wall.cell, wall.offset, wall_ref[w].cell, wall_ref[w].offset), wall.normal.xyz);
+            if (!(abs(moved) <= 0.5 * skin_width())) {
+                rebuild = true;
+            }
+        }
+    }
+    if (rebuild) {
+        for (var w = 0u; w < step.n_walls; w++) {
+            wall_ref[w] = WallRef(walls[w].cell, walls[w].offset);
+        }
+    }
     atomicStore(&skin[0], 0u);
     atomicStore(&skin[1], select(0u, 1u, rebuild));
     if (rebuild) {
@@ -551,10 +584,32 @@ fn copy_back_history(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgro
         a_hist[slot_index(k, s)] = b_hist[slot_index(k, s)];
         a_hist_pid[slot_index(k, s)] = b_hist_pid[slot_index(k, s)];
     }
-    for (var w = 0u; w < step.n_walls; w++) {
-        a_wall_hist[wall_slot(k, w)] = b_wall_hist[wall_slot(k, w)];
-    }
     ledger_copy_back(k, n);
+    // the wall candidates from the new position (copy_back ran before); a wall out of
+    // reach + skin starts with the history of a contact out of range
+    let ck = a_cell[k];
+    let ok = a_off[k];
+    let margin = step.reach + skin_width();
+    var near = 0u;
+    for (var w = 0u; w < step.n_walls; w++) {
+        let wall = walls[w];
+        let slot = wall_slot(k, w);
+        let delta = ok.w - dot(separation(ck, ok, wall.cell, wall.offset), wall.normal.xyz);
+        let candidate = !(delta < -margin) || ledger_wall_engaged(slot);
+        if (candidate && w < 32u) {
+            near |= 1u << w;
+        }
+        var h = hist_zero();
+        if (candidate || w >= 32u) {
+            h = b_wall_hist[slot];
+        }
+        a_wall_hist[slot] = h;
+        if (step.servo_walls != 0u) {
+            // a far wall's push stays 0 until the next rebuild (force writes candidates')
+            wall_push[slot] = 0.0;
+        }
+    }
+    a_wall_near[k] = near;
 }
 
 // The relative motion of one contact, as the model sees it (`model::Kinematics` plus the
@@ -632,15 +687,11 @@ fn particle_forces(k: u32) -> f32 {
         let dist = length(d);
         let delta = rk + rj - dist;
         let slot = slot_index(k, s);
-        if (delta < -step.reach) {
-            // a list candidate (within the skin) out of every model's range: no force,
-            // and the history a pair out of range has (the models reset it there too)
-            a_hist[slot] = hist_zero();
-            store_pair_force(slot, vec3<f32>(0.0));
-            rot_pair_store(slot, vec3<f32>(0.0));
-            ledger_departed(&ledger_acc, slot, delta);
-            continue;
-        }
+        // A list candidate (within the skin) out of every model's range gets no force and
+        // the history a pair out of range has (the models reset it there too). One store
+        // site per buffer for both cases: on a SIMD adapter (lavapipe) every store in the
+        // code costs a loop over the lanes, whether any lane takes its branch or not.
+        let far = delta < -step.reach;
         var n = vec3<f32>(0.0, 0.0, 1.0);
         if (dist > 0.0) {
             n = d / dist;
@@ -664,43 +715,38 @@ fn particle_forces(k: u32) -> f32 {
         var h = a_hist[slot];
         let row = pairs[select(mat_k * step.n_materials + u32(cj.w), 0u, ONE_MATERIAL)];
         let c = pair_contact(row, kin, &h);
-        a_hist[slot] = h;
-        peak = max(peak, delta / (2.0 * r_eff));
-        ledger_pair(&ledger_acc, slot, row, kin, c, dot(c.tangential, v_t) + dot(c.rolling, wk - wj));
-        let fp = c.normal * n + c.tangential;
-        f += fp;
-        store_pair_force(slot, fp);
-        if (ROTATION) {
-            // the partner sees n and the tangential force negated (their cross product
-            // unchanged) and the rolling torque negated
-            let t = cross(n, c.tangential);
-            torque += -rk * t + c.rolling;
-            rot_pair_store(slot, -rj * t - c.rolling);
-        }
-    }
-    // a particle that has not appeared meets no wall
-    let n_walls = select(0u, step.n_walls, is_active(a_pid[k]));
-    // A cheap pass marks the walls within reach (or whose contact the ledger still holds
-    // engaged); only those are evaluated. On a SIMD adapter (lavapipe) a loop iteration
-    // costs as much for a lane that skips it as for one that works, so the loop below runs
-    // as often as the most walls a lane of the group is near, mostly 0 in a packing,
-    // rather than n_walls times. Far walls get the history (and servo push) of a contact
-    // out of range, as the models give. Walls from the 33rd on are always evaluated.
-    var near = 0u;
-    let masked = min(n_walls, 32u);
-    for (var w = 0u; w < masked; w++) {
-        let wall = walls[w];
-        let delta = rk - dot(separation(ck, ok, wall.cell, wall.offset), wall.normal.xyz);
-        let slot = wall_slot(k, w);
-        if (delta >= -step.reach || ledger_wall_engaged(slot)) {
-            near |= 1u << w;
+        var fp = c.normal * n + c.tangential;
+        var t_partner = vec3<f32>(0.0);
+        if (far) {
+            h = hist_zero();
+            fp = vec3<f32>(0.0);
+            ledger_departed(&ledger_acc, slot, delta);
         } else {
-            a_wall_hist[slot] = hist_zero();
-            if (step.servo_walls != 0u) {
-                wall_push[slot] = 0.0;
+            peak = max(peak, delta / (2.0 * r_eff));
+            ledger_pair(&ledger_acc, slot, row, kin, c, dot(c.tangential, v_t) + dot(c.rolling, wk - wj));
+            f += fp;
+            if (ROTATION) {
+                // the partner sees n and the tangential force negated (their cross product
+                // unchanged) and the rolling torque negated
+                let t = cross(n, c.tangential);
+                torque += -rk * t + c.rolling;
+                t_partner = -rj * t - c.rolling;
             }
         }
+        a_hist[slot] = h;
+        store_pair_force(slot, fp);
+        rot_pair_store(slot, t_partner);
     }
+    // a particle that has not appeared meets no wall
+    let present = is_active(a_pid[k]);
+    let n_walls = select(0u, step.n_walls, present);
+    // Only the wall candidates of the last rebuild are evaluated (`a_wall_near`), and every
+    // wall from the 33rd on. On a SIMD adapter (lavapipe) a loop iteration costs as much for
+    // a lane that skips it as for one that works, so the loop below runs as often as the
+    // most candidates a lane of the group has, mostly 0 in a packing, rather than n_walls
+    // times; the other walls' history stays as the rebuild left it, zero.
+    var near = select(0u, a_wall_near[k], present);
+    let masked = min(n_walls, 32u);
     var rest = masked;
     loop {
         var w = rest;

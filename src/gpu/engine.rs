@@ -97,6 +97,9 @@ struct StateSet {
     wall_hist: wgpu::Buffer,
     /// Displacement since the last neighbour-list rebuild (xyz); only in A.
     disp: Option<wgpu::Buffer>,
+    /// The wall candidates of each particle (a bit per wall of the first 32), written by a
+    /// rebuild; only in A.
+    wall_near: Option<wgpu::Buffer>,
     /// Predicted velocity (xyz) and mass (w), written by `kick_drift`.
     vpred: wgpu::Buffer,
     /// Kahan compensation of the velocity and the cell offset (2 × vec4 per particle).
@@ -137,6 +140,7 @@ impl StateSet {
             // without walls: one element, the smallest binding the kernels accept
             wall_hist: b("wall_hist", hb * (n * walls).max(1)),
             disp: state.then(|| b("disp", 16 * n)),
+            wall_near: state.then(|| b("wall_near", 4 * if walls > 0 { n } else { 1 })),
             vpred: b("vpred", 16 * n),
             kahan: b("kahan", 32 * n),
             omega: kind.rotation().then(|| b("omega", 16 * n)),
@@ -159,6 +163,7 @@ impl StateSet {
             ("hist_pid", Some(&self.hist_pid)),
             ("wall_hist", Some(&self.wall_hist)),
             ("disp", self.disp.as_ref()),
+            ("wall_near", self.wall_near.as_ref()),
             ("vpred", Some(&self.vpred)),
             ("kahan", Some(&self.kahan)),
             ("omega", self.omega.as_ref()),
@@ -312,6 +317,10 @@ pub struct GpuEngine {
     /// How each wall moves, and the walls on the device (they move: state).
     wall_motion: Vec<crate::scene::WallMotion>,
     walls: wgpu::Buffer,
+    /// Each wall's point at the last rebuild (the trigger for moving walls: state).
+    wall_ref: wgpu::Buffer,
+    /// The servo's per-contact normal forces (scratch, cleared on a restore).
+    wall_push: wgpu::Buffer,
     /// The prescribed walls' points in f64, integrated on the host (v·dt per step, as the
     /// CPU does) and written to the device at every batch, so f32 rounding of the device's
     /// per-step moves never accumulates.
@@ -651,6 +660,8 @@ impl GpuEngine {
         if !walls.is_empty() {
             q0.write_buffer(&walls_buf, 0, bytemuck::cast_slice(&walls));
         }
+        // each wall's point at the last rebuild (decide); 32 bytes a wall
+        let wall_ref = alloc.buffer("wall_ref", 32 * walls.len().max(1) as u64);
         // which particles have appeared (pouring), by persistent id
         let active: Vec<bool> = scene.particles.iter().map(|p| p.insert_at <= 0.0).collect();
         let active_buf = alloc.buffer("active", 4 * n as u64);
@@ -744,6 +755,7 @@ impl GpuEngine {
             list.push(("pairs".into(), &pairs_buf));
             list.push(("walls".into(), &walls_buf));
             list.push(("wall_push".into(), &wall_push));
+            list.push(("wall_ref".into(), &wall_ref));
             list.push(("appeared".into(), &active_buf));
             list.push(("monitor".into(), &monitor));
             list.push(("skin".into(), &skin_buf));
@@ -817,6 +829,8 @@ impl GpuEngine {
                 .collect(),
             wall_motion: scene.walls.iter().map(|w| w.motion.clone()).collect(),
             walls: walls_buf,
+            wall_ref,
+            wall_push,
             wall_points: scene
                 .walls
                 .iter()
@@ -1275,6 +1289,7 @@ impl GpuEngine {
         list.push(("lower_count".into(), &self.lower_count));
         list.push(("skin".into(), &self.skin));
         list.push(("walls".into(), &self.walls));
+        list.push(("wall_ref".into(), &self.wall_ref));
         if let Some(l) = &self.particle_ledger {
             list.push(("particle_ledger".into(), l));
         }
@@ -1321,7 +1336,11 @@ impl GpuEngine {
             }
             self.ctx.queue.write_buffer(buf, 0, bytes);
         }
-        self.ctx.queue.submit([]);
+        // the servo's pushes of walls that are no candidates must read 0 (a rebuild zeroes
+        // them; this state's candidates may differ from the ones last written)
+        let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+        encoder.clear_buffer(&self.wall_push, 0, None);
+        self.ctx.queue.submit([encoder.finish()]);
         if saved.wall_points.len() == self.wall_points.len() {
             self.wall_points = saved.wall_points;
         }
