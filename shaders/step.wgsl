@@ -303,7 +303,7 @@ fn separation(ci: vec4<i32>, oi: vec4<f32>, cj: vec4<i32>, oj: vec4<f32>) -> vec
 
 @compute @workgroup_size(WG_SIZE)
 fn kick_drift(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
-    drift(global_index(wid, nwg, lid), false);
+    drift(global_index(wid, nwg, lid));
 }
 
 // The previous step's collect and closing kick and this step's kick_drift in one pass
@@ -315,54 +315,66 @@ fn kick_drift(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nw
 fn collect_kick_drift(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let i = global_index(wid, nwg, lid);
     if (i < grid.n_particles) {
-        collect_particle(i);
+        let vel = a_vel[i];
+        let acc = collect_particle(i, vel.w);
+        if (is_active(a_pid[i])) {
+            drift_particle(i, vel, acc, true);
+        }
     }
-    drift(i, true);
 }
 
-fn drift(i: u32, pending_kick: bool) {
+fn drift(i: u32) {
     if (i < grid.n_particles && is_active(a_pid[i])) {
-        let h = grid.cell_width;
-        var v0 = a_vel[i].xyz;
-        var c0 = a_kahan[2u * i].xyz;
-        if (pending_kick) {
-            let kk = kahan_add(v0, c0, 0.5 * step.dt * a_acc[i].xyz);
-            v0 = kk.x;
-            c0 = kk.c;
-            rot_kick(i);
-        }
-        let kv = kahan_add(v0, c0, 0.5 * step.dt * a_acc[i].xyz);
-        let v = kv.x;
-        a_vel[i] = vec4<f32>(v, a_vel[i].w);
-        a_kahan[2u * i] = vec4<f32>(kv.c, 0.0);
-        // vel.w holds the mass
-        a_vpred[i] = vec4<f32>(v + 0.5 * step.dt * a_acc[i].xyz, a_vel[i].w);
-        rot_kick_drift(i);
-        let disp = a_disp[i].xyz + step.dt * v;
-        a_disp[i] = vec4<f32>(disp, 0.0);
-        // (NaN forces a rebuild too)
-        if (!(length(disp) <= 0.5 * skin_width())) {
-            atomicStore(&skin[0], 1u);
-        }
-        // the move with the compensated velocity; the cell carry below subtracts whole
-        // cells (exact for an offset within a factor 2 of h), so the compensation stays
-        let ko = kahan_add(a_off[i].xyz, a_kahan[2u * i + 1u].xyz, step.dt * (v - kv.c));
-        a_kahan[2u * i + 1u] = vec4<f32>(ko.c, 0.0);
-        var o = ko.x;
-        let shift = floor(o / h);
-        o = o - shift * h;
-        // rounding can leave o == h: move it into the next cell
-        let over = o >= vec3<f32>(h);
-        o = select(o, vec3<f32>(0.0), over);
-        let carry = vec3<i32>(shift) + select(vec3<i32>(0), vec3<i32>(1), over);
-        let cell = wrap_cell(a_cell[i].xyz + carry);
-        a_cell[i] = vec4<i32>(cell, a_cell[i].w);
-        a_off[i] = vec4<f32>(o, a_off[i].w);
-        let at = vec3<f32>(cell) + o / h;
-        let outside = (at < vec3<f32>(0.0)) | (at > step.extent_cells);
-        if (any(outside & !periodic_axes())) {
-            atomicMax(&monitor[6], a_pid[i] + 1u);
-        }
+        drift_particle(i, a_vel[i], a_acc[i].xyz, false);
+    }
+}
+
+// Each buffer is read once and written once (the caller passes what it read already): on
+// lavapipe every access in the code is a loop over the SIMD lanes.
+fn drift_particle(i: u32, vel: vec4<f32>, acc: vec3<f32>, pending_kick: bool) {
+    let h = grid.cell_width;
+    let half_dv = 0.5 * step.dt * acc;
+    var v0 = vel.xyz;
+    var c0 = a_kahan[2u * i].xyz;
+    if (pending_kick) {
+        let kk = kahan_add(v0, c0, half_dv);
+        v0 = kk.x;
+        c0 = kk.c;
+        rot_kick(i);
+    }
+    let kv = kahan_add(v0, c0, half_dv);
+    let v = kv.x;
+    a_vel[i] = vec4<f32>(v, vel.w);
+    a_kahan[2u * i] = vec4<f32>(kv.c, 0.0);
+    // vel.w holds the mass
+    a_vpred[i] = vec4<f32>(v + half_dv, vel.w);
+    rot_kick_drift(i);
+    let disp = a_disp[i].xyz + step.dt * v;
+    a_disp[i] = vec4<f32>(disp, 0.0);
+    // (NaN forces a rebuild too)
+    if (!(length(disp) <= 0.5 * skin_width())) {
+        atomicStore(&skin[0], 1u);
+    }
+    // the move with the compensated velocity; the cell carry below subtracts whole
+    // cells (exact for an offset within a factor 2 of h), so the compensation stays
+    let off = a_off[i];
+    let ko = kahan_add(off.xyz, a_kahan[2u * i + 1u].xyz, step.dt * (v - kv.c));
+    a_kahan[2u * i + 1u] = vec4<f32>(ko.c, 0.0);
+    var o = ko.x;
+    let shift = floor(o / h);
+    o = o - shift * h;
+    // rounding can leave o == h: move it into the next cell
+    let over = o >= vec3<f32>(h);
+    o = select(o, vec3<f32>(0.0), over);
+    let carry = vec3<i32>(shift) + select(vec3<i32>(0), vec3<i32>(1), over);
+    let cell0 = a_cell[i];
+    let cell = wrap_cell(cell0.xyz + carry);
+    a_cell[i] = vec4<i32>(cell, cell0.w);
+    a_off[i] = vec4<f32>(o, off.w);
+    let at = vec3<f32>(cell) + o / h;
+    let outside = (at < vec3<f32>(0.0)) | (at > step.extent_cells);
+    if (any(outside & !periodic_axes())) {
+        atomicMax(&monitor[6], a_pid[i] + 1u);
     }
 }
 
@@ -668,9 +680,10 @@ fn particle_forces(k: u32) -> f32 {
     let ck = a_cell[k];
     let ok = a_off[k];
     let rk = ok.w;
-    // vel.w holds the mass
-    let mk = a_vel[k].w;
-    let vk = a_vpred[k].xyz;
+    // vpred.w holds the mass
+    let pk = a_vpred[k];
+    let mk = pk.w;
+    let vk = pk.xyz;
     let wk = rot_wpred(k);
     let mat_k = u32(ck.w);
     var f = vec3<f32>(0.0);
@@ -682,7 +695,9 @@ fn particle_forces(k: u32) -> f32 {
         let cj = a_cell[j];
         let oj = a_off[j];
         let rj = oj.w;
-        let mj = a_vpred[j].w;
+        // predicted velocity (xyz) and mass (w): one load
+        let pj = a_vpred[j];
+        let mj = pj.w;
         let d = separation(ck, ok, cj, oj);
         let dist = length(d);
         let delta = rk + rj - dist;
@@ -696,7 +711,7 @@ fn particle_forces(k: u32) -> f32 {
         if (dist > 0.0) {
             n = d / dist;
         }
-        let v_rel = vk - a_vpred[j].xyz;
+        let v_rel = vk - pj.xyz;
         let wj = rot_wpred(j);
         // Mirror-symmetric forms (see the header): (r_i w_i + r_j w_j) is commutative.
         let v_c = v_rel - cross(rk * wk + rj * wj, n);
@@ -796,11 +811,12 @@ fn particle_forces(k: u32) -> f32 {
 fn collect(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let k = global_index(wid, nwg, lid);
     if (k < grid.n_particles) {
-        collect_particle(k);
+        collect_particle(k, a_vel[k].w);
     }
 }
 
-fn collect_particle(k: u32) {
+// Returns (and stores) the acceleration.
+fn collect_particle(k: u32, mass: f32) -> vec3<f32> {
     var f = a_acc[k].xyz;
     var torque = vec3<f32>(0.0);
     for (var s = 0u; s < lower_count[k]; s++) {
@@ -808,13 +824,13 @@ fn collect_particle(k: u32) {
         f -= load_pair_force(slot);
         torque += rot_pair_load(slot);
     }
-    // vel.w holds the mass
-    let acc = f / a_vel[k].w + step.gravity;
+    let acc = f / mass + step.gravity;
     let finite_rot = rot_store(k, torque);
     if (any(acc != acc) || any(abs(acc) > vec3<f32>(3.0e38)) || !finite_rot) {
         atomicAdd(&monitor[2], 1u);
     }
     a_acc[k] = vec4<f32>(acc, 0.0);
+    return acc;
 }
 
 @compute @workgroup_size(WG_SIZE)
