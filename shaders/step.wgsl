@@ -226,19 +226,31 @@ fn slot_particle(slot: u32) -> u32 {
 // slot of the pair in j's list, where `force` leaves the pair's force for `collect`.
 @group(0) @binding(69) var<storage, read_write> lower: array<u32>;
 @group(0) @binding(70) var<storage, read_write> lower_count: array<u32>;
-// Per slot, this step: the force the evaluated pair exerts on the evaluator, xy and z in
-// two bindings (8 and 4 bytes a slot: no more per binding than the smallest history, so
-// the adapter's binding size limit does not bind sooner).
+// Per slot, this step: the force the evaluated pair exerts on the evaluator: one vec4 a
+// slot (`pair_force`, one access to store and one to load: on lavapipe each access in the
+// code is a loop over the SIMD lanes), or, when SPLIT_PAIR_FORCE is set because n·cap·16
+// bytes exceed the adapter's storage binding limit, xy and z in two bindings (8 and 4
+// bytes a slot: no more per binding than the smallest history, so the limit does not bind
+// sooner). The other form's bindings hold one element.
+override SPLIT_PAIR_FORCE: bool = false;
+@group(0) @binding(76) var<storage, read_write> pair_force: array<vec4<f32>>;
 @group(0) @binding(71) var<storage, read_write> pair_force_xy: array<vec2<f32>>;
 @group(0) @binding(73) var<storage, read_write> pair_force_z: array<f32>;
 
 fn store_pair_force(slot: u32, f: vec3<f32>) {
-    pair_force_xy[slot] = f.xy;
-    pair_force_z[slot] = f.z;
+    if (SPLIT_PAIR_FORCE) {
+        pair_force_xy[slot] = f.xy;
+        pair_force_z[slot] = f.z;
+    } else {
+        pair_force[slot] = vec4<f32>(f, 0.0);
+    }
 }
 
 fn load_pair_force(slot: u32) -> vec3<f32> {
-    return vec3<f32>(pair_force_xy[slot], pair_force_z[slot]);
+    if (SPLIT_PAIR_FORCE) {
+        return vec3<f32>(pair_force_xy[slot], pair_force_z[slot]);
+    }
+    return pair_force[slot].xyz;
 }
 @group(0) @binding(41) var<storage, read_write> old_index: array<u32>;
 @group(0) @binding(42) var<storage, read_write> nbr: array<u32>;

@@ -414,6 +414,13 @@ fn pipeline_constants(
     constants
 }
 
+/// Whether the pair forces of `slots` neighbour slots go into two bindings (xy, z) rather
+/// than one vec4 a slot: only where one would exceed the adapter's storage binding limit
+/// (the split form costs an extra access per slot in `force` and `collect`).
+fn split_pair_force(slots: u64, max_binding: u64) -> bool {
+    16 * slots > max_binding
+}
+
 /// The step a scene's pair models need and their pair table as bytes, or why the GPU
 /// cannot run them together.
 fn pair_table(models: &[ContactModel]) -> Result<(StepKind, Vec<u8>), PowderError> {
@@ -677,8 +684,13 @@ impl GpuEngine {
         // the half lists' other side, and what each evaluated pair leaves for collect
         let lower = alloc.buffer("lower", 4 * n as u64 * cap as u64);
         let lower_count = alloc.buffer("lower_count", 4 * n as u64);
-        let pair_force_xy = alloc.buffer("pair_force_xy", 8 * n as u64 * cap as u64);
-        let pair_force_z = alloc.buffer("pair_force_z", 4 * n as u64 * cap as u64);
+        // the pair forces in one vec4 a slot, or split (xy, z) where that exceeds the
+        // binding limit; the other form's buffers hold one element
+        let slots = n as u64 * cap as u64;
+        let split = split_pair_force(slots, ctx.max_storage_binding());
+        let pair_force = alloc.buffer("pair_force", 16 * if split { 1 } else { slots });
+        let pair_force_xy = alloc.buffer("pair_force_xy", 8 * if split { slots } else { 1 });
+        let pair_force_z = alloc.buffer("pair_force_z", 4 * if split { slots } else { 1 });
         let pair_torque = kind
             .rotation()
             .then(|| alloc.buffer("pair_torque", 16 * n as u64 * cap as u64));
@@ -707,7 +719,8 @@ impl GpuEngine {
         if servo_walls {
             wanted.push("wall_servo");
         }
-        let constants = pipeline_constants(scene, &r, &all_models);
+        let mut constants = pipeline_constants(scene, &r, &all_models);
+        constants.push(("SPLIT_PAIR_FORCE", f64::from(u8::from(split))));
         let program = Program::specialized(&ctx, &kind.variant(ledger), Some(&wanted), &constants)?;
         let max_per_dim = ctx.limits().max_compute_workgroups_per_dimension;
         // the indirect arguments of a rebuild (the grid sort's, then one per-particle
@@ -744,6 +757,7 @@ impl GpuEngine {
             list.push(("nbr".into(), &nbr));
             list.push(("lower".into(), &lower));
             list.push(("lower_count".into(), &lower_count));
+            list.push(("pair_force".into(), &pair_force));
             list.push(("pair_force_xy".into(), &pair_force_xy));
             list.push(("pair_force_z".into(), &pair_force_z));
             if let Some(t) = &pair_torque {
