@@ -80,6 +80,9 @@ struct StepParams {
     // shader compiler cannot fold Kahan compensations ((x + y) − x) − y to 0 (Mesa's NIR
     // does, for floating-point operations not marked exact: measured on lavapipe).
     zero: u32,
+    // The Verlet skin (m). A uniform rather than a storage value: on lavapipe each storage
+    // access is a loop over the SIMD lanes.
+    skin: f32,
 }
 
 fn opaque(x: vec3<f32>) -> vec3<f32> {
@@ -297,7 +300,7 @@ struct WallRef {
 // than skin/2 since the last rebuild (set by kick_drift, only there: a store where it
 // happens rather than a maximum over all particles, which cost workgroup atomics and
 // barriers every step), [1] = 1 when this step rebuilds (written by decide), [2] =
-// rebuilds so far, [3] = the skin as f32 bits.
+// rebuilds so far, [3] unused.
 @group(0) @binding(56) var<storage, read_write> skin: array<atomic<u32>, 4>;
 // Indirect dispatch arguments of the grid sort (`GridSort::encode_indirect`): decide
 // copies full_args (a full sort) or writes zeros (no sort this step).
@@ -305,7 +308,7 @@ struct WallRef {
 @group(0) @binding(58) var<storage, read> full_args: array<u32>;
 
 fn skin_width() -> f32 {
-    return bitcast<f32>(atomicLoad(&skin[3]));
+    return step.skin;
 }
 
 // Separation x_i - x_j from cell + offset positions.
@@ -381,7 +384,10 @@ fn drift_particle(i: u32, vel: vec4<f32>, acc: vec3<f32>, pending_kick: bool) {
     let carry = vec3<i32>(shift) + select(vec3<i32>(0), vec3<i32>(1), over);
     let cell0 = a_cell[i];
     let cell = wrap_cell(cell0.xyz + carry);
-    a_cell[i] = vec4<i32>(cell, cell0.w);
+    // stored only where it changes (rarely): a masked store skips the work of idle lanes
+    if (any(carry != vec3<i32>(0))) {
+        a_cell[i] = vec4<i32>(cell, cell0.w);
+    }
     a_off[i] = vec4<f32>(o, off.w);
     let at = vec3<f32>(cell) + o / h;
     let outside = (at < vec3<f32>(0.0)) | (at > step.extent_cells);

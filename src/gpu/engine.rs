@@ -655,6 +655,8 @@ impl GpuEngine {
             servo_walls: servo_walls as u32,
             periodic: periodic.map(u32::from),
             zero: 0,
+            skin: skin as f32,
+            _pad: [0; 3],
         };
         let step_buf = uniform_buffer(device, "step", bytemuck::bytes_of(&step));
         alloc.list.push(("step".into(), step_buf.size()));
@@ -697,7 +699,7 @@ impl GpuEngine {
         let monitor = alloc.buffer("monitor", MONITOR_BYTES);
         let skin_buf = alloc.buffer("skin", 16);
         // moved beyond skin/2 (flag set): the first step builds the lists
-        let skin_init = [1, 0, 0, (skin as f32).to_bits()];
+        let skin_init = [1u32, 0, 0, 0];
         q0.write_buffer(&skin_buf, 0, bytemuck::cast_slice(&skin_init));
         let mut wanted = vec![
             "kick_drift",

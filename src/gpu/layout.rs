@@ -446,6 +446,11 @@ pub struct StepParams {
     /// Always 0: the kernels read it to hide values from the shader compiler, so Kahan
     /// compensations are not folded away (see `opaque` in `shaders/step.wgsl`).
     pub zero: u32,
+    /// The Verlet skin, m: a rebuild comes once a particle (or a moving wall, along its
+    /// normal) has moved more than half of it.
+    pub skin: f32,
+    /// Pads the struct to WGSL's 16-byte size multiple.
+    pub _pad: [u32; 3],
 }
 
 /// A planar wall: a point as cell + offset and the unit normal. Twin of `Wall` in
@@ -772,6 +777,8 @@ mod tests {
                 ("extent_cells", offset_of!(StepParams, extent_cells)),
                 ("servo_walls", offset_of!(StepParams, servo_walls)),
                 ("periodic", offset_of!(StepParams, periodic)),
+                ("zero", offset_of!(StepParams, zero)),
+                ("skin", offset_of!(StepParams, skin)),
             ],
         );
         check(
