@@ -17,9 +17,10 @@
 //   (collect_kick_drift after a step of the same batch: its collect and kick first, in
 //   the same pass)
 //                                        dt·v, carried into the cell; disp += dt·v and
-//                                        atomicMax of |disp| (Verlet skin); the predicted
+//                                        a flag past skin/2 (Verlet skin); the predicted
 //                                        velocity vpred = v + dt/2·a (wpred likewise)
-//   decide       one invocation          rebuild this step when max |disp| > skin/2
+//   decide       one invocation          rebuild this step when max |disp| > skin/2 (or a
+//                                        moving wall moved > skin/2 along its normal)
 // only on a rebuild (indirect dispatches: zero workgroups on the other steps):
 //   <grid sort of A's cells>             sorted_index, cell_start, cell_count
 //   gather       per particle            B[k] = A[sorted_index[k]]
@@ -28,10 +29,11 @@
 //   remap        per particle (B)        resolves `lower`; each new slot finds its history
 //                                        in A by the persistent ids
 //   copy_back,   per particle            A[k] = B[k] (state, then the lists' history),
-//   copy_back_history                    disp = 0
+//   copy_back_history                    disp = 0; the wall candidates (a_wall_near)
 // every step:
 //   force        per particle (A)        evaluates the pairs of its list in slot order
-//                                        (candidates beyond reach skipped) and its walls;
+//                                        (candidates beyond reach skipped) and its wall
+//                                        candidates;
 //                                        leaves each pair's force in its slot
 //   collect      per particle (A)        adds the pairs its partners evaluated (no atomics:
 //                                        deterministic), gravity -> acc (alpha)

@@ -806,3 +806,41 @@ material = "b"
         );
     }
 }
+
+/// Pair forces are kept in one vec4 a neighbour slot, or split over two bindings (xy, z)
+/// where one vec4 a slot would exceed the adapter's storage binding limit: the same
+/// arithmetic either way, so the same bits. A device with a lowered limit forces the split
+/// form on a small packing.
+#[test]
+fn split_pair_forces_give_the_same_bits() {
+    use powder::bench::{packing, Case};
+    use powder::gpu::{GpuContext, GpuOptions};
+    let Some(ctx) = context() else { return };
+    let scene = packing(Case::Hysteretic, 1000, 1.0, 7).unwrap();
+    let options = GpuOptions { ledger: false };
+    let mut one = GpuEngine::with_options(&scene, ctx, options).unwrap();
+    let slots = 1000 * u64::from(one.capacity());
+    // 16 bytes a slot exceed the limit, 8 (the history's, and the split halves') do not
+    let small = GpuContext::with_storage_binding_limit(12 * slots).unwrap();
+    let mut split = GpuEngine::with_options(&scene, small, options).unwrap();
+    let size = |e: &GpuEngine, name: &str| {
+        e.buffers()
+            .into_iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, b)| b)
+            .unwrap()
+    };
+    assert_eq!(size(&one, "pair_force"), 16 * slots);
+    assert_eq!(size(&split, "pair_force"), 16, "the lowered limit did not split");
+    assert_eq!(size(&split, "pair_force_xy"), 8 * slots);
+    one.run_steps(400).unwrap();
+    split.run_steps(400).unwrap();
+    let (sa, sb) = (one.state().unwrap(), split.state().unwrap());
+    let bits = |v: &[glam::DVec3]| {
+        v.iter()
+            .flat_map(|p| p.to_array().map(f64::to_bits))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(bits(&sa.positions), bits(&sb.positions));
+    assert_eq!(bits(&sa.velocities), bits(&sb.velocities));
+}

@@ -319,12 +319,27 @@ impl GpuContext {
 
     /// Opens the best adapter allowed by `pref`.
     pub fn with_preference(pref: &AdapterPreference) -> Result<Self, PowderError> {
+        Self::open(pref, None)
+    }
+
+    /// Opens the adapter chosen by `POWDER_ADAPTER` with its storage binding limit lowered
+    /// to at most `bytes`: what a scene needs and does on a smaller GPU, tried on this one
+    /// (the engine splits or refuses per-slot buffers against this limit).
+    pub fn with_storage_binding_limit(bytes: u64) -> Result<Self, PowderError> {
+        Self::open(&AdapterPreference::from_env(), Some(bytes))
+    }
+
+    fn open(pref: &AdapterPreference, max_binding: Option<u64>) -> Result<Self, PowderError> {
         let adapter = choose_adapter(enumerate_adapters(), pref)?;
         let summary = AdapterSummary::of(&adapter);
+        let mut limits = adapter.limits();
+        if let Some(b) = max_binding {
+            limits.max_storage_buffer_binding_size = limits.max_storage_buffer_binding_size.min(b);
+        }
         let desc = wgpu::DeviceDescriptor {
             label: Some("powder"),
             required_features: wgpu::Features::empty(),
-            required_limits: adapter.limits(),
+            required_limits: limits,
             ..Default::default()
         };
         let (device, queue) = pollster::block_on(adapter.request_device(&desc)).map_err(|e| {
