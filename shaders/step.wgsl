@@ -477,7 +477,7 @@ fn neighbours(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nw
     // Without wrapping along x, the three cells x−1, x, x+1 of a row are consecutive keys
     // and their particles one range of the sorted order: 9 ranges instead of 27 cells.
     let rows = !periodic_axes().x;
-    // (an atomic load: read once, not per candidate)
+    // (read once, not per candidate)
     let cutoff = ok.w + step.reach + skin_width();
     for (var dz = -1; dz <= 1; dz++) {
         for (var dy = -1; dy <= 1; dy++) {
@@ -489,14 +489,21 @@ fn neighbours(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nw
                 if (any(c < vec3<i32>(0)) || any(c > hi)) {
                     continue;
                 }
-                var start = cell_start[cell_key(c, grid.dims)];
-                var end = start + cell_count[cell_key(c, grid.dims)];
+                // (each form's loads only under its branch: without periodic axes `rows`
+                // is a constant and the other form is compiled out; on lavapipe every
+                // load in the code costs, taken or not)
+                var start = 0u;
+                var end = 0u;
                 if (rows) {
                     let first = vec3<i32>(max(c.x - 1, 0), c.y, c.z);
                     let last = vec3<i32>(min(c.x + 1, hi.x), c.y, c.z);
                     start = cell_start[cell_key(first, grid.dims)];
                     let key = cell_key(last, grid.dims);
                     end = cell_start[key] + cell_count[key];
+                } else {
+                    let key = cell_key(c, grid.dims);
+                    start = cell_start[key];
+                    end = start + cell_count[key];
                 }
                 for (var j = start; j < end; j++) {
                     if (j == k || !here || !is_active(b_pid[j])) {
