@@ -5,6 +5,8 @@
 //! * [`scene`] — the TOML scene description and its validation;
 //! * [`collide`] — the head-on two-sphere collision used to check models against theory;
 //! * [`output`] — plots and atomically written files;
+//! * [`run`] over [`simulation`] — `powder run` on either backend, with [`observed`]
+//!   energies (the parts a GPU run without the energy ledger cannot know left out);
 //! * [`mod@bench`] and [`accuracy`] — throughput against N, and error against run time.
 
 #![warn(missing_docs)]
@@ -19,6 +21,7 @@ pub mod error;
 pub mod gpu;
 pub mod memory;
 pub mod model;
+pub mod observed;
 pub mod output;
 pub mod overrides;
 pub mod run;

@@ -1,11 +1,14 @@
 //! Running a scene headless on either backend: step to the end, report progress at the
 //! scene's cadence, write outputs and checkpoints, watch the run (the monitor), and
 //! summarise (energies, coordination, overlaps). One loop drives both backends through
-//! [`Simulation`].
+//! [`Simulation`]. A GPU run without the energy ledger ([`RunOptions::gpu`], `powder run
+//! --no-ledger`) leaves what only the ledger knows absent: empty CSV cells, keys left out
+//! of the JSON, "n/a" in the progress line.
 
-use crate::cpu::{ContactStats, CpuEngine, Energies};
+use crate::cpu::{ContactStats, CpuEngine};
 use crate::error::PowderError;
-use crate::gpu::{GpuContext, GpuEngine};
+use crate::gpu::{GpuContext, GpuEngine, GpuOptions};
+use crate::observed::ObservedEnergies;
 use crate::output::atomic::write_atomic;
 use crate::output::vtk;
 use crate::scene::Scene;
@@ -22,10 +25,11 @@ pub struct Snapshot {
     pub step: u64,
     /// Simulated time, s.
     pub time: f64,
-    /// Energy ledger, J.
-    pub energies: Energies,
-    /// Contact statistics.
-    pub contacts: ContactStats,
+    /// Energies, J (without the ledger: kinetic, gravitational and inserted only).
+    pub energies: ObservedEnergies,
+    /// Contact statistics; absent without the ledger.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub contacts: Option<ContactStats>,
 }
 
 /// What `powder run` reports at the end.
@@ -39,6 +43,9 @@ pub struct RunSummary {
     pub adapter: Option<String>,
     /// Number of particles.
     pub particles: usize,
+    /// Whether the run kept the energy ledger (off: `powder run --no-ledger` on the GPU;
+    /// the ledger's quantities are then left out).
+    pub ledger: bool,
     /// Time step, s.
     pub dt: f64,
     /// The rule dt was checked against (the binding limit, in words).
@@ -56,16 +63,18 @@ pub struct RunSummary {
     /// State at the end.
     pub last: Snapshot,
     /// |E_total(end) − E_total(start)| relative to the largest of the kinetic, stored and
-    /// gravitational energy changes seen (0 when nothing moved).
-    pub energy_balance_error: f64,
+    /// gravitational energy changes seen (0 when nothing moved); absent without the ledger.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub energy_balance_error: Option<f64>,
     /// Particles whose centre is outside the domain box at the end.
     pub outside_domain: usize,
     /// Particle volume over the domain box, and over the box enclosing the particles.
     pub solid_fraction_domain: f64,
     /// Particle volume over the box enclosing the particles (centres ± radii).
     pub solid_fraction_bounding_box: f64,
-    /// Force on each wall at the end, N.
-    pub wall_forces: Vec<[f64; 3]>,
+    /// Force on each wall at the end, N; absent without the ledger.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub wall_forces: Option<Vec<[f64; 3]>>,
     /// The step the run resumed from, if it did.
     pub resumed_from: Option<u64>,
     /// Stopped early by an interrupt (Ctrl-C) after writing a last checkpoint.
@@ -101,6 +110,9 @@ pub struct RunOptions {
     pub verbose: bool,
     /// Set (e.g. by Ctrl-C) to stop after the current chunk with a last checkpoint.
     pub interrupt: Option<Arc<AtomicBool>>,
+    /// The GPU engine's options (the energy ledger, on by default); the CPU backend keeps
+    /// its ledger always (it is cheap there) and ignores them.
+    pub gpu: GpuOptions,
 }
 
 /// Header of `series.csv`: per wall the force of the particles on it and, for a moving
@@ -118,31 +130,44 @@ pub fn csv_header(walls: &[crate::scene::Wall]) -> String {
     h
 }
 
+/// A CSV cell: empty when the value is unknown (no ledger), so the header stays the same
+/// and readers see a missing value, not a zero.
+fn cell<T: std::fmt::LowerExp>(v: Option<T>) -> String {
+    v.map(|v| format!("{v:e}")).unwrap_or_default()
+}
+
+/// A CSV cell of a count: empty when unknown.
+fn count_cell(v: Option<usize>) -> String {
+    v.map(|v| v.to_string()).unwrap_or_default()
+}
+
 fn csv_row(s: &Snapshot, obs: &Observation, walls: &[crate::scene::Wall]) -> String {
     let e = &s.energies;
-    let c = &s.contacts;
+    let c = s.contacts.as_ref();
     let mut row = format!(
-        "{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{},{:e},{:e},{:e},{:e}",
+        "{},{:e},{:e},{},{:e},{},{},{:e},{},{},{},{},{},{},{},{}",
         s.step,
         s.time,
         e.kinetic,
-        e.elastic,
+        cell(e.elastic),
         e.gravitational,
-        e.dissipated,
-        e.wall_work,
+        cell(e.dissipated),
+        cell(e.wall_work),
         e.inserted,
-        e.total(),
-        c.contacts,
-        c.wall_contacts,
-        c.non_contact,
-        c.coordination,
-        c.max_overlap,
-        c.max_overlap_ratio,
-        c.mean_overlap_ratio
+        cell(e.total()),
+        count_cell(c.map(|c| c.contacts)),
+        count_cell(c.map(|c| c.wall_contacts)),
+        count_cell(c.map(|c| c.non_contact)),
+        cell(c.map(|c| c.coordination)),
+        cell(c.map(|c| c.max_overlap)),
+        cell(c.map(|c| c.max_overlap_ratio)),
+        cell(c.map(|c| c.mean_overlap_ratio))
     );
     for (w, wall) in walls.iter().enumerate() {
-        let f = obs.wall_forces[w];
-        row.push_str(&format!(",{:e},{:e},{:e}", f.x, f.y, f.z));
+        match obs.wall_forces.as_ref().map(|f| f[w]) {
+            Some(f) => row.push_str(&format!(",{:e},{:e},{:e}", f.x, f.y, f.z)),
+            None => row.push_str(",,,"),
+        }
         if wall.motion.moves() {
             let p = obs.wall_points[w];
             row.push_str(&format!(",{:e},{:e},{:e}", p.x, p.y, p.z));
@@ -151,19 +176,27 @@ fn csv_row(s: &Snapshot, obs: &Observation, walls: &[crate::scene::Wall]) -> Str
     row
 }
 
+/// A value for people: "n/a" when unknown (no ledger).
+fn shown(v: Option<f64>, format: impl Fn(f64) -> String) -> String {
+    v.map(format).unwrap_or_else(|| "n/a".into())
+}
+
 impl Snapshot {
-    /// One human-readable progress line.
+    /// One human-readable progress line ("n/a" for what a run without the ledger does not
+    /// know).
     pub fn line(&self) -> String {
+        let e = &self.energies;
+        let c = self.contacts.as_ref();
         format!(
-            "step {:>9}  t = {:.4e} s  E_kin {:.4e}  E_el {:.4e}  E_diss {:.4e}  E_tot {:.6e} J  Z = {:.3}  max δ/a12 = {:.3e}",
+            "step {:>9}  t = {:.4e} s  E_kin {:.4e}  E_el {}  E_diss {}  E_tot {} J  Z = {}  max δ/a12 = {}",
             self.step,
             self.time,
-            self.energies.kinetic,
-            self.energies.elastic,
-            self.energies.dissipated,
-            self.energies.total(),
-            self.contacts.coordination,
-            self.contacts.max_overlap_ratio
+            e.kinetic,
+            shown(e.elastic, |v| format!("{v:.4e}")),
+            shown(e.dissipated, |v| format!("{v:.4e}")),
+            shown(e.total(), |v| format!("{v:.6e}")),
+            shown(c.map(|c| c.coordination), |v| format!("{v:.3}")),
+            shown(c.map(|c| c.max_overlap_ratio), |v| format!("{v:.3e}"))
         )
     }
 }
@@ -177,11 +210,17 @@ pub const MAX_OVERLAP_RATIO: f64 = 0.5;
 pub const MAX_ENERGY_GROWTH: f64 = 0.05;
 
 /// The run monitor: what must stop a run, with the step, the particles and a hint.
+/// `totals` is the total energy now and at the start, `None` without the ledger: the
+/// energy-growth check is then skipped. What that loses: a slow blow-up (a time step a
+/// little too large for the stiffest contact, pumping energy in a few per cent per
+/// chunk) is caught only once it shows as a non-finite value, an overlap beyond
+/// [`MAX_OVERLAP_RATIO`] or a particle leaving the domain, which the other checks watch
+/// every step, with or without the ledger. Kinetic energy alone is no substitute: stored
+/// adhesion and moving walls legitimately feed it.
 fn monitor(
     engine: &mut impl Simulation,
     dt_rule: &str,
-    energies: &Energies,
-    initial_total: f64,
+    totals: Option<(f64, f64)>,
     scale: f64,
 ) -> Result<(), PowderError> {
     let steps = engine.steps();
@@ -208,7 +247,9 @@ fn monitor(
             "step {steps}: particles {escaped:?} left the domain box; enlarge [domain] or add walls (or {hint})"
         )));
     }
-    let total = energies.total();
+    let Some((total, initial_total)) = totals else {
+        return Ok(());
+    };
     if scale > 0.0 && total - initial_total > MAX_ENERGY_GROWTH * scale {
         return Err(PowderError::Run(format!(
             "step {steps}: the total energy grew by {:.3e} J ({:.1}% of the run's energy scale {:.3e} J), which no contact model can inject; {hint}",
@@ -218,6 +259,15 @@ fn monitor(
         )));
     }
     Ok(())
+}
+
+/// The run's energy scale so far, grown by `now`: the largest kinetic, stored and
+/// gravitational change seen (the stored part only with the ledger).
+fn energy_scale(scale: f64, now: &ObservedEnergies, initial: &ObservedEnergies) -> f64 {
+    scale
+        .max(now.kinetic.abs())
+        .max(now.elastic.unwrap_or(0.0).abs())
+        .max((now.gravitational - initial.gravitational).abs())
 }
 
 /// Solid fraction of the particles in the domain box and in the box that encloses them.
@@ -302,8 +352,8 @@ pub fn run_cpu_with(
     run_with(scene, engine, &rule, opts, progress)
 }
 
-/// Runs `scene` on the GPU engine (energy ledger on) with the same outputs, checkpoints
-/// and monitor as the CPU backend.
+/// Runs `scene` on the GPU engine (with the energy ledger unless `opts.gpu` turns it off)
+/// with the same outputs, checkpoints and monitor as the CPU backend.
 pub fn run_gpu_with(
     scene: &Scene,
     ctx: GpuContext,
@@ -311,7 +361,7 @@ pub fn run_gpu_with(
     progress: impl FnMut(&Snapshot),
 ) -> Result<RunSummary, PowderError> {
     let rule = crate::setup::Resolved::new(scene)?.time_step.reason;
-    let engine = GpuEngine::new(scene, ctx)?;
+    let engine = GpuEngine::with_options(scene, ctx, opts.gpu)?;
     run_with(scene, engine, &rule, opts, progress)
 }
 
@@ -408,7 +458,7 @@ pub fn run_with<S: Simulation>(
     }
     let started = std::time::Instant::now();
     let start_steps = engine.steps();
-    let mut scale = initial.energies.kinetic.abs() + initial.energies.elastic.abs();
+    let mut scale = initial.energies.kinetic.abs() + initial.energies.elastic.unwrap_or(0.0).abs();
     let mut interrupted = false;
     let mut last_obs = obs;
     // Chunks end at outputs, checkpoints and at most 1000 steps apart (for Ctrl-C and the
@@ -424,11 +474,9 @@ pub fn run_with<S: Simulation>(
         let stepped = engine.run_steps(chunk).and_then(|()| {
             let obs = engine.observe()?;
             let now = obs.energies;
-            let scale = scale
-                .max(now.kinetic.abs())
-                .max(now.elastic.abs())
-                .max((now.gravitational - initial.energies.gravitational).abs());
-            monitor(&mut engine, dt_rule, &now, initial.energies.total(), scale)?;
+            let scale = energy_scale(scale, &now, &initial.energies);
+            let totals = now.total().zip(initial.energies.total());
+            monitor(&mut engine, dt_rule, totals, scale)?;
             Ok(obs)
         });
         let obs = match stepped {
@@ -457,10 +505,7 @@ pub fn run_with<S: Simulation>(
         let steps = engine.steps();
         if steps.is_multiple_of(scene.output_every) || steps == total {
             let snap = snapshot(&engine, &obs);
-            scale = scale
-                .max(snap.energies.kinetic.abs())
-                .max(snap.energies.elastic.abs())
-                .max((snap.energies.gravitational - initial.energies.gravitational).abs());
+            scale = energy_scale(scale, &snap.energies, &initial.energies);
             progress(&snap);
             if opts.verbose {
                 say(&snap);
@@ -489,7 +534,11 @@ pub fn run_with<S: Simulation>(
     }
     save(&engine, &rows)?;
     let wall = started.elapsed().as_secs_f64();
-    let drift = (last.energies.total() - initial.energies.total()).abs();
+    let drift = last
+        .energies
+        .total()
+        .zip(initial.energies.total())
+        .map(|(end, start)| (end - start).abs());
     let (solid_fraction_domain, solid_fraction_bounding_box) =
         solid_fractions(scene, &last_obs.positions, &radii);
     let summary = RunSummary {
@@ -497,6 +546,7 @@ pub fn run_with<S: Simulation>(
         backend: engine.backend(),
         adapter: engine.adapter(),
         particles: engine.len(),
+        ledger: engine.has_ledger(),
         dt: engine.dt(),
         dt_rule: dt_rule.to_string(),
         steps: engine.steps(),
@@ -506,11 +556,14 @@ pub fn run_with<S: Simulation>(
             / wall.max(1e-9),
         initial,
         last,
-        energy_balance_error: if scale > 0.0 { drift / scale } else { 0.0 },
+        energy_balance_error: drift.map(|d| if scale > 0.0 { d / scale } else { 0.0 }),
         outside_domain: outside_domain(scene, &last_obs.positions),
         solid_fraction_domain,
         solid_fraction_bounding_box,
-        wall_forces: last_obs.wall_forces.iter().map(|f| f.to_array()).collect(),
+        wall_forces: last_obs
+            .wall_forces
+            .as_ref()
+            .map(|f| f.iter().map(|f| f.to_array()).collect()),
         resumed_from,
         interrupted,
         out_dir: out.map(|d| d.display().to_string()),

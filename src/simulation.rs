@@ -3,9 +3,10 @@
 //! ([`GpuEngine`]).
 
 use crate::checkpoint;
-use crate::cpu::{ContactStats, CpuEngine, CpuState, Energies, Partner};
+use crate::cpu::{ContactStats, CpuEngine, CpuState, Partner};
 use crate::error::PowderError;
 use crate::gpu::{GpuEngine, GpuSavedState};
+use crate::observed::ObservedEnergies;
 use crate::scene::Scene;
 use glam::DVec3;
 use std::path::Path;
@@ -19,12 +20,13 @@ pub struct Observation {
     pub velocities: Vec<DVec3>,
     /// Empty when the particles do not rotate.
     pub angular_velocities: Vec<DVec3>,
-    /// Energy ledger, J.
-    pub energies: Energies,
-    /// Contact statistics.
-    pub contacts: ContactStats,
-    /// Force of the particles on each wall, N (GPU: the normal part only).
-    pub wall_forces: Vec<DVec3>,
+    /// Energies, J: the ledger's parts are `None` when the run keeps no ledger.
+    pub energies: ObservedEnergies,
+    /// Contact statistics; `None` when the run keeps no ledger (they are counted there).
+    pub contacts: Option<ContactStats>,
+    /// Force of the particles on each wall, N (GPU: the normal part only); `None` when the
+    /// run keeps no ledger (the device keeps the wall contacts' forces there).
+    pub wall_forces: Option<Vec<DVec3>>,
     /// Where each wall's plane passes now (its scene point, moved with the wall), m.
     pub wall_points: Vec<DVec3>,
 }
@@ -60,9 +62,13 @@ pub trait Simulation {
     }
     /// Particle radii in scene order, m.
     fn radii(&self) -> &[f64];
+    /// Whether the run keeps the energy ledger (stored and dissipated energy, contact
+    /// statistics, wall forces): always on the CPU, optional on the GPU.
+    fn has_ledger(&self) -> bool;
     /// Advances `n` steps.
     fn run_steps(&mut self, n: u64) -> Result<(), PowderError>;
-    /// Reads the state, energies, contact statistics and wall forces.
+    /// Reads the state, energies, contact statistics and wall forces (without the ledger:
+    /// the state, the kinetic and gravitational energy and the walls' points).
     fn observe(&self) -> Result<Observation, PowderError>;
     /// Copies the evolving state (for the run monitor to go back to).
     fn save(&self) -> Result<Self::Saved, PowderError>;
@@ -106,6 +112,9 @@ impl Simulation for CpuEngine {
     fn radii(&self) -> &[f64] {
         CpuEngine::radii(self)
     }
+    fn has_ledger(&self) -> bool {
+        true
+    }
     fn run_steps(&mut self, n: u64) -> Result<(), PowderError> {
         CpuEngine::run_steps(self, n)
     }
@@ -114,9 +123,9 @@ impl Simulation for CpuEngine {
             positions: self.positions().to_vec(),
             velocities: self.velocities().to_vec(),
             angular_velocities: self.angular_velocities().to_vec(),
-            energies: self.energies(),
-            contacts: self.contact_stats(),
-            wall_forces: self.wall_forces(),
+            energies: self.energies().into(),
+            contacts: Some(self.contact_stats()),
+            wall_forces: Some(self.wall_forces()),
             wall_points: self.walls_now().iter().map(|w| w.0).collect(),
         })
     }
@@ -175,15 +184,34 @@ impl Simulation for GpuEngine {
     fn radii(&self) -> &[f64] {
         GpuEngine::radii(self)
     }
+    fn has_ledger(&self) -> bool {
+        GpuEngine::has_ledger(self)
+    }
     fn run_steps(&mut self, n: u64) -> Result<(), PowderError> {
         GpuEngine::run_steps(self, n)
     }
     fn observe(&self) -> Result<Observation, PowderError> {
         let s = self.state()?;
+        let (energies, contacts, wall_forces) = if self.has_ledger() {
+            (
+                self.energies(&s)?.into(),
+                Some(self.contact_stats()?),
+                Some(self.wall_forces()?),
+            )
+        } else {
+            // what the read-back state tells on the host, in f64
+            let known = ObservedEnergies {
+                kinetic: self.kinetic_energy(&s),
+                gravitational: self.gravitational_energy(&s),
+                inserted: self.inserted_energy(),
+                ..Default::default()
+            };
+            (known, None, None)
+        };
         Ok(Observation {
-            energies: self.energies(&s)?,
-            contacts: self.contact_stats()?,
-            wall_forces: self.wall_forces()?,
+            energies,
+            contacts,
+            wall_forces,
             wall_points: self.walls_now()?.iter().map(|w| w.0).collect(),
             positions: s.positions,
             velocities: s.velocities,
@@ -201,15 +229,24 @@ impl Simulation for GpuEngine {
     }
     fn read_checkpoint(&mut self, path: &Path, scene: &Scene) -> Result<(), PowderError> {
         let saved = checkpoint::load_gpu(path, scene)?;
-        if saved.adapter != GpuEngine::adapter(self) {
+        let adapter = saved.adapter.clone();
+        // a state that does not fit (e.g. the other ledger option) names the file
+        self.restore_state(saved).map_err(|e| match e {
+            PowderError::Run(m) => PowderError::Run(format!(
+                "cannot resume from checkpoint `{}`: {m}",
+                path.display()
+            )),
+            e => e,
+        })?;
+        if adapter != GpuEngine::adapter(self) {
             eprintln!(
                 "notice: checkpoint `{}` was written on {}; continuing on {} (not bitwise identical to an uninterrupted run)",
                 path.display(),
-                saved.adapter,
+                adapter,
                 GpuEngine::adapter(self)
             );
         }
-        self.restore_state(saved)
+        Ok(())
     }
     fn non_finite(&self) -> Option<usize> {
         None
@@ -231,6 +268,11 @@ impl Simulation for GpuEngine {
             "neighbour lists rebuilt {} times (Verlet skin; the initial build included)",
             self.rebuilds()?
         )];
+        if !self.has_ledger() {
+            notes.push(
+                "no energy ledger (--no-ledger): stored and dissipated energy, wall work, the energy balance, contact statistics, wall forces and contacts that left the neighbour lists are not tracked, and the run monitor has no energy-growth check".into(),
+            );
+        }
         if self.dropped_contacts() > 0 {
             notes.push(format!(
                 "{} engaged contacts left the neighbour lists within one step (moved more than the skin in one step): the time step is too large for these speeds",

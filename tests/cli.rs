@@ -556,6 +556,64 @@ fn collide_and_run_on_the_gpu_backend() {
     assert!(out.contains("backend          gpu"), "{out}");
 }
 
+/// `powder run --no-ledger`: parsed, run on the GPU without the ledger (its quantities
+/// "n/a" in the summary, left out of the JSON), and accepted with a notice on the CPU, whose
+/// ledger stays.
+#[test]
+fn run_without_the_ledger_on_the_gpu_backend() {
+    let scene = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/examples/cohesive_cluster.toml"
+    );
+    let (ok, out, err) = powder(&[
+        "run",
+        scene,
+        "--backend",
+        "cpu",
+        "--no-ledger",
+        "--steps",
+        "100",
+        "--no-output",
+        "--json",
+    ]);
+    assert!(ok, "{err}");
+    assert!(
+        err.contains("--no-ledger has no effect on the CPU"),
+        "{err}"
+    );
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["ledger"], true);
+    assert!(v["energy_balance_error"].is_f64(), "{out}");
+    if !gpu_available() {
+        return;
+    }
+    let args = [
+        "run",
+        scene,
+        "--backend",
+        "gpu",
+        "--no-ledger",
+        "--steps",
+        "300",
+    ];
+    let (ok, out, err) = powder(&[&args[..], &["--no-output"]].concat());
+    assert!(ok, "{err}");
+    assert!(out.contains("backend          gpu"), "{out}");
+    assert!(
+        out.contains("energy balance   n/a (--no-ledger)")
+            && out.contains("contacts         n/a (--no-ledger)"),
+        "{out}"
+    );
+    let (ok, out, err) = powder(&[&args[..], &["--no-output", "--json"]].concat());
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["backend"], "gpu");
+    assert_eq!(v["ledger"], false);
+    assert!(v.get("energy_balance_error").is_none(), "{out}");
+    assert!(v["last"]["energies"]["kinetic"].is_f64(), "{out}");
+    assert!(v["last"]["energies"].get("elastic").is_none(), "{out}");
+}
+
 /// The Krijt and stress dissipations through the full GPU pipeline: `collide --backend gpu`
 /// (with the ledger's keys) and `run --backend gpu` of the LJ example scenes.
 #[test]

@@ -469,6 +469,52 @@ fn the_gpu_monitor_stops_runs_that_go_wrong_and_keeps_the_last_good_state() {
     assert!(err.contains("left the domain"), "{err}");
 }
 
+/// Without the energy ledger (`powder run --no-ledger`) the monitor has no energy-growth
+/// check, but its device checks still stop a forced, far too large time step, a violent
+/// impact and an escape, with a checkpoint of the last good state.
+#[test]
+fn the_gpu_monitor_without_the_ledger_still_stops_runs_that_go_wrong() {
+    use powder::gpu::GpuOptions;
+    use powder::run::run_gpu_with;
+    let dir = tempfile::tempdir().unwrap();
+    let opts = RunOptions {
+        out_dir: Some(dir.path().to_path_buf()),
+        gpu: GpuOptions { ledger: false },
+        ..Default::default()
+    };
+    let Some(ctx) = gpu() else { return };
+    let s = pair_scene(DtSetting::Fixed(2e-3), true, 0.5, 0.1);
+    let err = run_gpu_with(&s, ctx, &opts, |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("step") && err.contains("particle") && err.contains("time step"),
+        "{err}"
+    );
+    assert!(dir.path().join("checkpoint.bin").exists(), "{err}");
+    let quiet = RunOptions {
+        gpu: GpuOptions { ledger: false },
+        ..Default::default()
+    };
+    let Some(ctx) = gpu() else { return };
+    let err = run_gpu_with(
+        &pair_scene(DtSetting::Auto, false, 3.0, 0.1),
+        ctx,
+        &quiet,
+        |_| {},
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(err.contains("reduced radius"), "{err}");
+    let mut s = pair_scene(DtSetting::Auto, false, -0.5, 3e-3);
+    s.duration = 0.05;
+    let Some(ctx) = gpu() else { return };
+    let err = run_gpu_with(&s, ctx, &quiet, |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("left the domain"), "{err}");
+}
+
 /// The Rayleigh time bounds dt for elastic spheres when slow impacts make the Hertz
 /// contact time long: silica spheres (r = 1 µm) meeting at 0.1 mm/s.
 #[test]

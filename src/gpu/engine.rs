@@ -251,8 +251,9 @@ pub type KeyedHistory = ((u32, u32), ContactHistory);
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct GpuOptions {
     /// Keep the energy ledger and contact statistics on the device
-    /// ([`GpuEngine::energies`], [`GpuEngine::contact_stats`]): 32 bytes per neighbour slot
-    /// and 64 per particle more, and a little work per contact. Default on.
+    /// ([`GpuEngine::energies`], [`GpuEngine::contact_stats`], [`GpuEngine::wall_forces`]):
+    /// 32 bytes per neighbour slot and 64 per particle more, and about 20 % of the step.
+    /// Default on; `powder run --no-ledger` turns it off.
     pub ledger: bool,
 }
 
@@ -357,6 +358,17 @@ pub struct GpuSavedState {
     /// Which particles have appeared, and the energy they brought.
     active: Vec<bool>,
     inserted: f64,
+}
+
+impl GpuSavedState {
+    /// Whether the state was taken by a run that keeps the energy ledger
+    /// ([`GpuOptions::ledger`]): it then holds the per-particle ledger, and restores only
+    /// into an engine that keeps it too (and the reverse).
+    pub fn has_ledger(&self) -> bool {
+        self.buffers
+            .iter()
+            .any(|(name, _)| name == "particle_ledger")
+    }
 }
 
 /// The value every item of `values` has, or `mixed` when they differ or there is none.
@@ -1331,9 +1343,23 @@ impl GpuEngine {
     }
 
     /// Writes a saved state back: the run continues exactly as it would have from there.
-    /// Refused, naming the buffer, when it does not fit this engine (another scene,
-    /// another step variant or another ledger option).
+    /// Refused when it does not fit this engine: taken with the other ledger option (the
+    /// message names `--no-ledger`), or naming the buffer (another scene or step variant).
     pub fn restore_state(&mut self, saved: GpuSavedState) -> Result<(), PowderError> {
+        // the ledger cannot be made up for steps already taken, nor dropped silently
+        match (saved.has_ledger(), self.has_ledger()) {
+            (true, false) => {
+                return Err(PowderError::Run(
+                    "the saved GPU state was taken with the energy ledger, and this run keeps none (`powder run --no-ledger`, GpuOptions { ledger: false }): resume it without --no-ledger".into(),
+                ))
+            }
+            (false, true) => {
+                return Err(PowderError::Run(
+                    "the saved GPU state was taken without the energy ledger (`powder run --no-ledger`, GpuOptions { ledger: false }), and this run keeps it: resume it with --no-ledger (the ledger of the steps already taken cannot be rebuilt)".into(),
+                ))
+            }
+            _ => {}
+        }
         let list = self.state_buffers();
         let names: Vec<&String> = list.iter().map(|(n, _)| n).collect();
         let saved_names: Vec<&String> = saved.buffers.iter().map(|(n, _)| n).collect();
@@ -1418,18 +1444,10 @@ impl GpuEngine {
         let rows = self.read_particle_ledger()?;
         let mut e = Energies {
             kinetic: self.kinetic_energy(state),
-            inserted: self.inserted,
+            gravitational: self.gravitational_energy(state),
+            inserted: self.inserted_energy(),
             ..Default::default()
         };
-        for ((x, m), _) in state
-            .positions
-            .iter()
-            .zip(&self.mass)
-            .zip(&self.active)
-            .filter(|(_, &a)| a)
-        {
-            e.gravitational -= m * self.gravity.dot(*x);
-        }
         for p in rows.chunks(4) {
             e.dissipated += p[2][0] as f64 - p[2][1] as f64;
             e.elastic += p[2][2] as f64;
@@ -1511,8 +1529,26 @@ impl GpuEngine {
         Ok(f)
     }
 
+    /// Gravitational energy −Σ m·g·x of a read-back state (particles that have appeared),
+    /// J; known with or without the ledger.
+    pub fn gravitational_energy(&self, state: &GpuState) -> f64 {
+        state
+            .positions
+            .iter()
+            .zip(&self.mass)
+            .zip(&self.active)
+            .filter(|(_, &a)| a)
+            .fold(0.0, |g, ((x, m), _)| g - m * self.gravity.dot(*x))
+    }
+
+    /// Kinetic + gravitational energy brought in by the particles inserted so far (pouring;
+    /// booked on the host), J; known with or without the ledger.
+    pub fn inserted_energy(&self) -> f64 {
+        self.inserted
+    }
+
     /// Kinetic energy of a read-back state, translational plus rotational (I = 2/5·m·r²,
-    /// as the CPU ledger), J.
+    /// as the CPU ledger), J; known with or without the ledger.
     pub fn kinetic_energy(&self, state: &GpuState) -> f64 {
         // particles that have not appeared yet do not count
         let translational: f64 = state
