@@ -831,7 +831,11 @@ fn split_pair_forces_give_the_same_bits() {
             .unwrap()
     };
     assert_eq!(size(&one, "pair_force"), 16 * slots);
-    assert_eq!(size(&split, "pair_force"), 16, "the lowered limit did not split");
+    assert_eq!(
+        size(&split, "pair_force"),
+        16,
+        "the lowered limit did not split"
+    );
     assert_eq!(size(&split, "pair_force_xy"), 8 * slots);
     one.run_steps(400).unwrap();
     split.run_steps(400).unwrap();
