@@ -18,11 +18,41 @@ const ROTATION: bool = true;
 // Per slot, this step: the torque the evaluated pair exerts on the partner (xyz).
 @group(0) @binding(72) var<storage, read_write> pair_torque: array<vec4<f32>>;
 
-// kick_drift: omega += dt/2·alpha, and the prediction the forces see.
-fn rot_kick_drift(i: u32) {
-    let w = a_omega[i].xyz + 0.5 * step.dt * a_alpha[i].xyz;
-    a_omega[i] = vec4<f32>(w, a_omega[i].w);
-    a_wpred[i] = vec4<f32>(w + 0.5 * step.dt * a_alpha[i].xyz, 0.0);
+// One particle's angular state as its collect and drift read it, once per pass (on
+// lavapipe each storage access in the code is a loop over the SIMD lanes): omega (xyz)
+// with the moment of inertia (w), and alpha.
+struct RotState {
+    omega: vec4<f32>,
+    alpha: vec3<f32>,
+}
+
+fn rot_load(k: u32) -> RotState {
+    return RotState(a_omega[k], a_alpha[k].xyz);
+}
+
+// collect: alpha = (the torque of k's own pairs, which force left in alpha, + the partners'
+// share)/I, stored.
+fn rot_collect(k: u32, torque: vec3<f32>) -> RotState {
+    let omega = a_omega[k];
+    let alpha = (a_alpha[k].xyz + torque) / omega.w;
+    a_alpha[k] = vec4<f32>(alpha, 0.0);
+    return RotState(omega, alpha);
+}
+
+fn rot_finite(r: RotState) -> bool {
+    return !(any(r.alpha != r.alpha) || any(abs(r.alpha) > vec3<f32>(3.0e38)));
+}
+
+// kick_drift: omega += dt/2·alpha (first the previous step's closing kick when it is
+// pending: two roundings, as two kernels give), and the prediction the forces see.
+fn rot_drift(k: u32, r: RotState, pending_kick: bool) {
+    var w = r.omega.xyz;
+    if (pending_kick) {
+        w = w + 0.5 * step.dt * r.alpha;
+    }
+    w = w + 0.5 * step.dt * r.alpha;
+    a_omega[k] = vec4<f32>(w, r.omega.w);
+    a_wpred[k] = vec4<f32>(w + 0.5 * step.dt * r.alpha, 0.0);
 }
 
 // gather (on a rebuild): reorder into B.
@@ -49,12 +79,6 @@ fn rot_store_partial(k: u32, torque: vec3<f32>) {
     a_alpha[k] = vec4<f32>(torque, 0.0);
 }
 
-// collect: adds the partners' share and stores (torque)/I; false when it is not finite.
-fn rot_store(k: u32, torque: vec3<f32>) -> bool {
-    let alpha = (a_alpha[k].xyz + torque) / a_omega[k].w;
-    a_alpha[k] = vec4<f32>(alpha, 0.0);
-    return !(any(alpha != alpha) || any(abs(alpha) > vec3<f32>(3.0e38)));
-}
 
 // force: the torque an evaluated pair exerts on the partner (slot of the pair); collect
 // reads it back.

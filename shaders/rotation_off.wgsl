@@ -4,7 +4,23 @@
 
 const ROTATION: bool = false;
 
-fn rot_kick_drift(i: u32) {}
+struct RotState {
+    unused: f32,
+}
+
+fn rot_load(k: u32) -> RotState {
+    return RotState(0.0);
+}
+
+fn rot_collect(k: u32, torque: vec3<f32>) -> RotState {
+    return RotState(0.0);
+}
+
+fn rot_finite(r: RotState) -> bool {
+    return true;
+}
+
+fn rot_drift(k: u32, r: RotState, pending_kick: bool) {}
 
 fn rot_gather(k: u32, o: u32) {}
 
@@ -16,9 +32,6 @@ fn rot_wpred(k: u32) -> vec3<f32> {
 
 fn rot_store_partial(k: u32, torque: vec3<f32>) {}
 
-fn rot_store(k: u32, torque: vec3<f32>) -> bool {
-    return true;
-}
 
 fn rot_pair_store(slot: u32, torque: vec3<f32>) {}
 

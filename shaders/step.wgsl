@@ -7,8 +7,9 @@
 // rotation_off.wgsl (no rotation: no angular buffers declared at all). The model provides
 //   alias PairRow  the pair-table row,          alias Hist  one contact's stored history,
 //   fn hist_zero() -> Hist,                     fn pair_contact(PairRow, Kin, ptr<function, Hist>) -> Contact
-// and the rotation snippet the hooks rot_kick_drift, rot_gather, rot_wpred, rot_store,
-// rot_kick.
+// and the rotation snippet the state RotState and the hooks rot_load, rot_collect,
+// rot_finite, rot_drift, rot_gather, rot_copy_back, rot_wpred, rot_store_partial,
+// rot_pair_store, rot_pair_load, rot_kick.
 //
 // The particle state lives in one buffer set, A, in the order of the last neighbour-list
 // rebuild; set B is scratch that only a rebuild writes. Pass order, recorded by
@@ -333,22 +334,22 @@ fn collect_kick_drift(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgr
     let i = global_index(wid, nwg, lid);
     if (i < grid.n_particles) {
         let vel = a_vel[i];
-        let acc = collect_particle(i, vel.w);
+        let c = collect_particle(i, vel.w);
         if (is_active(a_pid[i])) {
-            drift_particle(i, vel, acc, true);
+            drift_particle(i, vel, c.acc, c.rot, true);
         }
     }
 }
 
 fn drift(i: u32) {
     if (i < grid.n_particles && is_active(a_pid[i])) {
-        drift_particle(i, a_vel[i], a_acc[i].xyz, false);
+        drift_particle(i, a_vel[i], a_acc[i].xyz, rot_load(i), false);
     }
 }
 
 // Each buffer is read once and written once (the caller passes what it read already): on
 // lavapipe every access in the code is a loop over the SIMD lanes.
-fn drift_particle(i: u32, vel: vec4<f32>, acc: vec3<f32>, pending_kick: bool) {
+fn drift_particle(i: u32, vel: vec4<f32>, acc: vec3<f32>, rot: RotState, pending_kick: bool) {
     let h = grid.cell_width;
     let half_dv = 0.5 * step.dt * acc;
     var v0 = vel.xyz;
@@ -357,7 +358,6 @@ fn drift_particle(i: u32, vel: vec4<f32>, acc: vec3<f32>, pending_kick: bool) {
         let kk = kahan_add(v0, c0, half_dv);
         v0 = kk.x;
         c0 = kk.c;
-        rot_kick(i);
     }
     let kv = kahan_add(v0, c0, half_dv);
     let v = kv.x;
@@ -365,7 +365,7 @@ fn drift_particle(i: u32, vel: vec4<f32>, acc: vec3<f32>, pending_kick: bool) {
     a_kahan[2u * i] = vec4<f32>(kv.c, 0.0);
     // vel.w holds the mass
     a_vpred[i] = vec4<f32>(v + half_dv, vel.w);
-    rot_kick_drift(i);
+    rot_drift(i, rot, pending_kick);
     let disp = a_disp[i].xyz + step.dt * v;
     a_disp[i] = vec4<f32>(disp, 0.0);
     // (NaN forces a rebuild too)
@@ -842,8 +842,14 @@ fn collect(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: 
     }
 }
 
-// Returns (and stores) the acceleration.
-fn collect_particle(k: u32, mass: f32) -> vec3<f32> {
+// What collect leaves for the drift of the same pass.
+struct Collected {
+    acc: vec3<f32>,
+    rot: RotState,
+}
+
+// Returns (and stores) the acceleration (and angular state).
+fn collect_particle(k: u32, mass: f32) -> Collected {
     var f = a_acc[k].xyz;
     var torque = vec3<f32>(0.0);
     for (var s = 0u; s < lower_count[k]; s++) {
@@ -852,12 +858,12 @@ fn collect_particle(k: u32, mass: f32) -> vec3<f32> {
         torque += rot_pair_load(slot);
     }
     let acc = f / mass + step.gravity;
-    let finite_rot = rot_store(k, torque);
-    if (any(acc != acc) || any(abs(acc) > vec3<f32>(3.0e38)) || !finite_rot) {
+    let rot = rot_collect(k, torque);
+    if (any(acc != acc) || any(abs(acc) > vec3<f32>(3.0e38)) || !rot_finite(rot)) {
         atomicAdd(&monitor[2], 1u);
     }
     a_acc[k] = vec4<f32>(acc, 0.0);
-    return acc;
+    return Collected(acc, rot);
 }
 
 @compute @workgroup_size(WG_SIZE)
