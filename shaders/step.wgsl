@@ -157,7 +157,11 @@ override ONE_MATERIAL: bool = false;
 @group(0) @binding(27) var<storage, read_write> a_hist: array<Hist>;
 @group(0) @binding(28) var<storage, read_write> a_hist_pid: array<u32>;
 @group(0) @binding(29) var<storage, read_write> a_wall_hist: array<Hist>;
-// Displacement (xyz) accumulated since the last neighbour-list rebuild.
+// Displacement (xyz) accumulated since the last neighbour-list rebuild, and (w) the largest
+// overlap/a12 of the particle's contacts over the steps of this batch so far: `force` leaves
+// each step's in acc.w, the next drift folds it in here (both accesses it makes anyway),
+// and the batch-end `collect` reduces it into the monitor. An atomic per particle and step
+// cost 5–10 % of the hysteretic step on lavapipe.
 @group(0) @binding(30) var<storage, read_write> a_disp: array<vec4<f32>>;
 // Predicted velocity v + dt/2·a for the velocity-dependent forces (xyz) and the mass (w),
 // written by kick_drift: the force kernel reads one vec4 per partner for both.
@@ -336,20 +340,21 @@ fn collect_kick_drift(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgr
         let vel = a_vel[i];
         let c = collect_particle(i, vel.w);
         if (is_active(a_pid[i])) {
-            drift_particle(i, vel, c.acc, c.rot, true);
+            drift_particle(i, vel, c.acc, c.rot, true, c.peak);
         }
     }
 }
 
 fn drift(i: u32) {
     if (i < grid.n_particles && is_active(a_pid[i])) {
-        drift_particle(i, a_vel[i], a_acc[i].xyz, rot_load(i), false);
+        drift_particle(i, a_vel[i], a_acc[i].xyz, rot_load(i), false, 0.0);
     }
 }
 
 // Each buffer is read once and written once (the caller passes what it read already): on
 // lavapipe every access in the code is a loop over the SIMD lanes.
-fn drift_particle(i: u32, vel: vec4<f32>, acc: vec3<f32>, rot: RotState, pending_kick: bool) {
+// `peak`: the largest overlap/a12 of the last force pass (0 when it was folded already).
+fn drift_particle(i: u32, vel: vec4<f32>, acc: vec3<f32>, rot: RotState, pending_kick: bool, peak: f32) {
     let h = grid.cell_width;
     let half_dv = 0.5 * step.dt * acc;
     var v0 = vel.xyz;
@@ -366,8 +371,9 @@ fn drift_particle(i: u32, vel: vec4<f32>, acc: vec3<f32>, rot: RotState, pending
     // vel.w holds the mass
     a_vpred[i] = vec4<f32>(v + half_dv, vel.w);
     rot_drift(i, rot, pending_kick);
-    let disp = a_disp[i].xyz + step.dt * v;
-    a_disp[i] = vec4<f32>(disp, 0.0);
+    let disp0 = a_disp[i];
+    let disp = disp0.xyz + step.dt * v;
+    a_disp[i] = vec4<f32>(disp, max(disp0.w, peak));
     // (NaN forces a rebuild too)
     if (!(length(disp) <= 0.5 * skin_width())) {
         atomicStore(&skin[0], 1u);
@@ -444,7 +450,9 @@ fn gather(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: v
     b_cell[k] = a_cell[o];
     b_off[k] = a_off[o];
     b_vel[k] = a_vel[o];
-    b_acc[k] = a_acc[o];
+    // (acc.w carries the batch's overlap maximum, disp.w, through the re-sort: disp is
+    // only in A)
+    b_acc[k] = vec4<f32>(a_acc[o].xyz, a_disp[o].w);
     b_vpred[k] = a_vpred[o];
     b_kahan[2u * k] = a_kahan[2u * o];
     b_kahan[2u * k + 1u] = a_kahan[2u * o + 1u];
@@ -606,7 +614,7 @@ fn copy_back(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg
     a_kahan[2u * k] = b_kahan[2u * k];
     a_kahan[2u * k + 1u] = b_kahan[2u * k + 1u];
     a_pid[k] = b_pid[k];
-    a_disp[k] = vec4<f32>(0.0);
+    a_disp[k] = vec4<f32>(0.0, 0.0, 0.0, b_acc[k].w);
     rot_copy_back(k);
 }
 
@@ -687,22 +695,13 @@ struct Contact {
 fn force(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let k = global_index(wid, nwg, lid);
     if (k < grid.n_particles) {
-        let ratio = particle_forces(k);
-        // the largest overlap/a12 (f32 bits: non-negative ones order as the values); an
-        // atomic only where it grows (a plain read else: no barriers, few atomics)
-        let bits = bitcast<u32>(ratio);
-        if (bits > atomicLoad(&monitor[4])) {
-            atomicMax(&monitor[4], bits);
-        }
-        if (ratio > MONITOR_MAX_OVERLAP_RATIO) {
-            atomicMax(&monitor[5], a_pid[k] + 1u);
-        }
+        particle_forces(k);
     }
 }
 
-// The forces on B's particle k (stored as its acceleration); returns its contacts' largest
-// overlap/a12 (0 without overlap) for the run monitor.
-fn particle_forces(k: u32) -> f32 {
+// The forces on particle k, stored in its acceleration's xyz, and its contacts' largest
+// overlap/a12 (0 without overlap) in w, for the run monitor (see a_disp).
+fn particle_forces(k: u32) {
     let cap = step.max_neighbours;
     let ck = a_cell[k];
     let ok = a_off[k];
@@ -825,10 +824,9 @@ fn particle_forces(k: u32) -> f32 {
         }
     }
     // the sums over k's own list and walls; collect adds the pairs evaluated by partners
-    a_acc[k] = vec4<f32>(f, 0.0);
+    a_acc[k] = vec4<f32>(f, peak);
     rot_store_partial(k, torque);
     ledger_store(a_pid[k], ledger_acc);
-    return peak;
 }
 
 // After force, per particle: adds the forces (and torques) of the pairs k's partners
@@ -838,7 +836,18 @@ fn particle_forces(k: u32) -> f32 {
 fn collect(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let k = global_index(wid, nwg, lid);
     if (k < grid.n_particles) {
-        collect_particle(k, a_vel[k].w);
+        let c = collect_particle(k, a_vel[k].w);
+        // the batch ends here (or the initial forces do): its overlap maximum, with this
+        // step's, into the monitor (an atomic only where it grows), and a fresh start
+        let ratio = max(a_disp[k].w, c.peak);
+        let bits = bitcast<u32>(ratio);
+        if (bits > atomicLoad(&monitor[4])) {
+            atomicMax(&monitor[4], bits);
+        }
+        if (ratio > MONITOR_MAX_OVERLAP_RATIO) {
+            atomicMax(&monitor[5], a_pid[k] + 1u);
+        }
+        a_disp[k].w = 0.0;
     }
 }
 
@@ -846,11 +855,14 @@ fn collect(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: 
 struct Collected {
     acc: vec3<f32>,
     rot: RotState,
+    // The largest overlap/a12 of the force pass just collected.
+    peak: f32,
 }
 
 // Returns (and stores) the acceleration (and angular state).
 fn collect_particle(k: u32, mass: f32) -> Collected {
-    var f = a_acc[k].xyz;
+    let partial = a_acc[k];
+    var f = partial.xyz;
     var torque = vec3<f32>(0.0);
     for (var s = 0u; s < lower_count[k]; s++) {
         let slot = lower[slot_index(k, s)];
@@ -863,7 +875,7 @@ fn collect_particle(k: u32, mass: f32) -> Collected {
         atomicAdd(&monitor[2], 1u);
     }
     a_acc[k] = vec4<f32>(acc, 0.0);
-    return Collected(acc, rot);
+    return Collected(acc, rot, partial.w);
 }
 
 @compute @workgroup_size(WG_SIZE)
