@@ -338,7 +338,7 @@ fn collect_kick_drift(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgr
     let i = global_index(wid, nwg, lid);
     if (i < grid.n_particles) {
         let vel = a_vel[i];
-        let c = collect_particle(i, vel.w);
+        let c = collect_particle(i, vel.w, false);
         if (is_active(a_pid[i])) {
             drift_particle(i, vel, c.acc, c.rot, true, c.peak);
         }
@@ -836,7 +836,7 @@ fn particle_forces(k: u32) {
 fn collect(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let k = global_index(wid, nwg, lid);
     if (k < grid.n_particles) {
-        let c = collect_particle(k, a_vel[k].w);
+        let c = collect_particle(k, a_vel[k].w, true);
         // the batch ends here (or the initial forces do): its overlap maximum, with this
         // step's, into the monitor (an atomic only where it grows), and a fresh start
         let ratio = max(a_disp[k].w, c.peak);
@@ -859,8 +859,10 @@ struct Collected {
     peak: f32,
 }
 
-// Returns (and stores) the acceleration (and angular state).
-fn collect_particle(k: u32, mass: f32) -> Collected {
+// Returns the acceleration (and the angular state, stored); `store`: the acceleration too,
+// at the end of a batch (kick, the host and checkpoints read it there). Within a batch
+// the drift takes it from here and the next force pass overwrites it: no store.
+fn collect_particle(k: u32, mass: f32, store: bool) -> Collected {
     let partial = a_acc[k];
     var f = partial.xyz;
     var torque = vec3<f32>(0.0);
@@ -874,7 +876,9 @@ fn collect_particle(k: u32, mass: f32) -> Collected {
     if (any(acc != acc) || any(abs(acc) > vec3<f32>(3.0e38)) || !rot_finite(rot)) {
         atomicAdd(&monitor[2], 1u);
     }
-    a_acc[k] = vec4<f32>(acc, 0.0);
+    if (store) {
+        a_acc[k] = vec4<f32>(acc, 0.0);
+    }
     return Collected(acc, rot, partial.w);
 }
 
