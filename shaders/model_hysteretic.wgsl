@@ -196,6 +196,11 @@ fn hist_zero() -> Hist {
     return vec2<f32>(0.0);
 }
 
+// Whether two stored histories are the same (the step stores one only where it changed).
+fn hist_same(a: Hist, b: Hist) -> bool {
+    return all(a == b);
+}
+
 // The history seen from the partner's side (the normal history is symmetric).
 fn hist_mirror(h: Hist) -> Hist {
     return h;

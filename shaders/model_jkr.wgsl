@@ -10,7 +10,7 @@
 //
 // Needs, from the composition (see `src/gpu/shaders.rs`):
 //   * `Kin` and `Contact` (shaders/step.wgsl): the pair's kinematics and the result;
-//   * the history layout snippet: `alias Hist`, `hist_zero()`, `jkr_unpack`, `jkr_pack`
+//   * the history layout snippet: `alias Hist`, `hist_zero()`, `hist_same`, `jkr_unpack`, `jkr_pack`
 //     and the switches JKR_TANGENTIAL / JKR_ROLLING (whether the stored history has room
 //     for the tangential spring / rolling displacement). Without room the kernel never
 //     evaluates that part, so the host only picks a layout that covers every pair;

@@ -6,7 +6,8 @@
 // model_krijt_off.wgsl, and <rotation> is rotation.wgsl (angular velocity, torques) or
 // rotation_off.wgsl (no rotation: no angular buffers declared at all). The model provides
 //   alias PairRow  the pair-table row,          alias Hist  one contact's stored history,
-//   fn hist_zero() -> Hist,                     fn pair_contact(PairRow, Kin, ptr<function, Hist>) -> Contact
+//   fn hist_zero() -> Hist, fn hist_same(Hist, Hist) -> bool,
+//   fn pair_contact(PairRow, Kin, ptr<function, Hist>) -> Contact
 // and the rotation snippet the state RotState and the hooks rot_load, rot_collect,
 // rot_finite, rot_drift, rot_gather, rot_copy_back, rot_wpred, rot_store_partial,
 // rot_pair_store, rot_pair_load, rot_kick.
@@ -753,7 +754,8 @@ fn particle_forces(k: u32) {
             v_t,
             r_eff * cross(wk - wj, n) + (0.5 * (rk - rj) / (rk + rj)) * v_t,
         );
-        var h = a_hist[slot];
+        let h0 = a_hist[slot];
+        var h = h0;
         let row = pairs[select(mat_k * step.n_materials + u32(cj.w), 0u, ONE_MATERIAL)];
         let c = pair_contact(row, kin, &h);
         var fp = c.normal * n + c.tangential;
@@ -774,7 +776,12 @@ fn particle_forces(k: u32) {
                 t_partner = -rj * t - c.rolling;
             }
         }
-        a_hist[slot] = h;
+        // stored only where it changed: most of a packing's list entries are candidates
+        // out of contact whose history stays zero, and a masked store skips the idle
+        // lanes' work on lavapipe
+        if (!hist_same(h, h0)) {
+            a_hist[slot] = h;
+        }
         store_pair_force(slot, fp);
         rot_pair_store(slot, t_partner);
     }

@@ -50,6 +50,7 @@ const JKR_TANGENTIAL: bool = false;
 const JKR_ROLLING: bool = false;
 alias Hist = f32;
 fn hist_zero() -> Hist { return 0.0; }
+fn hist_same(a: Hist, b: Hist) -> bool { return a == b; }
 fn jkr_unpack(h: Hist) -> JkrHistory { return JkrHistory(h != 0.0, vec3<f32>(0.0), vec3<f32>(0.0), 0.0); }
 fn jkr_pack(h: JkrHistory) -> Hist { return select(0.0, 1.0, h.touched); }
 ";
@@ -62,6 +63,7 @@ const JKR_TANGENTIAL: bool = false;
 const JKR_ROLLING: bool = false;
 alias Hist = vec2<f32>;
 fn hist_zero() -> Hist { return vec2<f32>(0.0); }
+fn hist_same(a: Hist, b: Hist) -> bool { return all(a == b); }
 fn jkr_unpack(h: Hist) -> JkrHistory { return JkrHistory(h.x != 0.0, vec3<f32>(0.0), vec3<f32>(0.0), h.y); }
 fn jkr_pack(h: JkrHistory) -> Hist { return vec2<f32>(select(0.0, 1.0, h.touched), h.a); }
 ";
@@ -73,6 +75,7 @@ const JKR_TANGENTIAL: bool = true;
 const JKR_ROLLING: bool = false;
 alias Hist = vec4<f32>;
 fn hist_zero() -> Hist { return vec4<f32>(0.0); }
+fn hist_same(a: Hist, b: Hist) -> bool { return all(a == b); }
 fn jkr_unpack(h: Hist) -> JkrHistory { return JkrHistory(h.w != 0.0, h.xyz, vec3<f32>(0.0), 0.0); }
 fn jkr_pack(h: JkrHistory) -> Hist { return vec4<f32>(h.spring, select(0.0, 1.0, h.touched)); }
 ";
@@ -92,6 +95,9 @@ struct JkrStoredSpring {
 }
 alias Hist = JkrStoredSpring;
 fn hist_zero() -> Hist { return JkrStoredSpring(0.0, 0.0, 0.0, 0.0, 0.0); }
+fn hist_same(a: Hist, b: Hist) -> bool {
+    return a.sx == b.sx && a.sy == b.sy && a.sz == b.sz && a.touched == b.touched && a.a == b.a;
+}
 fn jkr_unpack(h: Hist) -> JkrHistory {
     return JkrHistory(h.touched != 0.0, vec3<f32>(h.sx, h.sy, h.sz), vec3<f32>(0.0), h.a);
 }
@@ -113,6 +119,7 @@ struct JkrStored {
 }
 alias Hist = JkrStored;
 fn hist_zero() -> Hist { return JkrStored(vec4<f32>(0.0), vec4<f32>(0.0)); }
+fn hist_same(a: Hist, b: Hist) -> bool { return all(a.spring == b.spring) && all(a.xi == b.xi); }
 fn jkr_unpack(h: Hist) -> JkrHistory { return JkrHistory(h.spring.w != 0.0, h.spring.xyz, h.xi.xyz, h.xi.w); }
 fn jkr_pack(h: JkrHistory) -> Hist {
     return JkrStored(vec4<f32>(h.spring, select(0.0, 1.0, h.touched)), vec4<f32>(h.xi, h.a));
@@ -340,6 +347,7 @@ struct MixedHist {
 alias Hist = MixedHist;
 fn hist_zero() -> Hist { return MixedHist(jkr_hist_zero(), hyst_hist_zero()); }
 fn hist_mirror(h: Hist) -> Hist { return MixedHist(jkr_hist_mirror(h.jkr), hyst_hist_mirror(h.hyst)); }
+fn hist_same(a: Hist, b: Hist) -> bool { return jkr_hist_same(a.jkr, b.jkr) && hyst_hist_same(a.hyst, b.hyst); }
 fn pair_contact(p: MixedPair, k: Kin, hist: ptr<function, Hist>) -> Contact {
     if (p.kind == 0u) {
         var h = (*hist).hyst;
@@ -374,6 +382,7 @@ fn mixed_variant(
             ("Hist", "HystHist"),
             ("hist_zero", "hyst_hist_zero"),
             ("hist_mirror", "hyst_hist_mirror"),
+            ("hist_same", "hyst_hist_same"),
             ("pair_contact", "hyst_pair_contact"),
             ("pair_edges", "hyst_pair_edges"),
         ],
@@ -383,6 +392,7 @@ fn mixed_variant(
         ("Hist", "JkrHist"),
         ("hist_zero", "jkr_hist_zero"),
         ("hist_mirror", "jkr_hist_mirror"),
+        ("hist_same", "jkr_hist_same"),
         ("pair_contact", "jkr_pair_contact"),
         ("pair_edges", "jkr_pair_edges"),
     ];
