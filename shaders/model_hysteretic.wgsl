@@ -189,16 +189,22 @@ fn hyst_force(p: HystereticPair, delta: f32, delta_dot: f32, a12: f32, history: 
 
 alias PairRow = HystereticPair;
 
-// Per-contact history as stored: (delta_max, touched as 0/1).
-alias Hist = vec2<f32>;
+// Per-contact history as stored, in one f32 (4 bytes a slot: a storage binding holds
+// twice the contacts of a vec2, which lets 10⁶ particles fit lavapipe's 128 MiB binding
+// limit): delta_max (never negative) with the sign bit as the "touched" flag. +0.0, the
+// zeroed buffer's value, is untouched; -0.0 is touched at delta_max = 0.
+alias Hist = f32;
+
+const HYST_TOUCHED_BIT: u32 = 0x80000000u;
 
 fn hist_zero() -> Hist {
-    return vec2<f32>(0.0);
+    return 0.0;
 }
 
-// Whether two stored histories are the same (the step stores one only where it changed).
+// Whether two stored histories are the same (the step stores one only where it changed):
+// bitwise, so +0.0 and -0.0 (untouched, touched) differ.
 fn hist_same(a: Hist, b: Hist) -> bool {
-    return all(a == b);
+    return bitcast<u32>(a) == bitcast<u32>(b);
 }
 
 // The history seen from the partner's side (the normal history is symmetric).
@@ -207,11 +213,14 @@ fn hist_mirror(h: Hist) -> Hist {
 }
 
 fn history_in(h: Hist) -> HystHistory {
-    return HystHistory(h.x, h.y != 0.0);
+    let bits = bitcast<u32>(h);
+    return HystHistory(bitcast<f32>(bits & ~HYST_TOUCHED_BIT), (bits & HYST_TOUCHED_BIT) != 0u);
 }
 
 fn history_out(h: HystHistory) -> Hist {
-    return vec2<f32>(h.delta_max, select(0.0, 1.0, h.touched));
+    // (abs: delta_max >= 0 by construction; a -0.0 must not read as touched)
+    let bits = bitcast<u32>(abs(h.delta_max));
+    return bitcast<f32>(bits | select(0u, HYST_TOUCHED_BIT, h.touched));
 }
 
 // Normal force only: a12 = 2·R* (2r for a wall).

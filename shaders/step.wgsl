@@ -240,17 +240,19 @@ fn slot_particle(slot: u32) -> u32 {
 // Per slot, this step: the force the evaluated pair exerts on the evaluator: one vec4 a
 // slot (`pair_force`, one access to store and one to load: on lavapipe each access in the
 // code is a loop over the SIMD lanes), or, when SPLIT_PAIR_FORCE is set because n·cap·16
-// bytes exceed the adapter's storage binding limit, xy and z in two bindings (8 and 4
-// bytes a slot: no more per binding than the smallest history, so the limit does not bind
-// sooner). The other form's bindings hold one element.
+// bytes exceed the adapter's storage binding limit, x, y and z in three bindings (4 bytes
+// a slot each, as the lists and the smallest history: the limit does not bind sooner).
+// The other form's bindings hold one element.
 override SPLIT_PAIR_FORCE: bool = false;
 @group(0) @binding(76) var<storage, read_write> pair_force: array<vec4<f32>>;
-@group(0) @binding(71) var<storage, read_write> pair_force_xy: array<vec2<f32>>;
+@group(0) @binding(71) var<storage, read_write> pair_force_x: array<f32>;
+@group(0) @binding(77) var<storage, read_write> pair_force_y: array<f32>;
 @group(0) @binding(73) var<storage, read_write> pair_force_z: array<f32>;
 
 fn store_pair_force(slot: u32, f: vec3<f32>) {
     if (SPLIT_PAIR_FORCE) {
-        pair_force_xy[slot] = f.xy;
+        pair_force_x[slot] = f.x;
+        pair_force_y[slot] = f.y;
         pair_force_z[slot] = f.z;
     } else {
         pair_force[slot] = vec4<f32>(f, 0.0);
@@ -259,7 +261,7 @@ fn store_pair_force(slot: u32, f: vec3<f32>) {
 
 fn load_pair_force(slot: u32) -> vec3<f32> {
     if (SPLIT_PAIR_FORCE) {
-        return vec3<f32>(pair_force_xy[slot], pair_force_z[slot]);
+        return vec3<f32>(pair_force_x[slot], pair_force_y[slot], pair_force_z[slot]);
     }
     return pair_force[slot].xyz;
 }

@@ -27,7 +27,7 @@ fn codec(limit: u64) -> impl bincode::Options {
         .with_limit(limit)
 }
 /// Bumped whenever the state layout changes.
-const FORMAT: u32 = 4;
+const FORMAT: u32 = 5;
 
 #[derive(Serialize, Deserialize)]
 struct Header {

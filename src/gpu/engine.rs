@@ -426,9 +426,9 @@ fn pipeline_constants(
     constants
 }
 
-/// Whether the pair forces of `slots` neighbour slots go into two bindings (xy, z) rather
+/// Whether the pair forces of `slots` neighbour slots go into three bindings (x, y, z) rather
 /// than one vec4 a slot: only where one would exceed the adapter's storage binding limit
-/// (the split form costs an extra access per slot in `force` and `collect`).
+/// (the split form costs two more accesses per slot in `force` and `collect`).
 fn split_pair_force(slots: u64, max_binding: u64) -> bool {
     16 * slots > max_binding
 }
@@ -562,7 +562,7 @@ impl GpuEngine {
         }
         // the largest buffer with one element per neighbour slot (the last of equals)
         let (what, slot_bytes) = [
-            ("pair forces", 8),
+            ("pair forces", 4),
             ("contact history", kind.history_bytes()),
             ("energy ledger", if ledger { 16 } else { 0 }),
             ("pair torques", if kind.rotation() { 16 } else { 0 }),
@@ -698,13 +698,15 @@ impl GpuEngine {
         // the half lists' other side, and what each evaluated pair leaves for collect
         let lower = alloc.buffer("lower", 4 * n as u64 * cap as u64);
         let lower_count = alloc.buffer("lower_count", 4 * n as u64);
-        // the pair forces in one vec4 a slot, or split (xy, z) where that exceeds the
+        // the pair forces in one vec4 a slot, or split (x, y, z) where that exceeds the
         // binding limit; the other form's buffers hold one element
         let slots = n as u64 * cap as u64;
         let split = split_pair_force(slots, ctx.max_storage_binding());
         let pair_force = alloc.buffer("pair_force", 16 * if split { 1 } else { slots });
-        let pair_force_xy = alloc.buffer("pair_force_xy", 8 * if split { slots } else { 1 });
-        let pair_force_z = alloc.buffer("pair_force_z", 4 * if split { slots } else { 1 });
+        let mut plane = |name: &str| alloc.buffer(name, 4 * if split { slots } else { 1 });
+        let pair_force_x = plane("pair_force_x");
+        let pair_force_y = plane("pair_force_y");
+        let pair_force_z = plane("pair_force_z");
         let pair_torque = kind
             .rotation()
             .then(|| alloc.buffer("pair_torque", 16 * n as u64 * cap as u64));
@@ -772,7 +774,8 @@ impl GpuEngine {
             list.push(("lower".into(), &lower));
             list.push(("lower_count".into(), &lower_count));
             list.push(("pair_force".into(), &pair_force));
-            list.push(("pair_force_xy".into(), &pair_force_xy));
+            list.push(("pair_force_x".into(), &pair_force_x));
+            list.push(("pair_force_y".into(), &pair_force_y));
             list.push(("pair_force_z".into(), &pair_force_z));
             if let Some(t) = &pair_torque {
                 list.push(("pair_torque".into(), t));
@@ -1668,22 +1671,28 @@ impl GpuEngine {
 fn decode_history(kind: StepKind, b: &[u8]) -> ContactHistory {
     let f: Vec<f32> = bytemuck::pod_collect_to_vec(b);
     let v = |o: usize| DVec3::new(f[o] as f64, f[o + 1] as f64, f[o + 2] as f64);
+    // the hysteretic history: δmax with the sign bit as "touched" (model_hysteretic.wgsl)
+    let hyst = |x: f32| (x.abs() as f64, x.is_sign_negative());
     let mixed = |jkr: StepKind, at: usize| {
         let mut h = decode_history(jkr, &b[..4 * at]);
-        h.delta_max = f[at] as f64;
-        h.touched |= f[at + 1] != 0.0;
+        let (delta_max, touched) = hyst(f[at]);
+        h.delta_max = delta_max;
+        h.touched |= touched;
         h
     };
     match kind {
-        StepKind::Mixed => mixed(StepKind::Jkr, 2),
+        StepKind::Mixed => mixed(StepKind::Jkr, 1),
         StepKind::MixedFriction => mixed(StepKind::JkrFriction, 4),
         StepKind::MixedRolling => mixed(StepKind::JkrRolling, 8),
 
-        StepKind::Hysteretic => ContactHistory {
-            delta_max: f[0] as f64,
-            touched: f[1] != 0.0,
-            ..Default::default()
-        },
+        StepKind::Hysteretic => {
+            let (delta_max, touched) = hyst(f[0]);
+            ContactHistory {
+                delta_max,
+                touched,
+                ..Default::default()
+            }
+        }
         StepKind::Jkr => ContactHistory {
             touched: f[0] != 0.0,
             ..Default::default()

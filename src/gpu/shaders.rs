@@ -233,16 +233,16 @@ impl StepKind {
     /// `layout::tests`).
     pub fn history_bytes(self) -> u64 {
         match self {
-            Self::Hysteretic => 8,
+            Self::Hysteretic => 4,
             Self::Jkr => 4,
             Self::JkrFriction => 16,
             Self::JkrRolling => 32,
             Self::JkrKrijt => 8,
             Self::JkrKrijtFriction => 20,
             Self::JkrKrijtRolling => 32,
-            // struct { JKR layout, vec2 }: the vec2 at offset 8, 16, 32 (16-byte aligned
-            // for the vector layouts)
-            Self::Mixed => 16,
+            // struct { JKR layout, f32 }: the f32 at offset 4, 16, 32 (the struct 16-byte
+            // aligned for the vector layouts)
+            Self::Mixed => 8,
             Self::MixedFriction => 32,
             Self::MixedRolling => 48,
         }
