@@ -115,13 +115,7 @@ fn gpu_runs_are_bitwise_deterministic() {
     let mut b = GpuEngine::new(&scene, ctx).unwrap();
     b.run_steps(1500).unwrap();
     let (sa, sb) = (a.state().unwrap(), b.state().unwrap());
-    let bits = |v: &[glam::DVec3]| {
-        v.iter()
-            .flat_map(|p| p.to_array().map(f64::to_bits))
-            .collect::<Vec<_>>()
-    };
-    assert_eq!(bits(&sa.positions), bits(&sb.positions));
-    assert_eq!(bits(&sa.velocities), bits(&sb.velocities));
+    common::assert_same_bits(&sa, &sb);
 }
 
 mod collisions {
@@ -849,11 +843,5 @@ fn split_pair_forces_give_the_same_bits() {
     one.run_steps(400).unwrap();
     split.run_steps(400).unwrap();
     let (sa, sb) = (one.state().unwrap(), split.state().unwrap());
-    let bits = |v: &[glam::DVec3]| {
-        v.iter()
-            .flat_map(|p| p.to_array().map(f64::to_bits))
-            .collect::<Vec<_>>()
-    };
-    assert_eq!(bits(&sa.positions), bits(&sb.positions));
-    assert_eq!(bits(&sa.velocities), bits(&sb.velocities));
+    common::assert_same_bits(&sa, &sb);
 }

@@ -9,14 +9,7 @@ use powder::scene::Scene;
 use std::path::Path;
 
 fn cluster() -> Scene {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/examples/cohesive_cluster.toml"
-    );
-    let mut s = Scene::load(Path::new(path)).unwrap();
-    s.output_every = 500;
-    s.checkpoint_every = 1000;
-    s
+    common::cluster_with_outputs()
 }
 
 fn options(out: &Path, steps: u64, resume: Option<&Path>) -> RunOptions {

@@ -1,6 +1,8 @@
 //! Helpers shared by the integration tests.
 
-use powder::gpu::GpuContext;
+use powder::gpu::{GpuContext, GpuState};
+use powder::scene::Scene;
+use std::path::Path;
 
 /// The GPU context, or `None` (with a notice) when no adapter exists outside CI; in CI
 /// (where lavapipe is installed) a missing adapter fails the test.
@@ -13,4 +15,30 @@ pub fn gpu() -> Option<GpuContext> {
         }
         Err(e) => panic!("CI needs a GPU adapter (lavapipe): {e}"),
     }
+}
+
+/// The cohesive cluster example writing outputs every 500 steps and checkpoints every 1000
+/// (the run-output tests' scene).
+#[allow(dead_code)] // each test binary compiles this module; not all use every helper
+pub fn cluster_with_outputs() -> Scene {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/examples/cohesive_cluster.toml"
+    );
+    let mut s = Scene::load(Path::new(path)).unwrap();
+    s.output_every = 500;
+    s.checkpoint_every = 1000;
+    s
+}
+
+/// Asserts that two GPU states hold bitwise the same positions and velocities.
+#[allow(dead_code)]
+pub fn assert_same_bits(a: &GpuState, b: &GpuState) {
+    let bits = |v: &[glam::DVec3]| {
+        v.iter()
+            .flat_map(|p| p.to_array().map(f64::to_bits))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(bits(&a.positions), bits(&b.positions));
+    assert_eq!(bits(&a.velocities), bits(&b.velocities));
 }
