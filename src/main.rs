@@ -201,6 +201,18 @@ struct InfoArgs {
     /// Print the adapter summary as JSON on stdout.
     #[arg(long)]
     json: bool,
+    /// With a scene: time every pass of its GPU step (µs per dispatch, each pass recorded
+    /// 16 times alone, the rebuild's passes doing their full work), as `powder bench
+    /// --profile` does for the bench packings.
+    #[arg(long, requires = "scene")]
+    profile: bool,
+    /// With --profile: run this many steps first (profile a settled state, not the
+    /// initial one).
+    #[arg(long, default_value_t = 0, requires = "profile")]
+    after: u64,
+    /// Build the GPU engine without its energy ledger (as `powder run --no-ledger`).
+    #[arg(long, requires = "scene")]
+    no_ledger: bool,
 }
 
 /// What the GPU engine builds for a scene (`powder info SCENE`).
@@ -216,15 +228,24 @@ struct SceneInfo {
     buffers: Vec<(String, u64)>,
     total_bytes: u64,
     bytes_per_particle: f64,
+    /// With --profile: (pass, µs per dispatch) in step order, after `profile_after` steps.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    profile_us: Option<Vec<(String, f64)>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    profile_after: Option<u64>,
 }
 
 fn scene_info(
     path: &std::path::Path,
     ctx: powder::gpu::GpuContext,
+    a: &InfoArgs,
 ) -> Result<SceneInfo, PowderError> {
     let scene = Scene::load(path)?;
     let adapter = ctx.summary.name.clone();
-    let engine = powder::gpu::GpuEngine::new(&scene, ctx)?;
+    let options = powder::gpu::GpuOptions {
+        ledger: !a.no_ledger,
+    };
+    let mut engine = powder::gpu::GpuEngine::with_options(&scene, ctx, options)?;
     let variant_name = engine.variant_name();
     let mut kernels = vec![
         "grid: clear_counts, cell_keys, count, scan, scatter, sort_within_cells, sort_large_cells"
@@ -235,24 +256,35 @@ fn scene_info(
         kernels.extend(module.entry_points.iter().map(|e| e.name.clone()));
     }
     let total = engine.buffer_bytes();
+    let (buffers, particles) = (engine.buffers(), engine.len());
+    let (rotation, neighbour_slots) = (engine.rotates(), engine.capacity());
+    let profile_us = if a.profile {
+        engine.run_steps(a.after)?;
+        let passes = engine.profile_passes(16)?;
+        Some(passes.into_iter().map(|(p, s)| (p, s * 1e6)).collect())
+    } else {
+        None
+    };
     Ok(SceneInfo {
         scene: scene.name.clone(),
         adapter,
-        particles: engine.len(),
+        particles,
         step_variant: variant_name,
         kernels,
-        rotation: engine.rotates(),
-        neighbour_slots: engine.capacity(),
-        buffers: engine.buffers(),
+        rotation,
+        neighbour_slots,
+        buffers,
         total_bytes: total,
-        bytes_per_particle: total as f64 / engine.len().max(1) as f64,
+        bytes_per_particle: total as f64 / particles.max(1) as f64,
+        profile_after: a.profile.then_some(a.after),
+        profile_us,
     })
 }
 
 fn info_cmd(a: &InfoArgs) -> Result<(), PowderError> {
     let ctx = powder::gpu::GpuContext::new()?;
     if let Some(path) = &a.scene {
-        let info = scene_info(path, ctx)?;
+        let info = scene_info(path, ctx, a)?;
         if a.json {
             let text = serde_json::to_string_pretty(&info)
                 .map_err(|e| PowderError::Run(format!("cannot encode JSON: {e}")))?;
@@ -278,6 +310,15 @@ fn info_cmd(a: &InfoArgs) -> Result<(), PowderError> {
             "total            {} bytes = {:.1} bytes per particle",
             info.total_bytes, info.bytes_per_particle
         );
+        if let Some(passes) = &info.profile_us {
+            println!(
+                "passes (µs per dispatch, after {} steps):",
+                info.profile_after.unwrap_or(0)
+            );
+            for (name, us) in passes {
+                println!("  {name:<20} {us:>12.1}");
+            }
+        }
         return Ok(());
     }
     if a.json {

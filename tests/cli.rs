@@ -713,3 +713,49 @@ fn info_scene_lists_kernels_buffers_and_leaves_out_rotation() {
         .iter()
         .any(|b| b[0].as_str().unwrap().contains("omega")));
 }
+
+/// `powder info SCENE --profile` times the GPU step's passes on any scene (after `--after`
+/// steps), and `--no-ledger` builds the engine without the ledger's buffers.
+#[test]
+fn info_scene_profiles_its_passes() {
+    if !gpu_available() {
+        return;
+    }
+    let scene = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/examples/cohesive_cluster.toml"
+    );
+    let (ok, out, err) = powder(&[
+        "info",
+        scene,
+        "--profile",
+        "--after",
+        "20",
+        "--no-ledger",
+        "--json",
+    ]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["profile_after"], 20);
+    let passes = v["profile_us"].as_array().unwrap();
+    let names: Vec<&str> = passes.iter().map(|p| p[0].as_str().unwrap()).collect();
+    for pass in ["kick_drift", "decide", "neighbours", "force", "collect"] {
+        assert!(names.contains(&pass), "{names:?}");
+    }
+    assert!(
+        passes.iter().all(|p| p[1].as_f64().unwrap() >= 0.0),
+        "{passes:?}"
+    );
+    let buffers = v["buffers"].as_array().unwrap();
+    assert!(
+        !buffers
+            .iter()
+            .any(|b| b[0].as_str().unwrap().contains("ledger")),
+        "--no-ledger still allocated a ledger: {buffers:?}"
+    );
+    // without --profile the JSON has no profile keys
+    let (ok, out, _) = powder(&["info", scene, "--json"]);
+    assert!(ok);
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert!(v.get("profile_us").is_none() && v.get("profile_after").is_none());
+}
