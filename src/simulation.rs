@@ -193,11 +193,8 @@ impl Simulation for GpuEngine {
     fn observe(&self) -> Result<Observation, PowderError> {
         let s = self.state()?;
         let (energies, contacts, wall_forces) = if self.has_ledger() {
-            (
-                self.energies(&s)?.into(),
-                Some(self.contact_stats()?),
-                Some(self.wall_forces()?),
-            )
+            let (energies, contacts) = self.energies_and_contact_stats(&s)?;
+            (energies.into(), Some(contacts), Some(self.wall_forces()?))
         } else {
             // what the read-back state tells on the host, in f64
             let known = ObservedEnergies {

@@ -409,19 +409,22 @@ jitter = 0.3
     assert!(e.contact_stats().coordination > 2.0);
 }
 
-/// The run monitor on the GPU backend: the failures are detected on the device (overlap,
-/// escape, non-finite forces; checked once per batch of steps, no per-step read-back) and
-/// the run stops with a checkpoint of the last state that passed.
-#[test]
-fn the_gpu_monitor_stops_runs_that_go_wrong_and_keeps_the_last_good_state() {
+/// The device checks of the GPU run monitor, run with `gpu` (with or without the ledger):
+/// a forced, far too large time step stops with a checkpoint of the last good state (in
+/// `out`; returned with the run options and scene, to resume), a violent impact and an
+/// escape stop too. `None` without an adapter.
+fn gpu_monitor_stops_each_failure(
+    gpu_options: powder::gpu::GpuOptions,
+    out: &std::path::Path,
+) -> Option<(std::path::PathBuf, RunOptions, Scene)> {
     use powder::run::run_gpu_with;
-    let dir = tempfile::tempdir().unwrap();
     let opts = RunOptions {
-        out_dir: Some(dir.path().to_path_buf()),
+        out_dir: Some(out.to_path_buf()),
+        gpu: gpu_options,
         ..Default::default()
     };
     // a forced time step far above the limit
-    let Some(ctx) = gpu() else { return };
+    let ctx = gpu()?;
     let s = pair_scene(DtSetting::Fixed(2e-3), true, 0.5, 0.1);
     let err = run_gpu_with(&s, ctx, &opts, |_| {})
         .unwrap_err()
@@ -432,24 +435,17 @@ fn the_gpu_monitor_stops_runs_that_go_wrong_and_keeps_the_last_good_state() {
         "{err}"
     );
     assert!(err.contains("checkpoint.bin"), "{err}");
-    let ckpt = dir.path().join("checkpoint.bin");
+    let ckpt = out.join("checkpoint.bin");
     assert!(ckpt.exists());
-    // the checkpoint holds the last good state: it resumes (and fails again further on)
-    let Some(ctx) = gpu() else { return };
-    let resumed = RunOptions {
-        resume: Some(ckpt),
-        ..opts.clone()
-    };
-    let again = run_gpu_with(&s, ctx, &resumed, |_| {})
-        .unwrap_err()
-        .to_string();
-    assert!(again.contains("step"), "{again}");
     // a violent impact: overlap beyond half the reduced radius, seen on the device
-    let Some(ctx) = gpu() else { return };
+    let quiet = RunOptions {
+        gpu: gpu_options,
+        ..Default::default()
+    };
     let err = run_gpu_with(
         &pair_scene(DtSetting::Auto, false, 3.0, 0.1),
-        ctx,
-        &RunOptions::default(),
+        gpu()?,
+        &quiet,
         |_| {},
     )
     .unwrap_err()
@@ -459,14 +455,37 @@ fn the_gpu_monitor_stops_runs_that_go_wrong_and_keeps_the_last_good_state() {
         "{err}"
     );
     // particles leaving the domain
-    let mut s = pair_scene(DtSetting::Auto, false, -0.5, 3e-3);
-    s.duration = 0.05;
-    let Some(ctx) = gpu() else { return };
-    let err = run_gpu_with(&s, ctx, &RunOptions::default(), |_| {})
+    let mut escape = pair_scene(DtSetting::Auto, false, -0.5, 3e-3);
+    escape.duration = 0.05;
+    let err = run_gpu_with(&escape, gpu()?, &quiet, |_| {})
         .unwrap_err()
         .to_string();
     eprintln!("escape: {err}");
     assert!(err.contains("left the domain"), "{err}");
+    Some((ckpt, opts, s))
+}
+
+/// The run monitor on the GPU backend: the failures are detected on the device (overlap,
+/// escape, non-finite forces; checked once per batch of steps, no per-step read-back) and
+/// the run stops with a checkpoint of the last state that passed.
+#[test]
+fn the_gpu_monitor_stops_runs_that_go_wrong_and_keeps_the_last_good_state() {
+    use powder::run::run_gpu_with;
+    let dir = tempfile::tempdir().unwrap();
+    let Some((ckpt, opts, s)) = gpu_monitor_stops_each_failure(Default::default(), dir.path())
+    else {
+        return;
+    };
+    // the checkpoint holds the last good state: it resumes (and fails again further on)
+    let Some(ctx) = gpu() else { return };
+    let resumed = RunOptions {
+        resume: Some(ckpt),
+        ..opts
+    };
+    let again = run_gpu_with(&s, ctx, &resumed, |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(again.contains("step"), "{again}");
 }
 
 /// Without the energy ledger (`powder run --no-ledger`) the monitor has no energy-growth
@@ -474,45 +493,8 @@ fn the_gpu_monitor_stops_runs_that_go_wrong_and_keeps_the_last_good_state() {
 /// impact and an escape, with a checkpoint of the last good state.
 #[test]
 fn the_gpu_monitor_without_the_ledger_still_stops_runs_that_go_wrong() {
-    use powder::gpu::GpuOptions;
-    use powder::run::run_gpu_with;
     let dir = tempfile::tempdir().unwrap();
-    let opts = RunOptions {
-        out_dir: Some(dir.path().to_path_buf()),
-        gpu: GpuOptions { ledger: false },
-        ..Default::default()
-    };
-    let Some(ctx) = gpu() else { return };
-    let s = pair_scene(DtSetting::Fixed(2e-3), true, 0.5, 0.1);
-    let err = run_gpu_with(&s, ctx, &opts, |_| {})
-        .unwrap_err()
-        .to_string();
-    assert!(
-        err.contains("step") && err.contains("particle") && err.contains("time step"),
-        "{err}"
-    );
-    assert!(dir.path().join("checkpoint.bin").exists(), "{err}");
-    let quiet = RunOptions {
-        gpu: GpuOptions { ledger: false },
-        ..Default::default()
-    };
-    let Some(ctx) = gpu() else { return };
-    let err = run_gpu_with(
-        &pair_scene(DtSetting::Auto, false, 3.0, 0.1),
-        ctx,
-        &quiet,
-        |_| {},
-    )
-    .unwrap_err()
-    .to_string();
-    assert!(err.contains("reduced radius"), "{err}");
-    let mut s = pair_scene(DtSetting::Auto, false, -0.5, 3e-3);
-    s.duration = 0.05;
-    let Some(ctx) = gpu() else { return };
-    let err = run_gpu_with(&s, ctx, &quiet, |_| {})
-        .unwrap_err()
-        .to_string();
-    assert!(err.contains("left the domain"), "{err}");
+    gpu_monitor_stops_each_failure(powder::gpu::GpuOptions { ledger: false }, dir.path());
 }
 
 /// The Rayleigh time bounds dt for elastic spheres when slow impacts make the Hertz

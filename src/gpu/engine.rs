@@ -279,6 +279,8 @@ pub struct GpuEngine {
     radius: Vec<f64>,
     mass: Vec<f64>,
     grid: GridSort,
+    /// The grid sort's key pass bound to A's cells (made once: the buffer never changes).
+    grid_keys: wgpu::BindGroup,
     /// The state (A).
     state: StateSet,
     /// The re-sorted copy a rebuild writes (B; bound in the kernels, never read by the host).
@@ -833,6 +835,7 @@ impl GpuEngine {
             h,
             radius,
             mass: mass.clone(),
+            grid_keys: grid.keys_bind_group(&state.cell),
             grid,
             state,
             _sorted: sorted,
@@ -979,7 +982,7 @@ impl GpuEngine {
             bound.decide.once(&mut pass, max);
         }
         self.grid
-            .encode_indirect(encoder, &self.state.cell, &self.args, 0);
+            .encode_indirect(encoder, &self.grid_keys, &self.args, 0);
         let mut pass = encoder.begin_compute_pass(&Default::default());
         let rebuild = [
             &bound.gather,
@@ -1444,7 +1447,19 @@ impl GpuEngine {
     /// and dissipated read from the device and summed in f64 in particle order), J. The
     /// same quantities as `CpuEngine::energies`.
     pub fn energies(&self, state: &GpuState) -> Result<Energies, PowderError> {
+        Ok(self.energies_of(&self.read_particle_ledger()?, state))
+    }
+
+    /// [`Self::energies`] and [`Self::contact_stats`] from one read-back of the ledger.
+    pub fn energies_and_contact_stats(
+        &self,
+        state: &GpuState,
+    ) -> Result<(Energies, ContactStats), PowderError> {
         let rows = self.read_particle_ledger()?;
+        Ok((self.energies_of(&rows, state), self.contact_stats_of(&rows)))
+    }
+
+    fn energies_of(&self, rows: &[[f32; 4]], state: &GpuState) -> Energies {
         let mut e = Energies {
             kinetic: self.kinetic_energy(state),
             gravitational: self.gravitational_energy(state),
@@ -1456,13 +1471,16 @@ impl GpuEngine {
             e.elastic += p[2][2] as f64;
             e.wall_work += p[3][0] as f64 - p[3][1] as f64;
         }
-        Ok(e)
+        e
     }
 
     /// Contact counts and overlap statistics after the last step, as
     /// `CpuEngine::contact_stats` (each pair's evaluator counts it twice on the device).
     pub fn contact_stats(&self) -> Result<ContactStats, PowderError> {
-        let rows = self.read_particle_ledger()?;
+        Ok(self.contact_stats_of(&self.read_particle_ledger()?))
+    }
+
+    fn contact_stats_of(&self, rows: &[[f32; 4]]) -> ContactStats {
         let mut counts = [0.0f64; 4];
         let mut sums = [0.0f64; 2];
         let mut s = ContactStats::default();
@@ -1484,7 +1502,7 @@ impl GpuEngine {
         if touching > 0 {
             s.mean_overlap_ratio = (sums[0] / 2.0 + sums[1]) / touching as f64;
         }
-        Ok(s)
+        s
     }
 
     /// Force of the particles on each wall after the last step, N: the normal part, from the

@@ -449,8 +449,9 @@ impl GridSort {
         &self.params
     }
 
-    /// The bind group of `cell_keys` for this cell buffer.
-    fn keys_bind_group(&self, cells: &wgpu::Buffer) -> wgpu::BindGroup {
+    /// The bind group of `cell_keys` for this cell buffer (for [`Self::encode_indirect`]:
+    /// a stepping loop makes it once, not per step).
+    pub fn keys_bind_group(&self, cells: &wgpu::Buffer) -> wgpu::BindGroup {
         self.cell_keys
             .bind(
                 &self.device,
@@ -544,22 +545,21 @@ impl GridSort {
     /// Records the sort as [`Self::encode`] does, but every dispatch indirect: dispatch
     /// `i` reads its `[x, y, z]` from `args` at byte `offset + 12·i` (a buffer with
     /// `INDIRECT` usage holding [`Self::indirect_args`] to sort, or zeros to skip the
-    /// sort and keep the previous result).
+    /// sort and keep the previous result). `keys`: [`Self::keys_bind_group`] of the cells.
     pub fn encode_indirect(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        cells: &wgpu::Buffer,
+        keys: &wgpu::BindGroup,
         args: &wgpu::Buffer,
         offset: u64,
     ) {
-        let bg_keys = self.keys_bind_group(cells);
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("grid sort (indirect)"),
             timestamp_writes: None,
         });
         for (i, (kernel, bind_group, _)) in self.plan().into_iter().enumerate() {
             pass.set_pipeline(&kernel.pipeline);
-            pass.set_bind_group(0, bind_group.unwrap_or(&bg_keys), &[]);
+            pass.set_bind_group(0, bind_group.unwrap_or(keys), &[]);
             pass.dispatch_workgroups_indirect(args, offset + 12 * i as u64);
         }
     }
