@@ -24,9 +24,14 @@ struct HystereticPair {
     // Bit 0: jump-in adhesion (else reversible); bit 1: sqrt k2 rule (else linear);
     // bit 2: LSD (force k1*delta + gamma0*delta_dot, no history).
     flags: u32,
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
+    // Derived on the host, so the kernel multiplies where the f64 reference divides (on
+    // a SIMD adapter every branch's divisions run for every pair): 1/dmaxp_per_a12,
+    // (k1 + kc)/(kp − k1) (0 when kp <= k1: the tensile branch's history moves as
+    // 0.5·δ + sqrt(0.25·δ² + tensile_c·δ·δmax^p)), and kp·φf/(kp + kc), where the limit
+    // line meets the tensile branch, over a12.
+    inv_dmaxp_per_a12: f32,
+    tensile_c: f32,
+    tensile_limit_per_a12: f32,
 }
 
 const HYST_JUMP_IN: u32 = 1u;
@@ -67,8 +72,8 @@ fn hyst_range(p: HystereticPair) -> f32 {
     return 0.0;
 }
 
-fn hyst_k2(p: HystereticPair, delta_max: f32, dmaxp: f32) -> f32 {
-    let x = delta_max / dmaxp;
+// k2 at x = delta_max/delta_max^p.
+fn hyst_k2(p: HystereticPair, x: f32) -> f32 {
     if (x >= 1.0) {
         return p.kp;
     }
@@ -79,11 +84,18 @@ fn hyst_k2(p: HystereticPair, delta_max: f32, dmaxp: f32) -> f32 {
     return p.k1 + (p.kp - p.k1) * shape;
 }
 
-fn hyst_delta0(p: HystereticPair, delta_max: f32, dmaxp: f32, a12: f32) -> f32 {
+// delta0 for the k2 of delta_max (the caller has it: one division fewer per pair).
+fn hyst_delta0(p: HystereticPair, delta_max: f32, dmaxp: f32, a12: f32, k2: f32) -> f32 {
     if (delta_max >= dmaxp) {
         return p.phi_f * a12;
     }
-    return (1.0 - p.k1 / hyst_k2(p, delta_max, dmaxp)) * delta_max;
+    return (1.0 - p.k1 / k2) * delta_max;
+}
+
+// The un-/re-loading line of delta_max: (k2, delta0). `inv_a12` = 1/a12.
+fn hyst_line(p: HystereticPair, delta_max: f32, dmaxp: f32, a12: f32, inv_a12: f32) -> vec2<f32> {
+    let k2 = hyst_k2(p, delta_max * p.inv_dmaxp_per_a12 * inv_a12);
+    return vec2<f32>(k2, hyst_delta0(p, delta_max, dmaxp, a12, k2));
 }
 
 // The delta_max whose k2 line passes through (delta, -kc*delta): where the tensile branch
@@ -92,12 +104,12 @@ fn hyst_tensile_history(p: HystereticPair, delta: f32, dmaxp: f32, a12: f32) -> 
     if (p.kp <= p.k1) {
         return 0.0;
     }
-    if (delta >= p.kp * p.phi_f * a12 / (p.kp + p.kc)) {
+    if (delta >= p.tensile_limit_per_a12 * a12) {
         return dmaxp;
     }
     if (!hyst_flag(p, HYST_SQRT_RULE)) {
-        let s = (p.kp - p.k1) / dmaxp;
-        return 0.5 * delta + sqrt(0.25 * delta * delta + (p.k1 + p.kc) * delta / s);
+        // (k1 + kc)·delta/s with s = (kp − k1)/dmaxp
+        return 0.5 * delta + sqrt(0.25 * delta * delta + p.tensile_c * delta * dmaxp);
     }
     // sqrt rule: s*u^3 - s*delta*u - (k1 + kc)*delta = 0, u = sqrt(delta_max): bisection
     // (f32 converges in 24 halvings; 40 leaves margin).
@@ -117,7 +129,7 @@ fn hyst_tensile_history(p: HystereticPair, delta: f32, dmaxp: f32, a12: f32) -> 
 }
 
 // The mechanical contact force f_hys for delta > 0 (paper 000 eq. 5), updating delta_max.
-fn hyst_contact_force(p: HystereticPair, delta: f32, a12: f32, h: ptr<function, HystHistory>) -> f32 {
+fn hyst_contact_force(p: HystereticPair, delta: f32, a12: f32, inv_a12: f32, h: ptr<function, HystHistory>) -> f32 {
     let dmaxp = p.dmaxp_per_a12 * a12;
     if (delta >= (*h).delta_max) {
         (*h).delta_max = delta;
@@ -126,8 +138,8 @@ fn hyst_contact_force(p: HystereticPair, delta: f32, a12: f32, h: ptr<function, 
         }
         return p.kp * (delta - p.phi_f * a12);
     }
-    let k2 = hyst_k2(p, (*h).delta_max, dmaxp);
-    let elastic = k2 * (delta - hyst_delta0(p, (*h).delta_max, dmaxp, a12));
+    let line = hyst_line(p, (*h).delta_max, dmaxp, a12, inv_a12);
+    let elastic = line.x * (delta - line.y);
     if (elastic >= p.k1 * delta && (*h).delta_max < dmaxp) {
         return p.k1 * delta;
     }
@@ -152,7 +164,7 @@ fn hyst_adhesion_potential(p: HystereticPair, delta: f32) -> f32 {
 }
 
 // Total normal force of the pair (contact + non-contact adhesion + viscosity).
-fn hyst_force(p: HystereticPair, delta: f32, delta_dot: f32, a12: f32, history: HystHistory) -> HystForce {
+fn hyst_force(p: HystereticPair, delta: f32, delta_dot: f32, a12: f32, inv_a12: f32, history: HystHistory) -> HystForce {
     var h = history;
     if (hyst_flag(p, HYST_LSD)) {
         if (delta > 0.0) {
@@ -163,10 +175,10 @@ fn hyst_force(p: HystereticPair, delta: f32, delta_dot: f32, a12: f32, history: 
     let range = hyst_range(p);
     if (delta > 0.0) {
         h.touched = true;
-        let f = hyst_contact_force(p, delta, a12, &h) - p.fa + p.gamma0 * delta_dot;
-        let dmaxp = p.dmaxp_per_a12 * a12;
-        let d = delta - hyst_delta0(p, h.delta_max, dmaxp, a12);
-        var u = 0.5 * hyst_k2(p, h.delta_max, dmaxp) * d * d;
+        let f = hyst_contact_force(p, delta, a12, inv_a12, &h) - p.fa + p.gamma0 * delta_dot;
+        let line = hyst_line(p, h.delta_max, p.dmaxp_per_a12 * a12, a12, inv_a12);
+        let d = delta - line.y;
+        var u = 0.5 * line.x * d * d;
         if (p.fa > 0.0) {
             u += hyst_adhesion_potential(p, delta);
         }
@@ -225,7 +237,7 @@ fn history_out(h: HystHistory) -> Hist {
 
 // Normal force only: a12 = 2·R* (2r for a wall).
 fn pair_contact(p: HystereticPair, k: Kin, hist: ptr<function, Hist>) -> Contact {
-    let r = hyst_force(p, k.delta, k.delta_dot, 2.0 * k.r_eff, history_in(*hist));
+    let r = hyst_force(p, k.delta, k.delta_dot, 2.0 * k.r_eff, k.inv_a12, history_in(*hist));
     *hist = history_out(r.history);
     return Contact(r.force, vec3<f32>(0.0), vec3<f32>(0.0), r.potential, r.history.touched);
 }

@@ -69,9 +69,12 @@ fn rot_copy_back(k: u32) {
     a_wpred[k] = b_wpred[k];
 }
 
-// The predicted angular velocity of particle k.
+// The predicted angular velocity of particle k (in the force pass: from its mirror, as
+// m_vpred in step.wgsl).
+@group(0) @binding(83) var m_wpred: texture_storage_2d<rgba32float, read>;
+
 fn rot_wpred(k: u32) -> vec3<f32> {
-    return a_wpred[k].xyz;
+    return textureLoad(m_wpred, mirror_texel(k)).xyz;
 }
 
 // force: the torque of k's own pairs and walls (alpha holds it until collect).

@@ -183,6 +183,19 @@ override ONE_MATERIAL: bool = false;
 // particle in both state sets: the f32 updates v += dt/2·a and o += dt·v add increments of
 // a few ulps (slow particles, small dt), whose rounding would otherwise accumulate
 // systematically; the true values are v − c_v and o − c_o.
+// Read-only texture copies of a_cell, a_off and a_vpred, made right before each force
+// pass (`gpu::mirror`): the force pass loads them for every pair, and on lavapipe a
+// read-only storage-texture load is one gather where a storage-buffer load is a loop over
+// the SIMD lanes (measured 0.4 against 1.1–1.8 ns a vec4). MIRROR_WIDTH particles a row.
+const MIRROR_WIDTH: u32 = 4096u;
+@group(0) @binding(80) var m_cell: texture_storage_2d<rgba32sint, read>;
+@group(0) @binding(81) var m_off: texture_storage_2d<rgba32float, read>;
+@group(0) @binding(82) var m_vpred: texture_storage_2d<rgba32float, read>;
+
+fn mirror_texel(k: u32) -> vec2<u32> {
+    return vec2<u32>(k % MIRROR_WIDTH, k / MIRROR_WIDTH);
+}
+
 @group(0) @binding(66) var<storage, read_write> a_kahan: array<vec4<f32>>;
 @group(0) @binding(67) var<storage, read_write> b_kahan: array<vec4<f32>>;
 
@@ -357,6 +370,10 @@ fn drift(i: u32) {
 // Each buffer is read once and written once (the caller passes what it read already): on
 // lavapipe every access in the code is a loop over the SIMD lanes.
 // `peak`: the largest overlap/a12 of the last force pass (0 when it was folded already).
+// `pending_kick`: called from collect_kick_drift, within a batch, where the mirrors still
+// hold the cell and offset the last force pass saw (nothing wrote them since): read from
+// there (a gather on lavapipe, not a loop over the lanes). At a batch's first step the host
+// may have written the state since (a restore): read the buffers.
 fn drift_particle(i: u32, vel: vec4<f32>, acc: vec3<f32>, rot: RotState, pending_kick: bool, peak: f32) {
     let h = grid.cell_width;
     let half_dv = 0.5 * step.dt * acc;
@@ -383,7 +400,15 @@ fn drift_particle(i: u32, vel: vec4<f32>, acc: vec3<f32>, rot: RotState, pending
     }
     // the move with the compensated velocity; the cell carry below subtracts whole
     // cells (exact for an offset within a factor 2 of h), so the compensation stays
-    let off = a_off[i];
+    var off: vec4<f32>;
+    var cell0: vec4<i32>;
+    if (pending_kick) {
+        off = textureLoad(m_off, mirror_texel(i));
+        cell0 = textureLoad(m_cell, mirror_texel(i));
+    } else {
+        off = a_off[i];
+        cell0 = a_cell[i];
+    }
     let ko = kahan_add(off.xyz, a_kahan[2u * i + 1u].xyz, step.dt * (v - kv.c));
     a_kahan[2u * i + 1u] = vec4<f32>(ko.c, 0.0);
     var o = ko.x;
@@ -393,7 +418,6 @@ fn drift_particle(i: u32, vel: vec4<f32>, acc: vec3<f32>, rot: RotState, pending
     let over = o >= vec3<f32>(h);
     o = select(o, vec3<f32>(0.0), over);
     let carry = vec3<i32>(shift) + select(vec3<i32>(0), vec3<i32>(1), over);
-    let cell0 = a_cell[i];
     let cell = wrap_cell(cell0.xyz + carry);
     // stored only where it changes (rarely): a masked store skips the work of idle lanes
     if (any(carry != vec3<i32>(0))) {
@@ -702,6 +726,9 @@ struct Kin {
     v_t: vec3<f32>,
     // Rolling velocity R*·(w_i − w_j) × n + ½·(r_i − r_j)/(r_i + r_j)·v_t (paper 002 eq. 20).
     v_roll: vec3<f32>,
+    // 1/a12 = 1/(2R*) (the step needs it for the overlap monitor; the hysteretic model
+    // multiplies by it where the reference divides by a12).
+    inv_a12: f32,
 }
 
 // What one contact does to particle i.
@@ -721,20 +748,27 @@ struct Contact {
 @compute @workgroup_size(WG_SIZE)
 fn force(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let k = global_index(wid, nwg, lid);
+    // Loaded here, outside any branch: lavapipe loads a uniform address as one scalar only
+    // where invocation 0 is known to be active (no enclosing if or loop); inside the pair
+    // loop each of the row's words was a loop over the SIMD lanes — a fifth of the force
+    // pass (perf on the JIT code). Dead, and dropped, unless ONE_MATERIAL.
+    let row0 = pairs[0];
     if (k < grid.n_particles) {
-        particle_forces(k);
+        particle_forces(k, row0);
     }
 }
 
 // The forces on particle k, stored in its acceleration's xyz, and its contacts' largest
 // overlap/a12 (0 without overlap) in w, for the run monitor (see a_disp).
-fn particle_forces(k: u32) {
+// `row0`: pair row 0, the only one of a scene with ONE_MATERIAL.
+fn particle_forces(k: u32, row0: PairRow) {
     let cap = step.max_neighbours;
-    let ck = a_cell[k];
-    let ok = a_off[k];
+    // (own and partners' state from the mirrors: see m_cell)
+    let ck = textureLoad(m_cell, mirror_texel(k));
+    let ok = textureLoad(m_off, mirror_texel(k));
     let rk = ok.w;
     // vpred.w holds the mass
-    let pk = a_vpred[k];
+    let pk = textureLoad(m_vpred, mirror_texel(k));
     let mk = pk.w;
     let vk = pk.xyz;
     let wk = rot_wpred(k);
@@ -745,15 +779,18 @@ fn particle_forces(k: u32) {
     var peak = 0.0;
     for (var s = 0u; s < a_count[k]; s++) {
         let j = nbr[slot_index(k, s)];
-        let cj = a_cell[j];
-        let oj = a_off[j];
+        let cj = textureLoad(m_cell, mirror_texel(j));
+        let oj = textureLoad(m_off, mirror_texel(j));
         let rj = oj.w;
         // predicted velocity (xyz) and mass (w): one load
-        let pj = a_vpred[j];
+        let pj = textureLoad(m_vpred, mirror_texel(j));
         let mj = pj.w;
         let d = separation(ck, ok, cj, oj);
         let dist = length(d);
         let delta = rk + rj - dist;
+        // (one division, not one per component: on a SIMD adapter every division in the
+        // code runs for every pair)
+        let inv_dist = 1.0 / dist;
         let slot = slot_index(k, s);
         // A list candidate (within the skin) out of every model's range gets no force and
         // the history a pair out of range has (the models reset it there too). One store
@@ -762,14 +799,16 @@ fn particle_forces(k: u32) {
         let far = delta < -step.reach;
         var n = vec3<f32>(0.0, 0.0, 1.0);
         if (dist > 0.0) {
-            n = d / dist;
+            n = d * inv_dist;
         }
         let v_rel = vk - pj.xyz;
         let wj = rot_wpred(j);
         // Mirror-symmetric forms (see the header): (r_i w_i + r_j w_j) is commutative.
         let v_c = v_rel - cross(rk * wk + rj * wj, n);
         let v_t = v_c - n * dot(v_c, n);
-        let r_eff = rk * rj / (rk + rj);
+        let r_sum = rk + rj;
+        let r_eff = rk * rj / r_sum;
+        let inv_a12 = r_sum / (2.0 * rk * rj);
         let kin = Kin(
             delta,
             -dot(v_rel, n),
@@ -778,11 +817,15 @@ fn particle_forces(k: u32) {
             step.dt,
             n,
             v_t,
-            r_eff * cross(wk - wj, n) + (0.5 * (rk - rj) / (rk + rj)) * v_t,
+            r_eff * cross(wk - wj, n) + (0.5 * (rk - rj) / r_sum) * v_t,
+            inv_a12,
         );
         let h0 = a_hist[slot];
         var h = h0;
-        let row = pairs[select(mat_k * step.n_materials + u32(cj.w), 0u, ONE_MATERIAL)];
+        var row = row0;
+        if (!ONE_MATERIAL) {
+            row = pairs[mat_k * step.n_materials + u32(cj.w)];
+        }
         let c = pair_contact(row, kin, &h);
         var fp = c.normal * n + c.tangential;
         var t_partner = vec3<f32>(0.0);
@@ -791,7 +834,7 @@ fn particle_forces(k: u32) {
             fp = vec3<f32>(0.0);
             ledger_departed(&ledger_acc, slot, delta);
         } else {
-            peak = max(peak, delta / (2.0 * r_eff));
+            peak = max(peak, delta * inv_a12);
             ledger_pair(&ledger_acc, slot, row, kin, c, dot(c.tangential, v_t) + dot(c.rolling, wk - wj));
             f += fp;
             if (ROTATION) {
@@ -840,13 +883,14 @@ fn particle_forces(k: u32) {
         let v_c = v_rel - cross(rk * wk, n);
         let v_t = v_c - n * dot(v_c, n);
         // eq. 20 with r_j -> inf: (r_i - r_j)/(r_i + r_j) -> -1
-        let kin = Kin(delta, -dot(v_rel, n), rk, mk, step.dt, n, v_t, rk * cross(wk, n) - 0.5 * v_t);
+        let inv_a12 = 0.5 / rk;
+        let kin = Kin(delta, -dot(v_rel, n), rk, mk, step.dt, n, v_t, rk * cross(wk, n) - 0.5 * v_t, inv_a12);
         let slot = wall_slot(k, w);
         var h = a_wall_hist[slot];
         let row = pairs[step.n_materials * step.n_materials + w * step.n_materials + mat_k];
         let c = pair_contact(row, kin, &h);
         a_wall_hist[slot] = h;
-        peak = max(peak, delta / (2.0 * rk));
+        peak = max(peak, delta * inv_a12);
         ledger_wall(&ledger_acc, slot, row, kin, c, dot(c.tangential, v_t) + dot(c.rolling, wk), dot(n, wall.velocity.xyz));
         if (step.servo_walls != 0u) {
             wall_push[slot] = c.normal;

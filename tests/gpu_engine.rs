@@ -845,3 +845,45 @@ fn split_pair_forces_give_the_same_bits() {
     let (sa, sb) = (one.state().unwrap(), split.state().unwrap());
     common::assert_same_bits(&sa, &sb);
 }
+
+/// The force pass reads the particles' state from texture mirrors, `MIRROR_WIDTH` (4096)
+/// particles a row: packings of two rows, the second partial, for both mirrored layouts
+/// (the JKR case also mirrors the predicted angular velocity) follow the CPU reference.
+/// A particle of the second row read from the wrong texel would feel garbage forces.
+#[test]
+fn state_mirrors_past_one_texture_row_match_the_cpu() {
+    use powder::bench::{packing, Case};
+    for case in [Case::Hysteretic, Case::Jkr] {
+        let Some(ctx) = context() else { return };
+        let scene = packing(case, 4500, 1.0, 7).unwrap();
+        let mut cpu = CpuEngine::new(&scene).unwrap();
+        let mut gpu =
+            GpuEngine::with_options(&scene, ctx, powder::gpu::GpuOptions { ledger: false })
+                .unwrap();
+        cpu.run_steps(60).unwrap();
+        gpu.run_steps(60).unwrap();
+        let s = gpu.state().unwrap();
+        let r = scene.particles[0].radius;
+        let moved = cpu
+            .positions()
+            .iter()
+            .zip(&scene.particles)
+            .map(|(a, p)| a.distance(glam::DVec3::from_array(p.position)))
+            .fold(0.0, f64::max);
+        let (worst, at) = cpu
+            .positions()
+            .iter()
+            .zip(&s.positions)
+            .map(|(a, b)| a.distance(*b))
+            .enumerate()
+            .fold((0.0, 0), |m, (i, d)| if d > m.0 { (d, i) } else { m });
+        eprintln!(
+            "{case:?}: worst difference {:.3e} radii (particle {at}), largest move {:.3e} radii",
+            worst / r,
+            moved / r
+        );
+        // the contacts act: the particles move well beyond the tolerance
+        assert!(moved > 1e-4 * r, "{moved}");
+        assert!(worst < 1e-5 * r, "{case:?}: particle {at} off by {worst} m");
+    }
+}

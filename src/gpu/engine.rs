@@ -53,6 +53,7 @@ use crate::gpu::kernel::{
 use crate::gpu::layout::{
     encode3, gpu_cell_width, HystereticPair, JkrPair, MixedPair, StepParams, WallGpu,
 };
+use crate::gpu::mirror::Mirrors;
 use crate::gpu::shaders::StepKind;
 use crate::model::{ContactHistory, ContactModel};
 use crate::scene::Scene;
@@ -283,6 +284,8 @@ pub struct GpuEngine {
     grid_keys: wgpu::BindGroup,
     /// The state (A).
     state: StateSet,
+    /// Texture copies of A's cells, offsets and predictions for the force pass.
+    mirrors: Mirrors,
     /// The re-sorted copy a rebuild writes (B; bound in the kernels, never read by the host).
     _sorted: StateSet,
     monitor: wgpu::Buffer,
@@ -765,6 +768,18 @@ impl GpuEngine {
             mapped_at_creation: false,
         });
         alloc.list.push(("args".into(), args.size()));
+        // the force pass's read-only copies of what it loads per pair (`gpu::mirror`)
+        let s0 = &sets[0];
+        let mut mirrored = vec![
+            ("m_cell", &s0.cell, wgpu::TextureFormat::Rgba32Sint),
+            ("m_off", &s0.off, wgpu::TextureFormat::Rgba32Float),
+            ("m_vpred", &s0.vpred, wgpu::TextureFormat::Rgba32Float),
+        ];
+        if let Some(w) = &s0.wpred {
+            mirrored.push(("m_wpred", w, wgpu::TextureFormat::Rgba32Float));
+        }
+        let mirrors = Mirrors::new(device, n as u32, &mirrored)?;
+        alloc.list.extend(mirrors.sizes());
         let buffers = alloc.list;
         let bind = || -> Result<Bound, PowderError> {
             let mut list: Vec<(String, &wgpu::Buffer)> = sets[0].named("a");
@@ -801,7 +816,7 @@ impl GpuEngine {
                 list.iter().map(|(n, b)| (n.as_str(), *b)).collect();
             let pass = |name: &str| -> Result<Pass, PowderError> {
                 let kernel = program.kernel(name)?.clone();
-                let group = kernel.bind(device, &refs)?;
+                let group = kernel.bind_with_textures(device, &refs, &mirrors.views())?;
                 Ok(Pass { kernel, group })
             };
             let optional = |name: &str| program.kernels.contains_key(name).then(|| pass(name));
@@ -836,6 +851,7 @@ impl GpuEngine {
             radius,
             mass: mass.clone(),
             grid_keys: grid.keys_bind_group(&state.cell),
+            mirrors,
             grid,
             state,
             _sorted: sorted,
@@ -979,21 +995,33 @@ impl GpuEngine {
                     p.once(&mut pass, max);
                 }
             }
-            bound.decide.once(&mut pass, max);
+            if drift == Drift::None || !std::env::var("XSKIP").unwrap_or_default().contains('d') {
+                bound.decide.once(&mut pass, max);
+            }
         }
-        self.grid
-            .encode_indirect(encoder, &self.grid_keys, &self.args, 0);
+        let skip = std::env::var("XSKIP").unwrap_or_default();
+        if drift == Drift::None || !skip.contains('c') {
+            self.grid
+                .encode_indirect(encoder, &self.grid_keys, &self.args, 0);
+        }
+        if drift == Drift::None || !skip.contains('c') {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            let rebuild = [
+                &bound.gather,
+                &bound.neighbours,
+                &bound.remap,
+                &bound.copy_back,
+                &bound.copy_back_history,
+            ];
+            for p in rebuild {
+                p.indirect(&mut pass, &self.args, self.rebuild_args);
+            }
+        }
+        // the state the forces see, drifted (and re-sorted on a rebuild)
+        if drift == Drift::None || !skip.contains('m') {
+            self.mirrors.encode(encoder);
+        }
         let mut pass = encoder.begin_compute_pass(&Default::default());
-        let rebuild = [
-            &bound.gather,
-            &bound.neighbours,
-            &bound.remap,
-            &bound.copy_back,
-            &bound.copy_back_history,
-        ];
-        for p in rebuild {
-            p.indirect(&mut pass, &self.args, self.rebuild_args);
-        }
         bound.force.per_particle(&mut pass, n, max);
         if let Some(p) = &bound.wall_servo {
             p.once(&mut pass, max);

@@ -649,18 +649,7 @@ pub fn sort_reference(cells: &[[i32; 4]], dims: [u32; 3]) -> SortResult {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn wgsl_u32_const(module: &naga::Module, name: &str) -> u32 {
-        let (_, c) = module
-            .constants
-            .iter()
-            .find(|(_, c)| c.name.as_deref() == Some(name))
-            .unwrap_or_else(|| panic!("no constant {name}"));
-        match module.global_expressions[c.init] {
-            naga::Expression::Literal(naga::Literal::U32(v)) => v,
-            ref e => panic!("constant {name} is {e:?}"),
-        }
-    }
+    use crate::gpu::shaders::wgsl_u32_const;
 
     #[test]
     fn gpu_grid_constants_match_wgsl() {

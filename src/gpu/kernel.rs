@@ -169,21 +169,33 @@ impl Kernel {
         device: &wgpu::Device,
         buffers: &[(&str, &wgpu::Buffer)],
     ) -> Result<wgpu::BindGroup, PowderError> {
+        self.bind_with_textures(device, buffers, &[])
+    }
+
+    /// As [`Self::bind`], with `(global name, texture view)` pairs for texture globals.
+    pub fn bind_with_textures(
+        &self,
+        device: &wgpu::Device,
+        buffers: &[(&str, &wgpu::Buffer)],
+        textures: &[(&str, &wgpu::TextureView)],
+    ) -> Result<wgpu::BindGroup, PowderError> {
         let mut entries = Vec::with_capacity(self.bindings.len());
         for (name, binding) in &self.bindings {
-            let buffer = buffers
-                .iter()
-                .find(|(n, _)| n == name)
-                .map(|(_, b)| *b)
-                .ok_or_else(|| {
-                    PowderError::Run(format!(
-                        "kernel `{}` needs a buffer for `{name}` (binding {binding})",
+            let buffer = buffers.iter().find(|(n, _)| n == name).map(|(_, b)| *b);
+            let texture = textures.iter().find(|(n, _)| n == name).map(|(_, t)| *t);
+            let resource = match (buffer, texture) {
+                (Some(b), _) => b.as_entire_binding(),
+                (None, Some(t)) => wgpu::BindingResource::TextureView(t),
+                (None, None) => {
+                    return Err(PowderError::Run(format!(
+                        "kernel `{}` needs a buffer or texture for `{name}` (binding {binding})",
                         self.name
-                    ))
-                })?;
+                    )))
+                }
+            };
             entries.push(wgpu::BindGroupEntry {
                 binding: *binding,
-                resource: buffer.as_entire_binding(),
+                resource,
             });
         }
         Ok(device.create_bind_group(&wgpu::BindGroupDescriptor {

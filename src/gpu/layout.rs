@@ -208,8 +208,14 @@ pub struct HystereticPair {
     pub gamma0: f32,
     /// [`HYST_JUMP_IN`], [`HYST_SQRT_RULE`] and [`HYST_LSD`], or-ed.
     pub flags: u32,
-    /// Padding (size a multiple of 16 bytes); always 0.
-    pub _pad: [u32; 3],
+    /// 1/`dmaxp_per_a12` (the kernel multiplies where the f64 reference divides).
+    pub inv_dmaxp_per_a12: f32,
+    /// (k1 + kc)/(kp − k1), 0 when kp <= k1: the tensile branch's history
+    /// (`HystereticParams::delta_max_on_tensile_branch`, linear rule) is
+    /// 0.5·δ + √(0.25·δ² + tensile_c·δ·δmax^p).
+    pub tensile_c: f32,
+    /// kp·φf/(kp + kc): where the limit line meets the tensile branch, over a12.
+    pub tensile_limit_per_a12: f32,
 }
 
 /// Flags of [`HystereticPair`], as in the WGSL.
@@ -235,17 +241,24 @@ impl HystereticPair {
         if p.k2_rule == K2Rule::Sqrt {
             flags |= HYST_SQRT_RULE;
         }
+        let dmaxp = dmaxp.min(1e30);
         Self {
             k1: p.k1 as f32,
             kp: p.kp as f32,
             kc: p.kc as f32,
-            dmaxp_per_a12: dmaxp.min(1e30) as f32,
+            dmaxp_per_a12: dmaxp as f32,
             phi_f: p.phi_f as f32,
             fa: p.fa as f32,
             kca: if p.kca.is_finite() { p.kca as f32 } else { 0.0 },
             gamma0: p.gamma0 as f32,
             flags,
-            _pad: [0; 3],
+            inv_dmaxp_per_a12: (1.0 / dmaxp) as f32,
+            tensile_c: if p.kp > p.k1 {
+                ((p.k1 + p.kc) / (p.kp - p.k1)) as f32
+            } else {
+                0.0
+            },
+            tensile_limit_per_a12: (p.kp * p.phi_f / (p.kp + p.kc)) as f32,
         }
     }
 
@@ -255,6 +268,7 @@ impl HystereticPair {
             k1: p.k as f32,
             kp: p.k as f32,
             dmaxp_per_a12: 1e30,
+            inv_dmaxp_per_a12: 1e-30,
             gamma0: p.gamma0 as f32,
             flags: HYST_LSD,
             ..Default::default()
@@ -794,6 +808,15 @@ mod tests {
                 ("kca", offset_of!(HystereticPair, kca)),
                 ("gamma0", offset_of!(HystereticPair, gamma0)),
                 ("flags", offset_of!(HystereticPair, flags)),
+                (
+                    "inv_dmaxp_per_a12",
+                    offset_of!(HystereticPair, inv_dmaxp_per_a12),
+                ),
+                ("tensile_c", offset_of!(HystereticPair, tensile_c)),
+                (
+                    "tensile_limit_per_a12",
+                    offset_of!(HystereticPair, tensile_limit_per_a12),
+                ),
             ],
         );
         let (jkr, _) = shaders::validate(&shaders::StepKind::Jkr.variant(true).source).unwrap();

@@ -44,6 +44,7 @@ pub mod engine;
 pub mod grid;
 pub mod kernel;
 pub mod layout;
+pub mod mirror;
 pub mod shaders;
 
 pub use context::{AdapterPreference, AdapterSummary, GpuContext, LimitsSummary};

@@ -505,6 +505,21 @@ pub fn compute_entry_points(module: &naga::Module) -> Vec<String> {
         .collect()
 }
 
+/// The value of the WGSL `const NAME: u32` in `module` (tests tie host constants to
+/// their WGSL twins with it).
+#[cfg(test)]
+pub(crate) fn wgsl_u32_const(module: &naga::Module, name: &str) -> u32 {
+    let (_, c) = module
+        .constants
+        .iter()
+        .find(|(_, c)| c.name.as_deref() == Some(name))
+        .unwrap_or_else(|| panic!("no constant {name}"));
+    match module.global_expressions[c.init] {
+        naga::Expression::Literal(naga::Literal::U32(v)) => v,
+        ref e => panic!("constant {name} is {e:?}"),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
