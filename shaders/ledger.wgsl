@@ -167,14 +167,14 @@ fn ledger_copy_back(k: u32, n: u32) {
     for (var s = 0u; s < n; s++) {
         a_ledger[slot_index(k, s)] = b_ledger[slot_index(k, s)];
     }
-    for (var w = 0u; w < step.n_walls; w++) {
+    for (var w = 0u; w < wall_count(); w++) {
         a_wall_ledger[wall_slot(k, w)] = b_wall_ledger[wall_slot(k, w)];
     }
 }
 
 // gather: the wall contacts follow their particle.
 fn ledger_gather_walls(k: u32, o: u32) {
-    for (var w = 0u; w < step.n_walls; w++) {
+    for (var w = 0u; w < wall_count(); w++) {
         b_wall_ledger[wall_slot(k, w)] = a_wall_ledger[wall_slot(o, w)];
     }
 }

@@ -140,6 +140,16 @@ struct Wall {
 
 const WALL_SERVO: f32 = 2.0;
 
+// False for a scene without walls (set per pipeline by `gpu::engine`): no kernel then
+// contains wall code (on a SIMD adapter a loop body runs at least once per group of lanes,
+// even when no lane has an iteration to do).
+override WALLS: bool = true;
+
+// The number of walls the kernels loop over (0 for a scene without: the loops vanish).
+fn wall_count() -> u32 {
+    return select(0u, step.n_walls, WALLS);
+}
+
 // True for a scene with one material (set per pipeline by `gpu::engine`): every pair reads
 // pair row 0, an address the compiler then knows is the same for all invocations (one load,
 // not a gather of the 64-byte row per lane and pair).
@@ -442,7 +452,7 @@ fn decide() {
     var rebuild = atomicLoad(&skin[0]) != 0u;
     // A moving wall that has moved more than skin/2 along its normal since the last rebuild
     // invalidates the particles' wall candidates as a particle's move does.
-    for (var w = 0u; w < step.n_walls; w++) {
+    for (var w = 0u; w < wall_count(); w++) {
         let wall = walls[w];
         if (wall.motion.x != 0.0) {
             let moved = dot(separation(wall.cell, wall.offset, wall_ref[w].cell, wall_ref[w].offset), wall.normal.xyz);
@@ -452,7 +462,7 @@ fn decide() {
         }
     }
     if (rebuild) {
-        for (var w = 0u; w < step.n_walls; w++) {
+        for (var w = 0u; w < wall_count(); w++) {
             wall_ref[w] = WallRef(walls[w].cell, walls[w].offset);
         }
     }
@@ -486,7 +496,7 @@ fn gather(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: v
     b_pid[k] = a_pid[o];
     old_index[k] = o;
     rot_gather(k, o);
-    for (var w = 0u; w < step.n_walls; w++) {
+    for (var w = 0u; w < wall_count(); w++) {
         b_wall_hist[wall_slot(k, w)] = a_wall_hist[wall_slot(o, w)];
     }
     ledger_gather_walls(k, o);
@@ -689,7 +699,7 @@ fn copy_back_history(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgro
     let ok = a_off[k];
     let margin = step.reach + skin_width();
     var near = 0u;
-    for (var w = 0u; w < step.n_walls; w++) {
+    for (var w = 0u; w < wall_count(); w++) {
         let wall = walls[w];
         let slot = wall_slot(k, w);
         let delta = ok.w - dot(separation(ck, ok, wall.cell, wall.offset), wall.normal.xyz);
@@ -855,7 +865,7 @@ fn particle_forces(k: u32, row0: PairRow) {
         rot_pair_store(slot, t_partner);
     }
     // a particle that has not appeared meets no wall
-    let present = is_active(a_pid[k]);
+    let present = WALLS && is_active(a_pid[k]);
     let n_walls = select(0u, step.n_walls, present);
     // Only the wall candidates of the last rebuild are evaluated (`a_wall_near`), and every
     // wall from the 33rd on. On a SIMD adapter (lavapipe) a loop iteration costs as much for
@@ -979,7 +989,7 @@ fn kick(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
 @compute @workgroup_size(1)
 fn wall_move() {
     let h = grid.cell_width;
-    for (var w = 0u; w < step.n_walls; w++) {
+    for (var w = 0u; w < wall_count(); w++) {
         if (walls[w].motion.x == 0.0) {
             continue;
         }
@@ -1002,7 +1012,7 @@ var<workgroup> wg_push: array<f32, WG_SIZE>;
 
 @compute @workgroup_size(WG_SIZE)
 fn wall_servo(@builtin(local_invocation_index) lid: u32) {
-    for (var w = 0u; w < step.n_walls; w++) {
+    for (var w = 0u; w < wall_count(); w++) {
         // uniform control flow: every invocation reads the same wall
         let m = walls[w].motion;
         if (m.x != WALL_SERVO) {

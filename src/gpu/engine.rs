@@ -401,6 +401,7 @@ fn pipeline_constants(
             flag(scene.particles.iter().any(|p| p.insert_at > 0.0)),
         ),
         ("PERIODIC", flag(scene.domain.periodic.iter().any(|&p| p))),
+        ("WALLS", flag(!scene.walls.is_empty())),
     ];
     let hyst: Vec<HystereticPair> = models
         .iter()
