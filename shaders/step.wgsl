@@ -326,8 +326,11 @@ struct WallRef {
 // contacts dropped by a rebuild (ledger.wgsl), [4] = largest overlap/a12 of any contact
 // (f32 bits, atomicMax; non-negative f32 bits order as the values), [5] = persistent id
 // (+1) of a particle with a contact beyond MONITOR_MAX_OVERLAP_RATIO, [6] = persistent id
-// (+1) of a particle whose centre left the domain box, [7] unused.
-@group(0) @binding(48) var<storage, read_write> monitor: array<atomic<u32>, 8>;
+// (+1) of a particle whose centre left the domain box, [7] unused; for the host's forecast
+// of the next rebuild (`gpu::quiet`): [8] = the largest displacement since the last rebuild
+// at the batch's end (f32 bits; `collect`), [9] = the steps since this batch's last
+// rebuild (`decide`: 0 on a rebuild, +1 on any other step), [10], [11] unused.
+@group(0) @binding(48) var<storage, read_write> monitor: array<atomic<u32>, 12>;
 
 // Verlet skin state, persistent across batches: [0] = 1 once some particle has moved more
 // than skin/2 since the last rebuild (set by kick_drift, only there: a store where it
@@ -470,6 +473,9 @@ fn decide() {
     atomicStore(&skin[1], select(0u, 1u, rebuild));
     if (rebuild) {
         atomicAdd(&skin[2], 1u);
+        atomicStore(&monitor[9], 0u);
+    } else {
+        atomicAdd(&monitor[9], 1u);
     }
     for (var i = 0u; i < arrayLength(&full_args); i++) {
         args[i] = select(0u, full_args[i], rebuild);
@@ -926,7 +932,8 @@ fn collect(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: 
         let c = collect_particle(k, a_vel[k].w, true);
         // the batch ends here (or the initial forces do): its overlap maximum, with this
         // step's, into the monitor (an atomic only where it grows), and a fresh start
-        let ratio = max(a_disp[k].w, c.peak);
+        let disp = a_disp[k];
+        let ratio = max(disp.w, c.peak);
         let bits = bitcast<u32>(ratio);
         if (bits > atomicLoad(&monitor[4])) {
             atomicMax(&monitor[4], bits);
@@ -934,7 +941,12 @@ fn collect(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: 
         if (ratio > MONITOR_MAX_OVERLAP_RATIO) {
             atomicMax(&monitor[5], a_pid[k] + 1u);
         }
-        a_disp[k].w = 0.0;
+        // the displacement since the last rebuild, for the host's rebuild forecast
+        let moved = bitcast<u32>(length(disp.xyz));
+        if (moved > atomicLoad(&monitor[8])) {
+            atomicMax(&monitor[8], moved);
+        }
+        a_disp[k] = vec4<f32>(disp.xyz, 0.0);
     }
 }
 

@@ -380,6 +380,8 @@ pub struct BenchOptions {
     /// After the timed steps, time each pass of the GPU step alone
     /// (`GpuEngine::profile_passes`).
     pub profile: bool,
+    /// Quiet batches of the GPU engine (`GpuOptions::quiet`).
+    pub quiet: crate::gpu::QuietBatches,
 }
 
 impl Default for BenchOptions {
@@ -395,6 +397,7 @@ impl Default for BenchOptions {
             seed: 1,
             ledger: false,
             profile: false,
+            quiet: crate::gpu::QuietBatches::Auto,
         }
     }
 }
@@ -476,6 +479,8 @@ pub struct BenchRow {
     /// Neighbour-list rebuilds during the timed steps (both backends keep a Verlet list
     /// with a skin).
     pub rebuilds: Option<u64>,
+    /// GPU: quiet batches kept and rolled back during the timed steps (`gpu::quiet`).
+    pub quiet_batches: Option<(u64, u64)>,
     /// Particle–particle contacts per particle at the end (shows the packing is dense).
     pub contacts_per_particle: Option<f64>,
     /// GPU with `--profile`: seconds per dispatch of each pass of the step
@@ -501,6 +506,7 @@ impl BenchRow {
             gpu_bytes_per_particle: None,
             neighbour_slots: None,
             rebuilds: None,
+            quiet_batches: None,
             contacts_per_particle: None,
             passes: None,
         }
@@ -557,6 +563,7 @@ fn run_cpu(scene: &Scene, case: Case, opts: &BenchOptions) -> Result<BenchRow, P
         gpu_bytes_per_particle: None,
         neighbour_slots: None,
         rebuilds: Some(rebuilds),
+        quiet_batches: None,
         contacts_per_particle: Some(z),
         passes: None,
     })
@@ -575,16 +582,20 @@ fn run_gpu(
         ctx,
         crate::gpu::GpuOptions {
             ledger: opts.ledger,
+            quiet: opts.quiet,
         },
     )?;
     let setup = t0.elapsed().as_secs_f64();
     engine.run_steps(opts.warmup)?;
     let before = engine.rebuilds()?;
+    let quiet_before = engine.quiet_batches();
     let t1 = Instant::now();
     // run_steps waits for the device after every batch, so the clock sees the work done
     engine.run_steps(opts.steps)?;
     let wall = t1.elapsed().as_secs_f64();
     let rebuilds = engine.rebuilds()? - before;
+    let quiet = engine.quiet_batches();
+    let quiet = (quiet.0 - quiet_before.0, quiet.1 - quiet_before.1);
     let state = engine.state()?;
     let z = coordination(scene, &state.positions, engine.radii());
     let bytes = engine.buffer_bytes();
@@ -611,6 +622,7 @@ fn run_gpu(
         gpu_bytes_per_particle: Some(bytes as f64 / n as f64),
         neighbour_slots: Some(capacity),
         rebuilds: Some(rebuilds),
+        quiet_batches: Some(quiet),
         contacts_per_particle: Some(z),
     })
 }
@@ -803,7 +815,12 @@ pub fn table_line(r: &BenchRow) -> String {
         opt(r.gpu_bytes_per_particle, |v| format!("{v:.0}")),
         r.rebuilds.map_or_else(|| "-".into(), |v| v.to_string()),
         opt(r.contacts_per_particle, |v| format!("{v:.2}")),
-        r.note.as_deref().unwrap_or("")
+        match (r.note.as_deref(), r.quiet_batches) {
+            (Some(n), _) => n.to_string(),
+            (None, Some((kept, back))) if kept + back > 0 =>
+                format!("quiet batches {kept} kept, {back} rolled back"),
+            _ => String::new(),
+        }
     ) + &r.passes.as_ref().map_or(String::new(), |p| {
         let parts: Vec<String> = p
             .iter()

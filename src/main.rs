@@ -92,9 +92,34 @@ struct BenchArgs {
     /// Time each pass of the GPU step alone after the timed steps (which pass costs what).
     #[arg(long)]
     profile: bool,
+    /// GPU quiet batches: batches without the per-step rebuild check where none is expected.
+    #[arg(long = "quiet-batches", value_enum, default_value = "auto")]
+    quiet_batches: QuietChoice,
     /// Write the report (rows, machine, adapter, version, commit, date) as JSON.
     #[arg(long)]
     json: Option<PathBuf>,
+}
+
+/// `--quiet-batches`: how the GPU engine uses quiet batches (`powder::gpu::QuietBatches`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum QuietChoice {
+    /// Every batch checks each step whether to rebuild the neighbour lists.
+    Off,
+    /// Batches run without the per-step check where no rebuild is expected, and again with
+    /// it where one was needed (results bitwise the same).
+    Auto,
+    /// Every batch tries to run without the check (diagnostics).
+    Always,
+}
+
+impl From<QuietChoice> for powder::gpu::QuietBatches {
+    fn from(q: QuietChoice) -> Self {
+        match q {
+            QuietChoice::Off => Self::Off,
+            QuietChoice::Auto => Self::Auto,
+            QuietChoice::Always => Self::Always,
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -160,6 +185,7 @@ fn bench_cmd(a: &BenchArgs) -> Result<(), PowderError> {
         velocity_scale: a.velocity_scale,
         seed: a.seed,
         ledger: a.ledger,
+        quiet: a.quiet_batches.into(),
         profile: a.profile,
     };
     opts.validate()?;
@@ -244,6 +270,7 @@ fn scene_info(
     let adapter = ctx.summary.name.clone();
     let options = powder::gpu::GpuOptions {
         ledger: !a.no_ledger,
+        ..Default::default()
     };
     let mut engine = powder::gpu::GpuEngine::with_options(&scene, ctx, options)?;
     let variant_name = engine.variant_name();
@@ -384,6 +411,11 @@ struct RunArgs {
     /// says it ignores the flag.
     #[arg(long)]
     no_ledger: bool,
+    /// GPU quiet batches: batches without the per-step neighbour-list rebuild check where
+    /// the forecast expects no rebuild, run again with it where one was needed; the results
+    /// are bitwise the same whatever the choice.
+    #[arg(long = "quiet-batches", value_enum, default_value = "auto")]
+    quiet_batches: QuietChoice,
 }
 
 #[derive(Args)]
@@ -1123,6 +1155,7 @@ fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
         interrupt: Some(interrupt),
         gpu: powder::gpu::GpuOptions {
             ledger: !a.no_ledger,
+            quiet: a.quiet_batches.into(),
         },
     };
     let summary = match gpu {

@@ -265,6 +265,12 @@ impl Simulation for GpuEngine {
             "neighbour lists rebuilt {} times (Verlet skin; the initial build included)",
             self.rebuilds()?
         )];
+        let (kept, rolled_back) = self.quiet_batches();
+        if kept + rolled_back > 0 {
+            notes.push(format!(
+                "{kept} quiet batches (no per-step rebuild check; bitwise the same), {rolled_back} rolled back and rerun with the check"
+            ));
+        }
         if !self.has_ledger() {
             notes.push(
                 "no energy ledger (--no-ledger): stored and dissipated energy, wall work, the energy balance, contact statistics, wall forces and contacts that left the neighbour lists are not tracked, and the run monitor has no energy-growth check".into(),

@@ -820,7 +820,10 @@ fn split_pair_forces_give_the_same_bits() {
     use powder::gpu::{GpuContext, GpuOptions};
     let Some(ctx) = context() else { return };
     let scene = packing(Case::Hysteretic, 1000, 1.0, 7).unwrap();
-    let options = GpuOptions { ledger: false };
+    let options = GpuOptions {
+        ledger: false,
+        ..Default::default()
+    };
     let mut one = GpuEngine::with_options(&scene, ctx, options).unwrap();
     let slots = 1000 * u64::from(one.capacity());
     // 16 bytes a slot exceed the limit, 4 (the history, the lists, the split planes) do not
@@ -857,9 +860,15 @@ fn state_mirrors_past_one_texture_row_match_the_cpu() {
         let Some(ctx) = context() else { return };
         let scene = packing(case, 4500, 1.0, 7).unwrap();
         let mut cpu = CpuEngine::new(&scene).unwrap();
-        let mut gpu =
-            GpuEngine::with_options(&scene, ctx, powder::gpu::GpuOptions { ledger: false })
-                .unwrap();
+        let mut gpu = GpuEngine::with_options(
+            &scene,
+            ctx,
+            powder::gpu::GpuOptions {
+                ledger: false,
+                ..Default::default()
+            },
+        )
+        .unwrap();
         cpu.run_steps(60).unwrap();
         gpu.run_steps(60).unwrap();
         let s = gpu.state().unwrap();

@@ -155,7 +155,15 @@ fn gpu_without_ledger_allocates_none_and_moves_the_same() {
     let Some(ctx2) = context() else { return };
     let scene = example("cohesive_cluster.toml");
     let mut with = GpuEngine::new(&scene, ctx).unwrap();
-    let mut without = GpuEngine::with_options(&scene, ctx2, GpuOptions { ledger: false }).unwrap();
+    let mut without = GpuEngine::with_options(
+        &scene,
+        ctx2,
+        GpuOptions {
+            ledger: false,
+            ..Default::default()
+        },
+    )
+    .unwrap();
     assert!(with.has_ledger() && !without.has_ledger());
     assert_eq!(without.variant_name(), "step_hysteretic");
     assert_eq!(with.variant_name(), "step_hysteretic_ledger");

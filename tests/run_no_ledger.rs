@@ -20,7 +20,10 @@ fn options(out: &Path, steps: u64, resume: Option<&Path>, ledger: bool) -> RunOp
         out_dir: Some(out.to_path_buf()),
         resume: resume.map(Path::to_path_buf),
         max_steps: Some(steps),
-        gpu: GpuOptions { ledger },
+        gpu: GpuOptions {
+            ledger,
+            ..Default::default()
+        },
         ..Default::default()
     }
 }

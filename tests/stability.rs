@@ -494,7 +494,13 @@ fn the_gpu_monitor_stops_runs_that_go_wrong_and_keeps_the_last_good_state() {
 #[test]
 fn the_gpu_monitor_without_the_ledger_still_stops_runs_that_go_wrong() {
     let dir = tempfile::tempdir().unwrap();
-    gpu_monitor_stops_each_failure(powder::gpu::GpuOptions { ledger: false }, dir.path());
+    gpu_monitor_stops_each_failure(
+        powder::gpu::GpuOptions {
+            ledger: false,
+            ..Default::default()
+        },
+        dir.path(),
+    );
 }
 
 /// The Rayleigh time bounds dt for elastic spheres when slow impacts make the Hertz

@@ -54,6 +54,7 @@ use crate::gpu::layout::{
     encode3, gpu_cell_width, HystereticPair, JkrPair, MixedPair, StepParams, WallGpu,
 };
 use crate::gpu::mirror::Mirrors;
+use crate::gpu::quiet::{Forecast, QuietBatches};
 use crate::gpu::shaders::StepKind;
 use crate::model::{ContactHistory, ContactModel};
 use crate::scene::Scene;
@@ -65,7 +66,7 @@ use glam::DVec3;
 pub const SKIN: f64 = 0.1;
 
 /// Bytes of the device monitor (`monitor` in `shaders/step.wgsl`).
-const MONITOR_BYTES: u64 = 32;
+const MONITOR_BYTES: u64 = 48;
 
 /// Steps recorded into one submission.
 pub const STEPS_PER_SUBMIT: u64 = 64;
@@ -256,12 +257,38 @@ pub struct GpuOptions {
     /// 32 bytes per neighbour slot and 64 per particle more, and about 20 % of the step.
     /// Default on; `powder run --no-ledger` turns it off.
     pub ledger: bool,
+    /// Quiet batches (`gpu::quiet`): batches recorded without the per-step rebuild
+    /// decision where no rebuild is expected, run again with it where one was needed.
+    /// Results are bitwise the same either way. Default [`QuietBatches::Auto`].
+    pub quiet: QuietBatches,
 }
 
 impl Default for GpuOptions {
     fn default() -> Self {
-        Self { ledger: true }
+        Self {
+            ledger: true,
+            quiet: QuietBatches::Auto,
+        }
     }
+}
+
+/// What quiet batches need: the copies of what a batch changes that B does not hold, the
+/// forecast and the counts.
+struct Quiet {
+    mode: QuietBatches,
+    disp: wgpu::Buffer,
+    particle_ledger: Option<wgpu::Buffer>,
+    forecast: Forecast,
+    /// The device's rebuild count at the end of the last batch (u64::MAX: unknown).
+    rebuilds: u64,
+    kept: u64,
+    rolled_back: u64,
+}
+
+/// What the host reads after a batch: the monitor and the skin state.
+struct BatchReport {
+    monitor: Vec<u32>,
+    skin: Vec<u32>,
 }
 
 /// The GPU simulation of one scene.
@@ -286,6 +313,8 @@ pub struct GpuEngine {
     state: StateSet,
     /// Texture copies of A's cells, offsets and predictions for the force pass.
     mirrors: Mirrors,
+    /// Quiet batches, where the scene allows them (no moving walls, no pouring).
+    quiet: Option<Quiet>,
     /// The re-sorted copy a rebuild writes (B; bound in the kernels, never read by the host).
     _sorted: StateSet,
     monitor: wgpu::Buffer,
@@ -838,6 +867,32 @@ impl GpuEngine {
             })
         };
         let bound = bind()?;
+        // quiet batches: not where walls move (their rebuild trigger is decide's) nor where
+        // particles appear (an insertion rebuilds)
+        let pouring = scene.particles.iter().any(|p| p.insert_at > 0.0);
+        let quiet = (options.quiet != QuietBatches::Off && !moving_walls && !pouring).then(|| {
+            let mut alloc = Allocator {
+                device,
+                list: Vec::new(),
+            };
+            let q = Quiet {
+                mode: options.quiet,
+                disp: alloc.buffer("quiet.disp", 16 * n as u64),
+                particle_ledger: ledger
+                    .then(|| alloc.buffer("quiet.particle_ledger", 64 * n as u64)),
+                forecast: Forecast::new(skin),
+                // the initial forces build the lists once
+                rebuilds: 1,
+                kept: 0,
+                rolled_back: 0,
+            };
+            (q, alloc.list)
+        });
+        let mut buffers = buffers;
+        let quiet = quiet.map(|(q, list)| {
+            buffers.extend(list);
+            q
+        });
         let [state, sorted] = sets;
         let radius = scene.particles.iter().map(|p| p.radius).collect();
         let mass = r.mass.clone();
@@ -853,6 +908,7 @@ impl GpuEngine {
             mass: mass.clone(),
             grid_keys: grid.keys_bind_group(&state.cell),
             mirrors,
+            quiet,
             grid,
             state,
             _sorted: sorted,
@@ -1144,8 +1200,25 @@ impl GpuEngine {
     }
 
     fn check_monitor(&mut self, encoder: wgpu::CommandEncoder) -> Result<(), PowderError> {
-        let out = submit_and_read(&self.ctx, encoder, &[(&self.monitor, MONITOR_BYTES)])?;
-        let m = u32s(&out[0]);
+        let report = self.submit_batch(encoder)?;
+        self.apply_monitor(&report.monitor)
+    }
+
+    /// Submits a recorded batch and reads the monitor and the skin state back.
+    fn submit_batch(&self, encoder: wgpu::CommandEncoder) -> Result<BatchReport, PowderError> {
+        let out = submit_and_read(
+            &self.ctx,
+            encoder,
+            &[(&self.monitor, MONITOR_BYTES), (&self.skin, 16)],
+        )?;
+        Ok(BatchReport {
+            monitor: u32s(&out[0]),
+            skin: u32s(&out[1]),
+        })
+    }
+
+    /// Takes in what a batch's monitor holds: its records, and an error for what stops a run.
+    fn apply_monitor(&mut self, m: &[u32]) -> Result<(), PowderError> {
         self.dropped += m[3] as u64;
         let ratio = f32::from_bits(m[4]) as f64;
         let beyond = (m[5] != 0).then(|| m[5] as usize - 1);
@@ -1274,27 +1347,152 @@ impl GpuEngine {
                 .min(STEPS_PER_SUBMIT)
                 .min(self.prescribe_walls())
                 .min(self.insert_due());
-            self.advance_prescribed_walls(batch);
-            self.ctx
-                .queue
-                .write_buffer(&self.monitor, 0, &[0u8; MONITOR_BYTES as usize]);
-            let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
-            for i in 0..batch {
-                // each step's closing kick goes with the next step's drift
-                let drift = if i == 0 {
-                    Drift::Plain
-                } else {
-                    Drift::AfterStep
-                };
-                self.record_step(&mut encoder, drift);
+            if !self.quiet_batch(batch)? {
+                self.advance_prescribed_walls(batch);
+                self.ctx
+                    .queue
+                    .write_buffer(&self.monitor, 0, &[0u8; MONITOR_BYTES as usize]);
+                let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+                for i in 0..batch {
+                    self.record_step(&mut encoder, Self::drift_of(i));
+                }
+                self.record_finish(&mut encoder, true);
+                let report = self.submit_batch(encoder)?;
+                self.observe(batch, &report);
+                self.apply_monitor(&report.monitor)?;
             }
-            self.record_finish(&mut encoder, true);
             self.steps += batch;
             self.time += batch as f64 * self.dt;
             left -= batch;
-            self.check_monitor(encoder)?;
         }
         Ok(())
+    }
+
+    /// How step `i` of a batch starts: each step's closing kick goes with the next step's
+    /// drift.
+    fn drift_of(i: u64) -> Drift {
+        if i == 0 {
+            Drift::Plain
+        } else {
+            Drift::AfterStep
+        }
+    }
+
+    /// Tells the rebuild forecast what a kept batch ended with.
+    fn observe(&mut self, batch: u64, report: &BatchReport) {
+        if let Some(q) = &mut self.quiet {
+            let rebuilt = report.skin[2] as u64 != q.rebuilds;
+            let since = rebuilt.then_some(report.monitor[9] as u64);
+            q.forecast
+                .observe(batch, since, f32::from_bits(report.monitor[8]) as f64);
+            q.rebuilds = report.skin[2] as u64;
+        }
+    }
+
+    /// Runs `batch` steps as a quiet batch (`gpu::quiet`) when the scene allows it and the
+    /// forecast expects no rebuild: true when the batch was kept, false when it did not run
+    /// or was rolled back (the state is then as before: run it the normal way).
+    fn quiet_batch(&mut self, batch: u64) -> Result<bool, PowderError> {
+        let Some(q) = &self.quiet else {
+            return Ok(false);
+        };
+        if !q.forecast.quiet(batch, q.mode) {
+            return Ok(false);
+        }
+        let copies = self.quiet_copies();
+        let (n, max) = (self.n, self.max_per_dim);
+        self.ctx
+            .queue
+            .write_buffer(&self.monitor, 0, &[0u8; MONITOR_BYTES as usize]);
+        let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+        for (a, saved) in &copies {
+            encoder.copy_buffer_to_buffer(a, 0, saved, 0, a.size());
+        }
+        for i in 0..batch {
+            // drift, the mirrors, the forces: no decide, no rebuild chain
+            {
+                let mut pass = encoder.begin_compute_pass(&Default::default());
+                let first = match Self::drift_of(i) {
+                    Drift::AfterStep => &self.bound.collect_kick_drift,
+                    _ => &self.bound.kick_drift,
+                };
+                first.per_particle(&mut pass, n, max);
+            }
+            self.mirrors.encode(&mut encoder);
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            self.bound.force.per_particle(&mut pass, n, max);
+        }
+        self.record_finish(&mut encoder, true);
+        let report = self.submit_batch(encoder)?;
+        if report.skin[0] == 0 {
+            // no step would have rebuilt: the batch is what the normal one computes
+            self.observe(batch, &report);
+            if let Some(q) = &mut self.quiet {
+                q.kept += 1;
+            }
+            self.apply_monitor(&report.monitor)?;
+            return Ok(true);
+        }
+        // some step needed a rebuild: back to the batch's start (its monitor is void: the
+        // steps after the missed rebuild ran with stale lists)
+        let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+        for (a, saved) in &copies {
+            encoder.copy_buffer_to_buffer(saved, 0, a, 0, a.size());
+        }
+        self.ctx
+            .queue
+            .write_buffer(&self.skin, 0, bytemuck::bytes_of(&0u32));
+        self.ctx.queue.submit([encoder.finish()]);
+        if let Some(q) = &mut self.quiet {
+            q.rolled_back += 1;
+        }
+        Ok(false)
+    }
+
+    /// (buffer a quiet batch changes, where its batch-start copy goes): state A into the
+    /// rebuild's scratch set B (a quiet batch does not rebuild), the displacements and the
+    /// particle ledger into their own copies.
+    fn quiet_copies(&self) -> Vec<(wgpu::Buffer, wgpu::Buffer)> {
+        let (a, b) = (&self.state, &self._sorted);
+        let mut v = vec![
+            (a.cell.clone(), b.cell.clone()),
+            (a.off.clone(), b.off.clone()),
+            (a.vel.clone(), b.vel.clone()),
+            (a.acc.clone(), b.acc.clone()),
+            (a.vpred.clone(), b.vpred.clone()),
+            (a.kahan.clone(), b.kahan.clone()),
+            (a.hist.clone(), b.hist.clone()),
+            (a.wall_hist.clone(), b.wall_hist.clone()),
+        ];
+        let pairs = [
+            (&a.omega, &b.omega),
+            (&a.alpha, &b.alpha),
+            (&a.wpred, &b.wpred),
+            (&a.ledger, &b.ledger),
+            (&a.wall_ledger, &b.wall_ledger),
+        ];
+        for (x, y) in pairs {
+            if let (Some(x), Some(y)) = (x, y) {
+                v.push((x.clone(), y.clone()));
+            }
+        }
+        if let Some(q) = &self.quiet {
+            if let Some(d) = &a.disp {
+                v.push((d.clone(), q.disp.clone()));
+            }
+            if let (Some(l), Some(s)) = (&self.particle_ledger, &q.particle_ledger) {
+                v.push((l.clone(), s.clone()));
+            }
+        }
+        v
+    }
+
+    /// Quiet batches kept and rolled back so far (`gpu::quiet`); (0, 0) where the scene or
+    /// the options allow none.
+    pub fn quiet_batches(&self) -> (u64, u64) {
+        self.quiet
+            .as_ref()
+            .map_or((0, 0), |q| (q.kept, q.rolled_back))
     }
 
     /// Reads positions, velocities and (when the scene rotates) angular velocities back,
@@ -1427,6 +1625,10 @@ impl GpuEngine {
             self.ctx
                 .queue
                 .write_buffer(&self.active_buf, 0, bytemuck::cast_slice(&flags));
+        }
+        if let Some(q) = &mut self.quiet {
+            q.forecast.forget();
+            q.rebuilds = u64::MAX;
         }
         self.inserted = saved.inserted;
         self.time = saved.time;

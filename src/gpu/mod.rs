@@ -45,10 +45,12 @@ pub mod grid;
 pub mod kernel;
 pub mod layout;
 pub mod mirror;
+pub mod quiet;
 pub mod shaders;
 
 pub use context::{AdapterPreference, AdapterSummary, GpuContext, LimitsSummary};
 pub use engine::{GpuEngine, GpuOptions, GpuSavedState, GpuState};
 pub use grid::{ExclusiveScan, GridSort, SortResult};
 pub use layout::{decode, encode, CellCoord, CellOffset, GridParams, PackedPosition};
+pub use quiet::QuietBatches;
 pub use shaders::{all_variants, validate, ShaderVariant};

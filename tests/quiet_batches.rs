@@ -1,0 +1,71 @@
+//! Quiet batches (`gpu::quiet`): batches recorded without the per-step rebuild check are
+//! kept only where no step needed a rebuild, and rolled back and run again with the check
+//! otherwise, so a run is bitwise the same whichever way its batches ran.
+
+mod common;
+use common::{assert_same_bits, gpu as context};
+
+use powder::bench::{packing, Case};
+use powder::gpu::{GpuEngine, GpuOptions, QuietBatches};
+
+/// Runs `steps` steps of `case`'s bench packing (velocities scaled by `shake`: more
+/// rebuilds) with the ledger and the given quiet mode; returns the engine.
+fn run(case: Case, shake: f64, quiet: QuietBatches, steps: u64) -> Option<GpuEngine> {
+    let ctx = context()?;
+    let scene = packing(case, 1500, shake, 3).unwrap();
+    let mut e = GpuEngine::with_options(
+        &scene,
+        ctx,
+        GpuOptions {
+            ledger: true,
+            quiet,
+        },
+    )
+    .unwrap();
+    e.run_steps(steps).unwrap();
+    Some(e)
+}
+
+#[test]
+fn quiet_batches_give_the_same_bits_kept_or_rolled_back() {
+    for (case, shake, steps) in [(Case::Hysteretic, 2.0, 700), (Case::Jkr, 24.0, 700)] {
+        let Some(off) = run(case, shake, QuietBatches::Off, steps) else {
+            return;
+        };
+        let always = run(case, shake, QuietBatches::Always, steps).unwrap();
+        let auto = run(case, shake, QuietBatches::Auto, steps).unwrap();
+        let rebuilds = off.rebuilds().unwrap();
+        eprintln!(
+            "{case:?}: {rebuilds} rebuilds; quiet batches (kept, rolled back): always {:?}, auto {:?}",
+            always.quiet_batches(),
+            auto.quiet_batches()
+        );
+        assert_eq!(off.quiet_batches(), (0, 0));
+        // the shaken packing rebuilds in some batches and not in others: both paths ran
+        let (kept, back) = always.quiet_batches();
+        assert!(
+            kept > 0 && back > 0,
+            "{case:?}: {kept} kept, {back} rolled back"
+        );
+        assert!(
+            auto.quiet_batches().0 > 0,
+            "{case:?}: {:?}",
+            auto.quiet_batches()
+        );
+        let reference = off.state().unwrap();
+        for e in [&always, &auto] {
+            assert_eq!(e.rebuilds().unwrap(), rebuilds);
+            let s = e.state().unwrap();
+            assert_same_bits(&s, &reference);
+            assert_eq!(s.angular_velocities, reference.angular_velocities);
+            // the ledger too: the rolled-back batches left nothing behind
+            let (a, b) = (e.energies(&s).unwrap(), off.energies(&reference).unwrap());
+            assert_eq!(a.elastic.to_bits(), b.elastic.to_bits(), "{case:?}");
+            assert_eq!(a.dissipated.to_bits(), b.dissipated.to_bits(), "{case:?}");
+            assert_eq!(
+                e.contact_stats().unwrap().contacts,
+                off.contact_stats().unwrap().contacts
+            );
+        }
+    }
+}
