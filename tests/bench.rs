@@ -262,6 +262,7 @@ fn bench_profile_reports_every_pass() {
         "neighbours",
         "remap",
         "copy_back",
+        "mirror copies",
         "force",
         "kick",
     ] {

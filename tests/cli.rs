@@ -759,3 +759,46 @@ fn info_scene_profiles_its_passes() {
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
     assert!(v.get("profile_us").is_none() && v.get("profile_after").is_none());
 }
+
+/// `powder run --quiet-batches off|auto|always`: the same run, bitwise (the JSON's last
+/// energies), whichever way its batches ran; the summary says how many ran quiet.
+#[test]
+fn run_quiet_batches_choices_give_the_same_run() {
+    if !gpu_available() {
+        return;
+    }
+    let scene = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/examples/cohesive_cluster.toml"
+    );
+    let mut last = Vec::new();
+    for choice in ["off", "auto", "always"] {
+        let args = [
+            "run",
+            scene,
+            "--backend",
+            "gpu",
+            "--steps",
+            "1500",
+            "--no-output",
+            "--quiet-batches",
+            choice,
+        ];
+        let (ok, out, err) = powder(&args);
+        assert!(ok, "{err}");
+        // (auto: as many as the forecast allows, possibly none)
+        let noted = out.contains("quiet batches (no per-step rebuild check");
+        assert!(
+            choice == "auto" || noted == (choice == "always"),
+            "{choice}: {out}"
+        );
+        let (ok, out, err) = powder(&[&args[..], &["--json"]].concat());
+        assert!(ok, "{err}");
+        let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+        last.push(v["last"]["energies"].to_string());
+    }
+    assert_eq!(last[0], last[1]);
+    assert_eq!(last[0], last[2]);
+    let (ok, _, err) = powder(&["run", scene, "--quiet-batches", "sometimes"]);
+    assert!(!ok && err.contains("sometimes"), "{err}");
+}

@@ -1131,6 +1131,7 @@ impl GpuEngine {
             "remap",
             "copy_back",
             "copy_back_history",
+            "mirror copies",
             "force",
             "collect",
             "kick",
@@ -1138,6 +1139,10 @@ impl GpuEngine {
         let record = |e: &mut wgpu::CommandEncoder, id: usize| {
             if id == 2 {
                 self.grid.encode(e, &self.state.cell);
+                return;
+            }
+            if id == 8 {
+                self.mirrors.encode(e);
                 return;
             }
             let p = match id {
@@ -1148,8 +1153,8 @@ impl GpuEngine {
                 5 => &b.remap,
                 6 => &b.copy_back,
                 7 => &b.copy_back_history,
-                8 => &b.force,
-                9 => &b.collect,
+                9 => &b.force,
+                10 => &b.collect,
                 _ => &b.kick,
             };
             let mut pass = e.begin_compute_pass(&Default::default());
