@@ -69,3 +69,76 @@ fn quiet_batches_give_the_same_bits_kept_or_rolled_back() {
         }
     }
 }
+
+fn example(name: &str) -> powder::scene::Scene {
+    powder::scene::Scene::load(std::path::Path::new(&format!(
+        "{}/examples/{name}",
+        env!("CARGO_MANIFEST_DIR")
+    )))
+    .unwrap()
+}
+
+/// The packing example cut to a 8 × 8-site periodic column (832 spheres): the falling bed
+/// first moves too little to rebuild in a batch, then too much, so `always` keeps some
+/// batches and rolls others back, across the periodic faces; the same bits as `off`.
+#[test]
+fn quiet_batches_in_a_periodic_settling_bed() {
+    let mut text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/examples/packing.toml"
+    ))
+    .unwrap();
+    text = text
+        .replace(
+            "max = [0.046, 0.046, 0.08]",
+            "max = [0.0184, 0.0184, 0.04]",
+        )
+        .replace(
+            "max = [0.0449, 0.0449, 0.0585]",
+            "max = [0.0173, 0.0173, 0.03]",
+        );
+    let scene = powder::scene::Scene::from_toml_str(&text, "column").unwrap();
+    assert!(scene.particles.len() > 500, "{}", scene.particles.len());
+    let mut states = Vec::new();
+    for quiet in [QuietBatches::Off, QuietBatches::Always] {
+        let Some(ctx) = context() else { return };
+        let options = GpuOptions {
+            ledger: false,
+            quiet,
+        };
+        let mut e = GpuEngine::with_options(&scene, ctx, options).unwrap();
+        e.run_steps(1600).unwrap();
+        eprintln!(
+            "{quiet:?}: {} rebuilds, quiet batches {:?}",
+            e.rebuilds().unwrap(),
+            e.quiet_batches()
+        );
+        if quiet == QuietBatches::Always {
+            let (kept, back) = e.quiet_batches();
+            assert!(kept > 0 && back > 0, "{kept} kept, {back} rolled back");
+        }
+        states.push((e.rebuilds().unwrap(), e.state().unwrap()));
+    }
+    assert_eq!(states[0].0, states[1].0);
+    assert_same_bits(&states[0].1, &states[1].1);
+}
+
+/// Where walls move (their rebuild trigger is `decide`'s) or particles are poured in (an
+/// insertion rebuilds), no batch runs quiet, even when asked to always.
+#[test]
+fn no_quiet_batches_with_moving_walls_or_pouring() {
+    let mut poured = example("cohesive_cluster.toml");
+    for (i, p) in poured.particles.iter_mut().enumerate() {
+        p.insert_at = if i % 2 == 0 { 0.0 } else { 1e-3 };
+    }
+    for scene in [example("compression.toml"), poured] {
+        let Some(ctx) = context() else { return };
+        let options = GpuOptions {
+            ledger: false,
+            quiet: QuietBatches::Always,
+        };
+        let mut e = GpuEngine::with_options(&scene, ctx, options).unwrap();
+        e.run_steps(200).unwrap();
+        assert_eq!(e.quiet_batches(), (0, 0));
+    }
+}
