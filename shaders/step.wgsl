@@ -201,6 +201,11 @@ const MIRROR_WIDTH: u32 = 4096u;
 @group(0) @binding(80) var m_cell: texture_storage_2d<rgba32sint, read>;
 @group(0) @binding(81) var m_off: texture_storage_2d<rgba32float, read>;
 @group(0) @binding(82) var m_vpred: texture_storage_2d<rgba32float, read>;
+// The cell and offset mirrors as a rebuild's `gather` writes them (the same textures): the
+// re-sorted state B, which `neighbours` then reads (a gather per candidate, not a loop over
+// the lanes); the copy before the force pass writes the same values again from A.
+@group(0) @binding(88) var m_cell_out: texture_storage_2d<rgba32sint, write>;
+@group(0) @binding(89) var m_off_out: texture_storage_2d<rgba32float, write>;
 
 fn mirror_texel(k: u32) -> vec2<u32> {
     return vec2<u32>(k % MIRROR_WIDTH, k / MIRROR_WIDTH);
@@ -490,8 +495,12 @@ fn gather(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: v
         return;
     }
     let o = sorted_index[k];
-    b_cell[k] = a_cell[o];
-    b_off[k] = a_off[o];
+    let cell = a_cell[o];
+    let off = a_off[o];
+    b_cell[k] = cell;
+    b_off[k] = off;
+    textureStore(m_cell_out, mirror_texel(k), cell);
+    textureStore(m_off_out, mirror_texel(k), off);
     b_vel[k] = a_vel[o];
     // (acc.w carries the batch's overlap maximum, disp.w, through the re-sort: disp is
     // only in A)
@@ -538,8 +547,9 @@ fn neighbours(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nw
     if (k >= grid.n_particles) {
         return;
     }
-    let ck = b_cell[k];
-    let ok = b_off[k];
+    // (B's positions from the mirrors gather wrote: see m_cell_out)
+    let ck = textureLoad(m_cell, mirror_texel(k));
+    let ok = textureLoad(m_off, mirror_texel(k));
     let hi = vec3<i32>(grid.dims) - vec3<i32>(1);
     let home = clamp(ck.xyz, vec3<i32>(0), hi);
     let cap = step.max_neighbours;
@@ -584,8 +594,8 @@ fn neighbours(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nw
                     if (j == k || !here || !is_active(b_pid[j])) {
                         continue;
                     }
-                    let oj = b_off[j];
-                    let d = separation(ck, ok, b_cell[j], oj);
+                    let oj = textureLoad(m_off, mirror_texel(j));
+                    let d = separation(ck, ok, textureLoad(m_cell, mirror_texel(j)), oj);
                     let reach = cutoff + oj.w;
                     if (dot(d, d) < reach * reach) {
                         if (evaluates(d, k, j)) {

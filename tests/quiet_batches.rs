@@ -89,10 +89,7 @@ fn quiet_batches_in_a_periodic_settling_bed() {
     ))
     .unwrap();
     text = text
-        .replace(
-            "max = [0.046, 0.046, 0.08]",
-            "max = [0.0184, 0.0184, 0.04]",
-        )
+        .replace("max = [0.046, 0.046, 0.08]", "max = [0.0184, 0.0184, 0.04]")
         .replace(
             "max = [0.0449, 0.0449, 0.0585]",
             "max = [0.0173, 0.0173, 0.03]",

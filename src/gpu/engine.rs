@@ -801,12 +801,22 @@ impl GpuEngine {
         // the force pass's read-only copies of what it loads per pair (`gpu::mirror`)
         let s0 = &sets[0];
         let mut mirrored = vec![
-            ("m_cell", &s0.cell, wgpu::TextureFormat::Rgba32Sint),
-            ("m_off", &s0.off, wgpu::TextureFormat::Rgba32Float),
-            ("m_vpred", &s0.vpred, wgpu::TextureFormat::Rgba32Float),
+            (
+                "m_cell",
+                Some("m_cell_out"),
+                &s0.cell,
+                wgpu::TextureFormat::Rgba32Sint,
+            ),
+            (
+                "m_off",
+                Some("m_off_out"),
+                &s0.off,
+                wgpu::TextureFormat::Rgba32Float,
+            ),
+            ("m_vpred", None, &s0.vpred, wgpu::TextureFormat::Rgba32Float),
         ];
         if let Some(w) = &s0.wpred {
-            mirrored.push(("m_wpred", w, wgpu::TextureFormat::Rgba32Float));
+            mirrored.push(("m_wpred", None, w, wgpu::TextureFormat::Rgba32Float));
         }
         let mirrors = Mirrors::new(device, n as u32, &mirrored)?;
         alloc.list.extend(mirrors.sizes());

@@ -15,6 +15,12 @@
 //! reading the same data through the texture path is equally fast, and the copies are
 //! bandwidth-bound and small.
 //!
+//! A rebuild re-sorts the state: its `gather` writes the re-sorted cells and offsets into
+//! the cell and offset mirrors itself (texture stores, once per rebuild), so the neighbour
+//! search reads every candidate's position through a gather too (two vec4 buffer loads per
+//! candidate before; the search dominates a rebuild). The copy before the force pass then
+//! writes the same values again from A.
+//!
 //! Texels are laid out row-major, [`MIRROR_WIDTH`] particles a row (a power of two, so
 //! the shader maps an index to its texel with a mask and a shift: `mirror_texel` in
 //! `shaders/step.wgsl`).
@@ -30,6 +36,9 @@ const TEXEL_BYTES: u32 = 16;
 /// One mirrored buffer: its texture and view.
 struct Mirror {
     name: &'static str,
+    /// The WGSL name under which a kernel writes the texture itself (the rebuild's
+    /// `gather`), if any.
+    write_name: Option<&'static str>,
     source: wgpu::Buffer,
     texture: wgpu::Texture,
     view: wgpu::TextureView,
@@ -42,12 +51,18 @@ pub struct Mirrors {
 }
 
 impl Mirrors {
-    /// Textures for `sources` (WGSL global name, buffer of `n` vec4s, texel format), or an
-    /// error naming the limit when `n` particles need more rows than the adapter allows.
+    /// Textures for `sources` (WGSL global name, the name a kernel writes it under if
+    /// any, buffer of `n` vec4s, texel format), or an error naming the limit when `n`
+    /// particles need more rows than the adapter allows.
     pub fn new(
         device: &wgpu::Device,
         n: u32,
-        sources: &[(&'static str, &wgpu::Buffer, wgpu::TextureFormat)],
+        sources: &[(
+            &'static str,
+            Option<&'static str>,
+            &wgpu::Buffer,
+            wgpu::TextureFormat,
+        )],
     ) -> Result<Self, PowderError> {
         let rows = n.div_ceil(MIRROR_WIDTH).max(1);
         let max_rows = device.limits().max_texture_dimension_2d;
@@ -60,7 +75,7 @@ impl Mirrors {
         }
         let mirrors = sources
             .iter()
-            .map(|&(name, source, format)| {
+            .map(|&(name, write_name, source, format)| {
                 let texture = device.create_texture(&wgpu::TextureDescriptor {
                     label: Some(name),
                     size: wgpu::Extent3d {
@@ -78,6 +93,7 @@ impl Mirrors {
                 let view = texture.create_view(&Default::default());
                 Mirror {
                     name,
+                    write_name,
                     source: source.clone(),
                     texture,
                     view,
@@ -87,9 +103,17 @@ impl Mirrors {
         Ok(Self { n, mirrors })
     }
 
-    /// (WGSL global name, texture view) of every mirror, for binding.
+    /// (WGSL global name, texture view) of every mirror, for binding: under its read name
+    /// and, where a kernel writes it, its write name too (the same texture).
     pub fn views(&self) -> Vec<(&'static str, &wgpu::TextureView)> {
-        self.mirrors.iter().map(|m| (m.name, &m.view)).collect()
+        let mut v = Vec::new();
+        for m in &self.mirrors {
+            v.push((m.name, &m.view));
+            if let Some(w) = m.write_name {
+                v.push((w, &m.view));
+            }
+        }
+        v
     }
 
     /// (name, bytes) of every mirror texture (for the memory report).
