@@ -93,14 +93,26 @@ fn ledger_count(acc: ptr<function, LedgerAcc>, k: Kin, engaged: bool, wall: bool
     }
 }
 
-// One evaluated particle–particle contact in slot `slot` (after pair_contact).
-fn ledger_pair(acc: ptr<function, LedgerAcc>, slot: u32, p: PairRow, k: Kin, c: Contact, power: f32) {
-    let booked = ledger_book(a_ledger[slot], p, k, c, power);
+// A pair slot's ledger value, read once per pair (the force pass computes the new value
+// on both of its paths and stores it once: `ledger_save`; on lavapipe each access in the
+// code is a loop over the SIMD lanes, taken or not).
+fn ledger_load(slot: u32) -> vec4<f32> {
+    return a_ledger[slot];
+}
+
+fn ledger_save(slot: u32, value: vec4<f32>) {
+    a_ledger[slot] = value;
+}
+
+// One evaluated particle–particle contact whose slot held `old` (after pair_contact):
+// returns the slot's new value.
+fn ledger_pair(acc: ptr<function, LedgerAcc>, old: vec4<f32>, p: PairRow, k: Kin, c: Contact, power: f32) -> vec4<f32> {
+    let booked = ledger_book(old, p, k, c, power);
     (*acc).dissipated += booked.x;
     (*acc).stored += c.potential;
     let engaged = booked.w != 0.0;
-    a_ledger[slot] = select(vec4<f32>(0.0), vec4<f32>(k.delta, c.normal, c.potential - 0.5 * k.dt * power, 1.0), engaged);
     ledger_count(acc, k, engaged, false);
+    return select(vec4<f32>(0.0), vec4<f32>(k.delta, c.normal, c.potential - 0.5 * k.dt * power, 1.0), engaged);
 }
 
 // Whether the wall contact in `slot` was engaged after the last step (the force kernel
@@ -123,14 +135,13 @@ fn ledger_wall(acc: ptr<function, LedgerAcc>, slot: u32, p: PairRow, k: Kin, c: 
     ledger_count(acc, k, engaged, true);
 }
 
-// A listed pair beyond every model's reach: if it was engaged it leaves with its last
-// force, as the CPU's `book_departed`: 0.5·f0·(delta − delta0) + U0 − ½·dt·P0.
-fn ledger_departed(acc: ptr<function, LedgerAcc>, slot: u32, delta: f32) {
-    let old = a_ledger[slot];
+// A listed pair beyond every model's reach whose slot held `old`: if it was engaged it
+// leaves with its last force, as the CPU's `book_departed`:
+// 0.5·f0·(delta − delta0) + U0 − ½·dt·P0. The slot's new value is zero.
+fn ledger_departed(acc: ptr<function, LedgerAcc>, old: vec4<f32>, delta: f32) {
     if (old.w != 0.0) {
         (*acc).dissipated += 0.5 * old.y * (delta - old.x) + old.z;
     }
-    a_ledger[slot] = vec4<f32>(0.0);
 }
 
 // Kahan summation of the step's dissipation into the particle's running total: the f32

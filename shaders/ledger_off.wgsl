@@ -11,11 +11,19 @@ fn ledger_new() -> LedgerAcc {
     return LedgerAcc(0.0);
 }
 
-fn ledger_pair(acc: ptr<function, LedgerAcc>, slot: u32, p: PairRow, k: Kin, c: Contact, power: f32) {}
+fn ledger_load(slot: u32) -> vec4<f32> {
+    return vec4<f32>(0.0);
+}
+
+fn ledger_save(slot: u32, value: vec4<f32>) {}
+
+fn ledger_pair(acc: ptr<function, LedgerAcc>, old: vec4<f32>, p: PairRow, k: Kin, c: Contact, power: f32) -> vec4<f32> {
+    return vec4<f32>(0.0);
+}
 
 fn ledger_wall(acc: ptr<function, LedgerAcc>, slot: u32, p: PairRow, k: Kin, c: Contact, power: f32, v_n: f32) {}
 
-fn ledger_departed(acc: ptr<function, LedgerAcc>, slot: u32, delta: f32) {}
+fn ledger_departed(acc: ptr<function, LedgerAcc>, old: vec4<f32>, delta: f32) {}
 
 fn ledger_store(pid: u32, acc: LedgerAcc) {}
 

@@ -855,13 +855,15 @@ fn particle_forces(k: u32, row0: PairRow) {
         let c = pair_contact(row, kin, &h);
         var fp = c.normal * n + c.tangential;
         var t_partner = vec3<f32>(0.0);
+        let led0 = ledger_load(slot);
+        var led = vec4<f32>(0.0);
         if (far) {
             h = hist_zero();
             fp = vec3<f32>(0.0);
-            ledger_departed(&ledger_acc, slot, delta);
+            ledger_departed(&ledger_acc, led0, delta);
         } else {
             peak = max(peak, delta * inv_a12);
-            ledger_pair(&ledger_acc, slot, row, kin, c, dot(c.tangential, v_t) + dot(c.rolling, wk - wj));
+            led = ledger_pair(&ledger_acc, led0, row, kin, c, dot(c.tangential, v_t) + dot(c.rolling, wk - wj));
             f += fp;
             if (ROTATION) {
                 // the partner sees n and the tangential force negated (their cross product
@@ -879,6 +881,7 @@ fn particle_forces(k: u32, row0: PairRow) {
         }
         store_pair_force(slot, fp);
         rot_pair_store(slot, t_partner);
+        ledger_save(slot, led);
     }
     // a particle that has not appeared meets no wall
     let present = WALLS && is_active(a_pid[k]);
