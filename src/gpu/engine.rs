@@ -1362,23 +1362,26 @@ impl GpuEngine {
                 .min(STEPS_PER_SUBMIT)
                 .min(self.prescribe_walls())
                 .min(self.insert_due());
-            if !self.quiet_batch(batch)? {
-                self.advance_prescribed_walls(batch);
-                self.ctx
-                    .queue
-                    .write_buffer(&self.monitor, 0, &[0u8; MONITOR_BYTES as usize]);
-                let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
-                for i in 0..batch {
-                    self.record_step(&mut encoder, Self::drift_of(i));
+            let report = match self.quiet_batch(batch)? {
+                Some(report) => report,
+                None => {
+                    self.advance_prescribed_walls(batch);
+                    self.ctx
+                        .queue
+                        .write_buffer(&self.monitor, 0, &[0u8; MONITOR_BYTES as usize]);
+                    let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+                    for i in 0..batch {
+                        self.record_step(&mut encoder, Self::drift_of(i));
+                    }
+                    self.record_finish(&mut encoder, true);
+                    self.submit_batch(encoder)?
                 }
-                self.record_finish(&mut encoder, true);
-                let report = self.submit_batch(encoder)?;
-                self.observe(batch, &report);
-                self.apply_monitor(&report.monitor)?;
-            }
+            };
             self.steps += batch;
             self.time += batch as f64 * self.dt;
             left -= batch;
+            self.observe(batch, &report);
+            self.apply_monitor(&report.monitor)?;
         }
         Ok(())
     }
@@ -1405,14 +1408,14 @@ impl GpuEngine {
     }
 
     /// Runs `batch` steps as a quiet batch (`gpu::quiet`) when the scene allows it and the
-    /// forecast expects no rebuild: true when the batch was kept, false when it did not run
-    /// or was rolled back (the state is then as before: run it the normal way).
-    fn quiet_batch(&mut self, batch: u64) -> Result<bool, PowderError> {
+    /// forecast expects no rebuild: the batch's report when it was kept, `None` when it did
+    /// not run or was rolled back (the state is then as before: run it the normal way).
+    fn quiet_batch(&mut self, batch: u64) -> Result<Option<BatchReport>, PowderError> {
         let Some(q) = &self.quiet else {
-            return Ok(false);
+            return Ok(None);
         };
         if !q.forecast.quiet(batch, q.mode) {
-            return Ok(false);
+            return Ok(None);
         }
         let copies = self.quiet_copies();
         let (n, max) = (self.n, self.max_per_dim);
@@ -1441,12 +1444,10 @@ impl GpuEngine {
         let report = self.submit_batch(encoder)?;
         if report.skin[0] == 0 {
             // no step would have rebuilt: the batch is what the normal one computes
-            self.observe(batch, &report);
             if let Some(q) = &mut self.quiet {
                 q.kept += 1;
             }
-            self.apply_monitor(&report.monitor)?;
-            return Ok(true);
+            return Ok(Some(report));
         }
         // some step needed a rebuild: back to the batch's start (its monitor is void: the
         // steps after the missed rebuild ran with stale lists)
@@ -1461,7 +1462,7 @@ impl GpuEngine {
         if let Some(q) = &mut self.quiet {
             q.rolled_back += 1;
         }
-        Ok(false)
+        Ok(None)
     }
 
     /// (buffer a quiet batch changes, where its batch-start copy goes): state A into the
