@@ -26,8 +26,10 @@ fn codec(limit: u64) -> impl bincode::Options {
         .allow_trailing_bytes()
         .with_limit(limit)
 }
-/// Bumped whenever the state layout changes.
-const FORMAT: u32 = 5;
+/// Bumped whenever the state layout changes, or the GPU step's arithmetic does (a resume
+/// continues bitwise only with the same arithmetic; 6: the hysteretic model's divisions
+/// became multiplications by host-derived constants).
+const FORMAT: u32 = 6;
 
 #[derive(Serialize, Deserialize)]
 struct Header {
