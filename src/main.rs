@@ -278,10 +278,8 @@ fn scene_info(
         "grid: clear_counts, cell_keys, count, scan, scatter, sort_within_cells, sort_large_cells"
             .to_string(),
     ];
-    if let Some(v) = powder::gpu::shaders::variant(&variant_name) {
-        let (module, _) = powder::gpu::shaders::validate(&v.source).map_err(PowderError::Run)?;
-        kernels.extend(module.entry_points.iter().map(|e| e.name.clone()));
-    }
+    // the kernels built for this scene (not every entry point of the variant)
+    kernels.extend(engine.kernel_names());
     let total = engine.buffer_bytes();
     let (buffers, particles) = (engine.buffers(), engine.len());
     let (rotation, neighbour_slots) = (engine.rotates(), engine.capacity());

@@ -705,6 +705,14 @@ fn info_scene_lists_kernels_buffers_and_leaves_out_rotation() {
     assert!(plain["bytes_per_particle"].as_f64().unwrap() > 0.0);
     let kernels = plain["kernels"].as_array().unwrap();
     assert!(kernels.iter().any(|k| k == "force"));
+    // the kernels built for the scene: the moving-wall kernel only where a wall moves
+    assert!(!kernels.iter().any(|k| k == "wall_move"), "{kernels:?}");
+    let lid = info("compression.toml");
+    assert!(lid["kernels"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|k| k == "wall_move"));
     let rolling = info("jkr_deposition.toml");
     assert_eq!(rolling["rotation"], true);
     assert!(rolling["buffers"]

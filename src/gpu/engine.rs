@@ -1023,6 +1023,31 @@ impl GpuEngine {
         self.kind.variant_name(self.has_ledger())
     }
 
+    /// The step's kernels this engine built pipelines for (entry points of the step
+    /// variant; the moving-wall kernels only where walls move), in recording order.
+    pub fn kernel_names(&self) -> Vec<String> {
+        let b = &self.bound;
+        [
+            Some(&b.kick_drift),
+            Some(&b.collect_kick_drift),
+            b.wall_move.as_ref(),
+            Some(&b.decide),
+            Some(&b.gather),
+            Some(&b.neighbours),
+            Some(&b.remap),
+            Some(&b.copy_back),
+            Some(&b.copy_back_history),
+            Some(&b.force),
+            b.wall_servo.as_ref(),
+            Some(&b.collect),
+            Some(&b.kick),
+        ]
+        .into_iter()
+        .flatten()
+        .map(|p| p.kernel.name.clone())
+        .collect()
+    }
+
     /// The step variant this scene runs (see [`Self::variant_name`]).
     pub fn kind(&self) -> StepKind {
         self.kind
