@@ -95,6 +95,10 @@ struct BenchArgs {
     /// GPU quiet batches: batches without the per-step rebuild check where none is expected.
     #[arg(long = "quiet-batches", value_enum, default_value = "auto")]
     quiet_batches: QuietChoice,
+    /// Runs per case, backend and size (fresh engines); the table shows the fastest, the
+    /// JSON every run's rate.
+    #[arg(long, default_value_t = 1)]
+    repeats: u32,
     /// Write the report (rows, machine, adapter, version, commit, date) as JSON.
     #[arg(long)]
     json: Option<PathBuf>,
@@ -187,6 +191,7 @@ fn bench_cmd(a: &BenchArgs) -> Result<(), PowderError> {
         ledger: a.ledger,
         quiet: a.quiet_batches.into(),
         profile: a.profile,
+        repeats: a.repeats,
     };
     opts.validate()?;
     println!("{}", bench::table_header());

@@ -270,3 +270,51 @@ fn bench_profile_reports_every_pass() {
     }
     assert!(passes.iter().all(|p| p[1].as_f64().unwrap() >= 0.0));
 }
+
+/// `--repeats N`: every (case, backend, size) runs N times on fresh engines; the row is the
+/// fastest run and `runs` lists every run's rate. `--repeats 0` is refused.
+#[test]
+fn bench_repeats_keep_the_fastest_run() {
+    let gpu = gpu_available();
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("bench.json");
+    let backend = if gpu { "both" } else { "cpu" };
+    let (ok, _, err) = powder(&[
+        "bench",
+        "--sizes",
+        "27",
+        "--steps",
+        "8",
+        "--warmup",
+        "2",
+        "--case",
+        "hysteretic",
+        "--backend",
+        backend,
+        "--repeats",
+        "3",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let rows = read_json(&json)["rows"].as_array().unwrap().clone();
+    assert_eq!(rows.len(), if gpu { 2 } else { 1 });
+    for r in &rows {
+        let runs: Vec<f64> = r["runs"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        assert_eq!(runs.len(), 3, "{r}");
+        assert!(runs.iter().all(|&x| x > 0.0), "{r}");
+        let best = runs.iter().cloned().fold(0.0, f64::max);
+        assert_eq!(
+            r["particle_steps_per_second"].as_f64().unwrap(),
+            best,
+            "{r}"
+        );
+    }
+    let (ok, _, err) = powder(&["bench", "--sizes", "27", "--repeats", "0"]);
+    assert!(!ok && err.contains("repeats"), "{err}");
+}
