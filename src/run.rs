@@ -81,6 +81,13 @@ pub struct RunSummary {
     pub interrupted: bool,
     /// The output directory, if outputs were written.
     pub out_dir: Option<String>,
+    /// Neighbour-list rebuilds so far, as the backend counts them (the GPU's initial
+    /// build included; the CPU's since this run's engine was built).
+    pub rebuilds: u64,
+    /// GPU: quiet batches kept and rolled back in this run (`gpu::quiet`); absent on the
+    /// CPU.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub quiet_batches: Option<[u64; 2]>,
     /// Backend remarks (GPU: neighbour-list rebuilds, contacts that left the lists).
     pub notes: Vec<String>,
 }
@@ -567,6 +574,8 @@ pub fn run_with<S: Simulation>(
         resumed_from,
         interrupted,
         out_dir: out.map(|d| d.display().to_string()),
+        rebuilds: engine.rebuilds()?,
+        quiet_batches: engine.quiet_batches().map(|(kept, back)| [kept, back]),
         notes: engine.notes()?,
     };
     if let Some(d) = out {

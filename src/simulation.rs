@@ -87,6 +87,11 @@ pub trait Simulation {
     fn escaped(&self, limit: usize) -> Vec<usize>;
     /// Extra lines for the summary (e.g. neighbour-list rebuilds).
     fn notes(&self) -> Result<Vec<String>, PowderError>;
+    /// Neighbour-list rebuilds so far, as the engine counts them (the GPU's initial build
+    /// included; the CPU's since the engine was built).
+    fn rebuilds(&self) -> Result<u64, PowderError>;
+    /// Quiet batches kept and rolled back (GPU, `gpu::quiet`); `None` on the CPU.
+    fn quiet_batches(&self) -> Option<(u64, u64)>;
 }
 
 impl Simulation for CpuEngine {
@@ -158,6 +163,12 @@ impl Simulation for CpuEngine {
     }
     fn notes(&self) -> Result<Vec<String>, PowderError> {
         Ok(Vec::new())
+    }
+    fn rebuilds(&self) -> Result<u64, PowderError> {
+        Ok(CpuEngine::rebuilds(self))
+    }
+    fn quiet_batches(&self) -> Option<(u64, u64)> {
+        None
     }
 }
 
@@ -283,5 +294,11 @@ impl Simulation for GpuEngine {
             ));
         }
         Ok(notes)
+    }
+    fn rebuilds(&self) -> Result<u64, PowderError> {
+        GpuEngine::rebuilds(self)
+    }
+    fn quiet_batches(&self) -> Option<(u64, u64)> {
+        Some(GpuEngine::quiet_batches(self))
     }
 }

@@ -584,6 +584,9 @@ fn run_without_the_ledger_on_the_gpu_backend() {
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
     assert_eq!(v["ledger"], true);
     assert!(v["energy_balance_error"].is_f64(), "{out}");
+    // the CPU's list rebuilds; quiet batches are the GPU's
+    assert!(v["rebuilds"].is_u64(), "{out}");
+    assert!(v.get("quiet_batches").is_none(), "{out}");
     if !gpu_available() {
         return;
     }
@@ -803,8 +806,25 @@ fn run_quiet_batches_choices_give_the_same_run() {
         let (ok, out, err) = powder(&[&args[..], &["--json"]].concat());
         assert!(ok, "{err}");
         let v: serde_json::Value = serde_json::from_str(&out).unwrap();
-        last.push(v["last"]["energies"].to_string());
+        // the same rebuilds whichever way; the quiet batches in the JSON too
+        last.push(format!("{} {}", v["last"]["energies"], v["rebuilds"]));
+        let quiet: Vec<u64> = v["quiet_batches"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_u64().unwrap())
+            .collect();
+        assert_eq!(quiet.len(), 2);
+        // (auto: as many as the forecast allows, possibly none)
+        if choice != "auto" {
+            assert_eq!(
+                quiet[0] + quiet[1] > 0,
+                choice == "always",
+                "{choice}: {quiet:?}"
+            );
+        }
     }
+    assert!(last[0].ends_with(char::is_numeric), "{}", last[0]);
     assert_eq!(last[0], last[1]);
     assert_eq!(last[0], last[2]);
     let (ok, _, err) = powder(&["run", scene, "--quiet-batches", "sometimes"]);
