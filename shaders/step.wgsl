@@ -33,6 +33,8 @@
 //   copy_back,   per particle            A[k] = B[k] (state, then the lists' history),
 //   copy_back_history                    disp = 0; the wall candidates (a_wall_near)
 // every step:
+//   <mirror copies>                      A's cell, offset, vpred (wpred) into the read-only
+//                                        textures m_* (`gpu::mirror`)
 //   force        per particle (A)        evaluates the pairs of its list in slot order
 //                                        (candidates beyond reach skipped) and its wall
 //                                        candidates;

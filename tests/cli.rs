@@ -2,6 +2,12 @@
 
 use std::process::Command;
 
+/// The cohesive cluster example (the README's main job).
+const CLUSTER: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/examples/cohesive_cluster.toml"
+);
+
 fn powder(args: &[&str]) -> (bool, String, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_powder"))
         .args(args)
@@ -207,10 +213,7 @@ fn bad_parameters_name_the_parameter_and_the_rule() {
 
 #[test]
 fn run_prints_a_summary_and_rejects_missing_files() {
-    let scene = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/examples/cohesive_cluster.toml"
-    );
+    let scene = CLUSTER;
     let (ok, out, err) = powder(&["run", scene, "--steps", "200", "--no-output"]);
     assert!(ok, "{err}");
     assert!(
@@ -484,10 +487,7 @@ fn compare_reports_deviations_and_fails_beyond_thresholds() {
     if !gpu_available() {
         return;
     }
-    let scene = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/examples/cohesive_cluster.toml"
-    );
+    let scene = CLUSTER;
     let (ok, out, err) = powder(&[
         "compare", scene, "--steps", "2000", "--every", "500", "--json",
     ]);
@@ -547,10 +547,7 @@ fn collide_and_run_on_the_gpu_backend() {
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
     assert_eq!(v["backend"], "gpu");
     assert!(v["adapter"].is_string());
-    let scene = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/examples/cohesive_cluster.toml"
-    );
+    let scene = CLUSTER;
     let (ok, out, err) = powder(&["run", scene, "--backend", "gpu", "--steps", "300"]);
     assert!(ok, "{err}");
     assert!(out.contains("backend          gpu"), "{out}");
@@ -561,10 +558,7 @@ fn collide_and_run_on_the_gpu_backend() {
 /// ledger stays.
 #[test]
 fn run_without_the_ledger_on_the_gpu_backend() {
-    let scene = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/examples/cohesive_cluster.toml"
-    );
+    let scene = CLUSTER;
     let (ok, out, err) = powder(&[
         "run",
         scene,
@@ -732,10 +726,7 @@ fn info_scene_profiles_its_passes() {
     if !gpu_available() {
         return;
     }
-    let scene = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/examples/cohesive_cluster.toml"
-    );
+    let scene = CLUSTER;
     let (ok, out, err) = powder(&[
         "info",
         scene,
@@ -778,10 +769,7 @@ fn run_quiet_batches_choices_give_the_same_run() {
     if !gpu_available() {
         return;
     }
-    let scene = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/examples/cohesive_cluster.toml"
-    );
+    let scene = CLUSTER;
     let mut last = Vec::new();
     for choice in ["off", "auto", "always"] {
         let args = [

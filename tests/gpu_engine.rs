@@ -1,19 +1,10 @@
 //! The GPU engine against the CPU reference on lavapipe (CI) or any adapter.
 
 mod common;
-use common::gpu as context;
+use common::{example, gpu as context};
 
 use powder::cpu::CpuEngine;
 use powder::gpu::GpuEngine;
-use powder::scene::Scene;
-
-fn example(name: &str) -> Scene {
-    Scene::load(std::path::Path::new(&format!(
-        "{}/examples/{name}",
-        env!("CARGO_MANIFEST_DIR")
-    )))
-    .unwrap()
-}
 
 #[test]
 fn cohesive_cluster_matches_the_cpu_reference() {

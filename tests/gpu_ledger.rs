@@ -2,20 +2,12 @@
 //! and `compare`'s energy and history checks.
 
 mod common;
-use common::gpu as context;
+use common::{example, gpu as context};
 
 use powder::compare::{compare, Tolerances};
 use powder::cpu::CpuEngine;
 use powder::gpu::{GpuEngine, GpuOptions};
 use powder::scene::Scene;
-
-fn example(name: &str) -> Scene {
-    Scene::load(std::path::Path::new(&format!(
-        "{}/examples/{name}",
-        env!("CARGO_MANIFEST_DIR")
-    )))
-    .unwrap()
-}
 
 /// Adhesive micro-spheres with friction, rolling resistance and Tsuji damping thrown
 /// onto a plate and into each other: every part of the JKR ledger (normal work across

@@ -3,7 +3,7 @@
 //! otherwise, so a run is bitwise the same whichever way its batches ran.
 
 mod common;
-use common::{assert_same_bits, gpu as context};
+use common::{assert_same_bits, example, example_path, gpu as context};
 
 use powder::bench::{packing, Case};
 use powder::gpu::{GpuEngine, GpuOptions, QuietBatches};
@@ -70,24 +70,12 @@ fn quiet_batches_give_the_same_bits_kept_or_rolled_back() {
     }
 }
 
-fn example(name: &str) -> powder::scene::Scene {
-    powder::scene::Scene::load(std::path::Path::new(&format!(
-        "{}/examples/{name}",
-        env!("CARGO_MANIFEST_DIR")
-    )))
-    .unwrap()
-}
-
 /// The packing example cut to a 8 × 8-site periodic column (832 spheres): the falling bed
 /// first moves too little to rebuild in a batch, then too much, so `always` keeps some
 /// batches and rolls others back, across the periodic faces; the same bits as `off`.
 #[test]
 fn quiet_batches_in_a_periodic_settling_bed() {
-    let mut text = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/examples/packing.toml"
-    ))
-    .unwrap();
+    let mut text = std::fs::read_to_string(example_path("packing.toml")).unwrap();
     text = text
         .replace("max = [0.046, 0.046, 0.08]", "max = [0.0184, 0.0184, 0.04]")
         .replace(

@@ -1071,8 +1071,9 @@ impl GpuEngine {
     /// Records one step: drift, decide whether to rebuild, on a rebuild (indirect: no
     /// workgroups otherwise) sort, gather into B, rebuild B's lists, remap the history
     /// and copy B back; then the forces. Their collect and the closing kick are recorded
-    /// with the next step (`Drift::AfterStep`) or by [`Self::record_finish`].
-    fn record_step(&self, encoder: &mut wgpu::CommandEncoder, drift: Drift) {
+    /// with the next step (`Drift::AfterStep`) or by [`Self::record_finish`]. `quiet`:
+    /// without `decide` and the rebuild chain (a quiet batch, `gpu::quiet`).
+    fn record_step(&self, encoder: &mut wgpu::CommandEncoder, drift: Drift, quiet: bool) {
         let bound = &self.bound;
         let (n, max) = (self.n, self.max_per_dim);
         {
@@ -1087,16 +1088,13 @@ impl GpuEngine {
                     p.once(&mut pass, max);
                 }
             }
-            if drift == Drift::None || !std::env::var("XSKIP").unwrap_or_default().contains('d') {
+            if !quiet {
                 bound.decide.once(&mut pass, max);
             }
         }
-        let skip = std::env::var("XSKIP").unwrap_or_default();
-        if drift == Drift::None || !skip.contains('c') {
+        if !quiet {
             self.grid
                 .encode_indirect(encoder, &self.grid_keys, &self.args, 0);
-        }
-        if drift == Drift::None || !skip.contains('c') {
             let mut pass = encoder.begin_compute_pass(&Default::default());
             let rebuild = [
                 &bound.gather,
@@ -1110,9 +1108,7 @@ impl GpuEngine {
             }
         }
         // the state the forces see, drifted (and re-sorted on a rebuild)
-        if drift == Drift::None || !skip.contains('m') {
-            self.mirrors.encode(encoder);
-        }
+        self.mirrors.encode(encoder);
         let mut pass = encoder.begin_compute_pass(&Default::default());
         bound.force.per_particle(&mut pass, n, max);
         if let Some(p) = &bound.wall_servo {
@@ -1223,7 +1219,7 @@ impl GpuEngine {
         self.ctx
             .queue
             .write_buffer(&self.monitor, 0, &[0u8; MONITOR_BYTES as usize]);
-        self.record_step(&mut encoder, Drift::None);
+        self.record_step(&mut encoder, Drift::None, false);
         self.record_finish(&mut encoder, false);
         self.check_monitor(encoder)?;
         if let Some(buf) = &self.particle_ledger {
@@ -1396,7 +1392,7 @@ impl GpuEngine {
                         .write_buffer(&self.monitor, 0, &[0u8; MONITOR_BYTES as usize]);
                     let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
                     for i in 0..batch {
-                        self.record_step(&mut encoder, Self::drift_of(i));
+                        self.record_step(&mut encoder, Self::drift_of(i), false);
                     }
                     self.record_finish(&mut encoder, true);
                     self.submit_batch(encoder)?
@@ -1443,7 +1439,6 @@ impl GpuEngine {
             return Ok(None);
         }
         let copies = self.quiet_copies();
-        let (n, max) = (self.n, self.max_per_dim);
         self.ctx
             .queue
             .write_buffer(&self.monitor, 0, &[0u8; MONITOR_BYTES as usize]);
@@ -1452,18 +1447,7 @@ impl GpuEngine {
             encoder.copy_buffer_to_buffer(a, 0, saved, 0, a.size());
         }
         for i in 0..batch {
-            // drift, the mirrors, the forces: no decide, no rebuild chain
-            {
-                let mut pass = encoder.begin_compute_pass(&Default::default());
-                let first = match Self::drift_of(i) {
-                    Drift::AfterStep => &self.bound.collect_kick_drift,
-                    _ => &self.bound.kick_drift,
-                };
-                first.per_particle(&mut pass, n, max);
-            }
-            self.mirrors.encode(&mut encoder);
-            let mut pass = encoder.begin_compute_pass(&Default::default());
-            self.bound.force.per_particle(&mut pass, n, max);
+            self.record_step(&mut encoder, Self::drift_of(i), true);
         }
         self.record_finish(&mut encoder, true);
         let report = self.submit_batch(encoder)?;

@@ -17,6 +17,20 @@ pub fn gpu() -> Option<GpuContext> {
     }
 }
 
+/// An example scene from `examples/`, loaded.
+#[allow(dead_code)]
+pub fn example(name: &str) -> Scene {
+    Scene::load(&example_path(name)).unwrap()
+}
+
+/// The path of a file in `examples/`.
+#[allow(dead_code)]
+pub fn example_path(name: &str) -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("examples")
+        .join(name)
+}
+
 /// The cohesive cluster example writing outputs every 500 steps and checkpoints every 1000
 /// (the run-output tests' scene).
 #[allow(dead_code)] // each test binary compiles this module; not all use every helper
