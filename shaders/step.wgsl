@@ -198,7 +198,8 @@ override ONE_MATERIAL: bool = false;
 // Read-only texture copies of a_cell, a_off and a_vpred, made right before each force
 // pass (`gpu::mirror`): the force pass loads them for every pair, and on lavapipe a
 // read-only storage-texture load is one gather where a storage-buffer load is a loop over
-// the SIMD lanes (measured 0.4 against 1.1–1.8 ns a vec4). MIRROR_WIDTH particles a row.
+// the SIMD lanes (0.3 against 1.1–1.8 ns a vec4: examples/lavapipe_probe.rs). MIRROR_WIDTH
+// particles a row.
 const MIRROR_WIDTH: u32 = 4096u;
 @group(0) @binding(80) var m_cell: texture_storage_2d<rgba32sint, read>;
 @group(0) @binding(81) var m_off: texture_storage_2d<rgba32float, read>;

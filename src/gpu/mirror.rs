@@ -6,10 +6,11 @@
 //! Why: on Mesa lavapipe (the software adapter CI and most users without a GPU run on) a
 //! storage-buffer load with a per-invocation index is a scalar loop over the SIMD lanes
 //! with a branch on the lane's mask and on the bounds per component, while a read-only
-//! storage-texture load is one gather. Measured with a probe kernel (32 random vec4 loads
-//! per invocation, 2-core EPYC, lavapipe 22.3): 1.1–1.8 ns per load from a storage buffer,
-//! 0.4 ns from an `rgba32float` read-only storage texture, 0.9 ns from a sampled texture
-//! with `textureLoad`; a copy of 1 MiB from a buffer into a texture took 20 µs. The force
+//! storage-texture load is one gather. Measured with `cargo run --release --example
+//! lavapipe_probe` (32 random vec4 loads per invocation, 2-core EPYC, lavapipe 22.3):
+//! 1.1–1.8 ns per load from a storage buffer, 0.3 ns from an `rgba32float` read-only storage
+//! texture, 0.7 ns from a sampled texture with `textureLoad`; a copy of 1 MiB from a buffer
+//! into a texture takes 20 µs. The force
 //! pass loads the partner's three vec4s once per pair, so the copies (48 bytes a
 //! particle per step, 64 with rotation) buy back many times their cost. On a real GPU
 //! reading the same data through the texture path is equally fast, and the copies are
