@@ -2,10 +2,8 @@
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use powder::collide::{self, CollideResult, CollideSpec};
-use powder::model::{
-    AdhesionMode, ContactModel, Dissipation, HystereticParams, JkrParams, K2Rule, LsdParams,
-    Pulloff,
-};
+use powder::model::flags::LawArgs;
+use powder::model::ContactModel;
 use powder::scene::Scene;
 use powder::{ParamError, PowderError};
 use std::path::PathBuf;
@@ -443,113 +441,12 @@ struct CompareArgs {
     json: bool,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-enum ModelKind {
-    Hysteretic,
-    Lsd,
-    Jkr,
-    Hertz,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-enum DissipationKind {
-    /// Paper 002 eqs. 11-13, 16, calibrated by --restitution.
-    Tsuji,
-    /// Paper 001 eq. 19 with --D, --alpha, --beta.
-    Powerlaw,
-    /// Krijt viscoelastic JKR (paper 001 eqs. 10-12, B1-B2) with --tvis [--sigma0].
-    Krijt,
-    /// Stress-dependent Krijt (paper 001 eqs. 17-18) with --tvis0-per-radius, --B, --zeta [--sigma0].
-    Stress,
-}
-
 #[derive(Args)]
 #[command(allow_negative_numbers = true)]
 struct CollideArgs {
-    #[arg(long, value_enum)]
-    model: ModelKind,
-    /// Hysteretic: loading stiffness k1, N/m.
-    #[arg(long)]
-    k1: Option<f64>,
-    /// Hysteretic: limit stiffness kp, N/m.
-    #[arg(long)]
-    kp: Option<f64>,
-    /// Hysteretic: tensile-branch slope kc, N/m.
-    #[arg(long)]
-    kc: Option<f64>,
-    /// Hysteretic: plasticity depth phi_f in (0, 1].
-    #[arg(long = "phi-f")]
-    phi_f: Option<f64>,
-    /// Hysteretic: non-contact adhesive force fa, N (default 0).
-    #[arg(long)]
-    fa: Option<f64>,
-    /// Hysteretic: non-contact adhesive stiffness, N/m ("inf" = zero range; default kc, or inf when kc = 0).
-    #[arg(long)]
-    kca: Option<f64>,
-    /// Hysteretic: non-contact adhesion on first approach.
-    #[arg(long, value_enum)]
-    adhesion: Option<AdhesionMode>,
-    /// Hysteretic: k2(delta_max) interpolation.
-    #[arg(long = "k2-rule", value_enum)]
-    k2_rule: Option<K2Rule>,
-    /// LSD: spring stiffness k, N/m.
-    #[arg(long)]
-    k: Option<f64>,
-    /// Viscous damping gamma0, kg/s (default 0).
-    #[arg(long)]
-    gamma0: Option<f64>,
-    /// JKR/Hertz: Young's modulus E of both bodies, Pa.
-    #[arg(long)]
-    youngs: Option<f64>,
-    /// JKR/Hertz: Poisson ratio, in (-1, 0.5).
-    #[arg(long)]
-    poisson: Option<f64>,
-    /// JKR: surface energy gamma per surface, J/m^2 (Fc = 3 pi gamma R*).
-    #[arg(long = "surface-energy")]
-    surface_energy: Option<f64>,
-    /// JKR/Hertz: target restitution e for --dissipation tsuji (the default dissipation when given).
-    #[arg(long)]
-    restitution: Option<f64>,
-    /// JKR/Hertz: dissipation model (default: none, or tsuji when --restitution is given).
-    #[arg(long, value_enum)]
-    dissipation: Option<DissipationKind>,
-    /// JKR/Hertz power-law dissipation: coefficient D.
-    #[arg(long = "D")]
-    d: Option<f64>,
-    /// JKR/Hertz power-law dissipation: velocity exponent alpha.
-    #[arg(long)]
-    alpha: Option<f64>,
-    /// JKR/Hertz power-law dissipation: contact-radius exponent beta.
-    #[arg(long)]
-    beta: Option<f64>,
-    /// JKR --dissipation krijt: relaxation time T_vis, s (paper 001 eq. 12).
-    #[arg(long)]
-    tvis: Option<f64>,
-    /// JKR --dissipation krijt/stress: crack stress sigma0 ~ gamma/(atomic spacing), Pa
-    /// (paper 001 eq. B2); default 0 = the contact radius follows the JKR curve instantly.
-    #[arg(long)]
-    sigma0: Option<f64>,
-    /// JKR --dissipation stress: C of T_vis,0 = C*R, s/m (paper 001 eq. 18).
-    #[arg(long = "tvis0-per-radius")]
-    tvis0_per_radius: Option<f64>,
-    /// JKR --dissipation stress: pressure coefficient B (paper 001 eq. 17).
-    #[arg(long = "B")]
-    b: Option<f64>,
-    /// JKR --dissipation stress: pressure exponent zeta (paper 001 eq. 17).
-    #[arg(long)]
-    zeta: Option<f64>,
-    /// JKR/Hertz: sliding friction coefficient mu_s (0 = frictionless).
-    #[arg(long)]
-    friction: Option<f64>,
-    /// JKR: rolling resistance, adhesion hysteresis Delta gamma / gamma (0 = none).
-    #[arg(long = "rolling-hysteresis")]
-    rolling_hysteresis: Option<f64>,
-    /// JKR: pull-off rule.
-    #[arg(long, value_enum)]
-    pulloff: Option<Pulloff>,
-    /// JKR/Hertz: reduced stiffness S: E -> S E, gamma -> gamma S^(2/5) (paper 002 eq. 24).
-    #[arg(long = "stiffness-scale")]
-    stiffness_scale: Option<f64>,
+    /// The contact law and its parameters (declared in `model::params`).
+    #[command(flatten)]
+    law: LawArgs,
     /// Angle between the approach velocity and the tangent plane, degrees (90 = head-on).
     #[arg(long = "impact-angle", default_value_t = 90.0)]
     impact_angle: f64,
@@ -594,209 +491,6 @@ struct CollideArgs {
     /// Print JSON on stdout (one object, or an array for a sweep).
     #[arg(long)]
     json: bool,
-}
-
-fn required(value: Option<f64>, name: &'static str, model: &str) -> Result<f64, PowderError> {
-    value.ok_or_else(|| {
-        ParamError::new(
-            name,
-            format!(
-                "--{} is required for --model {model}",
-                name.replace('_', "-")
-            ),
-        )
-        .into()
-    })
-}
-
-fn reject(value: bool, name: &'static str, model: &str) -> Result<(), PowderError> {
-    if value {
-        Err(ParamError::new(
-            name,
-            format!(
-                "--{} does not apply to --model {model}",
-                name.replace('_', "-")
-            ),
-        )
-        .into())
-    } else {
-        Ok(())
-    }
-}
-
-fn contact_model(a: &CollideArgs) -> Result<ContactModel, PowderError> {
-    let model_name = format!("{:?}", a.model).to_lowercase();
-    let m = model_name.as_str();
-    let hysteretic_only = [
-        (a.k1.is_some(), "k1"),
-        (a.kp.is_some(), "kp"),
-        (a.kc.is_some(), "kc"),
-        (a.phi_f.is_some(), "phi_f"),
-        (a.fa.is_some(), "fa"),
-        (a.kca.is_some(), "kca"),
-        (a.adhesion.is_some(), "adhesion"),
-        (a.k2_rule.is_some(), "k2_rule"),
-    ];
-    let jkr_only = [
-        (a.youngs.is_some(), "youngs"),
-        (a.poisson.is_some(), "poisson"),
-        (a.surface_energy.is_some(), "surface_energy"),
-        (a.restitution.is_some(), "restitution"),
-        (a.dissipation.is_some(), "dissipation"),
-        (a.d.is_some(), "D"),
-        (a.alpha.is_some(), "alpha"),
-        (a.beta.is_some(), "beta"),
-        (a.tvis.is_some(), "tvis"),
-        (a.sigma0.is_some(), "sigma0"),
-        (a.tvis0_per_radius.is_some(), "tvis0_per_radius"),
-        (a.b.is_some(), "B"),
-        (a.zeta.is_some(), "zeta"),
-        (a.friction.is_some(), "friction"),
-        (a.rolling_hysteresis.is_some(), "rolling_hysteresis"),
-        (a.pulloff.is_some(), "pulloff"),
-        (a.stiffness_scale.is_some(), "stiffness_scale"),
-    ];
-    let reject_all = |list: &[(bool, &'static str)]| -> Result<(), PowderError> {
-        for &(given, name) in list {
-            reject(given, name, m)?;
-        }
-        Ok(())
-    };
-    let model = match a.model {
-        ModelKind::Hysteretic => {
-            reject(a.k.is_some(), "k", m)?;
-            reject_all(&jkr_only)?;
-            let kc = required(a.kc, "kc", m)?;
-            ContactModel::Hysteretic(HystereticParams {
-                k1: required(a.k1, "k1", m)?,
-                kp: required(a.kp, "kp", m)?,
-                kc,
-                phi_f: required(a.phi_f, "phi_f", m)?,
-                fa: a.fa.unwrap_or(0.0),
-                kca: a.kca.unwrap_or(if kc > 0.0 { kc } else { f64::INFINITY }),
-                adhesion: a.adhesion.unwrap_or_default(),
-                gamma0: a.gamma0.unwrap_or(0.0),
-                k2_rule: a.k2_rule.unwrap_or_default(),
-            })
-        }
-        ModelKind::Lsd => {
-            reject_all(&hysteretic_only)?;
-            reject_all(&jkr_only)?;
-            ContactModel::Lsd(LsdParams {
-                k: required(a.k, "k", m)?,
-                gamma0: a.gamma0.unwrap_or(0.0),
-            })
-        }
-        ModelKind::Jkr | ModelKind::Hertz => {
-            reject(a.k.is_some(), "k", m)?;
-            reject(a.gamma0.is_some(), "gamma0", m)?;
-            reject_all(&hysteretic_only)?;
-            let surface_energy = if a.model == ModelKind::Hertz {
-                reject(a.surface_energy.is_some(), "surface_energy", m)?;
-                reject(a.rolling_hysteresis.is_some(), "rolling_hysteresis", m)?;
-                reject(a.pulloff.is_some(), "pulloff", m)?;
-                0.0
-            } else {
-                required(a.surface_energy, "surface_energy", m)?
-            };
-            let kind = a
-                .dissipation
-                .or(a.restitution.map(|_| DissipationKind::Tsuji));
-            // each dissipation's own options, refused with the others
-            let owners: [(bool, &'static str, DissipationKind); 8] = [
-                (a.d.is_some(), "D", DissipationKind::Powerlaw),
-                (a.alpha.is_some(), "alpha", DissipationKind::Powerlaw),
-                (a.beta.is_some(), "beta", DissipationKind::Powerlaw),
-                (a.tvis.is_some(), "tvis", DissipationKind::Krijt),
-                (
-                    a.tvis0_per_radius.is_some(),
-                    "tvis0_per_radius",
-                    DissipationKind::Stress,
-                ),
-                (a.b.is_some(), "B", DissipationKind::Stress),
-                (a.zeta.is_some(), "zeta", DissipationKind::Stress),
-                (a.sigma0.is_some(), "sigma0", DissipationKind::Krijt),
-            ];
-            for (given, name, owner) in owners {
-                let fits = Some(owner) == kind
-                    || (name == "sigma0" && kind == Some(DissipationKind::Stress));
-                if given && !fits {
-                    let needs = match name {
-                        "sigma0" => "--dissipation krijt or stress".to_string(),
-                        _ => format!("--dissipation {}", format!("{owner:?}").to_lowercase()),
-                    };
-                    return Err(ParamError::new(
-                        name,
-                        format!("--{} needs {needs}", name.replace('_', "-")),
-                    )
-                    .into());
-                }
-            }
-            let dissipation = match kind {
-                None => Dissipation::None,
-                Some(DissipationKind::Tsuji) => Dissipation::Tsuji {
-                    restitution: a.restitution.ok_or_else(|| {
-                        PowderError::from(ParamError::new(
-                            "restitution",
-                            "--dissipation tsuji needs --restitution E (0 < E <= 1)",
-                        ))
-                    })?,
-                },
-                Some(DissipationKind::Powerlaw) => {
-                    reject(
-                        a.restitution.is_some(),
-                        "restitution",
-                        "--dissipation powerlaw",
-                    )?;
-                    Dissipation::PowerLaw {
-                        d: required(a.d, "D", "jkr --dissipation powerlaw")?,
-                        alpha: required(a.alpha, "alpha", "jkr --dissipation powerlaw")?,
-                        beta: required(a.beta, "beta", "jkr --dissipation powerlaw")?,
-                    }
-                }
-                Some(DissipationKind::Krijt) => {
-                    reject(
-                        a.restitution.is_some(),
-                        "restitution",
-                        "--dissipation krijt",
-                    )?;
-                    Dissipation::Krijt {
-                        tvis: required(a.tvis, "tvis", "jkr --dissipation krijt")?,
-                        sigma0: a.sigma0.unwrap_or(0.0),
-                    }
-                }
-                Some(DissipationKind::Stress) => {
-                    reject(
-                        a.restitution.is_some(),
-                        "restitution",
-                        "--dissipation stress",
-                    )?;
-                    Dissipation::Stress {
-                        tvis0_per_radius: required(
-                            a.tvis0_per_radius,
-                            "tvis0_per_radius",
-                            "jkr --dissipation stress",
-                        )?,
-                        b: required(a.b, "B", "jkr --dissipation stress")?,
-                        zeta: required(a.zeta, "zeta", "jkr --dissipation stress")?,
-                        sigma0: a.sigma0.unwrap_or(0.0),
-                    }
-                }
-            };
-            ContactModel::Jkr(JkrParams {
-                youngs: required(a.youngs, "youngs", m)?,
-                poisson: required(a.poisson, "poisson", m)?,
-                surface_energy,
-                dissipation,
-                friction: a.friction.unwrap_or(0.0),
-                rolling_hysteresis: a.rolling_hysteresis.unwrap_or(0.0),
-                pulloff: a.pulloff.unwrap_or_default(),
-                stiffness_scale: a.stiffness_scale.unwrap_or(1.0),
-            })
-        }
-    };
-    model.validate()?;
-    Ok(model)
 }
 
 fn fmt_opt(x: Option<f64>) -> String {
@@ -844,7 +538,7 @@ fn print_table(results: &[CollideResult]) {
 }
 
 fn collide_cmd(a: &CollideArgs) -> Result<(), PowderError> {
-    let model = contact_model(a)?;
+    let model = a.law.contact_model()?;
     let spec = CollideSpec {
         model,
         radius1: a.radius,

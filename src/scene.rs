@@ -150,11 +150,8 @@
 //! different materials that can meet (particle–particle, particle–wall) has an
 //! `[[interaction]]`.
 
-use crate::error::PowderError;
-use crate::model::{
-    AdhesionMode, ContactModel, Dissipation, HystereticParams, JkrParams, K2Rule, LsdParams,
-    Pulloff,
-};
+use crate::error::{ParamError, PowderError};
+use crate::model::{params, ContactModel};
 use rand::{Rng, SeedableRng};
 use rand_distr::{Distribution, LogNormal, Normal};
 use rand_pcg::Pcg64;
@@ -418,51 +415,6 @@ const SIMULATION_KEYS: &[&str] = &[
 ];
 const MATERIAL_KEYS: &[&str] = &["name", "density", "model"];
 const INTERACTION_KEYS: &[&str] = &["materials", "model"];
-const HYSTERETIC_KEYS: &[&str] = &[
-    "k1", "kp", "kc", "phi_f", "fa", "kca", "adhesion", "gamma0", "k2_rule",
-];
-const LSD_KEYS: &[&str] = &["k", "gamma0"];
-const JKR_KEYS: &[&str] = &[
-    "youngs",
-    "poisson",
-    "surface_energy",
-    "dissipation",
-    "restitution",
-    "D",
-    "alpha",
-    "beta",
-    "tvis",
-    "sigma0",
-    "tvis0_per_radius",
-    "B",
-    "zeta",
-    "friction",
-    "rolling_hysteresis",
-    "pulloff",
-    "stiffness_scale",
-];
-const HERTZ_KEYS: &[&str] = &[
-    "youngs",
-    "poisson",
-    "dissipation",
-    "restitution",
-    "D",
-    "alpha",
-    "beta",
-    "friction",
-    "stiffness_scale",
-];
-const MODELS: &[&str] = &["hysteretic", "lsd", "jkr", "hertz"];
-
-/// The parameter keys of each model.
-fn model_keys(kind: &str) -> &'static [&'static str] {
-    match kind {
-        "hysteretic" => HYSTERETIC_KEYS,
-        "lsd" => LSD_KEYS,
-        "jkr" => JKR_KEYS,
-        _ => HERTZ_KEYS,
-    }
-}
 const WALL_KEYS: &[&str] = &[
     "point",
     "normal",
@@ -1171,7 +1123,7 @@ fn parse_materials(root: &Tbl) -> Res<Vec<Material>> {
         if let Some(Val::Str(name)) = t.get("name").map(|n| &n.val) {
             t.ctx = format!("[[material]] #{} (`{name}`)", i + 1);
         }
-        let kind = model_kind(&t, MATERIAL_KEYS, "this material")?;
+        let kind = model_kind(&t, MATERIAL_KEYS)?;
         let name = t.str("name")?.ok_or_else(|| {
             t.missing(
                 "name",
@@ -1191,7 +1143,7 @@ fn parse_materials(root: &Tbl) -> Res<Vec<Material>> {
                 ),
             ));
         }
-        let model = build_model(&t, kind, &format!("material `{name}`"))?;
+        let model = build_model(&t, kind, MATERIAL_KEYS, &format!("material `{name}`"))?;
         let density = t.positive_req("density", "the material density in kg/m^3")?;
         out.push(Material {
             name: name.to_string(),
@@ -1202,191 +1154,95 @@ fn parse_materials(root: &Tbl) -> Res<Vec<Material>> {
     Ok(out)
 }
 
-/// Reads `model` and checks the table's keys against `common` plus that model's parameters.
-fn model_kind(t: &Tbl, common: &[&str], owner: &str) -> Res<&'static str> {
-    let mut all: Vec<&str> = common.to_vec();
-    for k in MODELS.iter().flat_map(|m| model_keys(m)) {
-        if !all.contains(k) {
-            all.push(k);
-        }
-    }
-    let Some(kind) = t.choice("model", MODELS)? else {
+/// Reads `model` and checks that the table's keys are `common` or some law's parameters
+/// (each law's own keys are checked by [`params::read_model`]).
+fn model_kind(t: &Tbl, common: &[&str]) -> Res<&'static str> {
+    let names = params::law_names();
+    let Some(kind) = t.choice("model", &names)? else {
+        let mut all: Vec<&str> = common.to_vec();
+        all.extend(params::all_params().iter().map(|p| p.key));
         t.check_keys(&all, |_| None)?;
         return Err(t.missing(
             "model",
-            "the contact model, \"hysteretic\", \"lsd\", \"jkr\" or \"hertz\"",
+            &format!("the contact model, {}", one_of_strings(&names)),
         ));
     };
-    let own = model_keys(kind);
-    let allowed: Vec<&str> = common.iter().chain(own).copied().collect();
-    t.check_keys(&allowed, |k| {
-        MODELS.iter().find(|m| model_keys(m).contains(&k)).map(|m| {
-            format!("`{k}` is a parameter of the `{m}` model, but {owner} uses model = \"{kind}\"")
-        })
-    })?;
     Ok(kind)
 }
 
-fn build_model(t: &Tbl, kind: &str, owner: &str) -> Res<ContactModel> {
-    let model = if kind == "hysteretic" {
-        let k1 = t.f64_req("k1", "the hysteretic loading stiffness k1 in N/m")?;
-        let kp = t.f64_req("kp", "the hysteretic limit stiffness kp in N/m")?;
-        let kc = t.f64_req("kc", "the hysteretic tensile-branch slope kc in N/m")?;
-        let phi_f = t.f64_req(
-            "phi_f",
-            "the hysteretic plasticity depth phi_f (0 < phi_f <= 1)",
-        )?;
-        let fa = t.f64("fa")?.unwrap_or(0.0);
-        let kca = match t.get("kca") {
-            None => {
-                if kc > 0.0 {
-                    kc
-                } else {
-                    f64::INFINITY
-                }
-            }
-            Some(node) => match &node.val {
-                Val::Str(s) if matches!(s.to_lowercase().as_str(), "inf" | "infinity") => {
-                    f64::INFINITY
-                }
-                _ => node_number(node)
-                    .ok_or_else(|| t.type_err("kca", node, "a number in N/m or \"inf\""))?,
-            },
-        };
-        let adhesion = match t.choice("adhesion", &["jump-in", "reversible"])? {
-            Some("reversible") => AdhesionMode::Reversible,
-            _ => AdhesionMode::JumpIn,
-        };
-        let gamma0 = t.f64("gamma0")?.unwrap_or(0.0);
-        let k2_rule = match t.choice("k2_rule", &["linear", "sqrt"])? {
-            Some("sqrt") => K2Rule::Sqrt,
-            _ => K2Rule::Linear,
-        };
-        ContactModel::Hysteretic(HystereticParams {
-            k1,
-            kp,
-            kc,
-            phi_f,
-            fa,
-            kca,
-            adhesion,
-            gamma0,
-            k2_rule,
+/// A scene table as a source of contact-law parameters.
+struct TableParams<'t, 'a> {
+    t: &'t Tbl<'a>,
+    /// The table's own keys (name, density, materials, model).
+    common: &'t [&'t str],
+    /// "material `glass`", "interaction `a`-`b`".
+    owner: &'t str,
+}
+
+impl params::ParamSource for TableParams<'_, '_> {
+    type Error = PowderError;
+
+    fn keys(&self) -> Vec<String> {
+        self.t
+            .entries
+            .iter()
+            .map(|e| e.key.clone())
+            .filter(|k| !self.common.contains(&k.as_str()))
+            .collect()
+    }
+
+    fn raw(&self, key: &str) -> Option<params::Raw> {
+        let node = self.t.get(key)?;
+        Some(match &node.val {
+            Val::Int(i) => params::Raw::Number(*i as f64),
+            Val::Float(x) => params::Raw::Number(*x),
+            Val::Str(s) => params::Raw::Text(s.clone()),
+            _ => params::Raw::Other(describe(node)),
         })
-    } else if kind == "lsd" {
-        let k = t.f64_req("k", "the LSD spring stiffness k in N/m")?;
-        let gamma0 = t.f64("gamma0")?.unwrap_or(0.0);
-        ContactModel::Lsd(LsdParams { k, gamma0 })
-    } else {
-        let youngs = t.f64_req("youngs", "Young's modulus of the material in Pa")?;
-        let poisson = t.f64_req("poisson", "the Poisson ratio, in (-1, 0.5)")?;
-        let surface_energy = if kind == "jkr" {
-            t.f64_req(
-                "surface_energy",
-                "the surface energy gamma per surface in J/m^2",
-            )?
-        } else {
-            0.0
-        };
-        let restitution = t.f64("restitution")?;
-        let default = if restitution.is_some() {
-            "tsuji"
-        } else {
-            "none"
-        };
-        let dissipation = match t
-            .choice(
-                "dissipation",
-                &["none", "tsuji", "powerlaw", "krijt", "stress"],
-            )?
-            .unwrap_or(default)
-        {
-            "tsuji" => Dissipation::Tsuji {
-                restitution: restitution.ok_or_else(|| {
-                    t.missing(
-                        "restitution",
-                        "the target restitution of dissipation = \"tsuji\"",
-                    )
-                })?,
-            },
-            "powerlaw" => Dissipation::PowerLaw {
-                d: t.f64_req("D", "the power-law dissipation coefficient D")?,
-                alpha: t.f64_req("alpha", "the power-law velocity exponent alpha")?,
-                beta: t.f64_req("beta", "the power-law contact-radius exponent beta")?,
-            },
-            "krijt" => Dissipation::Krijt {
-                tvis: t.f64_req(
-                    "tvis",
-                    "the relaxation time T_vis of dissipation = \"krijt\" (paper 001 eq. 12)",
-                )?,
-                sigma0: t.f64("sigma0")?.unwrap_or(0.0),
-            },
-            "stress" => Dissipation::Stress {
-                tvis0_per_radius: t.f64_req(
-                    "tvis0_per_radius",
-                    "C of T_vis,0 = C*R of dissipation = \"stress\" (paper 001 eq. 18)",
-                )?,
-                b: t.f64_req(
-                    "B",
-                    "the pressure coefficient B of dissipation = \"stress\" (paper 001 eq. 17)",
-                )?,
-                zeta: t.f64_req(
-                    "zeta",
-                    "the pressure exponent zeta of dissipation = \"stress\" (paper 001 eq. 17)",
-                )?,
-                sigma0: t.f64("sigma0")?.unwrap_or(0.0),
-            },
-            _ => Dissipation::None,
-        };
-        let owners: [(&str, &[&str]); 6] = [
-            ("D", &["powerlaw"]),
-            ("alpha", &["powerlaw"]),
-            ("beta", &["powerlaw"]),
-            ("tvis", &["krijt"]),
-            ("sigma0", &["krijt", "stress"]),
-            ("tvis0_per_radius", &["stress"]),
-        ];
-        let owners = owners
-            .into_iter()
-            .chain([("B", &["stress"][..]), ("zeta", &["stress"][..])]);
-        for (key, kinds) in owners {
-            if t.has(key) && !kinds.contains(&dissipation.name()) {
-                let which = kinds
-                    .iter()
-                    .map(|k| format!("dissipation = \"{k}\""))
-                    .collect::<Vec<_>>()
-                    .join(" or ");
-                return Err(t.err_key(key, format!("`{key}` applies to {which} only")));
-            }
-        }
-        if t.has("restitution") && !matches!(dissipation, Dissipation::Tsuji { .. }) {
-            return Err(t.err_key(
-                "restitution",
+    }
+
+    fn name(&self, key: &str) -> String {
+        format!("`{key}` in {}", self.t.ctx)
+    }
+
+    fn setting(&self, key: &str, value: &str) -> String {
+        format!("{key} = \"{value}\"")
+    }
+
+    fn error(&self, key: &str, message: String) -> PowderError {
+        self.t.err_key(key, message)
+    }
+
+    fn missing(&self, key: &str, what: &str) -> PowderError {
+        self.t.missing(key, what)
+    }
+
+    fn unknown(&self, key: &str, law: &params::Law, owner: Option<&str>) -> PowderError {
+        let mut allowed: Vec<&str> = self.common.to_vec();
+        allowed.extend(params::keys_of(law));
+        let hint = |k: &str| {
+            owner.filter(|_| k == key).map(|m| {
                 format!(
-                    "`restitution` applies to dissipation = \"tsuji\" only, not \"{}\"",
-                    dissipation.name()
-                ),
-            ));
-        }
-        let pulloff = match t.choice("pulloff", &["displacement", "force"])? {
-            Some("force") => Pulloff::Force,
-            _ => Pulloff::Displacement,
+                    "`{k}` is a parameter of the `{m}` model, but {} uses model = \"{}\"",
+                    self.owner, law.name
+                )
+            })
         };
-        ContactModel::Jkr(JkrParams {
-            youngs,
-            poisson,
-            surface_energy,
-            dissipation,
-            friction: t.f64("friction")?.unwrap_or(0.0),
-            rolling_hysteresis: t.f64("rolling_hysteresis")?.unwrap_or(0.0),
-            pulloff,
-            stiffness_scale: t.f64("stiffness_scale")?.unwrap_or(1.0),
-        })
-    };
-    model
-        .validate()
-        .map_err(|e| t.err_key(e.param, format!("{owner}: {e}")))?;
-    Ok(model)
+        match self.t.check_keys(&allowed, hint) {
+            Err(e) => e,
+            Ok(()) => self
+                .t
+                .err_key(key, format!("unknown key `{key}` in {}", self.t.ctx)),
+        }
+    }
+
+    fn invalid(&self, e: ParamError) -> PowderError {
+        self.t.err_key(e.param, format!("{}: {e}", self.owner))
+    }
+}
+
+fn build_model(t: &Tbl, kind: &str, common: &[&str], owner: &str) -> Res<ContactModel> {
+    params::read_model(&TableParams { t, common, owner }, kind)
 }
 
 /// Resolves a material name; errors list the known names.
@@ -1425,7 +1281,7 @@ fn parse_interactions(root: &Tbl, names: &[&str]) -> Res<Vec<Interaction>> {
             Some(span),
             format!("[[interaction]] #{}", i + 1),
         );
-        let kind = model_kind(&t, INTERACTION_KEYS, "this interaction")?;
+        let kind = model_kind(&t, INTERACTION_KEYS)?;
         let expected = "an array of two material names, e.g. [\"powder\", \"glass\"]";
         let node = t
             .get("materials")
@@ -1459,7 +1315,7 @@ fn parse_interactions(root: &Tbl, names: &[&str]) -> Res<Vec<Interaction>> {
             ));
         }
         let owner = format!("interaction `{}`-`{}`", names[a], names[b]);
-        let model = build_model(&t, kind, &owner)?;
+        let model = build_model(&t, kind, INTERACTION_KEYS, &owner)?;
         out.push(Interaction {
             materials: [a, b],
             model,
@@ -2381,6 +2237,7 @@ fn check_pair_models(src: &Src, scene: &Scene) -> Res<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::{AdhesionMode, K2Rule, LsdParams};
 
     const FULL: &str = r#"
 [domain]

@@ -94,6 +94,48 @@ fn undamped_jkr_loses_0_7722_fc_delta0_per_collision() {
     assert!(loss(&f) < loss(&d));
 }
 
+/// Paper 002's rule breaks the contact where it formed (δ = 0, F = −8/9·Fc on both sides of
+/// the contact): the JKR curve loses nothing, only the damping does.
+#[test]
+fn zero_overlap_pulloff_loses_nothing_without_damping() {
+    let p = JkrParams {
+        pulloff: Pulloff::Zero,
+        ..jkr()
+    };
+    assert_eq!(loss(&p), 0.0);
+    let d = JkrParams {
+        pulloff: Pulloff::Displacement,
+        ..jkr()
+    };
+    let v_stick = analytic::jkr_sticking_velocity(loss(&d), geometry().reduced_mass);
+    for f in [1.0, 3.0, 10.0] {
+        let r = run(p, f * v_stick);
+        assert!(!r.stuck, "v/v_stick {f}");
+        // the touch and break jumps are equal and opposite: first order in dt each
+        assert!((r.e - 1.0).abs() < 0.02, "v/v_stick {f}: e {}", r.e);
+        assert!(r.energy.balance_error.unwrap() < 1e-3);
+        assert_eq!(r.e_analytic, Some(1.0));
+    }
+    // with Tsuji damping it keeps more energy than the displacement rule at the same speed
+    for v in [0.5, 1.0, 2.0, 5.0].map(|f| f * v_stick) {
+        let damped = |pulloff| JkrParams {
+            pulloff,
+            dissipation: Dissipation::Tsuji { restitution: 0.8 },
+            ..jkr()
+        };
+        let (z, disp) = (
+            run(damped(Pulloff::Zero), v),
+            run(damped(Pulloff::Displacement), v),
+        );
+        assert!(
+            z.e > disp.e || (z.stuck && disp.stuck),
+            "v {v}: {} vs {}",
+            z.e,
+            disp.e
+        );
+    }
+}
+
 #[test]
 fn hertz_is_elastic_with_the_hertz_contact_time() {
     let p = JkrParams::hertz(1e9, 0.3);

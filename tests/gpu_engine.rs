@@ -307,6 +307,40 @@ mod jkr {
         eprintln!("JKR: worst |e_gpu - e_cpu| = {worst:.2e}");
     }
 
+    /// Paper 002's zero-overlap pull-off with Tsuji damping: the same stick/rebound verdict
+    /// and restitution on both backends, sticking and rebounding.
+    #[test]
+    fn gpu_zero_overlap_pulloff_matches_the_cpu() {
+        if context().is_none() {
+            return;
+        }
+        let p = JkrParams {
+            pulloff: Pulloff::Zero,
+            dissipation: Dissipation::Tsuji { restitution: 0.5 },
+            ..jkr()
+        };
+        let v0 = v_stick(&JkrParams {
+            pulloff: Pulloff::Displacement,
+            ..jkr()
+        });
+        let mut verdicts = Vec::new();
+        for f in [0.3, 1.0, 3.0, 10.0] {
+            let (g, c) = both(&spec(p, f * v0));
+            assert_eq!(g.stuck, c.stuck, "v/v0 {f}");
+            assert!(
+                (g.e - c.e).abs() < 2e-3,
+                "v/v0 {f}: gpu {} cpu {}",
+                g.e,
+                c.e
+            );
+            verdicts.push(c.stuck);
+        }
+        assert!(
+            verdicts[0] && !verdicts[3],
+            "{verdicts:?}: sticks slow, rebounds fast"
+        );
+    }
+
     #[test]
     fn gpu_hertz_tsuji_and_power_law_match_the_cpu() {
         if context().is_none() {

@@ -45,7 +45,6 @@ beta = 1.0
 friction = 0.2
 rolling_hysteresis = 0.3
 pulloff = "force"
-stiffness_scale = 0.5
 
 [[particles]]
 kind = "list"
@@ -71,8 +70,24 @@ fn jkr_material_parses_with_all_options() {
     assert_eq!(p.pulloff, Pulloff::Force);
     assert_eq!(
         (p.friction, p.rolling_hysteresis, p.stiffness_scale),
-        (0.2, 0.3, 0.5)
+        (0.2, 0.3, 1.0)
     );
+    // the reduced stiffness with the Tsuji dissipation it was derived for
+    let tsuji = JKR_SCENE
+        .replace(
+            "dissipation = \"powerlaw\"\nD = 1e-9\nalpha = 1.0\nbeta = 1.0\n",
+            "restitution = 0.5\n",
+        )
+        .replace(
+            "pulloff = \"force\"",
+            "pulloff = \"zero\"\nstiffness_scale = 0.5",
+        );
+    let s = Scene::from_toml_str(&tsuji, "jkr").unwrap();
+    let ContactModel::Jkr(p) = s.materials[0].model else {
+        panic!("not jkr")
+    };
+    assert_eq!(p.dissipation, Dissipation::Tsuji { restitution: 0.5 });
+    assert_eq!((p.pulloff, p.stiffness_scale), (Pulloff::Zero, 0.5));
 }
 
 #[test]
@@ -89,6 +104,17 @@ fn jkr_scene_errors_name_the_key() {
     assert!(e.contains("poisson"), "{e}");
     let e = err(JKR_SCENE.replace("dissipation = \"powerlaw\"", "dissipation = \"tsuji\""));
     assert!(e.contains("restitution"), "{e}");
+    // paper 002's reduced-stiffness rule is for Tsuji damping only
+    let e = err(JKR_SCENE.replace("pulloff = \"force\"", "stiffness_scale = 0.5"));
+    assert!(
+        e.contains("stiffness_scale") && e.contains("Tsuji") && e.contains("line 23"),
+        "{e}"
+    );
+    let e = err(JKR_SCENE.replace("D = 1e-9", "D = 1e-9\ntvis = 1.0"));
+    assert!(
+        e.contains("`tvis`") && e.contains("dissipation = \"krijt\" only"),
+        "{e}"
+    );
     let e = err(JKR_SCENE.replace("model = \"jkr\"", "model = \"hertz\""));
     assert!(
         e.contains("surface_energy") && e.contains("`jkr` model"),

@@ -9,7 +9,7 @@
 //!   −kc_a·δ − fa for δa < δ ≤ 0 with δa = −fa/kc_a;
 //! * the viscous force γ0·δ̇ while in contact (eq. 2).
 
-use crate::error::{require_finite, require_non_negative, require_positive, ParamError};
+use crate::error::{require_positive, ParamError};
 use crate::model::{ContactHistory, NormalForce};
 use serde::{Deserialize, Serialize};
 
@@ -77,8 +77,18 @@ impl HystereticParams {
 
     /// Checks every rule of the model; the error names the parameter and the rule.
     pub fn validate(&self) -> Result<(), ParamError> {
-        require_positive("k1", self.k1, "the loading stiffness k1")?;
-        require_positive("kp", self.kp, "the limit stiffness kp")?;
+        use crate::model::params as p;
+        for (param, x) in [
+            (&p::K1, self.k1),
+            (&p::KP, self.kp),
+            (&p::KC, self.kc),
+            (&p::PHI_F, self.phi_f),
+            (&p::FA, self.fa),
+            (&p::KCA, self.kca),
+            (&p::GAMMA0, self.gamma0),
+        ] {
+            param.check(x)?;
+        }
         if self.kp < self.k1 {
             return Err(ParamError::new(
                 "kp",
@@ -88,28 +98,6 @@ impl HystereticParams {
                 ),
             ));
         }
-        require_non_negative("kc", self.kc, "the tensile-branch slope kc")?;
-        require_finite("phi_f", self.phi_f)?;
-        if !(self.phi_f > 0.0 && self.phi_f <= 1.0) {
-            return Err(ParamError::new(
-                "phi_f",
-                format!(
-                    "the plasticity depth phi_f must satisfy 0 < phi_f <= 1, got {} (paper 000 eq. 10)",
-                    self.phi_f
-                ),
-            ));
-        }
-        require_non_negative("fa", self.fa, "the non-contact adhesive force fa")?;
-        if self.kca.is_nan() || self.kca <= 0.0 {
-            return Err(ParamError::new(
-                "kca",
-                format!(
-                    "the non-contact adhesive stiffness kca must be > 0 (use inf for zero range), got {} (paper 000 eq. 14)",
-                    self.kca
-                ),
-            ));
-        }
-        require_non_negative("gamma0", self.gamma0, "the viscous damping gamma0")?;
         Ok(())
     }
 

@@ -22,7 +22,7 @@
 //! point of d(x), x = 6^(−2/3), d = −(3/4)^(2/3) ≈ −0.8255, F = −5/9·Fc; equilibrium at
 //! x = 1, d = 1, F = 0.
 
-use crate::error::{require_finite, require_non_negative, require_positive, ParamError};
+use crate::error::ParamError;
 use crate::model::krijt::{self, KrijtLaw, Relaxation};
 use crate::model::{ContactHistory, NormalForce, PairGeometry};
 use glam::DVec3;
@@ -156,6 +156,9 @@ pub enum Pulloff {
     /// Force control (LAMMPS's choice): the contact breaks where F reaches −Fc, at
     /// δ = −2^(−4/3)·δ0 ≈ −0.397·δ0.
     Force,
+    /// Paper 002's rule: the contact breaks as soon as the overlap turns negative on
+    /// separation, where F = −8/9·Fc as at the touch, so the JKR curve itself loses nothing.
+    Zero,
 }
 
 impl Pulloff {
@@ -164,6 +167,7 @@ impl Pulloff {
         match self {
             Self::Displacement => D_PULLOFF_DISPLACEMENT,
             Self::Force => D_PULLOFF_FORCE,
+            Self::Zero => 0.0,
         }
     }
 
@@ -172,6 +176,7 @@ impl Pulloff {
         match self {
             Self::Displacement => X_PULLOFF_DISPLACEMENT,
             Self::Force => X_PULLOFF_FORCE,
+            Self::Zero => X_TOUCH,
         }
     }
 }
@@ -394,75 +399,55 @@ impl JkrParams {
 
     /// Checks every rule of the model; the error names the parameter and the rule.
     pub fn validate(&self) -> Result<(), ParamError> {
-        require_positive("youngs", self.youngs, "Young's modulus youngs")?;
-        require_finite("poisson", self.poisson)?;
-        if !(self.poisson > -1.0 && self.poisson < 0.5) {
-            return Err(ParamError::new(
-                "poisson",
-                format!(
-                    "Poisson's ratio must satisfy -1 < poisson < 0.5, got {}",
-                    self.poisson
-                ),
-            ));
-        }
-        require_non_negative(
-            "surface_energy",
-            self.surface_energy,
-            "the surface energy surface_energy (0 gives Hertz)",
-        )?;
+        use crate::model::params as p;
+        let mut checks = vec![
+            (&p::YOUNGS, self.youngs),
+            (&p::POISSON, self.poisson),
+            (&p::SURFACE_ENERGY, self.surface_energy),
+            (&p::FRICTION, self.friction),
+            (&p::ROLLING_HYSTERESIS, self.rolling_hysteresis),
+            (&p::STIFFNESS_SCALE, self.stiffness_scale),
+        ];
         match self.dissipation {
             Dissipation::None => {}
-            Dissipation::Tsuji { restitution } => {
-                require_finite("restitution", restitution)?;
-                if !(restitution > 0.0 && restitution <= 1.0) {
-                    return Err(ParamError::new(
-                        "restitution",
-                        format!(
-                            "the Tsuji target restitution must satisfy 0 < restitution <= 1, got {restitution} (paper 002 eq. 12)"
-                        ),
-                    ));
-                }
-            }
-            Dissipation::PowerLaw { d, alpha, beta } => {
-                require_non_negative("D", d, "the power-law dissipation coefficient D")?;
-                require_non_negative(
-                    "alpha",
-                    alpha,
-                    "the velocity exponent alpha of the power-law dissipation",
-                )?;
-                require_finite("beta", beta)?;
-            }
+            Dissipation::Tsuji { restitution } => checks.push((&p::RESTITUTION, restitution)),
+            Dissipation::PowerLaw { d, alpha, beta } => checks.extend([
+                (&p::POWER_D, d),
+                (&p::POWER_ALPHA, alpha),
+                (&p::POWER_BETA, beta),
+            ]),
             Dissipation::Krijt { tvis, sigma0 } => {
-                require_non_negative("tvis", tvis, "the relaxation time tvis")?;
-                require_non_negative(
-                    "sigma0",
-                    sigma0,
-                    "the crack stress sigma0 (about gamma / atomic spacing; 0 = no delay of a)",
-                )?;
+                checks.extend([(&p::TVIS, tvis), (&p::SIGMA0, sigma0)])
             }
             Dissipation::Stress {
                 tvis0_per_radius,
                 b,
                 zeta,
                 sigma0,
-            } => {
-                require_non_negative(
-                    "tvis0_per_radius",
-                    tvis0_per_radius,
-                    "C = tvis0_per_radius of T_vis,0 = C*R (paper 001 eq. 18)",
-                )?;
-                require_non_negative("B", b, "the pressure coefficient B (paper 001 eq. 17)")?;
-                require_positive(
-                    "zeta",
-                    zeta,
-                    "the pressure exponent zeta (paper 001 eq. 17)",
-                )?;
-                require_non_negative(
-                    "sigma0",
-                    sigma0,
-                    "the crack stress sigma0 (about gamma / atomic spacing; 0 = no delay of a)",
-                )?;
-            }
+            } => checks.extend([
+                (&p::TVIS0_PER_RADIUS, tvis0_per_radius),
+                (&p::STRESS_B, b),
+                (&p::STRESS_ZETA, zeta),
+                (&p::SIGMA0, sigma0),
+            ]),
+        }
+        for (param, x) in checks {
+            param.check(x)?;
+        }
+        if self.stiffness_scale != 1.0
+            && !matches!(
+                self.dissipation,
+                Dissipation::None | Dissipation::Tsuji { .. }
+            )
+        {
+            return Err(ParamError::new(
+                "stiffness_scale",
+                format!(
+                    "stiffness_scale = {} does not keep the restitution with dissipation = \"{}\": paper 002 derives the reduced-stiffness rule (eq. 24) for JKR with Tsuji damping only (the Krijt pair of paper 001 moves from e = 0.889 to 0.948 at S = 0.01); use dissipation = \"tsuji\" or \"none\", or leave stiffness_scale at 1",
+                    self.stiffness_scale,
+                    self.dissipation.name()
+                ),
+            ));
         }
         if self.dissipation.krijt_law().is_some() {
             if self.surface_energy <= 0.0 {
@@ -484,12 +469,6 @@ impl JkrParams {
                 ));
             }
         }
-        require_non_negative("friction", self.friction, "the sliding friction friction")?;
-        require_non_negative(
-            "rolling_hysteresis",
-            self.rolling_hysteresis,
-            "the adhesion hysteresis rolling_hysteresis (delta gamma / gamma)",
-        )?;
         if self.rolling_hysteresis > 0.0 && self.surface_energy <= 0.0 {
             return Err(ParamError::new(
                 "rolling_hysteresis",
@@ -499,11 +478,6 @@ impl JkrParams {
                 ),
             ));
         }
-        require_positive(
-            "stiffness_scale",
-            self.stiffness_scale,
-            "the stiffness scale stiffness_scale",
-        )?;
         Ok(())
     }
 

@@ -2,7 +2,7 @@
 //! model and the check of the integrator against a closed form. As in eq. 2 the force is
 //! not clamped at zero: the closed forms (eqs. 3–4) assume the same.
 
-use crate::error::{require_non_negative, require_positive, ParamError};
+use crate::error::ParamError;
 use crate::model::NormalForce;
 use serde::{Deserialize, Serialize};
 
@@ -18,9 +18,8 @@ pub struct LsdParams {
 impl LsdParams {
     /// Checks k > 0 and γ0 ≥ 0 (both finite).
     pub fn validate(&self) -> Result<(), ParamError> {
-        require_positive("k", self.k, "the spring stiffness k")?;
-        require_non_negative("gamma0", self.gamma0, "the viscous damping gamma0")?;
-        Ok(())
+        crate::model::params::K.check(self.k)?;
+        crate::model::params::GAMMA0.check(self.gamma0)
     }
 
     /// Normal force at overlap `delta` (m) and approach speed `delta_dot` (m/s): k·δ + γ0·δ̇

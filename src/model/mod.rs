@@ -2,10 +2,12 @@
 //! kernels are checked against.
 
 pub mod analytic;
+pub mod flags;
 pub mod hysteretic;
 pub mod jkr;
 pub mod krijt;
 pub mod lsd;
+pub mod params;
 
 pub use hysteretic::{AdhesionMode, HystereticParams, K2Rule};
 pub use jkr::{Dissipation, JkrParams, Pulloff};
