@@ -127,6 +127,9 @@ pub struct CollideResult {
     pub contact_duration_analytic: Option<f64>,
     /// JKR scales of the pair (JKR with surface energy > 0).
     pub jkr: Option<JkrScales>,
+    /// Tabor parameter λT of the pair (paper 002 eq. 1; JKR with surface energy > 0):
+    /// the JKR model holds for λT > 3. D_min = 1.65 Å unless set ([`tabor`]).
+    pub tabor: Option<f64>,
     /// Time step used, s.
     pub dt: f64,
     /// Steps run.
@@ -663,6 +666,7 @@ fn run_collision(
         contact_duration: (!stuck).then(|| last_contact - first_contact.unwrap_or(0.0)),
         contact_duration_analytic: None,
         jkr: None,
+        tabor: None,
         dt,
         steps: run.steps(),
         backend,
@@ -845,6 +849,7 @@ fn predict(spec: &CollideSpec, geom: &PairGeometry, result: &mut CollideResult) 
                         Some((15.0 * mr * v * v / (16.0 * e_star * r.sqrt())).powf(0.4));
                 }
             } else {
+                result.tabor = tabor(spec, analytic::TABOR_MIN_SEPARATION);
                 result.jkr = Some(JkrScales {
                     fc: p.fc(r),
                     a0: p.a0(r),
@@ -855,6 +860,32 @@ fn predict(spec: &CollideSpec, geom: &PairGeometry, result: &mut CollideResult) 
             }
         }
     }
+}
+
+/// The Tabor parameter λT of the pair (paper 002 eq. 1) with minimum separation `d_min`
+/// (in the length unit of the radii); `None` unless the model is JKR with surface energy.
+pub fn tabor(spec: &CollideSpec, d_min: f64) -> Option<f64> {
+    match &spec.model {
+        ContactModel::Jkr(p) if p.surface_energy > 0.0 => {
+            Some(analytic::jkr_tabor(p, spec.geometry().r_eff(), d_min))
+        }
+        _ => None,
+    }
+}
+
+/// The warning when the pair's λT is below the JKR range, naming the pair by its radii.
+pub fn tabor_warning(spec: &CollideSpec, tabor: f64, d_min: f64) -> Option<String> {
+    let pair = if spec.wall {
+        format!("the sphere of radius {:e} on the wall", spec.radius1)
+    } else {
+        format!(
+            "the pair of radii {:e} and {:e} (R* = {:.4e})",
+            spec.radius1,
+            spec.radius2,
+            spec.geometry().r_eff()
+        )
+    };
+    analytic::tabor_warning(&pair, tabor, d_min)
 }
 
 /// Velocities of a sweep `FROM:TO:N`, linear or logarithmic.

@@ -419,6 +419,12 @@ struct RunArgs {
     /// are bitwise the same whatever the choice.
     #[arg(long = "quiet-batches", value_enum, default_value = "auto")]
     quiet_batches: QuietChoice,
+    // ---- reports (issue 14) ----
+    /// D_min of the Tabor parameter (paper 002 eq. 1) in the scene's length unit, default
+    /// 1.65e-10 (m, the paper's value). The summary lists lambda_T of every JKR pair of
+    /// materials; a pair below the JKR range (lambda_T <= 3) is warned about on stderr.
+    #[arg(long = "tabor-dmin")]
+    tabor_dmin: Option<f64>,
 }
 
 #[derive(Args)]
@@ -594,6 +600,11 @@ struct CollideArgs {
     /// Print JSON on stdout (one object, or an array for a sweep).
     #[arg(long)]
     json: bool,
+    // ---- reports beyond the collision (issue 14) ----
+    /// JKR: D_min of the Tabor parameter (paper 002 eq. 1) in the unit of --radius,
+    /// default 1.65e-10 (m, the paper's value).
+    #[arg(long = "tabor-dmin")]
+    tabor_dmin: Option<f64>,
 }
 
 fn required(value: Option<f64>, name: &'static str, model: &str) -> Result<f64, PowderError> {
@@ -803,7 +814,53 @@ fn fmt_opt(x: Option<f64>) -> String {
     x.map_or_else(|| "-".into(), |v| format!("{v:.6}"))
 }
 
-fn print_table(results: &[CollideResult]) {
+/// What `collide` reports beyond the collision, from the options of issue 14.
+struct CollideReport {
+    /// D_min of the Tabor parameter.
+    tabor_dmin: f64,
+}
+
+/// Checks the report options against the model (kept apart from `contact_model`).
+fn collide_report(a: &CollideArgs, model: &ContactModel) -> Result<CollideReport, PowderError> {
+    let jkr = matches!(model, ContactModel::Jkr(p) if p.surface_energy > 0.0);
+    let tabor_dmin = match a.tabor_dmin {
+        Some(_) if !jkr => {
+            return Err(ParamError::new(
+                "tabor_dmin",
+                "--tabor-dmin applies to --model jkr (the Tabor parameter of a JKR pair)",
+            )
+            .into())
+        }
+        Some(d) => powder::error::require_positive(
+            "tabor_dmin",
+            d,
+            "D_min of the Tabor parameter (--tabor-dmin)",
+        )?,
+        None => powder::model::analytic::TABOR_MIN_SEPARATION,
+    };
+    Ok(CollideReport { tabor_dmin })
+}
+
+/// Adds the reports to the results, warns about a pair outside the JKR range and prints.
+fn finish_collide(
+    a: &CollideArgs,
+    spec: &CollideSpec,
+    report: &CollideReport,
+    mut results: Vec<CollideResult>,
+) -> Result<(), PowderError> {
+    for r in &mut results {
+        r.tabor = collide::tabor(spec, report.tabor_dmin);
+    }
+    // one pair for every velocity: one warning
+    if let Some(t) = results.first().and_then(|r| r.tabor) {
+        if let Some(w) = collide::tabor_warning(spec, t, report.tabor_dmin) {
+            eprintln!("warning: {w}");
+        }
+    }
+    print_results(a, &results, report)
+}
+
+fn print_table(results: &[CollideResult], report: &CollideReport) {
     println!(
         "{:>12} {:>9} {:>10} {:>10} {:>6} {:>12} {:>12} {:>12} {:>9} {:>10}",
         "v (m/s)",
@@ -840,11 +897,19 @@ fn print_table(results: &[CollideResult]) {
             Some(a) => println!("backend {} ({a}), dt = {:.4e} s", r.backend, r.dt),
             None => println!("backend {}, dt = {:.4e} s", r.backend, r.dt),
         }
+        if let Some(t) = r.tabor {
+            println!(
+                "Tabor parameter {t:.4}: {} regime (paper 002 eq. 1, D_min = {:e}; JKR holds above 3)",
+                powder::model::analytic::tabor_regime(t),
+                report.tabor_dmin
+            );
+        }
     }
 }
 
 fn collide_cmd(a: &CollideArgs) -> Result<(), PowderError> {
     let model = contact_model(a)?;
+    let report = collide_report(a, &model)?;
     let spec = CollideSpec {
         model,
         radius1: a.radius,
@@ -891,7 +956,7 @@ fn collide_cmd(a: &CollideArgs) -> Result<(), PowderError> {
             }
             eprintln!("wrote {}", path.display());
         }
-        return print_results(a, &[result]);
+        return finish_collide(a, &spec, &report, vec![result]);
     }
     let results = match &a.sweep_velocity {
         Some(text) => {
@@ -912,10 +977,14 @@ fn collide_cmd(a: &CollideArgs) -> Result<(), PowderError> {
         collide::restitution_plot(&spec, &results, a.log).write_svg(path)?;
         eprintln!("wrote {}", path.display());
     }
-    print_results(a, &results)
+    finish_collide(a, &spec, &report, results)
 }
 
-fn print_results(a: &CollideArgs, results: &[CollideResult]) -> Result<(), PowderError> {
+fn print_results(
+    a: &CollideArgs,
+    results: &[CollideResult],
+    report: &CollideReport,
+) -> Result<(), PowderError> {
     if a.json {
         let text = if a.sweep_velocity.is_some() {
             serde_json::to_string_pretty(&results)
@@ -925,7 +994,7 @@ fn print_results(a: &CollideArgs, results: &[CollideResult]) -> Result<(), Powde
         .map_err(|e| PowderError::Run(format!("cannot encode JSON: {e}")))?;
         println!("{text}");
     } else {
-        print_table(results);
+        print_table(results, report);
     }
     Ok(())
 }
@@ -1160,6 +1229,7 @@ fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
             ledger: !a.no_ledger,
             quiet: a.quiet_batches.into(),
         },
+        tabor_dmin: a.tabor_dmin,
     };
     let summary = match gpu {
         Some(ctx) => powder::run::run_gpu_with(&scene, ctx, &opts, |_| {})?,
@@ -1277,8 +1347,29 @@ fn print_summary(summary: &powder::run::RunSummary) {
             summary.outside_domain
         );
     }
+    print_tabor(&summary.tabor);
     for note in &summary.notes {
         println!("note             {note}");
+    }
+}
+
+/// The Tabor parameters of a run's JKR pairs (paper 002 eq. 1), one line each.
+fn print_tabor(pairs: &[powder::run::TaborPair]) {
+    for (k, t) in pairs.iter().enumerate() {
+        println!(
+            "{:<17}{} (R* = {:.4e}): {:.4} ({}{}, D_min = {:e})",
+            if k == 0 { "tabor" } else { "" },
+            t.label(),
+            t.r_eff,
+            t.tabor,
+            powder::model::analytic::tabor_regime(t.tabor),
+            if t.jkr_range {
+                ""
+            } else {
+                ", below the JKR range > 3"
+            },
+            t.d_min
+        );
     }
 }
 
