@@ -100,12 +100,14 @@ pub struct CollideResult {
     /// Whether the pair stuck (e = 0): the relative normal velocity turned back to approaching
     /// inside the interaction range.
     pub stuck: bool,
-    /// Closed-form restitution where one applies (no viscosity for the hysteretic model,
-    /// no dissipation for JKR).
+    /// Closed-form restitution where one applies: head-on impacts only (every `*_analytic`
+    /// is `None` for an oblique one), no viscosity for the hysteretic model, no dissipation,
+    /// friction or rolling resistance for JKR.
     pub e_analytic: Option<f64>,
     /// Whether the closed form predicts sticking (where `e_analytic` applies).
     pub stuck_analytic: Option<bool>,
-    /// Tangential contact-point speed after / before (oblique impacts with friction).
+    /// Tangential contact-point speed after / before (oblique impacts with friction;
+    /// `None` head-on, where there is no tangential motion to restitute).
     pub e_tangential: Option<f64>,
     /// Angular speed of sphere 1 at the end, rad/s (models with friction or rolling).
     pub omega_final: Option<f64>,
@@ -172,6 +174,12 @@ impl CollideSpec {
         self.velocity * self.impact_angle.to_radians().sin()
     }
 
+    /// Whether the impact is head-on (`impact_angle` = 90°): the closed forms apply only
+    /// then, and there is no tangential restitution.
+    pub fn is_head_on(&self) -> bool {
+        self.impact_angle == 90.0
+    }
+
     /// Time-step rule for this pair at this impact speed.
     pub fn time_step(&self) -> crate::model::TimeStep {
         self.model.time_step(&self.geometry(), self.normal_speed())
@@ -222,7 +230,12 @@ impl CollideSpec {
         let geom = self.geometry();
         let reach = self.model.reach(geom.r_eff());
         let vn = self.normal_speed();
-        let vt = self.velocity * self.impact_angle.to_radians().cos();
+        // exactly 0 head-on (cos of 90° in radians is 6e-17, not 0)
+        let vt = if self.is_head_on() {
+            0.0
+        } else {
+            self.velocity * self.impact_angle.to_radians().cos()
+        };
         let gap = self.model.range() + 2.5 * vn * dt;
         let r = self.radius1.max(if self.wall { 0.0 } else { self.radius2 });
         // room for the tangential travel during the collision
@@ -653,7 +666,7 @@ fn run_collision(
         stuck,
         e_analytic: None,
         stuck_analytic: None,
-        e_tangential: (rotates && !stuck)
+        e_tangential: (rotates && !stuck && !spec.is_head_on())
             .then(|| vt_in.filter(|v| *v > 0.0).map(|v| vt_out / v))
             .flatten(),
         omega_final: rotates.then(|| last.omega[0].length()),
@@ -779,8 +792,13 @@ pub fn trace_plot(spec: &CollideSpec, result: &CollideResult, rows: &[TraceRow])
     })
 }
 
-/// The closed-form restitution of this collision, where one applies.
+/// The closed-form restitution of this collision, where one applies: head-on only (an
+/// oblique pair turns its line of centres during the contact, and friction couples the
+/// directions, so the head-on value at the normal speed would mislead).
 pub fn closed_form_e(spec: &CollideSpec) -> Option<f64> {
+    if !spec.is_head_on() {
+        return None;
+    }
     let geom = spec.geometry();
     let v = spec.normal_speed();
     match &spec.model {
@@ -790,8 +808,7 @@ pub fn closed_form_e(spec: &CollideSpec) -> Option<f64> {
         ContactModel::Lsd(p) => analytic::lsd_restitution(p.k, p.gamma0, geom.reduced_mass),
         ContactModel::Jkr(p) => {
             let undamped = matches!(p.dissipation, Dissipation::None);
-            let plain =
-                spec.impact_angle == 90.0 && p.friction == 0.0 && p.rolling_hysteresis == 0.0;
+            let plain = p.friction == 0.0 && p.rolling_hysteresis == 0.0;
             if !undamped || !plain {
                 None
             } else if p.surface_energy == 0.0 {
@@ -807,6 +824,19 @@ pub fn closed_form_e(spec: &CollideSpec) -> Option<f64> {
 
 /// Fills in the closed forms that apply to this collision.
 fn predict(spec: &CollideSpec, geom: &PairGeometry, result: &mut CollideResult) {
+    predict_head_on(spec, geom, result);
+    if !spec.is_head_on() {
+        // the closed forms are those of a head-on collision (see `closed_form_e`)
+        result.e_analytic = None;
+        result.stuck_analytic = None;
+        result.delta_max_analytic = None;
+        result.delta_c_analytic = None;
+        result.contact_duration_analytic = None;
+    }
+}
+
+/// The closed forms of a head-on collision at the normal speed, and the pair's scales.
+fn predict_head_on(spec: &CollideSpec, geom: &PairGeometry, result: &mut CollideResult) {
     let v = spec.normal_speed();
     match &spec.model {
         ContactModel::Hysteretic(p) => {

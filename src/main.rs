@@ -860,37 +860,57 @@ fn finish_collide(
     print_results(a, &results, report)
 }
 
+/// One column of the collide table: header, width and the cell of a result.
+type Column = (&'static str, usize, fn(&CollideResult) -> String);
+
 fn print_table(results: &[CollideResult], report: &CollideReport) {
-    println!(
-        "{:>12} {:>9} {:>10} {:>10} {:>6} {:>12} {:>12} {:>12} {:>9} {:>10}",
-        "v (m/s)",
-        "chi",
-        "e",
-        "e_analytic",
-        "stuck",
-        "delta_max",
-        "delta_c",
-        "t_contact",
-        "steps",
-        "E_balance"
-    );
-    for r in results {
-        println!(
-            "{:>12.5e} {:>9} {:>10.6} {:>10} {:>6} {:>12.5e} {:>12} {:>12} {:>9} {:>10}",
-            r.velocity,
-            r.chi.map_or_else(|| "-".into(), |c| format!("{c:.4}")),
-            r.e,
-            fmt_opt(r.e_analytic),
-            r.stuck,
-            r.delta_max,
-            r.delta_c.map_or_else(|| "-".into(), |d| format!("{d:.5e}")),
+    let mut columns: Vec<Column> = vec![
+        ("v (m/s)", 12, |r| format!("{:.5e}", r.velocity)),
+        ("chi", 9, |r| {
+            r.chi.map_or_else(|| "-".into(), |c| format!("{c:.4}"))
+        }),
+        ("e", 10, |r| format!("{:.6}", r.e)),
+    ];
+    // only where some row has the value: the closed form applies head-on only, the
+    // tangential restitution to oblique impacts only
+    if results.iter().any(|r| r.e_analytic.is_some()) {
+        columns.push(("e_analytic", 10, |r| fmt_opt(r.e_analytic)));
+    }
+    if results.iter().any(|r| r.e_tangential.is_some()) {
+        columns.push(("e_t", 10, |r| fmt_opt(r.e_tangential)));
+    }
+    columns.extend([
+        (
+            "stuck",
+            6,
+            (|r| r.stuck.to_string()) as fn(&CollideResult) -> String,
+        ),
+        ("delta_max", 12, |r| format!("{:.5e}", r.delta_max)),
+        ("delta_c", 12, |r| {
+            r.delta_c.map_or_else(|| "-".into(), |d| format!("{d:.5e}"))
+        }),
+        ("t_contact", 12, |r| {
             r.contact_duration
-                .map_or_else(|| "-".into(), |t| format!("{t:.5e}")),
-            r.steps,
+                .map_or_else(|| "-".into(), |t| format!("{t:.5e}"))
+        }),
+        ("steps", 9, |r| r.steps.to_string()),
+        ("E_balance", 10, |r| {
             r.energy
                 .balance_error
                 .map_or_else(|| "-".into(), |b| format!("{b:.2e}"))
-        );
+        }),
+    ]);
+    let line = |cells: Vec<String>| {
+        let padded: Vec<String> = cells
+            .iter()
+            .zip(&columns)
+            .map(|(c, (_, w, _))| format!("{c:>w$}"))
+            .collect();
+        println!("{}", padded.join(" "));
+    };
+    line(columns.iter().map(|c| c.0.to_string()).collect());
+    for r in results {
+        line(columns.iter().map(|c| (c.2)(r)).collect());
     }
     if let Some(r) = results.first() {
         match &r.adapter {

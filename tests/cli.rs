@@ -936,3 +936,70 @@ fn run_reports_the_tabor_parameter_of_each_jkr_pair() {
         "{err}"
     );
 }
+
+#[test]
+fn collide_shows_e_analytic_head_on_and_e_t_oblique_only() {
+    // head-on with friction: the closed form does not apply (friction), no tangential column
+    let (ok, out, err) = jkr_cmd(&["--velocity", "2", "--friction", "0.3"]);
+    assert!(ok, "{err}");
+    let header = out.lines().next().unwrap();
+    assert!(
+        !header.contains("e_analytic") && !header.contains("e_t "),
+        "{out}"
+    );
+    let (ok, out, err) = jkr_cmd(&["--velocity", "2", "--friction", "0.3", "--json"]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_collide_keys(&v, &out);
+    assert!(
+        v["e_tangential"].is_null() && v["e_analytic"].is_null(),
+        "{out}"
+    );
+    // oblique: e_t, and no head-on closed form (null in JSON, no column)
+    let (ok, out, err) = jkr_cmd(&[
+        "--velocity",
+        "2",
+        "--friction",
+        "0.3",
+        "--impact-angle",
+        "45",
+    ]);
+    assert!(ok, "{err}");
+    let header = out.lines().next().unwrap();
+    assert!(
+        header.contains("e_t") && !header.contains("e_analytic"),
+        "{out}"
+    );
+    // LSD at 30°: its head-on e = 1 would mislead (the line of centres turns)
+    let lsd = [
+        "collide",
+        "--model",
+        "lsd",
+        "--k",
+        "1000",
+        "--radius",
+        "1e-3",
+        "--density",
+        "2000",
+        "--velocity",
+        "0.1",
+    ];
+    let mut args = lsd.to_vec();
+    args.extend(["--impact-angle", "30", "--json"]);
+    let (ok, out, err) = powder(&args);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_collide_keys(&v, &out);
+    for key in [
+        "e_analytic",
+        "stuck_analytic",
+        "delta_max_analytic",
+        "contact_duration_analytic",
+        "e_tangential",
+    ] {
+        assert!(v[key].is_null(), "{key}: {out}");
+    }
+    let (ok, out, err) = powder(&lsd);
+    assert!(ok, "{err}");
+    assert!(out.lines().next().unwrap().contains("e_analytic"), "{out}");
+}
