@@ -100,12 +100,14 @@ pub struct CollideResult {
     /// Whether the pair stuck (e = 0): the relative normal velocity turned back to approaching
     /// inside the interaction range.
     pub stuck: bool,
-    /// Closed-form restitution where one applies (no viscosity for the hysteretic model,
-    /// no dissipation for JKR).
+    /// Closed-form restitution where one applies: head-on impacts only (every `*_analytic`
+    /// is `None` for an oblique one), no viscosity for the hysteretic model, no dissipation,
+    /// friction or rolling resistance for JKR.
     pub e_analytic: Option<f64>,
     /// Whether the closed form predicts sticking (where `e_analytic` applies).
     pub stuck_analytic: Option<bool>,
-    /// Tangential contact-point speed after / before (oblique impacts with friction).
+    /// Tangential contact-point speed after / before (oblique impacts with friction;
+    /// `None` head-on, where there is no tangential motion to restitute).
     pub e_tangential: Option<f64>,
     /// Angular speed of sphere 1 at the end, rad/s (models with friction or rolling).
     pub omega_final: Option<f64>,
@@ -127,6 +129,9 @@ pub struct CollideResult {
     pub contact_duration_analytic: Option<f64>,
     /// JKR scales of the pair (JKR with surface energy > 0).
     pub jkr: Option<JkrScales>,
+    /// Tabor parameter λT of the pair (paper 002 eq. 1; JKR with surface energy > 0):
+    /// the JKR model holds for λT > 3. D_min = 1.65 Å unless set ([`tabor`]).
+    pub tabor: Option<f64>,
     /// Time step used, s.
     pub dt: f64,
     /// Steps run.
@@ -167,6 +172,12 @@ impl CollideSpec {
     /// Normal component of the approach speed.
     fn normal_speed(&self) -> f64 {
         self.velocity * self.impact_angle.to_radians().sin()
+    }
+
+    /// Whether the impact is head-on (`impact_angle` = 90°): the closed forms apply only
+    /// then, and there is no tangential restitution.
+    pub fn is_head_on(&self) -> bool {
+        self.impact_angle == 90.0
     }
 
     /// Time-step rule for this pair at this impact speed.
@@ -219,7 +230,12 @@ impl CollideSpec {
         let geom = self.geometry();
         let reach = self.model.reach(geom.r_eff());
         let vn = self.normal_speed();
-        let vt = self.velocity * self.impact_angle.to_radians().cos();
+        // exactly 0 head-on (cos of 90° in radians is 6e-17, not 0)
+        let vt = if self.is_head_on() {
+            0.0
+        } else {
+            self.velocity * self.impact_angle.to_radians().cos()
+        };
         let gap = self.model.range() + 2.5 * vn * dt;
         let r = self.radius1.max(if self.wall { 0.0 } else { self.radius2 });
         // room for the tangential travel during the collision
@@ -650,7 +666,7 @@ fn run_collision(
         stuck,
         e_analytic: None,
         stuck_analytic: None,
-        e_tangential: (rotates && !stuck)
+        e_tangential: (rotates && !stuck && !spec.is_head_on())
             .then(|| vt_in.filter(|v| *v > 0.0).map(|v| vt_out / v))
             .flatten(),
         omega_final: rotates.then(|| last.omega[0].length()),
@@ -663,6 +679,7 @@ fn run_collision(
         contact_duration: (!stuck).then(|| last_contact - first_contact.unwrap_or(0.0)),
         contact_duration_analytic: None,
         jkr: None,
+        tabor: None,
         dt,
         steps: run.steps(),
         backend,
@@ -775,8 +792,13 @@ pub fn trace_plot(spec: &CollideSpec, result: &CollideResult, rows: &[TraceRow])
     })
 }
 
-/// The closed-form restitution of this collision, where one applies.
+/// The closed-form restitution of this collision, where one applies: head-on only (an
+/// oblique pair turns its line of centres during the contact, and friction couples the
+/// directions, so the head-on value at the normal speed would mislead).
 pub fn closed_form_e(spec: &CollideSpec) -> Option<f64> {
+    if !spec.is_head_on() {
+        return None;
+    }
     let geom = spec.geometry();
     let v = spec.normal_speed();
     match &spec.model {
@@ -786,8 +808,7 @@ pub fn closed_form_e(spec: &CollideSpec) -> Option<f64> {
         ContactModel::Lsd(p) => analytic::lsd_restitution(p.k, p.gamma0, geom.reduced_mass),
         ContactModel::Jkr(p) => {
             let undamped = matches!(p.dissipation, Dissipation::None);
-            let plain =
-                spec.impact_angle == 90.0 && p.friction == 0.0 && p.rolling_hysteresis == 0.0;
+            let plain = p.friction == 0.0 && p.rolling_hysteresis == 0.0;
             if !undamped || !plain {
                 None
             } else if p.surface_energy == 0.0 {
@@ -803,6 +824,19 @@ pub fn closed_form_e(spec: &CollideSpec) -> Option<f64> {
 
 /// Fills in the closed forms that apply to this collision.
 fn predict(spec: &CollideSpec, geom: &PairGeometry, result: &mut CollideResult) {
+    predict_head_on(spec, geom, result);
+    if !spec.is_head_on() {
+        // the closed forms are those of a head-on collision (see `closed_form_e`)
+        result.e_analytic = None;
+        result.stuck_analytic = None;
+        result.delta_max_analytic = None;
+        result.delta_c_analytic = None;
+        result.contact_duration_analytic = None;
+    }
+}
+
+/// The closed forms of a head-on collision at the normal speed, and the pair's scales.
+fn predict_head_on(spec: &CollideSpec, geom: &PairGeometry, result: &mut CollideResult) {
     let v = spec.normal_speed();
     match &spec.model {
         ContactModel::Hysteretic(p) => {
@@ -845,6 +879,7 @@ fn predict(spec: &CollideSpec, geom: &PairGeometry, result: &mut CollideResult) 
                         Some((15.0 * mr * v * v / (16.0 * e_star * r.sqrt())).powf(0.4));
                 }
             } else {
+                result.tabor = tabor(spec, analytic::TABOR_MIN_SEPARATION);
                 result.jkr = Some(JkrScales {
                     fc: p.fc(r),
                     a0: p.a0(r),
@@ -855,6 +890,32 @@ fn predict(spec: &CollideSpec, geom: &PairGeometry, result: &mut CollideResult) 
             }
         }
     }
+}
+
+/// The Tabor parameter λT of the pair (paper 002 eq. 1) with minimum separation `d_min`
+/// (in the length unit of the radii); `None` unless the model is JKR with surface energy.
+pub fn tabor(spec: &CollideSpec, d_min: f64) -> Option<f64> {
+    match &spec.model {
+        ContactModel::Jkr(p) if p.surface_energy > 0.0 => {
+            Some(analytic::jkr_tabor(p, spec.geometry().r_eff(), d_min))
+        }
+        _ => None,
+    }
+}
+
+/// The warning when the pair's λT is below the JKR range, naming the pair by its radii.
+pub fn tabor_warning(spec: &CollideSpec, tabor: f64, d_min: f64) -> Option<String> {
+    let pair = if spec.wall {
+        format!("the sphere of radius {:e} on the wall", spec.radius1)
+    } else {
+        format!(
+            "the pair of radii {:e} and {:e} (R* = {:.4e})",
+            spec.radius1,
+            spec.radius2,
+            spec.geometry().r_eff()
+        )
+    };
+    analytic::tabor_warning(&pair, tabor, d_min)
 }
 
 /// Velocities of a sweep `FROM:TO:N`, linear or logarithmic.

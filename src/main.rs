@@ -417,6 +417,12 @@ struct RunArgs {
     /// are bitwise the same whatever the choice.
     #[arg(long = "quiet-batches", value_enum, default_value = "auto")]
     quiet_batches: QuietChoice,
+    // ---- reports (issue 14) ----
+    /// D_min of the Tabor parameter (paper 002 eq. 1) in the scene's length unit, default
+    /// 1.65e-10 (m, the paper's value). The summary lists lambda_T of every JKR pair of
+    /// materials; a pair below the JKR range (lambda_T <= 3) is warned about on stderr.
+    #[arg(long = "tabor-dmin")]
+    tabor_dmin: Option<f64>,
 }
 
 #[derive(Args)]
@@ -491,54 +497,133 @@ struct CollideArgs {
     /// Print JSON on stdout (one object, or an array for a sweep).
     #[arg(long)]
     json: bool,
+    // ---- reports beyond the collision (issue 14) ----
+    /// JKR: D_min of the Tabor parameter (paper 002 eq. 1) in the unit of --radius,
+    /// default 1.65e-10 (m, the paper's value).
+    #[arg(long = "tabor-dmin")]
+    tabor_dmin: Option<f64>,
 }
 
 fn fmt_opt(x: Option<f64>) -> String {
     x.map_or_else(|| "-".into(), |v| format!("{v:.6}"))
 }
 
-fn print_table(results: &[CollideResult]) {
-    println!(
-        "{:>12} {:>9} {:>10} {:>10} {:>6} {:>12} {:>12} {:>12} {:>9} {:>10}",
-        "v (m/s)",
-        "chi",
-        "e",
-        "e_analytic",
-        "stuck",
-        "delta_max",
-        "delta_c",
-        "t_contact",
-        "steps",
-        "E_balance"
-    );
-    for r in results {
-        println!(
-            "{:>12.5e} {:>9} {:>10.6} {:>10} {:>6} {:>12.5e} {:>12} {:>12} {:>9} {:>10}",
-            r.velocity,
-            r.chi.map_or_else(|| "-".into(), |c| format!("{c:.4}")),
-            r.e,
-            fmt_opt(r.e_analytic),
-            r.stuck,
-            r.delta_max,
-            r.delta_c.map_or_else(|| "-".into(), |d| format!("{d:.5e}")),
+/// What `collide` reports beyond the collision, from the options of issue 14.
+struct CollideReport {
+    /// D_min of the Tabor parameter.
+    tabor_dmin: f64,
+}
+
+/// Checks the report options against the model (kept apart from `contact_model`).
+fn collide_report(a: &CollideArgs, model: &ContactModel) -> Result<CollideReport, PowderError> {
+    let jkr = matches!(model, ContactModel::Jkr(p) if p.surface_energy > 0.0);
+    let tabor_dmin = match a.tabor_dmin {
+        Some(_) if !jkr => {
+            return Err(ParamError::new(
+                "tabor_dmin",
+                "--tabor-dmin applies to --model jkr (the Tabor parameter of a JKR pair)",
+            )
+            .into())
+        }
+        Some(d) => powder::error::require_positive(
+            "tabor_dmin",
+            d,
+            "D_min of the Tabor parameter (--tabor-dmin)",
+        )?,
+        None => powder::model::analytic::TABOR_MIN_SEPARATION,
+    };
+    Ok(CollideReport { tabor_dmin })
+}
+
+/// Adds the reports to the results, warns about a pair outside the JKR range and prints.
+fn finish_collide(
+    a: &CollideArgs,
+    spec: &CollideSpec,
+    report: &CollideReport,
+    mut results: Vec<CollideResult>,
+) -> Result<(), PowderError> {
+    for r in &mut results {
+        r.tabor = collide::tabor(spec, report.tabor_dmin);
+    }
+    // one pair for every velocity: one warning
+    if let Some(t) = results.first().and_then(|r| r.tabor) {
+        if let Some(w) = collide::tabor_warning(spec, t, report.tabor_dmin) {
+            eprintln!("warning: {w}");
+        }
+    }
+    print_results(a, &results, report)
+}
+
+/// One column of the collide table: header, width and the cell of a result.
+type Column = (&'static str, usize, fn(&CollideResult) -> String);
+
+fn print_table(results: &[CollideResult], report: &CollideReport) {
+    let mut columns: Vec<Column> = vec![
+        ("v (m/s)", 12, |r| format!("{:.5e}", r.velocity)),
+        ("chi", 9, |r| {
+            r.chi.map_or_else(|| "-".into(), |c| format!("{c:.4}"))
+        }),
+        ("e", 10, |r| format!("{:.6}", r.e)),
+    ];
+    // only where some row has the value: the closed form applies head-on only, the
+    // tangential restitution to oblique impacts only
+    if results.iter().any(|r| r.e_analytic.is_some()) {
+        columns.push(("e_analytic", 10, |r| fmt_opt(r.e_analytic)));
+    }
+    if results.iter().any(|r| r.e_tangential.is_some()) {
+        columns.push(("e_t", 10, |r| fmt_opt(r.e_tangential)));
+    }
+    columns.extend([
+        (
+            "stuck",
+            6,
+            (|r| r.stuck.to_string()) as fn(&CollideResult) -> String,
+        ),
+        ("delta_max", 12, |r| format!("{:.5e}", r.delta_max)),
+        ("delta_c", 12, |r| {
+            r.delta_c.map_or_else(|| "-".into(), |d| format!("{d:.5e}"))
+        }),
+        ("t_contact", 12, |r| {
             r.contact_duration
-                .map_or_else(|| "-".into(), |t| format!("{t:.5e}")),
-            r.steps,
+                .map_or_else(|| "-".into(), |t| format!("{t:.5e}"))
+        }),
+        ("steps", 9, |r| r.steps.to_string()),
+        ("E_balance", 10, |r| {
             r.energy
                 .balance_error
                 .map_or_else(|| "-".into(), |b| format!("{b:.2e}"))
-        );
+        }),
+    ]);
+    let line = |cells: Vec<String>| {
+        let padded: Vec<String> = cells
+            .iter()
+            .zip(&columns)
+            .map(|(c, (_, w, _))| format!("{c:>w$}"))
+            .collect();
+        println!("{}", padded.join(" "));
+    };
+    line(columns.iter().map(|c| c.0.to_string()).collect());
+    for r in results {
+        line(columns.iter().map(|c| (c.2)(r)).collect());
     }
     if let Some(r) = results.first() {
         match &r.adapter {
             Some(a) => println!("backend {} ({a}), dt = {:.4e} s", r.backend, r.dt),
             None => println!("backend {}, dt = {:.4e} s", r.backend, r.dt),
         }
+        if let Some(t) = r.tabor {
+            println!(
+                "Tabor parameter {t:.4}: {} regime (paper 002 eq. 1, D_min = {:e}; JKR holds above 3)",
+                powder::model::analytic::tabor_regime(t),
+                report.tabor_dmin
+            );
+        }
     }
 }
 
 fn collide_cmd(a: &CollideArgs) -> Result<(), PowderError> {
     let model = a.law.contact_model()?;
+    let report = collide_report(a, &model)?;
     let spec = CollideSpec {
         model,
         radius1: a.radius,
@@ -585,7 +670,7 @@ fn collide_cmd(a: &CollideArgs) -> Result<(), PowderError> {
             }
             eprintln!("wrote {}", path.display());
         }
-        return print_results(a, &[result]);
+        return finish_collide(a, &spec, &report, vec![result]);
     }
     let results = match &a.sweep_velocity {
         Some(text) => {
@@ -606,10 +691,14 @@ fn collide_cmd(a: &CollideArgs) -> Result<(), PowderError> {
         collide::restitution_plot(&spec, &results, a.log).write_svg(path)?;
         eprintln!("wrote {}", path.display());
     }
-    print_results(a, &results)
+    finish_collide(a, &spec, &report, results)
 }
 
-fn print_results(a: &CollideArgs, results: &[CollideResult]) -> Result<(), PowderError> {
+fn print_results(
+    a: &CollideArgs,
+    results: &[CollideResult],
+    report: &CollideReport,
+) -> Result<(), PowderError> {
     if a.json {
         let text = if a.sweep_velocity.is_some() {
             serde_json::to_string_pretty(&results)
@@ -619,7 +708,7 @@ fn print_results(a: &CollideArgs, results: &[CollideResult]) -> Result<(), Powde
         .map_err(|e| PowderError::Run(format!("cannot encode JSON: {e}")))?;
         println!("{text}");
     } else {
-        print_table(results);
+        print_table(results, report);
     }
     Ok(())
 }
@@ -854,6 +943,7 @@ fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
             ledger: !a.no_ledger,
             quiet: a.quiet_batches.into(),
         },
+        tabor_dmin: a.tabor_dmin,
     };
     let summary = match gpu {
         Some(ctx) => powder::run::run_gpu_with(&scene, ctx, &opts, |_| {})?,
@@ -971,8 +1061,29 @@ fn print_summary(summary: &powder::run::RunSummary) {
             summary.outside_domain
         );
     }
+    print_tabor(&summary.tabor);
     for note in &summary.notes {
         println!("note             {note}");
+    }
+}
+
+/// The Tabor parameters of a run's JKR pairs (paper 002 eq. 1), one line each.
+fn print_tabor(pairs: &[powder::run::TaborPair]) {
+    for (k, t) in pairs.iter().enumerate() {
+        println!(
+            "{:<17}{} (R* = {:.4e}): {:.4} ({}{}, D_min = {:e})",
+            if k == 0 { "tabor" } else { "" },
+            t.label(),
+            t.r_eff,
+            t.tabor,
+            powder::model::analytic::tabor_regime(t.tabor),
+            if t.jkr_range {
+                ""
+            } else {
+                ", below the JKR range > 3"
+            },
+            t.d_min
+        );
     }
 }
 

@@ -90,6 +90,100 @@ pub struct RunSummary {
     pub quiet_batches: Option<[u64; 2]>,
     /// Backend remarks (GPU: neighbour-list rebuilds, contacts that left the lists).
     pub notes: Vec<String>,
+    /// The Tabor parameter of every JKR pair of materials that can meet ([`tabor_pairs`]);
+    /// empty without JKR pairs.
+    pub tabor: Vec<TaborPair>,
+}
+
+/// The Tabor parameter λT (paper 002 eq. 1) of one JKR pair of materials of a scene.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct TaborPair {
+    /// The two material names; for a wall pair the wall's material comes first.
+    pub materials: [String; 2],
+    /// A wall and a particle (the plane has infinite radius).
+    pub wall: bool,
+    /// R* of the pair's smallest particles (the smallest radius of each material; a
+    /// particle's own radius against a wall), m: λT ∝ R*^(1/3), so this is the pair's
+    /// lowest λT.
+    pub r_eff: f64,
+    /// D_min of eq. 1, m.
+    pub d_min: f64,
+    /// λT = (4R*γ²/(E*²D_min³))^(1/3), from the materials' own E, ν, γ.
+    pub tabor: f64,
+    /// Whether λT is in the JKR range λT > 3.
+    pub jkr_range: bool,
+}
+
+impl TaborPair {
+    /// The pair for people: `a`-`b`, or wall `w`-`b`.
+    pub fn label(&self) -> String {
+        let [a, b] = &self.materials;
+        if self.wall {
+            format!("wall `{a}`-`{b}`")
+        } else {
+            format!("`{a}`-`{b}`")
+        }
+    }
+
+    /// The warning when λT is below the JKR range, naming the pair.
+    pub fn warning(&self) -> Option<String> {
+        let [a, b] = &self.materials;
+        let what = if self.wall {
+            "the wall-particle pair"
+        } else {
+            "the material pair"
+        };
+        crate::model::analytic::tabor_warning(
+            &format!("{what} `{a}`-`{b}` (R* = {:.4e})", self.r_eff),
+            self.tabor,
+            self.d_min,
+        )
+    }
+}
+
+/// The Tabor parameter of each JKR pair (surface energy > 0) of materials that can meet in
+/// `scene`: particle pairs (the same material only with two particles of it) and wall–
+/// particle pairs, with R* of the smallest particles of each material and D_min `d_min`.
+pub fn tabor_pairs(scene: &Scene, d_min: f64) -> Vec<TaborPair> {
+    use crate::model::{analytic, ContactModel};
+    let n = scene.materials.len();
+    let (mut r_min, mut count) = (vec![f64::INFINITY; n], vec![0usize; n]);
+    for p in &scene.particles {
+        r_min[p.material] = r_min[p.material].min(p.radius);
+        count[p.material] += 1;
+    }
+    let entry = |a: usize, b: usize, wall: bool, r_eff: f64| match scene.pair_model(a, b) {
+        Ok(ContactModel::Jkr(p)) if p.surface_energy > 0.0 => {
+            let tabor = analytic::jkr_tabor(&p, r_eff, d_min);
+            Some(TaborPair {
+                materials: [a, b].map(|m| scene.materials[m].name.clone()),
+                wall,
+                r_eff,
+                d_min,
+                tabor,
+                jkr_range: tabor > analytic::TABOR_JKR_MIN,
+            })
+        }
+        _ => None,
+    };
+    let mut pairs = Vec::new();
+    for a in 0..n {
+        for b in a..n {
+            if count[a] > 0 && count[b] > 0 && (a != b || count[a] > 1) {
+                let r_eff = r_min[a] * r_min[b] / (r_min[a] + r_min[b]);
+                pairs.extend(entry(a, b, false, r_eff));
+            }
+        }
+    }
+    let mut wall_materials: Vec<usize> = scene.walls.iter().map(|w| w.material).collect();
+    wall_materials.sort_unstable();
+    wall_materials.dedup();
+    for w in wall_materials {
+        for b in (0..n).filter(|&b| count[b] > 0) {
+            pairs.extend(entry(w, b, true, r_min[b]));
+        }
+    }
+    pairs
 }
 
 fn snapshot(engine: &impl Simulation, obs: &Observation) -> Snapshot {
@@ -120,6 +214,9 @@ pub struct RunOptions {
     /// The GPU engine's options (the energy ledger, on by default); the CPU backend keeps
     /// its ledger always (it is cheap there) and ignores them.
     pub gpu: GpuOptions,
+    /// D_min of the Tabor parameter in the scene's length unit; `None`: the paper's
+    /// 1.65 Å ([`crate::model::analytic::TABOR_MIN_SEPARATION`]).
+    pub tabor_dmin: Option<f64>,
 }
 
 /// Header of `series.csv`: per wall the force of the particles on it and, for a moving
@@ -380,6 +477,16 @@ pub fn run_with<S: Simulation>(
     opts: &RunOptions,
     mut progress: impl FnMut(&Snapshot),
 ) -> Result<RunSummary, PowderError> {
+    let d_min = match opts.tabor_dmin {
+        Some(d) => crate::error::require_positive("tabor-dmin", d, "D_min of the Tabor parameter")?,
+        None => crate::model::analytic::TABOR_MIN_SEPARATION,
+    };
+    let tabor = tabor_pairs(scene, d_min);
+    if opts.verbose {
+        for w in tabor.iter().filter_map(TaborPair::warning) {
+            eprintln!("warning: {w}");
+        }
+    }
     let mut resumed_from = None;
     if let Some(ckpt) = &opts.resume {
         engine.read_checkpoint(ckpt, scene)?;
@@ -577,6 +684,7 @@ pub fn run_with<S: Simulation>(
         rebuilds: engine.rebuilds()?,
         quiet_batches: engine.quiet_batches().map(|(kept, back)| [kept, back]),
         notes: engine.notes()?,
+        tabor,
     };
     if let Some(d) = out {
         let text = serde_json::to_string_pretty(&summary)
@@ -601,4 +709,119 @@ pub fn run_cpu(
         },
         progress,
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// λT of paper 002 eq. 1 by hand: (4R*γ²/(E*²D³))^(1/3), E* = E/(2(1 − ν²)).
+    fn by_hand(youngs: f64, gamma: f64, r_eff: f64) -> f64 {
+        let e_star = youngs / (2.0 * (1.0 - 0.3 * 0.3));
+        (4.0 * r_eff * gamma * gamma / (e_star * e_star * 1.65e-10f64.powi(3))).cbrt()
+    }
+
+    #[test]
+    fn tabor_pairs_cover_the_jkr_pairs_that_can_meet() {
+        // "soft": JKR, two sizes; "lone": JKR, one particle (no lone-lone pair);
+        // "plain": hysteretic; soft-lone: a stiffer JKR interaction; soft-plain: Hertz (no
+        // adhesion, no λT); a wall of "lone"
+        let text = r#"
+            [domain]
+            min = [0.0, 0.0, 0.0]
+            max = [1e-3, 1e-3, 1e-3]
+            [simulation]
+            duration = 1e-6
+            [[material]]
+            name = "soft"
+            density = 2000.0
+            model = "jkr"
+            youngs = 1e8
+            poisson = 0.3
+            surface_energy = 0.01
+            [[material]]
+            name = "lone"
+            density = 2000.0
+            model = "jkr"
+            youngs = 1e9
+            poisson = 0.3
+            surface_energy = 0.02
+            [[material]]
+            name = "plain"
+            density = 2000.0
+            model = "hysteretic"
+            k1 = 100.0
+            kp = 500.0
+            kc = 0.0
+            phi_f = 0.05
+            [[interaction]]
+            materials = ["lone", "soft"]
+            model = "jkr"
+            youngs = 1e11
+            poisson = 0.3
+            surface_energy = 0.01
+            [[interaction]]
+            materials = ["soft", "plain"]
+            model = "hertz"
+            youngs = 1e9
+            poisson = 0.3
+            [[interaction]]
+            materials = ["lone", "plain"]
+            model = "hertz"
+            youngs = 1e9
+            poisson = 0.3
+            [[wall]]
+            point = [0.0, 0.0, 0.0]
+            normal = [0.0, 0.0, 1.0]
+            material = "lone"
+            [[particles]]
+            kind = "list"
+            material = "soft"
+            positions = [[2e-4, 2e-4, 2e-4], [5e-4, 5e-4, 5e-4]]
+            radii = [2e-5, 1e-5]
+            [[particles]]
+            kind = "list"
+            material = "lone"
+            positions = [[8e-4, 8e-4, 8e-4]]
+            radius = 4e-5
+            [[particles]]
+            kind = "list"
+            material = "plain"
+            positions = [[2e-4, 8e-4, 2e-4]]
+            radius = 3e-5
+        "#;
+        let scene = Scene::from_toml_str(text, "mixed").unwrap();
+        let pairs = tabor_pairs(&scene, 1.65e-10);
+        let got: Vec<(String, bool, f64, f64)> = pairs
+            .iter()
+            .map(|p| (p.label(), p.wall, p.r_eff, p.tabor))
+            .collect();
+        let r_soft_lone = 1e-5 * 4e-5 / 5e-5;
+        let expect = [
+            ("`soft`-`soft`", false, 0.5e-5, by_hand(1e8, 0.01, 0.5e-5)),
+            (
+                "`soft`-`lone`",
+                false,
+                r_soft_lone,
+                by_hand(1e11, 0.01, r_soft_lone),
+            ),
+            // the wall (of "lone") against soft particles: the lone-soft interaction
+            ("wall `lone`-`soft`", true, 1e-5, by_hand(1e11, 0.01, 1e-5)),
+            ("wall `lone`-`lone`", true, 4e-5, by_hand(1e9, 0.02, 4e-5)),
+        ];
+        assert_eq!(got.len(), expect.len(), "{got:?}");
+        for (g, e) in got.iter().zip(expect) {
+            assert_eq!(g.0, e.0);
+            assert_eq!(g.1, e.1);
+            assert!((g.2 - e.2).abs() < 1e-12 * e.2, "{g:?}");
+            assert!((g.3 - e.3).abs() < 1e-12 * e.3, "{g:?}");
+        }
+        // E = 100 GPa at γ = 0.01 and R* = 8 µm: λT ≈ 0.618, warned; the soft pair is not
+        assert!(!pairs[1].jkr_range && (pairs[1].tabor - 0.618).abs() < 1e-3);
+        let w = pairs[1].warning().unwrap();
+        assert!(w.contains("the material pair `soft`-`lone`"), "{w}");
+        assert!(pairs[0].jkr_range && pairs[0].warning().is_none());
+        let w = pairs[2].warning().unwrap();
+        assert!(w.contains("the wall-particle pair `lone`-`soft`"), "{w}");
+    }
 }

@@ -818,3 +818,188 @@ fn run_quiet_batches_choices_give_the_same_run() {
     let (ok, _, err) = powder(&["run", scene, "--quiet-batches", "sometimes"]);
     assert!(!ok && err.contains("sometimes"), "{err}");
 }
+
+/// λT = (4R*γ²/(E*²D³))^(1/3) (paper 002 eq. 1) by hand, E* = E/(2(1 − ν²)) (eq. 2).
+fn tabor_by_hand(youngs: f64, poisson: f64, gamma: f64, r_eff: f64, d: f64) -> f64 {
+    let e_star = youngs / (2.0 * (1.0 - poisson * poisson));
+    (4.0 * r_eff * gamma * gamma / (e_star * e_star * d * d * d)).cbrt()
+}
+
+#[test]
+fn collide_reports_the_tabor_parameter_and_warns_below_the_jkr_range() {
+    // E = 1 GPa, γ = 0.05, two 1 µm spheres: λT ≈ 15.45, JKR, no warning
+    let (ok, out, err) = jkr_cmd(&["--velocity", "2", "--json"]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let t = v["tabor"].as_f64().unwrap();
+    assert!((t - tabor_by_hand(1e9, 0.3, 0.05, 5e-7, 1.65e-10)).abs() < 1e-9 * t);
+    assert!((t - 15.4485).abs() < 1e-3, "{t}");
+    assert!(!err.contains("Tabor"), "{err}");
+    let (ok, out, _) = jkr_cmd(&["--velocity", "2"]);
+    assert!(
+        ok && out.contains("Tabor parameter 15.4485: JKR regime"),
+        "{out}"
+    );
+    // λT ∝ 1/D_min
+    let (ok, out, err) = jkr_cmd(&["--velocity", "2", "--json", "--tabor-dmin", "3.3e-10"]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert!((v["tabor"].as_f64().unwrap() - 0.5 * t).abs() < 1e-9 * t);
+    // a stiff sub-micron pair on a wall (E = 100 GPa, γ = 0.01, R* = 0.1 µm): λT ≈ 0.14,
+    // Maugis-Dugdale; the warning names the pair
+    let (ok, out, err) = powder(&[
+        "collide",
+        "--model",
+        "jkr",
+        "--youngs",
+        "1e11",
+        "--poisson",
+        "0.3",
+        "--surface-energy",
+        "0.01",
+        "--radius",
+        "1e-7",
+        "--wall",
+        "--density",
+        "2000",
+        "--velocity",
+        "2",
+        "--json",
+    ]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let t = v["tabor"].as_f64().unwrap();
+    assert!((t - tabor_by_hand(1e11, 0.3, 0.01, 1e-7, 1.65e-10)).abs() < 1e-9 * t);
+    assert!(
+        err.contains("warning")
+            && err.contains("radius 1e-7 on the wall")
+            && err.contains("Maugis-Dugdale")
+            && err.contains("below the JKR range"),
+        "{err}"
+    );
+    // no Tabor parameter without adhesion; --tabor-dmin refused there
+    let (ok, out, err) = hysteretic(&["--velocity", "0.05", "--json"]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert!(v["tabor"].is_null());
+    let (ok, _, err) = hysteretic(&["--velocity", "0.05", "--tabor-dmin", "1e-10"]);
+    assert!(
+        !ok && err.contains("--tabor-dmin applies to --model jkr"),
+        "{err}"
+    );
+    let (ok, _, err) = jkr_cmd(&["--velocity", "2", "--tabor-dmin", "0"]);
+    assert!(!ok && err.contains("tabor"), "{err}");
+}
+
+const DEPOSITION: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/jkr_deposition.toml");
+
+#[test]
+fn run_reports_the_tabor_parameter_of_each_jkr_pair() {
+    // the example (E = 0.1 GPa, γ = 0.01, R = 5 µm): particle pair R* = 2.5 µm, wall R* = 5 µm
+    let (ok, out, err) = powder(&["run", DEPOSITION, "--steps", "2", "--no-output", "--json"]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let pairs = v["tabor"].as_array().unwrap();
+    assert_eq!(pairs.len(), 2, "{out}");
+    for (p, wall, r) in [(&pairs[0], false, 2.5e-6), (&pairs[1], true, 5e-6)] {
+        assert_eq!(p["materials"], serde_json::json!(["micro", "micro"]));
+        assert_eq!(p["wall"], wall);
+        let t = p["tabor"].as_f64().unwrap();
+        assert!((t - tabor_by_hand(1e8, 0.3, 0.01, r, 1.65e-10)).abs() < 1e-9 * t);
+        assert_eq!(p["jkr_range"], true);
+    }
+    assert!(!err.contains("Tabor"), "{err}");
+    // a thousand times stiffer: λT falls by 100 (E^(−2/3)) below 3, warned about by name
+    let (ok, out, err) = powder(&[
+        "run",
+        DEPOSITION,
+        "--steps",
+        "2",
+        "--no-output",
+        "--set",
+        "material[0].youngs=1e11",
+    ]);
+    assert!(ok, "{err}");
+    let t = tabor_by_hand(1e11, 0.3, 0.01, 2.5e-6, 1.65e-10);
+    assert!(t < 3.0);
+    assert!(
+        out.contains("tabor") && out.contains(&format!("{t:.4}")),
+        "{out}"
+    );
+    assert!(
+        err.contains("warning: the material pair `micro`-`micro`")
+            && err.contains("below the JKR range"),
+        "{err}"
+    );
+    assert!(
+        err.contains("the wall-particle pair `micro`-`micro`"),
+        "{err}"
+    );
+}
+
+#[test]
+fn collide_shows_e_analytic_head_on_and_e_t_oblique_only() {
+    // head-on with friction: the closed form does not apply (friction), no tangential column
+    let (ok, out, err) = jkr_cmd(&["--velocity", "2", "--friction", "0.3"]);
+    assert!(ok, "{err}");
+    let header = out.lines().next().unwrap();
+    assert!(
+        !header.contains("e_analytic") && !header.contains("e_t "),
+        "{out}"
+    );
+    let (ok, out, err) = jkr_cmd(&["--velocity", "2", "--friction", "0.3", "--json"]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_collide_keys(&v, &out);
+    assert!(
+        v["e_tangential"].is_null() && v["e_analytic"].is_null(),
+        "{out}"
+    );
+    // oblique: e_t, and no head-on closed form (null in JSON, no column)
+    let (ok, out, err) = jkr_cmd(&[
+        "--velocity",
+        "2",
+        "--friction",
+        "0.3",
+        "--impact-angle",
+        "45",
+    ]);
+    assert!(ok, "{err}");
+    let header = out.lines().next().unwrap();
+    assert!(
+        header.contains("e_t") && !header.contains("e_analytic"),
+        "{out}"
+    );
+    // LSD at 30°: its head-on e = 1 would mislead (the line of centres turns)
+    let lsd = [
+        "collide",
+        "--model",
+        "lsd",
+        "--k",
+        "1000",
+        "--radius",
+        "1e-3",
+        "--density",
+        "2000",
+        "--velocity",
+        "0.1",
+    ];
+    let mut args = lsd.to_vec();
+    args.extend(["--impact-angle", "30", "--json"]);
+    let (ok, out, err) = powder(&args);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_collide_keys(&v, &out);
+    for key in [
+        "e_analytic",
+        "stuck_analytic",
+        "delta_max_analytic",
+        "contact_duration_analytic",
+        "e_tangential",
+    ] {
+        assert!(v[key].is_null(), "{key}: {out}");
+    }
+    let (ok, out, err) = powder(&lsd);
+    assert!(ok, "{err}");
+    assert!(out.lines().next().unwrap().contains("e_analytic"), "{out}");
+}

@@ -313,3 +313,28 @@ fn delta_max_matches_energy_balance() {
         );
     }
 }
+
+/// The closed forms are those of a head-on collision: an oblique impact at the same normal
+/// speed reports none (issue 14 item 5), and no tangential restitution without rotation.
+#[test]
+fn oblique_impacts_carry_no_head_on_closed_form() {
+    let p = params(100.0);
+    let v = v_for(&p, RADIUS, 0.5);
+    let head_on = collide(&spec(p, RADIUS, v)).unwrap();
+    assert!(head_on.e_analytic.is_some() && head_on.delta_max_analytic.is_some());
+    let s = CollideSpec {
+        velocity: v / 0.5,
+        impact_angle: 30.0,
+        ..spec(p, RADIUS, v)
+    };
+    let r = collide(&s).unwrap();
+    assert!(
+        r.e_analytic.is_none() && r.stuck_analytic.is_none(),
+        "{r:?}"
+    );
+    assert!(r.delta_max_analytic.is_none() && r.delta_c_analytic.is_none());
+    assert!(r.e_tangential.is_none());
+    // the pair's scales stay: χ of the normal speed and vp
+    assert!((r.chi.unwrap() - head_on.chi.unwrap()).abs() < 1e-12);
+    assert_eq!(r.v_p, head_on.v_p);
+}

@@ -269,3 +269,38 @@ fn rolling_resistance_dissipates_and_balances() {
     );
     assert!(r.energy.dissipated.unwrap() > 0.0);
 }
+
+/// Head-on there is no tangential motion: no `e_tangential` and (the tangential speed being
+/// exactly 0) no spin; oblique impacts carry no head-on closed forms (issue 14 item 5).
+#[test]
+fn closed_forms_head_on_only_and_tangential_restitution_oblique_only() {
+    let p = JkrParams {
+        friction: 0.3,
+        ..jkr()
+    };
+    let head_on = run(p, 2.0);
+    assert!(!head_on.stuck);
+    assert_eq!(head_on.e_tangential, None);
+    assert_eq!(head_on.omega_final, Some(0.0));
+    let oblique = collide(&CollideSpec {
+        impact_angle: 45.0,
+        ..spec(p, 2.0)
+    })
+    .unwrap();
+    assert!(oblique.e_tangential.unwrap() > 0.0);
+    assert!(oblique.e_analytic.is_none() && oblique.stuck_analytic.is_none());
+    // frictionless Hertz: head-on every closed form, oblique none of them
+    let hertz = JkrParams::hertz(1e9, 0.3);
+    let plain = run(hertz, 2.0);
+    assert_eq!(plain.e_analytic, Some(1.0));
+    assert!(plain.delta_max_analytic.is_some() && plain.contact_duration_analytic.is_some());
+    let s = CollideSpec {
+        impact_angle: 30.0,
+        ..spec(hertz, 2.0)
+    };
+    assert_eq!(powder::collide::closed_form_e(&s), None);
+    let r = collide(&s).unwrap();
+    assert!(r.e_analytic.is_none() && r.stuck_analytic.is_none());
+    assert!(r.delta_max_analytic.is_none() && r.contact_duration_analytic.is_none());
+    assert!(r.e_tangential.is_none(), "no friction, no rotation: {r:?}");
+}

@@ -462,6 +462,55 @@ pub fn plastic_restitution(e: f64, e_tn: f64) -> f64 {
     (e * e - (1.0 - e_tn * e_tn)).max(0.0).sqrt()
 }
 
+// ---- Tabor parameter (paper 002 eq. 1) ----
+
+/// D_min of the Tabor parameter: the minimum atomic separation, "typically taken to be
+/// 1.65 Å" (paper 002 below eq. 1), in m. Another unit system needs its own value.
+pub const TABOR_MIN_SEPARATION: f64 = 1.65e-10;
+
+/// The JKR range of the Tabor parameter, λT > 3 (paper 002 §1 after Johnson and
+/// Greenwood: DMT for λT < 0.1, Maugis–Dugdale for 0.1 ≤ λT ≤ 3).
+pub const TABOR_JKR_MIN: f64 = 3.0;
+
+/// Upper end of the DMT range, λT < 0.1 (paper 002 §1).
+pub const TABOR_DMT_MAX: f64 = 0.1;
+
+/// Tabor parameter λT = (4R*γ²/(E*²·D_min³))^(1/3) (paper 002 eq. 1), with γ the surface
+/// energy per surface (work of adhesion 2γ, so this is (R*w²/(E*²D³))^(1/3)), R* and E*
+/// the effective radius and modulus of eq. 2.
+pub fn tabor_parameter(r_eff: f64, surface_energy: f64, e_star: f64, d_min: f64) -> f64 {
+    (4.0 * r_eff * surface_energy * surface_energy / (e_star * e_star * d_min.powi(3))).cbrt()
+}
+
+/// λT of a JKR pair from the material's own E, ν and γ: a stiffness scale S changes the
+/// simulated stiffness, not which contact theory describes the material.
+pub fn jkr_tabor(p: &jkr::JkrParams, r_eff: f64, d_min: f64) -> f64 {
+    tabor_parameter(r_eff, p.surface_energy, p.e_star_unscaled(), d_min)
+}
+
+/// The contact theory the Tabor parameter selects (paper 002 §1): "JKR" (λT > 3),
+/// "Maugis-Dugdale" (0.1 ≤ λT ≤ 3) or "DMT" (λT < 0.1).
+pub fn tabor_regime(tabor: f64) -> &'static str {
+    if tabor > TABOR_JKR_MIN {
+        "JKR"
+    } else if tabor >= TABOR_DMT_MAX {
+        "Maugis-Dugdale"
+    } else {
+        "DMT"
+    }
+}
+
+/// The warning for a JKR pair below the JKR range, naming the pair (`pair`, e.g. "the
+/// pair `a`-`b`"); `None` in range.
+pub fn tabor_warning(pair: &str, tabor: f64, d_min: f64) -> Option<String> {
+    (tabor <= TABOR_JKR_MIN).then(|| {
+        format!(
+            "{pair} has Tabor parameter {tabor:.3} (paper 002 eq. 1, D_min = {d_min:e}), below the JKR range (> {TABOR_JKR_MIN}): the {} regime, where the JKR contact law does not hold",
+            tabor_regime(tabor)
+        )
+    })
+}
+
 #[cfg(test)]
 mod jkr_tests {
     use super::*;
@@ -537,6 +586,47 @@ mod jkr_tests {
             p.hertz_contact_time(r, m, v),
             max_relative = 1e-15
         );
+    }
+
+    #[test]
+    fn tabor_parameter_of_paper_002_eq_1() {
+        // E = 1 GPa, ν = 0.3, γ = 0.05 J/m², two 1 µm spheres (R* = 0.5 µm), D = 1.65 Å:
+        // E* = 1e9/1.82 = 5.4945e8 Pa, λ³ = 4·5e-7·0.0025/(E*²·4.492125e-30) = 3686.8
+        let p = JkrParams::jkr(1e9, 0.3, 0.05);
+        let lambda = jkr_tabor(&p, 5e-7, TABOR_MIN_SEPARATION);
+        assert_relative_eq!(lambda, 15.448523667638632, max_relative = 1e-12);
+        assert_relative_eq!(
+            lambda.powi(3),
+            5e-9 / ((1e9f64 / 1.82).powi(2) * 4.492125e-30),
+            max_relative = 1e-12
+        );
+        // the stiffness scale does not change it (the material's own E and γ)
+        let scaled = JkrParams {
+            stiffness_scale: 0.01,
+            ..p
+        };
+        assert_eq!(jkr_tabor(&scaled, 5e-7, TABOR_MIN_SEPARATION), lambda);
+        // λ ∝ R^(1/3) γ^(2/3) E*^(−2/3) D^(−1)
+        assert_relative_eq!(
+            tabor_parameter(8.0 * 5e-7, 0.05, p.e_star(), 1.65e-10),
+            2.0 * lambda,
+            max_relative = 1e-12
+        );
+        assert_eq!(tabor_regime(lambda), "JKR");
+        assert!(tabor_warning("x", lambda, 1.65e-10).is_none());
+        // a stiff sub-micron pair (E = 100 GPa, γ = 0.01, R* = 50 nm): λ ≈ 0.114, Maugis
+        let stiff = tabor_parameter(5e-8, 0.01, 1e11 / 1.82, 1.65e-10);
+        assert_relative_eq!(
+            stiff,
+            (2e-11 / ((1e11f64 / 1.82).powi(2) * 4.492125e-30)).cbrt(),
+            max_relative = 1e-12
+        );
+        assert!((stiff - 0.1138).abs() < 1e-3, "{stiff}");
+        assert_eq!(tabor_regime(stiff), "Maugis-Dugdale");
+        assert_eq!(tabor_regime(0.05), "DMT");
+        assert_eq!(tabor_regime(3.0), "Maugis-Dugdale");
+        let w = tabor_warning("the pair `a`-`b`", stiff, 1.65e-10).unwrap();
+        assert!(w.contains("`a`-`b`") && w.contains("0.114") && w.contains("Maugis"));
     }
 
     #[test]
