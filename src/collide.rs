@@ -132,6 +132,14 @@ pub struct CollideResult {
     /// Tabor parameter λT of the pair (paper 002 eq. 1; JKR with surface energy > 0):
     /// the JKR model holds for λT > 3. D_min = 1.65 Å unless set ([`tabor`]).
     pub tabor: Option<f64>,
+    /// Yield velocity v_Y of the Thornton–Ning estimate, m/s, when one was given
+    /// ([`add_plastic_restitution`]; JKR family).
+    pub v_yield: Option<f64>,
+    /// Thornton–Ning restitution e_TN at the normal impact speed (paper 001 eq. 13).
+    pub e_tn: Option<f64>,
+    /// e_pl = √(e² − (1 − e_TN²)) with the measured e (paper 001 eq. 14), 0 when the
+    /// plastic loss takes all that is left.
+    pub e_pl: Option<f64>,
     /// Time step used, s.
     pub dt: f64,
     /// Steps run.
@@ -680,6 +688,9 @@ fn run_collision(
         contact_duration_analytic: None,
         jkr: None,
         tabor: None,
+        v_yield: None,
+        e_tn: None,
+        e_pl: None,
         dt,
         steps: run.steps(),
         backend,
@@ -916,6 +927,32 @@ pub fn tabor_warning(spec: &CollideSpec, tabor: f64, d_min: f64) -> Option<Strin
         )
     };
     analytic::tabor_warning(&pair, tabor, d_min)
+}
+
+/// Yield velocity of the pair for yield stress `yield_stress` (Pa): the Hertz impact whose
+/// centre pressure reaches 1.6·Y (paper 001 §IV A 3, [`analytic::yield_velocity`]), with
+/// the material's own E*; `None` unless the model is of the JKR family.
+pub fn yield_velocity(spec: &CollideSpec, yield_stress: f64) -> Option<f64> {
+    let ContactModel::Jkr(p) = &spec.model else {
+        return None;
+    };
+    let geom = spec.geometry();
+    Some(analytic::yield_velocity(
+        yield_stress,
+        p.e_star_unscaled(),
+        geom.r_eff(),
+        geom.reduced_mass,
+    ))
+}
+
+/// Adds the Thornton–Ning plastic loss for yield velocity `v_yield` (paper 001 eqs. 13–14):
+/// e_TN at the result's normal impact speed and e_pl from the measured e.
+pub fn add_plastic_restitution(spec: &CollideSpec, result: &mut CollideResult, v_yield: f64) {
+    let vn = result.velocity * spec.impact_angle.to_radians().sin();
+    let e_tn = analytic::thornton_ning_restitution(vn, v_yield);
+    result.v_yield = Some(v_yield);
+    result.e_tn = Some(e_tn);
+    result.e_pl = Some(analytic::plastic_restitution(result.e, e_tn));
 }
 
 /// Velocities of a sweep `FROM:TO:N`, linear or logarithmic.

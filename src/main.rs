@@ -9,6 +9,8 @@ use powder::{ParamError, PowderError};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+mod analytic_cmd;
+
 #[derive(Parser)]
 #[command(name = "powder", version, about = "DEM engine for cohesive powders")]
 struct Cli {
@@ -30,6 +32,9 @@ enum Command {
     Bench(BenchArgs),
     /// Error against run time (work-precision) over the time step, on both backends.
     Accuracy(AccuracyArgs),
+    /// Closed forms without a simulation: kp' (paper 000 eq. A.3), Thornton-Ning e_TN and
+    /// e_pl (paper 001 eqs. 13-14), the Tabor parameter (paper 002 eq. 1).
+    Analytic(analytic_cmd::AnalyticArgs),
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -502,6 +507,14 @@ struct CollideArgs {
     /// default 1.65e-10 (m, the paper's value).
     #[arg(long = "tabor-dmin")]
     tabor_dmin: Option<f64>,
+    /// JKR/Hertz: yield velocity v_Y, m/s: adds the Thornton-Ning e_TN and
+    /// e_pl = sqrt(e^2 - (1 - e_TN^2)) (paper 001 eqs. 13-14) beside e.
+    #[arg(long = "yield-velocity", conflicts_with = "yield_stress")]
+    yield_velocity: Option<f64>,
+    /// JKR/Hertz: yield stress Y, Pa: v_Y is the Hertz impact whose centre pressure reaches
+    /// 1.6 Y (paper 001 sec. IV A 3), then as --yield-velocity.
+    #[arg(long = "yield-stress")]
+    yield_stress: Option<f64>,
 }
 
 fn fmt_opt(x: Option<f64>) -> String {
@@ -512,11 +525,48 @@ fn fmt_opt(x: Option<f64>) -> String {
 struct CollideReport {
     /// D_min of the Tabor parameter.
     tabor_dmin: f64,
+    /// Yield velocity of the Thornton-Ning estimate (given, or from the yield stress).
+    v_yield: Option<f64>,
+    /// The yield stress v_yield came from, if given.
+    yield_stress: Option<f64>,
 }
 
 /// Checks the report options against the model (kept apart from `contact_model`).
-fn collide_report(a: &CollideArgs, model: &ContactModel) -> Result<CollideReport, PowderError> {
+fn collide_report(a: &CollideArgs, spec: &CollideSpec) -> Result<CollideReport, PowderError> {
+    let model = &spec.model;
     let jkr = matches!(model, ContactModel::Jkr(p) if p.surface_energy > 0.0);
+    let family = matches!(model, ContactModel::Jkr(_));
+    let v_yield = match (a.yield_velocity, a.yield_stress) {
+        (None, None) => None,
+        _ if !family => {
+            let name = if a.yield_velocity.is_some() {
+                "yield_velocity"
+            } else {
+                "yield_stress"
+            };
+            return Err(ParamError::new(
+                name,
+                format!(
+                    "--{} applies to --model jkr or hertz (Thornton-Ning, paper 001 eqs. 13-14; the hysteretic model has its own plasticity)",
+                    name.replace('_', "-")
+                ),
+            )
+            .into());
+        }
+        (Some(v), _) => Some(powder::error::require_positive(
+            "yield_velocity",
+            v,
+            "the yield velocity (--yield-velocity)",
+        )?),
+        (None, Some(y)) => {
+            let y = powder::error::require_positive(
+                "yield_stress",
+                y,
+                "the yield stress (--yield-stress)",
+            )?;
+            collide::yield_velocity(spec, y)
+        }
+    };
     let tabor_dmin = match a.tabor_dmin {
         Some(_) if !jkr => {
             return Err(ParamError::new(
@@ -532,7 +582,11 @@ fn collide_report(a: &CollideArgs, model: &ContactModel) -> Result<CollideReport
         )?,
         None => powder::model::analytic::TABOR_MIN_SEPARATION,
     };
-    Ok(CollideReport { tabor_dmin })
+    Ok(CollideReport {
+        tabor_dmin,
+        v_yield,
+        yield_stress: a.yield_stress,
+    })
 }
 
 /// Adds the reports to the results, warns about a pair outside the JKR range and prints.
@@ -544,6 +598,9 @@ fn finish_collide(
 ) -> Result<(), PowderError> {
     for r in &mut results {
         r.tabor = collide::tabor(spec, report.tabor_dmin);
+        if let Some(vy) = report.v_yield {
+            collide::add_plastic_restitution(spec, r, vy);
+        }
     }
     // one pair for every velocity: one warning
     if let Some(t) = results.first().and_then(|r| r.tabor) {
@@ -572,6 +629,10 @@ fn print_table(results: &[CollideResult], report: &CollideReport) {
     }
     if results.iter().any(|r| r.e_tangential.is_some()) {
         columns.push(("e_t", 10, |r| fmt_opt(r.e_tangential)));
+    }
+    if report.v_yield.is_some() {
+        columns.push(("e_TN", 10, |r| fmt_opt(r.e_tn)));
+        columns.push(("e_pl", 10, |r| fmt_opt(r.e_pl)));
     }
     columns.extend([
         (
@@ -618,12 +679,17 @@ fn print_table(results: &[CollideResult], report: &CollideReport) {
                 report.tabor_dmin
             );
         }
+        if let Some(vy) = report.v_yield {
+            let from = report.yield_stress.map_or_else(String::new, |y| {
+                format!(" (from Y = {y:e} Pa: Hertz centre pressure 1.6 Y)")
+            });
+            println!("yield velocity {vy:.6e} m/s{from}: e_TN, e_pl of paper 001 eqs. 13-14");
+        }
     }
 }
 
 fn collide_cmd(a: &CollideArgs) -> Result<(), PowderError> {
     let model = a.law.contact_model()?;
-    let report = collide_report(a, &model)?;
     let spec = CollideSpec {
         model,
         radius1: a.radius,
@@ -635,6 +701,7 @@ fn collide_cmd(a: &CollideArgs) -> Result<(), PowderError> {
         wall: a.wall,
         impact_angle: a.impact_angle,
     };
+    let report = collide_report(a, &spec)?;
     if let ContactModel::Jkr(p) = &spec.model {
         if let Some(note) = p.stiffness_scaling_report() {
             eprintln!("note: {note}");
@@ -1095,6 +1162,7 @@ fn main() -> ExitCode {
         Command::Info(a) => info_cmd(a),
         Command::Bench(a) => bench_cmd(a),
         Command::Accuracy(a) => accuracy_cmd(a),
+        Command::Analytic(a) => analytic_cmd::analytic_cmd(a),
         Command::Compare(a) => match compare_cmd(a) {
             Ok(true) => Ok(()),
             Ok(false) => return ExitCode::from(1),

@@ -1003,3 +1003,182 @@ fn collide_shows_e_analytic_head_on_and_e_t_oblique_only() {
     assert!(ok, "{err}");
     assert!(out.lines().next().unwrap().contains("e_analytic"), "{out}");
 }
+
+#[test]
+fn analytic_kp_prime_of_appendix_a() {
+    // paper 000 fig. 9: k1 = 100, kp = 500, φf = 0.05 → 0.5. By hand (eq. A.3): A = 400²/500
+    // = 320, B = 10, kp′ = 100 + 1600 + √(1600² + 100·3200) = 1700 + √2.88e6
+    let args = [
+        "analytic",
+        "kp-prime",
+        "--k1",
+        "100",
+        "--kp",
+        "500",
+        "--phi-f",
+        "0.05",
+        "--phi-f-new",
+        "0.5",
+    ];
+    let (ok, out, err) = powder(&args);
+    assert!(ok, "{err}");
+    assert!(out.contains("kp' = 3397.056275 N/m"), "{out}");
+    let mut json = args.to_vec();
+    json.push("--json");
+    let (ok, out, err) = powder(&json);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let kp2 = v["kp_prime"].as_f64().unwrap();
+    assert!((kp2 - (1700.0 + 2.88e6f64.sqrt())).abs() < 1e-9, "{out}");
+    // the plastic limit overlap kp/(kp − k1)·φf: 0.0625 before, kp′/(kp′ − k1)·0.5 after
+    let d = &v["delta_max_p_over_a12"];
+    assert!((d[0].as_f64().unwrap() - 0.0625).abs() < 1e-12);
+    assert!((d[1].as_f64().unwrap() - kp2 / (kp2 - 100.0) * 0.5).abs() < 1e-12);
+    let mut bad = args.to_vec();
+    bad[5] = "50";
+    let (ok, _, err) = powder(&bad);
+    assert!(!ok && err.contains("`kp`") && err.contains("k1"), "{err}");
+    let mut bad = args.to_vec();
+    bad[9] = "1.5";
+    let (ok, _, err) = powder(&bad);
+    assert!(!ok && err.contains("phi-f-new"), "{err}");
+}
+
+/// Paper 001 eq. 13 by hand with v̂ = v_Y/v.
+fn e_tn_by_hand(v: f64, vy: f64) -> f64 {
+    let h2 = (vy / v).powi(2);
+    (6.0 * 3f64.sqrt() / 5.0).sqrt()
+        * (1.0 - h2 / 6.0).sqrt()
+        * (1.0 + 2.0 * (6.0 / (5.0 * h2) - 0.2).sqrt()).powf(-0.25)
+}
+
+#[test]
+fn analytic_thornton_ning_and_tabor() {
+    let (ok, out, err) = powder(&[
+        "analytic",
+        "thornton-ning",
+        "--velocity",
+        "0.1,0.2,0.3",
+        "--yield-velocity",
+        "0.17",
+        "--restitution",
+        "0.9",
+        "--json",
+    ]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let rows = v["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 3);
+    // below v_Y no plastic loss
+    assert_eq!(rows[0]["e_tn"], 1.0);
+    assert_eq!(rows[0]["e_pl"], 0.9);
+    for (row, speed) in rows[1..].iter().zip([0.2, 0.3]) {
+        let e_tn = e_tn_by_hand(speed, 0.17);
+        assert!(
+            (row["e_tn"].as_f64().unwrap() - e_tn).abs() < 1e-12,
+            "{out}"
+        );
+        let e_pl = (0.81 - (1.0 - e_tn * e_tn)).sqrt();
+        assert!(
+            (row["e_pl"].as_f64().unwrap() - e_pl).abs() < 1e-12,
+            "{out}"
+        );
+    }
+    assert!((rows[1]["e_tn"].as_f64().unwrap() - 0.99446).abs() < 1e-5);
+    // paper 001 §IV A 3: Y = 0.15E* corresponds to v_Y ≈ 0.17 (LJ units, R = 147)
+    let (ok, out, err) = powder(&[
+        "analytic",
+        "thornton-ning",
+        "--velocity",
+        "0.2",
+        "--yield-stress",
+        "9.825",
+        "--youngs",
+        "122.8125",
+        "--poisson",
+        "0.25",
+        "--density",
+        "1.09",
+        "--radius",
+        "147",
+    ]);
+    assert!(ok, "{err}");
+    assert!(out.contains("v_Y = 1.706771e-1"), "{out}");
+    let (ok, _, err) = powder(&["analytic", "thornton-ning", "--velocity", "0.2"]);
+    assert!(!ok && err.contains("--yield-velocity"), "{err}");
+    let (ok, out, err) = powder(&[
+        "analytic",
+        "tabor",
+        "--youngs",
+        "1e9",
+        "--poisson",
+        "0.3",
+        "--surface-energy",
+        "0.05",
+        "--radius",
+        "1e-6",
+        "--json",
+    ]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let t = tabor_by_hand(1e9, 0.3, 0.05, 5e-7, 1.65e-10);
+    assert!((v["tabor"].as_f64().unwrap() - t).abs() < 1e-9 * t, "{out}");
+    assert_eq!(v["regime"], "JKR");
+}
+
+#[test]
+fn collide_adds_thornton_ning_with_a_yield_velocity() {
+    // v = 2 m/s, v_Y = 1 m/s: e_TN = 0.930626 (eq. 13), e_pl from the measured e (eq. 14)
+    let (ok, out, err) = jkr_cmd(&["--velocity", "2", "--yield-velocity", "1", "--json"]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let (e, e_tn) = (v["e"].as_f64().unwrap(), v["e_tn"].as_f64().unwrap());
+    assert!((e_tn - e_tn_by_hand(2.0, 1.0)).abs() < 1e-12);
+    assert!((e_tn - 0.930626).abs() < 1e-6);
+    let e_pl = (e * e - (1.0 - e_tn * e_tn)).sqrt();
+    assert!((v["e_pl"].as_f64().unwrap() - e_pl).abs() < 1e-12, "{out}");
+    assert_eq!(v["v_yield"], 1.0);
+    let (ok, out, err) = jkr_cmd(&["--velocity", "2", "--yield-velocity", "1"]);
+    assert!(ok, "{err}");
+    assert!(
+        out.lines().next().unwrap().contains("e_TN") && out.contains("yield velocity"),
+        "{out}"
+    );
+    // without one: null; below v_Y e_pl = e
+    let (ok, out, _) = jkr_cmd(&["--velocity", "2", "--json"]);
+    assert!(ok);
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert!(v["e_tn"].is_null() && v["e_pl"].is_null());
+    let (ok, out, _) = jkr_cmd(&["--velocity", "2", "--yield-velocity", "3", "--json"]);
+    assert!(ok);
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["e_tn"], 1.0);
+    assert_eq!(v["e_pl"], v["e"]);
+    // from a yield stress: v_Y of the pair (p_c = 1.6 Y on the Hertz impact)
+    let (ok, out, err) = jkr_cmd(&["--velocity", "2", "--yield-stress", "5e7", "--json"]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    // equal spheres: v_Y² = E*(0.8πY/E*)⁵/(5πρ), E* = 1e9/1.82, ρ = 2000
+    let es = 1e9 / 1.82;
+    let vy = (es * (0.8 * std::f64::consts::PI * 5e7 / es).powi(5)
+        / (5.0 * std::f64::consts::PI * 2000.0))
+        .sqrt();
+    assert!(
+        (v["v_yield"].as_f64().unwrap() - vy).abs() < 1e-9 * vy,
+        "{out}"
+    );
+    let (ok, _, err) = hysteretic(&["--velocity", "0.05", "--yield-velocity", "1"]);
+    assert!(
+        !ok && err.contains("--yield-velocity applies to --model jkr or hertz"),
+        "{err}"
+    );
+    let (ok, _, err) = jkr_cmd(&[
+        "--velocity",
+        "2",
+        "--yield-velocity",
+        "1",
+        "--yield-stress",
+        "1e8",
+    ]);
+    assert!(!ok && err.contains("cannot be used with"), "{err}");
+}

@@ -304,3 +304,47 @@ fn closed_forms_head_on_only_and_tangential_restitution_oblique_only() {
     assert!(r.delta_max_analytic.is_none() && r.contact_duration_analytic.is_none());
     assert!(r.e_tangential.is_none(), "no friction, no rotation: {r:?}");
 }
+
+/// Thornton–Ning on a collision (paper 001 eqs. 13–14): v_Y from a yield stress does not
+/// depend on the size of equal spheres and is twice as large against a wall (m* = m, R* = r
+/// instead of m/2, r/2: v_Y² ∝ R*³/m*); e_TN uses the normal impact speed.
+#[test]
+fn thornton_ning_from_a_yield_stress() {
+    use powder::collide::{add_plastic_restitution, yield_velocity};
+    let y = 5e7;
+    let vy = yield_velocity(&spec(jkr(), 1.0), y).unwrap();
+    let big = CollideSpec {
+        radius1: 100.0 * R,
+        radius2: 100.0 * R,
+        ..spec(jkr(), 1.0)
+    };
+    assert!((yield_velocity(&big, y).unwrap() / vy - 1.0).abs() < 1e-12);
+    let wall = CollideSpec {
+        wall: true,
+        ..spec(jkr(), 1.0)
+    };
+    assert!((yield_velocity(&wall, y).unwrap() / vy - 2.0).abs() < 1e-12);
+    assert!(yield_velocity(
+        &CollideSpec::head_on(
+            ContactModel::Lsd(powder::model::LsdParams {
+                k: 1.0,
+                gamma0: 0.0
+            }),
+            R,
+            RHO,
+            1.0
+        ),
+        y
+    )
+    .is_none());
+    // at 30° and v = 4 v_Y the normal speed is 2 v_Y: e_TN(2) = 0.930626 by eq. 13
+    let s = CollideSpec {
+        impact_angle: 30.0,
+        ..spec(jkr(), 4.0 * vy)
+    };
+    let mut r = collide(&s).unwrap();
+    add_plastic_restitution(&s, &mut r, vy);
+    assert!((r.e_tn.unwrap() - 0.9306258772736533).abs() < 1e-9);
+    let e_pl = (r.e * r.e - (1.0 - r.e_tn.unwrap().powi(2))).sqrt();
+    assert!((r.e_pl.unwrap() - e_pl).abs() < 1e-12);
+}

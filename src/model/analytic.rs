@@ -257,6 +257,16 @@ pub fn velocity_for_chi(p: &HystereticParams, a12: f64, mr: f64, chi: f64) -> f6
     chi * (p.k1 / mr).sqrt() * p.delta_max_p(a12)
 }
 
+/// Appendix A: the limit stiffness kp′ that keeps the collisions below the old plastic
+/// limit unchanged when the plasticity depth goes from φf to φf′ (eq. A.3):
+/// kp′ = k1 + AB/2 + √((AB/2)² + k1·AB), A = (kp − k1)²/kp, B = φf′/φf, the root of
+/// eq. A.2, (kp − k1)²/(kp·φf) = (kp′ − k1)²/(kp′·φf′).
+pub fn tuned_limit_stiffness(k1: f64, kp: f64, phi_f: f64, phi_f_new: f64) -> f64 {
+    let a = (kp - k1).powi(2) / kp;
+    let ab2 = 0.5 * a * phi_f_new / phi_f;
+    k1 + ab2 + (ab2 * ab2 + 2.0 * k1 * ab2).sqrt()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -349,6 +359,34 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn appendix_a_tuned_limit_stiffness() {
+        // paper 000 fig. 9: k1 = 100, kp = 500, φf = 0.05 → φf′ = 0.5. By hand: A = 400²/500
+        // = 320, B = 10, AB/2 = 1600, kp′ = 100 + 1600 + √(1600² + 100·3200) = 1700 + √2.88e6
+        let kp2 = tuned_limit_stiffness(100.0, 500.0, 0.05, 0.5);
+        assert_relative_eq!(kp2, 3397.056274847714, max_relative = 1e-14);
+        // eq. A.2: (kp − k1)²/(kp·φf) = 6400 = (kp′ − k1)²/(kp′·φf′)
+        assert_relative_eq!(
+            (kp2 - 100.0).powi(2) / (kp2 * 0.5),
+            6400.0,
+            max_relative = 1e-12
+        );
+        // eq. A.1: the new k2 at the old limit overlap is the old kp
+        let (dp_old, dp_new) = (500.0 / 400.0 * 0.05, kp2 / (kp2 - 100.0) * 0.5);
+        assert_relative_eq!(
+            100.0 + (kp2 - 100.0) * dp_old / dp_new,
+            500.0,
+            max_relative = 1e-12
+        );
+        // φf′ = φf keeps kp; the method of HystereticParams gives the same
+        assert_relative_eq!(tuned_limit_stiffness(100.0, 500.0, 0.05, 0.05), 500.0);
+        assert_relative_eq!(
+            HystereticParams::paper_figure().kp_for_phi_f(0.5).unwrap(),
+            kp2,
+            max_relative = 1e-14
+        );
     }
 
     #[test]
@@ -460,6 +498,16 @@ pub fn thornton_ning_restitution(v: f64, v_yield: f64) -> f64 {
 /// e_pl = √(e² − (1 − e_TN²)); 0 when the plastic loss exceeds what is left (sticking).
 pub fn plastic_restitution(e: f64, e_tn: f64) -> f64 {
     (e * e - (1.0 - e_tn * e_tn)).max(0.0).sqrt()
+}
+
+/// Yield velocity v_Y of a Hertz impact: the speed whose largest overlap (eq. 15,
+/// [`hertz_delta_max`]) brings the centre pressure p_c = (2E*/π)·√(δ/R*) (eq. 4) to 1.6·Y,
+/// the onset of plastic flow (paper 001 §IV A 3). Then δ_Y = R*·(0.8πY/E*)² and
+/// ½m*v_Y² = (8/15)E*√R*·δ_Y^(5/2). Equal spheres: v_Y² = E*·(0.8πY/E*)⁵/(5πρ), whatever
+/// the radius (paper 001: Y = 0.15E* ↔ v_Y ≈ 0.17 in its LJ units).
+pub fn yield_velocity(yield_stress: f64, e_star: f64, r_eff: f64, m_eff: f64) -> f64 {
+    let delta_y = r_eff * (0.8 * PI * yield_stress / e_star).powi(2);
+    (16.0 * e_star * r_eff.sqrt() * delta_y.powf(2.5) / (15.0 * m_eff)).sqrt()
 }
 
 // ---- Tabor parameter (paper 002 eq. 1) ----
@@ -627,6 +675,21 @@ mod jkr_tests {
         assert_eq!(tabor_regime(3.0), "Maugis-Dugdale");
         let w = tabor_warning("the pair `a`-`b`", stiff, 1.65e-10).unwrap();
         assert!(w.contains("`a`-`b`") && w.contains("0.114") && w.contains("Maugis"));
+    }
+
+    #[test]
+    fn yield_velocity_of_paper_001() {
+        // paper 001 §IV A 3: v_Y ≈ 0.17 corresponds to Y = 0.15E* (LJ units: E* = 65.5,
+        // ρ = 1.09, equal spheres R = 147)
+        let (es, rho, r) = (65.5, 1.09, 147.0f64);
+        let m = rho * 4.0 / 3.0 * PI * r.powi(3);
+        let vy = yield_velocity(0.15 * es, es, 0.5 * r, 0.5 * m);
+        assert!((vy - 0.17).abs() < 2e-3, "{vy}");
+        // by hand for equal spheres: v_Y² = E*(0.8πY/E*)⁵/(5πρ) = 0.029130
+        assert_relative_eq!(vy * vy, 0.02913067, max_relative = 1e-6);
+        // the Hertz centre pressure at v_Y is 1.6Y
+        let pc = hertz_centre_pressure(hertz_delta_max(0.5 * m, 0.5 * r, es, vy), 0.5 * r, es);
+        assert_relative_eq!(pc, 1.6 * 0.15 * es, max_relative = 1e-12);
     }
 
     #[test]

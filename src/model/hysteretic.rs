@@ -308,10 +308,9 @@ impl HystereticParams {
     /// plasticity depth is changed to `phi_f_new` (eq. A.3).
     pub fn kp_for_phi_f(&self, phi_f_new: f64) -> Result<f64, ParamError> {
         require_positive("phi_f", phi_f_new, "the new plasticity depth phi_f'")?;
-        let a = (self.kp - self.k1).powi(2) / self.kp;
-        let b = phi_f_new / self.phi_f;
-        let ab2 = 0.5 * a * b;
-        Ok(self.k1 + ab2 + (ab2 * ab2 + self.k1 * a * b).sqrt())
+        Ok(crate::model::analytic::tuned_limit_stiffness(
+            self.k1, self.kp, self.phi_f, phi_f_new,
+        ))
     }
 }
 

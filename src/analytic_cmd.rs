@@ -1,0 +1,339 @@
+//! `powder analytic`: closed forms of the papers from the command line, without running a
+//! collision (a module of the binary; the formulas live in `powder::model::analytic`).
+
+use clap::{Args, Subcommand};
+use powder::error::require_positive;
+use powder::model::{analytic, HystereticParams, JkrParams, PairGeometry};
+use powder::{ParamError, PowderError};
+use serde::Serialize;
+
+#[derive(Args)]
+pub struct AnalyticArgs {
+    #[command(subcommand)]
+    which: Which,
+}
+
+#[derive(Subcommand)]
+enum Which {
+    /// Paper 000 appendix A: the limit stiffness kp' that keeps the collisions below the
+    /// old plastic limit when the plasticity depth grows from --phi-f to --phi-f-new (eq. A.3).
+    KpPrime(KpPrimeArgs),
+    /// Thornton-Ning restitution e_TN (paper 001 eq. 13) at given impact speeds, and
+    /// e_pl = sqrt(e^2 - (1 - e_TN^2)) (eq. 14) for a restitution e without plasticity.
+    ThorntonNing(ThorntonNingArgs),
+    /// Tabor parameter of a JKR pair (paper 002 eq. 1) and the contact theory it selects.
+    Tabor(TaborArgs),
+}
+
+#[derive(Args)]
+struct KpPrimeArgs {
+    /// Loading stiffness k1, N/m.
+    #[arg(long)]
+    k1: f64,
+    /// Limit stiffness kp, N/m.
+    #[arg(long)]
+    kp: f64,
+    /// Plasticity depth phi_f in (0, 1].
+    #[arg(long = "phi-f")]
+    phi_f: f64,
+    /// The new plasticity depth phi_f' in (0, 1] (appendix A: larger than phi_f).
+    #[arg(long = "phi-f-new")]
+    phi_f_new: f64,
+    /// Print JSON on stdout.
+    #[arg(long)]
+    json: bool,
+}
+
+/// The pair of spheres (or a sphere and a wall) of `thornton-ning` and `tabor`.
+#[derive(Args)]
+struct PairArgs {
+    /// Radius of sphere 1, m.
+    #[arg(long)]
+    radius: Option<f64>,
+    /// Radius of sphere 2, m (default: --radius).
+    #[arg(long, conflicts_with = "wall")]
+    radius2: Option<f64>,
+    /// Sphere 1 against a plane of the same material.
+    #[arg(long)]
+    wall: bool,
+}
+
+impl PairArgs {
+    /// R* (r for a wall) and the reduced mass at `density` (1 when none is needed).
+    fn geometry(&self, density: f64) -> Result<PairGeometry, PowderError> {
+        let r1 = self.radius.ok_or_else(|| {
+            PowderError::from(ParamError::new("radius", "--radius is required here"))
+        })?;
+        require_positive("radius", r1, "the radius")?;
+        let m = |r: f64| density * 4.0 / 3.0 * std::f64::consts::PI * r.powi(3);
+        if self.wall {
+            return Ok(PairGeometry::wall(r1, m(r1)));
+        }
+        let r2 = require_positive("radius2", self.radius2.unwrap_or(r1), "the second radius")?;
+        Ok(PairGeometry::spheres(r1, r2, m(r1), m(r2)))
+    }
+}
+
+#[derive(Args)]
+#[command(group(clap::ArgGroup::new("yield").required(true).args(["yield_velocity", "yield_stress"])))]
+struct ThorntonNingArgs {
+    /// Normal impact speeds, m/s, comma-separated.
+    #[arg(long, value_delimiter = ',', required = true)]
+    velocity: Vec<f64>,
+    /// Yield velocity v_Y, m/s.
+    #[arg(long = "yield-velocity")]
+    yield_velocity: Option<f64>,
+    /// Yield stress Y, Pa: v_Y is the Hertz impact whose centre pressure reaches 1.6 Y
+    /// (paper 001 sec. IV A 3); needs --youngs, --poisson, --density and the pair.
+    #[arg(long = "yield-stress", requires_all = ["youngs", "poisson", "density", "radius"])]
+    yield_stress: Option<f64>,
+    /// Restitution e without plasticity (e.g. e of `powder collide`): one for every
+    /// speed, or one per speed, comma-separated; adds e_pl.
+    #[arg(long, value_delimiter = ',')]
+    restitution: Vec<f64>,
+    /// Young's modulus E, Pa (with --yield-stress).
+    #[arg(long, requires = "yield_stress")]
+    youngs: Option<f64>,
+    /// Poisson ratio (with --yield-stress).
+    #[arg(long, requires = "yield_stress")]
+    poisson: Option<f64>,
+    /// Density, kg/m^3 (with --yield-stress).
+    #[arg(long, requires = "yield_stress")]
+    density: Option<f64>,
+    #[command(flatten)]
+    pair: PairArgs,
+    /// Print JSON on stdout.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Args)]
+struct TaborArgs {
+    /// Young's modulus E, Pa.
+    #[arg(long)]
+    youngs: f64,
+    /// Poisson ratio.
+    #[arg(long)]
+    poisson: f64,
+    /// Surface energy gamma per surface, J/m^2.
+    #[arg(long = "surface-energy")]
+    surface_energy: f64,
+    #[command(flatten)]
+    pair: PairArgs,
+    /// D_min of eq. 1 in the unit of --radius (default 1.65e-10 m, the paper's value).
+    #[arg(long = "tabor-dmin")]
+    tabor_dmin: Option<f64>,
+    /// Print JSON on stdout.
+    #[arg(long)]
+    json: bool,
+}
+
+/// Runs `powder analytic`.
+pub fn analytic_cmd(a: &AnalyticArgs) -> Result<(), PowderError> {
+    match &a.which {
+        Which::KpPrime(k) => kp_prime(k),
+        Which::ThorntonNing(t) => thornton_ning(t),
+        Which::Tabor(t) => tabor(t),
+    }
+}
+
+fn print_json<T: Serialize>(value: &T) -> Result<(), PowderError> {
+    let text = serde_json::to_string_pretty(value)
+        .map_err(|e| PowderError::Run(format!("cannot encode JSON: {e}")))?;
+    println!("{text}");
+    Ok(())
+}
+
+#[derive(Serialize)]
+struct KpPrime {
+    k1: f64,
+    kp: f64,
+    phi_f: f64,
+    phi_f_new: f64,
+    kp_prime: f64,
+    /// δmax^p/a12 = kp/(kp − k1)·φf (eq. 10) before and after.
+    delta_max_p_over_a12: [f64; 2],
+}
+
+fn kp_prime(a: &KpPrimeArgs) -> Result<(), PowderError> {
+    let p = HystereticParams {
+        k1: a.k1,
+        kp: a.kp,
+        phi_f: a.phi_f,
+        kc: 0.0,
+        ..HystereticParams::paper_figure()
+    };
+    p.validate()?;
+    if !(a.phi_f_new > 0.0 && a.phi_f_new <= 1.0) {
+        return Err(ParamError::new(
+            "phi_f_new",
+            format!(
+                "the new plasticity depth --phi-f-new must satisfy 0 < phi_f' <= 1, got {}",
+                a.phi_f_new
+            ),
+        )
+        .into());
+    }
+    let kp_prime = p.kp_for_phi_f(a.phi_f_new)?;
+    let tuned = HystereticParams {
+        kp: kp_prime,
+        phi_f: a.phi_f_new,
+        ..p
+    };
+    let out = KpPrime {
+        k1: a.k1,
+        kp: a.kp,
+        phi_f: a.phi_f,
+        phi_f_new: a.phi_f_new,
+        kp_prime,
+        delta_max_p_over_a12: [p.delta_max_p(1.0), tuned.delta_max_p(1.0)],
+    };
+    if a.json {
+        return print_json(&out);
+    }
+    println!(
+        "kp' = {kp_prime:.6} N/m (paper 000 eq. A.3: k1 = {}, kp = {} N/m, phi_f = {} -> {})",
+        a.k1, a.kp, a.phi_f, a.phi_f_new
+    );
+    println!(
+        "plastic limit overlap delta_max^p/a12 (eq. 10): {:.6} -> {:.6}",
+        out.delta_max_p_over_a12[0], out.delta_max_p_over_a12[1]
+    );
+    Ok(())
+}
+
+#[derive(Serialize)]
+struct ThorntonNingRow {
+    velocity: f64,
+    e_tn: f64,
+    e: Option<f64>,
+    e_pl: Option<f64>,
+}
+
+#[derive(Serialize)]
+struct ThorntonNing {
+    v_yield: f64,
+    yield_stress: Option<f64>,
+    rows: Vec<ThorntonNingRow>,
+}
+
+fn thornton_ning(a: &ThorntonNingArgs) -> Result<(), PowderError> {
+    let v_yield = match (a.yield_velocity, a.yield_stress) {
+        (Some(v), _) => require_positive("yield_velocity", v, "the yield velocity")?,
+        (None, Some(y)) => {
+            require_positive("yield_stress", y, "the yield stress")?;
+            let (e, nu, rho) = (
+                a.youngs.unwrap_or_default(),
+                a.poisson.unwrap_or_default(),
+                a.density.unwrap_or_default(),
+            );
+            let material = JkrParams::hertz(e, nu);
+            material.validate()?;
+            require_positive("density", rho, "the density")?;
+            let g = a.pair.geometry(rho)?;
+            analytic::yield_velocity(y, material.e_star(), g.r_eff(), g.reduced_mass)
+        }
+        (None, None) => unreachable!("clap requires one of them"),
+    };
+    let n = a.velocity.len();
+    if !(a.restitution.is_empty() || a.restitution.len() == 1 || a.restitution.len() == n) {
+        return Err(ParamError::new(
+            "restitution",
+            format!(
+                "--restitution needs one value or one per velocity ({n}), got {}",
+                a.restitution.len()
+            ),
+        )
+        .into());
+    }
+    let mut rows = Vec::with_capacity(n);
+    for (k, &v) in a.velocity.iter().enumerate() {
+        require_positive("velocity", v, "the impact speed")?;
+        let e = a.restitution.get(k).or(a.restitution.first()).copied();
+        if let Some(e) = e {
+            if !(0.0..=1.0).contains(&e) {
+                return Err(ParamError::new(
+                    "restitution",
+                    format!("the restitution e must be in [0, 1], got {e}"),
+                )
+                .into());
+            }
+        }
+        let e_tn = analytic::thornton_ning_restitution(v, v_yield);
+        rows.push(ThorntonNingRow {
+            velocity: v,
+            e_tn,
+            e,
+            e_pl: e.map(|e| analytic::plastic_restitution(e, e_tn)),
+        });
+    }
+    let out = ThorntonNing {
+        v_yield,
+        yield_stress: a.yield_stress.filter(|_| a.yield_velocity.is_none()),
+        rows,
+    };
+    if a.json {
+        return print_json(&out);
+    }
+    match out.yield_stress {
+        Some(y) => println!(
+            "yield velocity v_Y = {v_yield:.6e} m/s (Y = {y:e} Pa: the Hertz impact with centre pressure 1.6 Y, paper 001 sec. IV A 3)"
+        ),
+        None => println!("yield velocity v_Y = {v_yield:.6e} m/s"),
+    }
+    let with_e = !a.restitution.is_empty();
+    if with_e {
+        println!(
+            "{:>12} {:>10} {:>10} {:>10}",
+            "v (m/s)", "e_TN", "e", "e_pl"
+        );
+    } else {
+        println!("{:>12} {:>10}", "v (m/s)", "e_TN");
+    }
+    for r in &out.rows {
+        match (r.e, r.e_pl) {
+            (Some(e), Some(e_pl)) => println!(
+                "{:>12.5e} {:>10.6} {e:>10.6} {e_pl:>10.6}",
+                r.velocity, r.e_tn
+            ),
+            _ => println!("{:>12.5e} {:>10.6}", r.velocity, r.e_tn),
+        }
+    }
+    println!("e_TN: paper 001 eq. 13 (1 up to v_Y); e_pl = sqrt(e^2 - (1 - e_TN^2)): eq. 14");
+    Ok(())
+}
+
+#[derive(Serialize)]
+struct Tabor {
+    r_eff: f64,
+    d_min: f64,
+    tabor: f64,
+    regime: &'static str,
+    jkr_range: bool,
+}
+
+fn tabor(a: &TaborArgs) -> Result<(), PowderError> {
+    let p = JkrParams::jkr(a.youngs, a.poisson, a.surface_energy);
+    p.validate()?;
+    let d_min = match a.tabor_dmin {
+        Some(d) => require_positive("tabor_dmin", d, "D_min of the Tabor parameter")?,
+        None => analytic::TABOR_MIN_SEPARATION,
+    };
+    let r_eff = a.pair.geometry(1.0)?.r_eff();
+    let t = analytic::jkr_tabor(&p, r_eff, d_min);
+    let out = Tabor {
+        r_eff,
+        d_min,
+        tabor: t,
+        regime: analytic::tabor_regime(t),
+        jkr_range: t > analytic::TABOR_JKR_MIN,
+    };
+    if a.json {
+        return print_json(&out);
+    }
+    println!(
+        "Tabor parameter {t:.6} at R* = {r_eff:e}, D_min = {d_min:e}: {} regime (paper 002 eq. 1; JKR above 3, DMT below 0.1)",
+        out.regime
+    );
+    Ok(())
+}
