@@ -1,16 +1,17 @@
 // step.wgsl — one time step of the GPU engine (after the grid sort of grid.wgsl).
-// Composed per scene (`src/gpu/shaders.rs`) as
-//   common.wgsl + <model> + [history layout] + <rotation> + this file
-// where <model> is model_hysteretic.wgsl (hysteretic, LSD) or model_jkr.wgsl (JKR,
-// Hertz) with model_krijt.wgsl (the Krijt contact-radius dynamics) or its no-op hooks
-// model_krijt_off.wgsl, and <rotation> is rotation.wgsl (angular velocity, torques) or
-// rotation_off.wgsl (no rotation: no angular buffers declared at all). The model provides
-//   alias PairRow  the pair-table row,          alias Hist  one contact's stored history,
-//   fn hist_zero() -> Hist, fn hist_same(Hist, Hist) -> bool,
-//   fn pair_contact(PairRow, Kin, ptr<function, Hist>) -> Contact
-// and the rotation snippet the state RotState and the hooks rot_load, rot_collect,
-// rot_finite, rot_drift, rot_gather, rot_copy_back, rot_wpred, rot_store_partial,
-// rot_pair_store, rot_pair_load, rot_kick.
+// Composed per scene (`src/gpu/composition.rs`) as
+//   common.wgsl + <contact sub-models> + <generated contact law> + <rotation> + <ledger>
+//   + this file
+// where the sub-models are the files of shaders/contact/ that some pair of the scene uses,
+// and the generated part declares what this file calls:
+//   struct PairRow  the pair-table row,   struct Hist  one contact's stored history,
+//   fn hist_zero() -> Hist, fn hist_same(Hist, Hist) -> bool, fn hist_mirror(Hist) -> Hist,
+//   fn pair_contact(PairRow, Kin, ptr<function, Hist>) -> Contact,
+//   fn pair_edges(PairRow, Kin) -> vec4<f32>
+// and <rotation> is rotation.wgsl (angular velocity, torques) or rotation_off.wgsl (no
+// rotation: no angular buffers declared at all), with the state RotState and the hooks
+// rot_load, rot_collect, rot_finite, rot_drift, rot_gather, rot_copy_back, rot_wpred,
+// rot_store_partial, rot_pair_store, rot_pair_load, rot_kick.
 //
 // The particle state lives in one buffer set, A, in the order of the last neighbour-list
 // rebuild; set B is scratch that only a rebuild writes. Pass order, recorded by
@@ -758,6 +759,42 @@ struct Kin {
     // 1/a12 = 1/(2R*) (the step needs it for the overlap monitor; the hysteretic model
     // multiplies by it where the reference divides by a12).
     inv_a12: f32,
+}
+
+// A normal law's result, what the composition and the friction sub-models need of it.
+struct Normal {
+    // Mechanical contact: the tangential, rolling and twisting laws act (their history
+    // is cleared otherwise).
+    in_contact: bool,
+    // The energy ledger's "engaged" (the law's touched flag).
+    engaged: bool,
+    // Normal force along n, repulsive positive, and the stored energy.
+    force: f32,
+    potential: f32,
+    // Contact radius a and a/a0 (JKR family; 0 for the linear laws).
+    a: f32,
+    x: f32,
+    // The load of the Coulomb limits (>= 0): |F_el + 2Fc| for JKR, Luding's
+    // f_n + kc·delta + fa for the hysteretic law.
+    coulomb: f32,
+}
+
+// Rotates v into the plane normal to n keeping its length (`model::rotate_into_plane`): a
+// rigid rotation of the pair must not change a stored spring's energy. Zero when v is
+// (within f32 rounding) along n.
+fn rotate_into_plane(v: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    let len = length(v);
+    if (len == 0.0) {
+        return vec3<f32>(0.0);
+    }
+    let q = v - n * dot(n, v);
+    let lq = length(q);
+    // f64 uses 1e-12; in f32 the projection of a vector along n is rounding noise of
+    // ~1e-7·len, so anything below 1e-6·len has no direction worth keeping.
+    if (lq > 1e-6 * len) {
+        return q * (len / lq);
+    }
+    return vec3<f32>(0.0);
 }
 
 // What one contact does to particle i.

@@ -5,7 +5,6 @@ mod common;
 use common::gpu;
 
 use powder::compare::{compare, Tolerances};
-use powder::gpu::shaders::StepKind;
 use powder::gpu::GpuEngine;
 use powder::scene::Scene;
 
@@ -101,7 +100,7 @@ fn a_mixed_scene_runs_on_the_gpu_and_matches_the_cpu() {
     let scene = mixed_scene();
     let Some(ctx) = gpu() else { return };
     let g = GpuEngine::new(&scene, ctx).unwrap();
-    assert_eq!(g.kind(), StepKind::MixedRolling);
+    assert_eq!(g.kind().name(), "step_hysteretic+jkr+mindlin+jkr_rolling");
     assert!(g.rotates());
     drop(g);
     let Some(ctx) = gpu() else { return };
@@ -172,5 +171,55 @@ rolling_hysteresis = 0.5
     let last = c.samples.last().unwrap();
     eprintln!("{last:?}");
     assert!(last.contacts_cpu > 5, "{last:?}");
+    assert!(c.passed, "{:?}", last);
+}
+
+/// A Krijt JKR material (its contact radius as per-contact state) above hysteretic spheres:
+/// both laws and the Krijt sub-model composed into one step, against the CPU.
+#[test]
+fn krijt_pairs_beside_hysteretic_pairs_match_the_cpu() {
+    let scene = two_lattices(
+        r#"
+[[material]]
+name = "plastic"
+density = 2000.0
+model = "hysteretic"
+k1 = 100.0
+kp = 500.0
+kc = 100.0
+phi_f = 0.05
+gamma0 = 1e-3
+[[material]]
+name = "sticky"
+density = 2000.0
+model = "jkr"
+youngs = 1e5
+poisson = 0.3
+surface_energy = 0.05
+dissipation = "krijt"
+tvis = 1e-5
+friction = 0.3
+[[interaction]]
+materials = ["plastic", "sticky"]
+model = "hysteretic"
+k1 = 100.0
+kp = 500.0
+kc = 50.0
+phi_f = 0.05
+gamma0 = 1e-3
+"#,
+        ["plastic", "sticky", "plastic"],
+        2.1e-3,
+        0.3,
+    );
+    let Some(ctx) = gpu() else { return };
+    let g = GpuEngine::new(&scene, ctx).unwrap();
+    assert_eq!(g.kind().name(), "step_hysteretic+jkr+krijt+mindlin");
+    drop(g);
+    let Some(ctx) = gpu() else { return };
+    let c = compare(&scene, ctx, 8000, 2000, Tolerances::default()).unwrap();
+    let last = c.samples.last().unwrap();
+    eprintln!("{last:?}");
+    assert!(last.contacts_cpu > 5 && last.history_pairs > 0, "{last:?}");
     assert!(c.passed, "{:?}", last);
 }

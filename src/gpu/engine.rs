@@ -3,15 +3,12 @@
 //! stress-dependent dissipations, friction, rolling resistance, reduced stiffness) with
 //! walls and gravity.
 //!
-//! The step's source is composed per scene ([`StepKind`]): the model's force law, the
-//! per-contact history layout its options need (JKR: just the touched flag; with friction
-//! also the tangential spring; with rolling resistance also ξ; with the `krijt`/`stress`
-//! dissipations also the contact radius a and the Krijt snippet) and, only when some contact
+//! The step's source is composed per scene ([`Composition`]): the contact sub-models its
+//! pairs use, the per-contact history layout they declare, and, only when some contact
 //! exerts tangential forces or torques, the angular state (ω with the moment of inertia,
 //! angular acceleration, predicted ω). What a scene does not need is neither declared nor
-//! allocated ([`GpuEngine::buffers`] lists what is). A scene mixing hysteretic/LSD and JKR
-//! pairs runs the mixed variant (tagged pair rows, both history layouts); with a Krijt or
-//! stress-dependent JKR pair among them it is refused.
+//! allocated ([`GpuEngine::buffers`] lists what is). A scene may mix any laws: each pair
+//! row carries its law's tag.
 //!
 //! The particle state lives in one buffer set, A, in the order of the last neighbour-list
 //! rebuild. Each step drifts A (accumulating each particle's displacement since the last
@@ -45,17 +42,15 @@
 
 use crate::cpu::{ContactStats, Energies};
 use crate::error::PowderError;
+use crate::gpu::composition::Composition;
 use crate::gpu::context::GpuContext;
 use crate::gpu::grid::GridSort;
 use crate::gpu::kernel::{
     split_workgroups, storage_buffer, submit_and_read, u32s, uniform_buffer, Kernel, Program,
 };
-use crate::gpu::layout::{
-    encode3, gpu_cell_width, HystereticPair, JkrPair, MixedPair, StepParams, WallGpu,
-};
+use crate::gpu::layout::{encode3, gpu_cell_width, HystereticPair, JkrPair, StepParams, WallGpu};
 use crate::gpu::mirror::Mirrors;
 use crate::gpu::quiet::{Forecast, QuietBatches};
-use crate::gpu::shaders::StepKind;
 use crate::model::{ContactHistory, ContactModel};
 use crate::scene::Scene;
 use crate::setup::Resolved;
@@ -123,7 +118,7 @@ impl StateSet {
         alloc: &mut Allocator,
         tag: &str,
         (n, cap, walls): (u64, u64, u64),
-        kind: StepKind,
+        kind: &Composition,
         ledger: bool,
     ) -> Self {
         // the displacements since the last rebuild belong to the state only
@@ -327,7 +322,7 @@ pub struct GpuEngine {
     rebuild_args: u64,
     bound: Bound,
     max_per_dim: u32,
-    kind: StepKind,
+    kind: Composition,
     n_walls: u32,
     /// (name, bytes) of every buffer allocated for the run.
     buffers: Vec<(String, u64)>,
@@ -468,69 +463,11 @@ fn split_pair_force(slots: u64, max_binding: u64) -> bool {
     16 * slots > max_binding
 }
 
-/// The step a scene's pair models need and their pair table as bytes, or why the GPU
-/// cannot run them together.
-fn pair_table(models: &[ContactModel]) -> Result<(StepKind, Vec<u8>), PowderError> {
-    let jkr: Vec<&crate::model::JkrParams> = models
-        .iter()
-        .filter_map(|m| match m {
-            ContactModel::Jkr(p) => Some(p),
-            _ => None,
-        })
-        .collect();
-    if jkr.is_empty() {
-        let rows: Vec<HystereticPair> = models
-            .iter()
-            .map(|m| match m {
-                ContactModel::Hysteretic(p) => HystereticPair::hysteretic(p),
-                ContactModel::Lsd(p) => HystereticPair::lsd(p),
-                ContactModel::Jkr(_) => unreachable!(),
-            })
-            .collect();
-        return Ok((StepKind::Hysteretic, bytemuck::cast_slice(&rows).to_vec()));
-    }
-    if jkr.len() != models.len() {
-        // a mixed scene: tagged rows holding either parameter set
-        if jkr.iter().any(|p| p.dissipation.krijt_law().is_some()) {
-            return Err(PowderError::Run(
-                "the GPU backend does not mix JKR pairs with Krijt or stress dissipation and hysteretic/LSD pairs in one scene; use --backend cpu"
-                    .into(),
-            ));
-        }
-        let kind = StepKind::mixed(
-            jkr.iter().any(|p| p.friction > 0.0),
-            jkr.iter().any(|p| p.rolling_hysteresis > 0.0),
-        );
-        let rows: Vec<MixedPair> = models
-            .iter()
-            .map(|m| match m {
-                ContactModel::Hysteretic(p) => MixedPair {
-                    kind: 0,
-                    hyst: HystereticPair::hysteretic(p),
-                    ..Default::default()
-                },
-                ContactModel::Lsd(p) => MixedPair {
-                    kind: 0,
-                    hyst: HystereticPair::lsd(p),
-                    ..Default::default()
-                },
-                ContactModel::Jkr(p) => MixedPair {
-                    kind: 1,
-                    jkr: JkrPair::new(p),
-                    ..Default::default()
-                },
-            })
-            .collect();
-        return Ok((kind, bytemuck::cast_slice(&rows).to_vec()));
-    }
-    // the history stores what some pair needs: the spring, ξ, the Krijt contact radius
-    let kind = StepKind::jkr(
-        jkr.iter().any(|p| p.friction > 0.0),
-        jkr.iter().any(|p| p.rolling_hysteresis > 0.0),
-        jkr.iter().any(|p| p.dissipation.krijt_law().is_some()),
-    );
-    let rows: Vec<JkrPair> = jkr.iter().map(|p| JkrPair::new(p)).collect();
-    Ok((kind, bytemuck::cast_slice(&rows).to_vec()))
+/// The step a scene's pair models need and their pair table as bytes.
+fn pair_table(models: &[ContactModel]) -> (Composition, Vec<u8>) {
+    let kind = Composition::of(models);
+    let rows = models.iter().flat_map(|m| kind.pair_row(m)).collect();
+    (kind, rows)
 }
 
 impl GpuEngine {
@@ -550,7 +487,7 @@ impl GpuEngine {
         let n = scene.particles.len();
         let all_models: Vec<ContactModel> =
             r.models.iter().chain(&r.wall_models).copied().collect();
-        let (kind, pairs) = pair_table(&all_models)?;
+        let (kind, pairs) = pair_table(&all_models);
         debug_assert_eq!(kind.rotation(), r.rotation);
         let r_min = scene
             .particles
@@ -629,8 +566,8 @@ impl GpuEngine {
         };
         let sizes = (n as u64, cap as u64, n_walls);
         let sets = [
-            StateSet::new(&mut alloc, "A", sizes, kind, ledger),
-            StateSet::new(&mut alloc, "B", sizes, kind, ledger),
+            StateSet::new(&mut alloc, "A", sizes, &kind, ledger),
+            StateSet::new(&mut alloc, "B", sizes, &kind, ledger),
         ];
         let dt32 = r.dt as f32;
         let particle_ledger = ledger.then(|| alloc.buffer("particle_ledger", 64 * n as u64));
@@ -1018,7 +955,7 @@ impl GpuEngine {
         self.particle_ledger.is_some()
     }
 
-    /// The name of the step's shader module (`StepKind::variant_name`).
+    /// The name of the step's shader module (`Composition::variant_name`).
     pub fn variant_name(&self) -> String {
         self.kind.variant_name(self.has_ledger())
     }
@@ -1049,8 +986,8 @@ impl GpuEngine {
     }
 
     /// The step variant this scene runs (see [`Self::variant_name`]).
-    pub fn kind(&self) -> StepKind {
-        self.kind
+    pub fn kind(&self) -> &Composition {
+        &self.kind
     }
 
     /// Every device buffer allocated for the run, as (name, bytes), in allocation order:
@@ -1845,12 +1782,9 @@ impl GpuEngine {
         translational + rotational
     }
 
-    /// Decodes one stored history element of this step variant (see
-    /// `gpu::shaders::StepKind`): δmax only for the hysteretic model, the tangential
-    /// spring, ξ and the Krijt contact radius only where the layout stores them (JKR keeps
-    /// no δmax on the device).
+    /// Decodes one stored history element (the layout the composition declares).
     fn decode_history(&self, b: &[u8]) -> ContactHistory {
-        decode_history(self.kind, b)
+        self.kind.decode_history(b)
     }
 
     /// The history particle `i` keeps of its contact with particle `j` (persistent ids)
@@ -1895,12 +1829,9 @@ impl GpuEngine {
             // slot-major, as `slot_index` in shaders/step.wgsl
             for slot in (0..count[k] as usize).map(|s| s * n as usize + k) {
                 // one stored history per pair, in its evaluator's frame; the partner sees
-                // the tangential spring negated
+                // it mirrored (the tangential spring negated)
                 let h = self.decode_history(&out[3][slot * hb..(slot + 1) * hb]);
-                let seen_by_partner = ContactHistory {
-                    tangential: -h.tangential,
-                    ..h
-                };
+                let seen_by_partner = self.kind.mirror_history(h);
                 list.push(((pid[k], hist_pid[slot]), h));
                 list.push(((hist_pid[slot], pid[k]), seen_by_partner));
             }
@@ -1935,64 +1866,5 @@ impl GpuEngine {
         // wall-major, as `wall_slot` in shaders/step.wgsl
         let slot = w * n as usize + k;
         Ok(self.decode_history(&out[1][slot * hb..(slot + 1) * hb]))
-    }
-}
-
-/// Decodes one stored history element of a step variant (see `gpu::shaders::StepKind`):
-/// δmax only for the hysteretic model, the tangential spring, ξ and the Krijt contact
-/// radius only where the layout stores them (JKR keeps no δmax on the device); a mixed
-/// layout holds the JKR part first and the hysteretic (δmax, touched) after it.
-fn decode_history(kind: StepKind, b: &[u8]) -> ContactHistory {
-    let f: Vec<f32> = bytemuck::pod_collect_to_vec(b);
-    let v = |o: usize| DVec3::new(f[o] as f64, f[o + 1] as f64, f[o + 2] as f64);
-    // the hysteretic history: δmax with the sign bit as "touched" (model_hysteretic.wgsl)
-    let hyst = |x: f32| (x.abs() as f64, x.is_sign_negative());
-    let mixed = |jkr: StepKind, at: usize| {
-        let mut h = decode_history(jkr, &b[..4 * at]);
-        let (delta_max, touched) = hyst(f[at]);
-        h.delta_max = delta_max;
-        h.touched |= touched;
-        h
-    };
-    match kind {
-        StepKind::Mixed => mixed(StepKind::Jkr, 1),
-        StepKind::MixedFriction => mixed(StepKind::JkrFriction, 4),
-        StepKind::MixedRolling => mixed(StepKind::JkrRolling, 8),
-
-        StepKind::Hysteretic => {
-            let (delta_max, touched) = hyst(f[0]);
-            ContactHistory {
-                delta_max,
-                touched,
-                ..Default::default()
-            }
-        }
-        StepKind::Jkr => ContactHistory {
-            touched: f[0] != 0.0,
-            ..Default::default()
-        },
-        StepKind::JkrFriction => ContactHistory {
-            touched: f[3] != 0.0,
-            tangential: v(0),
-            ..Default::default()
-        },
-        StepKind::JkrRolling | StepKind::JkrKrijtRolling => ContactHistory {
-            touched: f[3] != 0.0,
-            tangential: v(0),
-            rolling: v(4),
-            contact_radius: f[7] as f64,
-            ..Default::default()
-        },
-        StepKind::JkrKrijt => ContactHistory {
-            touched: f[0] != 0.0,
-            contact_radius: f[1] as f64,
-            ..Default::default()
-        },
-        StepKind::JkrKrijtFriction => ContactHistory {
-            touched: f[3] != 0.0,
-            tangential: v(0),
-            contact_radius: f[4] as f64,
-            ..Default::default()
-        },
     }
 }

@@ -185,7 +185,8 @@ pub fn separation_f32(
     d
 }
 
-/// One row of the pair-model table of `shaders/model_hysteretic.wgsl` (`HystereticPair`).
+/// The hysteretic law's block of the pair table (`HystereticPair` of
+/// `shaders/contact/hysteretic.wgsl`).
 /// LSD is the special case k1 = kp = k with the LSD flag.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -276,7 +277,7 @@ impl HystereticPair {
     }
 }
 
-/// One row of the pair-model table of `shaders/model_jkr.wgsl` (`JkrPair`): the JKR
+/// The JKR law's block of the pair table (`JkrPair` of `shaders/contact/jkr.wgsl`): the JKR
 /// family's parameters, derived in f64 from [`JkrParams`](crate::model::JkrParams) and
 /// rounded once. Per-contact quantities that depend on R* (a0, δ0, Fc, ξcrit) are formed in
 /// the kernel from the coefficients here, since R* varies with the particles' radii.
@@ -315,7 +316,7 @@ pub struct JkrPair {
     /// P(x_break) of [`potential_shape`](crate::model::jkr::potential_shape): the stored
     /// energy of a contact is Fc·δ0·(P(x) − P(x_break)) (energy ledger).
     pub p_break: f32,
-    /// Krijt and stress (`shaders/model_krijt.wgsl`): 2E*/ν² of the viscous force (eq. 12).
+    /// Krijt and stress (`shaders/contact/krijt.wgsl`): 2E*/ν² of the viscous force (eq. 12).
     pub visc: f32,
     /// T_vis (krijt) or C of T_vis,0 = C·R (stress, eq. 18).
     pub tvis: f32,
@@ -417,21 +418,6 @@ impl JkrPair {
             0.0
         };
     }
-}
-
-/// One row of the pair table of a mixed scene (`MixedPair` in `gpu::shaders::MIXED`):
-/// a hysteretic/LSD row (`kind` 0) or a JKR-family row (`kind` 1); the other part is zero.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct MixedPair {
-    /// 0: hysteretic/LSD (`hyst`), 1: JKR family (`jkr`).
-    pub kind: u32,
-    /// Padding (the parameter rows start at 16 bytes); always 0.
-    pub _pad: [u32; 3],
-    /// The hysteretic/LSD parameters (kind 0).
-    pub hyst: HystereticPair,
-    /// The JKR-family parameters (kind 1).
-    pub jkr: JkrPair,
 }
 
 /// Per-run step parameters: twin of `StepParams` in `shaders/step.wgsl`.
@@ -819,19 +805,23 @@ mod tests {
                 ),
             ],
         );
-        let (jkr, _) = shaders::validate(&shaders::StepKind::Jkr.variant(true).source).unwrap();
-        let (mixed, _) =
-            shaders::validate(&shaders::StepKind::MixedRolling.variant(true).source).unwrap();
-        let (wsize, members) = wgsl_struct(&mixed, "MixedPair");
-        assert_eq!(wsize as usize, size_of::<MixedPair>(), "MixedPair size");
-        for (field, off) in [
-            ("kind", offset_of!(MixedPair, kind)),
-            ("hyst", offset_of!(MixedPair, hyst)),
-            ("jkr", offset_of!(MixedPair, jkr)),
-        ] {
-            let m = members.iter().find(|(n, _)| n == field).unwrap();
-            assert_eq!(m.1 as usize, off, "MixedPair.{field}");
-        }
+        // a scene with every law: the pair row is the tag and each law's block, unpadded
+        use crate::gpu::composition::Composition;
+        let all = Composition::all()
+            .into_iter()
+            .max_by_key(|c| c.history_bytes())
+            .unwrap();
+        let (jkr, _) = shaders::validate(&all.variant(true).source).unwrap();
+        let (wsize, members) = wgsl_struct(&jkr, "PairRow");
+        assert_eq!(wsize as usize, all.row_bytes(), "PairRow size");
+        assert_eq!(
+            members,
+            vec![
+                ("law".to_string(), 0),
+                ("hysteretic".to_string(), 4),
+                ("jkr".to_string(), 4 + size_of::<HystereticPair>() as u32)
+            ]
+        );
         let (wsize, members) = wgsl_struct(&jkr, "JkrPair");
         assert_eq!(wsize as usize, size_of::<JkrPair>(), "JkrPair size");
         for (field, off) in [
@@ -879,12 +869,12 @@ mod tests {
         );
     }
 
-    /// The stored history of each step variant is as large as the host allocates
-    /// (`StepKind::history_bytes`): the array stride of `a_hist` and `b_wall_hist` in naga's
-    /// layout.
+    /// The stored history of each composition is as large as the host allocates
+    /// (`Composition::history_bytes`): the array stride of `a_hist` and `b_wall_hist` in
+    /// naga's layout.
     #[test]
     fn gpu_layout_history_strides_match_wgsl() {
-        for kind in shaders::StepKind::ALL {
+        for kind in crate::gpu::composition::Composition::all() {
             let (module, _) = shaders::validate(&kind.variant(true).source).unwrap();
             for name in ["a_hist", "b_hist", "a_wall_hist", "b_wall_hist"] {
                 let (_, g) = module

@@ -39,6 +39,7 @@
 //!   against ~10–15 µs per dispatch on lavapipe. Results are read back only for
 //!   output; the CPU engine stays the reference the GPU one is tested against.
 
+pub mod composition;
 pub mod context;
 pub mod engine;
 pub mod grid;

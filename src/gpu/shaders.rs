@@ -2,35 +2,24 @@
 //! validation with naga (no GPU needed).
 //!
 //! Every module is `shaders/common.wgsl` (shared structs, constants and helpers)
-//! followed by optional snippets (feature switches, e.g. `const MODEL: u32 = 2u;`)
-//! followed by one stage file (`shaders/grid.wgsl`, ...). A [`ShaderVariant`] is one such
-//! composition under a name; [`all_variants`] lists every variant the engine builds, and
-//! the unit test validates each of them with naga's WGSL front end and validator, so a
-//! broken kernel fails `cargo test` on any machine.
-//!
-//! Adding a stage (the force kernels, one variant per contact model) means adding a
-//! `shaders/<stage>.wgsl` file and an entry in [`STAGES`], or entries built with
-//! [`compose`] and per-model snippets in [`all_variants`]; run-time switches that need
-//! no recompilation of the WGSL text can use WGSL `override` constants instead, set
-//! through `wgpu::PipelineCompilationOptions::constants` when the pipelines are built.
+//! followed by snippets followed by one stage file (`shaders/grid.wgsl`, the step). The
+//! step's snippets are the contact sub-models a scene uses and the interface generated for
+//! them (`gpu::composition`). A [`ShaderVariant`] is one such composition under a name;
+//! [`all_variants`] lists every variant the engine can build, and the unit test validates
+//! each of them with naga's WGSL front end and validator, so a broken kernel fails
+//! `cargo test` on any machine.
 //!
 //! Validation uses [`naga::valid::Capabilities::empty`]: only core WGSL passes (no f64,
 //! no 64-bit integers, no float atomics, no subgroups, no push constants), so whatever
 //! validates here runs on every backend and adapter wgpu supports.
 
+use super::composition::Composition;
+use crate::model::ContactModel;
+
 /// Shared declarations, prepended to every stage.
 pub const COMMON: &str = include_str!("../../shaders/common.wgsl");
 /// The counting sort of particles by cell (see `shaders/grid.wgsl`).
 pub const GRID: &str = include_str!("../../shaders/grid.wgsl");
-/// The hysteretic and LSD force laws in f32 (a snippet of the step).
-pub const MODEL_HYSTERETIC: &str = include_str!("../../shaders/model_hysteretic.wgsl");
-/// The JKR family (JKR, Hertz) in f32 (a snippet of the step; needs a history layout).
-pub const MODEL_JKR: &str = include_str!("../../shaders/model_jkr.wgsl");
-/// The Krijt contact-radius dynamics (the `krijt` and `stress` dissipations of the JKR
-/// family; a snippet of the step for scenes that use them, with a history that stores a).
-pub const MODEL_KRIJT: &str = include_str!("../../shaders/model_krijt.wgsl");
-/// The Krijt hooks as no-ops (a snippet of the JKR steps without a stored contact radius).
-pub const MODEL_KRIJT_OFF: &str = include_str!("../../shaders/model_krijt_off.wgsl");
 /// Angular velocity and torques (a snippet of the step for scenes that rotate).
 pub const ROTATION: &str = include_str!("../../shaders/rotation.wgsl");
 /// The rotation hooks as no-ops (a snippet of the step for scenes that do not rotate).
@@ -43,380 +32,13 @@ pub const LEDGER_OFF: &str = include_str!("../../shaders/ledger_off.wgsl");
 /// forces, kick.
 pub const STEP: &str = include_str!("../../shaders/step.wgsl");
 
-/// JKR history layout without friction or rolling: only the "touched" flag (4 bytes).
-pub const JKR_HISTORY_TOUCHED: &str = "\
-// JKR history layout: the touched flag only (no friction, no rolling in this scene).
-const JKR_TANGENTIAL: bool = false;
-const JKR_ROLLING: bool = false;
-alias Hist = f32;
-fn hist_zero() -> Hist { return 0.0; }
-fn hist_same(a: Hist, b: Hist) -> bool { return a == b; }
-fn jkr_unpack(h: Hist) -> JkrHistory { return JkrHistory(h != 0.0, vec3<f32>(0.0), vec3<f32>(0.0), 0.0); }
-fn jkr_pack(h: JkrHistory) -> Hist { return select(0.0, 1.0, h.touched); }
-";
-
-/// JKR history layout of the Krijt dissipations without friction or rolling: the touched
-/// flag (x) and the contact radius a (y) (8 bytes).
-pub const JKR_HISTORY_TOUCHED_RADIUS: &str = "\
-// JKR history layout: touched (x) and the Krijt contact radius (y); no friction, no rolling.
-const JKR_TANGENTIAL: bool = false;
-const JKR_ROLLING: bool = false;
-alias Hist = vec2<f32>;
-fn hist_zero() -> Hist { return vec2<f32>(0.0); }
-fn hist_same(a: Hist, b: Hist) -> bool { return all(a == b); }
-fn jkr_unpack(h: Hist) -> JkrHistory { return JkrHistory(h.x != 0.0, vec3<f32>(0.0), vec3<f32>(0.0), h.y); }
-fn jkr_pack(h: JkrHistory) -> Hist { return vec2<f32>(select(0.0, 1.0, h.touched), h.a); }
-";
-
-/// JKR history layout with the tangential spring: xyz = spring, w = touched (16 bytes).
-pub const JKR_HISTORY_TANGENTIAL: &str = "\
-// JKR history layout: tangential spring (xyz) and touched (w); no rolling in this scene.
-const JKR_TANGENTIAL: bool = true;
-const JKR_ROLLING: bool = false;
-alias Hist = vec4<f32>;
-fn hist_zero() -> Hist { return vec4<f32>(0.0); }
-fn hist_same(a: Hist, b: Hist) -> bool { return all(a == b); }
-fn jkr_unpack(h: Hist) -> JkrHistory { return JkrHistory(h.w != 0.0, h.xyz, vec3<f32>(0.0), 0.0); }
-fn jkr_pack(h: JkrHistory) -> Hist { return vec4<f32>(h.spring, select(0.0, 1.0, h.touched)); }
-";
-
-/// JKR history layout of the Krijt dissipations with the tangential spring: spring, touched
-/// and the contact radius as five f32 (20 bytes; scalars, so no padding to 32).
-pub const JKR_HISTORY_TANGENTIAL_RADIUS: &str = "\
-// JKR history layout: tangential spring, touched and the Krijt contact radius; no rolling.
-const JKR_TANGENTIAL: bool = true;
-const JKR_ROLLING: bool = false;
-struct JkrStoredSpring {
-    sx: f32,
-    sy: f32,
-    sz: f32,
-    touched: f32,
-    a: f32,
-}
-alias Hist = JkrStoredSpring;
-fn hist_zero() -> Hist { return JkrStoredSpring(0.0, 0.0, 0.0, 0.0, 0.0); }
-fn hist_same(a: Hist, b: Hist) -> bool {
-    return a.sx == b.sx && a.sy == b.sy && a.sz == b.sz && a.touched == b.touched && a.a == b.a;
-}
-fn jkr_unpack(h: Hist) -> JkrHistory {
-    return JkrHistory(h.touched != 0.0, vec3<f32>(h.sx, h.sy, h.sz), vec3<f32>(0.0), h.a);
-}
-fn jkr_pack(h: JkrHistory) -> Hist {
-    return JkrStoredSpring(h.spring.x, h.spring.y, h.spring.z, select(0.0, 1.0, h.touched), h.a);
-}
-";
-
-/// JKR history layout with the tangential spring and the rolling displacement (32 bytes);
-/// the Krijt contact radius fills the padding (xi.w; 0 without the Krijt dissipations).
-pub const JKR_HISTORY_ROLLING: &str = "\
-// JKR history layout: tangential spring (spring.xyz), touched (spring.w), rolling
-// displacement (xi.xyz), Krijt contact radius (xi.w).
-const JKR_TANGENTIAL: bool = true;
-const JKR_ROLLING: bool = true;
-struct JkrStored {
-    spring: vec4<f32>,
-    xi: vec4<f32>,
-}
-alias Hist = JkrStored;
-fn hist_zero() -> Hist { return JkrStored(vec4<f32>(0.0), vec4<f32>(0.0)); }
-fn hist_same(a: Hist, b: Hist) -> bool { return all(a.spring == b.spring) && all(a.xi == b.xi); }
-fn jkr_unpack(h: Hist) -> JkrHistory { return JkrHistory(h.spring.w != 0.0, h.spring.xyz, h.xi.xyz, h.xi.w); }
-fn jkr_pack(h: JkrHistory) -> Hist {
-    return JkrStored(vec4<f32>(h.spring, select(0.0, 1.0, h.touched)), vec4<f32>(h.xi, h.a));
-}
-";
-
-/// Which step a scene runs: the model family and what its contacts need stored.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum StepKind {
-    /// Hysteretic and LSD pairs: normal force with (δmax, touched) history, no rotation.
-    Hysteretic,
-    /// JKR/Hertz without friction or rolling resistance: the touched flag, no rotation.
-    Jkr,
-    /// JKR/Hertz with friction (no rolling resistance): the tangential spring, rotation.
-    JkrFriction,
-    /// JKR/Hertz with rolling resistance (and friction): spring and ξ, rotation.
-    JkrRolling,
-    /// [`Self::Jkr`] where some pair uses the `krijt`/`stress` dissipation: touched and the
-    /// contact radius a, and the Krijt snippet.
-    JkrKrijt,
-    /// [`Self::JkrFriction`] with the contact radius (`krijt`/`stress`).
-    JkrKrijtFriction,
-    /// [`Self::JkrRolling`] with the contact radius (`krijt`/`stress`; a fills ξ's padding).
-    JkrKrijtRolling,
-    /// Hysteretic/LSD and JKR/Hertz pairs in one scene (no Krijt): the JKR touched flag and
-    /// the hysteretic (δmax, touched), no rotation.
-    Mixed,
-    /// As `Mixed`, with friction on some JKR pair: the tangential spring, rotation.
-    MixedFriction,
-    /// As `Mixed`, with rolling resistance on some JKR pair: spring and ξ, rotation.
-    MixedRolling,
-}
-
-impl StepKind {
-    /// Every step kind, in declaration order.
-    pub const ALL: [StepKind; 10] = [
-        StepKind::Hysteretic,
-        StepKind::Jkr,
-        StepKind::JkrFriction,
-        StepKind::JkrRolling,
-        StepKind::JkrKrijt,
-        StepKind::JkrKrijtFriction,
-        StepKind::JkrKrijtRolling,
-        StepKind::Mixed,
-        StepKind::MixedFriction,
-        StepKind::MixedRolling,
-    ];
-
-    /// The mixed step (hysteretic/LSD with JKR-family pairs) whose JKR history covers what
-    /// its JKR pairs need.
-    pub fn mixed(friction: bool, rolling: bool) -> Self {
-        match (rolling, friction) {
-            (true, _) => Self::MixedRolling,
-            (false, true) => Self::MixedFriction,
-            (false, false) => Self::Mixed,
-        }
-    }
-
-    /// The JKR step for a scene: with the tangential spring (`friction`), ξ (`rolling`,
-    /// implies the spring) and the Krijt contact radius (`krijt`) stored where some pair
-    /// needs them.
-    pub fn jkr(friction: bool, rolling: bool, krijt: bool) -> Self {
-        match (rolling, friction, krijt) {
-            (true, _, false) => Self::JkrRolling,
-            (true, _, true) => Self::JkrKrijtRolling,
-            (false, true, false) => Self::JkrFriction,
-            (false, true, true) => Self::JkrKrijtFriction,
-            (false, false, false) => Self::Jkr,
-            (false, false, true) => Self::JkrKrijt,
-        }
-    }
-
-    /// The name of the variant without the energy ledger (with it: `_ledger` appended).
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Hysteretic => "step_hysteretic",
-            Self::Jkr => "step_jkr",
-            Self::JkrFriction => "step_jkr_friction",
-            Self::JkrRolling => "step_jkr_rolling",
-            Self::JkrKrijt => "step_jkr_krijt",
-            Self::JkrKrijtFriction => "step_jkr_krijt_friction",
-            Self::JkrKrijtRolling => "step_jkr_krijt_rolling",
-            Self::Mixed => "step_mixed",
-            Self::MixedFriction => "step_mixed_friction",
-            Self::MixedRolling => "step_mixed_rolling",
-        }
-    }
-
-    /// Whether particles carry angular velocity (the rotation snippet is composed in).
-    pub fn rotation(self) -> bool {
-        matches!(
-            self,
-            Self::JkrFriction
-                | Self::JkrRolling
-                | Self::JkrKrijtFriction
-                | Self::JkrKrijtRolling
-                | Self::MixedFriction
-                | Self::MixedRolling
-        )
-    }
-
-    /// Whether the history stores the Krijt contact radius (model_krijt.wgsl is composed in).
-    pub fn krijt(self) -> bool {
-        matches!(
-            self,
-            Self::JkrKrijt | Self::JkrKrijtFriction | Self::JkrKrijtRolling
-        )
-    }
-
-    /// Bytes of one contact's stored history (`Hist`; checked against naga in
-    /// `layout::tests`).
-    pub fn history_bytes(self) -> u64 {
-        match self {
-            Self::Hysteretic => 4,
-            Self::Jkr => 4,
-            Self::JkrFriction => 16,
-            Self::JkrRolling => 32,
-            Self::JkrKrijt => 8,
-            Self::JkrKrijtFriction => 20,
-            Self::JkrKrijtRolling => 32,
-            // struct { JKR layout, f32 }: the f32 at offset 4, 16, 32 (the struct 16-byte
-            // aligned for the vector layouts)
-            Self::Mixed => 8,
-            Self::MixedFriction => 32,
-            Self::MixedRolling => 48,
-        }
-    }
-
-    /// The variant's name (also the shader module's label).
-    pub fn variant_name(self, ledger: bool) -> String {
-        if ledger {
-            format!("{}_ledger", self.name())
-        } else {
-            self.name().to_string()
-        }
-    }
-
-    /// The composed module: common, model (JKR: with the Krijt snippet or its no-op
-    /// hooks), history layout, rotation hooks, ledger hooks, step.
-    pub fn variant(self, ledger: bool) -> ShaderVariant {
-        let rotation = if self.rotation() {
-            ROTATION
-        } else {
-            ROTATION_OFF
-        };
-        let ledger_snippet = if ledger { LEDGER } else { LEDGER_OFF };
-        let mut snippets: Vec<&str> = match self {
-            Self::Hysteretic => vec![MODEL_HYSTERETIC, rotation],
-            Self::Jkr => vec![MODEL_JKR, MODEL_KRIJT_OFF, JKR_HISTORY_TOUCHED, rotation],
-            Self::JkrFriction => vec![MODEL_JKR, MODEL_KRIJT_OFF, JKR_HISTORY_TANGENTIAL, rotation],
-            Self::JkrRolling => vec![MODEL_JKR, MODEL_KRIJT_OFF, JKR_HISTORY_ROLLING, rotation],
-            Self::JkrKrijt => vec![MODEL_JKR, MODEL_KRIJT, JKR_HISTORY_TOUCHED_RADIUS, rotation],
-            Self::JkrKrijtFriction => vec![
-                MODEL_JKR,
-                MODEL_KRIJT,
-                JKR_HISTORY_TANGENTIAL_RADIUS,
-                rotation,
-            ],
-            Self::JkrKrijtRolling => vec![MODEL_JKR, MODEL_KRIJT, JKR_HISTORY_ROLLING, rotation],
-            Self::Mixed | Self::MixedFriction | Self::MixedRolling => {
-                let layout = match self {
-                    Self::Mixed => JKR_HISTORY_TOUCHED,
-                    Self::MixedFriction => JKR_HISTORY_TANGENTIAL,
-                    _ => JKR_HISTORY_ROLLING,
-                };
-                return mixed_variant(self, layout, rotation, ledger_snippet, ledger);
-            }
-        };
-        snippets.push(ledger_snippet);
-        ShaderVariant {
-            name: self.variant_name(ledger),
-            source: compose("shaders/step.wgsl", STEP, &snippets),
-        }
-    }
-}
-
-/// `src` with every identifier in `map` renamed (whole identifiers only): composes two
-/// model files whose step interfaces (`PairRow`, `Hist`, `hist_zero`, `pair_contact`,
-/// `pair_edges`) would otherwise clash.
-fn rename_idents(src: &str, map: &[(&str, &str)]) -> String {
-    let mut out = String::with_capacity(src.len() + 64);
-    let mut ident = String::new();
-    let flush = |ident: &mut String, out: &mut String| {
-        let name = map
-            .iter()
-            .find(|(from, _)| *from == ident.as_str())
-            .map_or(ident.as_str(), |(_, to)| to);
-        out.push_str(name);
-        ident.clear();
-    };
-    for c in src.chars() {
-        if c.is_ascii_alphanumeric() || c == '_' {
-            ident.push(c);
-        } else {
-            if !ident.is_empty() {
-                flush(&mut ident, &mut out);
-            }
-            out.push(c);
-        }
-    }
-    if !ident.is_empty() {
-        flush(&mut ident, &mut out);
-    }
-    out
-}
-
-/// The interface of a scene mixing hysteretic/LSD and JKR-family pairs: a tagged pair row
-/// holding both parameter sets and a history holding both layouts; each pair dispatches to
-/// its own model (the renamed interfaces of the two model files).
-pub const MIXED: &str = "\
-// Mixed scenes: hysteretic/LSD pairs (kind 0) and JKR-family pairs (kind 1) in one step.
-struct MixedPair {
-    kind: u32,
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
-    hyst: HystereticPair,
-    jkr: JkrPair,
-}
-alias PairRow = MixedPair;
-struct MixedHist {
-    jkr: JkrHist,
-    hyst: HystHist,
-}
-alias Hist = MixedHist;
-fn hist_zero() -> Hist { return MixedHist(jkr_hist_zero(), hyst_hist_zero()); }
-fn hist_mirror(h: Hist) -> Hist { return MixedHist(jkr_hist_mirror(h.jkr), hyst_hist_mirror(h.hyst)); }
-fn hist_same(a: Hist, b: Hist) -> bool { return jkr_hist_same(a.jkr, b.jkr) && hyst_hist_same(a.hyst, b.hyst); }
-fn pair_contact(p: MixedPair, k: Kin, hist: ptr<function, Hist>) -> Contact {
-    if (p.kind == 0u) {
-        var h = (*hist).hyst;
-        let c = hyst_pair_contact(p.hyst, k, &h);
-        (*hist).hyst = h;
-        return c;
-    }
-    var h = (*hist).jkr;
-    let c = jkr_pair_contact(p.jkr, k, &h);
-    (*hist).jkr = h;
-    return c;
-}
-fn pair_edges(p: MixedPair, k: Kin) -> vec4<f32> {
-    if (p.kind == 0u) {
-        return hyst_pair_edges(p.hyst, k);
-    }
-    return jkr_pair_edges(p.jkr, k);
-}
-";
-
-fn mixed_variant(
-    kind: StepKind,
-    jkr_layout: &str,
-    rotation: &str,
-    ledger_snippet: &str,
-    ledger: bool,
-) -> ShaderVariant {
-    let hyst = rename_idents(
-        MODEL_HYSTERETIC,
-        &[
-            ("PairRow", "HystPairRow"),
-            ("Hist", "HystHist"),
-            ("hist_zero", "hyst_hist_zero"),
-            ("hist_mirror", "hyst_hist_mirror"),
-            ("hist_same", "hyst_hist_same"),
-            ("pair_contact", "hyst_pair_contact"),
-            ("pair_edges", "hyst_pair_edges"),
-        ],
-    );
-    let jkr_map = [
-        ("PairRow", "JkrPairRow"),
-        ("Hist", "JkrHist"),
-        ("hist_zero", "jkr_hist_zero"),
-        ("hist_mirror", "jkr_hist_mirror"),
-        ("hist_same", "jkr_hist_same"),
-        ("pair_contact", "jkr_pair_contact"),
-        ("pair_edges", "jkr_pair_edges"),
-    ];
-    let jkr = rename_idents(MODEL_JKR, &jkr_map);
-    let krijt_off = rename_idents(MODEL_KRIJT_OFF, &jkr_map);
-    let layout = rename_idents(jkr_layout, &jkr_map);
-    let snippets: Vec<&str> = vec![
-        &hyst,
-        &jkr,
-        &krijt_off,
-        &layout,
-        MIXED,
-        rotation,
-        ledger_snippet,
-    ];
-    ShaderVariant {
-        name: kind.variant_name(ledger),
-        source: compose("shaders/step.wgsl", STEP, &snippets),
-    }
-}
-
-/// The step for the normal-force models (hysteretic, LSD), with the energy ledger.
+/// The step of a hysteretic/LSD scene, with the energy ledger.
 pub fn step_variant() -> ShaderVariant {
-    StepKind::Hysteretic.variant(true)
+    let lsd = ContactModel::Lsd(crate::model::LsdParams {
+        k: 1.0,
+        gamma0: 0.0,
+    });
+    Composition::of(&[lsd]).variant(true)
 }
 
 /// A shader stage: one file of `shaders/`.
@@ -470,8 +92,8 @@ pub fn all_variants() -> Vec<ShaderVariant> {
             source: compose(st.path, st.source, &[]),
         })
         .collect();
-    for ledger in [false, true] {
-        all.extend(StepKind::ALL.iter().map(|k| k.variant(ledger)));
+    for c in Composition::all() {
+        all.extend([false, true].map(|ledger| c.variant(ledger)));
     }
     all
 }
@@ -562,9 +184,9 @@ mod tests {
 
     #[test]
     fn gpu_shaders_every_step_variant_has_the_step_kernels() {
-        for (kind, ledger) in StepKind::ALL
+        for (kind, ledger) in Composition::all()
             .into_iter()
-            .flat_map(|k| [(k, false), (k, true)])
+            .flat_map(|k| [(k.clone(), false), (k, true)])
         {
             let v = kind.variant(ledger);
             let (module, _) = validate(&v.source).unwrap();
@@ -611,11 +233,6 @@ mod tests {
                 "{}: krijt_advance",
                 v.name
             );
-            assert!(
-                !kind.krijt() || v.source.contains("const KRIJT: bool = true;"),
-                "{}",
-                v.name
-            );
             // and the ledger's only where the run keeps one
             for name in [
                 "a_ledger",
@@ -634,17 +251,19 @@ mod tests {
         }
     }
 
-    /// The f32 literals of model_jkr.wgsl are the f32 roundings of the Rust constants of
+    /// The f32 literals of contact/jkr.wgsl are the f32 roundings of the Rust constants of
     /// `jkr::contact_radius_f32` (the two solvers must be the same function).
     #[test]
     fn gpu_shaders_jkr_constants_match_the_rust_solver() {
         use crate::model::jkr::{D_PULLOFF_DISPLACEMENT, NEWTON_ITERATIONS_F32, S_MIN};
         let literal = |name: &str| -> f64 {
             let key = format!("const {name}: ");
-            let line = MODEL_JKR
+            let line = super::super::composition::law("jkr")
+                .unwrap()
+                .source
                 .lines()
                 .find(|l| l.starts_with(&key))
-                .unwrap_or_else(|| panic!("{name} not in model_jkr.wgsl"));
+                .unwrap_or_else(|| panic!("{name} not in contact/jkr.wgsl"));
             let value = line.split('=').nth(1).unwrap().trim().trim_end_matches(';');
             value.trim_end_matches('u').parse().unwrap()
         };
@@ -662,7 +281,7 @@ mod tests {
         );
     }
 
-    /// The Krijt constants of model_krijt.wgsl are the f32 roundings of `model::krijt`'s and
+    /// The Krijt constants of contact/krijt.wgsl are the f32 roundings of `model::krijt`'s and
     /// `jkr::X_TOUCH`; the dissipation codes match `gpu::layout`'s.
     #[test]
     fn gpu_shaders_krijt_constants_match_the_rust_model() {
@@ -678,18 +297,22 @@ mod tests {
             let value = line.split('=').nth(1).unwrap().trim().trim_end_matches(';');
             value.trim_end_matches('u').parse().unwrap()
         };
-        let f32_of = |name: &str| literal(MODEL_KRIJT, name) as f32;
+        let jkr = super::super::composition::law("jkr").unwrap().source;
+        let krijt = super::super::composition::sub_model("krijt")
+            .unwrap()
+            .source;
+        let f32_of = |name: &str| literal(krijt, name) as f32;
         assert_eq!(f32_of("KRIJT_BETA_MIN"), BETA_MIN as f32);
         assert_eq!(f32_of("KRIJT_BETA_MAX"), BETA_MAX as f32);
         assert_eq!(f32_of("KRIJT_X_TOUCH"), X_TOUCH as f32);
         // 30 halvings take any bracket up to 2^6·x to one f32 ulp of x
-        assert!(literal(MODEL_KRIJT, "KRIJT_BISECTION_ITERATIONS") >= 24.0);
+        assert!(literal(krijt, "KRIJT_BISECTION_ITERATIONS") >= 24.0);
         assert_eq!(
-            literal(MODEL_JKR, "JKR_DISSIPATION_KRIJT") as u32,
+            literal(jkr, "JKR_DISSIPATION_KRIJT") as u32,
             JKR_DISSIPATION_KRIJT
         );
         assert_eq!(
-            literal(MODEL_JKR, "JKR_DISSIPATION_STRESS") as u32,
+            literal(jkr, "JKR_DISSIPATION_STRESS") as u32,
             JKR_DISSIPATION_STRESS
         );
     }

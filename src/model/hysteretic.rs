@@ -10,8 +10,19 @@
 //! * the viscous force γ0·δ̇ while in contact (eq. 2).
 
 use crate::error::{require_positive, ParamError};
+use crate::model::history::{HistoryField, HostField, Mirror, Shape};
 use crate::model::{ContactHistory, NormalForce};
 use serde::{Deserialize, Serialize};
+
+/// The per-contact history the hysteretic and LSD laws keep on the GPU: δmax (never
+/// negative) with the sign bit as the touched flag, one word.
+pub const HISTORY: &[HistoryField] = &[HistoryField {
+    name: "hyst_state",
+    shape: Shape::Word,
+    mirror: Mirror::Same,
+    host: HostField::DeltaMaxTouched,
+    doc: "delta_max with the sign bit as the touched flag",
+}];
 
 /// How the un-/re-loading stiffness k2 grows with the history δmax below the limit.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default, clap::ValueEnum)]

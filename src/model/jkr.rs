@@ -23,12 +23,40 @@
 //! x = 1, d = 1, F = 0.
 
 use crate::error::ParamError;
+use crate::model::history::{HistoryField, HostField, Mirror, Shape};
 use crate::model::krijt::{self, KrijtLaw, Relaxation};
 use crate::model::{ContactHistory, NormalForce, PairGeometry};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 use std::fmt;
+
+/// The per-contact history of the JKR normal law: touched since the pair last broke.
+pub const HISTORY: &[HistoryField] = &[HistoryField {
+    name: "touched",
+    shape: Shape::Flag,
+    mirror: Mirror::Same,
+    host: HostField::Touched,
+    doc: "touched since the pair last broke",
+}];
+
+/// The per-contact history of the Mindlin tangential spring (kept in the evaluator's frame).
+pub const SLIDING_HISTORY: &[HistoryField] = &[HistoryField {
+    name: "spring",
+    shape: Shape::Vec3,
+    mirror: Mirror::Negate,
+    host: HostField::Tangential,
+    doc: "the tangential spring s, m",
+}];
+
+/// The per-contact history of the JKR rolling resistance.
+pub const ROLLING_HISTORY: &[HistoryField] = &[HistoryField {
+    name: "xi",
+    shape: Shape::Vec3,
+    mirror: Mirror::Same,
+    host: HostField::Rolling,
+    doc: "the rolling displacement xi, m",
+}];
 
 /// s_min = 6^(−1/3): √(a/a0) at the displacement-controlled pull-off (turning point of
 /// d(s) = 3s⁴ − 2s).

@@ -52,7 +52,17 @@
 //!   one at the new radius.
 
 use crate::model::analytic;
+use crate::model::history::{HistoryField, HostField, Mirror, Shape};
 use std::f64::consts::PI;
+
+/// The per-contact history of the Krijt dissipations: the contact radius as state.
+pub const HISTORY: &[HistoryField] = &[HistoryField {
+    name: "contact_radius",
+    shape: Shape::Word,
+    mirror: Mirror::Same,
+    host: HostField::ContactRadius,
+    doc: "the Krijt contact radius a, m (0 = unset)",
+}];
 
 /// β below which the crack speed of eq. B2 diverges (ln(0.98/(1 − β)) = 0).
 pub const BETA_MIN: f64 = 0.02;

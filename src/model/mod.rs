@@ -3,6 +3,7 @@
 
 pub mod analytic;
 pub mod flags;
+pub mod history;
 pub mod hysteretic;
 pub mod jkr;
 pub mod krijt;

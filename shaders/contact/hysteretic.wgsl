@@ -1,4 +1,4 @@
-// model_hysteretic.wgsl — the piece-wise linear hysteretic adhesive elasto-plastic model
+// contact/hysteretic.wgsl — the piece-wise linear hysteretic adhesive elasto-plastic model
 // (paper 000 §2.2–2.3) and the linear spring–dashpot, in f32. The f64 reference is
 // `src/model/hysteretic.rs` / `src/model/lsd.rs`; tests tie the two together.
 //
@@ -197,49 +197,33 @@ fn hyst_force(p: HystereticPair, delta: f32, delta_dot: f32, a12: f32, inv_a12: 
     return HystForce(0.0, HystHistory(0.0, false), 0.0);
 }
 
-// ---- the step's interface (see shaders/step.wgsl) ----
+// ---- the sub-model interface (see `src/gpu/composition.rs`) ----
 
-alias PairRow = HystereticPair;
-
-// Per-contact history as stored, in one f32 (4 bytes a slot: a storage binding holds
-// twice the contacts of a vec2, which lets 10⁶ particles fit lavapipe's 128 MiB binding
-// limit): delta_max (never negative) with the sign bit as the "touched" flag. +0.0, the
-// zeroed buffer's value, is untouched; -0.0 is touched at delta_max = 0.
-alias Hist = f32;
-
+// The stored history word `hyst_state` (`model::hysteretic::HISTORY`): delta_max (never
+// negative) with the sign bit as the "touched" flag. +0.0, the zeroed buffer's value, is
+// untouched; -0.0 is touched at delta_max = 0. One word a contact: a storage binding holds
+// twice the contacts of a vec2.
 const HYST_TOUCHED_BIT: u32 = 0x80000000u;
 
-fn hist_zero() -> Hist {
-    return 0.0;
-}
-
-// Whether two stored histories are the same (the step stores one only where it changed):
-// bitwise, so +0.0 and -0.0 (untouched, touched) differ.
-fn hist_same(a: Hist, b: Hist) -> bool {
-    return bitcast<u32>(a) == bitcast<u32>(b);
-}
-
-// The history seen from the partner's side (the normal history is symmetric).
-fn hist_mirror(h: Hist) -> Hist {
-    return h;
-}
-
-fn history_in(h: Hist) -> HystHistory {
+fn hyst_history_in(h: f32) -> HystHistory {
     let bits = bitcast<u32>(h);
     return HystHistory(bitcast<f32>(bits & ~HYST_TOUCHED_BIT), (bits & HYST_TOUCHED_BIT) != 0u);
 }
 
-fn history_out(h: HystHistory) -> Hist {
+fn hyst_history_out(h: HystHistory) -> f32 {
     // (abs: delta_max >= 0 by construction; a -0.0 must not read as touched)
     let bits = bitcast<u32>(abs(h.delta_max));
     return bitcast<f32>(bits | select(0u, HYST_TOUCHED_BIT, h.touched));
 }
 
-// Normal force only: a12 = 2·R* (2r for a wall).
-fn pair_contact(p: HystereticPair, k: Kin, hist: ptr<function, Hist>) -> Contact {
-    let r = hyst_force(p, k.delta, k.delta_dot, 2.0 * k.r_eff, k.inv_a12, history_in(*hist));
-    *hist = history_out(r.history);
-    return Contact(r.force, vec3<f32>(0.0), vec3<f32>(0.0), r.potential, r.history.touched);
+// The normal force (a12 = 2·R*, 2r for a wall). In mechanical contact (delta > 0) the
+// Coulomb limits of the friction laws act on Luding's load f_n + kc·delta + fa, the
+// normal force with the adhesive parts taken out, never negative.
+fn hyst_normal(p: HystereticPair, k: Kin, h: ptr<function, History>) -> Normal {
+    let r = hyst_force(p, k.delta, k.delta_dot, 2.0 * k.r_eff, k.inv_a12, hyst_history_in((*h).hyst_state));
+    (*h).hyst_state = hyst_history_out(r.history);
+    let coulomb = max(0.0, r.force + p.kc * k.delta + p.fa);
+    return Normal(k.delta > 0.0, r.history.touched, r.force, r.potential, 0.0, 0.0, coulomb);
 }
 
 // Where a contact starts and ends and the force just inside those edges, for the energy
@@ -247,7 +231,7 @@ fn pair_contact(p: HystereticPair, k: Kin, hist: ptr<function, Hist>) -> Contact
 // With a non-contact range both edges are at -range with zero force; without one the
 // force jumps at delta = 0 by the adhesion -fa and the viscous gamma0·delta_dot (LSD:
 // fa = 0).
-fn pair_edges(p: HystereticPair, k: Kin) -> vec4<f32> {
+fn hyst_edges(p: HystereticPair, k: Kin) -> vec4<f32> {
     let range = hyst_range(p);
     if (range > 0.0) {
         return vec4<f32>(-range, 0.0, -range, 0.0);

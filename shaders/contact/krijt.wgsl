@@ -1,11 +1,12 @@
-// model_krijt.wgsl — the Krijt viscoelastic JKR contact (paper 001 §II C, eqs. 10–12 and
+// contact/krijt.wgsl — the Krijt viscoelastic JKR contact (paper 001 §II C, eqs. 10–12 and
 // appendix B) and the stress-dependent relaxation time (§V A, eqs. 17–18) in f32: the twin
 // of `src/model/krijt.rs` and of the `krijt`/`stress` branch of
-// `JkrParams::normal_force_step`. Composed after model_jkr.wgsl into the step variants whose
-// history stores the contact radius (`StepKind::JkrKrijt*`); elsewhere model_krijt_off.wgsl
-// supplies the same two hooks as no-ops.
+// `JkrParams::normal_force_step`. A dissipation sub-model of contact/jkr.wgsl, composed in
+// where some pair uses it: it answers the JKR law's hooks `jkr_radius_state` and
+// `jkr_damping` for those pairs (`src/gpu/composition.rs`).
 //
-// The contact radius a is per-contact state (`JkrHistory.a`, 0 = unset), advanced once per
+// The contact radius a is per-contact state (the history field `contact_radius`,
+// `model::krijt::HISTORY`; 0 = unset), advanced once per
 // evaluation by a backward-Euler step of the crack speed of eq. B2, solved by bisection
 // between the old radius and the JKR root (it never passes the equilibrium).
 //
@@ -17,8 +18,6 @@
 //   U           = Fc·delta0·x·(9/5·x⁴ − 2x²·d + d² − 2x)        (eq. 7; = P(x) on the JKR curve)
 //   p_c/E*      = 2·a0/(pi·R*)·(x − 1/(3·sqrt(x)))               (eq. 9)
 //   v_c·dt/a0   = (2E*·gamma/sigma0²)/a0 · dt/T_vis               (eq. B2)
-
-const KRIJT: bool = true;
 
 // The crack speed of eq. B2 diverges below and above these G_eff/gamma (`krijt::BETA_MIN`,
 // `krijt::BETA_MAX`).
@@ -148,4 +147,11 @@ fn krijt_normal(p: JkrPair, k: Kin, a0: f32, d0: f32, fc: f32, x_eq: f32, a_old:
 // positive (`krijt::viscous_force`); visc = 2E*/nu².
 fn krijt_viscous(p: JkrPair, a: f32, a0: f32, r: f32, delta_dot: f32) -> f32 {
     return p.visc * krijt_tvis(p, a / a0, a0, r) * a * delta_dot;
+}
+
+// The JKR law's `jkr_radius_state` for a Krijt pair: advances the stored contact radius.
+fn krijt_state(p: JkrPair, k: Kin, a0: f32, d0: f32, fc: f32, x_eq: f32, h: ptr<function, History>) -> vec4<f32> {
+    let kn = krijt_normal(p, k, a0, d0, fc, x_eq, (*h).contact_radius);
+    (*h).contact_radius = a0 * kn.x;
+    return vec4<f32>(kn, 1.0);
 }

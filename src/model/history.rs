@@ -1,0 +1,95 @@
+//! Per-contact history fields, each declared once by the sub-model that keeps it. The GPU
+//! layout (stored WGSL struct, load/store, the partner's view, byte size) and the host's
+//! decoder of read-back histories follow from these declarations (`gpu::composition`).
+
+use super::ContactHistory;
+use glam::DVec3;
+
+/// How a field is stored and worked with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Shape {
+    /// One f32 word, kept bitwise (the sub-model may pack bits into it).
+    Word,
+    /// A boolean, stored as 0.0 / 1.0.
+    Flag,
+    /// A vector, stored as three f32 words.
+    Vec3,
+}
+
+/// What the partner of a pair sees of a field: histories are stored once per pair, in the
+/// evaluating particle's frame, and handed over when the evaluator changes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mirror {
+    /// The same value (scalars and axial quantities such as the rolling displacement).
+    Same,
+    /// The negated value (the tangential spring: n and the relative velocity flip).
+    Negate,
+}
+
+/// The field of [`ContactHistory`] (the f64 reference's history) a stored field decodes into.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HostField {
+    /// δmax (magnitude) with the sign bit as the touched flag (the hysteretic model).
+    DeltaMaxTouched,
+    /// The touched flag (or-ed with other laws' flags in a mixed layout).
+    Touched,
+    /// The tangential spring.
+    Tangential,
+    /// The rolling displacement ξ.
+    Rolling,
+    /// The Krijt contact radius a.
+    ContactRadius,
+}
+
+/// One per-contact history field of a sub-model.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct HistoryField {
+    /// The WGSL member name (shared by sub-models that keep the same quantity, e.g. the
+    /// tangential spring of every sliding law: a pair uses one of them).
+    pub name: &'static str,
+    /// How it is stored.
+    pub shape: Shape,
+    /// What the partner sees.
+    pub mirror: Mirror,
+    /// Where the host decodes it to.
+    pub host: HostField,
+    /// One line: what it is.
+    pub doc: &'static str,
+}
+
+impl HistoryField {
+    /// Stored f32 words.
+    pub fn words(&self) -> usize {
+        match self.shape {
+            Shape::Word | Shape::Flag => 1,
+            Shape::Vec3 => 3,
+        }
+    }
+
+    /// Decodes the field's stored words `w` into `h`.
+    pub fn decode(&self, w: &[f32], h: &mut ContactHistory) {
+        let v = || DVec3::new(w[0] as f64, w[1] as f64, w[2] as f64);
+        match self.host {
+            HostField::DeltaMaxTouched => {
+                h.delta_max = w[0].abs() as f64;
+                h.touched |= w[0].is_sign_negative();
+            }
+            HostField::Touched => h.touched |= w[0] != 0.0,
+            HostField::Tangential => h.tangential = v(),
+            HostField::Rolling => h.rolling = v(),
+            HostField::ContactRadius => h.contact_radius = w[0] as f64,
+        }
+    }
+
+    /// `h` as the partner of the pair sees this field.
+    pub fn mirror_host(&self, h: &mut ContactHistory) {
+        if self.mirror == Mirror::Negate {
+            match self.host {
+                HostField::Tangential => h.tangential = -h.tangential,
+                HostField::Rolling => h.rolling = -h.rolling,
+                HostField::ContactRadius => h.contact_radius = -h.contact_radius,
+                HostField::DeltaMaxTouched | HostField::Touched => {}
+            }
+        }
+    }
+}
