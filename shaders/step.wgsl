@@ -759,6 +759,8 @@ struct Kin {
     // 1/a12 = 1/(2R*) (the step needs it for the overlap monitor; the hysteretic model
     // multiplies by it where the reference divides by a12).
     inv_a12: f32,
+    // Relative angular velocity w_i − w_j (w_i for a wall): Luding's rolling and twisting.
+    w_rel: vec3<f32>,
 }
 
 // A normal law's result, what the composition and the friction sub-models need of it.
@@ -885,6 +887,7 @@ fn particle_forces(k: u32, row0: PairRow) {
             v_t,
             r_eff * cross(wk - wj, n) + (0.5 * (rk - rj) / r_sum) * v_t,
             inv_a12,
+            wk - wj,
         );
         let h0 = a_hist[slot];
         var h = h0;
@@ -953,7 +956,7 @@ fn particle_forces(k: u32, row0: PairRow) {
         let v_t = v_c - n * dot(v_c, n);
         // eq. 20 with r_j -> inf: (r_i - r_j)/(r_i + r_j) -> -1
         let inv_a12 = 0.5 / rk;
-        let kin = Kin(delta, -dot(v_rel, n), rk, mk, step.dt, n, v_t, rk * cross(wk, n) - 0.5 * v_t, inv_a12);
+        let kin = Kin(delta, -dot(v_rel, n), rk, mk, step.dt, n, v_t, rk * cross(wk, n) - 0.5 * v_t, inv_a12, wk);
         let slot = wall_slot(k, w);
         var h = a_wall_hist[slot];
         let row = pairs[step.n_materials * step.n_materials + w * step.n_materials + mat_k];
