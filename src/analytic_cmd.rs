@@ -1,8 +1,10 @@
 //! `powder analytic`: closed forms of the papers from the command line, without running a
 //! collision (a module of the binary; the formulas live in `powder::model::analytic`).
 
-use clap::{Args, Subcommand};
+use clap::{Arg, Args, Subcommand};
 use powder::error::require_positive;
+use powder::model::flags::{ParamArgs, ParamSet};
+use powder::model::params::{self as declared, Param};
 use powder::model::{analytic, HystereticParams, JkrParams, PairGeometry};
 use powder::{ParamError, PowderError};
 use serde::Serialize;
@@ -25,17 +27,43 @@ enum Which {
     Tabor(TaborArgs),
 }
 
+/// The contact-law parameters each subcommand takes, as flags generated from their
+/// declarations in `model::params` (flag, help, unit, rule).
+struct HystereticStiffnesses;
+
+impl ParamSet for HystereticStiffnesses {
+    const PARAMS: &'static [&'static Param] = &[&declared::K1, &declared::KP, &declared::PHI_F];
+}
+
+/// E and ν of `thornton-ning --yield-stress`.
+struct YieldMaterial;
+
+impl ParamSet for YieldMaterial {
+    const PARAMS: &'static [&'static Param] = &[&declared::YOUNGS, &declared::POISSON];
+
+    fn adjust(arg: Arg, _p: &'static Param) -> Arg {
+        let help = arg.get_help().map(|h| h.to_string()).unwrap_or_default();
+        arg.requires("yield_stress")
+            .help(format!("{help} (with --yield-stress)"))
+    }
+}
+
+/// E, ν and γ of `tabor`.
+struct JkrMaterial;
+
+impl ParamSet for JkrMaterial {
+    const PARAMS: &'static [&'static Param] = &[
+        &declared::YOUNGS,
+        &declared::POISSON,
+        &declared::SURFACE_ENERGY,
+    ];
+}
+
 #[derive(Args)]
 struct KpPrimeArgs {
-    /// Loading stiffness k1, N/m.
-    #[arg(long)]
-    k1: f64,
-    /// Limit stiffness kp, N/m.
-    #[arg(long)]
-    kp: f64,
-    /// Plasticity depth phi_f in (0, 1].
-    #[arg(long = "phi-f")]
-    phi_f: f64,
+    /// k1, kp and phi_f of the hysteretic law.
+    #[command(flatten)]
+    law: ParamArgs<HystereticStiffnesses>,
     /// The new plasticity depth phi_f' in (0, 1] (appendix A: larger than phi_f).
     #[arg(long = "phi-f-new")]
     phi_f_new: f64,
@@ -91,12 +119,9 @@ struct ThorntonNingArgs {
     /// speed, or one per speed, comma-separated; adds e_pl.
     #[arg(long, value_delimiter = ',')]
     restitution: Vec<f64>,
-    /// Young's modulus E, Pa (with --yield-stress).
-    #[arg(long, requires = "yield_stress")]
-    youngs: Option<f64>,
-    /// Poisson ratio (with --yield-stress).
-    #[arg(long, requires = "yield_stress")]
-    poisson: Option<f64>,
+    /// E and ν of the material (with --yield-stress).
+    #[command(flatten)]
+    material: ParamArgs<YieldMaterial>,
     /// Density, kg/m^3 (with --yield-stress).
     #[arg(long, requires = "yield_stress")]
     density: Option<f64>,
@@ -109,15 +134,9 @@ struct ThorntonNingArgs {
 
 #[derive(Args)]
 struct TaborArgs {
-    /// Young's modulus E, Pa.
-    #[arg(long)]
-    youngs: f64,
-    /// Poisson ratio.
-    #[arg(long)]
-    poisson: f64,
-    /// Surface energy gamma per surface, J/m^2.
-    #[arg(long = "surface-energy")]
-    surface_energy: f64,
+    /// E, ν and γ of the JKR material.
+    #[command(flatten)]
+    material: ParamArgs<JkrMaterial>,
     #[command(flatten)]
     pair: PairArgs,
     /// D_min of eq. 1 in the unit of --radius (default 1.65e-10 m, the paper's value).
@@ -157,9 +176,9 @@ struct KpPrime {
 
 fn kp_prime(a: &KpPrimeArgs) -> Result<(), PowderError> {
     let p = HystereticParams {
-        k1: a.k1,
-        kp: a.kp,
-        phi_f: a.phi_f,
+        k1: a.law.number(&declared::K1)?,
+        kp: a.law.number(&declared::KP)?,
+        phi_f: a.law.number(&declared::PHI_F)?,
         kc: 0.0,
         ..HystereticParams::paper_figure()
     };
@@ -181,9 +200,9 @@ fn kp_prime(a: &KpPrimeArgs) -> Result<(), PowderError> {
         ..p
     };
     let out = KpPrime {
-        k1: a.k1,
-        kp: a.kp,
-        phi_f: a.phi_f,
+        k1: p.k1,
+        kp: p.kp,
+        phi_f: p.phi_f,
         phi_f_new: a.phi_f_new,
         kp_prime,
         delta_max_p_over_a12: [p.delta_max_p(1.0), tuned.delta_max_p(1.0)],
@@ -193,7 +212,7 @@ fn kp_prime(a: &KpPrimeArgs) -> Result<(), PowderError> {
     }
     println!(
         "kp' = {kp_prime:.6} N/m (paper 000 eq. A.3: k1 = {}, kp = {} N/m, phi_f = {} -> {})",
-        a.k1, a.kp, a.phi_f, a.phi_f_new
+        p.k1, p.kp, p.phi_f, a.phi_f_new
     );
     println!(
         "plastic limit overlap delta_max^p/a12 (eq. 10): {:.6} -> {:.6}",
@@ -223,8 +242,8 @@ fn thornton_ning(a: &ThorntonNingArgs) -> Result<(), PowderError> {
         (None, Some(y)) => {
             require_positive("yield_stress", y, "the yield stress")?;
             let (e, nu, rho) = (
-                a.youngs.unwrap_or_default(),
-                a.poisson.unwrap_or_default(),
+                a.material.number(&declared::YOUNGS)?,
+                a.material.number(&declared::POISSON)?,
                 a.density.unwrap_or_default(),
             );
             let material = JkrParams::hertz(e, nu);
@@ -313,7 +332,11 @@ struct Tabor {
 }
 
 fn tabor(a: &TaborArgs) -> Result<(), PowderError> {
-    let p = JkrParams::jkr(a.youngs, a.poisson, a.surface_energy);
+    let p = JkrParams::jkr(
+        a.material.number(&declared::YOUNGS)?,
+        a.material.number(&declared::POISSON)?,
+        a.material.number(&declared::SURFACE_ENERGY)?,
+    );
     p.validate()?;
     let d_min = match a.tabor_dmin {
         Some(d) => require_positive("tabor_dmin", d, "D_min of the Tabor parameter")?,

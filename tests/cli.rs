@@ -1044,6 +1044,82 @@ fn analytic_kp_prime_of_appendix_a() {
     assert!(!ok && err.contains("phi-f-new"), "{err}");
 }
 
+/// `powder analytic` takes the contact-law parameters as the flags that `model::params`
+/// declares: help, unit, rule and the error messages come from the declarations.
+#[test]
+fn analytic_parameter_flags_come_from_the_declarations() {
+    let (ok, out, err) = powder(&["analytic", "tabor", "--help"]);
+    assert!(ok, "{err}");
+    for text in [
+        "--youngs <Pa>",
+        "Young's modulus E of the material, Pa, > 0",
+        "--poisson <X>",
+        "in (-1, 0.5)",
+        "--surface-energy <J/m^2>",
+    ] {
+        assert!(out.contains(text), "`{text}` missing in {out}");
+    }
+    let (ok, out, err) = powder(&["analytic", "kp-prime", "--help"]);
+    assert!(ok, "{err}");
+    assert!(
+        out.contains("--k1 <N/m>") && out.contains("--phi-f <X>") && out.contains("(0, 1]"),
+        "{out}"
+    );
+    let tabor = [
+        "analytic",
+        "tabor",
+        "--youngs",
+        "1e9",
+        "--poisson",
+        "0.3",
+        "--surface-energy",
+        "0.05",
+        "--radius",
+        "1e-6",
+    ];
+    let mut bad = tabor.to_vec();
+    bad[5] = "0.7";
+    let (ok, _, err) = powder(&bad);
+    assert!(
+        !ok && err.contains("`poisson`") && err.contains("(-1, 0.5)"),
+        "{err}"
+    );
+    let mut bad = tabor.to_vec();
+    bad[7] = "sticky";
+    let (ok, _, err) = powder(&bad);
+    assert!(
+        !ok && err.contains("--surface-energy must be a number"),
+        "{err}"
+    );
+    let (ok, _, err) = powder(&tabor[..8]);
+    assert!(!ok && err.contains("--radius"), "{err}");
+    let (ok, _, err) = powder(&[
+        "analytic",
+        "kp-prime",
+        "--k1",
+        "-100",
+        "--kp",
+        "500",
+        "--phi-f",
+        "0.05",
+        "--phi-f-new",
+        "0.5",
+    ]);
+    assert!(!ok && err.contains("`k1`") && err.contains("> 0"), "{err}");
+    // E and ν of thornton-ning only with --yield-stress
+    let (ok, _, err) = powder(&[
+        "analytic",
+        "thornton-ning",
+        "--velocity",
+        "0.2",
+        "--yield-velocity",
+        "0.1",
+        "--youngs",
+        "1e9",
+    ]);
+    assert!(!ok && err.contains("--yield-stress"), "{err}");
+}
+
 /// Paper 001 eq. 13 by hand with v̂ = v_Y/v.
 fn e_tn_by_hand(v: f64, vy: f64) -> f64 {
     let h2 = (vy / v).powi(2);

@@ -1,12 +1,14 @@
 //! Command-line flags for the contact laws, generated from the declarations of
-//! [`super::params`]: `--model` and one flag per parameter, read by the same
-//! [`params::read_model`] as scene tables.
+//! [`super::params`]: `--model` and one flag per parameter ([`LawArgs`]), read by the same
+//! [`params::read_model`] as scene tables; and the flags of a fixed list of declared
+//! parameters outside a contact law ([`ParamArgs`], e.g. `powder analytic`).
 
 use super::params::{self, Fallback, Kind, Law, Param, ParamSource, Raw};
 use super::ContactModel;
 use crate::error::{ParamError, PowderError};
 use clap::builder::{PossibleValue, PossibleValuesParser};
 use clap::{Arg, ArgMatches, Args, Command, FromArgMatches};
+use std::marker::PhantomData;
 
 /// `--model` and the parameter flags as given on the command line.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -31,9 +33,20 @@ fn help(p: &Param) -> String {
         .filter(|l| params::keys_of(l).contains(&p.key))
         .map(|l| l.name)
         .collect();
-    let mut s = format!("{} [{}]", capitalised(p.doc), laws.join(", "));
+    help_line(p, Some(&laws))
+}
+
+/// The help line of one parameter: doc, `[laws]` when given, unit, default.
+fn help_line(p: &Param, laws: Option<&[&str]>) -> String {
+    let mut s = capitalised(p.doc);
+    if let Some(laws) = laws {
+        s.push_str(&format!(" [{}]", laws.join(", ")));
+    }
     if !p.unit.is_empty() {
         s.push_str(&format!(", {}", p.unit));
+    }
+    if let Some(rule) = p.rule_text() {
+        s.push_str(&format!(", {rule}"));
     }
     match p.fallback {
         Fallback::Required => {}
@@ -64,16 +77,7 @@ impl Args for LawArgs {
                 .value_parser(PossibleValuesParser::new(models)),
         );
         for p in params::all_params() {
-            let mut arg = Arg::new(p.key)
-                .long(p.flag())
-                .help(help(p))
-                .allow_negative_numbers(true);
-            arg = match p.kind {
-                Kind::Choice(options) => arg.value_parser(PossibleValuesParser::new(options)),
-                _ if p.unit.is_empty() => arg.value_name("X"),
-                _ => arg.value_name(p.unit),
-            };
-            cmd = cmd.arg(arg);
+            cmd = cmd.arg(flag_arg(p).help(help(p)));
         }
         cmd
     }
@@ -94,14 +98,40 @@ impl FromArgMatches for LawArgs {
         if let Ok(Some(model)) = m.try_get_one::<String>("model") {
             self.model = model.clone();
         }
-        for p in params::all_params() {
-            if let Ok(Some(v)) = m.try_get_one::<String>(p.key) {
-                self.given.retain(|(k, _)| *k != p.key);
-                self.given.push((p.key, v.clone()));
-            }
-        }
+        update_given(&mut self.given, &params::all_params(), m);
         Ok(())
     }
+}
+
+/// The flag of one declared parameter (`--` + key with `_` → `-`, id = the key): a value
+/// name from the unit, the choices of a [`Kind::Choice`]; the value is kept as typed and
+/// typed against the declaration later (so its errors name the flag and the rule).
+fn flag_arg(p: &'static Param) -> Arg {
+    let arg = Arg::new(p.key).long(p.flag()).allow_negative_numbers(true);
+    match p.kind {
+        Kind::Choice(options) => arg.value_parser(PossibleValuesParser::new(options)),
+        _ if p.unit.is_empty() => arg.value_name("X"),
+        _ => arg.value_name(p.unit),
+    }
+}
+
+/// Records the flags of `list` given in `m`, as typed, by key.
+fn update_given(given: &mut Vec<(&'static str, String)>, list: &[&'static Param], m: &ArgMatches) {
+    for p in list {
+        if let Ok(Some(v)) = m.try_get_one::<String>(p.key) {
+            given.retain(|(k, _)| *k != p.key);
+            given.push((p.key, v.clone()));
+        }
+    }
+}
+
+/// A flag's text as a declaration's raw value: a number where it parses as one.
+fn raw_of(given: &[(&'static str, String)], key: &str) -> Option<Raw> {
+    let (_, v) = given.iter().find(|(k, _)| *k == key)?;
+    Some(match v.trim().parse::<f64>() {
+        Ok(x) => Raw::Number(x),
+        Err(_) => Raw::Text(v.clone()),
+    })
 }
 
 fn flag(key: &str) -> String {
@@ -120,11 +150,7 @@ impl ParamSource for LawArgs {
     }
 
     fn raw(&self, key: &str) -> Option<Raw> {
-        let (_, v) = self.given.iter().find(|(k, _)| *k == key)?;
-        Some(match v.trim().parse::<f64>() {
-            Ok(x) => Raw::Number(x),
-            Err(_) => Raw::Text(v.clone()),
-        })
+        raw_of(&self.given, key)
     }
 
     fn name(&self, key: &str) -> String {
@@ -167,10 +193,165 @@ impl ParamSource for LawArgs {
     }
 }
 
+/// A fixed list of declared parameters that a command takes as flags outside a contact
+/// law (see [`ParamArgs`]).
+pub trait ParamSet {
+    /// The parameters, in the order of the help.
+    const PARAMS: &'static [&'static Param];
+
+    /// Adjusts the generated flag of `p` (e.g. `requires` another flag). The default: a
+    /// parameter without a fallback is a required flag.
+    fn adjust(arg: Arg, p: &'static Param) -> Arg {
+        arg.required(p.fallback == Fallback::Required)
+    }
+}
+
+/// The flags of the parameters `S::PARAMS`, generated from their declarations in
+/// [`params`] (flag, help, unit, choices, default), as [`LawArgs`] does for the contact
+/// laws; the values are typed and checked against the declared rules when read
+/// ([`Self::number`], [`Self::word`]), so the errors name the flag and the rule.
+/// `#[command(flatten)]` it into a clap command.
+pub struct ParamArgs<S> {
+    given: Vec<(&'static str, String)>,
+    set: PhantomData<fn() -> S>,
+}
+
+impl<S> Default for ParamArgs<S> {
+    fn default() -> Self {
+        Self {
+            given: Vec::new(),
+            set: PhantomData,
+        }
+    }
+}
+
+impl<S> Clone for ParamArgs<S> {
+    fn clone(&self) -> Self {
+        Self {
+            given: self.given.clone(),
+            set: PhantomData,
+        }
+    }
+}
+
+impl<S> std::fmt::Debug for ParamArgs<S> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ParamArgs")
+            .field("given", &self.given)
+            .finish()
+    }
+}
+
+impl<S: ParamSet> ParamArgs<S> {
+    /// The typed value of `p` (one of `S::PARAMS`): the one given or the declared default,
+    /// `None` when neither.
+    fn value(&self, p: &'static Param) -> Result<Option<params::Value>, PowderError> {
+        debug_assert!(S::PARAMS.iter().any(|q| q.key == p.key), "{}", p.key);
+        params::read_value(self, p)
+    }
+
+    /// The number given for `p` or its declared default, checked against its rule; `None`
+    /// when neither (an optional flag not given).
+    pub fn get(&self, p: &'static Param) -> Result<Option<f64>, PowderError> {
+        match self.value(p)? {
+            Some(params::Value::Number(x)) => Ok(Some(x)),
+            Some(params::Value::Word(w)) => Err(self.error(
+                p.key,
+                format!("{} must be a number, got \"{w}\"", flag(p.key)),
+            )),
+            None => Ok(None),
+        }
+    }
+
+    /// The number given for `p` or its declared default, checked against its rule; an
+    /// error naming the flag when neither.
+    pub fn number(&self, p: &'static Param) -> Result<f64, PowderError> {
+        self.get(p)?.ok_or_else(|| self.missing(p.key, &p.what()))
+    }
+
+    /// The word given for `p` (a [`Kind::Choice`]) or its declared default.
+    pub fn word(&self, p: &'static Param) -> Result<&'static str, PowderError> {
+        match self.value(p)? {
+            Some(params::Value::Word(w)) => Ok(w),
+            _ => Err(self.missing(p.key, &p.what())),
+        }
+    }
+}
+
+impl<S: ParamSet> Args for ParamArgs<S> {
+    fn augment_args(mut cmd: Command) -> Command {
+        for p in S::PARAMS {
+            cmd = cmd.arg(S::adjust(flag_arg(p).help(help_line(p, None)), p));
+        }
+        cmd
+    }
+
+    fn augment_args_for_update(cmd: Command) -> Command {
+        Self::augment_args(cmd)
+    }
+}
+
+impl<S: ParamSet> FromArgMatches for ParamArgs<S> {
+    fn from_arg_matches(m: &ArgMatches) -> Result<Self, clap::Error> {
+        let mut out = Self::default();
+        out.update_from_arg_matches(m)?;
+        Ok(out)
+    }
+
+    fn update_from_arg_matches(&mut self, m: &ArgMatches) -> Result<(), clap::Error> {
+        update_given(&mut self.given, S::PARAMS, m);
+        Ok(())
+    }
+}
+
+impl<S: ParamSet> ParamSource for ParamArgs<S> {
+    type Error = PowderError;
+
+    fn keys(&self) -> Vec<String> {
+        self.given.iter().map(|(k, _)| k.to_string()).collect()
+    }
+
+    fn raw(&self, key: &str) -> Option<Raw> {
+        raw_of(&self.given, key)
+    }
+
+    fn name(&self, key: &str) -> String {
+        flag(key)
+    }
+
+    fn setting(&self, key: &str, value: &str) -> String {
+        format!("{} {value}", flag(key))
+    }
+
+    fn error(&self, key: &str, message: String) -> PowderError {
+        ParamError::new(static_key(key), message).into()
+    }
+
+    fn missing(&self, key: &str, what: &str) -> PowderError {
+        ParamError::new(
+            static_key(key),
+            format!("{} is required here: {what}", flag(key)),
+        )
+        .into()
+    }
+
+    fn unknown(&self, key: &str, _law: &Law, _owner: Option<&str>) -> PowderError {
+        ParamError::new(
+            static_key(key),
+            format!("{} does not apply here", flag(key)),
+        )
+        .into()
+    }
+
+    fn invalid(&self, e: ParamError) -> PowderError {
+        e.into()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use clap::Parser;
+    use clap::{CommandFactory, Parser};
 
     #[derive(Parser)]
     #[command(allow_negative_numbers = true)]
@@ -262,6 +443,72 @@ mod tests {
             super::super::Dissipation::Tsuji { restitution: 0.5 }
         );
         assert_eq!(j.surface_energy, 0.0);
+    }
+
+    struct Pair;
+
+    impl ParamSet for Pair {
+        const PARAMS: &'static [&'static Param] =
+            &[&params::K1, &params::PHI_F, &params::KCA, &params::PULLOFF];
+    }
+
+    #[derive(Parser)]
+    struct Analytic {
+        #[command(flatten)]
+        law: ParamArgs<Pair>,
+    }
+
+    fn analytic(args: &[&str]) -> Result<ParamArgs<Pair>, String> {
+        Analytic::try_parse_from(std::iter::once("t").chain(args.iter().copied()))
+            .map(|a| a.law)
+            .map_err(|e| e.to_string())
+    }
+
+    #[test]
+    fn declared_flags_outside_a_law_come_from_the_declarations() {
+        // flag, unit, rule and default in the help, from the declaration
+        let mut cmd = Analytic::command();
+        let help = cmd.render_long_help().to_string();
+        for text in [
+            "--k1 <N/m>",
+            "The hysteretic loading stiffness k1, N/m, > 0",
+            "--phi-f <X>",
+            "in (0, 1]",
+            "--kca <N/m>",
+            "default kc, or inf when kc = 0",
+            "default displacement",
+        ] {
+            assert!(help.contains(text), "`{text}` missing in {help}");
+        }
+        // required where the declaration has no fallback
+        let e = analytic(&["--phi-f", "0.5"]).unwrap_err();
+        assert!(e.contains("--k1"), "{e}");
+        let a = analytic(&["--k1", "100", "--phi-f", "0.5", "--kca", "inf"]).unwrap();
+        assert_eq!(a.number(&params::K1).unwrap(), 100.0);
+        assert_eq!(a.number(&params::KCA).unwrap(), f64::INFINITY);
+        assert_eq!(a.word(&params::PULLOFF).unwrap(), "displacement");
+        // typed and checked against the declared rule when read, naming the flag or key
+        let a = analytic(&["--k1", "stiff", "--phi-f", "1.5"]).unwrap();
+        let e = a.number(&params::K1).unwrap_err().to_string();
+        assert!(e.contains("--k1 must be a number"), "{e}");
+        let e = a.number(&params::PHI_F).unwrap_err().to_string();
+        assert!(e.contains("`phi_f`") && e.contains("(0, 1]"), "{e}");
+        let a = analytic(&["--k1", "-1", "--phi-f", "1", "--pulloff", "zero"]).unwrap();
+        assert!(a
+            .number(&params::K1)
+            .unwrap_err()
+            .to_string()
+            .contains("> 0"));
+        assert_eq!(a.word(&params::PULLOFF).unwrap(), "zero");
+        // a derived default is the caller's: absent
+        assert_eq!(
+            analytic(&["--k1", "1", "--phi-f", "1"])
+                .unwrap()
+                .get(&params::KCA)
+                .unwrap(),
+            None
+        );
+        assert!(analytic(&["--k1", "1", "--phi-f", "1", "--pulloff", "sideways"]).is_err());
     }
 
     #[test]

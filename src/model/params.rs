@@ -84,17 +84,34 @@ impl Param {
         }
     }
 
+    /// The rule in words ("> 0", "in (0, 1]"); `None` for [`Rule::None`] and [`Rule::Finite`].
+    pub fn rule_text(&self) -> Option<String> {
+        match self.rule {
+            Rule::None | Rule::Finite => None,
+            Rule::PositiveOrInf => Some("> 0 (inf for none)".to_string()),
+            Rule::Positive => Some("> 0".to_string()),
+            Rule::NonNegative => Some(">= 0".to_string()),
+            Rule::LeftOpen(lo, hi) => Some(format!("in ({lo}, {hi}]")),
+            Rule::Open(lo, hi) => Some(format!("in ({lo}, {hi})")),
+        }
+    }
+
     /// Checks `value` against the rule; the error names the key and the rule.
     pub fn check(&self, value: f64) -> Result<(), ParamError> {
-        let (ok, rule) = match self.rule {
+        let ok = match self.rule {
             Rule::None => return Ok(()),
-            Rule::PositiveOrInf => (value > 0.0, "> 0 (inf for none)".to_string()),
-            _ if !value.is_finite() => (false, "a finite number".to_string()),
-            Rule::Finite => (true, String::new()),
-            Rule::Positive => (value > 0.0, "> 0".to_string()),
-            Rule::NonNegative => (value >= 0.0, ">= 0".to_string()),
-            Rule::LeftOpen(lo, hi) => (value > lo && value <= hi, format!("in ({lo}, {hi}]")),
-            Rule::Open(lo, hi) => (value > lo && value < hi, format!("in ({lo}, {hi})")),
+            Rule::PositiveOrInf => value > 0.0,
+            _ if !value.is_finite() => false,
+            Rule::Finite => true,
+            Rule::Positive => value > 0.0,
+            Rule::NonNegative => value >= 0.0,
+            Rule::LeftOpen(lo, hi) => value > lo && value <= hi,
+            Rule::Open(lo, hi) => value > lo && value < hi,
+        };
+        let rule = match self.rule {
+            Rule::PositiveOrInf => self.rule_text().unwrap_or_default(),
+            _ if !value.is_finite() => "a finite number".to_string(),
+            _ => self.rule_text().unwrap_or_default(),
         };
         if ok {
             Ok(())
@@ -610,6 +627,37 @@ fn one_of(options: &[&str]) -> String {
         Some((last, [])) => last.clone(),
         Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
     }
+}
+
+/// A typed value of one parameter.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Value {
+    /// A number (of [`Kind::Number`] or [`Kind::NumberOrInf`]).
+    Number(f64),
+    /// One of the words of a [`Kind::Choice`].
+    Word(&'static str),
+}
+
+/// Reads one parameter from `src` outside a contact law (a command that takes a few
+/// declared parameters, e.g. `powder analytic`): the value given, typed against the
+/// declaration, a number checked against its rule; the declared default when absent;
+/// `None` when neither (required or derived: the caller decides).
+pub fn read_value<S: ParamSource>(src: &S, p: &'static Param) -> Result<Option<Value>, S::Error> {
+    let value = match src.raw(p.key) {
+        Some(raw) => match typed(src, p, raw)? {
+            Typed::Number(x) => {
+                p.check(x).map_err(|e| src.invalid(e))?;
+                Value::Number(x)
+            }
+            Typed::Word(w) => Value::Word(w),
+        },
+        None => match p.fallback {
+            Number(x) => Value::Number(x),
+            Word(w) => Value::Word(w),
+            Required | Derived(_) => return Ok(None),
+        },
+    };
+    Ok(Some(value))
 }
 
 /// Reads the parameters of the law `name` from `src`: unknown keys, missing required keys,
