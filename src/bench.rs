@@ -102,7 +102,7 @@ pub fn packing(case: Case, n: usize, velocity_scale: f64, seed: u64) -> Result<S
                 youngs: 1e8,
                 poisson: 0.3,
                 surface_energy: 0.01,
-                dissipation: Dissipation::Tsuji { restitution: 0.5 },
+                dissipation: Dissipation::tsuji(0.5),
                 friction: 0.3,
                 rolling_hysteresis: 0.5,
                 pulloff: Pulloff::default(),

@@ -61,6 +61,10 @@
 //!                               # or "stress" (jkr only, paper 001 eqs. 17-18, needs
 //!                               # tvis0_per_radius, B, zeta); krijt/stress: CPU only so far
 //! restitution = 0.9             # target restitution e in (0, 1] of "tsuji"
+//! tsuji_stiffness = "contact-radius" # "tsuji" only: the stiffness of its dashpots,
+//!                               # "contact-radius" (default: Sn = 2E* a, St = 8G* a) or
+//!                               # "hertz" (paper 002 eq. 13: 2E* sqrt(R* delta),
+//!                               # 8G* sqrt(R* delta), zero at delta <= 0)
 //! D = 118.0                     # "powerlaw": F = sgn(v) D E* |v|^alpha a^beta
 //! alpha = 3.0
 //! beta = 1.5

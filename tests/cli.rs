@@ -1120,6 +1120,31 @@ fn analytic_parameter_flags_come_from_the_declarations() {
     assert!(!ok && err.contains("--yield-stress"), "{err}");
 }
 
+#[test]
+fn collide_takes_paper_002s_tsuji_stiffness() {
+    let run = |stiffness: &str| {
+        let (ok, out, err) = jkr_cmd(&[
+            "--velocity",
+            "2",
+            "--restitution",
+            "0.8",
+            "--tsuji-stiffness",
+            stiffness,
+            "--json",
+        ]);
+        assert!(ok, "{err}");
+        let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+        v["e"].as_f64().unwrap()
+    };
+    // the Hertz form damps less than the contact radius on an adhesive pair
+    assert!(run("hertz") > run("contact-radius") + 0.01);
+    let (ok, _, err) = jkr_cmd(&["--velocity", "2", "--tsuji-stiffness", "hertz"]);
+    assert!(
+        !ok && err.contains("--tsuji-stiffness applies to --dissipation tsuji only"),
+        "{err}"
+    );
+}
+
 /// Paper 001 eq. 13 by hand with v̂ = v_Y/v.
 fn e_tn_by_hand(v: f64, vy: f64) -> f64 {
     let h2 = (vy / v).powi(2);

@@ -234,7 +234,7 @@ fn rolling_resistance_holds_below_the_yield_force_and_yields_above() {
     use powder::model::{Dissipation, JkrParams};
     let r = 5e-6;
     let p = JkrParams {
-        dissipation: Dissipation::Tsuji { restitution: 0.3 },
+        dissipation: Dissipation::tsuji(0.3),
         friction: 0.5,
         rolling_hysteresis: 0.5,
         ..JkrParams::jkr(1e8, 0.3, 0.01)

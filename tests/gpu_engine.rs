@@ -242,7 +242,9 @@ mod jkr {
     use powder::collide::{collide_on, Backend, CollideResult, CollideSpec};
     use powder::cpu::CpuEngine;
     use powder::gpu::GpuEngine;
-    use powder::model::{analytic, ContactModel, Dissipation, JkrParams, PairGeometry, Pulloff};
+    use powder::model::{
+        analytic, ContactModel, Dissipation, JkrParams, PairGeometry, Pulloff, TsujiStiffness,
+    };
     use powder::scene::Scene;
 
     const R: f64 = 1e-6;
@@ -316,7 +318,7 @@ mod jkr {
         }
         let p = JkrParams {
             pulloff: Pulloff::Zero,
-            dissipation: Dissipation::Tsuji { restitution: 0.5 },
+            dissipation: Dissipation::tsuji(0.5),
             ..jkr()
         };
         let v0 = v_stick(&JkrParams {
@@ -341,6 +343,89 @@ mod jkr {
         );
     }
 
+    /// Paper 002's stiffness for the Tsuji dashpots (Sn = 2E*·√(R*δ), St = 8G*·√(R*δ),
+    /// zero at δ ≤ 0), with its zero-overlap pull-off and with the default one: the same
+    /// verdict and restitution on both backends, head-on and (the tangential dashpot)
+    /// oblique with friction; and not the contact-radius result, so the flag reaches the
+    /// kernel.
+    #[test]
+    fn gpu_tsuji_hertz_stiffness_matches_the_cpu() {
+        if context().is_none() {
+            return;
+        }
+        let hertz_rule = |p: JkrParams| JkrParams {
+            dissipation: Dissipation::Tsuji {
+                restitution: 0.5,
+                stiffness: TsujiStiffness::Hertz,
+            },
+            ..p
+        };
+        let v0 = v_stick(&jkr());
+        let mut verdicts = Vec::new();
+        for pulloff in [Pulloff::Zero, Pulloff::Displacement] {
+            let p = hertz_rule(JkrParams { pulloff, ..jkr() });
+            for f in [0.3, 1.0, 3.0, 10.0] {
+                let (g, c) = both(&spec(p, f * v0));
+                let default = collide_on(
+                    &spec(
+                        JkrParams {
+                            dissipation: Dissipation::tsuji(0.5),
+                            ..p
+                        },
+                        f * v0,
+                    ),
+                    Backend::Cpu,
+                )
+                .unwrap();
+                eprintln!(
+                    "Tsuji hertz {pulloff:?} v/v0 {f}: e gpu {:.6} cpu {:.6} (|diff| {:.1e}); contact radius cpu {:.6}",
+                    g.e,
+                    c.e,
+                    (g.e - c.e).abs(),
+                    default.e
+                );
+                assert_eq!(g.stuck, c.stuck, "{pulloff:?} v/v0 {f}");
+                assert!(
+                    (g.e - c.e).abs() < 2e-3,
+                    "{pulloff:?} v/v0 {f}: gpu {} cpu {}",
+                    g.e,
+                    c.e
+                );
+                if !c.stuck {
+                    assert!(g.e > default.e + 0.01, "{pulloff:?} v/v0 {f}");
+                }
+                verdicts.push(c.stuck);
+            }
+        }
+        assert!(verdicts[0] && !verdicts[3], "{verdicts:?}");
+        // the tangential dashpot: oblique wall impacts with friction
+        let p = hertz_rule(JkrParams {
+            friction: 0.3,
+            pulloff: Pulloff::Zero,
+            ..jkr()
+        });
+        for angle in [30.0, 60.0] {
+            let s = CollideSpec {
+                wall: true,
+                impact_angle: angle,
+                ..spec(p, 10.0 * v0)
+            };
+            let (g, c) = both(&s);
+            let (tg, tc) = (g.e_tangential.unwrap(), c.e_tangential.unwrap());
+            let (wg, wc) = (g.omega_final.unwrap(), c.omega_final.unwrap());
+            eprintln!(
+                "Tsuji hertz oblique {angle}°: e gpu {:.6} cpu {:.6}; e_t gpu {tg:.6} cpu {tc:.6}; omega rel. {:.1e}",
+                g.e,
+                c.e,
+                (wg / wc - 1.0).abs()
+            );
+            assert!(!g.stuck && !c.stuck);
+            assert!((g.e - c.e).abs() < 2e-3, "{angle}°: e {} {}", g.e, c.e);
+            assert!((tg - tc).abs() < 2e-3, "{angle}°: e_t {tg} {tc}");
+            assert!((wg / wc - 1.0).abs() < 2e-3, "{angle}°: omega {wg} {wc}");
+        }
+    }
+
     #[test]
     fn gpu_hertz_tsuji_and_power_law_match_the_cpu() {
         if context().is_none() {
@@ -348,7 +433,7 @@ mod jkr {
         }
         for e in [0.3, 0.9] {
             let p = JkrParams {
-                dissipation: Dissipation::Tsuji { restitution: e },
+                dissipation: Dissipation::tsuji(e),
                 ..JkrParams::hertz(1e9, 0.3)
             };
             for v in [0.05, 0.5] {
@@ -395,7 +480,7 @@ mod jkr {
         // friction and rolling resistance at 45° and 20°
         let hertz = JkrParams {
             friction: 0.3,
-            dissipation: Dissipation::Tsuji { restitution: 0.8 },
+            dissipation: Dissipation::tsuji(0.8),
             ..JkrParams::hertz(1e9, 0.3)
         };
         let adhesive = JkrParams {
@@ -452,7 +537,7 @@ mod jkr {
         let Some(ctx) = context() else { return };
         let r = 5e-6;
         let p = JkrParams {
-            dissipation: Dissipation::Tsuji { restitution: 0.3 },
+            dissipation: Dissipation::tsuji(0.3),
             friction: 0.5,
             rolling_hysteresis: 0.5,
             ..JkrParams::jkr(1e8, 0.3, 0.01)

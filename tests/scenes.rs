@@ -1,7 +1,7 @@
 //! Every shipped scene loads and runs; JKR scenes parse with their options and errors.
 
 use powder::cpu::CpuEngine;
-use powder::model::{ContactModel, Dissipation, Pulloff};
+use powder::model::{ContactModel, Dissipation, Pulloff, TsujiStiffness};
 use powder::scene::Scene;
 
 #[test]
@@ -86,8 +86,39 @@ fn jkr_material_parses_with_all_options() {
     let ContactModel::Jkr(p) = s.materials[0].model else {
         panic!("not jkr")
     };
-    assert_eq!(p.dissipation, Dissipation::Tsuji { restitution: 0.5 });
+    assert_eq!(p.dissipation, Dissipation::tsuji(0.5));
     assert_eq!((p.pulloff, p.stiffness_scale), (Pulloff::Zero, 0.5));
+    // paper 002's stiffness of the Tsuji dashpots
+    let s = Scene::from_toml_str(
+        &tsuji.replace(
+            "restitution = 0.5\n",
+            "restitution = 0.5\ntsuji_stiffness = \"hertz\"\n",
+        ),
+        "jkr",
+    )
+    .unwrap();
+    let ContactModel::Jkr(p) = s.materials[0].model else {
+        panic!("not jkr")
+    };
+    assert_eq!(
+        p.dissipation,
+        Dissipation::Tsuji {
+            restitution: 0.5,
+            stiffness: TsujiStiffness::Hertz
+        }
+    );
+    let s = Scene::from_toml_str(
+        &tsuji.replace(
+            "restitution = 0.5\n",
+            "dissipation = \"tsuji\"\nrestitution = 0.5\ntsuji_stiffness = \"contact-radius\"\n",
+        ),
+        "jkr",
+    )
+    .unwrap();
+    let ContactModel::Jkr(p) = s.materials[0].model else {
+        panic!("not jkr")
+    };
+    assert_eq!(p.dissipation, Dissipation::tsuji(0.5));
 }
 
 #[test]
@@ -113,6 +144,22 @@ fn jkr_scene_errors_name_the_key() {
     let e = err(JKR_SCENE.replace("D = 1e-9", "D = 1e-9\ntvis = 1.0"));
     assert!(
         e.contains("`tvis`") && e.contains("dissipation = \"krijt\" only"),
+        "{e}"
+    );
+    // tsuji_stiffness belongs to the tsuji dissipation, with its two words
+    let e = err(JKR_SCENE.replace("D = 1e-9", "D = 1e-9\ntsuji_stiffness = \"hertz\""));
+    assert!(
+        e.contains("`tsuji_stiffness`")
+            && e.contains("dissipation = \"tsuji\" only")
+            && e.contains("not dissipation = \"powerlaw\""),
+        "{e}"
+    );
+    let e = err(JKR_SCENE.replace(
+        "dissipation = \"powerlaw\"\nD = 1e-9\nalpha = 1.0\nbeta = 1.0\n",
+        "restitution = 0.5\ntsuji_stiffness = \"sqrt\"\n",
+    ));
+    assert!(
+        e.contains("`tsuji_stiffness`") && e.contains("\"contact-radius\" or \"hertz\""),
         "{e}"
     );
     let e = err(JKR_SCENE.replace("model = \"jkr\"", "model = \"hertz\""));

@@ -56,6 +56,9 @@ struct JkrPair {
     // B and zeta of eq. 17 (stress).
     stress_b: f32,
     stress_zeta: f32,
+    // Tsuji: 1 = paper 002's Hertz stiffness rho = sqrt(R*·max(delta, 0)) in the dashpots
+    // (Sn = 2E*·rho, St = 8G*·rho), 0 = the contact radius a.
+    tsuji_hertz: u32,
 }
 
 const JKR_DISSIPATION_TSUJI: u32 = 1u;
@@ -126,12 +129,22 @@ fn jkr_r23(r: f32) -> f32 {
     return pow(r, 2.0 / 3.0);
 }
 
-// The dissipative normal force for contact radius a (`JkrParams::normal_dissipation`);
-// a0 and R* for the Krijt viscous force.
-fn jkr_dissipation(p: JkrPair, a: f32, a0: f32, delta_dot: f32, m: f32, r: f32) -> f32 {
+// The radius rho of the Tsuji dashpots Sn = 2E*·rho, St = 8G*·rho (`TsujiStiffness::radius`):
+// the contact radius a, or sqrt(R*·max(delta, 0)) (paper 002 eq. 13).
+fn jkr_tsuji_radius(p: JkrPair, a: f32, delta: f32, r: f32) -> f32 {
+    if (p.tsuji_hertz != 0u) {
+        return sqrt(r * max(delta, 0.0));
+    }
+    return a;
+}
+
+// The dissipative normal force for contact radius a at overlap delta
+// (`JkrParams::normal_dissipation`); a0 and R* for the Krijt viscous force.
+fn jkr_dissipation(p: JkrPair, a: f32, delta: f32, a0: f32, delta_dot: f32, m: f32, r: f32) -> f32 {
     if (jkr_dissipation_is(p, JKR_DISSIPATION_TSUJI)) {
-        // Sn = 2E*·a (paper 002 eq. 13 for Hertz; a exists at negative overlap in JKR)
-        let sn = 2.0 * p.e_star * a;
+        // Sn = 2E*·a (paper 002 eq. 13 for Hertz; a exists at negative overlap in JKR), or
+        // paper 002's 2E*·sqrt(R*·delta)
+        let sn = 2.0 * p.e_star * jkr_tsuji_radius(p, a, delta, r);
         return p.tsuji * sqrt(sn * m) * delta_dot;
     }
     if (jkr_dissipation_is(p, JKR_DISSIPATION_POWER)) {
@@ -226,13 +239,21 @@ fn jkr_potential_shape(x: f32, s: f32) -> f32 {
     return 4.8 * x2 * x2 * x - 8.0 * x2 * x * s + 2.0 * x2;
 }
 
+// The kinematics k at the overlap delta of a contact's edge: the damping hook reads the
+// overlap (paper 002's Tsuji stiffness sqrt(R*·delta) is zero at both edges).
+fn jkr_at_edge(k: Kin, delta: f32) -> Kin {
+    var e = k;
+    e.delta = delta;
+    return e;
+}
+
 // Where a contact starts and ends and the force just inside those edges, for the energy
 // ledger (`JkrParams::edge_forces`): (entry delta, entry force, exit delta, exit force),
 // with the JKR radius at both edges also for the Krijt dissipations (as on the CPU).
 fn jkr_edges(p: JkrPair, k: Kin) -> vec4<f32> {
     if (jkr_hertz(p)) {
         // Hertz: a = 0 at the single edge delta = 0
-        let f = jkr_damping(p, 0.0, 0.0, k);
+        let f = jkr_damping(p, 0.0, 0.0, jkr_at_edge(k, 0.0));
         return vec4<f32>(0.0, f, 0.0, f);
     }
     let r = k.r_eff;
@@ -241,10 +262,10 @@ fn jkr_edges(p: JkrPair, k: Kin) -> vec4<f32> {
     let fc = 3.0 * JKR_PI * p.gamma * r;
     let s_in = jkr_solve_s(0.0, d0);
     let x_in = s_in * s_in;
-    let f_in = 4.0 * fc * (x_in * x_in * x_in - x_in * s_in) + jkr_damping(p, a0 * x_in, a0, k);
+    let f_in = 4.0 * fc * (x_in * x_in * x_in - x_in * s_in) + jkr_damping(p, a0 * x_in, a0, jkr_at_edge(k, 0.0));
     let d_out = p.break_ratio * d0;
     let s_out = jkr_solve_s(d_out, d0);
     let x_out = s_out * s_out;
-    let f_out = 4.0 * fc * (x_out * x_out * x_out - x_out * s_out) + jkr_damping(p, a0 * x_out, a0, k);
+    let f_out = 4.0 * fc * (x_out * x_out * x_out - x_out * s_out) + jkr_damping(p, a0 * x_out, a0, jkr_at_edge(k, d_out));
     return vec4<f32>(0.0, f_in, d_out, f_out);
 }

@@ -4,7 +4,8 @@
 // (`model::jkr::SLIDING_HISTORY`), in the evaluating particle's frame.
 
 // Tangential force on i: the spring rotated into the tangent plane, s += v_t·dt,
-// F = −St·s − c_t·v_t with St = 8G*·a and c_t = tsuji·sqrt(St·m*), truncated to
+// F = −St·s − c_t·v_t with St = 8G*·a and c_t = tsuji·sqrt(8G*·rho·m*) (rho:
+// `jkr_tsuji_radius`: a, or paper 002's sqrt(R*·delta)), truncated to
 // |F| <= mu_s·|F_el + 2Fc| (the normal law's Coulomb load) with the spring set consistent
 // with the truncated force. Stores ½·St·|s|² with the contact's energy.
 fn mindlin_apply(row: PairRow, k: Kin, nf: Normal, h: ptr<function, History>, c: ptr<function, Contact>) {
@@ -16,7 +17,8 @@ fn mindlin_apply(row: PairRow, k: Kin, nf: Normal, h: ptr<function, History>, c:
     let st = 8.0 * p.g_star * nf.a;
     var ct = 0.0;
     if (jkr_dissipation_is(p, JKR_DISSIPATION_TSUJI)) {
-        ct = p.tsuji * sqrt(st * k.m_eff);
+        // the dashpot's St: the spring's 8G*·a, or paper 002's 8G*·sqrt(R*·delta)
+        ct = p.tsuji * sqrt(8.0 * p.g_star * jkr_tsuji_radius(p, nf.a, k.delta, k.r_eff) * k.m_eff);
     }
     var force = -st * s - ct * k.v_t;
     let limit = p.friction * nf.coulomb;

@@ -117,7 +117,7 @@ pub const LAWS: &[NormalLaw] = &[
         hooks: &[
             Hook {
                 signature: "fn jkr_damping(p: JkrPair, a: f32, a0: f32, k: Kin) -> f32",
-                default: "return jkr_dissipation(p, a, a0, k.delta_dot, k.m_eff, k.r_eff);",
+                default: "return jkr_dissipation(p, a, k.delta, a0, k.delta_dot, k.m_eff, k.r_eff);",
             },
             Hook {
                 signature: "fn jkr_radius_state(p: JkrPair, k: Kin, a0: f32, d0: f32, fc: f32, x_eq: f32, h: ptr<function, History>) -> vec4<f32>",
@@ -664,10 +664,7 @@ mod tests {
 
     #[test]
     fn pair_rows_have_the_declared_size() {
-        let models = [
-            lsd(),
-            jkr(0.3, 0.5, Dissipation::Tsuji { restitution: 0.5 }),
-        ];
+        let models = [lsd(), jkr(0.3, 0.5, Dissipation::tsuji(0.5))];
         for c in Composition::all() {
             for m in &models {
                 if c.laws.contains(&law_of(m)) {

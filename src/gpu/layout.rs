@@ -326,6 +326,10 @@ pub struct JkrPair {
     pub stress_b: f32,
     /// ζ of eq. 17 (stress).
     pub stress_zeta: f32,
+    /// Tsuji: 1 when the dashpots use paper 002's Hertz stiffness, ρ = √(R*·max(δ, 0)) in
+    /// Sn = 2E*·ρ and St = 8G*·ρ; 0 for the contact radius a
+    /// ([`TsujiStiffness`](crate::model::TsujiStiffness)).
+    pub tsuji_hertz: u32,
 }
 
 /// Dissipation kinds of [`JkrPair`], as in the WGSL.
@@ -374,10 +378,14 @@ impl JkrPair {
         };
         match p.dissipation {
             Dissipation::None => {}
-            Dissipation::Tsuji { restitution } => {
+            Dissipation::Tsuji {
+                restitution,
+                stiffness,
+            } => {
                 row.dissipation = JKR_DISSIPATION_TSUJI;
                 // 2·√(5/6)·(−β): the prefactor of paper 002 eqs. 11 and 16
                 row.tsuji = (-2.0 * (5.0f64 / 6.0).sqrt() * tsuji_beta(restitution)) as f32;
+                row.tsuji_hertz = u32::from(stiffness == crate::model::TsujiStiffness::Hertz);
             }
             Dissipation::PowerLaw { d, alpha, beta } => {
                 row.dissipation = JKR_DISSIPATION_POWER;
@@ -848,6 +856,7 @@ mod tests {
             ("crack", offset_of!(JkrPair, crack)),
             ("stress_b", offset_of!(JkrPair, stress_b)),
             ("stress_zeta", offset_of!(JkrPair, stress_zeta)),
+            ("tsuji_hertz", offset_of!(JkrPair, tsuji_hertz)),
         ] {
             let m = members
                 .iter()
@@ -855,7 +864,7 @@ mod tests {
                 .unwrap_or_else(|| panic!("JkrPair.{field}"));
             assert_eq!(m.1 as usize, off, "JkrPair.{field}");
         }
-        assert_eq!(members.len(), 20, "JkrPair members: {members:?}");
+        assert_eq!(members.len(), 21, "JkrPair members: {members:?}");
         check(
             "Wall",
             size_of::<WallGpu>(),

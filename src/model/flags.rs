@@ -438,11 +438,34 @@ mod tests {
         let ContactModel::Jkr(j) = m else {
             panic!("{m:?}")
         };
+        assert_eq!(j.dissipation, super::super::Dissipation::tsuji(0.5));
+        assert_eq!(j.surface_energy, 0.0);
+        // paper 002's stiffness of the Tsuji dashpots
+        let m = model(&[
+            "--model",
+            "jkr",
+            "--youngs",
+            "1e9",
+            "--poisson",
+            "0.3",
+            "--surface-energy",
+            "0.1",
+            "--restitution",
+            "0.5",
+            "--tsuji-stiffness",
+            "hertz",
+        ])
+        .unwrap();
+        let ContactModel::Jkr(j) = m else {
+            panic!("{m:?}")
+        };
         assert_eq!(
             j.dissipation,
-            super::super::Dissipation::Tsuji { restitution: 0.5 }
+            super::super::Dissipation::Tsuji {
+                restitution: 0.5,
+                stiffness: super::super::TsujiStiffness::Hertz
+            }
         );
-        assert_eq!(j.surface_energy, 0.0);
     }
 
     struct Pair;
@@ -543,6 +566,22 @@ mod tests {
         .unwrap_err();
         assert!(
             e.contains("--tvis applies to --dissipation krijt only"),
+            "{e}"
+        );
+        // a parameter of the tsuji dissipation only
+        let e = model(&[
+            "--model",
+            "hertz",
+            "--youngs",
+            "1e9",
+            "--poisson",
+            "0.3",
+            "--tsuji-stiffness",
+            "hertz",
+        ])
+        .unwrap_err();
+        assert!(
+            e.contains("--tsuji-stiffness applies to --dissipation tsuji only"),
             "{e}"
         );
         let e = model(&["--model", "lsd", "--k", "stiff"]).unwrap_err();

@@ -25,7 +25,7 @@
 use crate::error::ParamError;
 use crate::model::history::{HistoryField, HostField, Mirror, Shape};
 use crate::model::krijt::{self, KrijtLaw, Relaxation};
-use crate::model::{ContactHistory, NormalForce, PairGeometry};
+use crate::model::{ContactHistory, Kinematics, NormalForce, PairGeometry};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
@@ -95,6 +95,10 @@ pub enum Dissipation {
     Tsuji {
         /// Target coefficient of restitution e ∈ (0, 1].
         restitution: f64,
+        /// The stiffness of the dashpots: the JKR contact radius (default) or paper 002's
+        /// Hertz form.
+        #[serde(default)]
+        stiffness: TsujiStiffness,
     },
     /// Power-law dissipation F_dis = sgn(δ̇)·D·E*·|δ̇|^α·a^β (paper 001 eq. 19), in any
     /// consistent unit system (D carries the units). Normal direction only.
@@ -136,7 +140,49 @@ pub enum Dissipation {
     },
 }
 
+/// The stiffness in the Tsuji dashpots, Sn = 2E*·ρ (normal, paper 002 eqs. 11–13) and
+/// St = 8G*·ρ (tangential, eq. 16), with ρ a contact radius.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum TsujiStiffness {
+    /// ρ = a, the JKR contact radius: it exists (and the dashpots act) also at negative
+    /// overlap while a JKR contact holds, and exceeds √(R*δ) at positive overlap.
+    #[default]
+    ContactRadius,
+    /// ρ = √(R*·δ), zero at δ ≤ 0: paper 002's Hertz forms Sn = 2E*√(R*δ) (eq. 13) and
+    /// St = 8G*√(R*δ) (below eq. 14), for which Tsuji's β(e) calibration was derived. The
+    /// same as `ContactRadius` for Hertz (γ = 0), where a = √(R*δ).
+    Hertz,
+}
+
+impl TsujiStiffness {
+    /// ρ of Sn = 2E*·ρ and St = 8G*·ρ for contact radius `a` at overlap `delta`.
+    pub fn radius(self, a: f64, delta: f64, r_eff: f64) -> f64 {
+        match self {
+            Self::ContactRadius => a,
+            Self::Hertz => (r_eff * delta.max(0.0)).sqrt(),
+        }
+    }
+
+    /// The name used in scenes and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::ContactRadius => "contact-radius",
+            Self::Hertz => "hertz",
+        }
+    }
+}
+
 impl Dissipation {
+    /// Tsuji damping with target restitution `restitution` and the default stiffness
+    /// ([`TsujiStiffness::ContactRadius`]).
+    pub fn tsuji(restitution: f64) -> Self {
+        Self::Tsuji {
+            restitution,
+            stiffness: TsujiStiffness::ContactRadius,
+        }
+    }
+
     /// The Krijt law of the `krijt` and `stress` dissipations.
     pub fn krijt_law(&self) -> Option<KrijtLaw> {
         match *self {
@@ -438,7 +484,7 @@ impl JkrParams {
         ];
         match self.dissipation {
             Dissipation::None => {}
-            Dissipation::Tsuji { restitution } => checks.push((&p::RESTITUTION, restitution)),
+            Dissipation::Tsuji { restitution, .. } => checks.push((&p::RESTITUTION, restitution)),
             Dissipation::PowerLaw { d, alpha, beta } => checks.extend([
                 (&p::POWER_D, d),
                 (&p::POWER_ALPHA, alpha),
@@ -646,16 +692,20 @@ impl JkrParams {
         krijt::viscous_force(tvis, a, 1.0, &m)
     }
 
-    /// The dissipative normal force for contact radius `a` and approach speed `delta_dot`,
-    /// repulsive positive (it opposes δ̇).
-    fn normal_dissipation(&self, a: f64, delta_dot: f64, geom: &PairGeometry) -> f64 {
+    /// The dissipative normal force for contact radius `a` at overlap `delta` and approach
+    /// speed `delta_dot`, repulsive positive (it opposes δ̇).
+    fn normal_dissipation(&self, a: f64, delta: f64, delta_dot: f64, geom: &PairGeometry) -> f64 {
         let m = geom.reduced_mass;
         match self.dissipation {
             Dissipation::None => 0.0,
-            Dissipation::Tsuji { restitution } => {
-                // Sn = 2E*·a: paper 002 eq. 13 writes 2E*√(Rδ), which is 2E*·a for Hertz;
-                // the contact radius also exists at negative overlap in JKR.
-                let sn = 2.0 * self.e_star() * a;
+            Dissipation::Tsuji {
+                restitution,
+                stiffness,
+            } => {
+                // Sn = 2E*·a by default (paper 002 eq. 13 writes 2E*√(Rδ), which is 2E*·a
+                // for Hertz; the contact radius also exists at negative overlap in JKR), or
+                // paper 002's 2E*·√(R*δ) (zero at δ ≤ 0)
+                let sn = 2.0 * self.e_star() * stiffness.radius(a, delta, geom.r_eff());
                 -TSUJI_PREFACTOR * tsuji_beta(restitution) * (sn * m).sqrt() * delta_dot
             }
             Dissipation::PowerLaw { d, alpha, beta } => {
@@ -688,7 +738,7 @@ impl JkrParams {
         let r = 0.5 * geom.a12;
         let at = |delta: f64| {
             let a = self.contact_radius(delta, r);
-            self.elastic_force(a, r) + self.normal_dissipation(a, delta_dot, geom)
+            self.elastic_force(a, r) + self.normal_dissipation(a, delta, delta_dot, geom)
         };
         let exit = self.pulloff_overlap(r);
         [(0.0, at(0.0)), (exit, at(exit))]
@@ -795,7 +845,7 @@ impl JkrParams {
         history.touched = true;
         history.delta_max = history.delta_max.max(delta);
         NormalForce {
-            force: conservative + self.normal_dissipation(a, delta_dot, geom),
+            force: conservative + self.normal_dissipation(a, delta, delta_dot, geom),
             conservative,
             potential,
             in_contact: true,
@@ -805,20 +855,21 @@ impl JkrParams {
 
     /// Tangential force on particle i (paper 002 eqs. 14–17).
     ///
-    /// `v_t` is the tangential velocity of i relative to j at the contact point (already in
-    /// the tangent plane), `spring` the stored displacement s (history). Steps: the spring
+    /// Of the kinematics `k` it takes the normal n, the overlap δ and `v_t`, the tangential
+    /// velocity of i relative to j at the contact point (already in the tangent plane);
+    /// `spring` is the stored displacement s (history). Steps: the spring
     /// is rotated into the current tangent plane keeping its length (see
     /// `rotate_into_plane`: a rigid rotation of the pair must not change the stored
     /// energy), s += v_t·dt, St = 8G*·a, and
-    /// F = −St·s − c_t·v_t with c_t = −2√(5/6)·β·√(St·m*) ≥ 0 (Tsuji only; β < 0).
+    /// F = −St·s − c_t·v_t with c_t = −2√(5/6)·β·√(St'·m*) ≥ 0 (Tsuji only; β < 0), where
+    /// St' = 8G*·ρ with ρ of [`TsujiStiffness`] (a, or √(R*·δ)).
     /// The force is truncated to |F| ≤ μs·|F_N + 2Fc| (eq. 17) with F_N the conservative
     /// (elastic) normal force; when truncated, F is set to the limit along its direction and
     /// the spring to s = −(F + c_t·v_t)/St, and `sliding` is true.
     /// Without friction or contact the spring is zeroed and there is no force.
     pub fn tangential_force(
         &self,
-        n: DVec3,
-        v_t: DVec3,
+        k: &Kinematics,
         normal: &NormalForce,
         geom: &PairGeometry,
         dt: f64,
@@ -828,12 +879,19 @@ impl JkrParams {
             *spring = DVec3::ZERO;
             return Tangential::default();
         }
+        let (n, v_t, delta) = (k.n, k.v_t, k.delta);
         let r = 0.5 * geom.a12;
         let mut s = rotate_into_plane(*spring, n) + v_t * dt;
         let st = 8.0 * self.g_star() * normal.contact_radius;
         let ct = match self.dissipation {
-            Dissipation::Tsuji { restitution } => {
-                -TSUJI_PREFACTOR * tsuji_beta(restitution) * (st * geom.reduced_mass).sqrt()
+            Dissipation::Tsuji {
+                restitution,
+                stiffness,
+            } => {
+                // the dashpot's St: the spring's 8G*·a, or paper 002's 8G*·√(R*δ)
+                let st_damp =
+                    8.0 * self.g_star() * stiffness.radius(normal.contact_radius, delta, r);
+                -TSUJI_PREFACTOR * tsuji_beta(restitution) * (st_damp * geom.reduced_mass).sqrt()
             }
             _ => 0.0,
         };
@@ -968,6 +1026,16 @@ mod tests {
 
     fn reff() -> f64 {
         0.5 * geom().a12
+    }
+
+    /// The kinematics the tangential force reads: normal, tangential velocity, overlap.
+    fn kin(n: DVec3, v_t: DVec3, delta: f64) -> Kinematics {
+        Kinematics {
+            n,
+            v_t,
+            delta,
+            ..Default::default()
+        }
     }
 
     /// Force with a fresh, touched history (the stable branch).
@@ -1430,14 +1498,21 @@ mod tests {
         let mut report = String::new();
         for target in [0.95, 0.9, 0.7, 0.5, 0.3, 0.1] {
             let p = JkrParams {
+                dissipation: Dissipation::tsuji(target),
+                ..hz
+            };
+            // paper 002's Hertz stiffness rule: for Hertz a = √(R*δ), so bitwise the same
+            let q = JkrParams {
                 dissipation: Dissipation::Tsuji {
                     restitution: target,
+                    stiffness: TsujiStiffness::Hertz,
                 },
                 ..hz
             };
             let mut es = Vec::new();
             for v in [1e-3, 0.1, 10.0] {
                 let (e, _) = tsuji_collision(&p, v);
+                assert_eq!(e.to_bits(), tsuji_collision(&q, v).0.to_bits());
                 es.push(e);
             }
             // velocity-independent (the damping ∝ δ^(1/4)·δ̇ keeps Hertz self-similar)
@@ -1480,18 +1555,108 @@ mod tests {
         assert_eq!(f.force, f.conservative);
         // Tsuji acts at negative overlap too (a > 0 there)
         let t = JkrParams {
-            dissipation: Dissipation::Tsuji { restitution: 0.5 },
+            dissipation: Dissipation::tsuji(0.5),
             ..params()
         };
         let f = t.normal_force(-0.5 * d0, -0.1, &g, &mut h);
         assert!(f.in_contact && f.force < f.conservative);
     }
 
+    /// Paper 002's stiffness rule for the Tsuji dashpots: Sn = 2E*·√(R*δ) and
+    /// St = 8G*·√(R*δ), zero at δ ≤ 0, where the default uses the JKR contact radius a
+    /// (larger than √(R*δ) at δ > 0, and positive at δ ≤ 0 while the contact holds).
+    #[test]
+    fn tsuji_hertz_stiffness_rule() {
+        let hertz_rule = |p: JkrParams| JkrParams {
+            dissipation: Dissipation::Tsuji {
+                restitution: 0.5,
+                stiffness: TsujiStiffness::Hertz,
+            },
+            ..p
+        };
+        let (p, q) = (
+            JkrParams {
+                friction: 0.3,
+                dissipation: Dissipation::tsuji(0.5),
+                ..params()
+            },
+            hertz_rule(JkrParams {
+                friction: 0.3,
+                ..params()
+            }),
+        );
+        let (r, g) = (reff(), geom());
+        let (d0, m) = (p.delta0(r), g.reduced_mass);
+        let c = -TSUJI_PREFACTOR * tsuji_beta(0.5);
+        let touched = || ContactHistory {
+            touched: true,
+            ..Default::default()
+        };
+        for d in [0.3, 1.0, 5.0] {
+            let delta = d * d0;
+            let (fp, fq) = (
+                p.normal_force(delta, 0.2, &g, &mut touched()),
+                q.normal_force(delta, 0.2, &g, &mut touched()),
+            );
+            // the same elastic force, the damping from √(R*δ) instead of a
+            assert_eq!(fp.conservative, fq.conservative);
+            let rho = (r * delta).sqrt();
+            assert!(rho < fp.contact_radius);
+            assert_relative_eq!(
+                fq.force - fq.conservative,
+                c * (2.0 * q.e_star() * rho * m).sqrt() * 0.2,
+                max_relative = 1e-12
+            );
+            assert_relative_eq!(
+                fp.force - fp.conservative,
+                c * (2.0 * p.e_star() * fp.contact_radius * m).sqrt() * 0.2,
+                max_relative = 1e-12
+            );
+            // tangential: the spring keeps 8G*·a, the dashpot takes 8G*·√(R*δ)
+            let v = DVec3::new(0.0, 1e-3, 0.0);
+            let (mut sp, mut sq) = (DVec3::ZERO, DVec3::ZERO);
+            let tp = p.tangential_force(&kin(DVec3::X, v, delta), &fp, &g, 1e-12, &mut sp);
+            let tq = q.tangential_force(&kin(DVec3::X, v, delta), &fq, &g, 1e-12, &mut sq);
+            assert_eq!(tp.stiffness, tq.stiffness);
+            assert_eq!(sp, sq);
+            let st = 8.0 * q.g_star() * fq.contact_radius;
+            let ct = c * (8.0 * q.g_star() * rho * m).sqrt();
+            assert!(!tq.sliding);
+            assert!((tq.force - (-st * sq - ct * v)).length() < 1e-12 * tq.force.length());
+            assert!(tq.force.length() < tp.force.length());
+        }
+        // negative overlap: the contact holds and attracts, the Hertz-rule dashpots are off
+        let delta = -0.5 * d0;
+        let (fp, fq) = (
+            p.normal_force(delta, -0.2, &g, &mut touched()),
+            q.normal_force(delta, -0.2, &g, &mut touched()),
+        );
+        assert!(fq.in_contact && fq.contact_radius > 0.0);
+        assert_eq!(fq.force, fq.conservative);
+        assert!(fp.force < fp.conservative);
+        let v = DVec3::new(0.0, 1e-3, 0.0);
+        let mut sq = DVec3::ZERO;
+        let tq = q.tangential_force(&kin(DVec3::X, v, delta), &fq, &g, 1e-12, &mut sq);
+        assert!((tq.force + tq.stiffness * sq).length() <= 1e-15 * tq.force.length());
+        // no damping at the contact's edges (δ = 0 and the pull-off overlap)
+        for (delta, f) in q.edge_forces(&g, 1.0) {
+            let a = q.contact_radius(delta, r);
+            assert_eq!(f, q.elastic_force(a, r), "edge at {delta}");
+        }
+        // validation and serde: the default is the contact radius; "hertz" round-trips
+        assert!(q.validate().is_ok());
+        let json = serde_json::to_string(&q).unwrap();
+        assert!(json.contains("\"stiffness\":\"hertz\""), "{json}");
+        assert_eq!(serde_json::from_str::<JkrParams>(&json).unwrap(), q);
+        assert_eq!(TsujiStiffness::default(), TsujiStiffness::ContactRadius);
+        assert_eq!(TsujiStiffness::Hertz.name(), "hertz");
+    }
+
     #[test]
     fn tangential_spring_and_coulomb_limit() {
         let p = JkrParams {
             friction: 0.3,
-            dissipation: Dissipation::Tsuji { restitution: 0.5 },
+            dissipation: Dissipation::tsuji(0.5),
             ..params()
         };
         let r = reff();
@@ -1508,7 +1673,7 @@ mod tests {
         let mut s = DVec3::new(0.0, 1e-3 * d0, 0.0);
         let v = DVec3::new(0.0, 0.0, 1e-6);
         let dt = 1e-9;
-        let t = p.tangential_force(n, v, &normal, &g, dt, &mut s);
+        let t = p.tangential_force(&kin(n, v, d0), &normal, &g, dt, &mut s);
         let s_expect = DVec3::new(0.0, 1e-3 * d0, 1e-15);
         assert!((s - s_expect).length() < 1e-12 * s_expect.length());
         let f_expect = -st * s_expect - ct * v;
@@ -1517,7 +1682,7 @@ mod tests {
         assert_relative_eq!(t.stiffness, st, max_relative = 1e-15);
         // above the limit: |F| = μs·|F_N + 2Fc| exactly, spring consistent with the force
         let mut s = DVec3::new(0.0, 10.0 * d0, 0.0);
-        let t = p.tangential_force(n, v, &normal, &g, dt, &mut s);
+        let t = p.tangential_force(&kin(n, v, d0), &normal, &g, dt, &mut s);
         assert!(t.sliding);
         assert_relative_eq!(t.force.length(), limit, max_relative = 1e-14);
         assert!((-st * s - ct * v - t.force).length() < 1e-12 * limit);
@@ -1525,16 +1690,16 @@ mod tests {
         // a new tangent plane: the spring is rotated, keeping its length
         let mut s = DVec3::new(0.0, 1e-3 * d0, 0.0);
         let n2 = DVec3::new(0.6, 0.8, 0.0);
-        let t2 = p.tangential_force(n2, DVec3::ZERO, &normal, &g, dt, &mut s);
+        let t2 = p.tangential_force(&kin(n2, DVec3::ZERO, d0), &normal, &g, dt, &mut s);
         assert!(s.dot(n2).abs() < 1e-15 * s.length());
         assert_relative_eq!(s.length(), 1e-3 * d0, max_relative = 1e-14);
         assert_relative_eq!(t2.force.length(), st * 1e-3 * d0, max_relative = 1e-14);
         // no friction, or no contact: spring zeroed, no force
         let mut s = DVec3::new(0.0, 1e-3 * d0, 0.0);
-        let t = params().tangential_force(n, v, &normal, &g, dt, &mut s);
+        let t = params().tangential_force(&kin(n, v, d0), &normal, &g, dt, &mut s);
         assert_eq!((t, s), (Tangential::default(), DVec3::ZERO));
         let mut s = DVec3::new(0.0, 1e-3 * d0, 0.0);
-        let t = p.tangential_force(n, v, &NormalForce::default(), &g, dt, &mut s);
+        let t = p.tangential_force(&kin(n, v, d0), &NormalForce::default(), &g, dt, &mut s);
         assert_eq!((t, s), (Tangential::default(), DVec3::ZERO));
         // Hertz: the limit is μs·F_N
         let hz = JkrParams {
@@ -1543,7 +1708,7 @@ mod tests {
         };
         let nh = hz.normal_force(1e-9, 0.0, &g, &mut ContactHistory::default());
         let mut s = DVec3::new(0.0, 1e-6, 0.0);
-        let t = hz.tangential_force(n, DVec3::ZERO, &nh, &g, dt, &mut s);
+        let t = hz.tangential_force(&kin(n, DVec3::ZERO, 1e-9), &nh, &g, dt, &mut s);
         assert_relative_eq!(
             t.force.length(),
             0.3 * nh.conservative,
@@ -1806,11 +1971,11 @@ mod tests {
         assert_eq!(bad(|p| p.poisson = -1.0).param, "poisson");
         assert_eq!(bad(|p| p.surface_energy = -1.0).param, "surface_energy");
         assert_eq!(
-            bad(|p| p.dissipation = Dissipation::Tsuji { restitution: 0.0 }).param,
+            bad(|p| p.dissipation = Dissipation::tsuji(0.0)).param,
             "restitution"
         );
         assert_eq!(
-            bad(|p| p.dissipation = Dissipation::Tsuji { restitution: 1.1 }).param,
+            bad(|p| p.dissipation = Dissipation::tsuji(1.1)).param,
             "restitution"
         );
         let pl = |d, alpha, beta| Dissipation::PowerLaw { d, alpha, beta };
@@ -1863,7 +2028,7 @@ mod tests {
         .unwrap();
         assert_eq!(q.stiffness_scale, 1.0);
         assert_eq!(q.pulloff, Pulloff::Force);
-        assert_eq!(q.dissipation, Dissipation::Tsuji { restitution: 0.5 });
+        assert_eq!(q.dissipation, Dissipation::tsuji(0.5));
     }
 }
 

@@ -11,7 +11,7 @@ pub mod lsd;
 pub mod params;
 
 pub use hysteretic::{AdhesionMode, HystereticParams, K2Rule};
-pub use jkr::{Dissipation, JkrParams, Pulloff};
+pub use jkr::{Dissipation, JkrParams, Pulloff, TsujiStiffness};
 pub use lsd::LsdParams;
 
 use crate::error::ParamError;
@@ -164,8 +164,7 @@ impl ContactModel {
                     ..Default::default()
                 };
                 if normal.in_contact && p.friction > 0.0 {
-                    let t =
-                        p.tangential_force(k.n, k.v_t, &normal, geom, dt, &mut history.tangential);
+                    let t = p.tangential_force(k, &normal, geom, dt, &mut history.tangential);
                     r.tangential = t.force;
                     r.potential += 0.5 * t.stiffness * history.tangential.length_squared();
                 }

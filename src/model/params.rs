@@ -5,7 +5,7 @@
 
 use super::{
     AdhesionMode, ContactModel, Dissipation, HystereticParams, JkrParams, K2Rule, LsdParams,
-    Pulloff,
+    Pulloff, TsujiStiffness,
 };
 use crate::error::ParamError;
 
@@ -315,6 +315,7 @@ param!(
     Rule::LeftOpen(0.0, 1.0),
     "the target restitution e of dissipation = \"tsuji\" (paper 002 eq. 12)"
 );
+param!(TSUJI_STIFFNESS, "tsuji_stiffness", Choice(&["contact-radius", "hertz"]), "", Word("contact-radius"), Rule::None, "the stiffness of the Tsuji dashpots: \"contact-radius\" Sn = 2E* a, St = 8G* a (a the JKR contact radius, also at negative overlap) or \"hertz\" Sn = 2E* sqrt(R* delta), St = 8G* sqrt(R* delta), 0 at delta <= 0 (paper 002 eqs. 13-16)");
 param!(
     POWER_D,
     "D",
@@ -430,7 +431,7 @@ pub const DISSIPATIONS: &[Law] = &[
     Law {
         name: "tsuji",
         doc: "Tsuji damping calibrated by the restitution (paper 002 eqs. 11-13, 16)",
-        params: &[&RESTITUTION],
+        params: &[&RESTITUTION, &TSUJI_STIFFNESS],
         dissipation: false,
     },
     Law {
@@ -768,6 +769,10 @@ fn build(law: &Law, dissipation: Option<&Law>, v: &Values) -> ContactModel {
             let dissipation = match dissipation.map_or("none", |d| d.name) {
                 "tsuji" => Dissipation::Tsuji {
                     restitution: v.num(&RESTITUTION),
+                    stiffness: match v.word(&TSUJI_STIFFNESS) {
+                        "hertz" => TsujiStiffness::Hertz,
+                        _ => TsujiStiffness::ContactRadius,
+                    },
                 },
                 "powerlaw" => Dissipation::PowerLaw {
                     d: v.num(&POWER_D),
