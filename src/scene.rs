@@ -45,10 +45,25 @@
 //! adhesion = "jump-in"          # "jump-in" (default) or "reversible"
 //! gamma0 = 0.0                  # kg/s, >= 0, default 0: viscous damping in contact
 //! k2_rule = "linear"            # "linear" (default) or "sqrt": how k2 grows with delta_max
+//! # Luding's friction (hysteretic and lsd; README "Luding's sliding, rolling and twisting
+//! # friction"); > 0 makes particles rotate; CPU only so far. Lever a12 = 2R* (2r at a wall),
+//! # Coulomb load max(0, f_n + kc delta + fa) (lsd: max(0, f_n)):
+//! friction = 0.0                # >= 0, default 0 (off): static sliding coefficient mu_s
+//! friction_dynamic = 0.0        # 0 <= mu_d <= mu_s, default friction
+//! kt = 28.6                     # N/m, > 0, default 2/7 k1 (lsd: 2/7 k)
+//! gamma_t = 0.0                 # kg/s, >= 0, default 2/7 gamma0
+//! rolling_friction = 0.0        # >= 0, default 0 (off): mu_r, torque <= mu_r a12 f_N*
+//! kr = 40.0                     # N/m, > 0, default 2/5 k1 (lsd: 2/5 k)
+//! gamma_r = 0.0                 # kg/s, >= 0, default 2/5 gamma0
+//! twisting_friction = 0.0       # >= 0, default 0 (off): mu_o, torque <= mu_o a12 f_N*
+//! ko = 40.0                     # N/m, > 0, default 2/5 k1 (lsd: 2/5 k)
+//! gamma_o = 0.0                 # kg/s, >= 0, default 2/5 gamma0
+//! # (a stiffness, damping or friction_dynamic without its coefficient > 0 is refused)
 //!
 //! # model = "lsd" (linear spring-dashpot):
 //! k = 300.0                     # required, N/m, > 0: spring stiffness
 //! gamma0 = 0.0                  # kg/s, >= 0, default 0: viscous damping
+//! # and Luding's friction keys as for "hysteretic"
 //!
 //! # model = "jkr" (JKR adhesive elastic spheres) or "hertz" (the same without adhesion):
 //! youngs = 1e8                  # required, Pa, > 0: Young's modulus E of the material
@@ -78,6 +93,9 @@
 //! pulloff = "displacement"      # jkr only: "displacement" (default, breaks at
 //!                               # -(3/4)^(2/3) delta0) or "force" (breaks at F = -Fc)
 //! stiffness_scale = 1.0         # > 0, default 1: E -> S E and gamma -> gamma S^(2/5)
+//! twisting_friction = 0.0       # >= 0, default 0 (off): Luding's twisting, mu_o (CPU only)
+//! ko = 1e3                      # N/m, > 0, default 2/5 * 8 G* a at the current contact radius
+//! gamma_o = 0.0                 # kg/s, >= 0, default 0
 //!
 //! [[interaction]]               # optional: the model for a pair of materials
 //! materials = ["powder", "glass"]  # required: two material names (order does not matter)
@@ -2353,10 +2371,7 @@ radius = 1e-3
         }
         assert_eq!(
             s.materials[1].model,
-            ContactModel::Lsd(LsdParams {
-                k: 300.0,
-                gamma0: 1e-3
-            })
+            ContactModel::Lsd(LsdParams::new(300.0, 1e-3))
         );
         assert_eq!(s.interactions.len(), 1);
         assert_eq!(s.interactions[0].materials, [1, 0]);
@@ -2373,10 +2388,7 @@ radius = 1e-3
         assert!((s.particles[2].position[0] - 1e-3).abs() < 1e-15);
         assert!((s.particles[2].position[2] - 0.011).abs() < 1e-15);
         // pair models: override in either order, own model, missing pair
-        let lsd200 = ContactModel::Lsd(LsdParams {
-            k: 200.0,
-            gamma0: 0.0,
-        });
+        let lsd200 = ContactModel::Lsd(LsdParams::new(200.0, 0.0));
         assert_eq!(s.pair_model(0, 1).unwrap(), lsd200);
         assert_eq!(s.pair_model(1, 0).unwrap(), lsd200);
         assert_eq!(s.pair_model(1, 1).unwrap(), s.materials[1].model);

@@ -326,10 +326,7 @@ fn thornton_ning_from_a_yield_stress() {
     assert!((yield_velocity(&wall, y).unwrap() / vy - 2.0).abs() < 1e-12);
     assert!(yield_velocity(
         &CollideSpec::head_on(
-            ContactModel::Lsd(powder::model::LsdParams {
-                k: 1.0,
-                gamma0: 0.0
-            }),
+            ContactModel::Lsd(powder::model::LsdParams::new(1.0, 0.0)),
             R,
             RHO,
             1.0

@@ -58,7 +58,7 @@ fn floor() -> Wall {
 fn sphere_settles_on_a_floor_at_mg_over_k() {
     let k = 1000.0;
     let s = scene(
-        ContactModel::Lsd(LsdParams { k, gamma0: 0.02 }),
+        ContactModel::Lsd(LsdParams::new(k, 0.02)),
         vec![particle([0.0, 0.0, 1.2e-3], [0.0; 3])],
         vec![floor()],
         -9.81,
@@ -102,7 +102,7 @@ fn sphere_settles_on_a_floor_at_mg_over_k() {
 fn wall_bounce_matches_lsd_restitution() {
     let (k, gamma0) = (1000.0, 2e-3);
     let s = scene(
-        ContactModel::Lsd(LsdParams { k, gamma0 }),
+        ContactModel::Lsd(LsdParams::new(k, gamma0)),
         vec![particle([0.0, 0.0, 1.01e-3], [0.0, 0.0, -0.1])],
         vec![floor()],
         0.0,

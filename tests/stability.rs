@@ -258,10 +258,7 @@ fn pair_scene(dt: DtSetting, force_dt: bool, v: f64, domain: f64) -> Scene {
         materials: vec![Material {
             name: "m".into(),
             density: 2000.0,
-            model: ContactModel::Lsd(LsdParams {
-                k: 100.0,
-                gamma0: 0.0,
-            }),
+            model: ContactModel::Lsd(LsdParams::new(100.0, 0.0)),
         }],
         interactions: vec![],
         walls: vec![],

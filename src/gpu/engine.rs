@@ -471,6 +471,9 @@ fn split_pair_force(slots: u64, max_binding: u64) -> bool {
 /// The step a scene's pair models need and their pair table as bytes, or why the GPU
 /// cannot run them together.
 fn pair_table(models: &[ContactModel]) -> Result<(StepKind, Vec<u8>), PowderError> {
+    if let Some(why) = models.iter().find_map(ContactModel::gpu_refusal) {
+        return Err(PowderError::Run(why));
+    }
     let jkr: Vec<&crate::model::JkrParams> = models
         .iter()
         .filter_map(|m| match m {

@@ -23,8 +23,9 @@
 //! x = 1, d = 1, F = 0.
 
 use crate::error::ParamError;
+use crate::model::friction::{self, rotate_into_plane, LudingFriction};
 use crate::model::krijt::{self, KrijtLaw, Relaxation};
-use crate::model::{ContactHistory, NormalForce, PairGeometry};
+use crate::model::{ContactHistory, Kinematics, NormalForce, PairGeometry};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
@@ -210,6 +211,12 @@ pub struct JkrParams {
     /// Stiffness scale S > 0 (typically ≤ 1): E → S·E and γ → γ·S^(2/5) (paper 002 eq. 24).
     #[serde(default = "default_stiffness_scale")]
     pub stiffness_scale: f64,
+    /// Luding's twisting resistance ([`crate::model::friction::twisting`]; only `twisting`
+    /// is used: the family has its own sliding and rolling laws). Its stiffness 0 means the
+    /// Mindlin-derived k_o = 2/5·8G*·a at the current contact radius
+    /// ([`Self::twisting_stiffness`]).
+    #[serde(default)]
+    pub luding: LudingFriction,
 }
 
 /// Tangential force of one contact.
@@ -286,25 +293,6 @@ pub fn tsuji_beta(restitution: f64) -> f64 {
 pub fn potential_shape(x: f64) -> f64 {
     let x2 = x * x;
     4.8 * x2 * x2 * x - 8.0 * x2 * x * x.sqrt() + 2.0 * x2
-}
-
-/// Rotates `v` into the plane normal to `n`, keeping its length (zero if `v` ∥ `n`).
-///
-/// The contact frame turns with the pair; projecting alone would shrink a stored spring
-/// and so destroy elastic energy (and torque) by frame rotation alone; rescaling to the
-/// old length keeps |v| and ½k|v|² (the usual history rotation of LIGGGHTS/LAMMPS).
-fn rotate_into_plane(v: DVec3, n: DVec3) -> DVec3 {
-    let len = v.length();
-    if len == 0.0 {
-        return DVec3::ZERO;
-    }
-    let p = v - n * n.dot(v);
-    let lp = p.length();
-    if lp > 1e-12 * len {
-        p * (len / lp)
-    } else {
-        DVec3::ZERO
-    }
 }
 
 // Constants of the deflated solve (see `solve_t_f64`): c = 2·s_min, b = 2·s_min²,
@@ -394,6 +382,7 @@ impl JkrParams {
             rolling_hysteresis: 0.0,
             pulloff: Pulloff::Displacement,
             stiffness_scale: 1.0,
+            luding: LudingFriction::default(),
         }
     }
 
@@ -468,6 +457,21 @@ impl JkrParams {
                     ),
                 ));
             }
+        }
+        let twisting = &self.luding.twisting;
+        p::TWISTING_FRICTION.check(twisting.mu_s)?;
+        p::GAMMA_O.check(twisting.gamma)?;
+        if twisting.k != 0.0 {
+            p::KO.check(twisting.k)?;
+        }
+        if self.luding.sliding.is_on()
+            || self.luding.rolling.is_on()
+            || twisting.mu_d != twisting.mu_s
+        {
+            return Err(ParamError::new(
+                "twisting_friction",
+                "the JKR family takes Luding's twisting only: its sliding friction is `friction` (Mindlin, paper 002 eqs. 14-17) and its rolling resistance `rolling_hysteresis` (paper 002 eqs. 18-22)",
+            ));
         }
         if self.rolling_hysteresis > 0.0 && self.surface_energy <= 0.0 {
             return Err(ParamError::new(
@@ -873,6 +877,77 @@ impl JkrParams {
             stiffness: kr,
             yielding,
         }
+    }
+
+    /// The twisting stiffness at contact radius `a`: the given k_o, or (k_o = 0, the default)
+    /// 2/5 of the Mindlin tangential stiffness 8G*·a, N/m. Luding's k_o = 2/5·k scaling of the
+    /// normal stiffness k, with the tangential stiffness 8G*a (= 0.82·2E*a, the Hertz normal
+    /// tangent stiffness, for ν = 0.3) standing in for k: the twisting oscillator then has
+    /// about the normal period for two equal spheres.
+    pub fn twisting_stiffness(&self, a: f64) -> f64 {
+        let k = self.luding.twisting.k;
+        if k > 0.0 {
+            k
+        } else {
+            0.4 * 8.0 * self.g_star() * a
+        }
+    }
+
+    /// Luding's twisting resistance of a JKR/Hertz contact over a step: the couple on i
+    /// (−it on j) and the spring's energy ½·k_o·ξ_o². The Coulomb load is |F_el + 2Fc| as for
+    /// the sliding friction (paper 002 eq. 17), the lever a12 = 2R*, the stiffness
+    /// [`Self::twisting_stiffness`] at the current contact radius. Acts while the contact
+    /// exists (also in a stretched neck at δ < 0, as the sliding friction); the spring is
+    /// forgotten with the history at pull-off.
+    pub fn twisting(
+        &self,
+        k: &Kinematics,
+        normal: &NormalForce,
+        geom: &PairGeometry,
+        dt: f64,
+        twist: &mut f64,
+    ) -> (DVec3, f64) {
+        let load = (normal.conservative + 2.0 * self.fc(geom.r_eff())).abs();
+        let ko = self.twisting_stiffness(normal.contact_radius);
+        if ko <= 0.0 {
+            *twist = 0.0;
+            return (DVec3::ZERO, 0.0);
+        }
+        let (couple, st) = friction::twisting::step(
+            &self.luding.twisting,
+            ko,
+            k.n,
+            k.omega_rel,
+            geom.a12,
+            load,
+            dt,
+            twist,
+        );
+        (couple, 0.5 * ko * st.spring * st.spring)
+    }
+
+    /// The twisting oscillator for the time step, with the stiffness at the largest contact
+    /// radius: the Hertz one at impact speed `v`, or a0 if larger (JKR).
+    pub fn twisting_oscillator(&self, geom: &PairGeometry, v: f64) -> Option<friction::Oscillator> {
+        if !self.luding.twisting.is_on() {
+            return None;
+        }
+        let r = geom.r_eff();
+        // the undamped Hertz overlap: ½m*v² = 8/15·E*·√R*·δ^(5/2)
+        let es = self.e_star();
+        let delta = (15.0 * geom.reduced_mass * v * v / (16.0 * es * r.sqrt())).powf(0.4);
+        let hertz = (r * delta).sqrt();
+        let a = if self.gamma() > 0.0 {
+            hertz.max(self.a0(r))
+        } else {
+            hertz
+        };
+        Some(friction::Oscillator {
+            k: self.twisting_stiffness(a),
+            mass: geom.rotational_mass,
+            gamma: self.luding.twisting.gamma,
+            what: "twisting",
+        })
     }
 
     /// Hertz contact time 2.87·(m*²/(R*·E*²·v))^(1/5) at impact speed `v` (scaled E*), s.
