@@ -122,6 +122,36 @@ fn jkr_scene_errors_name_the_key() {
     );
 }
 
+/// Luding's friction keys in a scene: JKR takes the twisting trio (its own sliding and
+/// rolling laws otherwise); a stiffness without its coefficient is refused at its line.
+#[test]
+fn luding_friction_keys_in_a_scene() {
+    let s = Scene::from_toml_str(
+        &JKR_SCENE.replace(
+            "pulloff = \"force\"",
+            "twisting_friction = 0.1\ngamma_o = 1e-9",
+        ),
+        "jkr",
+    )
+    .unwrap();
+    let ContactModel::Jkr(p) = s.materials[0].model else {
+        panic!("not jkr")
+    };
+    let o = p.luding.twisting;
+    assert_eq!((o.mu_s, o.k, o.gamma), (0.1, 0.0, 1e-9));
+    let err = |text: String| Scene::from_toml_str(&text, "jkr").unwrap_err().to_string();
+    let e = err(JKR_SCENE.replace("pulloff = \"force\"", "ko = 5.0"));
+    assert!(
+        e.contains("ko is given but twisting_friction = 0") && e.contains("line 23"),
+        "{e}"
+    );
+    let e = err(JKR_SCENE.replace("pulloff = \"force\"", "kt = 5.0"));
+    assert!(
+        e.contains("`kt` is a parameter of the `hysteretic` model"),
+        "{e}"
+    );
+}
+
 #[test]
 fn more_particles_than_memory_holds_are_refused_with_what_fits() {
     if powder::memory::available().is_none() {
