@@ -28,6 +28,7 @@ fn scene() -> Scene {
                         2e-3 + 2.4 * r * k as f64,
                     ],
                     velocity: [0.0; 3],
+                    angular_velocity: [0.0; 3],
                     radius: r,
                     material: 0,
                     insert_at: 0.0,

@@ -242,6 +242,7 @@ pub fn pair_params() -> HystereticParams {
         adhesion: AdhesionMode::default(),
         gamma0: 0.0,
         k2_rule: K2Rule::default(),
+        luding: Default::default(),
     }
 }
 

@@ -91,6 +91,7 @@ pub fn packing(case: Case, n: usize, velocity_scale: f64, seed: u64) -> Result<S
                 adhesion: AdhesionMode::default(),
                 gamma0: 1e-3,
                 k2_rule: K2Rule::default(),
+                luding: Default::default(),
             }),
             1.0,
             0.02,
@@ -107,6 +108,7 @@ pub fn packing(case: Case, n: usize, velocity_scale: f64, seed: u64) -> Result<S
                 rolling_hysteresis: 0.5,
                 pulloff: Pulloff::default(),
                 stiffness_scale: 1.0,
+                luding: Default::default(),
             }),
             0.1,
             0.02,
@@ -141,6 +143,7 @@ pub fn packing(case: Case, n: usize, velocity_scale: f64, seed: u64) -> Result<S
             velocity,
             radius,
             material: 0,
+            angular_velocity: [0.0; 3],
             insert_at: 0.0,
         });
     }

@@ -28,8 +28,9 @@ fn codec(limit: u64) -> impl bincode::Options {
 }
 /// Bumped whenever the state layout changes, or the GPU step's arithmetic does (a resume
 /// continues bitwise only with the same arithmetic; 6: the hysteretic model's divisions
-/// became multiplications by host-derived constants).
-const FORMAT: u32 = 6;
+/// became multiplications by host-derived constants; 7: the contact history holds Luding's
+/// twisting spring and the models their friction parameters).
+const FORMAT: u32 = 7;
 
 #[derive(Serialize, Deserialize)]
 struct Header {

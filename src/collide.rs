@@ -106,9 +106,16 @@ pub struct CollideResult {
     pub e_analytic: Option<f64>,
     /// Whether the closed form predicts sticking (where `e_analytic` applies).
     pub stuck_analytic: Option<bool>,
-    /// Tangential contact-point speed after / before (oblique impacts with friction;
-    /// `None` head-on, where there is no tangential motion to restitute).
+    /// Tangential restitution: the tangential contact-point velocity after, along its
+    /// direction before, over the speed before (−1: reversed, as an elastic sphere that
+    /// sticks throughout; 1: kept). Oblique impacts of models that rotate (friction, rolling
+    /// or twisting on); `None` head-on, where there is no tangential motion to restitute.
     pub e_tangential: Option<f64>,
+    /// Closed form of `e_tangential` where one applies: an elastic hysteretic or LSD pair
+    /// (k1 = kp, kc = fa = 0, γ0 = 0) with Luding's sliding friction only, k_t = 2/7·k, γ_t = 0,
+    /// μs = μd = μ: −1 for u_t ≤ 3.5·μ·v_n (sticking throughout), else 1 − 7·μ·v_n/u_t
+    /// ([`analytic::luding_tangential_restitution`]); oblique impacts only.
+    pub e_tangential_analytic: Option<f64>,
     /// Angular speed of sphere 1 at the end, rad/s (models with friction or rolling).
     pub omega_final: Option<f64>,
     /// Largest overlap reached, m.
@@ -253,6 +260,7 @@ impl CollideSpec {
             velocity: [0.0; 3],
             radius: self.radius1,
             material: 0,
+            angular_velocity: [0.0; 3],
             insert_at: 0.0,
         }];
         let mut walls = vec![];
@@ -276,6 +284,7 @@ impl CollideSpec {
                 velocity: [-vn * f2, -vt * f2, 0.0],
                 radius: self.radius2,
                 material: 0,
+                angular_velocity: [0.0; 3],
                 insert_at: 0.0,
             });
             x2
@@ -608,7 +617,7 @@ fn run_collision(
     let mut delta_c = None;
     let mut vt_in = None;
     let mut e = 0.0;
-    let mut vt_out = 0.0;
+    let mut vt_out = DVec3::ZERO;
     let mut vt_before = spec.pair_state(&view0, wall_x).3;
     let mut last;
     loop {
@@ -639,7 +648,7 @@ fn run_collision(
         let contact = delta > 0.0 || (touched && neck);
         if contact {
             if !touched {
-                vt_in = Some(vt_before.length());
+                vt_in = Some(vt_before);
             }
             touched = true;
             first_contact.get_or_insert(run.time() - dt);
@@ -660,7 +669,7 @@ fn run_collision(
         }
         if receding && delta <= -reach && !neck {
             e = -vn / vn0;
-            vt_out = vt.length();
+            vt_out = vt;
             break;
         }
     }
@@ -675,8 +684,13 @@ fn run_collision(
         e_analytic: None,
         stuck_analytic: None,
         e_tangential: (rotates && !stuck && !spec.is_head_on())
-            .then(|| vt_in.filter(|v| *v > 0.0).map(|v| vt_out / v))
+            .then(|| {
+                vt_in
+                    .filter(|v| v.length() > 0.0)
+                    .map(|v| vt_out.dot(v) / v.length_squared())
+            })
             .flatten(),
+        e_tangential_analytic: None,
         omega_final: rotates.then(|| last.omega[0].length()),
         delta_max,
         delta_max_analytic: None,
@@ -843,6 +857,9 @@ fn predict(spec: &CollideSpec, geom: &PairGeometry, result: &mut CollideResult) 
         result.delta_max_analytic = None;
         result.delta_c_analytic = None;
         result.contact_duration_analytic = None;
+        let psi = spec.impact_angle.to_radians();
+        result.e_tangential_analytic = analytic::luding_elastic_sliding(&spec.model)
+            .map(|mu| analytic::luding_tangential_restitution(mu, psi.sin(), psi.cos()));
     }
 }
 

@@ -5,8 +5,8 @@
 //! smallest radius), velocities (over the largest CPU speed), contact counts and the
 //! largest overlap (each engine's own contact statistics), the energy ledger (kinetic,
 //! stored, dissipated) and the per-contact history values (δmax, tangential spring,
-//! rolling displacement, Krijt contact radius) of every contact both engines hold. Granular flows are chaotic,
-//! so f32 and f64 trajectories separate exponentially once collisions chain up; compare
+//! rolling displacement, twisting spring, Krijt contact radius) of every contact both
+//! engines hold. Granular flows are chaotic, so f32 and f64 trajectories separate exponentially once collisions chain up; compare
 //! over the early steps, or judge the aggregate quantities (energy, contacts) later on.
 
 use crate::cpu::CpuEngine;
@@ -133,8 +133,8 @@ struct HistoryDeviation {
 }
 
 /// Compares δmax (pairs of the hysteretic model: `keeps_delta_max`), the tangential
-/// spring, ξ and the Krijt contact radius of every CPU contact with overlap against the
-/// GPU's copy of the same side.
+/// spring, ξ, the twisting spring and the Krijt contact radius of every CPU contact with
+/// overlap against the GPU's copy of the same side.
 fn history_deviation(
     cpu: &[((u32, u32), f64, ContactHistory)],
     gpu: &[((u32, u32), ContactHistory)],
@@ -143,7 +143,7 @@ fn history_deviation(
     let gpu: HashMap<(u32, u32), ContactHistory> = gpu.iter().copied().collect();
     let (mut compared, mut missing) = (0, 0);
     // per quantity: largest difference, largest value, Σ difference², Σ value²
-    let mut q = [[0.0f64; 4]; 4];
+    let mut q = [[0.0f64; 4]; 5];
     let mut add = |k: usize, diff: f64, value: f64| {
         q[k][0] = q[k][0].max(diff);
         q[k][1] = q[k][1].max(value);
@@ -170,6 +170,7 @@ fn history_deviation(
             (g.contact_radius - c.contact_radius).abs(),
             c.contact_radius,
         );
+        add(4, (g.twist - c.twist).abs(), c.twist.abs());
     }
     let of =
         |f: &dyn Fn(&[f64; 4]) -> f64| q.iter().filter(|x| x[1] > 0.0).map(f).fold(0.0, f64::max);

@@ -630,6 +630,9 @@ fn print_table(results: &[CollideResult], report: &CollideReport) {
     if results.iter().any(|r| r.e_tangential.is_some()) {
         columns.push(("e_t", 10, |r| fmt_opt(r.e_tangential)));
     }
+    if results.iter().any(|r| r.e_tangential_analytic.is_some()) {
+        columns.push(("e_t_analytic", 12, |r| fmt_opt(r.e_tangential_analytic)));
+    }
     if report.v_yield.is_some() {
         columns.push(("e_TN", 10, |r| fmt_opt(r.e_tn)));
         columns.push(("e_pl", 10, |r| fmt_opt(r.e_pl)));

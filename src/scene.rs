@@ -45,10 +45,25 @@
 //! adhesion = "jump-in"          # "jump-in" (default) or "reversible"
 //! gamma0 = 0.0                  # kg/s, >= 0, default 0: viscous damping in contact
 //! k2_rule = "linear"            # "linear" (default) or "sqrt": how k2 grows with delta_max
+//! # Luding's friction (hysteretic and lsd; README "Luding's sliding, rolling and twisting
+//! # friction"); > 0 makes particles rotate; CPU only so far. Lever a12 = 2R* (2r at a wall),
+//! # Coulomb load max(0, f_n + kc delta + fa) (lsd: max(0, f_n)):
+//! friction = 0.0                # >= 0, default 0 (off): static sliding coefficient mu_s
+//! friction_dynamic = 0.0        # 0 <= mu_d <= mu_s, default friction
+//! kt = 28.6                     # N/m, > 0, default 2/7 k1 (lsd: 2/7 k)
+//! gamma_t = 0.0                 # kg/s, >= 0, default 2/7 gamma0
+//! rolling_friction = 0.0        # >= 0, default 0 (off): mu_r, torque <= mu_r a12 f_N*
+//! kr = 40.0                     # N/m, > 0, default 2/5 k1 (lsd: 2/5 k)
+//! gamma_r = 0.0                 # kg/s, >= 0, default 2/5 gamma0
+//! twisting_friction = 0.0       # >= 0, default 0 (off): mu_o, torque <= mu_o a12 f_N*
+//! ko = 40.0                     # N/m, > 0, default 2/5 k1 (lsd: 2/5 k)
+//! gamma_o = 0.0                 # kg/s, >= 0, default 2/5 gamma0
+//! # (a stiffness, damping or friction_dynamic without its coefficient > 0 is refused)
 //!
 //! # model = "lsd" (linear spring-dashpot):
 //! k = 300.0                     # required, N/m, > 0: spring stiffness
 //! gamma0 = 0.0                  # kg/s, >= 0, default 0: viscous damping
+//! # and Luding's friction keys as for "hysteretic"
 //!
 //! # model = "jkr" (JKR adhesive elastic spheres) or "hertz" (the same without adhesion):
 //! youngs = 1e8                  # required, Pa, > 0: Young's modulus E of the material
@@ -82,6 +97,9 @@
 //! pulloff = "displacement"      # jkr only: "displacement" (default, breaks at
 //!                               # -(3/4)^(2/3) delta0) or "force" (breaks at F = -Fc)
 //! stiffness_scale = 1.0         # > 0, default 1: E -> S E and gamma -> gamma S^(2/5)
+//! twisting_friction = 0.0       # >= 0, default 0 (off): Luding's twisting, mu_o (CPU only)
+//! ko = 1e3                      # N/m, > 0, default 2/5 * 8 G* a at the current contact radius
+//! gamma_o = 0.0                 # kg/s, >= 0, default 0
 //!
 //! [[interaction]]               # optional: the model for a pair of materials
 //! materials = ["powder", "glass"]  # required: two material names (order does not matter)
@@ -113,6 +131,8 @@
 //! # radii = [1.1e-3, 1.0e-3]    # m, > 0, one per position (exactly one of radius / radii)
 //! velocities = [[0.0, 0.0, 0.0], [0.0, 0.0, -0.1]]  # m/s, optional, one per position; or
 //! # velocity = [0.0, 0.0, 0.0] # m/s for all; default zero
+//! # angular_velocity = [0.0, 0.0, 100.0]  # rad/s for all, any kind, default zero: only
+//! #                             # where a contact model makes particles rotate
 //!
 //! # kind = "lattice": simple cubic lattice, x fastest, then y, then z
 //! min = [0.0, 0.0, 0.0]         # required, m: region corner; spheres lie fully inside the region
@@ -295,6 +315,9 @@ pub struct ParticleInit {
     pub position: [f64; 3],
     /// m/s.
     pub velocity: [f64; 3],
+    /// rad/s: the spin it starts (or enters) with; only where a contact model makes
+    /// particles rotate.
+    pub angular_velocity: [f64; 3],
     /// m.
     pub radius: f64,
     /// Index into [`Scene::materials`].
@@ -439,6 +462,7 @@ const LIST_KEYS: &[&str] = &[
     "radii",
     "velocities",
     "velocity",
+    "angular_velocity",
     "insert_at",
 ];
 const LATTICE_KEYS: &[&str] = &[
@@ -449,6 +473,7 @@ const LATTICE_KEYS: &[&str] = &[
     "radius",
     "spacing",
     "velocity",
+    "angular_velocity",
     "jitter",
     "seed",
     "insert_at",
@@ -463,6 +488,7 @@ const RANDOM_KEYS: &[&str] = &[
     "radius",
     "size",
     "velocity",
+    "angular_velocity",
     "insert_at",
     "batches",
     "batch_interval",
@@ -1535,6 +1561,10 @@ fn block_velocity(t: &Tbl) -> Res<[f64; 3]> {
     Ok(t.vec3("velocity")?.unwrap_or([0.0; 3]))
 }
 
+fn block_angular_velocity(t: &Tbl) -> Res<[f64; 3]> {
+    Ok(t.vec3("angular_velocity")?.unwrap_or([0.0; 3]))
+}
+
 fn region(t: &Tbl) -> Res<([f64; 3], [f64; 3])> {
     let min = t.vec3_req("min", "the lower corner [x, y, z] of the region in m")?;
     let max = t.vec3_req("max", "the upper corner [x, y, z] of the region in m")?;
@@ -1629,10 +1659,12 @@ fn expand_list(t: &Tbl, names: &[&str], out: &mut Vec<ParticleInit>) -> Res<()> 
         }
         None => vec![block_velocity(t)?; n],
     };
+    let angular_velocity = block_angular_velocity(t)?;
     for i in 0..n {
         out.push(ParticleInit {
             position: positions[i],
             velocity: velocities[i],
+            angular_velocity,
             radius: radii[i],
             material,
             insert_at: 0.0,
@@ -1670,6 +1702,7 @@ fn expand_lattice(t: &Tbl, names: &[&str], out: &mut Vec<ParticleInit>) -> Res<(
     }
     let seed = t.u64("seed")?.unwrap_or(1);
     let velocity = block_velocity(t)?;
+    let angular_velocity = block_angular_velocity(t)?;
     let mut counts = [0u64; 3];
     for a in 0..3 {
         let free = max[a] - min[a] - 2.0 * radius;
@@ -1723,6 +1756,7 @@ fn expand_lattice(t: &Tbl, names: &[&str], out: &mut Vec<ParticleInit>) -> Res<(
                 out.push(ParticleInit {
                     position: p,
                     velocity,
+                    angular_velocity,
                     radius,
                     material,
                     insert_at: 0.0,
@@ -1937,6 +1971,7 @@ fn expand_random(
     )?;
     let size = parse_size(t)?;
     let velocity = block_velocity(t)?;
+    let angular_velocity = block_angular_velocity(t)?;
 
     let mut rng = Pcg64::seed_from_u64(seed);
     let radii: Vec<f64> = (0..count).map(|_| size.sample(&mut rng)).collect();
@@ -1979,6 +2014,7 @@ fn expand_random(
                 out.push(ParticleInit {
                     position: p,
                     velocity,
+                    angular_velocity,
                     radius: r,
                     material,
                     insert_at,
@@ -2357,10 +2393,7 @@ radius = 1e-3
         }
         assert_eq!(
             s.materials[1].model,
-            ContactModel::Lsd(LsdParams {
-                k: 300.0,
-                gamma0: 1e-3
-            })
+            ContactModel::Lsd(LsdParams::new(300.0, 1e-3))
         );
         assert_eq!(s.interactions.len(), 1);
         assert_eq!(s.interactions[0].materials, [1, 0]);
@@ -2377,10 +2410,7 @@ radius = 1e-3
         assert!((s.particles[2].position[0] - 1e-3).abs() < 1e-15);
         assert!((s.particles[2].position[2] - 0.011).abs() < 1e-15);
         // pair models: override in either order, own model, missing pair
-        let lsd200 = ContactModel::Lsd(LsdParams {
-            k: 200.0,
-            gamma0: 0.0,
-        });
+        let lsd200 = ContactModel::Lsd(LsdParams::new(200.0, 0.0));
         assert_eq!(s.pair_model(0, 1).unwrap(), lsd200);
         assert_eq!(s.pair_model(1, 0).unwrap(), lsd200);
         assert_eq!(s.pair_model(1, 1).unwrap(), s.materials[1].model);

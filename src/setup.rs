@@ -119,6 +119,19 @@ impl Resolved {
             .iter()
             .chain(&wall_models)
             .any(ContactModel::needs_rotation);
+        if !rotation {
+            if let Some((i, p)) = scene
+                .particles
+                .iter()
+                .enumerate()
+                .find(|(_, p)| p.angular_velocity != [0.0; 3])
+            {
+                return Err(PowderError::Scene(format!(
+                    "particle {i} starts with angular_velocity = {:?} rad/s, but no contact model of the scene has friction, rolling or twisting resistance, so particles do not rotate: remove angular_velocity or give the model friction",
+                    p.angular_velocity
+                )));
+            }
+        }
         Ok(Self {
             n_materials,
             models,

@@ -1004,6 +1004,90 @@ fn collide_shows_e_analytic_head_on_and_e_t_oblique_only() {
     assert!(out.lines().next().unwrap().contains("e_analytic"), "{out}");
 }
 
+/// `--friction` with the hysteretic law: an elastic oblique wall impact reports the
+/// tangential restitution beside its closed form (sliding throughout at 20°:
+/// e_t = 1 − 7μ·tan 20°), and the table shows both columns.
+#[test]
+fn collide_hysteretic_with_friction_reports_the_tangential_closed_form() {
+    let args = [
+        "collide",
+        "--model",
+        "hysteretic",
+        "--k1",
+        "100",
+        "--kp",
+        "100",
+        "--kc",
+        "0",
+        "--phi-f",
+        "0.05",
+        "--radius",
+        "1e-3",
+        "--density",
+        "2000",
+        "--velocity",
+        "0.1",
+        "--friction",
+        "0.3",
+        "--impact-angle",
+        "20",
+        "--wall",
+    ];
+    let mut json = args.to_vec();
+    json.push("--json");
+    let (ok, out, err) = powder(&json);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_collide_keys(&v, &out);
+    let expect = 1.0 - 7.0 * 0.3 * 20f64.to_radians().tan();
+    let et = v["e_tangential"].as_f64().unwrap();
+    assert!((v["e_tangential_analytic"].as_f64().unwrap() - expect).abs() < 1e-12);
+    assert!((et - expect).abs() < 1e-3, "{out}");
+    let (ok, out, err) = powder(&args);
+    assert!(ok, "{err}");
+    let header = out.lines().next().unwrap();
+    assert!(
+        header.contains("e_t ") && header.contains("e_t_analytic"),
+        "{out}"
+    );
+}
+
+/// Luding friction parameters that make no sense together are refused with the reason.
+#[test]
+fn collide_refuses_friction_parameters_without_their_coefficient() {
+    let base = [
+        "collide",
+        "--model",
+        "lsd",
+        "--k",
+        "100",
+        "--radius",
+        "1e-3",
+        "--density",
+        "2000",
+        "--velocity",
+        "0.1",
+    ];
+    let run = |extra: &[&str]| {
+        let mut args = base.to_vec();
+        args.extend_from_slice(extra);
+        powder(&args)
+    };
+    let (ok, _, err) = run(&["--kr", "40"]);
+    assert!(!ok);
+    assert!(
+        err.contains("kr is given but rolling_friction = 0")
+            && err.contains("rolling_friction > 0"),
+        "{err}"
+    );
+    let (ok, _, err) = run(&["--friction", "0.2", "--friction-dynamic", "0.3"]);
+    assert!(!ok);
+    assert!(
+        err.contains("friction_dynamic (0.3) must be <= friction (0.2)"),
+        "{err}"
+    );
+}
+
 #[test]
 fn analytic_kp_prime_of_appendix_a() {
     // paper 000 fig. 9: k1 = 100, kp = 500, φf = 0.05 → 0.5. By hand (eq. A.3): A = 400²/500

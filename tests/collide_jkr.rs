@@ -329,8 +329,11 @@ fn oblique_wall_impact_with_friction_spins_the_sphere_and_keeps_the_ledger() {
     let r = collide(&s).unwrap();
     assert!(!r.stuck);
     assert!(r.omega_final.unwrap() > 0.0, "friction makes it spin");
+    // u_t/v_n = cot 30° = 1.73 is below the rigid-body gross-sliding bound
+    // 3.5·μ·(1 + e) = 1.89: the slip stops, and the tangential spring turns the contact
+    // point back a little (e_t is signed: −1 = reversed)
     let et = r.e_tangential.unwrap();
-    assert!(et < 1.0 && et > 0.0, "tangential restitution {et}");
+    assert!(et < 0.0 && et > -1.0, "tangential restitution {et}");
     assert!(
         r.energy.balance_error.unwrap() < 2e-3,
         "{}",
@@ -423,10 +426,7 @@ fn thornton_ning_from_a_yield_stress() {
     assert!((yield_velocity(&wall, y).unwrap() / vy - 2.0).abs() < 1e-12);
     assert!(yield_velocity(
         &CollideSpec::head_on(
-            ContactModel::Lsd(powder::model::LsdParams {
-                k: 1.0,
-                gamma0: 0.0
-            }),
+            ContactModel::Lsd(powder::model::LsdParams::new(1.0, 0.0)),
             R,
             RHO,
             1.0

@@ -5,7 +5,7 @@ use powder::model::{ContactModel, LsdParams};
 
 fn spec(k: f64, gamma0: f64, r2: f64) -> CollideSpec {
     CollideSpec {
-        model: ContactModel::Lsd(LsdParams { k, gamma0 }),
+        model: ContactModel::Lsd(LsdParams::new(k, gamma0)),
         radius1: 1e-3,
         radius2: r2,
         density: 2500.0,

@@ -191,6 +191,7 @@ mod collisions {
             ContactModel::Lsd(LsdParams {
                 k: 1000.0,
                 gamma0: 5e-3,
+                luding: Default::default(),
             }),
             1e-3,
             2500.0,

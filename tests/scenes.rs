@@ -169,6 +169,60 @@ fn jkr_scene_errors_name_the_key() {
     );
 }
 
+/// Luding's friction keys in a scene: JKR takes the twisting trio (its own sliding and
+/// rolling laws otherwise); a stiffness without its coefficient is refused at its line.
+#[test]
+fn luding_friction_keys_in_a_scene() {
+    let s = Scene::from_toml_str(
+        &JKR_SCENE.replace(
+            "pulloff = \"force\"",
+            "twisting_friction = 0.1\ngamma_o = 1e-9",
+        ),
+        "jkr",
+    )
+    .unwrap();
+    let ContactModel::Jkr(p) = s.materials[0].model else {
+        panic!("not jkr")
+    };
+    let o = p.luding.twisting;
+    assert_eq!((o.mu_s, o.k, o.gamma), (0.1, 0.0, 1e-9));
+    let err = |text: String| Scene::from_toml_str(&text, "jkr").unwrap_err().to_string();
+    let e = err(JKR_SCENE.replace("pulloff = \"force\"", "ko = 5.0"));
+    assert!(
+        e.contains("ko is given but twisting_friction = 0") && e.contains("line 23"),
+        "{e}"
+    );
+    let e = err(JKR_SCENE.replace("pulloff = \"force\"", "kt = 5.0"));
+    assert!(
+        e.contains("`kt` is a parameter of the `hysteretic` model"),
+        "{e}"
+    );
+}
+
+/// A particle block's `angular_velocity` starts the spin where particles rotate (the CPU
+/// engine holds it from step 0; the GPU's is `tests/gpu_friction.rs`), and is refused with
+/// the particle named where no contact model makes them rotate.
+#[test]
+fn angular_velocity_starts_the_spin_where_particles_rotate() {
+    let spin = JKR_SCENE.replace(
+        "radius = 5e-6",
+        "radius = 5e-6\nangular_velocity = [1.0, 2.0, 3.0]",
+    );
+    let s = Scene::from_toml_str(&spin, "spin").unwrap();
+    assert_eq!(s.particles[0].angular_velocity, [1.0, 2.0, 3.0]);
+    let e = CpuEngine::new(&s).unwrap();
+    assert_eq!(e.angular_velocities()[0].to_array(), [1.0, 2.0, 3.0]);
+    let still = spin
+        .replace("friction = 0.2", "friction = 0.0")
+        .replace("rolling_hysteresis = 0.3", "rolling_hysteresis = 0.0");
+    let s = Scene::from_toml_str(&still, "spin").unwrap();
+    let e = CpuEngine::new(&s).err().unwrap().to_string();
+    assert!(
+        e.contains("particle 0 starts with angular_velocity") && e.contains("do not rotate"),
+        "{e}"
+    );
+}
+
 #[test]
 fn more_particles_than_memory_holds_are_refused_with_what_fits() {
     if powder::memory::available().is_none() {

@@ -194,6 +194,7 @@ fn sticking_oscillations_keep_their_amplitude_or_settle() {
             ParticleInit {
                 position: [0.0; 3],
                 velocity: [0.1165, 0.0, 0.0],
+                angular_velocity: [0.0; 3],
                 radius: 1.1e-3,
                 material: 0,
                 insert_at: 0.0,
@@ -201,6 +202,7 @@ fn sticking_oscillations_keep_their_amplitude_or_settle() {
             ParticleInit {
                 position: [2.2001e-3, 0.0, 0.0],
                 velocity: [-0.1165, 0.0, 0.0],
+                angular_velocity: [0.0; 3],
                 radius: 1.1e-3,
                 material: 0,
                 insert_at: 0.0,
@@ -258,10 +260,7 @@ fn pair_scene(dt: DtSetting, force_dt: bool, v: f64, domain: f64) -> Scene {
         materials: vec![Material {
             name: "m".into(),
             density: 2000.0,
-            model: ContactModel::Lsd(LsdParams {
-                k: 100.0,
-                gamma0: 0.0,
-            }),
+            model: ContactModel::Lsd(LsdParams::new(100.0, 0.0)),
         }],
         interactions: vec![],
         walls: vec![],
@@ -269,6 +268,7 @@ fn pair_scene(dt: DtSetting, force_dt: bool, v: f64, domain: f64) -> Scene {
             ParticleInit {
                 position: [-1.2e-3, 0.0, 0.0],
                 velocity: [v, 0.0, 0.0],
+                angular_velocity: [0.0; 3],
                 radius: 1e-3,
                 material: 0,
                 insert_at: 0.0,
@@ -276,6 +276,7 @@ fn pair_scene(dt: DtSetting, force_dt: bool, v: f64, domain: f64) -> Scene {
             ParticleInit {
                 position: [1.2e-3, 0.0, 0.0],
                 velocity: [-v, 0.0, 0.0],
+                angular_velocity: [0.0; 3],
                 radius: 1e-3,
                 material: 0,
                 insert_at: 0.0,

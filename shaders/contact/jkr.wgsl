@@ -1,5 +1,5 @@
 // contact/jkr.wgsl — the JKR family's normal law (JKR, Hertz) in f32: the twin of
-// `src/model/jkr.rs` (papers 001 §II and 002 §2–3). Normal force with contact hysteresis and
+// `src/model/jkr/mod.rs` (papers 001 §II and 002 §2–3). Normal force with contact hysteresis and
 // the Tsuji or power-law damping. The `krijt` and `stress` dissipations (contact/krijt.wgsl),
 // the Mindlin tangential spring (contact/mindlin.wgsl) and the rolling resistance
 // (contact/jkr_rolling.wgsl) are sub-models composed in where some pair uses them. Tests tie

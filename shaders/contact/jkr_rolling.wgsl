@@ -1,7 +1,7 @@
 // contact/jkr_rolling.wgsl — the rolling resistance of the JKR family (paper 002 eqs.
 // 18–22, Dominik–Tielens/Krijt) in f32: the twin of `JkrParams::rolling_torque` in
-// `src/model/jkr.rs`. Composed in where some JKR pair has rolling resistance; keeps the
-// history field `xi` (`model::jkr::ROLLING_HISTORY`), the same seen from both sides.
+// `src/model/jkr/rolling.rs`. Composed in where some JKR pair has rolling resistance; keeps the
+// history field `xi` (`model::jkr::rolling::HISTORY`), the same seen from both sides.
 
 // Rolling-resistance torque on i: xi rotated into the tangent plane, xi += v_roll·dt,
 // truncated at xi_crit = (a0_unscaled/12)·(delta gamma/gamma); torque −kr·(n × xi) with

@@ -1,7 +1,7 @@
 // contact/mindlin.wgsl — the tangential spring of the JKR family (paper 002 eqs. 14–17) in
-// f32: the twin of `JkrParams::tangential_force` in `src/model/jkr.rs`. Composed in where
+// f32: the twin of `JkrParams::tangential_force` in `src/model/jkr/mindlin.rs`. Composed in where
 // some JKR/Hertz pair has friction; keeps the history field `spring`
-// (`model::jkr::SLIDING_HISTORY`), in the evaluating particle's frame.
+// (`model::jkr::mindlin::HISTORY`), in the evaluating particle's frame.
 
 // Tangential force on i: the spring rotated into the tangent plane, s += v_t·dt,
 // F = −St·s − c_t·v_t with St = 8G*·a and c_t = tsuji·sqrt(8G*·rho·m*) (rho:

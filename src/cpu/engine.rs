@@ -110,10 +110,12 @@ struct ContactRecord {
     delta: f64,
     force: f64,
     tangential: DVec3,
-    rolling_torque: DVec3,
+    /// The antisymmetric couple on i (rolling and twisting resistance; −it on j).
+    couple: DVec3,
     potential: f64,
     /// Tangential contact velocity and relative angular velocity the forces were
-    /// evaluated with (the power of friction and rolling is integrated trapezoidally).
+    /// evaluated with (the power of friction and of the couple is integrated
+    /// trapezoidally).
     v_t: DVec3,
     omega_rel: DVec3,
 }
@@ -137,7 +139,7 @@ impl ContactRecord {
             delta,
             force: r.normal.force,
             tangential: r.tangential,
-            rolling_torque: r.rolling_torque,
+            couple: r.couple,
             potential: r.potential,
             v_t: m.v_t,
             omega_rel: m.omega_rel,
@@ -159,8 +161,6 @@ struct Contact<'a> {
     model: &'a ContactModel,
     geom: PairGeometry,
     kin: Kinematics,
-    /// ω_i − ω_j (ω_i at a wall).
-    omega_rel: DVec3,
     /// The particle and its partner, for the peak overlap and the error message.
     i: usize,
     partner: Partner,
@@ -214,7 +214,7 @@ impl<'a> StepLog<'a> {
         let motion = Motion {
             delta: kin.delta,
             v_t: kin.v_t,
-            omega_rel: c.omega_rel,
+            omega_rel: kin.omega_rel,
         };
         let record = ContactRecord::new(history, kin.delta, &r, &motion);
         let edges = || c.model.edges(geom, kin.delta_dot);
@@ -487,7 +487,11 @@ impl CpuEngine {
         let cutoff_pad = radius.iter().map(|r| r + max_reach).collect();
         let (omega, torque, inertia) = if rotation {
             (
-                vec![DVec3::ZERO; n],
+                scene
+                    .particles
+                    .iter()
+                    .map(|p| DVec3::from_array(p.angular_velocity))
+                    .collect(),
                 vec![DVec3::ZERO; n],
                 mass.iter()
                     .zip(&radius)
@@ -706,6 +710,23 @@ impl CpuEngine {
         &self.omega
     }
 
+    /// Sets particle `i`'s angular velocity, rad/s (scenes start without spin: an initial
+    /// spin for tests and studies). Only where particles rotate (some contact model exerts
+    /// tangential forces or torques).
+    pub fn set_angular_velocity(&mut self, i: usize, omega: DVec3) -> Result<(), PowderError> {
+        if self.omega.is_empty() {
+            return Err(PowderError::Run(
+                "the particles do not rotate: no contact model has friction, rolling or twisting resistance".into(),
+            ));
+        }
+        let n = self.omega.len();
+        let w = self.omega.get_mut(i).ok_or_else(|| {
+            PowderError::Run(format!("particle {i} does not exist ({n} particles)"))
+        })?;
+        *w = omega;
+        Ok(())
+    }
+
     /// Whether particles rotate in this scene.
     pub fn rotates(&self) -> bool {
         !self.omega.is_empty()
@@ -892,6 +913,9 @@ impl CpuEngine {
                 self.rebuild_due = true;
                 self.inserted += 0.5 * self.mass[i] * self.vel[i].length_squared()
                     - self.mass[i] * self.gravity.dot(self.pos[i]);
+                if let Some(w) = self.omega.get(i) {
+                    self.inserted += 0.5 * self.inertia[i] * w.length_squared();
+                }
             }
         }
     }
@@ -956,7 +980,7 @@ impl CpuEngine {
         };
         normal
             - 0.5 * (o.tangential.dot(o.v_t) + new.tangential.dot(m.v_t)) * dt
-            - 0.5 * (o.rolling_torque.dot(o.omega_rel) + new.rolling_torque.dot(m.omega_rel)) * dt
+            - 0.5 * (o.couple.dot(o.omega_rel) + new.couple.dot(m.omega_rel)) * dt
             - (new.potential - o.potential)
     }
 
@@ -1225,8 +1249,8 @@ impl CpuEngine {
                             n,
                             v_t,
                             v_roll,
+                            omega_rel: wi - wj,
                         },
-                        omega_rel: wi - wj,
                         i,
                         partner: Partner::Particle(j),
                     };
@@ -1236,8 +1260,8 @@ impl CpuEngine {
                     force[j] -= f;
                     if rotation {
                         let t = n.cross(r.tangential);
-                        ti += -ri * t + r.rolling_torque;
-                        torque[j] += -radius[j] * t - r.rolling_torque;
+                        ti += -ri * t + r.couple;
+                        torque[j] += -radius[j] * t - r.couple;
                     }
                     let keep = r.stays(range);
                     if keep {
@@ -1308,15 +1332,15 @@ impl CpuEngine {
                         v_t,
                         // eq. 20 with r_j → ∞: (r_i − r_j)/(r_i + r_j) → −1
                         v_roll: geom.r_eff() * wi.cross(n) - 0.5 * v_t,
+                        omega_rel: wi,
                     },
-                    omega_rel: wi,
                     i,
                     partner: Partner::Wall(w),
                 };
                 let r = log.contact(contact, prior);
                 self.force[i] += r.force * n + r.tangential;
                 if rotation {
-                    self.torque[i] += -self.radius[i] * n.cross(r.tangential) + r.rolling_torque;
+                    self.torque[i] += -self.radius[i] * n.cross(r.tangential) + r.couple;
                 }
                 if r.stays(range) {
                     new.key.push(key);

@@ -8,10 +8,11 @@
 //! `pair_contact` / `pair_edges` that `shaders/step.wgsl` calls. Nothing a scene does not
 //! use is compiled in.
 
-use super::layout::{HystereticPair, JkrPair};
+use super::layout::{CoulombSpringRow, HystereticPair, JkrPair, TwistingRow};
 use super::shaders::{compose, ShaderVariant, LEDGER, LEDGER_OFF, ROTATION, ROTATION_OFF, STEP};
+use crate::model::friction::{rolling, sliding, twisting};
 use crate::model::history::{HistoryField, Mirror, Shape};
-use crate::model::{hysteretic, jkr, krijt, ContactHistory, ContactModel};
+use crate::model::{hysteretic, jkr, krijt, ContactHistory, ContactModel, CoulombSpring};
 
 /// A block of the pair-table row: a WGSL struct of f32/u32 scalars (so blocks concatenate
 /// without padding) and how a pair's model fills it.
@@ -69,6 +70,10 @@ pub struct SubModel {
     pub name: &'static str,
     /// The WGSL file.
     pub source: &'static str,
+    /// WGSL files it shares with other sub-models (composed in once).
+    pub shared: &'static [&'static str],
+    /// Its parameter block, where it has its own.
+    pub row: Option<RowBlock>,
     /// The normal laws it attaches to.
     pub laws: &'static [&'static str],
     /// Its history fields.
@@ -132,6 +137,8 @@ pub const SUB_MODELS: &[SubModel] = &[
     SubModel {
         name: "krijt",
         source: include_str!("../../shaders/contact/krijt.wgsl"),
+        shared: &[],
+        row: None,
         laws: &["jkr"],
         history: krijt::HISTORY,
         role: Role::Hooks(&[
@@ -149,20 +156,88 @@ pub const SUB_MODELS: &[SubModel] = &[
     SubModel {
         name: "mindlin",
         source: include_str!("../../shaders/contact/mindlin.wgsl"),
+        shared: &[],
+        row: None,
         laws: &["jkr"],
-        history: jkr::SLIDING_HISTORY,
+        history: jkr::mindlin::HISTORY,
         role: Role::Apply("mindlin_apply"),
         uses: |m| matches!(m, ContactModel::Jkr(p) if p.friction > 0.0),
     },
     SubModel {
         name: "jkr_rolling",
         source: include_str!("../../shaders/contact/jkr_rolling.wgsl"),
+        shared: &[],
+        row: None,
         laws: &["jkr"],
-        history: jkr::ROLLING_HISTORY,
+        history: jkr::rolling::HISTORY,
         role: Role::Apply("jkr_rolling_apply"),
         uses: |m| matches!(m, ContactModel::Jkr(p) if p.rolling_hysteresis > 0.0),
     },
+    SubModel {
+        name: "luding_sliding",
+        source: include_str!("../../shaders/contact/luding_sliding.wgsl"),
+        shared: &[COULOMB],
+        row: Some(RowBlock {
+            member: "luding_sliding",
+            wgsl_struct: "CoulombSpring",
+            bytes: std::mem::size_of::<CoulombSpringRow>(),
+            fill: |m| spring_block(luding_of(m).map(|l| l.sliding)),
+        }),
+        laws: &["hysteretic"],
+        history: sliding::HISTORY,
+        role: Role::Apply("luding_sliding_apply"),
+        uses: |m| luding_of(m).is_some_and(|l| l.sliding.is_on()),
+    },
+    SubModel {
+        name: "luding_rolling",
+        source: include_str!("../../shaders/contact/luding_rolling.wgsl"),
+        shared: &[COULOMB],
+        row: Some(RowBlock {
+            member: "luding_rolling",
+            wgsl_struct: "CoulombSpring",
+            bytes: std::mem::size_of::<CoulombSpringRow>(),
+            fill: |m| spring_block(luding_of(m).map(|l| l.rolling)),
+        }),
+        laws: &["hysteretic"],
+        history: rolling::HISTORY,
+        role: Role::Apply("luding_rolling_apply"),
+        uses: |m| luding_of(m).is_some_and(|l| l.rolling.is_on()),
+    },
+    SubModel {
+        name: "luding_twisting",
+        source: include_str!("../../shaders/contact/luding_twisting.wgsl"),
+        shared: &[COULOMB],
+        row: Some(RowBlock {
+            member: "luding_twisting",
+            wgsl_struct: "TwistingRow",
+            bytes: std::mem::size_of::<TwistingRow>(),
+            fill: |m| TwistingRow::new(m).map(|r| bytes(&r)),
+        }),
+        laws: &["hysteretic", "jkr"],
+        history: twisting::HISTORY,
+        role: Role::Apply("luding_twisting_apply"),
+        uses: |m| TwistingRow::new(m).is_some(),
+    },
 ];
+
+/// Luding's Coulomb spring, shared by his sliding, rolling and twisting laws.
+const COULOMB: &str = include_str!("../../shaders/contact/coulomb.wgsl");
+
+/// Luding's sliding and rolling friction of a hysteretic/LSD pair (the JKR family has its
+/// own, Mindlin and Dominik–Tielens).
+fn luding_of(m: &ContactModel) -> Option<&crate::model::LudingFriction> {
+    match m {
+        ContactModel::Hysteretic(p) => Some(&p.luding),
+        ContactModel::Lsd(p) => Some(&p.luding),
+        ContactModel::Jkr(_) => None,
+    }
+}
+
+/// The block of a spring that acts.
+fn spring_block(s: Option<CoulombSpring>) -> Option<Vec<u8>> {
+    s.filter(CoulombSpring::is_on)
+        .map(|s| bytes(&CoulombSpringRow::new(&s)))
+}
 
 /// The normal law called `name`.
 pub fn law(name: &str) -> Option<&'static NormalLaw> {
@@ -322,19 +397,26 @@ impl Composition {
             let tag = self.laws.iter().position(|&l| l == law_of(m)).unwrap_or(0) as u32;
             row.extend_from_slice(&tag.to_le_bytes());
         }
-        for l in self.laws() {
-            match (l.row.fill)(m) {
+        for block in self.row_blocks() {
+            match (block.fill)(m) {
                 Some(b) => row.extend_from_slice(&b),
-                None => row.resize(row.len() + l.row.bytes, 0),
+                None => row.resize(row.len() + block.bytes, 0),
             }
         }
         row
     }
 
+    /// The blocks of the pair row after the tag: the laws', then the sub-models' that have one.
+    fn row_blocks(&self) -> impl Iterator<Item = &'static RowBlock> + '_ {
+        self.laws()
+            .map(|l| &l.row)
+            .chain(self.subs().filter_map(|s| s.row.as_ref()))
+    }
+
     /// Bytes of one pair-table row.
     pub fn row_bytes(&self) -> usize {
         let tag = if self.laws.len() > 1 { 4 } else { 0 };
-        tag + self.laws().map(|l| l.row.bytes).sum::<usize>()
+        tag + self.row_blocks().map(|b| b.bytes).sum::<usize>()
     }
 
     /// The generated WGSL: the pair row, the history layout, the laws' hooks and the
@@ -350,8 +432,8 @@ impl Composition {
         if self.laws.len() > 1 {
             w.push_str("    law: u32,\n");
         }
-        for l in self.laws() {
-            w.push_str(&format!("    {}: {},\n", l.row.member, l.row.wgsl_struct));
+        for block in self.row_blocks() {
+            w.push_str(&format!("    {}: {},\n", block.member, block.wgsl_struct));
         }
         w.push_str("}\n\n");
         // the stored history (f32 words) and the working one
@@ -536,11 +618,15 @@ impl Composition {
     /// the rotation and ledger hooks, the step.
     pub fn variant(&self, ledger: bool) -> ShaderVariant {
         let interface = self.interface();
-        let mut parts: Vec<&str> = self
-            .laws()
-            .map(|l| l.source)
-            .chain(self.subs().map(|s| s.source))
-            .collect();
+        let mut parts: Vec<&str> = self.laws().map(|l| l.source).collect();
+        for s in self.subs() {
+            for shared in s.shared {
+                if !parts.contains(shared) {
+                    parts.push(shared);
+                }
+            }
+            parts.push(s.source);
+        }
         parts.push(&interface);
         parts.push(if self.rotation() {
             ROTATION
@@ -578,6 +664,7 @@ mod tests {
             rolling_hysteresis: rolling,
             pulloff: Pulloff::Displacement,
             stiffness_scale: 1.0,
+            luding: Default::default(),
         })
     }
 
@@ -585,6 +672,7 @@ mod tests {
         ContactModel::Lsd(LsdParams {
             k: 1.0,
             gamma0: 0.0,
+            luding: Default::default(),
         })
     }
 
@@ -660,6 +748,89 @@ mod tests {
             .iter()
             .flat_map(|(_, h)| h.iter())
             .all(|f| f.host != HostField::DeltaMaxTouched || f.shape == Shape::Word));
+    }
+
+    /// Sub-models that keep the same quantity share its field (a pair uses one of them), so
+    /// their declarations must agree on everything but the comment.
+    #[test]
+    fn fields_that_share_a_name_agree() {
+        let all: Vec<&HistoryField> = LAWS
+            .iter()
+            .flat_map(|l| l.history)
+            .chain(SUB_MODELS.iter().flat_map(|s| s.history))
+            .collect();
+        for a in &all {
+            for b in all.iter().filter(|b| b.name == a.name) {
+                assert_eq!(
+                    (a.shape, a.mirror, a.host),
+                    (b.shape, b.mirror, b.host),
+                    "{}",
+                    a.name
+                );
+            }
+        }
+    }
+
+    /// Luding's three laws on the hysteretic law: their blocks follow the law's in the row
+    /// (a pair without one has it zero, which is off), their springs in the history.
+    #[test]
+    fn luding_friction_adds_its_blocks_and_springs() {
+        use crate::model::{CoulombSpring, LudingFriction};
+        let spring = |mu: f64| CoulombSpring {
+            mu_s: mu,
+            mu_d: mu,
+            k: 2.0,
+            gamma: 0.0,
+        };
+        let rough = |rolling: f64| {
+            ContactModel::Lsd(LsdParams {
+                luding: LudingFriction {
+                    sliding: spring(0.5),
+                    rolling: spring(rolling),
+                    twisting: spring(0.1),
+                },
+                ..LsdParams::new(1.0, 0.0)
+            })
+        };
+        let c = Composition::of(&[rough(0.1), rough(0.0)]);
+        assert_eq!(
+            c.name(),
+            "step_hysteretic+luding_sliding+luding_rolling+luding_twisting"
+        );
+        assert!(c.rotation());
+        // hyst_state, spring, xi, twist
+        assert_eq!(c.history_bytes(), 4 * (1 + 3 + 3 + 1));
+        let hyst = std::mem::size_of::<HystereticPair>();
+        assert_eq!(c.row_bytes(), hyst + 16 + 16 + 20);
+        let row = c.pair_row(&rough(0.0));
+        let rolling: &[f32] = bytemuck::cast_slice(&row[hyst + 16..hyst + 32]);
+        assert_eq!(rolling, &[0.0; 4]);
+        let sliding: &[f32] = bytemuck::cast_slice(&row[hyst..hyst + 16]);
+        assert_eq!(sliding, &[0.5, 0.5, 2.0, 0.0]);
+        let words: [f32; 8] = [1.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, -7.0];
+        let h = c.decode_history(bytemuck::cast_slice(&words));
+        assert_eq!(h.twist, -7.0);
+        let m = c.mirror_history(h);
+        assert_eq!(
+            (m.tangential, m.rolling, m.twist),
+            (-h.tangential, h.rolling, h.twist)
+        );
+        // JKR twisting: the stiffness per contact radius where k_o is not given
+        let mut j = jkr(0.0, 0.0, Dissipation::None);
+        if let ContactModel::Jkr(p) = &mut j {
+            p.luding.twisting = CoulombSpring {
+                k: 0.0,
+                ..spring(0.1)
+            };
+        }
+        let c = Composition::of(&[j]);
+        assert_eq!(c.name(), "step_jkr+luding_twisting");
+        let row = c.pair_row(&j);
+        let twisting: &[f32] = bytemuck::cast_slice(&row[row.len() - 20..]);
+        let ContactModel::Jkr(p) = j else {
+            unreachable!()
+        };
+        assert_eq!(twisting[4], (0.4 * 8.0 * p.g_star()) as f32);
     }
 
     #[test]

@@ -605,12 +605,15 @@ impl GpuEngine {
         q0.write_buffer(&s0.vpred, 0, bytemuck::cast_slice(&vpred0));
         q0.write_buffer(&s0.pid, 0, bytemuck::cast_slice(&pid));
         if let Some(omega) = &s0.omega {
-            // ω = 0 (scenes start without spin), w = I = 2/5·m·r²
+            // ω as the scene gives it, w = I = 2/5·m·r²
             let w: Vec<[f32; 4]> = scene
                 .particles
                 .iter()
                 .zip(&r.mass)
-                .map(|(p, m)| [0.0, 0.0, 0.0, (0.4 * m * p.radius * p.radius) as f32])
+                .map(|(p, m)| {
+                    let [x, y, z] = p.angular_velocity.map(|c| c as f32);
+                    [x, y, z, (0.4 * m * p.radius * p.radius) as f32]
+                })
                 .collect();
             q0.write_buffer(omega, 0, bytemuck::cast_slice(&w));
         }
@@ -896,7 +899,9 @@ impl GpuEngine {
                 .iter()
                 .zip(&mass)
                 .map(|(p, m)| {
+                    let spin = 0.2 * m * p.radius * p.radius;
                     0.5 * m * DVec3::from_array(p.velocity).length_squared()
+                        + spin * DVec3::from_array(p.angular_velocity).length_squared()
                         - m * DVec3::from_array(scene.gravity).dot(DVec3::from_array(p.position))
                 })
                 .collect(),
@@ -1777,7 +1782,9 @@ impl GpuEngine {
             .angular_velocities
             .iter()
             .zip(self.mass.iter().zip(&self.radius))
-            .map(|(w, (m, r))| 0.5 * 0.4 * m * r * r * w.length_squared())
+            .zip(&self.active)
+            .filter(|(_, &a)| a)
+            .map(|((w, (m, r)), _)| 0.5 * 0.4 * m * r * r * w.length_squared())
             .sum();
         translational + rotational
     }

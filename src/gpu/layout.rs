@@ -428,6 +428,64 @@ impl JkrPair {
     }
 }
 
+/// One Luding spring's block of the pair table (`CoulombSpring` of
+/// `shaders/contact/coulomb.wgsl`): [`CoulombSpring`](crate::model::CoulombSpring) rounded to
+/// f32; all zero (μs = 0) is off.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct CoulombSpringRow {
+    /// Static coefficient μs; 0 = off.
+    pub mu_s: f32,
+    /// Dynamic coefficient μd.
+    pub mu_d: f32,
+    /// Stiffness k, N/m.
+    pub k: f32,
+    /// Dashpot γ, kg/s.
+    pub gamma: f32,
+}
+
+impl CoulombSpringRow {
+    /// The block of a spring.
+    pub fn new(s: &crate::model::CoulombSpring) -> Self {
+        Self {
+            mu_s: s.mu_s as f32,
+            mu_d: s.mu_d as f32,
+            k: s.k as f32,
+            gamma: s.gamma as f32,
+        }
+    }
+}
+
+/// The twisting block of the pair table (`TwistingRow` of
+/// `shaders/contact/luding_twisting.wgsl`): the spring, and for the JKR family without a
+/// given k_o the stiffness per contact radius (k_o = k + k_per_a·a).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct TwistingRow {
+    /// The spring (its `k` is 0 where the stiffness follows the contact radius).
+    pub spring: CoulombSpringRow,
+    /// dk_o/da, N/m²: 2/5·8G* for the JKR family's default, else 0.
+    pub k_per_a: f32,
+}
+
+impl TwistingRow {
+    /// The block of a pair's model, `None` where it has no twisting friction.
+    pub fn new(m: &crate::model::ContactModel) -> Option<Self> {
+        use crate::model::ContactModel;
+        let (spring, k_per_a) = match m {
+            ContactModel::Hysteretic(p) => (p.luding.twisting, 0.0),
+            ContactModel::Lsd(p) => (p.luding.twisting, 0.0),
+            // the stiffness of `JkrParams::twisting_stiffness` at a: k_o, or 2/5·8G*·a
+            ContactModel::Jkr(p) if p.luding.twisting.k > 0.0 => (p.luding.twisting, 0.0),
+            ContactModel::Jkr(p) => (p.luding.twisting, p.twisting_stiffness(1.0)),
+        };
+        spring.is_on().then(|| Self {
+            spring: CoulombSpringRow::new(&spring),
+            k_per_a: k_per_a as f32,
+        })
+    }
+}
+
 /// Per-run step parameters: twin of `StepParams` in `shaders/step.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -822,12 +880,43 @@ mod tests {
         let (jkr, _) = shaders::validate(&all.variant(true).source).unwrap();
         let (wsize, members) = wgsl_struct(&jkr, "PairRow");
         assert_eq!(wsize as usize, all.row_bytes(), "PairRow size");
+        let jkr_at = 4 + size_of::<HystereticPair>() as u32;
+        let sliding_at = jkr_at + size_of::<JkrPair>() as u32;
+        let spring = size_of::<CoulombSpringRow>() as u32;
         assert_eq!(
             members,
             vec![
                 ("law".to_string(), 0),
                 ("hysteretic".to_string(), 4),
-                ("jkr".to_string(), 4 + size_of::<HystereticPair>() as u32)
+                ("jkr".to_string(), jkr_at),
+                ("luding_sliding".to_string(), sliding_at),
+                ("luding_rolling".to_string(), sliding_at + spring),
+                ("luding_twisting".to_string(), sliding_at + 2 * spring),
+            ]
+        );
+        let (wsize, members) = wgsl_struct(&jkr, "CoulombSpring");
+        assert_eq!(wsize, spring, "CoulombSpring size");
+        for (field, off) in [
+            ("mu_s", offset_of!(CoulombSpringRow, mu_s)),
+            ("mu_d", offset_of!(CoulombSpringRow, mu_d)),
+            ("k", offset_of!(CoulombSpringRow, k)),
+            ("gamma", offset_of!(CoulombSpringRow, gamma)),
+        ] {
+            assert!(
+                members.contains(&(field.to_string(), off as u32)),
+                "CoulombSpring.{field}"
+            );
+        }
+        let (wsize, members) = wgsl_struct(&jkr, "TwistingRow");
+        assert_eq!(wsize as usize, size_of::<TwistingRow>(), "TwistingRow size");
+        assert_eq!(
+            members,
+            vec![
+                ("spring".to_string(), offset_of!(TwistingRow, spring) as u32),
+                (
+                    "k_per_a".to_string(),
+                    offset_of!(TwistingRow, k_per_a) as u32
+                ),
             ]
         );
         let (wsize, members) = wgsl_struct(&jkr, "JkrPair");

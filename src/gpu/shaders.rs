@@ -37,6 +37,7 @@ pub fn step_variant() -> ShaderVariant {
     let lsd = ContactModel::Lsd(crate::model::LsdParams {
         k: 1.0,
         gamma0: 0.0,
+        luding: Default::default(),
     });
     Composition::of(&[lsd]).variant(true)
 }

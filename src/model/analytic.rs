@@ -5,6 +5,7 @@
 //! χ = δmax/δmax^p the scaled impact velocity (= v/vp without fa).
 
 use crate::model::hysteretic::{AdhesionMode, HystereticParams};
+use crate::model::ContactModel;
 use std::f64::consts::PI;
 
 /// Plasticity η = (kp − k1)/k1 (eq. 27a).
@@ -472,6 +473,46 @@ pub fn hertz_centre_pressure(delta: f64, r_eff: f64, e_star: f64) -> f64 {
 /// radius `a` (γ per surface), Pa; negative (tensile) for a small contact.
 pub fn jkr_centre_pressure(a: f64, r_eff: f64, e_star: f64, gamma: f64) -> f64 {
     2.0 * e_star * a / (PI * r_eff) - (4.0 * gamma * e_star / (PI * a)).sqrt()
+}
+
+/// Tangential restitution e_t = u_t'/u_t of an elastic oblique impact of solid spheres with
+/// Luding's sliding friction, k_t = 2/7·k (the tangential oscillator has the normal
+/// period), no damping and μs = μd = μ, at normal approach speed `vn` and tangential
+/// contact-point speed `ut` (docs/luding2008_laws.md §6a; sphere–sphere and sphere–wall
+/// alike): the spring's ξ(t) = (u_t/ω)·sin ωt is in phase with δ(t), so the contact **sticks
+/// throughout** iff u_t ≤ 3.5·μ·v_n, and then reverses, e_t = −1; otherwise it **slides
+/// throughout** and e_t = 1 − 7·μ·v_n/u_t (the rigid-body 1 − 3.5·μ·(1 + e_n)·v_n/u_t with
+/// e_n = 1). The two branches meet at −1.
+pub fn luding_tangential_restitution(mu: f64, vn: f64, ut: f64) -> f64 {
+    if ut <= 3.5 * mu * vn {
+        -1.0
+    } else {
+        1.0 - 7.0 * mu * vn / ut
+    }
+}
+
+/// μ when [`luding_tangential_restitution`] applies to the model: an elastic hysteretic
+/// (k1 = kp, kc = fa = 0, γ0 = 0) or undamped LSD pair with Luding's sliding friction only,
+/// μs = μd > 0, k_t = 2/7·k (to 1e-12) and γ_t = 0; `None` otherwise.
+pub fn luding_elastic_sliding(model: &ContactModel) -> Option<f64> {
+    let (k, luding) = match model {
+        ContactModel::Hysteretic(p)
+            if p.k1 == p.kp && p.kc == 0.0 && p.fa == 0.0 && p.gamma0 == 0.0 =>
+        {
+            (p.k1, &p.luding)
+        }
+        ContactModel::Lsd(p) if p.gamma0 == 0.0 => (p.k, &p.luding),
+        _ => return None,
+    };
+    let s = &luding.sliding;
+    let kt = 2.0 / 7.0 * k;
+    (s.is_on()
+        && s.mu_d == s.mu_s
+        && (s.k - kt).abs() <= 1e-12 * kt
+        && s.gamma == 0.0
+        && !luding.rolling.is_on()
+        && !luding.twisting.is_on())
+    .then_some(s.mu_s)
 }
 
 /// Largest overlap of an undamped Hertz collision, δmax = (15·m*·v²/(16·E*·√R*))^(2/5):

@@ -534,6 +534,101 @@ mod tests {
         assert!(analytic(&["--k1", "1", "--phi-f", "1", "--pulloff", "sideways"]).is_err());
     }
 
+    /// Luding's friction: `--friction μ` alone sets μs = μd, the stiffnesses and dampings
+    /// follow k1 (k) and γ0; a sub-model that is off stays all zero; JKR takes twisting only.
+    #[test]
+    fn luding_friction_flags_and_their_derived_defaults() {
+        use crate::model::CoulombSpring;
+        let hyst = |extra: &[&str]| {
+            let mut args = vec![
+                "--model",
+                "hysteretic",
+                "--k1",
+                "100",
+                "--kp",
+                "500",
+                "--kc",
+                "10",
+                "--phi-f",
+                "0.05",
+                "--gamma0",
+                "1e-3",
+            ];
+            args.extend_from_slice(extra);
+            model(&args)
+        };
+        let ContactModel::Hysteretic(h) = hyst(&["--friction", "0.4"]).unwrap() else {
+            panic!()
+        };
+        let s = h.luding.sliding;
+        assert_eq!((s.mu_s, s.mu_d), (0.4, 0.4));
+        assert!((s.k - 200.0 / 7.0).abs() < 1e-12 && (s.gamma - 2e-3 / 7.0).abs() < 1e-18);
+        assert_eq!(h.luding.rolling, CoulombSpring::default());
+        assert_eq!(h.luding.twisting, CoulombSpring::default());
+        let m = hyst(&[
+            "--friction",
+            "0.4",
+            "--friction-dynamic",
+            "0.3",
+            "--rolling-friction",
+            "0.1",
+            "--twisting-friction",
+            "0.05",
+            "--ko",
+            "7",
+        ])
+        .unwrap();
+        let ContactModel::Hysteretic(h) = m else {
+            panic!()
+        };
+        assert_eq!((h.luding.sliding.mu_s, h.luding.sliding.mu_d), (0.4, 0.3));
+        let r = h.luding.rolling;
+        assert_eq!((r.mu_s, r.mu_d, r.k), (0.1, 0.1, 40.0));
+        assert!((r.gamma - 4e-4).abs() < 1e-18);
+        let o = h.luding.twisting;
+        assert_eq!((o.mu_s, o.k), (0.05, 7.0));
+        assert!(m.needs_rotation());
+        // LSD: from k
+        let ContactModel::Lsd(l) =
+            model(&["--model", "lsd", "--k", "350", "--rolling-friction", "0.2"]).unwrap()
+        else {
+            panic!()
+        };
+        assert_eq!(l.luding.rolling.k, 140.0);
+        assert!(!l.luding.sliding.is_on());
+        // JKR/Hertz: twisting only, the Mindlin-derived stiffness (0) and no damping by default
+        let jkr = |extra: &[&str]| {
+            let mut args = vec!["--model", "hertz", "--youngs", "1e9", "--poisson", "0.3"];
+            args.extend_from_slice(extra);
+            model(&args)
+        };
+        let ContactModel::Jkr(j) = jkr(&["--twisting-friction", "0.1"]).unwrap() else {
+            panic!()
+        };
+        let o = j.luding.twisting;
+        assert_eq!((o.mu_s, o.mu_d, o.k, o.gamma), (0.1, 0.1, 0.0, 0.0));
+        assert!((j.twisting_stiffness(1e-6) - 3.2 * j.g_star() * 1e-6).abs() < 1e-9);
+        // refused: a sub-model's parameters without its coefficient, mu_d > mu_s, and the
+        // Luding sliding/rolling keys for the JKR family
+        let e = hyst(&["--kt", "10"]).unwrap_err();
+        assert!(e.contains("kt is given but friction = 0"), "{e}");
+        let e = hyst(&["--friction", "0.3", "--gamma-r", "1e-3"]).unwrap_err();
+        assert!(
+            e.contains("gamma_r is given but rolling_friction = 0"),
+            "{e}"
+        );
+        let e = jkr(&["--ko", "1e3"]).unwrap_err();
+        assert!(e.contains("ko is given but twisting_friction = 0"), "{e}");
+        let e = hyst(&["--friction", "0.3", "--friction-dynamic", "0.4"]).unwrap_err();
+        assert!(e.contains("must be <= friction"), "{e}");
+        let e = jkr(&["--friction", "0.3", "--kt", "5"]).unwrap_err();
+        assert!(e.contains("--kt does not apply to --model hertz"), "{e}");
+        let e = jkr(&["--rolling-friction", "0.1"]).unwrap_err();
+        assert!(e.contains("does not apply to --model hertz"), "{e}");
+        let e = hyst(&["--twisting-friction", "0.1", "--ko", "0"]).unwrap_err();
+        assert!(e.contains("ko") && e.contains("> 0"), "{e}");
+    }
+
     #[test]
     fn flags_errors_name_the_flag_and_the_rule() {
         let e = model(&[

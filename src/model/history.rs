@@ -39,6 +39,8 @@ pub enum HostField {
     Rolling,
     /// The Krijt contact radius a.
     ContactRadius,
+    /// `twist` (Luding's twisting spring, a scalar along n).
+    Twist,
 }
 
 /// One per-contact history field of a sub-model.
@@ -78,6 +80,7 @@ impl HistoryField {
             HostField::Tangential => h.tangential = v(),
             HostField::Rolling => h.rolling = v(),
             HostField::ContactRadius => h.contact_radius = w[0] as f64,
+            HostField::Twist => h.twist = w[0] as f64,
         }
     }
 
@@ -88,6 +91,7 @@ impl HistoryField {
                 HostField::Tangential => h.tangential = -h.tangential,
                 HostField::Rolling => h.rolling = -h.rolling,
                 HostField::ContactRadius => h.contact_radius = -h.contact_radius,
+                HostField::Twist => h.twist = -h.twist,
                 HostField::DeltaMaxTouched | HostField::Touched => {}
             }
         }

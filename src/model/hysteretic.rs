@@ -11,7 +11,7 @@
 
 use crate::error::{require_positive, ParamError};
 use crate::model::history::{HistoryField, HostField, Mirror, Shape};
-use crate::model::{ContactHistory, NormalForce};
+use crate::model::{ContactHistory, LudingFriction, NormalForce};
 use serde::{Deserialize, Serialize};
 
 /// The per-contact history the hysteretic and LSD laws keep on the GPU: δmax (never
@@ -68,6 +68,10 @@ pub struct HystereticParams {
     pub gamma0: f64,
     /// Interpolation of the un-/re-loading stiffness k2 between k1 and kp (eq. 9 or D.1).
     pub k2_rule: K2Rule,
+    /// Luding's sliding, rolling and twisting friction ([`crate::model::friction`]); off by
+    /// default. The Coulomb load is [`Self::coulomb_load`].
+    #[serde(default)]
+    pub luding: LudingFriction,
 }
 
 impl HystereticParams {
@@ -83,6 +87,7 @@ impl HystereticParams {
             adhesion: AdhesionMode::JumpIn,
             gamma0: 0.0,
             k2_rule: K2Rule::Linear,
+            luding: LudingFriction::default(),
         }
     }
 
@@ -100,6 +105,7 @@ impl HystereticParams {
         ] {
             param.check(x)?;
         }
+        self.luding.validate()?;
         if self.kp < self.k1 {
             return Err(ParamError::new(
                 "kp",
@@ -260,6 +266,17 @@ impl HystereticParams {
         } else {
             -0.5 * self.kca * delta * delta - self.fa * delta - well
         }
+    }
+
+    /// The Coulomb load of Luding's friction, f_N* = max(0, f_n + kc·δ + fa) with f_n the
+    /// total normal force (f_hys − fa + γ0·δ̇): the normal force measured from the adhesive
+    /// limit −kc·δ − fa rather than from zero (Luding 2008 as WooDEM and AutoPas give it,
+    /// `docs/luding2008_laws.md` §1b; + fa extends it to the non-contact adhesion of paper
+    /// 000 eqs. 14–15, as LAMMPS's `epa_linear` adds f_0). A contact held together by
+    /// adhesion at zero net force can still carry friction; the limit vanishes only on the
+    /// tensile branch f_hys = −kc·δ, where the contact is about to break.
+    pub fn coulomb_load(&self, normal: &NormalForce, delta: f64) -> f64 {
+        (normal.force + self.kc * delta + self.fa).max(0.0)
     }
 
     /// Total normal force for overlap `delta` and approach speed `delta_dot`.

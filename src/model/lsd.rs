@@ -3,7 +3,7 @@
 //! not clamped at zero: the closed forms (eqs. 3–4) assume the same.
 
 use crate::error::ParamError;
-use crate::model::NormalForce;
+use crate::model::{LudingFriction, NormalForce};
 use serde::{Deserialize, Serialize};
 
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -13,13 +13,33 @@ pub struct LsdParams {
     pub k: f64,
     /// Viscous damping γ0, kg/s.
     pub gamma0: f64,
+    /// Luding's sliding, rolling and twisting friction ([`crate::model::friction`]); off by
+    /// default. The Coulomb load is [`Self::coulomb_load`].
+    #[serde(default)]
+    pub luding: LudingFriction,
 }
 
 impl LsdParams {
-    /// Checks k > 0 and γ0 ≥ 0 (both finite).
+    /// The spring–dashpot k, γ0 without friction.
+    pub fn new(k: f64, gamma0: f64) -> Self {
+        Self {
+            k,
+            gamma0,
+            luding: LudingFriction::default(),
+        }
+    }
+
+    /// Checks k > 0 and γ0 ≥ 0 (both finite) and the friction's rules.
     pub fn validate(&self) -> Result<(), ParamError> {
         crate::model::params::K.check(self.k)?;
-        crate::model::params::GAMMA0.check(self.gamma0)
+        crate::model::params::GAMMA0.check(self.gamma0)?;
+        self.luding.validate()
+    }
+
+    /// The Coulomb load of Luding's friction, f_N* = max(0, f_n) with f_n = k·δ + γ0·δ̇ (no
+    /// adhesion to add).
+    pub fn coulomb_load(&self, normal: &NormalForce) -> f64 {
+        normal.force.max(0.0)
     }
 
     /// Normal force at overlap `delta` (m) and approach speed `delta_dot` (m/s): k·δ + γ0·δ̇

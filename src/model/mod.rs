@@ -3,6 +3,7 @@
 
 pub mod analytic;
 pub mod flags;
+pub mod friction;
 pub mod history;
 pub mod hysteretic;
 pub mod jkr;
@@ -10,6 +11,7 @@ pub mod krijt;
 pub mod lsd;
 pub mod params;
 
+pub use friction::{CoulombSpring, LudingFriction};
 pub use hysteretic::{AdhesionMode, HystereticParams, K2Rule};
 pub use jkr::{Dissipation, JkrParams, Pulloff, TsujiStiffness};
 pub use lsd::LsdParams;
@@ -27,14 +29,21 @@ pub struct ContactHistory {
     /// (jump-in adhesion acts only after the first touch; a JKR contact persists into
     /// negative overlap until pull-off).
     pub touched: bool,
-    /// Tangential spring displacement, kept in the current tangent plane (JKR friction).
+    /// Tangential spring displacement, kept in the current tangent plane (JKR friction;
+    /// Luding's sliding spring ξ_t, staggered half a step ahead, see
+    /// [`friction::coulomb`]). Negated when the pair is seen from the partner.
     pub tangential: DVec3,
-    /// Rolling displacement ξ, kept in the current tangent plane (JKR rolling resistance).
+    /// Rolling displacement ξ, kept in the current tangent plane (JKR rolling resistance;
+    /// Luding's rolling spring ξ_r, staggered). The same seen from the partner.
     pub rolling: DVec3,
     /// Contact radius a as its own state variable (the `krijt` and `stress` dissipations
     /// of JKR, see [`krijt`]), m; 0 = unset (set to a_JKR(0) at the first touch).
     #[serde(default)]
     pub contact_radius: f64,
+    /// Luding's twisting spring along n as a scalar ξ_o = n·ξ_o, m (staggered, see
+    /// [`friction::twisting`]): the same seen from either particle.
+    #[serde(default)]
+    pub twist: f64,
 }
 
 /// The normal force of one contact and what the energy bookkeeping needs.
@@ -60,6 +69,10 @@ pub struct PairGeometry {
     pub a12: f64,
     /// Reduced mass m1·m2/(m1 + m2); m for a wall.
     pub reduced_mass: f64,
+    /// Effective mass of the rolling and twisting oscillators about the lever a12 of solid
+    /// spheres (I = 2/5·m·r²): 1/[a12²·(1/I1 + 1/I2)] (m/5 = 2/5·m_r for equal spheres,
+    /// m/10 against a wall, where a12 = 2r).
+    pub rotational_mass: f64,
 }
 
 impl PairGeometry {
@@ -68,11 +81,20 @@ impl PairGeometry {
         0.5 * self.a12
     }
 
+    /// Effective mass of the tangential contact-point motion of solid spheres,
+    /// 1/(1/m1 + 1/m2 + r1²/I1 + r2²/I2) = 2/7·m_r.
+    pub fn tangential_mass(&self) -> f64 {
+        2.0 / 7.0 * self.reduced_mass
+    }
+
     /// A sphere–sphere pair: radii `r1`, `r2` (m) and masses `m1`, `m2` (kg).
     pub fn spheres(r1: f64, r2: f64, m1: f64, m2: f64) -> Self {
+        let a12 = 2.0 * r1 * r2 / (r1 + r2);
         Self {
-            a12: 2.0 * r1 * r2 / (r1 + r2),
+            a12,
             reduced_mass: m1 * m2 / (m1 + m2),
+            // 1/I = 5/(2·m·r²)
+            rotational_mass: 0.4 / (a12 * a12 * (1.0 / (m1 * r1 * r1) + 1.0 / (m2 * r2 * r2))),
         }
     }
 
@@ -82,6 +104,7 @@ impl PairGeometry {
         Self {
             a12: 2.0 * r,
             reduced_mass: m,
+            rotational_mass: 0.1 * m,
         }
     }
 }
@@ -112,6 +135,8 @@ pub struct Kinematics {
     /// Rolling velocity v_L = R*·(ω_i − ω_j) × n + ½·(r_i − r_j)/(r_i + r_j)·v_t
     /// (paper 002 eq. 20).
     pub v_roll: DVec3,
+    /// Relative angular velocity ω_i − ω_j (ω_i against a wall); zero without rotation.
+    pub omega_rel: DVec3,
 }
 
 /// Forces and torques of one contact on particle i (particle j gets the opposite force;
@@ -122,9 +147,11 @@ pub struct Response {
     pub normal: NormalForce,
     /// Tangential force on i.
     pub tangential: DVec3,
-    /// Rolling-resistance torque on i (−this on j).
-    pub rolling_torque: DVec3,
-    /// Stored energy of the contact: normal + tangential spring + rolling spring, J.
+    /// The antisymmetric couple on i (−this on j): the rolling and twisting resistance
+    /// torques (JKR rolling, Luding rolling + twisting). The torques of the tangential force
+    /// are not in it: the engine applies them at the contact point.
+    pub couple: DVec3,
+    /// Stored energy of the contact: normal + the springs (tangential, rolling, twisting), J.
     pub potential: f64,
 }
 
@@ -142,8 +169,11 @@ impl ContactModel {
     /// need angular velocity.
     pub fn needs_rotation(&self) -> bool {
         match self {
-            Self::Jkr(p) => p.friction > 0.0 || p.rolling_hysteresis > 0.0,
-            _ => false,
+            Self::Jkr(p) => {
+                p.friction > 0.0 || p.rolling_hysteresis > 0.0 || p.luding.twisting.is_on()
+            }
+            Self::Hysteretic(p) => p.luding.is_on(),
+            Self::Lsd(p) => p.luding.is_on(),
         }
     }
 
@@ -171,20 +201,66 @@ impl ContactModel {
                 if normal.in_contact && p.rolling_hysteresis > 0.0 {
                     let m =
                         p.rolling_torque(k.n, k.v_roll, &normal, geom, dt, &mut history.rolling);
-                    r.rolling_torque = m.torque;
+                    r.couple = m.torque;
                     r.potential += 0.5 * m.stiffness * history.rolling.length_squared();
+                }
+                if normal.in_contact && p.luding.twisting.is_on() {
+                    let (couple, energy) = p.twisting(k, &normal, geom, dt, &mut history.twist);
+                    r.couple += couple;
+                    r.potential += energy;
                 }
                 r
             }
-            _ => {
-                let normal = self.force(k.delta, k.delta_dot, geom, history);
-                Response {
+            Self::Hysteretic(p) => {
+                let normal = p.force(k.delta, k.delta_dot, geom.a12, history);
+                Self::with_friction(
+                    &p.luding,
                     normal,
-                    potential: normal.potential,
-                    ..Default::default()
-                }
+                    p.coulomb_load(&normal, k.delta),
+                    k,
+                    geom,
+                    dt,
+                    history,
+                )
+            }
+            Self::Lsd(p) => {
+                let normal = p.force(k.delta, k.delta_dot);
+                Self::with_friction(
+                    &p.luding,
+                    normal,
+                    p.coulomb_load(&normal),
+                    k,
+                    geom,
+                    dt,
+                    history,
+                )
             }
         }
+    }
+
+    /// The response of a hysteretic/LSD contact: its normal force and Luding's friction with
+    /// the Coulomb load `load` (in mechanical contact only, δ > 0).
+    fn with_friction(
+        luding: &LudingFriction,
+        normal: NormalForce,
+        load: f64,
+        k: &Kinematics,
+        geom: &PairGeometry,
+        dt: f64,
+        history: &mut ContactHistory,
+    ) -> Response {
+        let mut r = Response {
+            normal,
+            potential: normal.potential,
+            ..Default::default()
+        };
+        if luding.is_on() {
+            let f = luding.respond(k, geom, k.delta > 0.0, load, dt, history);
+            r.tangential = f.tangential;
+            r.couple = f.couple;
+            r.potential += f.potential;
+        }
+        r
     }
 
     /// Non-contact interaction range (how far beyond touching a pair still interacts), m.
@@ -243,6 +319,24 @@ impl ContactModel {
         }
     }
 
+    /// The friction oscillators of a pair (Luding's sliding, rolling and twisting where
+    /// they act; the JKR family's twisting with the stiffness of the largest contact radius
+    /// at `impact_velocity`), for the time step.
+    pub fn friction_oscillators(
+        &self,
+        geom: &PairGeometry,
+        impact_velocity: f64,
+    ) -> Vec<friction::Oscillator> {
+        match self {
+            Self::Hysteretic(p) => p.luding.oscillators(geom),
+            Self::Lsd(p) => p.luding.oscillators(geom),
+            Self::Jkr(p) => p
+                .twisting_oscillator(geom, impact_velocity)
+                .into_iter()
+                .collect(),
+        }
+    }
+
     /// Time-step limits for a pair of geometry `geom` meeting at up to `impact_velocity`.
     ///
     /// The contact time tc is π·√(m_r/k_max) on the stiffest linear branch (kp, or kc_a
@@ -251,6 +345,12 @@ impl ContactModel {
     /// oscillation time π·√(m*/k_eq) about the equilibrium overlap (k_eq = dF/dδ at δ0)
     /// nor the time δ0/v to cross the adhesive zone, whose force jumps at touch and
     /// pull-off make the error first order in dt.
+    ///
+    /// Where friction acts, no longer than the half-period π·√(m/k) of each friction
+    /// oscillator ([`Self::friction_oscillators`]: tangential k_t with m_t = 2/7·m_r,
+    /// rolling k_r and twisting k_o with 1/[ℓ²(1/I_i + 1/I_j)]; against a wall, where
+    /// ℓ = 2r, the rolling period with k_r = 2/5·k is half the normal one), and every
+    /// dashpot γ within γ·dt/m ≤ [`MAX_VISCOUS_STEP`].
     pub fn time_step(&self, geom: &PairGeometry, impact_velocity: f64) -> TimeStep {
         let mr = geom.reduced_mass;
         let (tc, what, gamma0) = match self {
@@ -295,17 +395,39 @@ impl ContactModel {
                 }
             }
         };
+        // the friction oscillators: each half-period pi*sqrt(m/k) counts as a contact time
+        let (mut tc, mut what) = (tc, what);
+        for o in self.friction_oscillators(geom, impact_velocity) {
+            let t = std::f64::consts::PI * (o.mass / o.k).sqrt();
+            if t < tc {
+                tc = t;
+                what = format!(
+                    "tc = pi*sqrt(m/k) of the {} oscillator (k = {:.4e} N/m, m = {:.4e} kg)",
+                    o.what, o.k, o.mass
+                );
+            }
+        }
         let mut max = tc / MAX_DT_FRACTION;
         let mut reason = format!("dt <= tc/{MAX_DT_FRACTION} with {what}, tc = {tc:.4e} s");
-        if gamma0 > 0.0 {
-            // explicit viscous force: keep γ0·dt/m_r small (the exact decay per step is
-            // exp(−γ0·dt/m_r); the explicit update is unstable beyond γ0·dt/m_r = 2).
-            let visc = MAX_VISCOUS_STEP * mr / gamma0;
-            if visc < max {
-                max = visc;
-                reason = format!(
-                    "dt <= {MAX_VISCOUS_STEP}*m_r/gamma0 = {visc:.4e} s for the viscous damping gamma0 = {gamma0:.4e} kg/s"
-                );
+        // explicit viscous forces: keep γ·dt/m small (the exact decay per step is
+        // exp(−γ·dt/m); the explicit update is unstable beyond γ·dt/m = 2).
+        let dashpots = std::iter::once((gamma0, mr, "the viscous damping gamma0", "m_r/gamma0"))
+            .chain(
+                self.friction_oscillators(geom, impact_velocity)
+                    .into_iter()
+                    .map(|o| (o.gamma, o.mass, o.what, "m/gamma")),
+            );
+        for (gamma, mass, name, ratio) in dashpots {
+            if gamma > 0.0 {
+                let visc = MAX_VISCOUS_STEP * mass / gamma;
+                if visc < max {
+                    max = visc;
+                    reason = if name.starts_with("the viscous") {
+                        format!("dt <= {MAX_VISCOUS_STEP}*{ratio} = {visc:.4e} s for {name} = {gamma:.4e} kg/s")
+                    } else {
+                        format!("dt <= {MAX_VISCOUS_STEP}*{ratio} = {visc:.4e} s for the {name} damping {gamma:.4e} kg/s (m = {mass:.4e} kg)")
+                    };
+                }
             }
         }
         TimeStep {

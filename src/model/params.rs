@@ -4,8 +4,8 @@
 //! models' `validate` apply the per-parameter rules declared here.
 
 use super::{
-    AdhesionMode, ContactModel, Dissipation, HystereticParams, JkrParams, K2Rule, LsdParams,
-    Pulloff, TsujiStiffness,
+    AdhesionMode, ContactModel, CoulombSpring, Dissipation, HystereticParams, JkrParams, K2Rule,
+    LsdParams, LudingFriction, Pulloff, TsujiStiffness,
 };
 use crate::error::ParamError;
 
@@ -293,9 +293,93 @@ param!(
     "",
     Number(0.0),
     Rule::NonNegative,
-    "the sliding friction coefficient mu_s, 0 = frictionless (paper 002 eqs. 14-16)"
+    "the (static) sliding friction coefficient mu_s, 0 = frictionless (jkr, hertz: paper 002 eqs. 14-17; hysteretic, lsd: Luding 2008)"
 );
 param!(ROLLING_HYSTERESIS, "rolling_hysteresis", NUM, "", Number(0.0), Rule::NonNegative, "the rolling resistance as adhesion hysteresis delta gamma / gamma, 0 = none (paper 002 eq. 18)");
+// Luding's sliding, rolling and twisting friction (Luding 2008, docs/luding2008_laws.md;
+// `model::friction`): hysteretic and lsd take all of them, jkr and hertz the twisting trio.
+// Rolling and twisting act through the lever a12 = 2R* (2r against a wall).
+param!(
+    FRICTION_DYNAMIC,
+    "friction_dynamic",
+    NUM,
+    "",
+    Derived("friction (mu_d = mu_s)"),
+    Rule::NonNegative,
+    "the dynamic sliding friction coefficient mu_d <= mu_s, the force while slipping (Luding 2008)"
+);
+param!(
+    KT,
+    "kt",
+    NUM,
+    "N/m",
+    Derived("2/7 k1 (hysteretic) or 2/7 k (lsd): the normal period"),
+    Rule::Positive,
+    "the tangential spring stiffness k_t (Luding 2008)"
+);
+param!(
+    GAMMA_T,
+    "gamma_t",
+    NUM,
+    "kg/s",
+    Derived("2/7 gamma0"),
+    Rule::NonNegative,
+    "the tangential damping gamma_t (Luding 2008)"
+);
+param!(
+    ROLLING_FRICTION,
+    "rolling_friction",
+    NUM,
+    "",
+    Number(0.0),
+    Rule::NonNegative,
+    "the rolling friction coefficient mu_r, torque <= mu_r a12 f_N*; 0 = none (Luding 2008)"
+);
+param!(
+    KR,
+    "kr",
+    NUM,
+    "N/m",
+    Derived("2/5 k1 (hysteretic) or 2/5 k (lsd)"),
+    Rule::Positive,
+    "the rolling spring stiffness k_r, torque stiffness k_r a12^2 per rad (Luding 2008)"
+);
+param!(
+    GAMMA_R,
+    "gamma_r",
+    NUM,
+    "kg/s",
+    Derived("2/5 gamma0"),
+    Rule::NonNegative,
+    "the rolling damping gamma_r (Luding 2008)"
+);
+param!(
+    TWISTING_FRICTION,
+    "twisting_friction",
+    NUM,
+    "",
+    Number(0.0),
+    Rule::NonNegative,
+    "the twisting friction coefficient mu_o, torque <= mu_o a12 f_N*; 0 = none (Luding 2008)"
+);
+param!(
+    KO,
+    "ko",
+    NUM,
+    "N/m",
+    Derived("2/5 k1 (hysteretic), 2/5 k (lsd), 2/5 * 8 G* a at the current contact radius a (jkr, hertz)"),
+    Rule::Positive,
+    "the twisting spring stiffness k_o, torque stiffness k_o a12^2 per rad (Luding 2008)"
+);
+param!(
+    GAMMA_O,
+    "gamma_o",
+    NUM,
+    "kg/s",
+    Derived("2/5 gamma0 (hysteretic, lsd), 0 (jkr, hertz)"),
+    Rule::NonNegative,
+    "the twisting damping gamma_o (Luding 2008)"
+);
 // Normal dissipation of the JKR family, one sub-model at a time.
 param!(
     DISSIPATION,
@@ -387,14 +471,45 @@ pub const LAWS: &[Law] = &[
         name: "hysteretic",
         doc: "the hysteretic adhesive elasto-plastic model (paper 000 eqs. 5-15)",
         params: &[
-            &K1, &KP, &KC, &PHI_F, &FA, &KCA, &ADHESION, &GAMMA0, &K2_RULE,
+            &K1,
+            &KP,
+            &KC,
+            &PHI_F,
+            &FA,
+            &KCA,
+            &ADHESION,
+            &GAMMA0,
+            &K2_RULE,
+            &FRICTION,
+            &FRICTION_DYNAMIC,
+            &KT,
+            &GAMMA_T,
+            &ROLLING_FRICTION,
+            &KR,
+            &GAMMA_R,
+            &TWISTING_FRICTION,
+            &KO,
+            &GAMMA_O,
         ],
         dissipation: false,
     },
     Law {
         name: "lsd",
         doc: "the linear spring-dashpot (paper 000 eq. 2)",
-        params: &[&K, &GAMMA0],
+        params: &[
+            &K,
+            &GAMMA0,
+            &FRICTION,
+            &FRICTION_DYNAMIC,
+            &KT,
+            &GAMMA_T,
+            &ROLLING_FRICTION,
+            &KR,
+            &GAMMA_R,
+            &TWISTING_FRICTION,
+            &KO,
+            &GAMMA_O,
+        ],
         dissipation: false,
     },
     Law {
@@ -409,13 +524,25 @@ pub const LAWS: &[Law] = &[
             &ROLLING_HYSTERESIS,
             &PULLOFF,
             &STIFFNESS_SCALE,
+            &TWISTING_FRICTION,
+            &KO,
+            &GAMMA_O,
         ],
         dissipation: true,
     },
     Law {
         name: "hertz",
         doc: "Hertz (JKR without adhesion) with damping and friction",
-        params: &[&YOUNGS, &POISSON, &DISSIPATION, &FRICTION, &STIFFNESS_SCALE],
+        params: &[
+            &YOUNGS,
+            &POISSON,
+            &DISSIPATION,
+            &FRICTION,
+            &STIFFNESS_SCALE,
+            &TWISTING_FRICTION,
+            &KO,
+            &GAMMA_O,
+        ],
         dissipation: true,
     },
 ];
@@ -731,9 +858,79 @@ pub fn read_model<S: ParamSource>(src: &S, name: &str) -> Result<ContactModel, S
             }
         }
     }
+    luding_given(law, &values).map_err(|e| src.invalid(e))?;
     let model = build(law, dissipation, &values);
     model.validate().map_err(|e| src.invalid(e))?;
     Ok(model)
+}
+
+/// Refuses a stiffness, damping or dynamic coefficient of a friction sub-model that is off:
+/// it would have no effect, which is more likely a mistake than an intent.
+fn luding_given(law: &Law, v: &Values) -> Result<(), ParamError> {
+    // jkr/hertz: `friction` is the Mindlin law's, which takes none of these
+    let groups: [(&Param, &[&Param]); 3] = [
+        (&FRICTION, &[&FRICTION_DYNAMIC, &KT, &GAMMA_T]),
+        (&ROLLING_FRICTION, &[&KR, &GAMMA_R]),
+        (&TWISTING_FRICTION, &[&KO, &GAMMA_O]),
+    ];
+    for (mu, dependents) in groups {
+        if !law.params.contains(&mu) || v.num(mu) > 0.0 {
+            continue;
+        }
+        if let Some(p) = dependents
+            .iter()
+            .find(|p| law.params.contains(p) && v.has(p.key))
+        {
+            return Err(ParamError::new(
+                p.key,
+                format!(
+                    "{} is given but {} = {}: {} acts only with {} > 0 (Luding 2008); set {} or drop {}",
+                    p.key,
+                    mu.key,
+                    v.num(mu),
+                    p.doc,
+                    mu.key,
+                    mu.key,
+                    p.key
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Luding's friction of a hysteretic (`k` = k1) or LSD (`k` = k) pair with damping `gamma0`,
+/// the defaults derived: μd = μs, k_t = 2/7·k, γ_t = 2/7·γ0 (the tangential period equals
+/// the normal one), k_r = k_o = 2/5·k, γ_r = γ_o = 2/5·γ0 (equal periods for two equal
+/// spheres with the lever a12). A sub-model that is off (μ = 0) is all zero.
+fn luding(v: &Values, k: f64, gamma0: f64) -> LudingFriction {
+    // a sub-model that is off stays all zero: a frictionless model is the one of before
+    let spring = |mu: f64, mu_d: f64, kp: &Param, gp: &Param, share: f64| {
+        if mu > 0.0 {
+            CoulombSpring {
+                mu_s: mu,
+                mu_d,
+                k: v.opt(kp).unwrap_or(share * k),
+                gamma: v.opt(gp).unwrap_or(share * gamma0),
+            }
+        } else {
+            CoulombSpring::default()
+        }
+    };
+    let mu = v.num(&FRICTION);
+    let mu_r = v.num(&ROLLING_FRICTION);
+    let mu_o = v.num(&TWISTING_FRICTION);
+    LudingFriction {
+        sliding: spring(
+            mu,
+            v.opt(&FRICTION_DYNAMIC).unwrap_or(mu),
+            &KT,
+            &GAMMA_T,
+            2.0 / 7.0,
+        ),
+        rolling: spring(mu_r, mu_r, &KR, &GAMMA_R, 0.4),
+        twisting: spring(mu_o, mu_o, &KO, &GAMMA_O, 0.4),
+    }
 }
 
 /// The model from typed values (required ones present, defaults from the declaration).
@@ -759,11 +956,13 @@ fn build(law: &Law, dissipation: Option<&Law>, v: &Values) -> ContactModel {
                     "sqrt" => K2Rule::Sqrt,
                     _ => K2Rule::Linear,
                 },
+                luding: luding(v, v.num(&K1), v.num(&GAMMA0)),
             })
         }
         "lsd" => ContactModel::Lsd(LsdParams {
             k: v.num(&K),
             gamma0: v.num(&GAMMA0),
+            luding: luding(v, v.num(&K), v.num(&GAMMA0)),
         }),
         _ => {
             let dissipation = match dissipation.map_or("none", |d| d.name) {
@@ -809,6 +1008,20 @@ fn build(law: &Law, dissipation: Option<&Law>, v: &Values) -> ContactModel {
                     _ => Pulloff::Displacement,
                 },
                 stiffness_scale: v.num(&STIFFNESS_SCALE),
+                luding: LudingFriction {
+                    // k_o = 0: the Mindlin-derived stiffness of the current contact radius
+                    twisting: if v.num(&TWISTING_FRICTION) > 0.0 {
+                        CoulombSpring {
+                            mu_s: v.num(&TWISTING_FRICTION),
+                            mu_d: v.num(&TWISTING_FRICTION),
+                            k: v.opt(&KO).unwrap_or(0.0),
+                            gamma: v.opt(&GAMMA_O).unwrap_or(0.0),
+                        }
+                    } else {
+                        CoulombSpring::default()
+                    },
+                    ..Default::default()
+                },
             })
         }
     }

@@ -23,10 +23,17 @@
 //! x = 1, d = 1, F = 0.
 
 use crate::error::ParamError;
+
+pub mod mindlin;
+pub mod rolling;
+mod twisting;
+
+use crate::model::friction::LudingFriction;
 use crate::model::history::{HistoryField, HostField, Mirror, Shape};
 use crate::model::krijt::{self, KrijtLaw, Relaxation};
-use crate::model::{ContactHistory, Kinematics, NormalForce, PairGeometry};
-use glam::DVec3;
+use crate::model::{ContactHistory, NormalForce, PairGeometry};
+pub use mindlin::Tangential;
+pub use rolling::Rolling;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 use std::fmt;
@@ -38,24 +45,6 @@ pub const HISTORY: &[HistoryField] = &[HistoryField {
     mirror: Mirror::Same,
     host: HostField::Touched,
     doc: "touched since the pair last broke",
-}];
-
-/// The per-contact history of the Mindlin tangential spring (kept in the evaluator's frame).
-pub const SLIDING_HISTORY: &[HistoryField] = &[HistoryField {
-    name: "spring",
-    shape: Shape::Vec3,
-    mirror: Mirror::Negate,
-    host: HostField::Tangential,
-    doc: "the tangential spring s, m",
-}];
-
-/// The per-contact history of the JKR rolling resistance.
-pub const ROLLING_HISTORY: &[HistoryField] = &[HistoryField {
-    name: "xi",
-    shape: Shape::Vec3,
-    mirror: Mirror::Same,
-    host: HostField::Rolling,
-    doc: "the rolling displacement xi, m",
 }];
 
 /// s_min = 6^(−1/3): √(a/a0) at the displacement-controlled pull-off (turning point of
@@ -284,28 +273,12 @@ pub struct JkrParams {
     /// Stiffness scale S > 0 (typically ≤ 1): E → S·E and γ → γ·S^(2/5) (paper 002 eq. 24).
     #[serde(default = "default_stiffness_scale")]
     pub stiffness_scale: f64,
-}
-
-/// Tangential force of one contact.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Tangential {
-    /// Force on particle i (−this on j), N.
-    pub force: DVec3,
-    /// Tangential stiffness St = 8G*·a, N/m (the spring energy is ½·St·|s|²).
-    pub stiffness: f64,
-    /// Whether the Coulomb limit truncated the force.
-    pub sliding: bool,
-}
-
-/// Rolling-resistance torque of one contact.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Rolling {
-    /// Torque on particle i; on j it is the negative.
-    pub torque: DVec3,
-    /// Rolling stiffness kr = 4Fc·(a/a0)^(3/2), N (the spring energy is ½·kr·|ξ|²).
-    pub stiffness: f64,
-    /// Whether ξ was truncated to ξcrit (irreversible rolling).
-    pub yielding: bool,
+    /// Luding's twisting resistance ([`crate::model::friction::twisting`]; only `twisting`
+    /// is used: the family has its own sliding and rolling laws). Its stiffness 0 means the
+    /// Mindlin-derived k_o = 2/5·8G*·a at the current contact radius
+    /// ([`Self::twisting_stiffness`]).
+    #[serde(default)]
+    pub luding: LudingFriction,
 }
 
 /// What a reduced stiffness S ≠ 1 changes (paper 002 §3, §6.2).
@@ -360,25 +333,6 @@ pub fn tsuji_beta(restitution: f64) -> f64 {
 pub fn potential_shape(x: f64) -> f64 {
     let x2 = x * x;
     4.8 * x2 * x2 * x - 8.0 * x2 * x * x.sqrt() + 2.0 * x2
-}
-
-/// Rotates `v` into the plane normal to `n`, keeping its length (zero if `v` ∥ `n`).
-///
-/// The contact frame turns with the pair; projecting alone would shrink a stored spring
-/// and so destroy elastic energy (and torque) by frame rotation alone; rescaling to the
-/// old length keeps |v| and ½k|v|² (the usual history rotation of LIGGGHTS/LAMMPS).
-fn rotate_into_plane(v: DVec3, n: DVec3) -> DVec3 {
-    let len = v.length();
-    if len == 0.0 {
-        return DVec3::ZERO;
-    }
-    let p = v - n * n.dot(v);
-    let lp = p.length();
-    if lp > 1e-12 * len {
-        p * (len / lp)
-    } else {
-        DVec3::ZERO
-    }
 }
 
 // Constants of the deflated solve (see `solve_t_f64`): c = 2·s_min, b = 2·s_min²,
@@ -468,6 +422,7 @@ impl JkrParams {
             rolling_hysteresis: 0.0,
             pulloff: Pulloff::Displacement,
             stiffness_scale: 1.0,
+            luding: LudingFriction::default(),
         }
     }
 
@@ -542,6 +497,21 @@ impl JkrParams {
                     ),
                 ));
             }
+        }
+        let twisting = &self.luding.twisting;
+        p::TWISTING_FRICTION.check(twisting.mu_s)?;
+        p::GAMMA_O.check(twisting.gamma)?;
+        if twisting.k != 0.0 {
+            p::KO.check(twisting.k)?;
+        }
+        if self.luding.sliding.is_on()
+            || self.luding.rolling.is_on()
+            || twisting.mu_d != twisting.mu_s
+        {
+            return Err(ParamError::new(
+                "twisting_friction",
+                "the JKR family takes Luding's twisting only: its sliding friction is `friction` (Mindlin, paper 002 eqs. 14-17) and its rolling resistance `rolling_hysteresis` (paper 002 eqs. 18-22)",
+            ));
         }
         if self.rolling_hysteresis > 0.0 && self.surface_energy <= 0.0 {
             return Err(ParamError::new(
@@ -853,114 +823,6 @@ impl JkrParams {
         }
     }
 
-    /// Tangential force on particle i (paper 002 eqs. 14–17).
-    ///
-    /// Of the kinematics `k` it takes the normal n, the overlap δ and `v_t`, the tangential
-    /// velocity of i relative to j at the contact point (already in the tangent plane);
-    /// `spring` is the stored displacement s (history). Steps: the spring
-    /// is rotated into the current tangent plane keeping its length (see
-    /// `rotate_into_plane`: a rigid rotation of the pair must not change the stored
-    /// energy), s += v_t·dt, St = 8G*·a, and
-    /// F = −St·s − c_t·v_t with c_t = −2√(5/6)·β·√(St'·m*) ≥ 0 (Tsuji only; β < 0), where
-    /// St' = 8G*·ρ with ρ of [`TsujiStiffness`] (a, or √(R*·δ)).
-    /// The force is truncated to |F| ≤ μs·|F_N + 2Fc| (eq. 17) with F_N the conservative
-    /// (elastic) normal force; when truncated, F is set to the limit along its direction and
-    /// the spring to s = −(F + c_t·v_t)/St, and `sliding` is true.
-    /// Without friction or contact the spring is zeroed and there is no force.
-    pub fn tangential_force(
-        &self,
-        k: &Kinematics,
-        normal: &NormalForce,
-        geom: &PairGeometry,
-        dt: f64,
-        spring: &mut DVec3,
-    ) -> Tangential {
-        if self.friction == 0.0 || !normal.in_contact {
-            *spring = DVec3::ZERO;
-            return Tangential::default();
-        }
-        let (n, v_t, delta) = (k.n, k.v_t, k.delta);
-        let r = 0.5 * geom.a12;
-        let mut s = rotate_into_plane(*spring, n) + v_t * dt;
-        let st = 8.0 * self.g_star() * normal.contact_radius;
-        let ct = match self.dissipation {
-            Dissipation::Tsuji {
-                restitution,
-                stiffness,
-            } => {
-                // the dashpot's St: the spring's 8G*·a, or paper 002's 8G*·√(R*δ)
-                let st_damp =
-                    8.0 * self.g_star() * stiffness.radius(normal.contact_radius, delta, r);
-                -TSUJI_PREFACTOR * tsuji_beta(restitution) * (st_damp * geom.reduced_mass).sqrt()
-            }
-            _ => 0.0,
-        };
-        let mut force = -st * s - ct * v_t;
-        let limit = self.friction * (normal.conservative + 2.0 * self.fc(r)).abs();
-        let magnitude = force.length();
-        let mut sliding = false;
-        if magnitude > limit {
-            sliding = true;
-            force *= limit / magnitude;
-            if st > 0.0 {
-                s = -(force + ct * v_t) / st;
-            }
-        }
-        *spring = s;
-        Tangential {
-            force,
-            stiffness: st,
-            sliding,
-        }
-    }
-
-    /// Rolling-resistance torque on particle i (Dominik–Tielens/Krijt, paper 002
-    /// eqs. 18–22).
-    ///
-    /// `v_roll` is the rolling velocity of eq. 20 and `xi` the stored rolling displacement
-    /// ξ: rotated into the tangent plane keeping its length (as the tangential spring),
-    /// ξ += v_roll·dt, truncated to |ξ| ≤ ξcrit = (a0/12)·(Δγ/γ) (`yielding` when
-    /// truncated). kr = 4Fc·(a/a0)^(3/2) and torque = −kr·(n × ξ) on i (+kr·(n × ξ) on j).
-    ///
-    /// Direction: with v_roll = R*(ω_i − ω_j) × n, ξ grows along (ω_i − ω_j) × n and
-    /// n × ((ω_i − ω_j) × n) is the tangential part of ω_i − ω_j, so the torque on i opposes
-    /// the relative rolling rotation ω_i − ω_j.
-    ///
-    /// Reduced stiffness (paper 002 §3.2): Fc and a0 in ξcrit and in the prefactor 4Fc are
-    /// the unscaled values; only the ratio a/a0 uses the modified a and a0.
-    /// Zero (and ξ zeroed) without rolling hysteresis, without surface energy or out of
-    /// contact.
-    pub fn rolling_torque(
-        &self,
-        n: DVec3,
-        v_roll: DVec3,
-        normal: &NormalForce,
-        geom: &PairGeometry,
-        dt: f64,
-        xi: &mut DVec3,
-    ) -> Rolling {
-        if self.rolling_hysteresis == 0.0 || self.surface_energy == 0.0 || !normal.in_contact {
-            *xi = DVec3::ZERO;
-            return Rolling::default();
-        }
-        let r = 0.5 * geom.a12;
-        let mut x = rotate_into_plane(*xi, n) + v_roll * dt;
-        let xi_crit = self.a0_unscaled(r) / 12.0 * self.rolling_hysteresis;
-        let len = x.length();
-        let yielding = len > xi_crit;
-        if yielding {
-            x *= xi_crit / len;
-        }
-        *xi = x;
-        let ratio = normal.contact_radius / self.a0(r);
-        let kr = 4.0 * self.fc_unscaled(r) * ratio * ratio.sqrt();
-        Rolling {
-            torque: -kr * n.cross(x),
-            stiffness: kr,
-            yielding,
-        }
-    }
-
     /// Hertz contact time 2.87·(m*²/(R*·E*²·v))^(1/5) at impact speed `v` (scaled E*), s.
     pub fn hertz_contact_time(&self, r_eff: f64, m_eff: f64, v: f64) -> f64 {
         let es = self.e_star();
@@ -1010,7 +872,9 @@ impl JkrParams {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::Kinematics;
     use approx::assert_relative_eq;
+    use glam::DVec3;
 
     // Silica-like micro-spheres: r = 1 µm each, E = 70 GPa, ν = 0.17, γ = 0.05 J/m².
     const R1: f64 = 1e-6;

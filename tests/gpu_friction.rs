@@ -1,0 +1,320 @@
+//! Luding's sliding, rolling and twisting friction on the GPU (`shaders/contact/luding_*.wgsl`)
+//! against the closed forms and the f64 CPU reference: oblique elastic impacts on both
+//! branches, packings of hysteretic spheres with all three laws (alone and beside JKR pairs
+//! with twisting friction), and a sphere spinning and rolling on a floor.
+
+mod common;
+use common::gpu;
+
+use powder::collide::{collide_on, Backend, CollideSpec};
+use powder::compare::{compare, Tolerances};
+use powder::gpu::GpuEngine;
+use powder::model::analytic;
+use powder::model::flags::LawArgs;
+use powder::model::ContactModel;
+use powder::scene::Scene;
+use std::f64::consts::PI;
+
+const R: f64 = 1e-3;
+const RHO: f64 = 2000.0;
+const G: f64 = 9.81;
+
+fn law(name: &str, params: &[(&'static str, f64)]) -> ContactModel {
+    LawArgs {
+        model: name.into(),
+        given: params.iter().map(|(k, v)| (*k, v.to_string())).collect(),
+    }
+    .contact_model()
+    .unwrap()
+}
+
+/// Elastic oblique impacts on a wall against Luding's closed form, sticking (60°) and
+/// sliding (32°, 20°), and against the CPU's e_t. Measured: 9.3e-5 off the closed form
+/// (the CPU's discretisation error, 1e-3 allowed as there), 1.4e-6 off the CPU (1e-5).
+#[test]
+fn oblique_impacts_on_the_gpu_follow_the_closed_form() {
+    if gpu().is_none() {
+        return;
+    }
+    let mu = 0.3;
+    let model = law(
+        "hysteretic",
+        &[
+            ("k1", 100.0),
+            ("kp", 100.0),
+            ("kc", 0.0),
+            ("phi_f", 0.05),
+            ("friction", mu),
+        ],
+    );
+    for angle in [60.0f64, 32.0, 20.0] {
+        let spec = CollideSpec {
+            wall: true,
+            impact_angle: angle,
+            ..CollideSpec::head_on(model, R, RHO, 0.1)
+        };
+        let g = collide_on(&spec, Backend::Gpu).unwrap();
+        let c = collide_on(&spec, Backend::Cpu).unwrap();
+        assert_eq!(g.backend, "gpu");
+        let psi = angle.to_radians();
+        let expect = analytic::luding_tangential_restitution(mu, psi.sin(), psi.cos());
+        let (eg, ec) = (g.e_tangential.unwrap(), c.e_tangential.unwrap());
+        eprintln!("{angle}°: e_t gpu {eg} cpu {ec} closed form {expect}");
+        assert!((eg - expect).abs() < 1e-3, "{angle}°: {eg} vs {expect}");
+        assert!((eg - ec).abs() < 1e-5, "{angle}°: gpu {eg} vs cpu {ec}");
+        assert!((g.e - 1.0).abs() < 3e-3, "elastic normal: {}", g.e);
+    }
+}
+
+/// A box of jittered 1 mm spheres thrown onto a floor: `materials` as scene lines, every
+/// sphere of the first material, the upper half of `upper`.
+fn packing(materials: &str, upper: &str) -> Scene {
+    let text = format!(
+        r#"
+[domain]
+min = [0.0, 0.0, 0.0]
+max = [0.012, 0.012, 0.02]
+[simulation]
+duration = 0.05
+gravity = [0.0, 0.0, -9.81]
+impact_velocity = 0.5
+{materials}
+[[wall]]
+point = [0.0, 0.0, 0.0]
+normal = [0.0, 0.0, 1.0]
+material = "rough"
+[[particles]]
+kind = "lattice"
+material = "rough"
+min = [0.0011, 0.0011, 0.0011]
+max = [0.0109, 0.0109, 0.0062]
+radius = 1.0e-3
+spacing = 2.1e-3
+jitter = 0.5
+seed = 7
+[[particles]]
+kind = "lattice"
+material = "{upper}"
+min = [0.0011, 0.0011, 0.0066]
+max = [0.0109, 0.0109, 0.0118]
+radius = 1.0e-3
+spacing = 2.1e-3
+jitter = 0.5
+velocity = [0.1, 0.05, -0.3]
+seed = 8
+"#
+    );
+    Scene::from_toml_str(&text, "packing").unwrap()
+}
+
+/// Adhesive elasto-plastic spheres with Luding's sliding (μs > μd), rolling and twisting
+/// friction: one pair law and its three sub-models, against the CPU. The thrown spheres'
+/// sideways speed makes this box chaotic: f32 and f64 separate by a factor ~2 per 250 steps
+/// after the first impacts, with or without friction (3e-5 radii at step 2000, 1e-2 at
+/// 4000), so the comparison covers the first 2400 steps (~60 contacts).
+const ROUGH: &str = r#"
+[[material]]
+name = "rough"
+density = 2000.0
+model = "hysteretic"
+k1 = 100.0
+kp = 500.0
+kc = 100.0
+phi_f = 0.05
+gamma0 = 1e-3
+friction = 0.5
+friction_dynamic = 0.4
+rolling_friction = 0.1
+twisting_friction = 0.1
+"#;
+
+fn report(c: &powder::compare::Comparison) {
+    for s in &c.samples {
+        eprintln!(
+            "step {}: pos {:.2e} vel {:.2e} energy {:.2e} contacts {}/{} history {:.2e} over {}",
+            s.step,
+            s.position,
+            s.velocity,
+            s.energy,
+            s.contacts_cpu,
+            s.contacts_gpu,
+            s.history,
+            s.history_pairs
+        );
+    }
+}
+
+#[test]
+fn a_packing_with_luding_friction_matches_the_cpu() {
+    let scene = packing(ROUGH, "rough");
+    let Some(ctx) = gpu() else { return };
+    let g = GpuEngine::new(&scene, ctx).unwrap();
+    assert_eq!(
+        g.kind().name(),
+        "step_hysteretic+luding_sliding+luding_rolling+luding_twisting"
+    );
+    assert!(g.rotates());
+    drop(g);
+    let Some(ctx) = gpu() else { return };
+    let c = compare(&scene, ctx, 2400, 600, Tolerances::default()).unwrap();
+    report(&c);
+    let last = c.samples.last().unwrap();
+    assert!(
+        last.contacts_cpu > 30 && last.history_pairs > 30,
+        "{last:?}"
+    );
+    assert!(c.passed, "{last:?}");
+}
+
+/// JKR spheres with Mindlin friction, rolling resistance and Luding's twisting friction
+/// (its stiffness following the contact radius) above the rough hysteretic ones: both laws
+/// and five sub-models in one step, against the CPU.
+#[test]
+fn jkr_twisting_beside_luding_friction_matches_the_cpu() {
+    let materials = format!(
+        r#"{ROUGH}
+[[material]]
+name = "sticky"
+density = 2000.0
+model = "jkr"
+youngs = 1e5
+poisson = 0.3
+surface_energy = 0.05
+restitution = 0.5
+friction = 0.3
+rolling_hysteresis = 0.5
+twisting_friction = 0.1
+[[interaction]]
+materials = ["rough", "sticky"]
+model = "hysteretic"
+k1 = 100.0
+kp = 500.0
+kc = 50.0
+phi_f = 0.05
+gamma0 = 1e-3
+friction = 0.3
+"#
+    );
+    let scene = packing(&materials, "sticky");
+    let Some(ctx) = gpu() else { return };
+    let g = GpuEngine::new(&scene, ctx).unwrap();
+    assert_eq!(
+        g.kind().name(),
+        "step_hysteretic+jkr+mindlin+jkr_rolling+luding_sliding+luding_rolling+luding_twisting"
+    );
+    drop(g);
+    let Some(ctx) = gpu() else { return };
+    let c = compare(&scene, ctx, 8000, 2000, Tolerances::default()).unwrap();
+    report(&c);
+    let last = c.samples.last().unwrap();
+    assert!(last.contacts_cpu > 5 && last.history_pairs > 0, "{last:?}");
+    assert!(c.passed, "{last:?}");
+}
+
+/// A sphere resting on a floor of the elastic law k = 100 N/m (γ0 = `gamma0`) with the
+/// friction keys `extra`, starting with velocity `v` and spin `w`, on the GPU.
+fn on_floor(extra: &str, gamma0: f64, v: [f64; 3], w: [f64; 3]) -> Option<GpuEngine> {
+    let m = RHO * 4.0 / 3.0 * PI * R.powi(3);
+    let z = R - m * G / 100.0;
+    let text = format!(
+        r#"
+[domain]
+min = [-0.5, -0.05, -0.01]
+max = [0.5, 0.05, 0.05]
+[simulation]
+duration = 1.0
+gravity = [0.0, 0.0, {g}]
+impact_velocity = 0.1
+[[material]]
+name = "m"
+density = {RHO}
+model = "hysteretic"
+k1 = 100.0
+kp = 100.0
+kc = 0.0
+phi_f = 0.05
+gamma0 = {gamma0:e}
+{extra}
+[[wall]]
+point = [0.0, 0.0, 0.0]
+normal = [0.0, 0.0, 1.0]
+[[particles]]
+kind = "list"
+radius = {R:e}
+positions = [[0.0, 0.0, {z:e}]]
+velocity = [{:e}, {:e}, {:e}]
+angular_velocity = [{:e}, {:e}, {:e}]
+"#,
+        v[0],
+        v[1],
+        v[2],
+        w[0],
+        w[1],
+        w[2],
+        g = -G
+    );
+    let scene = Scene::from_toml_str(&text, "floor").unwrap();
+    let ctx = gpu()?;
+    Some(GpuEngine::new(&scene, ctx).unwrap())
+}
+
+/// Steps `e` to time `t`; the time reached and the sphere's velocity and spin.
+fn run_to(e: &mut GpuEngine, t: f64) -> (f64, glam::DVec3, glam::DVec3) {
+    let steps = (t / e.dt()).ceil() as u64 - e.steps;
+    e.run_steps(steps).unwrap();
+    let s = e.state().unwrap();
+    (e.time, s.velocities[0], s.angular_velocities[0])
+}
+
+/// Spinning about the floor's normal stops at dω/dt = −(5/2)·μo·ℓ·g/r² with ℓ = 2r, as on
+/// the CPU (`tests/friction.rs`, exact there): the twisting law alone, saturated throughout.
+/// Measured 3.3e-5 off in f32; 1e-3 allowed.
+#[test]
+fn spinning_on_a_floor_decelerates_at_five_halves_mu_o_lever_g_on_the_gpu() {
+    let mu_o = 0.05;
+    let extra = format!("twisting_friction = {mu_o}");
+    let Some(mut e) = on_floor(&extra, 0.0, [0.0; 3], [0.0, 0.0, 100.0]) else {
+        return;
+    };
+    assert_eq!(e.kind().name(), "step_hysteretic+luding_twisting");
+    let (t1, _, w1) = run_to(&mut e, 0.005);
+    let (t2, v2, w2) = run_to(&mut e, 0.03);
+    let rate = (w1.z - w2.z) / (t2 - t1);
+    let expect = 2.5 * mu_o * 2.0 * R * G / (R * R);
+    eprintln!("spin-down {rate} vs {expect} rad/s^2");
+    assert!((rate / expect - 1.0).abs() < 1e-3, "{rate} vs {expect}");
+    assert!(v2.x.abs() < 1e-9 && w2.x.abs() < 1e-6, "{v2} {w2}");
+}
+
+/// Rolling on a floor decelerates at (5/7)·μr·(ℓ/r)·g with ℓ = 2r, the sliding friction
+/// keeping it rolling, as on the CPU: sliding and rolling laws together on the device.
+/// Measured 3.1e-4 off (3.2e-4 on the CPU: the sliding spring's remaining oscillation);
+/// 1e-3 allowed.
+#[test]
+fn rolling_on_a_floor_decelerates_at_five_sevenths_mu_r_lever_g_on_the_gpu() {
+    let mu_r = 0.05;
+    let m = RHO * 4.0 / 3.0 * PI * R.powi(3);
+    let gamma0 = 0.2 * (100.0 * m).sqrt();
+    let extra = format!("friction = 0.5\nrolling_friction = {mu_r}");
+    let Some(mut e) = on_floor(&extra, gamma0, [0.05, 0.0, 0.0], [0.0, 0.05 / R, 0.0]) else {
+        return;
+    };
+    assert_eq!(
+        e.kind().name(),
+        "step_hysteretic+luding_sliding+luding_rolling"
+    );
+    let (t1, v1, _) = run_to(&mut e, 0.01);
+    let (t2, v2, w2) = run_to(&mut e, 0.05);
+    let decel = (v1.x - v2.x) / (t2 - t1);
+    let expect = 5.0 / 7.0 * mu_r * 2.0 * G;
+    eprintln!(
+        "deceleration {decel} vs {expect} m/s^2, slip {}",
+        v2.x - w2.y * R
+    );
+    assert!((decel / expect - 1.0).abs() < 1e-3, "{decel} vs {expect}");
+    assert!(
+        (v2.x - w2.y * R).abs() < 1e-3 * v2.x,
+        "slip {}",
+        v2.x - w2.y * R
+    );
+}
