@@ -318,3 +318,30 @@ fn rolling_on_a_floor_decelerates_at_five_sevenths_mu_r_lever_g_on_the_gpu() {
         v2.x - w2.y * R
     );
 }
+
+/// A saved GPU state restores only into a step of the same layout: sliding-only and
+/// rolling-only scenes have buffers of the same names and sizes (4 + 12 bytes of history),
+/// but their history words mean different springs.
+#[test]
+fn a_saved_state_restores_only_into_the_same_contact_layout() {
+    let Some(sliding) = on_floor("friction = 0.5", 0.0, [0.01, 0.0, 0.0], [0.0; 3]) else {
+        return;
+    };
+    let Some(mut rolling) = on_floor("rolling_friction = 0.1", 0.0, [0.01, 0.0, 0.0], [0.0; 3])
+    else {
+        return;
+    };
+    let saved = sliding.save_state().unwrap();
+    let e = rolling
+        .restore_state(saved.clone())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("luding_sliding") && e.contains("luding_rolling") && e.contains("history ["),
+        "{e}"
+    );
+    let Some(mut again) = on_floor("friction = 0.5", 0.0, [0.01, 0.0, 0.0], [0.0; 3]) else {
+        return;
+    };
+    again.restore_state(saved).unwrap();
+}

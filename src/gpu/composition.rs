@@ -364,6 +364,22 @@ impl Composition {
         out
     }
 
+    /// The step's name, its pair-row bytes and its history fields in order: what a saved
+    /// GPU state must match to be restored.
+    pub fn layout(&self) -> String {
+        let fields: Vec<String> = self
+            .history()
+            .iter()
+            .map(|f| format!("{}:{:?}", f.name, f.shape))
+            .collect();
+        format!(
+            "{}, row {} B, history [{}]",
+            self.name(),
+            self.row_bytes(),
+            fields.join(", ")
+        )
+    }
+
     /// Bytes of one contact's stored history (`Hist`: f32 words, no padding).
     pub fn history_bytes(&self) -> u64 {
         4 * self.history().iter().map(|f| f.words()).sum::<usize>() as u64

@@ -387,6 +387,9 @@ pub struct GpuSavedState {
     /// Which particles have appeared, and the energy they brought.
     active: Vec<bool>,
     inserted: f64,
+    /// The composed contact law's layout (`Composition::layout`): the history words in the
+    /// buffers mean what it says.
+    layout: String,
 }
 
 impl GpuSavedState {
@@ -1539,6 +1542,7 @@ impl GpuEngine {
             wall_points: self.wall_points.clone(),
             active: self.active.clone(),
             inserted: self.inserted,
+            layout: self.kind.layout(),
         })
     }
 
@@ -1559,6 +1563,13 @@ impl GpuEngine {
                 ))
             }
             _ => {}
+        }
+        if saved.layout != self.kind.layout() {
+            return Err(PowderError::Run(format!(
+                "the saved GPU state's contact law is laid out as `{}`, this run's as `{}` (another scene or powder version): rerun the scene from the start",
+                saved.layout,
+                self.kind.layout()
+            )));
         }
         let list = self.state_buffers();
         let names: Vec<&String> = list.iter().map(|(n, _)| n).collect();
