@@ -22,7 +22,11 @@ pub struct LawArgs {
 impl LawArgs {
     /// The contact model these flags describe, validated; errors name the flag.
     pub fn contact_model(&self) -> Result<ContactModel, PowderError> {
-        params::read_model(self, &self.model)
+        let flags = Flags {
+            given: &self.given,
+            model: Some(&self.model),
+        };
+        params::read_model(&flags, &self.model)
     }
 }
 
@@ -142,7 +146,16 @@ fn static_key(key: &str) -> &'static str {
     params::param(key).map_or("model", |p| p.key)
 }
 
-impl ParamSource for LawArgs {
+/// Flags given on the command line as a source of declared parameters: for a contact
+/// law (`--model`, [`LawArgs`]) or a command's own list ([`ParamArgs`]); errors name the
+/// flag.
+struct Flags<'a> {
+    given: &'a [(&'static str, String)],
+    /// The `--model` the flags are read for, if any.
+    model: Option<&'a str>,
+}
+
+impl ParamSource for Flags<'_> {
     type Error = PowderError;
 
     fn keys(&self) -> Vec<String> {
@@ -150,7 +163,7 @@ impl ParamSource for LawArgs {
     }
 
     fn raw(&self, key: &str) -> Option<Raw> {
-        raw_of(&self.given, key)
+        raw_of(self.given, key)
     }
 
     fn name(&self, key: &str) -> String {
@@ -166,26 +179,28 @@ impl ParamSource for LawArgs {
     }
 
     fn missing(&self, key: &str, what: &str) -> PowderError {
+        let place = match self.model {
+            Some(m) => format!("for --model {m}"),
+            None => "here".to_string(),
+        };
         ParamError::new(
             static_key(key),
-            format!(
-                "{} is required for --model {}: {what}",
-                flag(key),
-                self.model
-            ),
+            format!("{} is required {place}: {what}", flag(key)),
         )
         .into()
     }
 
     fn unknown(&self, key: &str, law: &Law, owner: Option<&str>) -> PowderError {
-        let hint = owner.map_or(String::new(), |m| {
-            format!(" (it is a parameter of --model {m})")
-        });
-        ParamError::new(
-            static_key(key),
-            format!("{} does not apply to --model {}{hint}", flag(key), law.name),
-        )
-        .into()
+        let message = match self.model {
+            Some(_) => {
+                let hint = owner.map_or(String::new(), |m| {
+                    format!(" (it is a parameter of --model {m})")
+                });
+                format!("{} does not apply to --model {}{hint}", flag(key), law.name)
+            }
+            None => format!("{} does not apply here", flag(key)),
+        };
+        ParamError::new(static_key(key), message).into()
     }
 
     fn invalid(&self, e: ParamError) -> PowderError {
@@ -247,7 +262,14 @@ impl<S: ParamSet> ParamArgs<S> {
     /// `None` when neither.
     fn value(&self, p: &'static Param) -> Result<Option<params::Value>, PowderError> {
         debug_assert!(S::PARAMS.iter().any(|q| q.key == p.key), "{}", p.key);
-        params::read_value(self, p)
+        params::read_value(&self.flags(), p)
+    }
+
+    fn flags(&self) -> Flags<'_> {
+        Flags {
+            given: &self.given,
+            model: None,
+        }
     }
 
     /// The number given for `p` or its declared default, checked against its rule; `None`
@@ -255,7 +277,7 @@ impl<S: ParamSet> ParamArgs<S> {
     pub fn get(&self, p: &'static Param) -> Result<Option<f64>, PowderError> {
         match self.value(p)? {
             Some(params::Value::Number(x)) => Ok(Some(x)),
-            Some(params::Value::Word(w)) => Err(self.error(
+            Some(params::Value::Word(w)) => Err(self.flags().error(
                 p.key,
                 format!("{} must be a number, got \"{w}\"", flag(p.key)),
             )),
@@ -266,14 +288,15 @@ impl<S: ParamSet> ParamArgs<S> {
     /// The number given for `p` or its declared default, checked against its rule; an
     /// error naming the flag when neither.
     pub fn number(&self, p: &'static Param) -> Result<f64, PowderError> {
-        self.get(p)?.ok_or_else(|| self.missing(p.key, &p.what()))
+        self.get(p)?
+            .ok_or_else(|| self.flags().missing(p.key, &p.what()))
     }
 
     /// The word given for `p` (a [`Kind::Choice`]) or its declared default.
     pub fn word(&self, p: &'static Param) -> Result<&'static str, PowderError> {
         match self.value(p)? {
             Some(params::Value::Word(w)) => Ok(w),
-            _ => Err(self.missing(p.key, &p.what())),
+            _ => Err(self.flags().missing(p.key, &p.what())),
         }
     }
 }
@@ -301,50 +324,6 @@ impl<S: ParamSet> FromArgMatches for ParamArgs<S> {
     fn update_from_arg_matches(&mut self, m: &ArgMatches) -> Result<(), clap::Error> {
         update_given(&mut self.given, S::PARAMS, m);
         Ok(())
-    }
-}
-
-impl<S: ParamSet> ParamSource for ParamArgs<S> {
-    type Error = PowderError;
-
-    fn keys(&self) -> Vec<String> {
-        self.given.iter().map(|(k, _)| k.to_string()).collect()
-    }
-
-    fn raw(&self, key: &str) -> Option<Raw> {
-        raw_of(&self.given, key)
-    }
-
-    fn name(&self, key: &str) -> String {
-        flag(key)
-    }
-
-    fn setting(&self, key: &str, value: &str) -> String {
-        format!("{} {value}", flag(key))
-    }
-
-    fn error(&self, key: &str, message: String) -> PowderError {
-        ParamError::new(static_key(key), message).into()
-    }
-
-    fn missing(&self, key: &str, what: &str) -> PowderError {
-        ParamError::new(
-            static_key(key),
-            format!("{} is required here: {what}", flag(key)),
-        )
-        .into()
-    }
-
-    fn unknown(&self, key: &str, _law: &Law, _owner: Option<&str>) -> PowderError {
-        ParamError::new(
-            static_key(key),
-            format!("{} does not apply here", flag(key)),
-        )
-        .into()
-    }
-
-    fn invalid(&self, e: ParamError) -> PowderError {
-        e.into()
     }
 }
 
