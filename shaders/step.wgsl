@@ -129,6 +129,7 @@ const MONITOR_MAX_OVERLAP_RATIO: f32 = 0.5;
 
 struct Wall {
     // A point of the plane as cell + offset (like particle positions); moves with the wall.
+    // offset.w: the plane's rounding residual (`WallGpu::offset`).
     cell: vec4<i32>,
     offset: vec4<f32>,
     // Unit normal into the domain (xyz).
@@ -431,8 +432,10 @@ fn drift_particle(i: u32, vel: vec4<f32>, acc: vec3<f32>, rot: RotState, pending
         off = a_off[i];
         cell0 = a_cell[i];
     }
-    let ko = kahan_add(off.xyz, a_kahan[2u * i + 1u].xyz, step.dt * (v - kv.c));
-    a_kahan[2u * i + 1u] = vec4<f32>(ko.c, 0.0);
+    // (w: the radius's rounding residual, kept)
+    let c_off = a_kahan[2u * i + 1u];
+    let ko = kahan_add(off.xyz, c_off.xyz, step.dt * (v - kv.c));
+    a_kahan[2u * i + 1u] = vec4<f32>(ko.c, c_off.w);
     var o = ko.x;
     let shift = floor(o / h);
     o = o - shift * h;
@@ -841,6 +844,9 @@ fn particle_forces(k: u32, row0: PairRow) {
     let vk = pk.xyz;
     let wk = rot_wpred(k);
     let mat_k = u32(ck.w);
+    // the position's compensation (xyz) and the radius's residual (w): the overlaps are
+    // taken from them to below f32 rounding (overlap.wgsl)
+    let comp_k = a_kahan[2u * k + 1u];
     var f = vec3<f32>(0.0);
     var torque = vec3<f32>(0.0);
     var ledger_acc = ledger_new();
@@ -853,9 +859,12 @@ fn particle_forces(k: u32, row0: PairRow) {
         // predicted velocity (xyz) and mass (w): one load
         let pj = textureLoad(m_vpred, mirror_texel(j));
         let mj = pj.w;
-        let d = separation(ck, ok, cj, oj);
+        let dc = vec3<f32>(nearest_image(ck.xyz - cj.xyz));
+        let comp_j = a_kahan[2u * j + 1u];
+        let dd = precise_separation(dc, ok.xyz, oj.xyz, comp_k.xyz, comp_j.xyz);
+        let d = dd.hi;
         let dist = length(d);
-        let delta = rk + rj - dist;
+        let delta = precise_overlap(dd, rk, rj, comp_k.w, comp_j.w);
         // (one division, not one per component: on a SIMD adapter every division in the
         // code runs for every pair)
         let inv_dist = 1.0 / dist;
@@ -949,7 +958,9 @@ fn particle_forces(k: u32, row0: PairRow) {
         }
         let wall = walls[w];
         let n = wall.normal.xyz;
-        let delta = rk - dot(separation(ck, ok, wall.cell, wall.offset), n);
+        let dc = vec3<f32>(nearest_image(ck.xyz - wall.cell.xyz));
+        let dd = precise_separation(dc, ok.xyz, wall.offset.xyz, comp_k.xyz, vec3<f32>(0.0));
+        let delta = precise_wall_overlap(dd, n, rk, comp_k.w, wall.offset.w);
         // relative to the (possibly moving) wall
         let v_rel = vk - wall.velocity.xyz;
         let v_c = v_rel - cross(rk * wk, n);

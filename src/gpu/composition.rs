@@ -9,7 +9,9 @@
 //! use is compiled in.
 
 use super::layout::{CoulombSpringRow, HystereticPair, JkrPair, TwistingRow};
-use super::shaders::{compose, ShaderVariant, LEDGER, LEDGER_OFF, ROTATION, ROTATION_OFF, STEP};
+use super::shaders::{
+    compose, ShaderVariant, LEDGER, LEDGER_OFF, OVERLAP, ROTATION, ROTATION_OFF, STEP,
+};
 use crate::model::friction::{rolling, sliding, twisting};
 use crate::model::history::{HistoryField, Mirror, Shape};
 use crate::model::{hysteretic, jkr, krijt, ContactHistory, ContactModel, CoulombSpring};
@@ -643,6 +645,7 @@ impl Composition {
             }
             parts.push(s.source);
         }
+        parts.push(OVERLAP);
         parts.push(&interface);
         parts.push(if self.rotation() {
             ROTATION

@@ -578,14 +578,28 @@ impl GpuEngine {
         let mut cells = Vec::with_capacity(n);
         let mut offs = Vec::with_capacity(n);
         let mut vels = Vec::with_capacity(n);
+        // the compensations (stored − true) of velocity and position, and the radius's
+        // rounding residual: the kernels' x − c is the scene's value to ~1e-16 relative
+        let mut kahan: Vec<[f32; 4]> = Vec::with_capacity(2 * n);
         for (p, m) in scene.particles.iter().zip(&r.mass) {
-            let (mut c, mut o) = encode3(DVec3::from_array(p.position), origin, h);
+            let x = DVec3::from_array(p.position);
+            let (mut c, mut o) = encode3(x, origin, h);
             c[3] = p.material as i32;
             o[3] = p.radius as f32;
+            let dx = crate::gpu::layout::decode3(c, o, origin, h) - x;
+            let v = p.velocity;
+            let v32 = v.map(|c| c as f32);
+            let cv = [0, 1, 2].map(|a| (v32[a] as f64 - v[a]) as f32);
+            kahan.push([cv[0], cv[1], cv[2], 0.0]);
+            kahan.push([
+                dx.x as f32,
+                dx.y as f32,
+                dx.z as f32,
+                (o[3] as f64 - p.radius) as f32,
+            ]);
             cells.push(c);
             offs.push(o);
-            let v = p.velocity;
-            vels.push([v[0] as f32, v[1] as f32, v[2] as f32, *m as f32]);
+            vels.push([v32[0], v32[1], v32[2], *m as f32]);
         }
         let pid: Vec<u32> = (0..n as u32).collect();
         let g = scene.gravity;
@@ -595,6 +609,7 @@ impl GpuEngine {
         q0.write_buffer(&s0.cell, 0, bytemuck::cast_slice(&cells));
         q0.write_buffer(&s0.off, 0, bytemuck::cast_slice(&offs));
         q0.write_buffer(&s0.vel, 0, bytemuck::cast_slice(&vels));
+        q0.write_buffer(&s0.kahan, 0, bytemuck::cast_slice(&kahan));
         q0.write_buffer(&s0.acc, 0, bytemuck::cast_slice(&acc0));
         // the prediction kick_drift writes each step, for the initial forces
         let vpred0: Vec<[f32; 4]> = vels

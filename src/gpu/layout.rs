@@ -526,7 +526,9 @@ pub struct StepParams {
 pub struct WallGpu {
     /// A point of the plane: integer cell (xyz), w unused.
     pub cell: [i32; 4],
-    /// A point of the plane: offset inside the cell (xyz), m; w unused.
+    /// A point of the plane: offset inside the cell (xyz), m; w: the plane's rounding
+    /// residual n·(encoded − true point), m, which the kernels' overlap subtracts (0 once
+    /// the device moves the wall: servo).
     pub offset: [f32; 4],
     /// Unit normal pointing into the domain (xyz); w unused.
     pub normal: [f32; 4],
@@ -548,8 +550,10 @@ impl WallGpu {
     /// A fixed wall through `point` (m) with normal `normal` (normalised here), encoded on the
     /// grid at `origin` with cell widths `h`.
     pub fn new(point: DVec3, normal: DVec3, origin: DVec3, h: DVec3) -> Self {
-        let (cell, offset) = encode3(point, origin, h);
+        let (cell, mut offset) = encode3(point, origin, h);
         let n = normal.normalize();
+        let n32 = DVec3::new(n.x as f32 as f64, n.y as f32 as f64, n.z as f32 as f64);
+        offset[3] = n32.dot(decode3(cell, offset, origin, h) - point) as f32;
         Self {
             cell,
             offset,

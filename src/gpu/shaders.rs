@@ -28,6 +28,8 @@ pub const ROTATION_OFF: &str = include_str!("../../shaders/rotation_off.wgsl");
 pub const LEDGER: &str = include_str!("../../shaders/ledger.wgsl");
 /// The ledger hooks as no-ops (a snippet of the step for runs without the ledger).
 pub const LEDGER_OFF: &str = include_str!("../../shaders/ledger_off.wgsl");
+/// Overlaps to below f32 rounding of positions (double-float on the compensated state).
+pub const OVERLAP: &str = include_str!("../../shaders/overlap.wgsl");
 /// One time step: drift, (on a rebuild: gather, neighbours, history remap, copy back),
 /// forces, kick.
 pub const STEP: &str = include_str!("../../shaders/step.wgsl");

@@ -1,0 +1,103 @@
+// overlap.wgsl — a pair's overlap to far below f32 rounding of positions (issue 15):
+// double-float (hi + lo) arithmetic on the compensated positions x = cell·h + o − c and
+// radii r − c_r (the Kahan compensations the drift keeps, and the radius's rounding
+// residual, both in `a_kahan[2k + 1]`). A separation of 2 mm has an f32 ulp of 2.3e-10 m,
+// more than 4 % of a 5e-9 m adhesion range; this resolves the overlap to ~1e-16 m.
+//
+// Every intermediate goes through `opaque1` (step.wgsl): Mesa's NIR folds the error terms
+// of these exact transformations ((a + b) − a → b) for operations not marked exact.
+
+// a + b = s + e exactly (Knuth's TwoSum).
+struct Df {
+    hi: f32,
+    lo: f32,
+}
+
+fn two_sum(a: f32, b: f32) -> Df {
+    let s = opaque1(a + b);
+    let bb = opaque1(s - a);
+    let e = opaque1(a - opaque1(s - bb)) + opaque1(b - bb);
+    return Df(s, e);
+}
+
+// Veltkamp's split: x = hi + lo with both halves of at most 12 significant bits, so their
+// products are exact in f32 (no fused multiply-add needed: WGSL does not promise one).
+fn split(x: f32) -> Df {
+    let t = opaque1(4097.0 * x);
+    let hi = opaque1(t - opaque1(t - x));
+    return Df(hi, opaque1(x - hi));
+}
+
+// a·b = p + e exactly (Dekker's TwoProduct).
+fn two_prod(a: f32, b: f32) -> Df {
+    let p = opaque1(a * b);
+    let sa = split(a);
+    let sb = split(b);
+    var e = opaque1(opaque1(sa.hi * sb.hi) - p);
+    e = opaque1(e + opaque1(sa.hi * sb.lo));
+    e = opaque1(e + opaque1(sa.lo * sb.hi));
+    e = opaque1(e + opaque1(sa.lo * sb.lo));
+    return Df(p, e);
+}
+
+// A separation x_i − x_j as hi + lo per component.
+struct Df3 {
+    hi: vec3<f32>,
+    lo: vec3<f32>,
+}
+
+// x_i − x_j from cell differences `dc` (nearest image), offsets and the compensations
+// (xyz of `ci`, `cj`): the f32 separation the kernels form (cell difference·h + (o_i −
+// o_j)) with its rounding recovered exactly and the compensations subtracted.
+fn precise_separation(dc: vec3<f32>, oi: vec3<f32>, oj: vec3<f32>, ci: vec3<f32>, cj: vec3<f32>) -> Df3 {
+    var hi = vec3<f32>(0.0);
+    var lo = vec3<f32>(0.0);
+    for (var a = 0u; a < 3u; a++) {
+        // o_i − o_j exactly, then the whole cells (exact for the neighbouring cells a
+        // contact spans; their rounding is kept otherwise)
+        let o = two_sum(oi[a], -oj[a]);
+        let cells = two_prod(dc[a], grid.cell_width[a]);
+        let s = two_sum(cells.hi, o.hi);
+        hi[a] = s.hi;
+        lo[a] = s.lo + o.lo + cells.lo - (ci[a] - cj[a]);
+    }
+    return Df3(hi, lo);
+}
+
+// The overlap r_i + r_j − |d| of a pair: `d` from `precise_separation`, `ri`, `rj` the
+// stored radii and `cri`, `crj` their rounding residuals (r = stored − residual). |d| is
+// taken in double-float (|lo| ~ 1e-10 m against |d| ~ 1e-3 m: terms in lo² are below
+// 1e-17 m).
+fn precise_overlap(d: Df3, ri: f32, rj: f32, cri: f32, crj: f32) -> f32 {
+    // |d|² = Σ hi² + 2·hi·lo
+    var sq = Df(0.0, 0.0);
+    for (var a = 0u; a < 3u; a++) {
+        let p = two_prod(d.hi[a], d.hi[a]);
+        let s = two_sum(sq.hi, p.hi);
+        sq = Df(s.hi, sq.lo + s.lo + p.lo + 2.0 * d.hi[a] * d.lo[a]);
+    }
+    // |d| = s0 + (sq − s0²)/(2·s0)
+    let s0 = sqrt(sq.hi);
+    if (s0 <= 0.0) {
+        return ri + rj;
+    }
+    let q = two_prod(s0, s0);
+    let dist_lo = (opaque1(opaque1(sq.hi - q.hi) - q.lo) + sq.lo) / (2.0 * s0);
+    // r_i + r_j − |d|: the radii's sum exactly, their residuals, then s0 (exact near
+    // contact, where the two are within a factor 2)
+    let r = two_sum(ri, rj);
+    return opaque1(r.hi - s0) + (r.lo - (cri + crj) - dist_lo);
+}
+
+// The overlap r − n·d of a particle with a wall plane (d from the plane's stored point to
+// the particle, `n` the unit normal as stored, `cw` the plane's rounding residual
+// n·(stored − true point)).
+fn precise_wall_overlap(d: Df3, n: vec3<f32>, r: f32, cr: f32, cw: f32) -> f32 {
+    var dot_n = Df(0.0, 0.0);
+    for (var a = 0u; a < 3u; a++) {
+        let p = two_prod(n[a], d.hi[a]);
+        let s = two_sum(dot_n.hi, p.hi);
+        dot_n = Df(s.hi, dot_n.lo + s.lo + p.lo + n[a] * d.lo[a]);
+    }
+    return opaque1(r - dot_n.hi) + (-cr - dot_n.lo - cw);
+}
