@@ -101,3 +101,39 @@ fn precise_wall_overlap(d: Df3, n: vec3<f32>, r: f32, cr: f32, cw: f32) -> f32 {
     }
     return opaque1(r - dot_n.hi) + (-cr - dot_n.lo - cw);
 }
+
+// An offset carried into whole cells, exactly: o = carry·h + offset + lo with
+// 0 <= offset < h. The remainder's rounding (a step back over a face, o + h, rounds) goes
+// to `lo`, which the caller books into its compensation.
+struct Carried {
+    offset: vec3<f32>,
+    carry: vec3<i32>,
+    lo: vec3<f32>,
+}
+
+fn carry_cells(o: vec3<f32>, h: vec3<f32>) -> Carried {
+    var out = Carried(vec3<f32>(0.0), vec3<i32>(0), vec3<f32>(0.0));
+    for (var a = 0u; a < 3u; a++) {
+        var shift = floor(o[a] / h[a]);
+        var r = two_sum(o[a], -shift * h[a]);
+        // the division may round across an integer: one more or one fewer cell
+        if (r.hi >= h[a]) {
+            let back = two_sum(r.hi, -h[a]);
+            r = Df(back.hi, r.lo + back.lo);
+            shift += 1.0;
+        } else if (r.hi < 0.0) {
+            let up = two_sum(r.hi, h[a]);
+            r = Df(up.hi, r.lo + up.lo);
+            shift -= 1.0;
+        }
+        // (r.hi + h may round up to h itself)
+        if (r.hi >= h[a]) {
+            r = Df(0.0, r.lo + opaque1(r.hi - h[a]));
+            shift += 1.0;
+        }
+        out.offset[a] = r.hi;
+        out.carry[a] = i32(shift);
+        out.lo[a] = r.lo;
+    }
+    return out;
+}

@@ -421,8 +421,7 @@ fn drift_particle(i: u32, vel: vec4<f32>, acc: vec3<f32>, rot: RotState, pending
     if (!(length(disp) <= 0.5 * skin_width())) {
         atomicStore(&skin[0], 1u);
     }
-    // the move with the compensated velocity; the cell carry below subtracts whole
-    // cells (exact for an offset within a factor 2 of h), so the compensation stays
+    // the move with the compensated velocity, carried into whole cells (below)
     var off: vec4<f32>;
     var cell0: vec4<i32>;
     if (pending_kick) {
@@ -432,17 +431,15 @@ fn drift_particle(i: u32, vel: vec4<f32>, acc: vec3<f32>, rot: RotState, pending
         off = a_off[i];
         cell0 = a_cell[i];
     }
-    // (w: the radius's rounding residual, kept)
+    // the true step dt·(v − c_v): the velocity's compensation joins the offset's (v − c_v
+    // itself rounds back to v); w: the radius's rounding residual, kept
     let c_off = a_kahan[2u * i + 1u];
-    let ko = kahan_add(off.xyz, c_off.xyz, step.dt * (v - kv.c));
-    a_kahan[2u * i + 1u] = vec4<f32>(ko.c, c_off.w);
-    var o = ko.x;
-    let shift = floor(o / h);
-    o = o - shift * h;
-    // rounding can leave o == h: move it into the next cell
-    let over = o >= vec3<f32>(h);
-    o = select(o, vec3<f32>(0.0), over);
-    let carry = vec3<i32>(shift) + select(vec3<i32>(0), vec3<i32>(1), over);
+    let ko = kahan_add(off.xyz, c_off.xyz + step.dt * kv.c, step.dt * v);
+    // whole cells carried exactly, their rounding booked into the compensation
+    let carried = carry_cells(ko.x, h);
+    a_kahan[2u * i + 1u] = vec4<f32>(ko.c - carried.lo, c_off.w);
+    let o = carried.offset;
+    let carry = carried.carry;
     let cell = wrap_cell(cell0.xyz + carry);
     // stored only where it changes (rarely): a masked store skips the work of idle lanes
     if (any(carry != vec3<i32>(0))) {
@@ -1072,14 +1069,20 @@ fn wall_move() {
         if (walls[w].motion.x == 0.0) {
             continue;
         }
-        var o = walls[w].offset.xyz + step.dt * walls[w].velocity.xyz;
-        let shift = floor(o / h);
-        o = o - shift * h;
-        let over = o >= vec3<f32>(h);
-        o = select(o, vec3<f32>(0.0), over);
-        let carry = vec3<i32>(shift) + select(vec3<i32>(0), vec3<i32>(1), over);
-        walls[w].cell = vec4<i32>(walls[w].cell.xyz + carry, 0);
-        walls[w].offset = vec4<f32>(o, 0.0);
+        let o0 = walls[w].offset;
+        let dx = step.dt * walls[w].velocity.xyz;
+        var sum = vec3<f32>(0.0);
+        var lo = vec3<f32>(0.0);
+        for (var a = 0u; a < 3u; a++) {
+            let s = two_sum(o0[a], dx[a]);
+            sum[a] = s.hi;
+            lo[a] = s.lo;
+        }
+        let carried = carry_cells(sum, h);
+        walls[w].cell = vec4<i32>(walls[w].cell.xyz + carried.carry, 0);
+        // the plane's residual n·(stored − true) takes the move's rounding
+        let residual = o0.w - dot(walls[w].normal.xyz, lo + carried.lo);
+        walls[w].offset = vec4<f32>(carried.offset, residual);
     }
 }
 

@@ -1324,7 +1324,10 @@ impl GpuEngine {
             .iter()
             .take(self.wall_normals.len())
             .map(|w| {
-                let p = crate::gpu::layout::decode3(w.cell, w.offset, self.origin, self.h);
+                // the stored point less its residual along the normal (`WallGpu::offset`)
+                let n = DVec3::new(w.normal[0] as f64, w.normal[1] as f64, w.normal[2] as f64);
+                let p = crate::gpu::layout::decode3(w.cell, w.offset, self.origin, self.h)
+                    - w.offset[3] as f64 * n;
                 let v = DVec3::new(
                     w.velocity[0] as f64,
                     w.velocity[1] as f64,

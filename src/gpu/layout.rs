@@ -527,8 +527,8 @@ pub struct WallGpu {
     /// A point of the plane: integer cell (xyz), w unused.
     pub cell: [i32; 4],
     /// A point of the plane: offset inside the cell (xyz), m; w: the plane's rounding
-    /// residual n·(encoded − true point), m, which the kernels' overlap subtracts (0 once
-    /// the device moves the wall: servo).
+    /// residual n·(encoded − true point), m, which the kernels' overlap subtracts (a wall the
+    /// device moves books each move's rounding into it).
     pub offset: [f32; 4],
     /// Unit normal pointing into the domain (xyz); w unused.
     pub normal: [f32; 4],
