@@ -29,7 +29,8 @@ kept even if the suite is stopped.
 
   python3 bench/gpu_suite.py --quick      # tiny sizes on any adapter (lavapipe here:
                                           # NODEVICE_SELECT=1), JSON into
-                                          # /tmp/powder-gpu-suite/; about 15 s
+                                          # /tmp/powder-gpu-suite/; about 15 s (--build:
+                                          # cargo build --release first)
   python3 bench/gpu_suite.py              # the full suite, JSON into bench/results/
   python3 bench/gpu_suite.py --prepare    # here, before a lent machine: build, strip the
                                           # binary into .gpubench/, fetch the Vulkan loader
@@ -85,6 +86,7 @@ MODES = {
         packing_particles=1_000_000,
         budget=540.0,
         first_steps=256,
+        calibrate=True,  # a short run of the smallest size first
         target_seconds=6.0,  # timed stepping per size
         min_steps=64,
         max_steps=4000,
@@ -98,6 +100,7 @@ MODES = {
         packing_particles=10_000,
         budget=240.0,
         first_steps=16,
+        calibrate=False,
         target_seconds=0.5,
         min_steps=8,
         max_steps=64,
@@ -250,20 +253,37 @@ def install_loader(notes):
     notes.append(f"unpacked the Vulkan loader from .gl/ ({len(debs)} packages)")
 
 
+def prepared_is_current():
+    """Whether .gpubench/powder was built from the tree as it is (unknown: yes)."""
+    try:
+        with open(os.path.join(PREPARED, "build.json")) as f:
+            built = json.load(f).get("git")
+    except (OSError, ValueError):
+        return True
+    tree = git_state()
+    return not (built and tree) or (built == tree and not tree["dirty"])
+
+
 def find_binary(args):
+    """--binary; else .gpubench/powder where there is no cargo (a lent machine) or it was
+    built from the tree as it is; else the release build (built first with --build or when
+    there is none)."""
     if args.binary:
-        return os.path.abspath(args.binary)
-    candidates = [
-        os.path.join(PREPARED, "powder"),
-        os.path.join(target_dir(), "release", "powder"),
-    ]
-    if args.build or not any(os.path.exists(c) for c in candidates):
-        if shutil.which("cargo"):
+        found = os.path.abspath(args.binary)
+    else:
+        prepared = os.path.join(PREPARED, "powder")
+        release = os.path.join(target_dir(), "release", "powder")
+        cargo = shutil.which("cargo")
+        if os.path.exists(prepared) and not args.build and (not cargo or prepared_is_current()):
+            found = prepared
+        elif cargo and (args.build or not os.path.exists(release)):
             log("building the release binary (cargo build --release) ...")
             subprocess.run(["cargo", "build", "--release", "-q"], cwd=ROOT, check=True)
-            return candidates[1]
-        sys.exit("no powder binary: run `python3 bench/gpu_suite.py --prepare` where cargo is")
-    found = next(c for c in candidates if os.path.exists(c))
+            found = release
+        elif os.path.exists(release):
+            found = release
+        else:
+            sys.exit("no powder binary: run `python3 bench/gpu_suite.py --prepare` where cargo is")
     if not os.access(found, os.X_OK):
         os.chmod(found, 0o755)  # a copy that lost its mode on the way
     return found
@@ -496,6 +516,17 @@ class Suite:
         retried = False
         while queue:
             n = queue.pop(0)
+            if prev is None and c["calibrate"] and not stopped and refused is None:
+                # the smallest size once, briefly: its rate sizes the steps of every size,
+                # this one included (a fast GPU does 1e5 particles' steps in well under 1 ms)
+                log(f"  {case} N = {n}: calibration, {c['first_steps']} steps")
+                row, _ = self.bench_one(case, n, c["first_steps"], 16, 1, False, case)
+                row["calibration"] = True
+                self.report["calibration"].append(row)
+                self.save()
+                if row["status"] == "ran":
+                    per = row["wall_seconds"] / (n * row["steps"])
+                    prev = (n, row["process_seconds"], per, row["steps"], 16, 1)
             per_ps = prev[2] if prev else None
             steps = self.plan_steps(n, per_ps)
             warmup = max(8, min(64, steps // 4))
@@ -802,6 +833,7 @@ class Suite:
                 "predicted past their phase's deadline are skipped",
             },
             "notes": notes,
+            "calibration": [],
             "bench": [],
             "packing": None,
         }
