@@ -266,6 +266,8 @@ pub struct Adapter {
     pub driver: String,
     /// Driver version and details.
     pub driver_info: String,
+    /// The limits the GPU engine cares about.
+    pub limits: crate::gpu::LimitsSummary,
 }
 
 impl Adapter {
@@ -278,6 +280,7 @@ impl Adapter {
             device_type: s.device_type.clone(),
             driver: s.driver.clone(),
             driver_info: s.driver_info.clone(),
+            limits: s.limits.clone(),
         }
     }
 }
@@ -498,6 +501,9 @@ pub struct BenchRow {
     /// GPU with `--profile`: seconds per dispatch of each pass of the step
     /// (`GpuEngine::profile_passes`; the sort, `neighbours` and `remap` at a rebuild).
     pub passes: Option<Vec<(String, f64)>>,
+    /// GPU: the bytes each pass binds and the estimate of bytes moved per particle-step
+    /// with the rebuilds of the timed steps (`gpu::traffic`; an upper bound).
+    pub traffic: Option<crate::gpu::TrafficEstimate>,
 }
 
 impl BenchRow {
@@ -522,6 +528,7 @@ impl BenchRow {
             runs: Vec::new(),
             contacts_per_particle: None,
             passes: None,
+            traffic: None,
         }
     }
 }
@@ -580,6 +587,7 @@ fn run_cpu(scene: &Scene, case: Case, opts: &BenchOptions) -> Result<BenchRow, P
         runs: Vec::new(),
         contacts_per_particle: Some(z),
         passes: None,
+        traffic: None,
     })
 }
 
@@ -613,6 +621,7 @@ fn run_gpu(
     let state = engine.state()?;
     let z = coordination(scene, &state.positions, engine.radii());
     let bytes = engine.buffer_bytes();
+    let traffic = crate::gpu::TrafficEstimate::new(engine.traffic(), n, rebuilds, opts.steps);
     let (dt, capacity) = (engine.dt(), engine.capacity());
     let passes = if opts.profile {
         Some(engine.profile_passes(16)?)
@@ -639,6 +648,7 @@ fn run_gpu(
         quiet_batches: Some(quiet),
         runs: Vec::new(),
         contacts_per_particle: Some(z),
+        traffic: Some(traffic),
     })
 }
 
@@ -821,7 +831,7 @@ fn opt(x: Option<f64>, f: impl Fn(f64) -> String) -> String {
 /// The table `powder bench` prints (one header, then [`table_line`] per row).
 pub fn table_header() -> String {
     format!(
-        "{:<11} {:<4} {:>9} {:>6} {:>8} {:>9} {:>10} {:>12} {:>9} {:>8} {:>6}  note",
+        "{:<11} {:<4} {:>9} {:>6} {:>8} {:>9} {:>10} {:>12} {:>9} {:>9} {:>8} {:>6}  note",
         "case",
         "back",
         "particles",
@@ -831,6 +841,7 @@ pub fn table_header() -> String {
         "s/step",
         "p-steps/s",
         "GPU B/p",
+        "B/p-step",
         "rebuilds",
         "Z"
     )
@@ -839,7 +850,7 @@ pub fn table_header() -> String {
 /// One row of the table.
 pub fn table_line(r: &BenchRow) -> String {
     format!(
-        "{:<11} {:<4} {:>9} {:>6} {:>8} {:>9} {:>10} {:>12} {:>9} {:>8} {:>6}  {}",
+        "{:<11} {:<4} {:>9} {:>6} {:>8} {:>9} {:>10} {:>12} {:>9} {:>9} {:>8} {:>6}  {}",
         r.case,
         r.backend,
         r.particles,
@@ -849,6 +860,10 @@ pub fn table_line(r: &BenchRow) -> String {
         opt(r.seconds_per_step, |v| format!("{v:.3e}")),
         opt(r.particle_steps_per_second, |v| format!("{v:.3e}")),
         opt(r.gpu_bytes_per_particle, |v| format!("{v:.0}")),
+        opt(
+            r.traffic.as_ref().map(|t| t.bytes_per_particle_step),
+            |v| format!("{v:.0}")
+        ),
         r.rebuilds.map_or_else(|| "-".into(), |v| v.to_string()),
         opt(r.contacts_per_particle, |v| format!("{v:.2}")),
         match (r.note.as_deref(), r.quiet_batches) {

@@ -247,6 +247,9 @@ struct InfoArgs {
     /// Build the GPU engine without its energy ledger (as `powder run --no-ledger`).
     #[arg(long, requires = "scene")]
     no_ledger: bool,
+    /// Change a scene value, KEY=VALUE, as `powder run --set` (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE", requires = "scene")]
+    set: Vec<String>,
 }
 
 /// What the GPU engine builds for a scene (`powder info SCENE`).
@@ -262,6 +265,9 @@ struct SceneInfo {
     buffers: Vec<(String, u64)>,
     total_bytes: u64,
     bytes_per_particle: f64,
+    /// What each pass of the step binds and the bytes per particle-step it adds up to
+    /// without rebuilds (`powder::gpu::traffic`, an upper bound).
+    traffic: powder::gpu::TrafficEstimate,
     /// With --profile: (pass, µs per dispatch) in step order, after `profile_after` steps.
     #[serde(skip_serializing_if = "Option::is_none")]
     profile_us: Option<Vec<(String, f64)>>,
@@ -274,7 +280,7 @@ fn scene_info(
     ctx: powder::gpu::GpuContext,
     a: &InfoArgs,
 ) -> Result<SceneInfo, PowderError> {
-    let scene = Scene::load(path)?;
+    let scene = Scene::load_with(path, &a.set)?;
     let adapter = ctx.summary.name.clone();
     let options = powder::gpu::GpuOptions {
         ledger: !a.no_ledger,
@@ -291,6 +297,7 @@ fn scene_info(
     let total = engine.buffer_bytes();
     let (buffers, particles) = (engine.buffers(), engine.len());
     let (rotation, neighbour_slots) = (engine.rotates(), engine.capacity());
+    let traffic = powder::gpu::TrafficEstimate::new(engine.traffic(), particles, 0, 0);
     let profile_us = if a.profile {
         engine.run_steps(a.after)?;
         let passes = engine.profile_passes(16)?;
@@ -309,6 +316,7 @@ fn scene_info(
         buffers,
         total_bytes: total,
         bytes_per_particle: total as f64 / particles.max(1) as f64,
+        traffic,
         profile_after: a.profile.then_some(a.after),
         profile_us,
     })
@@ -342,6 +350,11 @@ fn info_cmd(a: &InfoArgs) -> Result<(), PowderError> {
         println!(
             "total            {} bytes = {:.1} bytes per particle",
             info.total_bytes, info.bytes_per_particle
+        );
+        let t = &info.traffic;
+        println!(
+            "traffic          {:.0} bytes per particle a step, {:.0} more on a rebuild (bound by its passes: an upper bound)",
+            t.step_bytes_per_particle, t.rebuild_bytes_per_particle
         );
         if let Some(passes) = &info.profile_us {
             println!(

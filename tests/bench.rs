@@ -318,3 +318,91 @@ fn bench_repeats_keep_the_fastest_run() {
     let (ok, _, err) = powder(&["bench", "--sizes", "27", "--repeats", "0"]);
     assert!(!ok && err.contains("repeats"), "{err}");
 }
+
+/// The GPU rows carry the estimate of bytes moved per particle-step (`gpu::traffic`) and the
+/// adapter its limits; `powder info SCENE --json --set ...` reports the same estimate for a
+/// scaled scene.
+#[test]
+fn bench_and_info_report_the_traffic_estimate() {
+    if !gpu_available() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("bench.json");
+    let (ok, out, err) = powder(&[
+        "bench",
+        "--sizes",
+        "64",
+        "--steps",
+        "4",
+        "--warmup",
+        "1",
+        "--backend",
+        "gpu",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(out.contains("B/p-step"), "{out}");
+    let v = read_json(&json);
+    let limits = &v["adapter"]["limits"];
+    for key in [
+        "max_storage_buffer_binding_size",
+        "max_buffer_size",
+        "max_storage_buffers_per_shader_stage",
+    ] {
+        assert!(limits[key].as_u64().unwrap() > 0, "{key}: {limits}");
+    }
+    let mut step = Vec::new();
+    for r in v["rows"].as_array().unwrap() {
+        let t = &r["traffic"];
+        let per_step = t["step_bytes_per_particle"].as_f64().unwrap();
+        let rebuild = t["rebuild_bytes_per_particle"].as_f64().unwrap();
+        let rate = t["rebuilds_per_step"].as_f64().unwrap();
+        assert!(per_step > 100.0 && rebuild > 100.0, "{t}");
+        let total = t["bytes_per_particle_step"].as_f64().unwrap();
+        assert!(
+            (total - (per_step + rate * rebuild)).abs() <= 1e-9 * total,
+            "{t}"
+        );
+        let passes = t["passes"].as_array().unwrap();
+        let pass = |name: &str| {
+            passes
+                .iter()
+                .find(|p| p["pass"] == name)
+                .unwrap_or_else(|| panic!("no pass {name}: {t}"))
+        };
+        assert_eq!(pass("force")["when"], "step");
+        assert_eq!(pass("neighbours")["when"], "rebuild");
+        assert_eq!(pass("grid.cell_keys")["when"], "rebuild");
+        assert!(pass("mirror copies")["bytes"].as_u64().unwrap() >= 6 * 16 * 64);
+        // the force pass reads the neighbour list, counted once, whole
+        let bound = pass("force")["bound"].as_array().unwrap();
+        let nbr: Vec<_> = bound.iter().filter(|b| b[0] == "nbr").collect();
+        assert_eq!(nbr.len(), 1, "{bound:?}");
+        let slots = r["neighbour_slots"].as_u64().unwrap();
+        assert_eq!(nbr[0][1].as_u64().unwrap(), 4 * 64 * slots);
+        step.push((r["case"].as_str().unwrap().to_string(), per_step));
+    }
+    // friction and rolling bind more per step
+    assert_eq!(step.len(), 2);
+    assert!(step[1].1 > step[0].1, "{step:?}");
+    // info: the estimate of a scene, scaled by --set
+    let scene = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/examples/cohesive_cluster.toml"
+    );
+    let (ok, out, err) = powder(&[
+        "info",
+        scene,
+        "--json",
+        "--no-ledger",
+        "--set",
+        "particles[0].count=300",
+    ]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["particles"], 300);
+    assert!(v["traffic"]["step_bytes_per_particle"].as_f64().unwrap() > 100.0);
+    assert_eq!(v["traffic"]["rebuilds_per_step"], 0.0);
+}

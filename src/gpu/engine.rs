@@ -51,6 +51,7 @@ use crate::gpu::kernel::{
 use crate::gpu::layout::{encode3, gpu_cell_width, HystereticPair, JkrPair, StepParams, WallGpu};
 use crate::gpu::mirror::Mirrors;
 use crate::gpu::quiet::{Forecast, QuietBatches};
+use crate::gpu::traffic::{PassTraffic, When};
 use crate::model::{ContactHistory, ContactModel};
 use crate::scene::Scene;
 use crate::setup::Resolved;
@@ -197,6 +198,8 @@ struct Bound {
 struct Pass {
     kernel: Kernel,
     group: wgpu::BindGroup,
+    /// (global name, bytes) of every distinct resource the group binds (`gpu::traffic`).
+    bound: Vec<(String, u64)>,
 }
 
 impl Pass {
@@ -812,10 +815,16 @@ impl GpuEngine {
             }
             let refs: Vec<(&str, &wgpu::Buffer)> =
                 list.iter().map(|(n, b)| (n.as_str(), *b)).collect();
+            let textures = mirrors.view_bytes();
             let pass = |name: &str| -> Result<Pass, PowderError> {
                 let kernel = program.kernel(name)?.clone();
                 let group = kernel.bind_with_textures(device, &refs, &mirrors.views())?;
-                Ok(Pass { kernel, group })
+                let bound = kernel.bound_bytes(&refs, &textures);
+                Ok(Pass {
+                    kernel,
+                    group,
+                    bound,
+                })
             };
             let optional = |name: &str| program.kernels.contains_key(name).then(|| pass(name));
             Ok(Bound {
@@ -1026,6 +1035,43 @@ impl GpuEngine {
     /// Total bytes of [`Self::buffers`].
     pub fn buffer_bytes(&self) -> u64 {
         self.buffers.iter().map(|(_, b)| b).sum()
+    }
+
+    /// What each pass of a step binds, for the estimate of the bytes a step moves
+    /// (`gpu::traffic`, where the counting is explained): the passes of every step in
+    /// recording order (`collect_kick_drift`, the wall kernels where walls move, `decide`,
+    /// the mirror copies, `force`), then those of a rebuild (the cell sort's as `grid.*`,
+    /// `gather`, `neighbours`, `remap`, `copy_back`, `copy_back_history`).
+    pub fn traffic(&self) -> Vec<PassTraffic> {
+        let b = &self.bound;
+        let pass = |p: &Pass, when| PassTraffic::new(p.kernel.name.clone(), when, p.bound.clone());
+        let mut out = vec![pass(&b.collect_kick_drift, When::Step)];
+        out.extend(b.wall_move.as_ref().map(|p| pass(p, When::Step)));
+        out.push(pass(&b.decide, When::Step));
+        out.push(PassTraffic::new(
+            "mirror copies",
+            When::Step,
+            self.mirrors.copy_traffic(),
+        ));
+        out.push(pass(&b.force, When::Step));
+        out.extend(b.wall_servo.as_ref().map(|p| pass(p, When::Step)));
+        for (name, bound) in self.grid.traffic(&self.state.cell) {
+            out.push(PassTraffic::new(
+                format!("grid.{name}"),
+                When::Rebuild,
+                bound,
+            ));
+        }
+        for p in [
+            &b.gather,
+            &b.neighbours,
+            &b.remap,
+            &b.copy_back,
+            &b.copy_back_history,
+        ] {
+            out.push(pass(p, When::Rebuild));
+        }
+        out
     }
 
     /// Records one step: drift, decide whether to rebuild, on a rebuild (indirect: no

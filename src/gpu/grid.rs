@@ -81,6 +81,9 @@ struct ScanLevel {
     blocks: wgpu::BindGroup,
     /// Adds the next level's scanned sums into this level's output (absent at the top).
     add: Option<wgpu::BindGroup>,
+    /// (global name, bytes) of what `blocks` and `add` bind (`gpu::traffic`).
+    blocks_bound: Vec<(String, u64)>,
+    add_bound: Vec<(String, u64)>,
 }
 
 impl ExclusiveScan {
@@ -112,20 +115,20 @@ impl ExclusiveScan {
                 }),
             );
             let sums = kernel::storage_buffer(device, "scan block sums", n_blocks as u64 * 4);
-            let blocks = scan_blocks.bind(
-                device,
-                &[
-                    ("scan_params", &params),
-                    ("scan_in", &level_in),
-                    ("scan_out", &level_out),
-                    ("scan_sums", &sums),
-                ],
-            )?;
+            let named: &[(&str, &wgpu::Buffer)] = &[
+                ("scan_params", &params),
+                ("scan_in", &level_in),
+                ("scan_out", &level_out),
+                ("scan_sums", &sums),
+            ];
+            let blocks = scan_blocks.bind(device, named)?;
             let mut level = ScanLevel {
                 n: level_n,
                 n_blocks,
                 blocks,
                 add: None,
+                blocks_bound: scan_blocks.bound_bytes(named, &[]),
+                add_bound: Vec::new(),
             };
             if n_blocks == 1 {
                 levels.push(level);
@@ -134,14 +137,13 @@ impl ExclusiveScan {
             }
             let scanned_sums =
                 kernel::storage_buffer(device, "scanned block sums", n_blocks as u64 * 4);
-            level.add = Some(scan_add.bind(
-                device,
-                &[
-                    ("scan_params", &params),
-                    ("scan_out", &level_out),
-                    ("scan_carry", &scanned_sums),
-                ],
-            )?);
+            let named: &[(&str, &wgpu::Buffer)] = &[
+                ("scan_params", &params),
+                ("scan_out", &level_out),
+                ("scan_carry", &scanned_sums),
+            ];
+            level.add = Some(scan_add.bind(device, named)?);
+            level.add_bound = scan_add.bound_bytes(named, &[]);
             levels.push(level);
             buffers.extend([params, sums.clone(), scanned_sums.clone()]);
             level_in = sums;
@@ -168,6 +170,13 @@ impl ExclusiveScan {
         self.n == 0
     }
 
+    /// Whether `group` is one of the scan's bind groups.
+    fn binds(&self, group: &wgpu::BindGroup) -> bool {
+        self.levels
+            .iter()
+            .any(|l| &l.blocks == group || l.add.as_ref() == Some(group))
+    }
+
     /// Number of levels (1 up to [`SCAN_BLOCK`] elements, 2 up to `SCAN_BLOCK^2`, ...).
     pub fn levels(&self) -> usize {
         self.levels.len()
@@ -178,6 +187,22 @@ impl ExclusiveScan {
         for (kernel, bind_group, workgroups) in self.plan() {
             kernel.dispatch_workgroups(pass, bind_group, workgroups, self.max_per_dim);
         }
+    }
+
+    /// (kernel, global name and bytes of what it binds) of the scan's dispatches in
+    /// recording order (`gpu::traffic`).
+    pub fn traffic(&self) -> Vec<(String, Vec<(String, u64)>)> {
+        let mut out: Vec<(String, Vec<(String, u64)>)> = self
+            .levels
+            .iter()
+            .map(|level| (self.scan_blocks.name.clone(), level.blocks_bound.clone()))
+            .collect();
+        for level in self.levels.iter().rev() {
+            if level.add.is_some() {
+                out.push((self.scan_add.name.clone(), level.add_bound.clone()));
+            }
+        }
+        out
     }
 
     /// The scan's dispatches in recording order: (kernel, bind group, workgroups).
@@ -268,7 +293,7 @@ pub struct GridSort {
     cell_count: wgpu::Buffer,
     cell_start: wgpu::Buffer,
     sorted_index: wgpu::Buffer,
-    _large_cells: wgpu::Buffer,
+    large_cells: wgpu::Buffer,
     bg_clear: wgpu::BindGroup,
     bg_count: wgpu::BindGroup,
     bg_scatter: wgpu::BindGroup,
@@ -394,7 +419,7 @@ impl GridSort {
             cell_count,
             cell_start,
             sorted_index,
-            _large_cells: large_cells,
+            large_cells,
             bg_clear,
             bg_count,
             bg_scatter,
@@ -531,6 +556,38 @@ impl GridSort {
         ));
         plan.retain(|&(_, _, g)| g > 0);
         plan
+    }
+
+    /// (kernel, global name and bytes of what it binds) of the sort's dispatches in
+    /// recording order, `cells` being the cell buffer sorted (`gpu::traffic`).
+    pub fn traffic(&self, cells: &wgpu::Buffer) -> Vec<(String, Vec<(String, u64)>)> {
+        let named: &[(&str, &wgpu::Buffer)] = &[
+            ("grid", &self.params),
+            ("cells", cells),
+            ("keys", &self.keys),
+            ("cell_count", &self.cell_count),
+            ("cell_count_atomic", &self.cell_count),
+            ("cell_start", &self.cell_start),
+            ("sorted_index", &self.sorted_index),
+            ("large_cells", &self.large_cells),
+            ("large_cells_atomic", &self.large_cells),
+        ];
+        // the scan's dispatches come in the plan in the order of its own traffic
+        let mut scan = self.scan.traffic().into_iter();
+        let out = self
+            .plan()
+            .into_iter()
+            .map(|(kernel, bind_group, _)| {
+                let bound = if bind_group.is_some_and(|b| self.scan.binds(b)) {
+                    scan.next().map(|(_, b)| b).unwrap_or_default()
+                } else {
+                    kernel.bound_bytes(named, &[])
+                };
+                (kernel.name.clone(), bound)
+            })
+            .collect();
+        debug_assert!(scan.next().is_none(), "every scan dispatch is in the plan");
+        out
     }
 
     /// The `[x, y, z]` workgroup counts of the sort's dispatches, in the order

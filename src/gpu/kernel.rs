@@ -205,6 +205,31 @@ impl Kernel {
         }))
     }
 
+    /// (global name, bytes) of every distinct buffer or texture this kernel binds from
+    /// the same pairs [`Self::bind_with_textures`] takes, textures with their bytes: what a
+    /// dispatch may touch (`gpu::traffic`).
+    pub fn bound_bytes(
+        &self,
+        buffers: &[(&str, &wgpu::Buffer)],
+        textures: &[(&str, &wgpu::TextureView, u64)],
+    ) -> Vec<(String, u64)> {
+        #[derive(PartialEq)]
+        enum Resource<'a> {
+            Buffer(&'a wgpu::Buffer),
+            Texture(&'a wgpu::TextureView),
+        }
+        let resources: Vec<(&str, Resource, u64)> = buffers
+            .iter()
+            .map(|&(n, b)| (n, Resource::Buffer(b), b.size()))
+            .chain(
+                textures
+                    .iter()
+                    .map(|&(n, t, bytes)| (n, Resource::Texture(t), bytes)),
+            )
+            .collect();
+        crate::gpu::traffic::distinct_bound(&self.bindings, &resources)
+    }
+
     /// Records a 1-D dispatch of `invocations` invocations (rounded up to whole
     /// workgroups), split over y (and z) when the workgroup count exceeds
     /// `max_per_dim`; kernels recover the linear index with `global_index` from

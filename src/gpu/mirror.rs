@@ -121,12 +121,34 @@ impl Mirrors {
     pub fn sizes(&self) -> Vec<(String, u64)> {
         self.mirrors
             .iter()
-            .map(|m| {
-                let s = m.texture.size();
-                (
-                    format!("mirror.{}", m.name),
-                    s.width as u64 * s.height as u64 * TEXEL_BYTES as u64,
-                )
+            .map(|m| (format!("mirror.{}", m.name), texture_bytes(&m.texture)))
+            .collect()
+    }
+
+    /// [`Self::views`] with each texture's bytes (for `Kernel::bound_bytes`).
+    pub fn view_bytes(&self) -> Vec<(&'static str, &wgpu::TextureView, u64)> {
+        let mut v = Vec::new();
+        for m in &self.mirrors {
+            let bytes = texture_bytes(&m.texture);
+            v.push((m.name, &m.view, bytes));
+            if let Some(w) = m.write_name {
+                v.push((w, &m.view, bytes));
+            }
+        }
+        v
+    }
+
+    /// What [`Self::encode`] moves (`gpu::traffic`): each source's `n` texels read
+    /// (`<name>.read`) and written into its texture (`<name>.write`), bytes.
+    pub fn copy_traffic(&self) -> Vec<(String, u64)> {
+        let bytes = self.n as u64 * TEXEL_BYTES as u64;
+        self.mirrors
+            .iter()
+            .flat_map(|m| {
+                [
+                    (format!("{}.read", m.name), bytes),
+                    (format!("{}.write", m.name), bytes),
+                ]
             })
             .collect()
     }
@@ -168,6 +190,12 @@ impl Mirrors {
             }
         }
     }
+}
+
+/// Bytes of a mirror texture (whole rows of [`MIRROR_WIDTH`] texels).
+fn texture_bytes(texture: &wgpu::Texture) -> u64 {
+    let s = texture.size();
+    s.width as u64 * s.height as u64 * TEXEL_BYTES as u64
 }
 
 #[cfg(test)]

@@ -48,6 +48,7 @@ pub mod layout;
 pub mod mirror;
 pub mod quiet;
 pub mod shaders;
+pub mod traffic;
 
 pub use context::{AdapterPreference, AdapterSummary, GpuContext, LimitsSummary};
 pub use engine::{GpuEngine, GpuOptions, GpuSavedState, GpuState};
@@ -55,3 +56,4 @@ pub use grid::{ExclusiveScan, GridSort, SortResult};
 pub use layout::{decode, encode, CellCoord, CellOffset, GridParams, PackedPosition};
 pub use quiet::QuietBatches;
 pub use shaders::{all_variants, validate, ShaderVariant};
+pub use traffic::{PassTraffic, TrafficEstimate};
