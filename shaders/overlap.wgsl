@@ -90,14 +90,15 @@ fn precise_overlap(d: Df3, ri: f32, rj: f32, cri: f32, crj: f32) -> f32 {
 }
 
 // The overlap r − n·d of a particle with a wall plane (d from the plane's stored point to
-// the particle, `n` the unit normal as stored, `cw` the plane's rounding residual
-// n·(stored − true point)).
-fn precise_wall_overlap(d: Df3, n: vec3<f32>, r: f32, cr: f32, cw: f32) -> f32 {
+// the particle, `n` the unit normal as stored and `n_lo` its rounding residual (true −
+// stored: a tilted plane would otherwise turn by up to 6e-8 rad about the stored point),
+// `cw` the plane's residual n·(stored − true point)).
+fn precise_wall_overlap(d: Df3, n: vec3<f32>, n_lo: vec3<f32>, r: f32, cr: f32, cw: f32) -> f32 {
     var dot_n = Df(0.0, 0.0);
     for (var a = 0u; a < 3u; a++) {
         let p = two_prod(n[a], d.hi[a]);
         let s = two_sum(dot_n.hi, p.hi);
-        dot_n = Df(s.hi, dot_n.lo + s.lo + p.lo + n[a] * d.lo[a]);
+        dot_n = Df(s.hi, dot_n.lo + s.lo + p.lo + n[a] * d.lo[a] + n_lo[a] * d.hi[a]);
     }
     return opaque1(r - dot_n.hi) + (-cr - dot_n.lo - cw);
 }

@@ -140,6 +140,9 @@ struct Wall {
     // x: 0 fixed, 1 prescribed, 2 servo; y: the servo's force (N), z: its gain (m/s per
     // N), w: its largest speed (m/s).
     motion: vec4<f32>,
+    // The normal's rounding residual (xyz: true − stored): the overlap's plane is the
+    // true one also far from the stored point (`WallGpu::normal_lo`).
+    normal_lo: vec4<f32>,
 }
 
 const WALL_SERVO: f32 = 2.0;
@@ -957,7 +960,7 @@ fn particle_forces(k: u32, row0: PairRow) {
         let n = wall.normal.xyz;
         let dc = vec3<f32>(nearest_image(ck.xyz - wall.cell.xyz));
         let dd = precise_separation(dc, ok.xyz, wall.offset.xyz, comp_k.xyz, vec3<f32>(0.0));
-        let delta = precise_wall_overlap(dd, n, rk, comp_k.w, wall.offset.w);
+        let delta = precise_wall_overlap(dd, n, wall.normal_lo.xyz, rk, comp_k.w, wall.offset.w);
         // relative to the (possibly moving) wall
         let v_rel = vk - wall.velocity.xyz;
         let v_c = v_rel - cross(rk * wk, n);

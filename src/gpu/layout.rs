@@ -537,6 +537,9 @@ pub struct WallGpu {
     /// x: [`WALL_FIXED`], [`WALL_PRESCRIBED`] or [`WALL_SERVO`]; y, z, w: the servo's
     /// force (N), gain (m/s per N) and largest speed (m/s).
     pub motion: [f32; 4],
+    /// The unit normal's f32 rounding residual (xyz, true − stored); w unused. The kernels'
+    /// wall overlap adds it, so a tilted plane does not turn about its stored point.
+    pub normal_lo: [f32; 4],
 }
 
 /// Wall motion kinds of [`WallGpu::motion`], as in the WGSL.
@@ -560,6 +563,12 @@ impl WallGpu {
             normal: [n.x as f32, n.y as f32, n.z as f32, 0.0],
             velocity: [0.0; 4],
             motion: [WALL_FIXED, 0.0, 0.0, 0.0],
+            normal_lo: [
+                (n.x - n32.x) as f32,
+                (n.y - n32.y) as f32,
+                (n.z - n32.z) as f32,
+                0.0,
+            ],
         }
     }
 
@@ -967,6 +976,7 @@ mod tests {
                 ("normal", offset_of!(WallGpu, normal)),
                 ("velocity", offset_of!(WallGpu, velocity)),
                 ("motion", offset_of!(WallGpu, motion)),
+                ("normal_lo", offset_of!(WallGpu, normal_lo)),
             ],
         );
     }
