@@ -46,10 +46,17 @@ struct Df3 {
     lo: vec3<f32>,
 }
 
-// x_i − x_j from cell differences `dc` (nearest image), offsets and the compensations
-// (xyz of `ci`, `cj`): the f32 separation the kernels form (cell difference·h + (o_i −
-// o_j)) with its rounding recovered exactly and the compensations subtracted.
-fn precise_separation(dc: vec3<f32>, oi: vec3<f32>, oj: vec3<f32>, ci: vec3<f32>, cj: vec3<f32>) -> Df3 {
+// The periods a nearest-image cell difference added to the raw one, per axis (−1, 0, 1).
+fn image_shift(image: vec3<i32>, raw: vec3<i32>) -> vec3<f32> {
+    return vec3<f32>((image - raw) / vec3<i32>(grid.dims));
+}
+
+// x_i − x_j from cell differences `dc` (nearest image, `shift` periods from the raw one),
+// offsets and the compensations (xyz of `ci`, `cj`): the f32 separation the kernels form
+// (cell difference·h + (o_i − o_j)) with its rounding recovered exactly, the
+// compensations subtracted and, across a periodic seam, the scene's period instead of
+// dims·h.
+fn precise_separation(dc: vec3<f32>, shift: vec3<f32>, oi: vec3<f32>, oj: vec3<f32>, ci: vec3<f32>, cj: vec3<f32>) -> Df3 {
     var hi = vec3<f32>(0.0);
     var lo = vec3<f32>(0.0);
     for (var a = 0u; a < 3u; a++) {
@@ -59,7 +66,7 @@ fn precise_separation(dc: vec3<f32>, oi: vec3<f32>, oj: vec3<f32>, ci: vec3<f32>
         let cells = two_prod(dc[a], grid.cell_width[a]);
         let s = two_sum(cells.hi, o.hi);
         hi[a] = s.hi;
-        lo[a] = s.lo + o.lo + cells.lo - (ci[a] - cj[a]);
+        lo[a] = s.lo + o.lo + cells.lo - (ci[a] - cj[a]) + shift[a] * step.period_lo[a];
     }
     return Df3(hi, lo);
 }

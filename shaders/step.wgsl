@@ -90,6 +90,9 @@ struct StepParams {
     // The Verlet skin (m). A uniform rather than a storage value: on lavapipe each storage
     // access is a loop over the SIMD lanes.
     skin: f32,
+    // Per periodic axis, the scene's period less dims·h (h is rounded to f32), m: a wrap
+    // and a separation across the seam add it (overlap.wgsl; 0 on other axes).
+    period_lo: vec3<f32>,
 }
 
 fn opaque(x: vec3<f32>) -> vec3<f32> {
@@ -443,7 +446,14 @@ fn drift_particle(i: u32, vel: vec4<f32>, acc: vec3<f32>, rot: RotState, pending
     a_kahan[2u * i + 1u] = vec4<f32>(ko.c - carried.lo, c_off.w);
     let o = carried.offset;
     let carry = carried.carry;
-    let cell = wrap_cell(cell0.xyz + carry);
+    let raw = cell0.xyz + carry;
+    let cell = wrap_cell(raw);
+    // a wrap moves the stored position by dims·h, the true one by the period L
+    let wraps = vec3<f32>((cell - raw) / vec3<i32>(grid.dims));
+    if (any(wraps != vec3<f32>(0.0))) {
+        let c = a_kahan[2u * i + 1u];
+        a_kahan[2u * i + 1u] = vec4<f32>(c.xyz - wraps * step.period_lo, c.w);
+    }
     // stored only where it changes (rarely): a masked store skips the work of idle lanes
     if (any(carry != vec3<i32>(0))) {
         a_cell[i] = vec4<i32>(cell, cell0.w);
@@ -859,9 +869,10 @@ fn particle_forces(k: u32, row0: PairRow) {
         // predicted velocity (xyz) and mass (w): one load
         let pj = textureLoad(m_vpred, mirror_texel(j));
         let mj = pj.w;
-        let dc = vec3<f32>(nearest_image(ck.xyz - cj.xyz));
+        let dc_raw = ck.xyz - cj.xyz;
+        let dc_i = nearest_image(dc_raw);
         let comp_j = a_kahan[2u * j + 1u];
-        let dd = precise_separation(dc, ok.xyz, oj.xyz, comp_k.xyz, comp_j.xyz);
+        let dd = precise_separation(vec3<f32>(dc_i), image_shift(dc_i, dc_raw), ok.xyz, oj.xyz, comp_k.xyz, comp_j.xyz);
         let d = dd.hi;
         let dist = length(d);
         let delta = precise_overlap(dd, rk, rj, comp_k.w, comp_j.w);
@@ -958,8 +969,9 @@ fn particle_forces(k: u32, row0: PairRow) {
         }
         let wall = walls[w];
         let n = wall.normal.xyz;
-        let dc = vec3<f32>(nearest_image(ck.xyz - wall.cell.xyz));
-        let dd = precise_separation(dc, ok.xyz, wall.offset.xyz, comp_k.xyz, vec3<f32>(0.0));
+        let dcw_raw = ck.xyz - wall.cell.xyz;
+        let dcw = nearest_image(dcw_raw);
+        let dd = precise_separation(vec3<f32>(dcw), image_shift(dcw, dcw_raw), ok.xyz, wall.offset.xyz, comp_k.xyz, vec3<f32>(0.0));
         let delta = precise_wall_overlap(dd, n, wall.normal_lo.xyz, rk, comp_k.w, wall.offset.w);
         // relative to the (possibly moving) wall
         let v_rel = vk - wall.velocity.xyz;

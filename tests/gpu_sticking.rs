@@ -219,3 +219,75 @@ positions = [[{:e}, {:e}, {:e}]]
     assert!((hc - (RADIUS - delta)).abs() < 1e-15, "settled on the CPU");
     assert!((hg - hc).abs() < 1e-12, "gpu {hg} vs cpu {hc}");
 }
+
+/// Paper 003's adhesive pair meeting across a periodic seam (x periodic, L = 20.3 mm, so the
+/// device's period dims·h differs from L by f32 rounding): both backends stick at 0.9 of
+/// the fa threshold and rebound at 1.1, the same distance apart after 3000 steps (the
+/// scene's default dt is coarser than `collide`'s, which moves the engines' own threshold
+/// by more than 0.5 %).
+/// Mutation: without the period's residual (`StepParams::period_lo`) the GPU's separation
+/// across the seam is off by L − dims·h.
+#[test]
+fn a_pair_across_a_periodic_seam_sticks_as_on_the_cpu() {
+    use powder::scene::Scene;
+    if gpu().is_none() {
+        return;
+    }
+    let p = HystereticParams {
+        fa: 5e-7,
+        kca: 100.0,
+        ..HystereticParams::paper_figure()
+    };
+    let v_c = fa_threshold(&p, false);
+    let l = 0.0203;
+    let range = 5e-9;
+    for (f, sticks) in [(0.9, true), (1.1, false)] {
+        let v = f * v_c;
+        // each 1 nm outside the adhesion range, on either side of the seam x = 0 = L
+        let a = RADIUS + 0.5 * range + 1e-9;
+        let text = format!(
+            r#"
+[domain]
+min = [0.0, 0.0, 0.0]
+max = [{l}, 0.01, 0.01]
+periodic = [true, false, false]
+[simulation]
+duration = 1.0
+gravity = [0.0, 0.0, 0.0]
+impact_velocity = {v:e}
+[[material]]
+name = "m"
+density = {DENSITY}
+model = "hysteretic"
+k1 = 100.0
+kp = 500.0
+kc = 100.0
+phi_f = 0.05
+fa = 5e-7
+kca = 100.0
+[[particles]]
+kind = "list"
+radius = {RADIUS:e}
+positions = [[{:e}, 0.005, 0.005], [{a:e}, 0.005, 0.005]]
+velocities = [[{:e}, 0.0, 0.0], [{:e}, 0.0, 0.0]]
+"#,
+            l - a,
+            0.5 * v,
+            -0.5 * v
+        );
+        let scene = Scene::from_toml_str(&text, "seam").unwrap();
+        let mut cpu = powder::cpu::CpuEngine::new(&scene).unwrap();
+        let mut gpu = powder::gpu::GpuEngine::new(&scene, gpu().unwrap()).unwrap();
+        for _ in 0..3000 {
+            cpu.step().unwrap();
+        }
+        gpu.run_steps(3000).unwrap();
+        // the distance across the seam: x_b + L − x_a (positions may have wrapped)
+        let gap = |x: &[glam::DVec3]| (x[1].x - x[0].x).rem_euclid(l) - 2.0 * RADIUS;
+        let (gc, gg) = (gap(cpu.positions()), gap(&gpu.state().unwrap().positions));
+        eprintln!("v {v:e}: gap cpu {gc:e} gpu {gg:e}");
+        assert_eq!(gc < range, sticks, "cpu: gap {gc}");
+        assert_eq!(gg < range, sticks, "gpu: gap {gg}");
+        assert!((gg - gc).abs() < 1e-3 * range, "gap gpu {gg} vs cpu {gc}");
+    }
+}

@@ -665,6 +665,14 @@ impl GpuEngine {
             zero: 0,
             skin: skin as f32,
             _pad: [0; 3],
+            period_lo: [0, 1, 2].map(|a| {
+                if periodic[a] {
+                    (extent[a] - dims[a] as f64 * h[a]) as f32
+                } else {
+                    0.0
+                }
+            }),
+            _pad_end: 0,
         };
         let step_buf = uniform_buffer(device, "step", bytemuck::bytes_of(&step));
         alloc.list.push(("step".into(), step_buf.size()));

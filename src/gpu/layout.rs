@@ -515,8 +515,13 @@ pub struct StepParams {
     /// The Verlet skin, m: a rebuild comes once a particle (or a moving wall, along its
     /// normal) has moved more than half of it.
     pub skin: f32,
-    /// Pads the struct to WGSL's 16-byte size multiple.
+    /// Pads `period_lo` to its 16-byte alignment.
     pub _pad: [u32; 3],
+    /// Per periodic axis, the scene's period less the device's, L − dims·h, m (h is
+    /// rounded to f32): a wrap and a separation across the seam add it (0 elsewhere).
+    pub period_lo: [f32; 3],
+    /// Pads the struct to WGSL's 16-byte size multiple.
+    pub _pad_end: u32,
 }
 
 /// A planar wall: a point as cell + offset and the unit normal. Twin of `Wall` in
@@ -858,6 +863,7 @@ mod tests {
                 ("periodic", offset_of!(StepParams, periodic)),
                 ("zero", offset_of!(StepParams, zero)),
                 ("skin", offset_of!(StepParams, skin)),
+                ("period_lo", offset_of!(StepParams, period_lo)),
             ],
         );
         check(
