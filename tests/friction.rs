@@ -5,10 +5,12 @@
 //! at zero net normal load held by the adhesive Coulomb load kc·δ + fa, and the energy
 //! ledger.
 
+mod common;
+use common::{floor_scene, law};
+
 use glam::DVec3;
 use powder::collide::{collide, CollideSpec};
 use powder::cpu::CpuEngine;
-use powder::model::flags::LawArgs;
 use powder::model::{analytic, ContactModel};
 use powder::scene::Scene;
 use std::f64::consts::PI;
@@ -19,16 +21,6 @@ const G: f64 = 9.81;
 
 fn mass() -> f64 {
     RHO * 4.0 / 3.0 * PI * R.powi(3)
-}
-
-/// A model from its parameters as the command line gives them (the declared defaults apply).
-fn law(name: &str, params: &[(&'static str, f64)]) -> ContactModel {
-    LawArgs {
-        model: name.into(),
-        given: params.iter().map(|(k, v)| (*k, v.to_string())).collect(),
-    }
-    .contact_model()
-    .unwrap()
 }
 
 /// The elastic hysteretic law (k1 = kp = k, kc = fa = 0, γ0 = 0) with Luding's sliding
@@ -189,32 +181,7 @@ velocities = [[0.05, 0.0, -0.0866025]]
 /// A sphere on a floor under gravity with a scene's material keys: `keys` are the model's
 /// lines, `gravity` and the start given; the sphere starts at `z` with velocity `v`.
 fn on_floor(keys: &str, gravity: [f64; 3], z: f64, v: [f64; 3]) -> CpuEngine {
-    let text = format!(
-        r#"
-[domain]
-min = [-0.5, -0.05, -0.01]
-max = [0.5, 0.05, 0.05]
-[simulation]
-duration = 1.0
-gravity = [{}, {}, {}]
-impact_velocity = 0.1
-[[material]]
-name = "m"
-density = {RHO}
-{keys}
-[[wall]]
-point = [0.0, 0.0, 0.0]
-normal = [0.0, 0.0, 1.0]
-[[particles]]
-kind = "list"
-radius = {R:e}
-positions = [[0.0, 0.0, {z:e}]]
-velocities = [[{:e}, {:e}, {:e}]]
-"#,
-        gravity[0], gravity[1], gravity[2], v[0], v[1], v[2]
-    );
-    let scene = Scene::from_toml_str(&text, "floor").unwrap();
-    CpuEngine::new(&scene).unwrap()
+    CpuEngine::new(&floor_scene(keys, [R, RHO], gravity, z, v, [0.0; 3])).unwrap()
 }
 
 /// Runs until time `t` (s).

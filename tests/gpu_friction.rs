@@ -4,29 +4,18 @@
 //! with twisting friction), and a sphere spinning and rolling on a floor.
 
 mod common;
-use common::gpu;
+use common::{floor_scene, gpu, law};
 
 use powder::collide::{collide_on, Backend, CollideSpec};
 use powder::compare::{compare, Tolerances};
 use powder::gpu::GpuEngine;
 use powder::model::analytic;
-use powder::model::flags::LawArgs;
-use powder::model::ContactModel;
 use powder::scene::Scene;
 use std::f64::consts::PI;
 
 const R: f64 = 1e-3;
 const RHO: f64 = 2000.0;
 const G: f64 = 9.81;
-
-fn law(name: &str, params: &[(&'static str, f64)]) -> ContactModel {
-    LawArgs {
-        model: name.into(),
-        given: params.iter().map(|(k, v)| (*k, v.to_string())).collect(),
-    }
-    .contact_model()
-    .unwrap()
-}
 
 /// Elastic oblique impacts on a wall against Luding's closed form, sticking (60°) and
 /// sliding (32°, 20°), and against the CPU's e_t. Measured: 9.3e-5 off the closed form
@@ -216,44 +205,10 @@ friction = 0.3
 fn on_floor(extra: &str, gamma0: f64, v: [f64; 3], w: [f64; 3]) -> Option<GpuEngine> {
     let m = RHO * 4.0 / 3.0 * PI * R.powi(3);
     let z = R - m * G / 100.0;
-    let text = format!(
-        r#"
-[domain]
-min = [-0.5, -0.05, -0.01]
-max = [0.5, 0.05, 0.05]
-[simulation]
-duration = 1.0
-gravity = [0.0, 0.0, {g}]
-impact_velocity = 0.1
-[[material]]
-name = "m"
-density = {RHO}
-model = "hysteretic"
-k1 = 100.0
-kp = 100.0
-kc = 0.0
-phi_f = 0.05
-gamma0 = {gamma0:e}
-{extra}
-[[wall]]
-point = [0.0, 0.0, 0.0]
-normal = [0.0, 0.0, 1.0]
-[[particles]]
-kind = "list"
-radius = {R:e}
-positions = [[0.0, 0.0, {z:e}]]
-velocity = [{:e}, {:e}, {:e}]
-angular_velocity = [{:e}, {:e}, {:e}]
-"#,
-        v[0],
-        v[1],
-        v[2],
-        w[0],
-        w[1],
-        w[2],
-        g = -G
+    let keys = format!(
+        "model = \"hysteretic\"\nk1 = 100.0\nkp = 100.0\nkc = 0.0\nphi_f = 0.05\ngamma0 = {gamma0:e}\n{extra}"
     );
-    let scene = Scene::from_toml_str(&text, "floor").unwrap();
+    let scene = floor_scene(&keys, [R, RHO], [0.0, 0.0, -G], z, v, w);
     let ctx = gpu()?;
     Some(GpuEngine::new(&scene, ctx).unwrap())
 }

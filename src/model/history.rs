@@ -59,6 +59,26 @@ pub struct HistoryField {
     pub doc: &'static str,
 }
 
+/// The tangential spring, kept in the evaluator's frame (the partner sees it negated):
+/// Mindlin's (JKR family) and Luding's sliding law keep it; a pair uses one of them.
+pub const TANGENTIAL_SPRING: HistoryField = HistoryField {
+    name: "spring",
+    shape: Shape::Vec3,
+    mirror: Mirror::Negate,
+    host: HostField::Tangential,
+    doc: "the tangential spring, m",
+};
+
+/// The rolling displacement, the same seen from either side: the JKR rolling resistance
+/// and Luding's rolling law keep it; a pair uses one of them.
+pub const ROLLING_DISPLACEMENT: HistoryField = HistoryField {
+    name: "xi",
+    shape: Shape::Vec3,
+    mirror: Mirror::Same,
+    host: HostField::Rolling,
+    doc: "the rolling displacement, m",
+};
+
 impl HistoryField {
     /// Stored f32 words.
     pub fn words(&self) -> usize {

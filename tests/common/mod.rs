@@ -6,6 +6,7 @@ use std::path::Path;
 
 /// The GPU context, or `None` (with a notice) when no adapter exists outside CI; in CI
 /// (where lavapipe is installed) a missing adapter fails the test.
+#[allow(dead_code)]
 pub fn gpu() -> Option<GpuContext> {
     match GpuContext::new() {
         Ok(ctx) => Some(ctx),
@@ -55,4 +56,55 @@ pub fn assert_same_bits(a: &GpuState, b: &GpuState) {
     };
     assert_eq!(bits(&a.positions), bits(&b.positions));
     assert_eq!(bits(&a.velocities), bits(&b.velocities));
+}
+
+/// A contact model from its parameters as the command line gives them (the declared
+/// defaults apply).
+#[allow(dead_code)]
+pub fn law(name: &str, params: &[(&'static str, f64)]) -> powder::model::ContactModel {
+    powder::model::flags::LawArgs {
+        model: name.into(),
+        given: params.iter().map(|(k, v)| (*k, v.to_string())).collect(),
+    }
+    .contact_model()
+    .unwrap()
+}
+
+/// One sphere of `radius` and `density` over a floor z = 0 in a 1 m × 10 cm box: `keys`
+/// are the material's model lines; it starts at height `z` with velocity `v` and spin `w`.
+#[allow(dead_code)]
+pub fn floor_scene(
+    keys: &str,
+    [radius, density]: [f64; 2],
+    gravity: [f64; 3],
+    z: f64,
+    v: [f64; 3],
+    w: [f64; 3],
+) -> Scene {
+    let text = format!(
+        r#"
+[domain]
+min = [-0.5, -0.05, -0.01]
+max = [0.5, 0.05, 0.05]
+[simulation]
+duration = 1.0
+gravity = [{:e}, {:e}, {:e}]
+impact_velocity = 0.1
+[[material]]
+name = "m"
+density = {density}
+{keys}
+[[wall]]
+point = [0.0, 0.0, 0.0]
+normal = [0.0, 0.0, 1.0]
+[[particles]]
+kind = "list"
+radius = {radius:e}
+positions = [[0.0, 0.0, {z:e}]]
+velocity = [{:e}, {:e}, {:e}]
+angular_velocity = [{:e}, {:e}, {:e}]
+"#,
+        gravity[0], gravity[1], gravity[2], v[0], v[1], v[2], w[0], w[1], w[2]
+    );
+    Scene::from_toml_str(&text, "floor").unwrap()
 }

@@ -11,18 +11,12 @@
 
 use super::coulomb::{CoulombSpring, Step};
 use super::rotate_into_plane;
-use crate::model::history::{HistoryField, HostField, Mirror, Shape};
+use crate::model::history::{HistoryField, ROLLING_DISPLACEMENT};
 use glam::DVec3;
 
 /// The per-contact history of Luding's rolling spring (staggered; v_r and so the spring are
 /// the same seen from the partner).
-pub const HISTORY: &[HistoryField] = &[HistoryField {
-    name: "xi",
-    shape: Shape::Vec3,
-    mirror: Mirror::Same,
-    host: HostField::Rolling,
-    doc: "the rolling displacement, m",
-}];
+pub const HISTORY: &[HistoryField] = &[ROLLING_DISPLACEMENT];
 
 /// The rolling velocity v_r = −ℓ·n×(ω_i − ω_j).
 pub fn velocity(n: DVec3, omega_rel: DVec3, lever: f64) -> DVec3 {

@@ -11,18 +11,12 @@
 
 use super::coulomb::{CoulombSpring, Step};
 use super::rotate_into_plane;
-use crate::model::history::{HistoryField, HostField, Mirror, Shape};
+use crate::model::history::{HistoryField, TANGENTIAL_SPRING};
 use glam::DVec3;
 
 /// The per-contact history of Luding's sliding spring (staggered, in the evaluator's frame:
 /// the partner sees it negated).
-pub const HISTORY: &[HistoryField] = &[HistoryField {
-    name: "spring",
-    shape: Shape::Vec3,
-    mirror: Mirror::Negate,
-    host: HostField::Tangential,
-    doc: "the tangential spring, m",
-}];
+pub const HISTORY: &[HistoryField] = &[TANGENTIAL_SPRING];
 
 /// One step of the sliding law: `stored` is the staggered spring (history `tangential`).
 pub fn step(

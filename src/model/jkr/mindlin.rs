@@ -3,18 +3,12 @@
 
 use super::{tsuji_beta, Dissipation, JkrParams, TSUJI_PREFACTOR};
 use crate::model::friction::rotate_into_plane;
-use crate::model::history::{HistoryField, HostField, Mirror, Shape};
+use crate::model::history::{HistoryField, TANGENTIAL_SPRING};
 use crate::model::{Kinematics, NormalForce, PairGeometry};
 use glam::DVec3;
 
 /// The per-contact history of the Mindlin tangential spring (kept in the evaluator's frame).
-pub const HISTORY: &[HistoryField] = &[HistoryField {
-    name: "spring",
-    shape: Shape::Vec3,
-    mirror: Mirror::Negate,
-    host: HostField::Tangential,
-    doc: "the tangential spring s, m",
-}];
+pub const HISTORY: &[HistoryField] = &[TANGENTIAL_SPRING];
 
 /// Tangential force of one contact.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

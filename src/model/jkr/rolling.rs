@@ -3,18 +3,12 @@
 
 use super::JkrParams;
 use crate::model::friction::rotate_into_plane;
-use crate::model::history::{HistoryField, HostField, Mirror, Shape};
+use crate::model::history::{HistoryField, ROLLING_DISPLACEMENT};
 use crate::model::{NormalForce, PairGeometry};
 use glam::DVec3;
 
 /// The per-contact history of the JKR rolling resistance.
-pub const HISTORY: &[HistoryField] = &[HistoryField {
-    name: "xi",
-    shape: Shape::Vec3,
-    mirror: Mirror::Same,
-    host: HostField::Rolling,
-    doc: "the rolling displacement xi, m",
-}];
+pub const HISTORY: &[HistoryField] = &[ROLLING_DISPLACEMENT];
 
 /// Rolling-resistance torque of one contact.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
