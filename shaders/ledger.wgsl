@@ -33,7 +33,6 @@ const LEDGER: bool = true;
 @group(0) @binding(60) var<storage, read_write> a_ledger: array<vec4<f32>>;
 @group(0) @binding(61) var<storage, read_write> b_ledger: array<vec4<f32>>;
 @group(0) @binding(62) var<storage, read_write> a_wall_ledger: array<vec4<f32>>;
-@group(0) @binding(63) var<storage, read_write> b_wall_ledger: array<vec4<f32>>;
 @group(0) @binding(64) var<storage, read_write> particle_ledger: array<vec4<f32>>;
 
 // What the force kernel gathers for one particle during a step.
@@ -172,21 +171,11 @@ fn ledger_clear(new_slot: u32) {
     b_ledger[new_slot] = vec4<f32>(0.0);
 }
 
-// copy_back: the new lists' slots (n of them) and the wall contacts return to A.
+// copy_back_history: the new lists' slots (n of them) return to A (the wall contacts
+// were re-sorted in place with their particle).
 fn ledger_copy_back(k: u32, n: u32) {
-    let cap = step.max_neighbours;
     for (var s = 0u; s < n; s++) {
         a_ledger[slot_index(k, s)] = b_ledger[slot_index(k, s)];
-    }
-    for (var w = 0u; w < wall_count(); w++) {
-        a_wall_ledger[wall_slot(k, w)] = b_wall_ledger[wall_slot(k, w)];
-    }
-}
-
-// gather: the wall contacts follow their particle.
-fn ledger_gather_walls(k: u32, o: u32) {
-    for (var w = 0u; w < wall_count(); w++) {
-        b_wall_ledger[wall_slot(k, w)] = a_wall_ledger[wall_slot(o, w)];
     }
 }
 
@@ -213,7 +202,7 @@ fn ledger_dropped(pid: u32, o: u32, old_n: u32, k: u32) {
             }
         }
         for (var s = 0u; s < lower_count[k] && !found; s++) {
-            if (b_pid[slot_particle(lower[slot_index(k, s)])] == partner) {
+            if (a_pid[slot_particle(lower[slot_index(k, s)])] == partner) {
                 found = true;
             }
         }

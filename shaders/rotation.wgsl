@@ -11,10 +11,7 @@ const ROTATION: bool = true;
 
 @group(0) @binding(50) var<storage, read_write> a_omega: array<vec4<f32>>;
 @group(0) @binding(51) var<storage, read_write> a_alpha: array<vec4<f32>>;
-@group(0) @binding(52) var<storage, read_write> b_omega: array<vec4<f32>>;
-@group(0) @binding(53) var<storage, read_write> b_alpha: array<vec4<f32>>;
 @group(0) @binding(54) var<storage, read_write> a_wpred: array<vec4<f32>>;
-@group(0) @binding(68) var<storage, read_write> b_wpred: array<vec4<f32>>;
 // Per slot, this step: the torque the evaluated pair exerts on the partner (xyz).
 @group(0) @binding(72) var<storage, read_write> pair_torque: array<vec4<f32>>;
 
@@ -53,20 +50,6 @@ fn rot_drift(k: u32, r: RotState, pending_kick: bool) {
     w = w + 0.5 * step.dt * r.alpha;
     a_omega[k] = vec4<f32>(w, r.omega.w);
     a_wpred[k] = vec4<f32>(w + 0.5 * step.dt * r.alpha, 0.0);
-}
-
-// gather (on a rebuild): reorder into B.
-fn rot_gather(k: u32, o: u32) {
-    b_omega[k] = a_omega[o];
-    b_alpha[k] = a_alpha[o];
-    b_wpred[k] = a_wpred[o];
-}
-
-// copy_back (on a rebuild): B returns to A.
-fn rot_copy_back(k: u32) {
-    a_omega[k] = b_omega[k];
-    a_alpha[k] = b_alpha[k];
-    a_wpred[k] = b_wpred[k];
 }
 
 // The predicted angular velocity of particle k (in the force pass: from its mirror, as

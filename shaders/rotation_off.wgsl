@@ -22,9 +22,7 @@ fn rot_finite(r: RotState) -> bool {
 
 fn rot_drift(k: u32, r: RotState, pending_kick: bool) {}
 
-fn rot_gather(k: u32, o: u32) {}
 
-fn rot_copy_back(k: u32) {}
 
 fn rot_wpred(k: u32) -> vec3<f32> {
     return vec3<f32>(0.0);

@@ -10,11 +10,12 @@
 //   fn pair_edges(PairRow, Kin) -> vec4<f32>
 // and <rotation> is rotation.wgsl (angular velocity, torques) or rotation_off.wgsl (no
 // rotation: no angular buffers declared at all), with the state RotState and the hooks
-// rot_load, rot_collect, rot_finite, rot_drift, rot_gather, rot_copy_back, rot_wpred,
+// rot_load, rot_collect, rot_finite, rot_drift, rot_wpred,
 // rot_store_partial, rot_pair_store, rot_pair_load, rot_kick.
 //
 // The particle state lives in one buffer set, A, in the order of the last neighbour-list
-// rebuild; set B is scratch that only a rebuild writes. Pass order, recorded by
+// rebuild; a rebuild re-sorts it in place (`permute.wgsl`) and builds the new lists in
+// the B lists before copying them back. Pass order, recorded by
 // `gpu::engine` into one encoder per batch of steps:
 //   kick_drift   per particle (A)        v += dt/2·a (omega += dt/2·alpha); offset +=
 //   (collect_kick_drift after a step of the same batch: its collect and kick first, in
@@ -26,13 +27,14 @@
 //                                        moving wall moved > skin/2 along its normal)
 // only on a rebuild (indirect dispatches: zero workgroups on the other steps):
 //   <grid sort of A's cells>             sorted_index, cell_start, cell_count
-//   gather       per particle            B[k] = A[sorted_index[k]]
-//   neighbours   per particle (B)        the half lists from the 27 cells, cut-off
+//   gather       per particle            the cell and offset mirrors in sorted order
+//   <permute.wgsl, a dispatch a field>   A[k] = A[sorted_index[k]] field by field
+//   neighbours   per particle            the half lists from the 27 cells into B, cut-off
 //                                        r_i + r_j + reach + skin
-//   remap        per particle (B)        resolves `lower`; each new slot finds its history
-//                                        in A by the persistent ids
-//   copy_back,   per particle            A[k] = B[k] (state, then the lists' history),
-//   copy_back_history                    disp = 0; the wall candidates (a_wall_near)
+//   remap        per particle            resolves `lower`; each new slot finds its history
+//                                        in A's old lists by the persistent ids
+//   copy_back_history                    the B lists into A; disp = 0; the wall candidates
+//                                        (a_wall_near)
 // every step:
 //   <mirror copies>                      A's cell, offset, vpred (wpred) into the read-only
 //                                        textures m_* (`gpu::mirror`)
@@ -167,8 +169,8 @@ override ONE_MATERIAL: bool = false;
 
 @group(0) @binding(20) var<uniform> step: StepParams;
 
-// State A (the current state, in the order of the last rebuild) and B (its re-sorted copy,
-// written only by a rebuild's gather, neighbours and remap, then copied back into A).
+// State A (the current state, in the order of the last rebuild; a rebuild re-sorts it in
+// place) and its neighbour lists with their history; B is the lists a rebuild builds.
 @group(0) @binding(21) var<storage, read_write> a_cell: array<vec4<i32>>;
 @group(0) @binding(22) var<storage, read_write> a_off: array<vec4<f32>>;
 @group(0) @binding(23) var<storage, read_write> a_vel: array<vec4<f32>>;
@@ -188,19 +190,12 @@ override ONE_MATERIAL: bool = false;
 // written by kick_drift: the force kernel reads one vec4 per partner for both.
 @group(0) @binding(40) var<storage, read_write> a_vpred: array<vec4<f32>>;
 
-@group(0) @binding(31) var<storage, read_write> b_cell: array<vec4<i32>>;
-@group(0) @binding(32) var<storage, read_write> b_off: array<vec4<f32>>;
-@group(0) @binding(33) var<storage, read_write> b_vel: array<vec4<f32>>;
-@group(0) @binding(34) var<storage, read_write> b_acc: array<vec4<f32>>;
-@group(0) @binding(35) var<storage, read_write> b_pid: array<u32>;
 @group(0) @binding(36) var<storage, read_write> b_count: array<u32>;
 @group(0) @binding(37) var<storage, read_write> b_hist: array<Hist>;
 @group(0) @binding(38) var<storage, read_write> b_hist_pid: array<u32>;
-@group(0) @binding(39) var<storage, read_write> b_wall_hist: array<Hist>;
-@group(0) @binding(55) var<storage, read_write> b_vpred: array<vec4<f32>>;
 
 // Kahan compensation of the velocity (element 2i) and of the cell offset (2i + 1), per
-// particle in both state sets: the f32 updates v += dt/2·a and o += dt·v add increments of
+// particle: the f32 updates v += dt/2·a and o += dt·v add increments of
 // a few ulps (slow particles, small dt), whose rounding would otherwise accumulate
 // systematically; the true values are v − c_v and o − c_o.
 // Read-only texture copies of a_cell, a_off and a_vpred, made right before each force
@@ -213,8 +208,8 @@ const MIRROR_WIDTH: u32 = 4096u;
 @group(0) @binding(81) var m_off: texture_storage_2d<rgba32float, read>;
 @group(0) @binding(82) var m_vpred: texture_storage_2d<rgba32float, read>;
 // The cell and offset mirrors as a rebuild's `gather` writes them (the same textures): the
-// re-sorted state B, which `neighbours` then reads (a gather per candidate, not a loop over
-// the lanes); the copy before the force pass writes the same values again from A.
+// re-sorted positions, which `neighbours` then reads (a gather per candidate, not a loop
+// over the lanes); the copy before the force pass writes the same values again from A.
 @group(0) @binding(88) var m_cell_out: texture_storage_2d<rgba32sint, write>;
 @group(0) @binding(89) var m_off_out: texture_storage_2d<rgba32float, write>;
 
@@ -223,7 +218,6 @@ fn mirror_texel(k: u32) -> vec2<u32> {
 }
 
 @group(0) @binding(66) var<storage, read_write> a_kahan: array<vec4<f32>>;
-@group(0) @binding(67) var<storage, read_write> b_kahan: array<vec4<f32>>;
 
 // x + dx with Kahan compensation c (x_true = x − c): returns (x', c').
 struct Compensated {
@@ -304,7 +298,6 @@ fn load_pair_force(slot: u32) -> vec3<f32> {
     }
     return pair_force[slot].xyz;
 }
-@group(0) @binding(41) var<storage, read_write> old_index: array<u32>;
 @group(0) @binding(42) var<storage, read_write> nbr: array<u32>;
 
 // From the grid sort.
@@ -504,7 +497,8 @@ fn decide() {
     }
 }
 
-// On a rebuild: B[k] = A[sorted_index[k]], everything that moves with the particle.
+// On a rebuild, before the state is re-sorted: the cell and offset mirrors in the new
+// order, for `neighbours`.
 @compute @workgroup_size(WG_SIZE)
 fn gather(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let k = global_index(wid, nwg, lid);
@@ -512,26 +506,8 @@ fn gather(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: v
         return;
     }
     let o = sorted_index[k];
-    let cell = a_cell[o];
-    let off = a_off[o];
-    b_cell[k] = cell;
-    b_off[k] = off;
-    textureStore(m_cell_out, mirror_texel(k), cell);
-    textureStore(m_off_out, mirror_texel(k), off);
-    b_vel[k] = a_vel[o];
-    // (acc.w carries the batch's overlap maximum, disp.w, through the re-sort: disp is
-    // only in A)
-    b_acc[k] = vec4<f32>(a_acc[o].xyz, a_disp[o].w);
-    b_vpred[k] = a_vpred[o];
-    b_kahan[2u * k] = a_kahan[2u * o];
-    b_kahan[2u * k + 1u] = a_kahan[2u * o + 1u];
-    b_pid[k] = a_pid[o];
-    old_index[k] = o;
-    rot_gather(k, o);
-    for (var w = 0u; w < wall_count(); w++) {
-        b_wall_hist[wall_slot(k, w)] = a_wall_hist[wall_slot(o, w)];
-    }
-    ledger_gather_walls(k, o);
+    textureStore(m_cell_out, mirror_texel(k), a_cell[o]);
+    textureStore(m_off_out, mirror_texel(k), a_off[o]);
 }
 
 // Whether particle k evaluates its pair with j (d = x_k − x_j): when j lies ahead of k
@@ -564,7 +540,7 @@ fn neighbours(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nw
     if (k >= grid.n_particles) {
         return;
     }
-    // (B's positions from the mirrors gather wrote: see m_cell_out)
+    // (the re-sorted positions from the mirrors gather wrote: see m_cell_out)
     let ck = textureLoad(m_cell, mirror_texel(k));
     let ok = textureLoad(m_off, mirror_texel(k));
     let hi = vec3<i32>(grid.dims) - vec3<i32>(1);
@@ -575,7 +551,7 @@ fn neighbours(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nw
     var up = 0u;
     var down = 0u;
     // a particle that has not appeared lists no neighbours (and is listed by none)
-    let here = is_active(b_pid[k]);
+    let here = is_active(a_pid[k]);
     // Without wrapping along x, the three cells x−1, x, x+1 of a row are consecutive keys
     // and their particles one range of the sorted order: 9 ranges instead of 27 cells.
     let rows = !periodic_axes().x;
@@ -608,7 +584,7 @@ fn neighbours(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nw
                     end = start + cell_count[key];
                 }
                 for (var j = start; j < end; j++) {
-                    if (j == k || !here || !is_active(b_pid[j])) {
+                    if (j == k || !here || !is_active(a_pid[j])) {
                         continue;
                     }
                     let oj = textureLoad(m_off, mirror_texel(j));
@@ -632,7 +608,7 @@ fn neighbours(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nw
         }
     }
     if (up > cap || down > cap) {
-        atomicMax(&monitor[1], b_pid[k] + 1u);
+        atomicMax(&monitor[1], a_pid[k] + 1u);
     }
     atomicMax(&monitor[0], max(up, down));
     b_count[k] = min(up, cap);
@@ -658,12 +634,12 @@ fn remap(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
     }
     // each new slot's history: from k's old list, or (when the pair's evaluator changed
     // with the new order) from the partner's, seen from the other side
-    let o = old_index[k];
+    let o = sorted_index[k];
     let old_n = a_count[o];
-    let me = b_pid[k];
+    let me = a_pid[k];
     for (var s = 0u; s < b_count[k]; s++) {
         let j = nbr[slot_index(k, s)];
-        let partner = b_pid[j];
+        let partner = a_pid[j];
         var h = hist_zero();
         ledger_clear(slot_index(k, s));
         var found = false;
@@ -676,7 +652,7 @@ fn remap(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
             }
         }
         if (!found) {
-            let oj = old_index[j];
+            let oj = sorted_index[j];
             for (var m = 0u; m < a_count[oj]; m++) {
                 if (a_hist_pid[slot_index(oj, m)] == me) {
                     h = hist_mirror(a_hist[slot_index(oj, m)]);
@@ -691,27 +667,8 @@ fn remap(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
     ledger_dropped(me, o, old_n, k);
 }
 
-// On a rebuild, last: A[k] = B[k], in two kernels (one binding both sets of everything
-// would exceed the 32 storage buffers per kernel lavapipe allows): the particle state, and
-// the displacements start afresh; then the new lists' history and the wall contacts.
-@compute @workgroup_size(WG_SIZE)
-fn copy_back(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
-    let k = global_index(wid, nwg, lid);
-    if (k >= grid.n_particles) {
-        return;
-    }
-    a_cell[k] = b_cell[k];
-    a_off[k] = b_off[k];
-    a_vel[k] = b_vel[k];
-    a_acc[k] = b_acc[k];
-    a_vpred[k] = b_vpred[k];
-    a_kahan[2u * k] = b_kahan[2u * k];
-    a_kahan[2u * k + 1u] = b_kahan[2u * k + 1u];
-    a_pid[k] = b_pid[k];
-    a_disp[k] = vec4<f32>(0.0, 0.0, 0.0, b_acc[k].w);
-    rot_copy_back(k);
-}
-
+// On a rebuild, last: the new lists' history returns to A, the displacements start
+// afresh, and the wall candidates are found from the re-sorted positions.
 @compute @workgroup_size(WG_SIZE)
 fn copy_back_history(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let k = global_index(wid, nwg, lid);
@@ -726,8 +683,9 @@ fn copy_back_history(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgro
         a_hist_pid[slot_index(k, s)] = b_hist_pid[slot_index(k, s)];
     }
     ledger_copy_back(k, n);
-    // the wall candidates from the new position (copy_back ran before); a wall out of
-    // reach + skin starts with the history of a contact out of range
+    // (w: the batch's largest overlap so far, which the re-sort carried)
+    a_disp[k] = vec4<f32>(0.0, 0.0, 0.0, a_disp[k].w);
+    // a wall out of reach + skin starts with the history of a contact out of range
     let ck = a_cell[k];
     let ok = a_off[k];
     let margin = step.reach + skin_width();
@@ -740,11 +698,9 @@ fn copy_back_history(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgro
         if (candidate && w < 32u) {
             near |= 1u << w;
         }
-        var h = hist_zero();
-        if (candidate || w >= 32u) {
-            h = b_wall_hist[slot];
+        if (!candidate && w < 32u) {
+            a_wall_hist[slot] = hist_zero();
         }
-        a_wall_hist[slot] = h;
         if (step.servo_walls != 0u) {
             // a far wall's push stays 0 until the next rebuild (force writes candidates')
             wall_push[slot] = 0.0;

@@ -112,8 +112,9 @@ struct BenchArgs {
 enum QuietChoice {
     /// Every batch checks each step whether to rebuild the neighbour lists.
     Off,
-    /// Batches run without the per-step check where no rebuild is expected, and again with
-    /// it where one was needed (results bitwise the same).
+    /// On a software adapter, batches run without the per-step check where no rebuild is
+    /// expected, and again with it where one was needed (results bitwise the same); on a
+    /// GPU as `off` (the copies they need cost as much memory as the state).
     Auto,
     /// Every batch tries to run without the check (diagnostics).
     Always,

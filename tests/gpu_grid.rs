@@ -260,3 +260,79 @@ fn gpu_info_cli_prints_the_adapter() {
     );
     assert!(v["features"].is_array());
 }
+
+/// The rebuild's in-place re-sort (`gpu::permute`) moves every field, per-particle and
+/// wall-major, to the sorted order, whatever its size, through a scratch one field wide.
+#[test]
+fn gpu_permute_resorts_every_field_in_place() {
+    use powder::gpu::kernel::{storage_buffer, submit_and_read, uniform_buffer};
+    use powder::gpu::layout::GridParams;
+    use powder::gpu::permute::{Field, Permutation};
+    use rand::seq::SliceRandom;
+    let Some((_guard, ctx)) = gpu() else { return };
+    let n = 1000u32;
+    let walls = 3u32;
+    let mut rng = Pcg64::seed_from_u64(11);
+    let mut order: Vec<u32> = (0..n).collect();
+    order.shuffle(&mut rng);
+    let params = GridParams {
+        dims: [1, 1, 1],
+        n_particles: n,
+        cell_width: [1.0; 3],
+        n_cells: 1,
+    };
+    let grid = uniform_buffer(&ctx.device, "grid", bytemuck::bytes_of(&params));
+    let sorted = storage_buffer(&ctx.device, "sorted", 4 * n as u64);
+    ctx.queue
+        .write_buffer(&sorted, 0, bytemuck::cast_slice(&order));
+    // (bytes per particle or wall contact, wall blocks or 0 for a per-particle field): a
+    // vec4, a word, a 28-byte contact (a dispatch per wall), a 4-byte one (walls grouped)
+    let specs = [(16u64, 0u32), (4, 0), (28, walls), (4, walls)];
+    let mut fields = Vec::new();
+    let mut before = Vec::new();
+    let mut buffers = Vec::new();
+    for (i, &(bytes, blocks)) in specs.iter().enumerate() {
+        let words = (bytes / 4) as usize * n as usize * blocks.max(1) as usize;
+        let data: Vec<u32> = (0..words).map(|_| rng.random()).collect();
+        let buf = storage_buffer(&ctx.device, &format!("field {i}"), 4 * words as u64);
+        ctx.queue.write_buffer(&buf, 0, bytemuck::cast_slice(&data));
+        if blocks == 0 {
+            fields.push(Field::per_particle(&format!("f{i}"), &buf, bytes));
+        } else {
+            fields.extend(Field::wall_major(&format!("f{i}"), &buf, bytes, blocks, n));
+        }
+        before.push(data);
+        buffers.push(buf);
+    }
+    let perm = Permutation::new(ctx, &grid, &sorted, n, &fields).unwrap();
+    // 1 + 1 + 3 + 1 fields, one dispatch more; the scratch as wide as the 28-byte contact
+    assert_eq!(fields.len(), 6);
+    assert_eq!(perm.dispatches(), 7);
+    assert_eq!(perm.scratch_bytes(), 28 * n as u64);
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    {
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        perm.encode(
+            &mut pass,
+            n,
+            ctx.limits().max_compute_workgroups_per_dimension,
+        );
+    }
+    let sources: Vec<(&wgpu::Buffer, u64)> = buffers.iter().map(|b| (b, b.size())).collect();
+    let out = submit_and_read(ctx, encoder, &sources).unwrap();
+    for (i, &(bytes, blocks)) in specs.iter().enumerate() {
+        let after: Vec<u32> = bytemuck::pod_collect_to_vec(&out[i]);
+        let w = (bytes / 4) as usize;
+        for b in 0..blocks.max(1) as usize {
+            for k in 0..n as usize {
+                let o = order[k] as usize;
+                let block = b * n as usize * w;
+                assert_eq!(
+                    after[block + k * w..block + (k + 1) * w],
+                    before[i][block + o * w..block + (o + 1) * w],
+                    "field {i}, block {b}, particle {k}"
+                );
+            }
+        }
+    }
+}

@@ -312,6 +312,12 @@ pub fn choose_adapter(
 }
 
 impl GpuContext {
+    /// Whether the adapter is a software rasteriser (lavapipe, llvmpipe): the one switch
+    /// for the paths that pay off only there.
+    pub fn is_software(&self) -> bool {
+        self.adapter.get_info().device_type == wgpu::DeviceType::Cpu
+    }
+
     /// Opens the adapter chosen by `POWDER_ADAPTER` (see the module docs).
     pub fn new() -> Result<Self, PowderError> {
         Self::with_preference(&AdapterPreference::from_env())

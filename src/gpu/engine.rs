@@ -13,12 +13,10 @@
 //! The particle state lives in one buffer set, A, in the order of the last neighbour-list
 //! rebuild. Each step drifts A (accumulating each particle's displacement since the last
 //! rebuild), decides on the device whether to rebuild, and on a rebuild sorts A by cell,
-//! gathers it into the scratch set B in sorted order, rebuilds B's neighbour lists from the
-//! grid, remaps every contact's history from A by the partner's persistent id and copies B
-//! back into A. Then it computes the forces and kicks, in place. A step without a rebuild
-//! (most of them) thus copies nothing: an earlier design gathered A into B every step and
-//! swapped the roles, which cost a third of the non-force time (gather and history copy,
-//! measured with `powder bench --profile`). Many steps are recorded per submission and the host reads back only a
+//! re-sorts it in place ([`Permutation`]), builds the new neighbour lists (B) from the
+//! grid, remaps every contact's history from A's lists by the partner's persistent id and
+//! copies the lists back into A. Then it computes the forces and kicks, in place. A step
+//! without a rebuild (most of them) copies nothing. Many steps are recorded per submission and the host reads back only a
 //! 16-byte monitor per batch (neighbour-capacity overflow, non-finite forces) and whatever
 //! output needs.
 //!
@@ -29,7 +27,7 @@
 //! `decide` kernel reads and clears it and writes the rebuild flag and the grid
 //! sort's indirect dispatch arguments (the full sort's, or zero workgroups): the sort is
 //! recorded with `dispatch_workgroups_indirect` ([`GridSort::encode_indirect`]);
-//! the rebuild's own per-particle passes (gather, neighbours, remap, copy back) are
+//! the rebuild's own per-particle passes (gather, re-sort, neighbours, remap, copy back) are
 //! indirect too. Indirect rather than a flag read by each kernel: a skipped rebuild then
 //! launches no workgroups at all, on any adapter, and `GridSort`'s kernels stay unaware of
 //! the skin. On lavapipe both measured alike (3.1·10⁵ particle-steps/s for the
@@ -50,6 +48,7 @@ use crate::gpu::kernel::{
 };
 use crate::gpu::layout::{encode3, gpu_cell_width, HystereticPair, JkrPair, StepParams, WallGpu};
 use crate::gpu::mirror::Mirrors;
+use crate::gpu::permute::{Field, Permutation};
 use crate::gpu::quiet::{Forecast, QuietBatches};
 use crate::gpu::traffic::{PassTraffic, When};
 use crate::model::{ContactHistory, ContactModel};
@@ -81,8 +80,8 @@ impl Allocator<'_> {
     }
 }
 
-/// One set of particle-state buffers: A (the state) or B (the re-sorted copy a rebuild
-/// builds, then copies back into A).
+/// The particle state (A): per particle, in the order of the last rebuild, with the
+/// neighbour lists' history.
 struct StateSet {
     cell: wgpu::Buffer,
     off: wgpu::Buffer,
@@ -93,11 +92,11 @@ struct StateSet {
     hist: wgpu::Buffer,
     hist_pid: wgpu::Buffer,
     wall_hist: wgpu::Buffer,
-    /// Displacement since the last neighbour-list rebuild (xyz); only in A.
-    disp: Option<wgpu::Buffer>,
+    /// Displacement since the last neighbour-list rebuild (xyz).
+    disp: wgpu::Buffer,
     /// The wall candidates of each particle (a bit per wall of the first 32), written by a
-    /// rebuild; only in A.
-    wall_near: Option<wgpu::Buffer>,
+    /// rebuild.
+    wall_near: wgpu::Buffer,
     /// Predicted velocity (xyz) and mass (w), written by `kick_drift`.
     vpred: wgpu::Buffer,
     /// Kahan compensation of the velocity and the cell offset (2 × vec4 per particle).
@@ -117,14 +116,11 @@ struct StateSet {
 impl StateSet {
     fn new(
         alloc: &mut Allocator,
-        tag: &str,
         (n, cap, walls): (u64, u64, u64),
         kind: &Composition,
         ledger: bool,
     ) -> Self {
-        // the displacements since the last rebuild belong to the state only
-        let state = tag == "A";
-        let mut b = |name: &str, bytes: u64| alloc.buffer(&format!("{tag}.{name}"), bytes);
+        let mut b = |name: &str, bytes: u64| alloc.buffer(&format!("A.{name}"), bytes);
         let hb = kind.history_bytes();
         Self {
             cell: b("cell", 16 * n),
@@ -137,8 +133,8 @@ impl StateSet {
             hist_pid: b("hist_pid", 4 * n * cap),
             // without walls: one element, the smallest binding the kernels accept
             wall_hist: b("wall_hist", hb * (n * walls).max(1)),
-            disp: state.then(|| b("disp", 16 * n)),
-            wall_near: state.then(|| b("wall_near", 4 * if walls > 0 { n } else { 1 })),
+            disp: b("disp", 16 * n),
+            wall_near: b("wall_near", 4 * if walls > 0 { n } else { 1 }),
             vpred: b("vpred", 16 * n),
             kahan: b("kahan", 32 * n),
             omega: kind.rotation().then(|| b("omega", 16 * n)),
@@ -160,8 +156,8 @@ impl StateSet {
             ("hist", Some(&self.hist)),
             ("hist_pid", Some(&self.hist_pid)),
             ("wall_hist", Some(&self.wall_hist)),
-            ("disp", self.disp.as_ref()),
-            ("wall_near", self.wall_near.as_ref()),
+            ("disp", Some(&self.disp)),
+            ("wall_near", Some(&self.wall_near)),
             ("vpred", Some(&self.vpred)),
             ("kahan", Some(&self.kahan)),
             ("omega", self.omega.as_ref()),
@@ -174,6 +170,69 @@ impl StateSet {
         .filter_map(|(n, b)| b.map(|b| (format!("{side}_{n}"), b)))
         .collect()
     }
+
+    /// The fields a rebuild re-sorts (`gpu::permute`): everything per particle but the
+    /// lists (rebuilt) and the wall candidates (recomputed).
+    fn permuted(&self, n: u32, walls: u32, history_bytes: u64) -> Vec<Field> {
+        let mut f = vec![
+            Field::per_particle("cell", &self.cell, 16),
+            Field::per_particle("off", &self.off, 16),
+            Field::per_particle("vel", &self.vel, 16),
+            Field::per_particle("acc", &self.acc, 16),
+            Field::per_particle("vpred", &self.vpred, 16),
+            Field::per_particle("kahan", &self.kahan, 32),
+            Field::per_particle("pid", &self.pid, 4),
+            Field::per_particle("disp", &self.disp, 16),
+        ];
+        for (name, b) in [
+            ("omega", &self.omega),
+            ("alpha", &self.alpha),
+            ("wpred", &self.wpred),
+        ] {
+            f.extend(b.as_ref().map(|b| Field::per_particle(name, b, 16)));
+        }
+        f.extend(Field::wall_major(
+            "wall_hist",
+            &self.wall_hist,
+            history_bytes,
+            walls,
+            n,
+        ));
+        if let Some(l) = &self.wall_ledger {
+            f.extend(Field::wall_major("wall_ledger", l, 16, walls, n));
+        }
+        f
+    }
+}
+
+/// The neighbour lists a rebuild builds (B), copied back into A's at its end.
+struct NewLists {
+    count: wgpu::Buffer,
+    hist: wgpu::Buffer,
+    hist_pid: wgpu::Buffer,
+    ledger: Option<wgpu::Buffer>,
+}
+
+impl NewLists {
+    fn new(alloc: &mut Allocator, (n, cap): (u64, u64), kind: &Composition, ledger: bool) -> Self {
+        let mut b = |name: &str, bytes: u64| alloc.buffer(&format!("B.{name}"), bytes);
+        Self {
+            count: b("count", 4 * n),
+            hist: b("hist", kind.history_bytes() * n * cap),
+            hist_pid: b("hist_pid", 4 * n * cap),
+            ledger: ledger.then(|| b("ledger", 16 * n * cap)),
+        }
+    }
+
+    fn named(&self) -> Vec<(String, &wgpu::Buffer)> {
+        let mut v = vec![
+            ("b_count".to_string(), &self.count),
+            ("b_hist".to_string(), &self.hist),
+            ("b_hist_pid".to_string(), &self.hist_pid),
+        ];
+        v.extend(self.ledger.as_ref().map(|l| ("b_ledger".to_string(), l)));
+        v
+    }
 }
 
 /// The step's kernels, bound to the two sets.
@@ -183,7 +242,6 @@ struct Bound {
     gather: Pass,
     neighbours: Pass,
     remap: Pass,
-    copy_back: Pass,
     copy_back_history: Pass,
     force: Pass,
     kick: Pass,
@@ -270,12 +328,11 @@ impl Default for GpuOptions {
     }
 }
 
-/// What quiet batches need: the copies of what a batch changes that B does not hold, the
-/// forecast and the counts.
+/// What quiet batches need: (buffer a batch changes, its batch-start copy), the forecast
+/// and the counts.
 struct Quiet {
     mode: QuietBatches,
-    disp: wgpu::Buffer,
-    particle_ledger: Option<wgpu::Buffer>,
+    copies: Vec<(wgpu::Buffer, wgpu::Buffer)>,
     forecast: Forecast,
     /// The device's rebuild count at the end of the last batch (u64::MAX: unknown).
     rebuilds: u64,
@@ -313,8 +370,10 @@ pub struct GpuEngine {
     mirrors: Mirrors,
     /// Quiet batches, where the scene allows them (no moving walls, no pouring).
     quiet: Option<Quiet>,
-    /// The re-sorted copy a rebuild writes (B; bound in the kernels, never read by the host).
-    _sorted: StateSet,
+    /// The lists a rebuild builds (B; bound in the kernels, never read by the host).
+    _new_lists: NewLists,
+    /// A rebuild's in-place re-sort of the state.
+    permutation: Permutation,
     monitor: wgpu::Buffer,
     /// Verlet skin state (see `skin` in `shaders/step.wgsl`): [0] some particle moved more
     /// than skin/2 since the last rebuild, [1] rebuild flag, [2] rebuilds so far, [3] skin.
@@ -571,10 +630,8 @@ impl GpuEngine {
             ],
         };
         let sizes = (n as u64, cap as u64, n_walls);
-        let sets = [
-            StateSet::new(&mut alloc, "A", sizes, &kind, ledger),
-            StateSet::new(&mut alloc, "B", sizes, &kind, ledger),
-        ];
+        let state = StateSet::new(&mut alloc, sizes, &kind, ledger);
+        let new_lists = NewLists::new(&mut alloc, (sizes.0, sizes.1), &kind, ledger);
         let dt32 = r.dt as f32;
         let particle_ledger = ledger.then(|| alloc.buffer("particle_ledger", 64 * n as u64));
         // Initial state, in scene order (the first sort orders it).
@@ -608,7 +665,7 @@ impl GpuEngine {
         let g = scene.gravity;
         let acc0: Vec<[f32; 4]> = vec![[g[0] as f32, g[1] as f32, g[2] as f32, 0.0]; n];
         let q0 = &ctx.queue;
-        let s0 = &sets[0];
+        let s0 = &state;
         q0.write_buffer(&s0.cell, 0, bytemuck::cast_slice(&cells));
         q0.write_buffer(&s0.off, 0, bytemuck::cast_slice(&offs));
         q0.write_buffer(&s0.vel, 0, bytemuck::cast_slice(&vels));
@@ -697,7 +754,6 @@ impl GpuEngine {
             "wall_push",
             4 * if servo_walls { n as u64 * n_walls } else { 1 },
         );
-        let old_index = alloc.buffer("old_index", 4 * n as u64);
         let nbr = alloc.buffer("nbr", 4 * n as u64 * cap as u64);
         // the half lists' other side, and what each evaluated pair leaves for collect
         let lower = alloc.buffer("lower", 4 * n as u64 * cap as u64);
@@ -725,7 +781,6 @@ impl GpuEngine {
             "gather",
             "neighbours",
             "remap",
-            "copy_back",
             "copy_back_history",
             "force",
             "kick",
@@ -768,7 +823,7 @@ impl GpuEngine {
         });
         alloc.list.push(("args".into(), args.size()));
         // the force pass's read-only copies of what it loads per pair (`gpu::mirror`)
-        let s0 = &sets[0];
+        let s0 = &state;
         let mut mirrored = vec![
             (
                 "m_cell",
@@ -789,13 +844,22 @@ impl GpuEngine {
         }
         let mirrors = Mirrors::new(device, n as u32, &mirrored)?;
         alloc.list.extend(mirrors.sizes());
+        let permutation = Permutation::new(
+            &ctx,
+            grid.params(),
+            grid.sorted_index(),
+            n as u32,
+            &state.permuted(n as u32, n_walls as u32, kind.history_bytes()),
+        )?;
+        alloc
+            .list
+            .push(("permute.scratch".into(), permutation.scratch_bytes()));
         let buffers = alloc.list;
         let bind = || -> Result<Bound, PowderError> {
-            let mut list: Vec<(String, &wgpu::Buffer)> = sets[0].named("a");
-            list.extend(sets[1].named("b"));
+            let mut list: Vec<(String, &wgpu::Buffer)> = state.named("a");
+            list.extend(new_lists.named());
             list.push(("grid".into(), grid.params()));
             list.push(("step".into(), &step_buf));
-            list.push(("old_index".into(), &old_index));
             list.push(("nbr".into(), &nbr));
             list.push(("lower".into(), &lower));
             list.push(("lower_count".into(), &lower_count));
@@ -841,7 +905,6 @@ impl GpuEngine {
                 gather: pass("gather")?,
                 neighbours: pass("neighbours")?,
                 remap: pass("remap")?,
-                copy_back: pass("copy_back")?,
                 copy_back_history: pass("copy_back_history")?,
                 force: pass("force")?,
                 kick: pass("kick")?,
@@ -855,16 +918,43 @@ impl GpuEngine {
         // quiet batches: not where walls move (their rebuild trigger is decide's) nor where
         // particles appear (an insertion rebuilds)
         let pouring = scene.particles.iter().any(|p| p.insert_at > 0.0);
-        let quiet = (options.quiet != QuietBatches::Off && !moving_walls && !pouring).then(|| {
+        let mode = options.quiet.on(&ctx);
+        let quiet = (mode != QuietBatches::Off && !moving_walls && !pouring).then(|| {
             let mut alloc = Allocator {
                 device,
                 list: Vec::new(),
             };
+            // the lists' history goes into B's (a quiet batch does not rebuild), the rest
+            // into copies of its own
+            let mut copies = vec![(state.hist.clone(), new_lists.hist.clone())];
+            if let (Some(a), Some(b)) = (&state.ledger, &new_lists.ledger) {
+                copies.push((a.clone(), b.clone()));
+            }
+            let a = &state;
+            let own = [
+                ("cell", Some(&a.cell)),
+                ("off", Some(&a.off)),
+                ("vel", Some(&a.vel)),
+                ("acc", Some(&a.acc)),
+                ("vpred", Some(&a.vpred)),
+                ("kahan", Some(&a.kahan)),
+                ("wall_hist", Some(&a.wall_hist)),
+                ("disp", Some(&a.disp)),
+                ("omega", a.omega.as_ref()),
+                ("alpha", a.alpha.as_ref()),
+                ("wpred", a.wpred.as_ref()),
+                ("wall_ledger", a.wall_ledger.as_ref()),
+                ("particle_ledger", particle_ledger.as_ref()),
+            ];
+            for (name, b) in own {
+                if let Some(b) = b {
+                    let copy = alloc.buffer(&format!("quiet.{name}"), b.size());
+                    copies.push((b.clone(), copy));
+                }
+            }
             let q = Quiet {
-                mode: options.quiet,
-                disp: alloc.buffer("quiet.disp", 16 * n as u64),
-                particle_ledger: ledger
-                    .then(|| alloc.buffer("quiet.particle_ledger", 64 * n as u64)),
+                mode,
+                copies,
                 forecast: Forecast::new(skin),
                 // the initial forces build the lists once
                 rebuilds: 1,
@@ -878,7 +968,6 @@ impl GpuEngine {
             buffers.extend(list);
             q
         });
-        let [state, sorted] = sets;
         let radius = scene.particles.iter().map(|p| p.radius).collect();
         let mass = r.mass.clone();
         let mut engine = Self {
@@ -896,7 +985,8 @@ impl GpuEngine {
             quiet,
             grid,
             state,
-            _sorted: sorted,
+            _new_lists: new_lists,
+            permutation,
             monitor,
             skin: skin_buf,
             args,
@@ -1001,7 +1091,8 @@ impl GpuEngine {
     }
 
     /// The step's kernels this engine built pipelines for (entry points of the step
-    /// variant; the moving-wall kernels only where walls move), in recording order.
+    /// variant, and the re-sort's `permute`; the moving-wall kernels only where walls
+    /// move), in recording order.
     pub fn kernel_names(&self) -> Vec<String> {
         let b = &self.bound;
         [
@@ -1012,7 +1103,6 @@ impl GpuEngine {
             Some(&b.gather),
             Some(&b.neighbours),
             Some(&b.remap),
-            Some(&b.copy_back),
             Some(&b.copy_back_history),
             Some(&b.force),
             b.wall_servo.as_ref(),
@@ -1022,6 +1112,11 @@ impl GpuEngine {
         .into_iter()
         .flatten()
         .map(|p| p.kernel.name.clone())
+        .flat_map(|name| {
+            // the re-sort's kernel (its own module) right after gather
+            let permute = (name == "gather").then(|| "permute".to_string());
+            std::iter::once(name).chain(permute)
+        })
         .collect()
     }
 
@@ -1032,10 +1127,11 @@ impl GpuEngine {
 
     /// Every device buffer allocated for the run, as (name, bytes), in allocation order:
     /// the grid sort's index buffers (`grid.*`; its internal scan and large-cell scratch,
-    /// a few bytes per cell / 32 particles, are not listed), both particle-state sets
-    /// (`A.*`, `B.*`), the uniform step parameters, the pair table, walls, and the per-step
-    /// scratch. Angular buffers (`A.omega`, `A.alpha`, `B.omega`, `B.alpha`, `wpred`)
-    /// appear only when the scene rotates.
+    /// a few bytes per cell / 32 particles, are not listed), the particle state (`A.*`),
+    /// the lists a rebuild builds (`B.*`), the uniform step parameters, the pair table,
+    /// walls, the per-step scratch, the re-sort's scratch (`permute.scratch`) and the
+    /// quiet batches' copies (`quiet.*`). Angular buffers (`A.omega`, `A.alpha`,
+    /// `A.wpred`) appear only when the scene rotates.
     pub fn buffers(&self) -> Vec<(String, u64)> {
         self.buffers.clone()
     }
@@ -1049,7 +1145,7 @@ impl GpuEngine {
     /// (`gpu::traffic`, where the counting is explained): the passes of every step in
     /// recording order (`collect_kick_drift`, the wall kernels where walls move, `decide`,
     /// the mirror copies, `force`), then those of a rebuild (the cell sort's as `grid.*`,
-    /// `gather`, `neighbours`, `remap`, `copy_back`, `copy_back_history`).
+    /// `gather`, the re-sort's `permute *`, `neighbours`, `remap`, `copy_back_history`).
     pub fn traffic(&self) -> Vec<PassTraffic> {
         let b = &self.bound;
         let pass = |p: &Pass, when| PassTraffic::new(p.kernel.name.clone(), when, p.bound.clone());
@@ -1070,21 +1166,19 @@ impl GpuEngine {
                 bound,
             ));
         }
-        for p in [
-            &b.gather,
-            &b.neighbours,
-            &b.remap,
-            &b.copy_back,
-            &b.copy_back_history,
-        ] {
+        out.push(pass(&b.gather, When::Rebuild));
+        for (name, bound) in self.permutation.traffic() {
+            out.push(PassTraffic::new(name, When::Rebuild, bound));
+        }
+        for p in [&b.neighbours, &b.remap, &b.copy_back_history] {
             out.push(pass(p, When::Rebuild));
         }
         out
     }
 
     /// Records one step: drift, decide whether to rebuild, on a rebuild (indirect: no
-    /// workgroups otherwise) sort, gather into B, rebuild B's lists, remap the history
-    /// and copy B back; then the forces. Their collect and the closing kick are recorded
+    /// workgroups otherwise) sort, re-sort the state in place, build the new lists in B,
+    /// remap the history and copy the lists back; then the forces. Their collect and the closing kick are recorded
     /// with the next step (`Drift::AfterStep`) or by [`Self::record_finish`]. `quiet`:
     /// without `decide` and the rebuild chain (a quiet batch, `gpu::quiet`).
     fn record_step(&self, encoder: &mut wgpu::CommandEncoder, drift: Drift, quiet: bool) {
@@ -1110,15 +1204,11 @@ impl GpuEngine {
             self.grid
                 .encode_indirect(encoder, &self.grid_keys, &self.args, 0);
             let mut pass = encoder.begin_compute_pass(&Default::default());
-            let rebuild = [
-                &bound.gather,
-                &bound.neighbours,
-                &bound.remap,
-                &bound.copy_back,
-                &bound.copy_back_history,
-            ];
-            for p in rebuild {
-                p.indirect(&mut pass, &self.args, self.rebuild_args);
+            let at = self.rebuild_args;
+            bound.gather.indirect(&mut pass, &self.args, at);
+            self.permutation.encode_indirect(&mut pass, &self.args, at);
+            for p in [&bound.neighbours, &bound.remap, &bound.copy_back_history] {
+                p.indirect(&mut pass, &self.args, at);
             }
         }
         // the state the forces see, drifted (and re-sorted on a rebuild)
@@ -1172,9 +1262,9 @@ impl GpuEngine {
             "decide",
             "grid sort",
             "gather",
+            "permute",
             "neighbours",
             "remap",
-            "copy_back",
             "copy_back_history",
             "mirror copies",
             "force",
@@ -1190,19 +1280,22 @@ impl GpuEngine {
                 self.mirrors.encode(e);
                 return;
             }
+            let mut pass = e.begin_compute_pass(&Default::default());
+            if id == 4 {
+                self.permutation.encode(&mut pass, n, max);
+                return;
+            }
             let p = match id {
                 0 => &b.kick_drift,
                 1 => &b.decide,
                 3 => &b.gather,
-                4 => &b.neighbours,
-                5 => &b.remap,
-                6 => &b.copy_back,
+                5 => &b.neighbours,
+                6 => &b.remap,
                 7 => &b.copy_back_history,
                 9 => &b.force,
                 10 => &b.collect,
                 _ => &b.kick,
             };
-            let mut pass = e.begin_compute_pass(&Default::default());
             if id == 1 {
                 p.once(&mut pass, max);
             } else {
@@ -1455,7 +1548,7 @@ impl GpuEngine {
         if !q.forecast.quiet(batch, q.mode) {
             return Ok(None);
         }
-        let copies = self.quiet_copies();
+        let copies = q.copies.clone();
         self.ctx
             .queue
             .write_buffer(&self.monitor, 0, &[0u8; MONITOR_BYTES as usize]);
@@ -1489,44 +1582,6 @@ impl GpuEngine {
             q.rolled_back += 1;
         }
         Ok(None)
-    }
-
-    /// (buffer a quiet batch changes, where its batch-start copy goes): state A into the
-    /// rebuild's scratch set B (a quiet batch does not rebuild), the displacements and the
-    /// particle ledger into their own copies.
-    fn quiet_copies(&self) -> Vec<(wgpu::Buffer, wgpu::Buffer)> {
-        let (a, b) = (&self.state, &self._sorted);
-        let mut v = vec![
-            (a.cell.clone(), b.cell.clone()),
-            (a.off.clone(), b.off.clone()),
-            (a.vel.clone(), b.vel.clone()),
-            (a.acc.clone(), b.acc.clone()),
-            (a.vpred.clone(), b.vpred.clone()),
-            (a.kahan.clone(), b.kahan.clone()),
-            (a.hist.clone(), b.hist.clone()),
-            (a.wall_hist.clone(), b.wall_hist.clone()),
-        ];
-        let pairs = [
-            (&a.omega, &b.omega),
-            (&a.alpha, &b.alpha),
-            (&a.wpred, &b.wpred),
-            (&a.ledger, &b.ledger),
-            (&a.wall_ledger, &b.wall_ledger),
-        ];
-        for (x, y) in pairs {
-            if let (Some(x), Some(y)) = (x, y) {
-                v.push((x.clone(), y.clone()));
-            }
-        }
-        if let Some(q) = &self.quiet {
-            if let Some(d) = &a.disp {
-                v.push((d.clone(), q.disp.clone()));
-            }
-            if let (Some(l), Some(s)) = (&self.particle_ledger, &q.particle_ledger) {
-                v.push((l.clone(), s.clone()));
-            }
-        }
-        v
     }
 
     /// Quiet batches kept and rolled back so far (`gpu::quiet`); (0, 0) where the scene or

@@ -46,6 +46,7 @@ pub mod grid;
 pub mod kernel;
 pub mod layout;
 pub mod mirror;
+pub mod permute;
 pub mod quiet;
 pub mod shaders;
 pub mod traffic;

@@ -8,8 +8,9 @@
 //! --quiet-batches off` measured 2.0–2.1·10⁻⁴ s/step, `always` 1.5–1.7·10⁻⁴.
 //!
 //! Most batches rebuild nothing. A quiet batch records only the drift, the mirror copies and
-//! the forces, after copying what the steps change into the rebuild's scratch set B (and
-//! two shadows). The drift raises its "moved more than skin/2" flag as always; no `decide`
+//! the forces, after copying what the steps change (the contacts' history into the lists
+//! a rebuild builds, which a quiet batch leaves idle, the rest into copies of its own).
+//! The drift raises its "moved more than skin/2" flag as always; no `decide`
 //! clears it. If the flag is still clear at the end, no step of the batch would have
 //! rebuilt, so the batch computed exactly what the normal one would have (the skipped
 //! dispatches launched no work): it is kept, bitwise the same. Otherwise the copy is put
@@ -19,16 +20,34 @@
 //! (the device reports it, and the steps since that rebuild, at each batch's end) to the end
 //! of the next batch at the rate it grew since the rebuild (the last such rate when the
 //! rebuild was too recent to tell), with a margin of 1.5.
+//!
+//! The copies cost as much memory as the particle state, so `Auto` uses quiet batches on
+//! software adapters only ([`QuietBatches::on`]).
+
+use crate::gpu::context::GpuContext;
 
 /// How a GPU run uses quiet batches (`GpuOptions::quiet`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum QuietBatches {
     /// Every batch checks each step (the rebuild decision on the device).
     Off,
-    /// A batch runs quiet when the forecast expects no rebuild in it (the default).
+    /// On a software adapter, a batch runs quiet when the forecast expects no rebuild in
+    /// it; never on a GPU (the default).
     Auto,
     /// Every batch tries to run quiet (tests: every rollback path runs).
     Always,
+}
+
+impl QuietBatches {
+    /// What the choice means on `ctx`'s adapter: `Auto` tries quiet batches only on a
+    /// software adapter, where they pay (above); on a GPU their copies of the state
+    /// would cost memory for dispatches that launch no work.
+    pub fn on(self, ctx: &GpuContext) -> Self {
+        match self {
+            Self::Auto if !ctx.is_software() => Self::Off,
+            mode => mode,
+        }
+    }
 }
 
 /// The margin on the linear extrapolation of the displacement (accelerating particles).

@@ -1,0 +1,59 @@
+// permute.wgsl — a rebuild's re-sort of the particle state, in place, one field at a time
+// through one scratch buffer (`src/gpu/permute.rs`).
+//
+// Dispatch i stores field i−1 from the scratch into its sorted place and loads field i of
+// the particle that sorts to k into the scratch. Invocation k touches only scratch row k
+// and sorted place k, so one dispatch does both without a race.
+
+// Where a field lies in its buffer: `blocks` blocks (one per wall for the wall-major
+// contact arrays, else 1) of `words` u32 per particle, block b at word base + b·stride.
+struct Field {
+    words: u32,
+    blocks: u32,
+    base: u32,
+    stride: u32,
+}
+
+// One dispatch: the field it stores (words 0: none), the one it loads (words 0: none) and
+// the scratch's words per particle. Layout: mirrored by `permute::MoveParams`.
+struct Move {
+    store: Field,
+    load: Field,
+    row: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+@group(0) @binding(1) var<uniform> mv: Move;
+@group(0) @binding(2) var<storage, read> sorted_index: array<u32>;
+@group(0) @binding(3) var<storage, read_write> scratch: array<u32>;
+// (both read_write: consecutive wall blocks are one buffer, bound twice)
+@group(0) @binding(4) var<storage, read_write> stored: array<u32>;
+@group(0) @binding(5) var<storage, read_write> loaded: array<u32>;
+
+@compute @workgroup_size(WG_SIZE)
+fn permute(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    let k = global_index(wid, nwg, lid);
+    if (k >= grid.n_particles) {
+        return;
+    }
+    let row = k * mv.row;
+    var s = row;
+    for (var b = 0u; b < mv.store.blocks; b++) {
+        let at = mv.store.base + b * mv.store.stride + k * mv.store.words;
+        for (var c = 0u; c < mv.store.words; c++) {
+            stored[at + c] = scratch[s];
+            s++;
+        }
+    }
+    let o = sorted_index[k];
+    s = row;
+    for (var b = 0u; b < mv.load.blocks; b++) {
+        let at = mv.load.base + b * mv.load.stride + o * mv.load.words;
+        for (var c = 0u; c < mv.load.words; c++) {
+            scratch[s] = loaded[at + c];
+            s++;
+        }
+    }
+}

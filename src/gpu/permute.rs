@@ -1,0 +1,252 @@
+//! A rebuild's re-sort of the particle state, in place, one field at a time through one
+//! scratch buffer (`shaders/permute.wgsl`): the scratch holds one field's words per
+//! particle instead of a second copy of the whole state. `n` fields take `n + 1`
+//! dispatches (each stores the previous field and loads the next).
+
+use crate::error::PowderError;
+use crate::gpu::context::GpuContext;
+use crate::gpu::kernel::{storage_buffer, uniform_buffer, Kernel, Program};
+use crate::gpu::shaders;
+
+/// Words of a scratch row the wall-major arrays are grouped into (a particle's field is
+/// never split, so a wall contact larger than this takes a row of its own).
+pub const ROW_WORDS: u32 = 8;
+
+/// Where a field lies in its buffer (`Field` in `shaders/permute.wgsl`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct FieldPlace {
+    /// u32 words per particle and block.
+    pub words: u32,
+    /// Blocks (walls of a wall-major array; 1 otherwise).
+    pub blocks: u32,
+    /// First word of block 0.
+    pub base: u32,
+    /// Words from one block to the next.
+    pub stride: u32,
+}
+
+/// One dispatch's parameters (`Move` in `shaders/permute.wgsl`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct MoveParams {
+    /// The field stored from the scratch (words 0: none).
+    pub store: FieldPlace,
+    /// The field loaded into the scratch (words 0: none).
+    pub load: FieldPlace,
+    /// Scratch words per particle.
+    pub row: u32,
+    _pad: [u32; 3],
+}
+
+/// One field of the particle state to re-sort.
+#[derive(Clone, Debug)]
+pub struct Field {
+    /// Name, for traffic reports (`permute <name>`).
+    pub name: String,
+    buffer: wgpu::Buffer,
+    place: FieldPlace,
+}
+
+impl Field {
+    /// `bytes` per particle (a multiple of 4), particle k at byte k·bytes.
+    pub fn per_particle(name: &str, buffer: &wgpu::Buffer, bytes: u64) -> Self {
+        Self {
+            name: name.to_string(),
+            buffer: buffer.clone(),
+            place: FieldPlace {
+                words: (bytes / 4) as u32,
+                blocks: 1,
+                base: 0,
+                stride: 0,
+            },
+        }
+    }
+
+    /// A wall-major contact array (contact of particle k with wall w at element w·n + k)
+    /// of `bytes` per contact: one field per group of walls that fits [`ROW_WORDS`].
+    pub fn wall_major(
+        name: &str,
+        buffer: &wgpu::Buffer,
+        bytes: u64,
+        walls: u32,
+        n: u32,
+    ) -> Vec<Self> {
+        let words = (bytes / 4) as u32;
+        let group = (ROW_WORDS / words.max(1)).max(1);
+        (0..walls)
+            .step_by(group as usize)
+            .map(|first| Self {
+                name: format!("{name}[{first}..]"),
+                buffer: buffer.clone(),
+                place: FieldPlace {
+                    words,
+                    blocks: group.min(walls - first),
+                    base: first * n * words,
+                    stride: n * words,
+                },
+            })
+            .collect()
+    }
+
+    /// Words one particle has in this field.
+    fn row_words(&self) -> u32 {
+        self.place.words * self.place.blocks
+    }
+}
+
+/// One dispatch of the re-sort.
+struct Move {
+    group: wgpu::BindGroup,
+    /// `permute <field loaded>` (or the last field stored).
+    name: String,
+    /// What it touches, as (name, bytes) (`gpu::traffic`).
+    touched: Vec<(String, u64)>,
+}
+
+/// The re-sort of one run's state: the kernel, the scratch and a bind group per dispatch.
+pub struct Permutation {
+    kernel: Kernel,
+    scratch: wgpu::Buffer,
+    moves: Vec<Move>,
+}
+
+impl Permutation {
+    /// The re-sort of `fields` for `n` particles by the grid sort's `sorted_index` (the
+    /// k-th particle of the new order was `sorted_index[k]`), with `grid` its parameters.
+    pub fn new(
+        ctx: &GpuContext,
+        grid: &wgpu::Buffer,
+        sorted_index: &wgpu::Buffer,
+        n: u32,
+        fields: &[Field],
+    ) -> Result<Self, PowderError> {
+        let variant = shaders::stage("permute").expect("permute is a stage");
+        let program = Program::new(ctx, &variant)?;
+        let kernel = program.kernel("permute")?.clone();
+        let row = fields
+            .iter()
+            .map(Field::row_words)
+            .max()
+            .unwrap_or(1)
+            .max(1);
+        let scratch_bytes = 4 * row as u64 * n as u64;
+        if scratch_bytes > ctx.max_storage_binding() {
+            return Err(PowderError::Run(format!(
+                "the re-sort's scratch needs {scratch_bytes} bytes for {n} particles, over the adapter's storage binding limit of {} bytes",
+                ctx.max_storage_binding()
+            )));
+        }
+        let scratch = storage_buffer(&ctx.device, "permute.scratch", scratch_bytes);
+        let none = FieldPlace::default();
+        let mut moves = Vec::with_capacity(fields.len() + 1);
+        for i in 0..=fields.len() {
+            let store = i.checked_sub(1).map(|p| &fields[p]);
+            let load = fields.get(i);
+            let Some(any) = load.or(store) else {
+                break;
+            };
+            let params = MoveParams {
+                store: store.map_or(none, |f| f.place),
+                load: load.map_or(none, |f| f.place),
+                row,
+                _pad: [0; 3],
+            };
+            let uniform = uniform_buffer(&ctx.device, "permute.move", bytemuck::bytes_of(&params));
+            let group = kernel.bind(
+                &ctx.device,
+                &[
+                    ("grid", grid),
+                    ("mv", &uniform),
+                    ("sorted_index", sorted_index),
+                    ("scratch", &scratch),
+                    ("stored", &store.unwrap_or(any).buffer),
+                    ("loaded", &load.unwrap_or(any).buffer),
+                ],
+            )?;
+            let touched = |f: &Field| 4 * f.row_words() as u64 * n as u64;
+            let scratch_touched = store.map_or(0, touched) + load.map_or(0, touched);
+            let mut bound = vec![
+                ("sorted_index".to_string(), 4 * n as u64),
+                ("scratch".to_string(), scratch_touched),
+            ];
+            bound.extend(store.map(|f| (format!("stored {}", f.name), touched(f))));
+            bound.extend(load.map(|f| (format!("loaded {}", f.name), touched(f))));
+            let touched = bound;
+            let name = match load {
+                Some(f) => format!("permute {}", f.name),
+                None => format!("permute (store {})", any.name),
+            };
+            moves.push(Move {
+                group,
+                name,
+                touched,
+            });
+        }
+        Ok(Self {
+            kernel,
+            scratch,
+            moves,
+        })
+    }
+
+    /// The scratch buffer's bytes.
+    pub fn scratch_bytes(&self) -> u64 {
+        self.scratch.size()
+    }
+
+    /// Dispatches of one re-sort.
+    pub fn dispatches(&self) -> usize {
+        self.moves.len()
+    }
+
+    /// Records the re-sort's dispatches, each with workgroup counts from `args` at
+    /// `offset` (one invocation per particle in workgroups of `WG_SIZE`; zeros: none).
+    pub fn encode_indirect(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        args: &wgpu::Buffer,
+        offset: u64,
+    ) {
+        for m in &self.moves {
+            self.kernel.dispatch_indirect(pass, &m.group, args, offset);
+        }
+    }
+
+    /// Records the re-sort's dispatches for `n` particles (`Kernel::dispatch`).
+    pub fn encode(&self, pass: &mut wgpu::ComputePass<'_>, n: u32, max_per_dim: u32) {
+        for m in &self.moves {
+            self.kernel.dispatch(pass, &m.group, n, max_per_dim);
+        }
+    }
+
+    /// (pass name, what it touches as (name, bytes)) per dispatch, for `gpu::traffic`:
+    /// the scratch row is written and read once, each field's words once.
+    pub fn traffic(&self) -> Vec<(String, Vec<(String, u64)>)> {
+        self.moves
+            .iter()
+            .map(|m| (m.name.clone(), m.touched.clone()))
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gpu_permute_params_match_the_shader_layout() {
+        let source = shaders::stage("permute").expect("a stage").source;
+        let (module, _) = shaders::validate(&source).expect("permute.wgsl validates");
+        let size = |name: &str| {
+            module
+                .types
+                .iter()
+                .find(|(_, t)| t.name.as_deref() == Some(name))
+                .map(|(_, t)| t.inner.size(module.to_ctx()))
+                .expect("struct present")
+        };
+        assert_eq!(size("Field") as usize, std::mem::size_of::<FieldPlace>());
+        assert_eq!(size("Move") as usize, std::mem::size_of::<MoveParams>());
+    }
+}
