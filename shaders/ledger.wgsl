@@ -171,11 +171,11 @@ fn ledger_clear(new_slot: u32) {
     b_ledger[new_slot] = vec4<f32>(0.0);
 }
 
-// copy_back_history: the new lists' slots (n of them) return to A (the wall contacts
-// were re-sorted in place with their particle).
-fn ledger_copy_back(k: u32, n: u32) {
-    for (var s = 0u; s < n; s++) {
-        a_ledger[slot_index(k, s)] = b_ledger[slot_index(k, s)];
+// copy_back_history: the new list's entries row .. row + n return to A (the wall
+// contacts were re-sorted in place with their particle).
+fn ledger_copy_back(row: u32, n: u32) {
+    for (var e = row; e < row + n; e++) {
+        a_ledger[e] = b_ledger[e];
     }
 }
 
@@ -185,24 +185,26 @@ fn ledger_copy_back(k: u32, n: u32) {
 // work 0.5·f0·(delta − delta0) at its current overlap, which is not at hand here) and
 // counted in monitor[3], so the host can say so.
 fn ledger_dropped(pid: u32, o: u32, old_n: u32, k: u32) {
-    let cap = step.max_neighbours;
     var lost = 0.0;
+    let old_row = a_row[o];
     for (var m = 0u; m < old_n; m++) {
-        let old = a_ledger[slot_index(o, m)];
+        let old = a_ledger[old_row + m];
         if (old.w == 0.0) {
             continue;
         }
         // the pair is in k's new list, or in a partner's that lists k (`lower`, resolved)
-        let partner = a_hist_pid[slot_index(o, m)];
+        let partner = a_hist_pid[old_row + m];
         var found = false;
-        for (var s = 0u; s < b_count[k]; s++) {
-            if (b_hist_pid[slot_index(k, s)] == partner) {
+        let row = b_row[k];
+        for (var e = row; e < row + b_count[k]; e++) {
+            if (b_hist_pid[e] == partner) {
                 found = true;
                 break;
             }
         }
-        for (var s = 0u; s < lower_count[k] && !found; s++) {
-            if (a_pid[slot_particle(lower[slot_index(k, s)])] == partner) {
+        let low = lower_row[k];
+        for (var s = low; s < low + lower_count[k] && !found; s++) {
+            if (a_pid[entry_owner(lower[s])] == partner) {
                 found = true;
             }
         }

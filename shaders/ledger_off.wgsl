@@ -31,7 +31,7 @@ fn ledger_carry(new_slot: u32, old_slot: u32) {}
 
 fn ledger_clear(new_slot: u32) {}
 
-fn ledger_copy_back(k: u32, n: u32) {}
+fn ledger_copy_back(row: u32, n: u32) {}
 
 fn ledger_wall_engaged(slot: u32) -> bool {
     return false;

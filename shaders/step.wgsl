@@ -28,11 +28,13 @@
 // only on a rebuild (indirect dispatches: zero workgroups on the other steps):
 //   <grid sort of A's cells>             sorted_index, cell_start, cell_count
 //   gather       per particle            the cell and offset mirrors in sorted order
+//   count_neighbours  per particle       the new lists' lengths (the 27 cells, cut-off
+//                                        r_i + r_j + reach + skin)
+//   <two exclusive scans (grid.wgsl)>    b_row, lower_row: where each list goes
+//   neighbours   per particle            the half lists into B (the same search)
 //   <permute.wgsl, a dispatch a field>   A[k] = A[sorted_index[k]] field by field
-//   neighbours   per particle            the half lists from the 27 cells into B, cut-off
-//                                        r_i + r_j + reach + skin
-//   remap        per particle            resolves `lower`; each new slot finds its history
-//                                        in A's old lists by the persistent ids
+//   remap        per particle            resolves `lower`; each new entry finds its
+//                                        history in A's old lists by the persistent ids
 //   copy_back_history                    the B lists into A; disp = 0; the wall candidates
 //                                        (a_wall_near)
 // every step:
@@ -71,8 +73,8 @@
 // happen.
 struct StepParams {
     dt: f32,
-    // Neighbour-list capacity per particle.
-    max_neighbours: u32,
+    // Entries the neighbour lists have room for (each of the per-entry arrays).
+    list_capacity: u32,
     n_materials: u32,
     n_walls: u32,
     gravity: vec3<f32>,
@@ -243,27 +245,35 @@ fn is_active(pid: u32) -> bool {
     return !POURING || appeared[pid] != 0u;
 }
 
-// Neighbour slot s of particle k: slot-major (all particles' first slots, then all second
-// ones, …), so neighbouring invocations touch neighbouring elements and the few slots in
-// use fill whole cache lines; particle-major (k·cap + s) left most of each particle's
-// capacity-wide stretch unused: at 10⁵ particles the step measured 1.5x slower (collect
-// 3x, force 1.4x; `powder bench --profile`).
-fn slot_index(k: u32, s: u32) -> u32 {
-    return s * grid.n_particles + k;
-}
+// The lists are compressed rows: particle k's entries are a_row[k] .. a_row[k] + a_count[k]
+// of the per-entry arrays (nbr, a_hist, a_hist_pid, the pair forces and torques, the
+// ledger), in sorted order, so consecutive particles' rows are consecutive; b_row and
+// b_count place the lists a rebuild builds, lower_row and lower_count the `lower` list.
+@group(0) @binding(90) var<storage, read_write> a_row: array<u32>;
+@group(0) @binding(91) var<storage, read_write> b_row: array<u32>;
+@group(0) @binding(92) var<storage, read_write> lower_row: array<u32>;
 
 // The contact of particle k with wall w: wall-major, for the same reason.
 fn wall_slot(k: u32, w: u32) -> u32 {
     return w * grid.n_particles + k;
 }
 
-// The particle a slot belongs to.
-fn slot_particle(slot: u32) -> u32 {
-    return slot % grid.n_particles;
+// The particle whose new list (b_row, b_count) holds entry e: the last with b_row <= e
+// (particles with empty lists share the next one's row).
+fn entry_owner(e: u32) -> u32 {
+    var lo = 0u;
+    var hi = grid.n_particles;
+    while (hi - lo > 1u) {
+        let mid = (lo + hi) / 2u;
+        if (b_row[mid] <= e) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    return lo;
 }
 
-// Rebuild scratch: the old index of each new slot; the neighbour lists (kept between
-// rebuilds).
 // Half lists (Newton's third law: each pair evaluated once): particle k's list (`nbr`,
 // `a_count` long, with the history slots) holds the partners whose pairs k evaluates
 // (`evaluates`), `lower` (`lower_count` long) holds, for each other partner j, the slot of
@@ -534,24 +544,23 @@ fn evaluates(d: vec3<f32>, k: u32, j: u32) -> bool {
     return c < 0.0;
 }
 
-@compute @workgroup_size(WG_SIZE)
-fn neighbours(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
-    let k = global_index(wid, nwg, lid);
-    if (k >= grid.n_particles) {
-        return;
-    }
+// The neighbour search of particle k (in the new order, before the state is re-sorted):
+// the partners within r_i + r_j + reach + skin from the 27 cells, in a fixed order, as
+// (evaluated by k, evaluated by the partner) counts; `fill`: also written to the new
+// lists at b_row[k] and lower_row[k], which the counts' scans placed.
+fn search(k: u32, fill: bool) -> vec2<u32> {
     // (the re-sorted positions from the mirrors gather wrote: see m_cell_out)
     let ck = textureLoad(m_cell, mirror_texel(k));
     let ok = textureLoad(m_off, mirror_texel(k));
     let hi = vec3<i32>(grid.dims) - vec3<i32>(1);
     let home = clamp(ck.xyz, vec3<i32>(0), hi);
-    let cap = step.max_neighbours;
+    let cap = step.list_capacity;
     // the half lists: the partners whose pairs k evaluates, and the others (their
     // evaluations reach k through `lower`)
     var up = 0u;
     var down = 0u;
     // a particle that has not appeared lists no neighbours (and is listed by none)
-    let here = is_active(a_pid[k]);
+    let here = is_active(a_pid[sorted_index[k]]);
     // Without wrapping along x, the three cells x−1, x, x+1 of a row are consecutive keys
     // and their particles one range of the sorted order: 9 ranges instead of 27 cells.
     let rows = !periodic_axes().x;
@@ -584,7 +593,7 @@ fn neighbours(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nw
                     end = start + cell_count[key];
                 }
                 for (var j = start; j < end; j++) {
-                    if (j == k || !here || !is_active(a_pid[j])) {
+                    if (j == k || !here || !is_active(a_pid[sorted_index[j]])) {
                         continue;
                     }
                     let oj = textureLoad(m_off, mirror_texel(j));
@@ -592,13 +601,13 @@ fn neighbours(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nw
                     let reach = cutoff + oj.w;
                     if (dot(d, d) < reach * reach) {
                         if (evaluates(d, k, j)) {
-                            if (up < cap) {
-                                nbr[slot_index(k, up)] = j;
+                            if (fill && b_row[k] + up < cap) {
+                                nbr[b_row[k] + up] = j;
                             }
                             up += 1u;
                         } else {
-                            if (down < cap) {
-                                lower[slot_index(k, down)] = j;
+                            if (fill && lower_row[k] + down < cap) {
+                                lower[lower_row[k] + down] = j;
                             }
                             down += 1u;
                         }
@@ -607,12 +616,35 @@ fn neighbours(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nw
             }
         }
     }
-    if (up > cap || down > cap) {
-        atomicMax(&monitor[1], a_pid[k] + 1u);
+    return vec2<u32>(up, down);
+}
+
+// On a rebuild: each particle's list lengths, for the scans that place the lists.
+@compute @workgroup_size(WG_SIZE)
+fn count_neighbours(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    let k = global_index(wid, nwg, lid);
+    if (k >= grid.n_particles) {
+        return;
     }
-    atomicMax(&monitor[0], max(up, down));
-    b_count[k] = min(up, cap);
-    lower_count[k] = min(down, cap);
+    let c = search(k, false);
+    atomicMax(&monitor[0], max(c.x, c.y));
+    b_count[k] = c.x;
+    lower_count[k] = c.y;
+}
+
+// On a rebuild, after the scans: the lists, each particle's at its place. Lists that do
+// not fit the capacity are reported (monitor[1]: the first particle past it, + 1).
+@compute @workgroup_size(WG_SIZE)
+fn neighbours(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    let k = global_index(wid, nwg, lid);
+    if (k >= grid.n_particles) {
+        return;
+    }
+    let c = search(k, true);
+    let cap = step.list_capacity;
+    if (b_row[k] + c.x > cap || lower_row[k] + c.y > cap) {
+        atomicMax(&monitor[1], a_pid[sorted_index[k]] + 1u);
+    }
 }
 
 @compute @workgroup_size(WG_SIZE)
@@ -621,13 +653,14 @@ fn remap(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
     if (k >= grid.n_particles) {
         return;
     }
-    let cap = step.max_neighbours;
-    // the lower list: each such partner j lists k in its own list; keep that slot
+    // the lower list: each such partner j lists k in its own list; keep that entry
+    let low = lower_row[k];
     for (var s = 0u; s < lower_count[k]; s++) {
-        let j = lower[slot_index(k, s)];
+        let j = lower[low + s];
+        let row_j = b_row[j];
         for (var m = 0u; m < b_count[j]; m++) {
-            if (nbr[slot_index(j, m)] == k) {
-                lower[slot_index(k, s)] = slot_index(j, m);
+            if (nbr[row_j + m] == k) {
+                lower[low + s] = row_j + m;
                 break;
             }
         }
@@ -636,33 +669,37 @@ fn remap(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
     // with the new order) from the partner's, seen from the other side
     let o = sorted_index[k];
     let old_n = a_count[o];
+    let old_row = a_row[o];
     let me = a_pid[k];
+    let row = b_row[k];
     for (var s = 0u; s < b_count[k]; s++) {
-        let j = nbr[slot_index(k, s)];
+        let e = row + s;
+        let j = nbr[e];
         let partner = a_pid[j];
         var h = hist_zero();
-        ledger_clear(slot_index(k, s));
+        ledger_clear(e);
         var found = false;
         for (var m = 0u; m < old_n; m++) {
-            if (a_hist_pid[slot_index(o, m)] == partner) {
-                h = a_hist[slot_index(o, m)];
-                ledger_carry(slot_index(k, s), slot_index(o, m));
+            if (a_hist_pid[old_row + m] == partner) {
+                h = a_hist[old_row + m];
+                ledger_carry(e, old_row + m);
                 found = true;
                 break;
             }
         }
         if (!found) {
             let oj = sorted_index[j];
+            let row_j = a_row[oj];
             for (var m = 0u; m < a_count[oj]; m++) {
-                if (a_hist_pid[slot_index(oj, m)] == me) {
-                    h = hist_mirror(a_hist[slot_index(oj, m)]);
-                    ledger_carry(slot_index(k, s), slot_index(oj, m));
+                if (a_hist_pid[row_j + m] == me) {
+                    h = hist_mirror(a_hist[row_j + m]);
+                    ledger_carry(e, row_j + m);
                     break;
                 }
             }
         }
-        b_hist[slot_index(k, s)] = h;
-        b_hist_pid[slot_index(k, s)] = partner;
+        b_hist[e] = h;
+        b_hist_pid[e] = partner;
     }
     ledger_dropped(me, o, old_n, k);
 }
@@ -675,14 +712,15 @@ fn copy_back_history(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgro
     if (k >= grid.n_particles) {
         return;
     }
-    let cap = step.max_neighbours;
     let n = b_count[k];
+    let row = b_row[k];
     a_count[k] = n;
-    for (var s = 0u; s < n; s++) {
-        a_hist[slot_index(k, s)] = b_hist[slot_index(k, s)];
-        a_hist_pid[slot_index(k, s)] = b_hist_pid[slot_index(k, s)];
+    a_row[k] = row;
+    for (var e = row; e < row + n; e++) {
+        a_hist[e] = b_hist[e];
+        a_hist_pid[e] = b_hist_pid[e];
     }
-    ledger_copy_back(k, n);
+    ledger_copy_back(row, n);
     // (w: the batch's largest overlap so far, which the re-sort carried)
     a_disp[k] = vec4<f32>(0.0, 0.0, 0.0, a_disp[k].w);
     // a wall out of reach + skin starts with the history of a contact out of range
@@ -799,7 +837,7 @@ fn force(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
 // overlap/a12 (0 without overlap) in w, for the run monitor (see a_disp).
 // `row0`: pair row 0, the only one of a scene with ONE_MATERIAL.
 fn particle_forces(k: u32, row0: PairRow) {
-    let cap = step.max_neighbours;
+    let first = a_row[k];
     // (own and partners' state from the mirrors: see m_cell)
     let ck = textureLoad(m_cell, mirror_texel(k));
     let ok = textureLoad(m_off, mirror_texel(k));
@@ -817,8 +855,8 @@ fn particle_forces(k: u32, row0: PairRow) {
     var torque = vec3<f32>(0.0);
     var ledger_acc = ledger_new();
     var peak = 0.0;
-    for (var s = 0u; s < a_count[k]; s++) {
-        let j = nbr[slot_index(k, s)];
+    for (var slot = first; slot < first + a_count[k]; slot++) {
+        let j = nbr[slot];
         let cj = textureLoad(m_cell, mirror_texel(j));
         let oj = textureLoad(m_off, mirror_texel(j));
         let rj = oj.w;
@@ -835,7 +873,6 @@ fn particle_forces(k: u32, row0: PairRow) {
         // (one division, not one per component: on a SIMD adapter every division in the
         // code runs for every pair)
         let inv_dist = 1.0 / dist;
-        let slot = slot_index(k, s);
         // A list candidate (within the skin) out of every model's range gets no force and
         // the history a pair out of range has (the models reset it there too). One store
         // site per buffer for both cases: on a SIMD adapter (lavapipe) every store in the
@@ -1000,8 +1037,9 @@ fn collect_particle(k: u32, mass: f32, store: bool) -> Collected {
     let partial = a_acc[k];
     var f = partial.xyz;
     var torque = vec3<f32>(0.0);
-    for (var s = 0u; s < lower_count[k]; s++) {
-        let slot = lower[slot_index(k, s)];
+    let low = lower_row[k];
+    for (var s = low; s < low + lower_count[k]; s++) {
+        let slot = lower[s];
         f -= load_pair_force(slot);
         torque += rot_pair_load(slot);
     }

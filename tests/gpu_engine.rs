@@ -109,6 +109,94 @@ fn gpu_runs_are_bitwise_deterministic() {
     common::assert_same_bits(&sa, &sb);
 }
 
+/// A particle may have any number of neighbours: in a clump of 5×5×5 spheres (pressed
+/// together by 0.5 % of a radius) inside a
+/// 4 mm non-contact adhesion range, the inner ones list over 100 partners, four times
+/// the 24 a particle the capacity rule provides (an error before the lists were
+/// compressed rows); 400 spheres far apart leave room in the total. It runs and follows
+/// the CPU.
+#[test]
+fn crowded_particles_beyond_the_capacity_rule_run_and_match_the_cpu() {
+    let Some(ctx) = context() else { return };
+    let r = 1e-3;
+    let mut positions = Vec::new();
+    for i in 0..5 {
+        for j in 0..5 {
+            for k in 0..5 {
+                let at = |c: i32| 0.006 + 1.995e-3 * c as f64;
+                positions.push(format!("[{:e}, {:e}, {:e}]", at(i), at(j), at(k)));
+            }
+        }
+    }
+    for i in 0..20 {
+        for j in 0..20 {
+            let at = |c: i32| 0.03 + 8.5e-3 * c as f64;
+            positions.push(format!("[{:e}, {:e}, 0.05]", at(i), at(j)));
+        }
+    }
+    let text = format!(
+        r#"
+[domain]
+min = [0.0, 0.0, 0.0]
+max = [0.2, 0.2, 0.1]
+[simulation]
+duration = 1.0
+gravity = [0.0, 0.0, 0.0]
+[[material]]
+name = "m"
+density = 2000.0
+model = "hysteretic"
+k1 = 100.0
+kp = 500.0
+kc = 100.0
+phi_f = 0.05
+fa = 4e-4
+kca = 0.1
+[[particles]]
+kind = "list"
+radius = {r:e}
+positions = [{}]
+"#,
+        positions.join(", ")
+    );
+    let scene = powder::scene::Scene::from_toml_str(&text, "crowded").unwrap();
+    let mut cpu = CpuEngine::new(&scene).unwrap();
+    let mut gpu = GpuEngine::new(&scene, ctx).unwrap();
+    let cap = gpu.capacity() as usize;
+    // the centre of the clump (id 62) lists more partners than the rule's capacity
+    let listed = gpu
+        .contact_histories()
+        .unwrap()
+        .iter()
+        .filter(|((i, _), _)| *i == 62)
+        .count();
+    eprintln!("particle 62 lists {listed} partners, capacity rule {cap}");
+    assert!(listed > 2 * cap, "{listed} partners, capacity {cap}");
+    cpu.run_steps(400).unwrap();
+    gpu.run_steps(400).unwrap();
+    let s = gpu.state().unwrap();
+    let worst = cpu
+        .positions()
+        .iter()
+        .zip(&s.positions)
+        .map(|(a, b)| a.distance(*b))
+        .fold(0.0, f64::max);
+    let moved = cpu
+        .positions()
+        .iter()
+        .zip(&scene.particles)
+        .map(|(a, p)| a.distance(glam::DVec3::from_array(p.position)))
+        .fold(0.0, f64::max);
+    eprintln!(
+        "moved {:.3e} radii, GPU − CPU {:.3e} radii",
+        moved / r,
+        worst / r
+    );
+    // (measured: moved 7.1e-4 radii, GPU − CPU 1.3e-10 radii)
+    assert!(moved > 2e-4 * r, "the clump did not move: {moved} m");
+    assert!(worst < 1e-7 * r, "{worst} m");
+}
+
 mod collisions {
     use super::context;
     use powder::collide::{collide_on, Backend, CollideSpec};

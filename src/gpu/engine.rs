@@ -42,7 +42,7 @@ use crate::cpu::{ContactStats, Energies};
 use crate::error::PowderError;
 use crate::gpu::composition::Composition;
 use crate::gpu::context::GpuContext;
-use crate::gpu::grid::GridSort;
+use crate::gpu::grid::{ExclusiveScan, GridSort};
 use crate::gpu::kernel::{
     split_workgroups, storage_buffer, submit_and_read, u32s, uniform_buffer, Kernel, Program,
 };
@@ -88,7 +88,10 @@ struct StateSet {
     vel: wgpu::Buffer,
     acc: wgpu::Buffer,
     pid: wgpu::Buffer,
+    /// Each particle's list: its length and first entry.
     count: wgpu::Buffer,
+    row: wgpu::Buffer,
+    /// Per list entry: the contact's history and the partner's persistent id.
     hist: wgpu::Buffer,
     hist_pid: wgpu::Buffer,
     wall_hist: wgpu::Buffer,
@@ -116,7 +119,7 @@ struct StateSet {
 impl StateSet {
     fn new(
         alloc: &mut Allocator,
-        (n, cap, walls): (u64, u64, u64),
+        (n, entries, walls): (u64, u64, u64),
         kind: &Composition,
         ledger: bool,
     ) -> Self {
@@ -129,8 +132,9 @@ impl StateSet {
             acc: b("acc", 16 * n),
             pid: b("pid", 4 * n),
             count: b("count", 4 * n),
-            hist: b("hist", hb * n * cap),
-            hist_pid: b("hist_pid", 4 * n * cap),
+            row: b("row", 4 * n),
+            hist: b("hist", hb * entries),
+            hist_pid: b("hist_pid", 4 * entries),
             // without walls: one element, the smallest binding the kernels accept
             wall_hist: b("wall_hist", hb * (n * walls).max(1)),
             disp: b("disp", 16 * n),
@@ -140,7 +144,7 @@ impl StateSet {
             omega: kind.rotation().then(|| b("omega", 16 * n)),
             alpha: kind.rotation().then(|| b("alpha", 16 * n)),
             wpred: kind.rotation().then(|| b("wpred", 16 * n)),
-            ledger: ledger.then(|| b("ledger", 16 * n * cap)),
+            ledger: ledger.then(|| b("ledger", 16 * entries)),
             wall_ledger: ledger.then(|| b("wall_ledger", 16 * (n * walls).max(1))),
         }
     }
@@ -153,6 +157,7 @@ impl StateSet {
             ("acc", Some(&self.acc)),
             ("pid", Some(&self.pid)),
             ("count", Some(&self.count)),
+            ("row", Some(&self.row)),
             ("hist", Some(&self.hist)),
             ("hist_pid", Some(&self.hist_pid)),
             ("wall_hist", Some(&self.wall_hist)),
@@ -208,25 +213,33 @@ impl StateSet {
 /// The neighbour lists a rebuild builds (B), copied back into A's at its end.
 struct NewLists {
     count: wgpu::Buffer,
+    row: wgpu::Buffer,
     hist: wgpu::Buffer,
     hist_pid: wgpu::Buffer,
     ledger: Option<wgpu::Buffer>,
 }
 
 impl NewLists {
-    fn new(alloc: &mut Allocator, (n, cap): (u64, u64), kind: &Composition, ledger: bool) -> Self {
+    fn new(
+        alloc: &mut Allocator,
+        (n, entries): (u64, u64),
+        kind: &Composition,
+        ledger: bool,
+    ) -> Self {
         let mut b = |name: &str, bytes: u64| alloc.buffer(&format!("B.{name}"), bytes);
         Self {
             count: b("count", 4 * n),
-            hist: b("hist", kind.history_bytes() * n * cap),
-            hist_pid: b("hist_pid", 4 * n * cap),
-            ledger: ledger.then(|| b("ledger", 16 * n * cap)),
+            row: b("row", 4 * n),
+            hist: b("hist", kind.history_bytes() * entries),
+            hist_pid: b("hist_pid", 4 * entries),
+            ledger: ledger.then(|| b("ledger", 16 * entries)),
         }
     }
 
     fn named(&self) -> Vec<(String, &wgpu::Buffer)> {
         let mut v = vec![
             ("b_count".to_string(), &self.count),
+            ("b_row".to_string(), &self.row),
             ("b_hist".to_string(), &self.hist),
             ("b_hist_pid".to_string(), &self.hist_pid),
         ];
@@ -240,6 +253,7 @@ struct Bound {
     kick_drift: Pass,
     decide: Pass,
     gather: Pass,
+    count_neighbours: Pass,
     neighbours: Pass,
     remap: Pass,
     copy_back_history: Pass,
@@ -400,10 +414,16 @@ pub struct GpuEngine {
     /// A particle whose centre left the domain box (monitor[6]).
     escaped: Option<usize>,
     /// The neighbour lists (they persist between rebuilds, so they are state): each
-    /// particle's half list, and the slots of the pairs its partners before it evaluate.
+    /// particle's half list, and the entries of the pairs its partners evaluate (`lower`,
+    /// with its rows).
     nbr: wgpu::Buffer,
     lower: wgpu::Buffer,
     lower_count: wgpu::Buffer,
+    lower_row: wgpu::Buffer,
+    /// A rebuild's scans of the new lists' lengths into their first entries (the pair
+    /// lists', `lower`'s), dispatched indirectly from `args` at `scan_args`.
+    scans: [ExclusiveScan; 2],
+    scan_args: [u64; 2],
     /// Unit normals of the walls (into the domain).
     wall_normals: Vec<DVec3>,
     /// How each wall moves, and the walls on the device (they move: state).
@@ -629,9 +649,11 @@ impl GpuEngine {
                 ("grid.sorted_index".into(), grid.sorted_index().size()),
             ],
         };
-        let sizes = (n as u64, cap as u64, n_walls);
+        // list entries: as many as `cap` per particle
+        let entries = n as u64 * cap as u64;
+        let sizes = (n as u64, entries, n_walls);
         let state = StateSet::new(&mut alloc, sizes, &kind, ledger);
-        let new_lists = NewLists::new(&mut alloc, (sizes.0, sizes.1), &kind, ledger);
+        let new_lists = NewLists::new(&mut alloc, (n as u64, entries), &kind, ledger);
         let dt32 = r.dt as f32;
         let particle_ledger = ledger.then(|| alloc.buffer("particle_ledger", 64 * n as u64));
         // Initial state, in scene order (the first sort orders it).
@@ -708,7 +730,7 @@ impl GpuEngine {
         let step = StepParams {
             gravity: [g[0] as f32, g[1] as f32, g[2] as f32],
             dt: r.dt as f32,
-            max_neighbours: cap,
+            list_capacity: entries as u32,
             n_materials: r.n_materials as u32,
             n_walls: n_walls as u32,
             reach: r.max_reach as f32,
@@ -754,13 +776,14 @@ impl GpuEngine {
             "wall_push",
             4 * if servo_walls { n as u64 * n_walls } else { 1 },
         );
-        let nbr = alloc.buffer("nbr", 4 * n as u64 * cap as u64);
+        let nbr = alloc.buffer("nbr", 4 * entries);
         // the half lists' other side, and what each evaluated pair leaves for collect
-        let lower = alloc.buffer("lower", 4 * n as u64 * cap as u64);
+        let lower = alloc.buffer("lower", 4 * entries);
         let lower_count = alloc.buffer("lower_count", 4 * n as u64);
+        let lower_row = alloc.buffer("lower_row", 4 * n as u64);
         // the pair forces in one vec4 a slot, or split (x, y, z) where that exceeds the
         // binding limit; the other form's buffers hold one element
-        let slots = n as u64 * cap as u64;
+        let slots = entries;
         let split = split_pair_force(slots, ctx.max_storage_binding());
         let pair_force = alloc.buffer("pair_force", 16 * if split { 1 } else { slots });
         let mut plane = |name: &str| alloc.buffer(name, 4 * if split { slots } else { 1 });
@@ -769,7 +792,7 @@ impl GpuEngine {
         let pair_force_z = plane("pair_force_z");
         let pair_torque = kind
             .rotation()
-            .then(|| alloc.buffer("pair_torque", 16 * n as u64 * cap as u64));
+            .then(|| alloc.buffer("pair_torque", 16 * entries));
         let monitor = alloc.buffer("monitor", MONITOR_BYTES);
         let skin_buf = alloc.buffer("skin", 16);
         // moved beyond skin/2 (flag set): the first step builds the lists
@@ -779,6 +802,7 @@ impl GpuEngine {
             "kick_drift",
             "decide",
             "gather",
+            "count_neighbours",
             "neighbours",
             "remap",
             "copy_back_history",
@@ -798,8 +822,19 @@ impl GpuEngine {
         constants.push(("SPLIT_PAIR_FORCE", f64::from(u8::from(split))));
         let program = Program::specialized(&ctx, &kind.variant(ledger), Some(&wanted), &constants)?;
         let max_per_dim = ctx.limits().max_compute_workgroups_per_dimension;
-        // the indirect arguments of a rebuild (the grid sort's, then one per-particle
-        // pass's), and the ones decide writes each step (those, or zeros)
+        // the scans that place the new lists (counts -> first entries)
+        let scan_program = Program::with_entry_points(
+            &ctx,
+            &crate::gpu::shaders::stage("grid").expect("grid is a stage"),
+            Some(&["scan_blocks", "scan_add"]),
+        )?;
+        let n32 = n as u32;
+        let scans = [
+            ExclusiveScan::new(&ctx, &scan_program, &new_lists.count, &new_lists.row, n32)?,
+            ExclusiveScan::new(&ctx, &scan_program, &lower_count, &lower_row, n32)?,
+        ];
+        // the indirect arguments of a rebuild (the grid sort's, one per-particle pass's,
+        // the scans'), and the ones decide writes each step (those, or zeros)
         let sort_args = grid.indirect_args();
         let per_group = program
             .kernel("gather")?
@@ -808,9 +843,15 @@ impl GpuEngine {
             .product::<u32>();
         let particle_args = split_workgroups((n as u32).div_ceil(per_group), max_per_dim);
         let rebuild_args = 12 * sort_args.len() as u64;
+        let scan_args = [
+            rebuild_args + 12,
+            rebuild_args + 12 + 12 * scans[0].indirect_args().len() as u64,
+        ];
         let full: Vec<u32> = sort_args
             .into_iter()
             .chain([particle_args])
+            .chain(scans[0].indirect_args())
+            .chain(scans[1].indirect_args())
             .flatten()
             .collect();
         let full_args = alloc.buffer("full_args", 4 * full.len() as u64);
@@ -863,6 +904,7 @@ impl GpuEngine {
             list.push(("nbr".into(), &nbr));
             list.push(("lower".into(), &lower));
             list.push(("lower_count".into(), &lower_count));
+            list.push(("lower_row".into(), &lower_row));
             list.push(("pair_force".into(), &pair_force));
             list.push(("pair_force_x".into(), &pair_force_x));
             list.push(("pair_force_y".into(), &pair_force_y));
@@ -903,6 +945,7 @@ impl GpuEngine {
                 kick_drift: pass("kick_drift")?,
                 decide: pass("decide")?,
                 gather: pass("gather")?,
+                count_neighbours: pass("count_neighbours")?,
                 neighbours: pass("neighbours")?,
                 remap: pass("remap")?,
                 copy_back_history: pass("copy_back_history")?,
@@ -1004,6 +1047,9 @@ impl GpuEngine {
             nbr,
             lower,
             lower_count,
+            lower_row,
+            scans,
+            scan_args,
             wall_normals: scene
                 .walls
                 .iter()
@@ -1101,6 +1147,7 @@ impl GpuEngine {
             b.wall_move.as_ref(),
             Some(&b.decide),
             Some(&b.gather),
+            Some(&b.count_neighbours),
             Some(&b.neighbours),
             Some(&b.remap),
             Some(&b.copy_back_history),
@@ -1113,8 +1160,8 @@ impl GpuEngine {
         .flatten()
         .map(|p| p.kernel.name.clone())
         .flat_map(|name| {
-            // the re-sort's kernel (its own module) right after gather
-            let permute = (name == "gather").then(|| "permute".to_string());
+            // the re-sort's kernel (its own module) right after the lists are filled
+            let permute = (name == "neighbours").then(|| "permute".to_string());
             std::iter::once(name).chain(permute)
         })
         .collect()
@@ -1145,7 +1192,8 @@ impl GpuEngine {
     /// (`gpu::traffic`, where the counting is explained): the passes of every step in
     /// recording order (`collect_kick_drift`, the wall kernels where walls move, `decide`,
     /// the mirror copies, `force`), then those of a rebuild (the cell sort's as `grid.*`,
-    /// `gather`, the re-sort's `permute *`, `neighbours`, `remap`, `copy_back_history`).
+    /// `gather`, `count_neighbours`, the lists' scans as `lists.*`, `neighbours`, the
+    /// re-sort's `permute *`, `remap`, `copy_back_history`).
     pub fn traffic(&self) -> Vec<PassTraffic> {
         let b = &self.bound;
         let pass = |p: &Pass, when| PassTraffic::new(p.kernel.name.clone(), when, p.bound.clone());
@@ -1167,18 +1215,29 @@ impl GpuEngine {
             ));
         }
         out.push(pass(&b.gather, When::Rebuild));
+        out.push(pass(&b.count_neighbours, When::Rebuild));
+        for scan in &self.scans {
+            for (name, bound) in scan.traffic() {
+                out.push(PassTraffic::new(
+                    format!("lists.{name}"),
+                    When::Rebuild,
+                    bound,
+                ));
+            }
+        }
+        out.push(pass(&b.neighbours, When::Rebuild));
         for (name, bound) in self.permutation.traffic() {
             out.push(PassTraffic::new(name, When::Rebuild, bound));
         }
-        for p in [&b.neighbours, &b.remap, &b.copy_back_history] {
+        for p in [&b.remap, &b.copy_back_history] {
             out.push(pass(p, When::Rebuild));
         }
         out
     }
 
     /// Records one step: drift, decide whether to rebuild, on a rebuild (indirect: no
-    /// workgroups otherwise) sort, re-sort the state in place, build the new lists in B,
-    /// remap the history and copy the lists back; then the forces. Their collect and the closing kick are recorded
+    /// workgroups otherwise) sort, build the new lists in B (count, place, fill), re-sort
+    /// the state in place, remap the history and copy the lists back; then the forces. Their collect and the closing kick are recorded
     /// with the next step (`Drift::AfterStep`) or by [`Self::record_finish`]. `quiet`:
     /// without `decide` and the rebuild chain (a quiet batch, `gpu::quiet`).
     fn record_step(&self, encoder: &mut wgpu::CommandEncoder, drift: Drift, quiet: bool) {
@@ -1206,8 +1265,13 @@ impl GpuEngine {
             let mut pass = encoder.begin_compute_pass(&Default::default());
             let at = self.rebuild_args;
             bound.gather.indirect(&mut pass, &self.args, at);
+            bound.count_neighbours.indirect(&mut pass, &self.args, at);
+            for (scan, &offset) in self.scans.iter().zip(&self.scan_args) {
+                scan.record_indirect(&mut pass, &self.args, offset);
+            }
+            bound.neighbours.indirect(&mut pass, &self.args, at);
             self.permutation.encode_indirect(&mut pass, &self.args, at);
-            for p in [&bound.neighbours, &bound.remap, &bound.copy_back_history] {
+            for p in [&bound.remap, &bound.copy_back_history] {
                 p.indirect(&mut pass, &self.args, at);
             }
         }
@@ -1262,8 +1326,10 @@ impl GpuEngine {
             "decide",
             "grid sort",
             "gather",
-            "permute",
+            "count_neighbours",
+            "list scans",
             "neighbours",
+            "permute",
             "remap",
             "copy_back_history",
             "mirror copies",
@@ -1276,12 +1342,18 @@ impl GpuEngine {
                 self.grid.encode(e, &self.state.cell);
                 return;
             }
-            if id == 8 {
+            if id == 10 {
                 self.mirrors.encode(e);
                 return;
             }
             let mut pass = e.begin_compute_pass(&Default::default());
-            if id == 4 {
+            if id == 5 {
+                for scan in &self.scans {
+                    scan.record(&mut pass);
+                }
+                return;
+            }
+            if id == 7 {
                 self.permutation.encode(&mut pass, n, max);
                 return;
             }
@@ -1289,11 +1361,12 @@ impl GpuEngine {
                 0 => &b.kick_drift,
                 1 => &b.decide,
                 3 => &b.gather,
-                5 => &b.neighbours,
-                6 => &b.remap,
-                7 => &b.copy_back_history,
-                9 => &b.force,
-                10 => &b.collect,
+                4 => &b.count_neighbours,
+                6 => &b.neighbours,
+                8 => &b.remap,
+                9 => &b.copy_back_history,
+                11 => &b.force,
+                12 => &b.collect,
                 _ => &b.kick,
             };
             if id == 1 {
@@ -1373,10 +1446,11 @@ impl GpuEngine {
         }
         if m[1] != 0 {
             return Err(PowderError::Run(format!(
-                "step {}: particle {} has more than {} neighbours within reach + skin, the neighbour-list capacity; the scene is denser or more polydisperse than the capacity rule 5·(1 + r_max/r_min)²·(1 + skin/2r_min)³ expects",
+                "step {}: the neighbour lists need more than the {} entries allocated ({} a particle on average; particle {} is past them); the scene is denser or more polydisperse than the capacity rule 5·(1 + r_max/r_min)²·(1 + skin/2r_min)³ expects",
                 self.steps,
+                self.n as u64 * self.cap as u64,
+                self.cap,
                 m[1] - 1,
-                self.cap
             )));
         }
         if m[2] != 0 {
@@ -1645,6 +1719,7 @@ impl GpuEngine {
         list.push(("nbr".into(), &self.nbr));
         list.push(("lower".into(), &self.lower));
         list.push(("lower_count".into(), &self.lower_count));
+        list.push(("lower_row".into(), &self.lower_row));
         list.push(("skin".into(), &self.skin));
         list.push(("walls".into(), &self.walls));
         list.push(("wall_ref".into(), &self.wall_ref));
@@ -1954,7 +2029,7 @@ impl GpuEngine {
     /// For comparisons and diagnostics: reads the lists back.
     pub fn contact_histories(&self) -> Result<Vec<KeyedHistory>, PowderError> {
         let s = &self.state;
-        let (n, cap) = (self.n as u64, self.cap as u64);
+        let n = self.n as u64;
         let hb = self.kind.history_bytes();
         let encoder = self.ctx.device.create_command_encoder(&Default::default());
         let out = submit_and_read(
@@ -1963,19 +2038,21 @@ impl GpuEngine {
             &[
                 (&s.pid, 4 * n),
                 (&s.count, 4 * n),
-                (&s.hist_pid, 4 * n * cap),
-                (&s.hist, hb * n * cap),
+                (&s.row, 4 * n),
+                (&s.hist_pid, s.hist_pid.size()),
+                (&s.hist, s.hist.size()),
             ],
         )?;
-        let (pid, count, hist_pid) = (u32s(&out[0]), u32s(&out[1]), u32s(&out[2]));
+        let (pid, count, row) = (u32s(&out[0]), u32s(&out[1]), u32s(&out[2]));
+        let hist_pid = u32s(&out[3]);
         let hb = hb as usize;
         let mut list = Vec::new();
         for k in 0..n as usize {
-            // slot-major, as `slot_index` in shaders/step.wgsl
-            for slot in (0..count[k] as usize).map(|s| s * n as usize + k) {
+            // particle k's entries, as `a_row` in shaders/step.wgsl
+            for slot in row[k] as usize..(row[k] + count[k]) as usize {
                 // one stored history per pair, in its evaluator's frame; the partner sees
                 // it mirrored (the tangential spring negated)
-                let h = self.decode_history(&out[3][slot * hb..(slot + 1) * hb]);
+                let h = self.decode_history(&out[4][slot * hb..(slot + 1) * hb]);
                 let seen_by_partner = self.kind.mirror_history(h);
                 list.push(((pid[k], hist_pid[slot]), h));
                 list.push(((hist_pid[slot], pid[k]), seen_by_partner));

@@ -189,6 +189,29 @@ impl ExclusiveScan {
         }
     }
 
+    /// The `[x, y, z]` workgroup counts of the scan's dispatches, in recording order (for
+    /// [`Self::record_indirect`]).
+    pub fn indirect_args(&self) -> Vec<[u32; 3]> {
+        self.plan()
+            .into_iter()
+            .map(|(_, _, g)| split_workgroups(g, self.max_per_dim))
+            .collect()
+    }
+
+    /// Records the scan's dispatches into `pass`, dispatch `i` reading its workgroup
+    /// counts from `args` at byte `offset + 12·i` ([`Self::indirect_args`], or zeros to
+    /// skip the scan).
+    pub fn record_indirect(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        args: &wgpu::Buffer,
+        offset: u64,
+    ) {
+        for (i, (kernel, bind_group, _)) in self.plan().into_iter().enumerate() {
+            kernel.dispatch_indirect(pass, bind_group, args, offset + 12 * i as u64);
+        }
+    }
+
     /// (kernel, global name and bytes of what it binds) of the scan's dispatches in
     /// recording order (`gpu::traffic`).
     pub fn traffic(&self) -> Vec<(String, Vec<(String, u64)>)> {

@@ -492,8 +492,8 @@ impl TwistingRow {
 pub struct StepParams {
     /// Time step, s.
     pub dt: f32,
-    /// Neighbour-list slots per particle.
-    pub max_neighbours: u32,
+    /// Entries the neighbour lists have room for (each per-entry array).
+    pub list_capacity: u32,
     /// Materials in the pair-model table (n_materials × n_materials rows).
     pub n_materials: u32,
     /// Walls in the wall buffer.
@@ -854,7 +854,7 @@ mod tests {
             &[
                 ("gravity", offset_of!(StepParams, gravity)),
                 ("dt", offset_of!(StepParams, dt)),
-                ("max_neighbours", offset_of!(StepParams, max_neighbours)),
+                ("list_capacity", offset_of!(StepParams, list_capacity)),
                 ("n_materials", offset_of!(StepParams, n_materials)),
                 ("n_walls", offset_of!(StepParams, n_walls)),
                 ("reach", offset_of!(StepParams, reach)),

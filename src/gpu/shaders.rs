@@ -218,6 +218,7 @@ mod tests {
                 "kick_drift",
                 "decide",
                 "gather",
+                "count_neighbours",
                 "neighbours",
                 "remap",
                 "copy_back_history",
