@@ -482,7 +482,7 @@ class Suite:
             dt=r.get("dt"),
             gpu_bytes=r.get("gpu_bytes"),
             gpu_bytes_per_particle=r.get("gpu_bytes_per_particle"),
-            neighbour_slots=r.get("neighbour_slots"),
+            list_entries=r.get("list_entries"),
             rebuilds=r.get("rebuilds"),
             quiet_batches=r.get("quiet_batches"),
             contacts_per_particle=r.get("contacts_per_particle"),
@@ -694,7 +694,7 @@ class Suite:
             info[key] = {
                 "particles": v["particles"],
                 "step_variant": v["step_variant"],
-                "neighbour_slots": v["neighbour_slots"],
+                "list_entries": v["list_entries"],
                 "gpu_bytes": v["total_bytes"],
                 "gpu_bytes_per_particle": v["bytes_per_particle"],
                 "traffic": traffic_summary(v["traffic"], None),

@@ -32,6 +32,7 @@
 //                                        r_i + r_j + reach + skin)
 //   <two exclusive scans (grid.wgsl)>    b_row, lower_row: where each list goes
 //   neighbours   per particle            the half lists into B (the same search)
+//   commit       one invocation          halts the batch when they did not fit
 //   <permute.wgsl, a dispatch a field>   A[k] = A[sorted_index[k]] field by field
 //   remap        per particle            resolves `lower`; each new entry finds its
 //                                        history in A's old lists by the persistent ids
@@ -340,15 +341,17 @@ struct WallRef {
 @group(0) @binding(75) var<storage, read_write> a_wall_near: array<u32>;
 
 // Monitor, zeroed per batch of steps and read back after it (no per-step read-back):
-// [0] = largest neighbour count seen (atomicMax), [1] = persistent id of a particle that
-// overflowed the capacity (+1; 0 = none), [2] = non-finite acceleration count, [3] = engaged
+// [0] = largest neighbour count seen (atomicMax), [1] unused, [2] = non-finite
+// acceleration count, [3] = engaged
 // contacts dropped by a rebuild (ledger.wgsl), [4] = largest overlap/a12 of any contact
 // (f32 bits, atomicMax; non-negative f32 bits order as the values), [5] = persistent id
 // (+1) of a particle with a contact beyond MONITOR_MAX_OVERLAP_RATIO, [6] = persistent id
-// (+1) of a particle whose centre left the domain box, [7] unused; for the host's forecast
-// of the next rebuild (`gpu::quiet`): [8] = the largest displacement since the last rebuild
-// at the batch's end (f32 bits; `collect`), [9] = the steps since this batch's last
-// rebuild (`decide`: 0 on a rebuild, +1 on any other step), [10], [11] unused.
+// (+1) of a particle whose centre left the domain box, [7] = 1 when the batch halted
+// (`commit`: the new lists did not fit); for the host's forecast of the next rebuild
+// (`gpu::quiet`): [8] = the largest displacement since the last rebuild at the batch's end
+// (f32 bits; `collect`), [9] = the steps since this batch's last rebuild (`decide`: 0 on a
+// rebuild, +1 on any other step); [10] = the steps begun before any halt (`decide`),
+// [11] = the list entries a halted rebuild needed.
 @group(0) @binding(48) var<storage, read_write> monitor: array<atomic<u32>, 12>;
 
 // Verlet skin state, persistent across batches: [0] = 1 once some particle has moved more
@@ -357,8 +360,10 @@ struct WallRef {
 // barriers every step), [1] = 1 when this step rebuilds (written by decide), [2] =
 // rebuilds so far, [3] unused.
 @group(0) @binding(56) var<storage, read_write> skin: array<atomic<u32>, 4>;
-// Indirect dispatch arguments of the grid sort (`GridSort::encode_indirect`): decide
-// copies full_args (a full sort) or writes zeros (no sort this step).
+// Indirect dispatch arguments: first those of a rebuild (the grid sort's, the per-particle
+// passes', the list scans'), which decide copies from full_args or zeroes each step; then
+// those of every step's passes (per particle, one workgroup), which the host writes at
+// each batch's start and `commit` zeroes to halt the batch.
 @group(0) @binding(57) var<storage, read_write> args: array<u32>;
 @group(0) @binding(58) var<storage, read> full_args: array<u32>;
 
@@ -477,6 +482,11 @@ fn drift_particle(i: u32, vel: vec4<f32>, acc: vec3<f32>, rot: RotState, pending
 // the next maximum afresh. Moving walls count too (their move since the last rebuild).
 @compute @workgroup_size(1)
 fn decide() {
+    // a halted batch runs nothing more (`commit`)
+    if (atomicLoad(&monitor[7]) != 0u) {
+        return;
+    }
+    atomicAdd(&monitor[10], 1u);
     var rebuild = atomicLoad(&skin[0]) != 0u;
     // A moving wall that has moved more than skin/2 along its normal since the last rebuild
     // invalidates the particles' wall candidates as a particle's move does.
@@ -632,18 +642,37 @@ fn count_neighbours(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgrou
     lower_count[k] = c.y;
 }
 
-// On a rebuild, after the scans: the lists, each particle's at its place. Lists that do
-// not fit the capacity are reported (monitor[1]: the first particle past it, + 1).
+// On a rebuild, after the scans: the lists, each particle's at its place (what does not fit
+// the capacity is not written; `commit` halts then).
 @compute @workgroup_size(WG_SIZE)
 fn neighbours(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let k = global_index(wid, nwg, lid);
     if (k >= grid.n_particles) {
         return;
     }
-    let c = search(k, true);
-    let cap = step.list_capacity;
-    if (b_row[k] + c.x > cap || lower_row[k] + c.y > cap) {
-        atomicMax(&monitor[1], a_pid[sorted_index[k]] + 1u);
+    search(k, true);
+}
+
+// On a rebuild, after the lists are filled and before anything is re-sorted: when the new
+// lists need more entries than there are, halt the batch — zero every indirect argument, so
+// the rest of this rebuild and every later pass of the batch launches nothing — and leave
+// the skin flag raised. The host grows the lists and finishes the batch from this step's
+// rebuild (`GpuEngine::run_steps`): the state is as the drift left it, the old lists whole.
+@compute @workgroup_size(1)
+fn commit() {
+    if (grid.n_particles == 0u) {
+        return;
+    }
+    let last = grid.n_particles - 1u;
+    let need = max(b_row[last] + b_count[last], lower_row[last] + lower_count[last]);
+    if (need > step.list_capacity) {
+        atomicStore(&monitor[7], 1u);
+        atomicStore(&monitor[11], need);
+        atomicStore(&skin[0], 1u);
+        atomicSub(&skin[2], 1u);
+        for (var i = 0u; i < arrayLength(&args); i++) {
+            args[i] = 0u;
+        }
     }
 }
 

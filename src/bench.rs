@@ -487,8 +487,9 @@ pub struct BenchRow {
     pub gpu_bytes: Option<u64>,
     /// `gpu_bytes / particles`.
     pub gpu_bytes_per_particle: Option<f64>,
-    /// GPU neighbour slots per particle.
-    pub neighbour_slots: Option<u32>,
+    /// Entries the GPU engine's neighbour lists had room for at the end (grown to 1.25×
+    /// what a rebuild needs).
+    pub list_entries: Option<u64>,
     /// Neighbour-list rebuilds during the timed steps (both backends keep a Verlet list
     /// with a skin).
     pub rebuilds: Option<u64>,
@@ -522,7 +523,7 @@ impl BenchRow {
             particle_steps_per_second: None,
             gpu_bytes: None,
             gpu_bytes_per_particle: None,
-            neighbour_slots: None,
+            list_entries: None,
             rebuilds: None,
             quiet_batches: None,
             runs: Vec::new(),
@@ -581,7 +582,7 @@ fn run_cpu(scene: &Scene, case: Case, opts: &BenchOptions) -> Result<BenchRow, P
         particle_steps_per_second: Some(n as f64 * opts.steps as f64 / wall.max(1e-12)),
         gpu_bytes: None,
         gpu_bytes_per_particle: None,
-        neighbour_slots: None,
+        list_entries: None,
         rebuilds: Some(rebuilds),
         quiet_batches: None,
         runs: Vec::new(),
@@ -605,6 +606,7 @@ fn run_gpu(
         crate::gpu::GpuOptions {
             ledger: opts.ledger,
             quiet: opts.quiet,
+            ..Default::default()
         },
     )?;
     let setup = t0.elapsed().as_secs_f64();
@@ -622,7 +624,7 @@ fn run_gpu(
     let z = coordination(scene, &state.positions, engine.radii());
     let bytes = engine.buffer_bytes();
     let traffic = crate::gpu::TrafficEstimate::new(engine.traffic(), n, rebuilds, opts.steps);
-    let (dt, capacity) = (engine.dt(), engine.capacity());
+    let (dt, entries) = (engine.dt(), engine.list_entries());
     let passes = if opts.profile {
         Some(engine.profile_passes(16)?)
     } else {
@@ -643,7 +645,7 @@ fn run_gpu(
         particle_steps_per_second: Some(n as f64 * opts.steps as f64 / wall.max(1e-12)),
         gpu_bytes: Some(bytes),
         gpu_bytes_per_particle: Some(bytes as f64 / n as f64),
-        neighbour_slots: Some(capacity),
+        list_entries: Some(entries),
         rebuilds: Some(rebuilds),
         quiet_batches: Some(quiet),
         runs: Vec::new(),

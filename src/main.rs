@@ -262,7 +262,7 @@ struct SceneInfo {
     step_variant: String,
     kernels: Vec<String>,
     rotation: bool,
-    neighbour_slots: u32,
+    list_entries: u64,
     buffers: Vec<(String, u64)>,
     total_bytes: u64,
     bytes_per_particle: f64,
@@ -297,7 +297,7 @@ fn scene_info(
     kernels.extend(engine.kernel_names());
     let total = engine.buffer_bytes();
     let (buffers, particles) = (engine.buffers(), engine.len());
-    let (rotation, neighbour_slots) = (engine.rotates(), engine.capacity());
+    let (rotation, list_entries) = (engine.rotates(), engine.list_entries());
     let traffic = powder::gpu::TrafficEstimate::new(engine.traffic(), particles, 0, 0);
     let profile_us = if a.profile {
         engine.run_steps(a.after)?;
@@ -313,7 +313,7 @@ fn scene_info(
         step_variant: variant_name,
         kernels,
         rotation,
-        neighbour_slots,
+        list_entries,
         buffers,
         total_bytes: total,
         bytes_per_particle: total as f64 / particles.max(1) as f64,
@@ -343,7 +343,11 @@ fn info_cmd(a: &InfoArgs) -> Result<(), PowderError> {
             if info.rotation { "on" } else { "off" }
         );
         println!("kernels          {}", info.kernels.join(", "));
-        println!("neighbour slots  {} per particle", info.neighbour_slots);
+        println!(
+            "list entries     {} ({:.2} a particle, after the first rebuild)",
+            info.list_entries,
+            info.list_entries as f64 / info.particles as f64
+        );
         println!("buffers:");
         for (name, bytes) in &info.buffers {
             println!("  {name:<20} {bytes:>14} bytes");
@@ -1026,6 +1030,7 @@ fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
         gpu: powder::gpu::GpuOptions {
             ledger: !a.no_ledger,
             quiet: a.quiet_batches.into(),
+            ..Default::default()
         },
         tabor_dmin: a.tabor_dmin,
     };

@@ -381,8 +381,8 @@ fn bench_and_info_report_the_traffic_estimate() {
         let bound = pass("force")["bound"].as_array().unwrap();
         let nbr: Vec<_> = bound.iter().filter(|b| b[0] == "nbr").collect();
         assert_eq!(nbr.len(), 1, "{bound:?}");
-        let slots = r["neighbour_slots"].as_u64().unwrap();
-        assert_eq!(nbr[0][1].as_u64().unwrap(), 4 * 64 * slots);
+        let entries = r["list_entries"].as_u64().unwrap();
+        assert_eq!(nbr[0][1].as_u64().unwrap(), 4 * entries);
         step.push((r["case"].as_str().unwrap().to_string(), per_step));
     }
     // friction and rolling bind more per step

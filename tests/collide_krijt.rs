@@ -501,7 +501,7 @@ mod gpu {
         ] {
             let g = GpuEngine::new(&scene(d, extra), context().unwrap()).unwrap();
             assert_eq!(g.kind().name(), kind, "{d} {extra}");
-            let slots = g.len() as u64 * g.capacity() as u64;
+            let slots = g.list_entries();
             let hist = g
                 .buffers()
                 .into_iter()

@@ -162,7 +162,7 @@ positions = [{}]
     let scene = powder::scene::Scene::from_toml_str(&text, "crowded").unwrap();
     let mut cpu = CpuEngine::new(&scene).unwrap();
     let mut gpu = GpuEngine::new(&scene, ctx).unwrap();
-    let cap = gpu.capacity() as usize;
+    let cap = (gpu.capacity_rule() / gpu.len() as u64) as usize;
     // the centre of the clump (id 62) lists more partners than the rule's capacity
     let listed = gpu
         .contact_histories()
@@ -195,6 +195,71 @@ positions = [{}]
     // (measured: moved 7.1e-4 radii, GPU − CPU 1.3e-10 radii)
     assert!(moved > 2e-4 * r, "the clump did not move: {moved} m");
     assert!(worst < 1e-7 * r, "{worst} m");
+}
+
+/// The lists grow when a rebuild needs more room: the batch halts at that rebuild and
+/// finishes after the growth. Runs that grow mid-run are bitwise the runs whose lists were
+/// large from the start — the collapsing cohesive cluster, and the compression with its
+/// prescribed lid (walls are written at batch boundaries, which a halt keeps) — and a state
+/// saved with the large lists resumes bitwise in an engine with small ones.
+#[test]
+fn growing_lists_mid_run_change_no_bit() {
+    use common::assert_same_bits;
+    use powder::gpu::GpuOptions;
+    // (the compression's lid moving from the start, so lists grow while it moves)
+    let text = std::fs::read_to_string(common::example_path("compression.toml")).unwrap();
+    let early = text.replace(
+        "times = [0.1, 0.3, 0.33, 0.36]",
+        "times = [0.0, 0.04, 0.045, 0.05]",
+    );
+    assert_ne!(early, text);
+    let scenes = [
+        (
+            "compression",
+            powder::scene::Scene::from_toml_str(&early, "c").unwrap(),
+            6000,
+        ),
+        ("cohesive cluster", example("cohesive_cluster.toml"), 20000),
+    ];
+    for (name, scene, steps) in scenes {
+        let Some(ctx) = context() else { return };
+        let n = scene.particles.len() as u64;
+        // (from one entry: the first build grows them, the compaction again)
+        let small = GpuOptions {
+            list_entries: Some(1),
+            ..Default::default()
+        };
+        let mut grown = GpuEngine::with_options(&scene, ctx, small).unwrap();
+        let large = GpuOptions {
+            list_entries: Some(40 * n),
+            ..Default::default()
+        };
+        let mut fixed = GpuEngine::with_options(&scene, context().unwrap(), large).unwrap();
+        let first = grown.list_entries();
+        grown.run_steps(steps).unwrap();
+        fixed.run_steps(steps).unwrap();
+        eprintln!(
+            "{name}: {} growths, {first} -> {} entries ({:.2} a particle)",
+            grown.list_growths(),
+            grown.list_entries(),
+            grown.list_entries() as f64 / n as f64
+        );
+        assert_eq!(fixed.list_growths(), 0, "{name}");
+        assert!(grown.list_growths() >= 2, "{name}: no growth mid-run");
+        let (a, b) = (grown.state().unwrap(), fixed.state().unwrap());
+        assert_same_bits(&a, &b);
+        assert_eq!(
+            grown.energies(&a).unwrap().dissipated.to_bits(),
+            fixed.energies(&b).unwrap().dissipated.to_bits(),
+            "{name}"
+        );
+        let mut resumed = GpuEngine::new(&scene, context().unwrap()).unwrap();
+        resumed.restore_state(fixed.save_state().unwrap()).unwrap();
+        assert_eq!(resumed.list_entries(), 40 * n);
+        resumed.run_steps(500).unwrap();
+        fixed.run_steps(500).unwrap();
+        assert_same_bits(&resumed.state().unwrap(), &fixed.state().unwrap());
+    }
 }
 
 mod collisions {
@@ -920,10 +985,10 @@ velocity = [-0.1, 0.05, -0.3]
                 .map(|(_, b)| b)
                 .unwrap()
         };
-        let slots = plain.len() as u64 * plain.capacity() as u64;
-        assert_eq!(bytes(&plain, "A.hist"), 4 * slots);
-        assert_eq!(bytes(&friction, "A.hist"), 16 * slots);
-        assert_eq!(bytes(&rolling, "A.hist"), 28 * slots);
+        let entries = |g: &GpuEngine| g.list_entries();
+        assert_eq!(bytes(&plain, "A.hist"), 4 * entries(&plain));
+        assert_eq!(bytes(&friction, "A.hist"), 16 * entries(&friction));
+        assert_eq!(bytes(&rolling, "A.hist"), 28 * entries(&rolling));
         assert!(plain.buffer_bytes() < friction.buffer_bytes());
         for (n, b) in plain.buffers() {
             eprintln!("frictionless JKR buffer {n}: {b} bytes");
@@ -1019,9 +1084,10 @@ fn split_pair_forces_give_the_same_bits() {
         ..Default::default()
     };
     let mut one = GpuEngine::with_options(&scene, ctx, options).unwrap();
-    let slots = 1000 * u64::from(one.capacity());
-    // 16 bytes a slot exceed the limit, 4 (the history, the lists, the split planes) do not
-    let small = GpuContext::with_storage_binding_limit(12 * slots).unwrap();
+    let rule = one.capacity_rule();
+    // 16 bytes an entry of the rule exceed the limit, 4 (the history, the lists, the split
+    // planes) of the entries needed do not
+    let small = GpuContext::with_storage_binding_limit(12 * rule).unwrap();
     let mut split = GpuEngine::with_options(&scene, small, options).unwrap();
     let size = |e: &GpuEngine, name: &str| {
         e.buffers()
@@ -1030,13 +1096,13 @@ fn split_pair_forces_give_the_same_bits() {
             .map(|(_, b)| b)
             .unwrap()
     };
-    assert_eq!(size(&one, "pair_force"), 16 * slots);
+    assert_eq!(size(&one, "pair_force"), 16 * one.list_entries());
     assert_eq!(
         size(&split, "pair_force"),
         16,
         "the lowered limit did not split"
     );
-    assert_eq!(size(&split, "pair_force_x"), 4 * slots);
+    assert_eq!(size(&split, "pair_force_x"), 4 * split.list_entries());
     one.run_steps(400).unwrap();
     split.run_steps(400).unwrap();
     let (sa, sb) = (one.state().unwrap(), split.state().unwrap());

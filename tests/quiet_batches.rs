@@ -19,6 +19,7 @@ fn run(case: Case, shake: f64, quiet: QuietBatches, steps: u64) -> Option<GpuEng
         GpuOptions {
             ledger: true,
             quiet,
+            ..Default::default()
         },
     )
     .unwrap();
@@ -90,6 +91,7 @@ fn quiet_batches_in_a_periodic_settling_bed() {
         let options = GpuOptions {
             ledger: false,
             quiet,
+            ..Default::default()
         };
         let mut e = GpuEngine::with_options(&scene, ctx, options).unwrap();
         e.run_steps(1600).unwrap();
@@ -121,6 +123,7 @@ fn no_quiet_batches_with_moving_walls_or_pouring() {
         let options = GpuOptions {
             ledger: false,
             quiet: QuietBatches::Always,
+            ..Default::default()
         };
         let mut e = GpuEngine::with_options(&scene, ctx, options).unwrap();
         e.run_steps(200).unwrap();

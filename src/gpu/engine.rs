@@ -60,6 +60,13 @@ use glam::DVec3;
 /// r_i + r_j + reach + skin, rebuilt once some particle has moved more than skin/2.
 pub const SKIN: f64 = 0.1;
 
+/// The neighbour lists' first capacity, entries a particle (+256): the first rebuild
+/// grows them to what it needs (`GpuEngine::grow_lists`).
+const INITIAL_ENTRIES_PER_PARTICLE: u64 = 2;
+
+/// Headroom of a grown capacity over what a rebuild needed.
+const LIST_HEADROOM: f64 = 1.25;
+
 /// Bytes of the device monitor (`monitor` in `shaders/step.wgsl`).
 const MONITOR_BYTES: u64 = 48;
 
@@ -248,13 +255,185 @@ impl NewLists {
     }
 }
 
-/// The step's kernels, bound to the two sets.
+/// The step's buffers besides the particle state and the new lists, and the per-entry
+/// arrays the lists' capacity sizes (`nbr`, `lower`, the pair forces and torques).
+struct StepBuffers {
+    step: wgpu::Buffer,
+    pairs: wgpu::Buffer,
+    walls: wgpu::Buffer,
+    /// Each wall's point at the last rebuild (the trigger for moving walls: state).
+    wall_ref: wgpu::Buffer,
+    /// The servo's per-contact normal forces (scratch, cleared on a restore).
+    wall_push: wgpu::Buffer,
+    /// Which particles have appeared (pouring), by persistent id.
+    appeared: wgpu::Buffer,
+    monitor: wgpu::Buffer,
+    /// Verlet skin state (see `skin` in `shaders/step.wgsl`): [0] some particle moved more
+    /// than skin/2 since the last rebuild, [1] rebuild flag, [2] rebuilds so far, [3] skin.
+    skin: wgpu::Buffer,
+    /// The indirect dispatch arguments: a rebuild's (written by `decide` each step), then
+    /// every step's (written by the host at each batch's start; zeroed by a halt).
+    args: wgpu::Buffer,
+    full_args: wgpu::Buffer,
+    /// Per particle (by persistent id): contact counts, overlaps, dissipated and stored
+    /// energy (`particle_ledger` in `shaders/ledger.wgsl`); only with the ledger.
+    particle_ledger: Option<wgpu::Buffer>,
+    /// The neighbour lists (they persist between rebuilds, so they are state): each
+    /// particle's half list, and the entries of the pairs its partners evaluate (`lower`,
+    /// with its rows).
+    nbr: wgpu::Buffer,
+    lower: wgpu::Buffer,
+    lower_count: wgpu::Buffer,
+    lower_row: wgpu::Buffer,
+    /// The pair forces in one vec4 an entry, or split (x, y, z) where that would exceed
+    /// the binding limit; the other form's buffers hold one element.
+    pair_force: [wgpu::Buffer; 4],
+    pair_torque: Option<wgpu::Buffer>,
+}
+
+impl StepBuffers {
+    /// Every buffer under the name the kernels bind it by.
+    fn named(&self) -> Vec<(String, &wgpu::Buffer)> {
+        let mut list: Vec<(&str, &wgpu::Buffer)> = vec![
+            ("step", &self.step),
+            ("pairs", &self.pairs),
+            ("walls", &self.walls),
+            ("wall_ref", &self.wall_ref),
+            ("wall_push", &self.wall_push),
+            ("appeared", &self.appeared),
+            ("monitor", &self.monitor),
+            ("skin", &self.skin),
+            ("args", &self.args),
+            ("full_args", &self.full_args),
+            ("nbr", &self.nbr),
+            ("lower", &self.lower),
+            ("lower_count", &self.lower_count),
+            ("lower_row", &self.lower_row),
+            ("pair_force", &self.pair_force[0]),
+            ("pair_force_x", &self.pair_force[1]),
+            ("pair_force_y", &self.pair_force[2]),
+            ("pair_force_z", &self.pair_force[3]),
+        ];
+        list.extend(self.pair_torque.as_ref().map(|t| ("pair_torque", t)));
+        list.extend(
+            self.particle_ledger
+                .as_ref()
+                .map(|l| ("particle_ledger", l)),
+        );
+        list.into_iter().map(|(n, b)| (n.to_string(), b)).collect()
+    }
+}
+
+/// The per-entry arrays sized by the lists' capacity besides the lists' own history:
+/// partners, `lower`, the pair forces and torques.
+struct EntryArrays {
+    nbr: wgpu::Buffer,
+    lower: wgpu::Buffer,
+    pair_force: [wgpu::Buffer; 4],
+    pair_torque: Option<wgpu::Buffer>,
+}
+
+impl EntryArrays {
+    fn new(alloc: &mut Allocator, entries: u64, split: bool, rotation: bool) -> Self {
+        let (vec4, plane) = if split { (1, entries) } else { (entries, 1) };
+        Self {
+            nbr: alloc.buffer("nbr", 4 * entries),
+            lower: alloc.buffer("lower", 4 * entries),
+            pair_force: [
+                alloc.buffer("pair_force", 16 * vec4),
+                alloc.buffer("pair_force_x", 4 * plane),
+                alloc.buffer("pair_force_y", 4 * plane),
+                alloc.buffer("pair_force_z", 4 * plane),
+            ],
+            pair_torque: rotation.then(|| alloc.buffer("pair_torque", 16 * entries)),
+        }
+    }
+}
+
+/// What a list entry takes in each per-entry array.
+struct EntryWidths {
+    history: u64,
+    ledger: bool,
+    rotation: bool,
+    split: bool,
+}
+
+impl EntryWidths {
+    /// An error naming the array when `entries` entries of it exceed the adapter's
+    /// storage binding limit (or the u32 entry indices).
+    fn check(&self, entries: u64, particles: u64, limit: u64) -> Result<(), PowderError> {
+        let (what, bytes) = [
+            ("neighbour lists", 4),
+            ("pair forces", if self.split { 4 } else { 16 }),
+            ("contact history", self.history),
+            ("energy ledger", if self.ledger { 16 } else { 0 }),
+            ("pair torques", if self.rotation { 16 } else { 0 }),
+        ]
+        .into_iter()
+        .max_by_key(|&(_, b)| b)
+        .unwrap_or(("neighbour lists", 4));
+        if entries * bytes > limit || entries > u32::MAX as u64 {
+            return Err(PowderError::Run(format!(
+                "the neighbour lists need {entries} entries ({:.1} a particle) of {bytes} bytes of {what}, over the adapter's storage binding limit of {limit} bytes",
+                entries as f64 / particles.max(1) as f64
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// Binds every kernel of the step to the run's buffers and the mirrors' textures.
+fn bind_all(
+    device: &wgpu::Device,
+    program: &Program,
+    mirrors: &Mirrors,
+    grid: &GridSort,
+    buffers: [Vec<(String, &wgpu::Buffer)>; 3],
+) -> Result<Bound, PowderError> {
+    let mut list: Vec<(String, &wgpu::Buffer)> = buffers.into_iter().flatten().collect();
+    list.push(("grid".into(), grid.params()));
+    list.push(("sorted_index".into(), grid.sorted_index()));
+    list.push(("cell_start".into(), grid.cell_start()));
+    list.push(("cell_count".into(), grid.cell_count()));
+    let refs: Vec<(&str, &wgpu::Buffer)> = list.iter().map(|(n, b)| (n.as_str(), *b)).collect();
+    let textures = mirrors.view_bytes();
+    let pass = |name: &str| -> Result<Pass, PowderError> {
+        let kernel = program.kernel(name)?.clone();
+        let group = kernel.bind_with_textures(device, &refs, &mirrors.views())?;
+        let bound = kernel.bound_bytes(&refs, &textures);
+        Ok(Pass {
+            kernel,
+            group,
+            bound,
+        })
+    };
+    let optional = |name: &str| program.kernels.contains_key(name).then(|| pass(name));
+    Ok(Bound {
+        kick_drift: pass("kick_drift")?,
+        decide: pass("decide")?,
+        gather: pass("gather")?,
+        count_neighbours: pass("count_neighbours")?,
+        neighbours: pass("neighbours")?,
+        commit: pass("commit")?,
+        remap: pass("remap")?,
+        copy_back_history: pass("copy_back_history")?,
+        force: pass("force")?,
+        kick: pass("kick")?,
+        collect_kick_drift: pass("collect_kick_drift")?,
+        collect: pass("collect")?,
+        wall_move: optional("wall_move").transpose()?,
+        wall_servo: optional("wall_servo").transpose()?,
+    })
+}
+
+/// The step's kernels, bound to the run's buffers.
 struct Bound {
     kick_drift: Pass,
     decide: Pass,
     gather: Pass,
     count_neighbours: Pass,
     neighbours: Pass,
+    commit: Pass,
     remap: Pass,
     copy_back_history: Pass,
     force: Pass,
@@ -331,6 +510,11 @@ pub struct GpuOptions {
     /// decision where no rebuild is expected, run again with it where one was needed.
     /// Results are bitwise the same either way. Default [`QuietBatches::Auto`].
     pub quiet: QuietBatches,
+    /// The neighbour lists' first capacity, entries (default: a guess the first rebuild
+    /// grows to 1.25× what it needs). Lists grow whenever a rebuild needs more — the batch
+    /// halts at that rebuild and finishes after the growth, bitwise as without it — so
+    /// this only saves those halts where the need is known.
+    pub list_entries: Option<u64>,
 }
 
 impl Default for GpuOptions {
@@ -338,12 +522,13 @@ impl Default for GpuOptions {
         Self {
             ledger: true,
             quiet: QuietBatches::Auto,
+            list_entries: None,
         }
     }
 }
 
-/// What quiet batches need: (buffer a batch changes, its batch-start copy), the forecast
-/// and the counts.
+/// What quiet batches need: (buffer of the state a batch changes, its batch-start copy),
+/// the forecast and the counts.
 struct Quiet {
     mode: QuietBatches,
     copies: Vec<(wgpu::Buffer, wgpu::Buffer)>,
@@ -360,6 +545,19 @@ struct BatchReport {
     skin: Vec<u32>,
 }
 
+impl BatchReport {
+    /// The list entries a rebuild needed when the batch halted for them (`commit`).
+    fn halted(&self) -> Option<u64> {
+        (self.monitor[7] != 0).then_some(self.monitor[11] as u64)
+    }
+
+    /// Steps of a halted batch completed before the one that halted (`decide` counts the
+    /// steps begun).
+    fn completed(&self) -> u64 {
+        (self.monitor[10] as u64).saturating_sub(1)
+    }
+}
+
 /// The GPU simulation of one scene.
 pub struct GpuEngine {
     ctx: GpuContext,
@@ -369,7 +567,12 @@ pub struct GpuEngine {
     pub steps: u64,
     dt: f64,
     n: u32,
-    cap: u32,
+    /// Entries the neighbour lists have room for (grown when a rebuild needs more).
+    entries: u64,
+    /// Whether the pair forces are split over three bindings (`split_pair_force`), and
+    /// the entries the capacity rule sets aside that decided it.
+    split: bool,
+    rule_entries: u64,
     origin: DVec3,
     /// Cell width per axis (the f32 values the kernels use), m.
     h: DVec3,
@@ -388,14 +591,18 @@ pub struct GpuEngine {
     _new_lists: NewLists,
     /// A rebuild's in-place re-sort of the state.
     permutation: Permutation,
-    monitor: wgpu::Buffer,
-    /// Verlet skin state (see `skin` in `shaders/step.wgsl`): [0] some particle moved more
-    /// than skin/2 since the last rebuild, [1] rebuild flag, [2] rebuilds so far, [3] skin.
-    skin: wgpu::Buffer,
-    /// The indirect dispatch arguments of the grid sort and then of the rebuild's
-    /// per-particle passes (at byte [`Self::rebuild_args`]), written by `decide` each step.
-    args: wgpu::Buffer,
+    /// The step's other buffers.
+    b: StepBuffers,
+    /// Offsets in `b.args`: the rebuild's per-particle passes', and every step's
+    /// (per particle, then one workgroup), with the values the latter take.
     rebuild_args: u64,
+    step_args: u64,
+    step_args_full: [[u32; 3]; 2],
+    /// A halted batch's remaining steps, the first without its drift (`run_steps`).
+    resume: Option<u64>,
+    /// Times the lists grew (each a halted batch, or the first build).
+    growths: u64,
+    program: Program,
     bound: Bound,
     max_per_dim: u32,
     kind: Composition,
@@ -403,9 +610,6 @@ pub struct GpuEngine {
     /// (name, bytes) of every buffer allocated for the run.
     buffers: Vec<(String, u64)>,
     gravity: DVec3,
-    /// Per particle (by persistent id): contact counts, overlaps, dissipated and stored
-    /// energy (`particle_ledger` in `shaders/ledger.wgsl`); only with the ledger.
-    particle_ledger: Option<wgpu::Buffer>,
     /// Engaged contacts that left the neighbour lists within one step (monitor[3]).
     dropped: u64,
     /// Deepest overlap/a12 since the run monitor last looked, and a particle with a
@@ -413,13 +617,6 @@ pub struct GpuEngine {
     peak: Option<(f64, Option<usize>)>,
     /// A particle whose centre left the domain box (monitor[6]).
     escaped: Option<usize>,
-    /// The neighbour lists (they persist between rebuilds, so they are state): each
-    /// particle's half list, and the entries of the pairs its partners evaluate (`lower`,
-    /// with its rows).
-    nbr: wgpu::Buffer,
-    lower: wgpu::Buffer,
-    lower_count: wgpu::Buffer,
-    lower_row: wgpu::Buffer,
     /// A rebuild's scans of the new lists' lengths into their first entries (the pair
     /// lists', `lower`'s), dispatched indirectly from `args` at `scan_args`.
     scans: [ExclusiveScan; 2],
@@ -428,11 +625,6 @@ pub struct GpuEngine {
     wall_normals: Vec<DVec3>,
     /// How each wall moves, and the walls on the device (they move: state).
     wall_motion: Vec<crate::scene::WallMotion>,
-    walls: wgpu::Buffer,
-    /// Each wall's point at the last rebuild (the trigger for moving walls: state).
-    wall_ref: wgpu::Buffer,
-    /// The servo's per-contact normal forces (scratch, cleared on a restore).
-    wall_push: wgpu::Buffer,
     /// The prescribed walls' points in f64, integrated on the host (v·dt per step, as the
     /// CPU does) and written to the device at every batch, so f32 rounding of the device's
     /// per-step moves never accumulates.
@@ -443,7 +635,6 @@ pub struct GpuEngine {
     /// brought so far.
     insert_at: Vec<f64>,
     active: Vec<bool>,
-    active_buf: wgpu::Buffer,
     insert_energy: Vec<f64>,
     inserted: f64,
 }
@@ -617,24 +808,6 @@ impl GpuEngine {
                 dims[a] = ((extent[a] / h0).ceil() as u32).clamp(1, 1 << 20);
             }
         }
-        // the largest buffer with one element per neighbour slot (the last of equals)
-        let (what, slot_bytes) = [
-            ("pair forces", 4),
-            ("contact history", kind.history_bytes()),
-            ("energy ledger", if ledger { 16 } else { 0 }),
-            ("pair torques", if kind.rotation() { 16 } else { 0 }),
-        ]
-        .into_iter()
-        .max_by_key(|&(_, b)| b)
-        .unwrap_or(("contact history", 8));
-        let bytes_needed = n as u64 * cap as u64 * slot_bytes;
-        if bytes_needed > ctx.max_storage_binding() {
-            return Err(PowderError::Run(format!(
-                "{n} particles with {cap} neighbour slots of {slot_bytes} bytes each need {bytes_needed} bytes of {what}, over the adapter's storage binding limit of {} bytes; at most {} particles fit",
-                ctx.max_storage_binding(),
-                ctx.max_storage_binding() / (cap as u64 * slot_bytes)
-            )));
-        }
         let grid =
             GridSort::with_cell_widths(&ctx, n as u32, dims, [h.x as f32, h.y as f32, h.z as f32])?;
         let device = &ctx.device;
@@ -649,8 +822,21 @@ impl GpuEngine {
                 ("grid.sorted_index".into(), grid.sorted_index().size()),
             ],
         };
-        // list entries: as many as `cap` per particle
-        let entries = n as u64 * cap as u64;
+        // the pair forces go into three planes where the rule's capacity would exceed the
+        // binding limit in one (a pipeline constant: decided once)
+        let split = split_pair_force(n as u64 * cap as u64, ctx.max_storage_binding());
+        // list entries: a first guess, grown by the first rebuild to what it needs
+        let entries = options
+            .list_entries
+            .unwrap_or(INITIAL_ENTRIES_PER_PARTICLE * n as u64 + 256)
+            .max(1);
+        let widths = EntryWidths {
+            history: kind.history_bytes(),
+            ledger,
+            rotation: kind.rotation(),
+            split,
+        };
+        widths.check(entries, n as u64, ctx.max_storage_binding())?;
         let sizes = (n as u64, entries, n_walls);
         let state = StateSet::new(&mut alloc, sizes, &kind, ledger);
         let new_lists = NewLists::new(&mut alloc, (n as u64, entries), &kind, ledger);
@@ -776,23 +962,10 @@ impl GpuEngine {
             "wall_push",
             4 * if servo_walls { n as u64 * n_walls } else { 1 },
         );
-        let nbr = alloc.buffer("nbr", 4 * entries);
         // the half lists' other side, and what each evaluated pair leaves for collect
-        let lower = alloc.buffer("lower", 4 * entries);
         let lower_count = alloc.buffer("lower_count", 4 * n as u64);
         let lower_row = alloc.buffer("lower_row", 4 * n as u64);
-        // the pair forces in one vec4 a slot, or split (x, y, z) where that exceeds the
-        // binding limit; the other form's buffers hold one element
-        let slots = entries;
-        let split = split_pair_force(slots, ctx.max_storage_binding());
-        let pair_force = alloc.buffer("pair_force", 16 * if split { 1 } else { slots });
-        let mut plane = |name: &str| alloc.buffer(name, 4 * if split { slots } else { 1 });
-        let pair_force_x = plane("pair_force_x");
-        let pair_force_y = plane("pair_force_y");
-        let pair_force_z = plane("pair_force_z");
-        let pair_torque = kind
-            .rotation()
-            .then(|| alloc.buffer("pair_torque", 16 * entries));
+        let entry_arrays = EntryArrays::new(&mut alloc, entries, split, kind.rotation());
         let monitor = alloc.buffer("monitor", MONITOR_BYTES);
         let skin_buf = alloc.buffer("skin", 16);
         // moved beyond skin/2 (flag set): the first step builds the lists
@@ -804,6 +977,7 @@ impl GpuEngine {
             "gather",
             "count_neighbours",
             "neighbours",
+            "commit",
             "remap",
             "copy_back_history",
             "force",
@@ -856,10 +1030,14 @@ impl GpuEngine {
             .collect();
         let full_args = alloc.buffer("full_args", 4 * full.len() as u64);
         q0.write_buffer(&full_args, 0, bytemuck::cast_slice(&full));
+        // then every step's: one invocation per particle, one workgroup
+        let step_args = 4 * full.len() as u64;
         let args = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("args"),
-            size: 4 * full.len() as u64,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
+            size: step_args + 24,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::INDIRECT
+                | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
         alloc.list.push(("args".into(), args.size()));
@@ -896,68 +1074,32 @@ impl GpuEngine {
             .list
             .push(("permute.scratch".into(), permutation.scratch_bytes()));
         let buffers = alloc.list;
-        let bind = || -> Result<Bound, PowderError> {
-            let mut list: Vec<(String, &wgpu::Buffer)> = state.named("a");
-            list.extend(new_lists.named());
-            list.push(("grid".into(), grid.params()));
-            list.push(("step".into(), &step_buf));
-            list.push(("nbr".into(), &nbr));
-            list.push(("lower".into(), &lower));
-            list.push(("lower_count".into(), &lower_count));
-            list.push(("lower_row".into(), &lower_row));
-            list.push(("pair_force".into(), &pair_force));
-            list.push(("pair_force_x".into(), &pair_force_x));
-            list.push(("pair_force_y".into(), &pair_force_y));
-            list.push(("pair_force_z".into(), &pair_force_z));
-            if let Some(t) = &pair_torque {
-                list.push(("pair_torque".into(), t));
-            }
-            list.push(("sorted_index".into(), grid.sorted_index()));
-            list.push(("cell_start".into(), grid.cell_start()));
-            list.push(("cell_count".into(), grid.cell_count()));
-            list.push(("pairs".into(), &pairs_buf));
-            list.push(("walls".into(), &walls_buf));
-            list.push(("wall_push".into(), &wall_push));
-            list.push(("wall_ref".into(), &wall_ref));
-            list.push(("appeared".into(), &active_buf));
-            list.push(("monitor".into(), &monitor));
-            list.push(("skin".into(), &skin_buf));
-            list.push(("args".into(), &args));
-            list.push(("full_args".into(), &full_args));
-            if let Some(l) = &particle_ledger {
-                list.push(("particle_ledger".into(), l));
-            }
-            let refs: Vec<(&str, &wgpu::Buffer)> =
-                list.iter().map(|(n, b)| (n.as_str(), *b)).collect();
-            let textures = mirrors.view_bytes();
-            let pass = |name: &str| -> Result<Pass, PowderError> {
-                let kernel = program.kernel(name)?.clone();
-                let group = kernel.bind_with_textures(device, &refs, &mirrors.views())?;
-                let bound = kernel.bound_bytes(&refs, &textures);
-                Ok(Pass {
-                    kernel,
-                    group,
-                    bound,
-                })
-            };
-            let optional = |name: &str| program.kernels.contains_key(name).then(|| pass(name));
-            Ok(Bound {
-                kick_drift: pass("kick_drift")?,
-                decide: pass("decide")?,
-                gather: pass("gather")?,
-                count_neighbours: pass("count_neighbours")?,
-                neighbours: pass("neighbours")?,
-                remap: pass("remap")?,
-                copy_back_history: pass("copy_back_history")?,
-                force: pass("force")?,
-                kick: pass("kick")?,
-                collect_kick_drift: pass("collect_kick_drift")?,
-                collect: pass("collect")?,
-                wall_move: optional("wall_move").transpose()?,
-                wall_servo: optional("wall_servo").transpose()?,
-            })
+        let b = StepBuffers {
+            step: step_buf,
+            pairs: pairs_buf,
+            walls: walls_buf,
+            wall_ref,
+            wall_push,
+            appeared: active_buf,
+            monitor,
+            skin: skin_buf,
+            args,
+            full_args,
+            particle_ledger,
+            nbr: entry_arrays.nbr,
+            lower: entry_arrays.lower,
+            lower_count,
+            lower_row,
+            pair_force: entry_arrays.pair_force,
+            pair_torque: entry_arrays.pair_torque,
         };
-        let bound = bind()?;
+        let bound = bind_all(
+            device,
+            &program,
+            &mirrors,
+            &grid,
+            [state.named("a"), new_lists.named(), b.named()],
+        )?;
         // quiet batches: not where walls move (their rebuild trigger is decide's) nor where
         // particles appear (an insertion rebuilds)
         let pouring = scene.particles.iter().any(|p| p.insert_at > 0.0);
@@ -967,12 +1109,9 @@ impl GpuEngine {
                 device,
                 list: Vec::new(),
             };
-            // the lists' history goes into B's (a quiet batch does not rebuild), the rest
-            // into copies of its own
-            let mut copies = vec![(state.hist.clone(), new_lists.hist.clone())];
-            if let (Some(a), Some(b)) = (&state.ledger, &new_lists.ledger) {
-                copies.push((a.clone(), b.clone()));
-            }
+            // the state into copies of its own (the lists' history goes into the new lists':
+            // `quiet_copies`)
+            let mut copies = Vec::new();
             let a = &state;
             let own = [
                 ("cell", Some(&a.cell)),
@@ -987,7 +1126,7 @@ impl GpuEngine {
                 ("alpha", a.alpha.as_ref()),
                 ("wpred", a.wpred.as_ref()),
                 ("wall_ledger", a.wall_ledger.as_ref()),
-                ("particle_ledger", particle_ledger.as_ref()),
+                ("particle_ledger", b.particle_ledger.as_ref()),
             ];
             for (name, b) in own {
                 if let Some(b) = b {
@@ -1018,7 +1157,9 @@ impl GpuEngine {
             steps: 0,
             dt: r.dt,
             n: n as u32,
-            cap,
+            entries,
+            split,
+            rule_entries: n as u64 * cap as u64,
             origin,
             h,
             radius,
@@ -1030,24 +1171,22 @@ impl GpuEngine {
             state,
             _new_lists: new_lists,
             permutation,
-            monitor,
-            skin: skin_buf,
-            args,
+            b,
             rebuild_args,
+            step_args,
+            step_args_full: [particle_args, [1, 1, 1]],
+            resume: None,
+            growths: 0,
+            program,
             bound,
             max_per_dim,
             kind,
             n_walls: n_walls as u32,
             buffers,
             gravity: DVec3::from_array(scene.gravity),
-            particle_ledger,
             dropped: 0,
             peak: None,
             escaped: None,
-            nbr,
-            lower,
-            lower_count,
-            lower_row,
             scans,
             scan_args,
             wall_normals: scene
@@ -1056,9 +1195,6 @@ impl GpuEngine {
                 .map(|w| DVec3::from_array(w.normal).normalize())
                 .collect(),
             wall_motion: scene.walls.iter().map(|w| w.motion.clone()).collect(),
-            walls: walls_buf,
-            wall_ref,
-            wall_push,
             wall_points: scene
                 .walls
                 .iter()
@@ -1077,7 +1213,6 @@ impl GpuEngine {
                 })
                 .collect(),
             active,
-            active_buf,
             inserted: 0.0,
             ctx,
         };
@@ -1100,9 +1235,23 @@ impl GpuEngine {
         self.n == 0
     }
 
-    /// Neighbour slots per particle.
-    pub fn capacity(&self) -> u32 {
-        self.cap
+    /// Times the neighbour lists grew so far: each a batch that halted at a rebuild whose
+    /// lists did not fit, finished after the growth (the first build included).
+    pub fn list_growths(&self) -> u64 {
+        self.growths
+    }
+
+    /// The list entries the capacity rule 5·(1 + r_max/r_min)²·(1 + skin/2r_min)³ sets aside
+    /// for all particles: the pair forces are split over three bindings where 16 bytes
+    /// each would exceed the adapter's binding limit (a pipeline constant, decided once).
+    pub fn capacity_rule(&self) -> u64 {
+        self.rule_entries
+    }
+
+    /// Entries the neighbour lists have room for now (each pair a particle evaluates takes
+    /// one, and its partner's `lower` one): grown by a rebuild that needs more.
+    pub fn list_entries(&self) -> u64 {
+        self.entries
     }
 
     /// Name of the adapter the engine runs on.
@@ -1128,7 +1277,7 @@ impl GpuEngine {
 
     /// Whether the run keeps the energy ledger and contact statistics ([`GpuOptions`]).
     pub fn has_ledger(&self) -> bool {
-        self.particle_ledger.is_some()
+        self.b.particle_ledger.is_some()
     }
 
     /// The name of the step's shader module (`Composition::variant_name`).
@@ -1149,6 +1298,7 @@ impl GpuEngine {
             Some(&b.gather),
             Some(&b.count_neighbours),
             Some(&b.neighbours),
+            Some(&b.commit),
             Some(&b.remap),
             Some(&b.copy_back_history),
             Some(&b.force),
@@ -1160,8 +1310,8 @@ impl GpuEngine {
         .flatten()
         .map(|p| p.kernel.name.clone())
         .flat_map(|name| {
-            // the re-sort's kernel (its own module) right after the lists are filled
-            let permute = (name == "neighbours").then(|| "permute".to_string());
+            // the re-sort's kernel (its own module) once the new lists are known to fit
+            let permute = (name == "commit").then(|| "permute".to_string());
             std::iter::once(name).chain(permute)
         })
         .collect()
@@ -1192,8 +1342,8 @@ impl GpuEngine {
     /// (`gpu::traffic`, where the counting is explained): the passes of every step in
     /// recording order (`collect_kick_drift`, the wall kernels where walls move, `decide`,
     /// the mirror copies, `force`), then those of a rebuild (the cell sort's as `grid.*`,
-    /// `gather`, `count_neighbours`, the lists' scans as `lists.*`, `neighbours`, the
-    /// re-sort's `permute *`, `remap`, `copy_back_history`).
+    /// `gather`, `count_neighbours`, the lists' scans as `lists.*`, `neighbours`, `commit`,
+    /// the re-sort's `permute *`, `remap`, `copy_back_history`).
     pub fn traffic(&self) -> Vec<PassTraffic> {
         let b = &self.bound;
         let pass = |p: &Pass, when| PassTraffic::new(p.kernel.name.clone(), when, p.bound.clone());
@@ -1226,6 +1376,7 @@ impl GpuEngine {
             }
         }
         out.push(pass(&b.neighbours, When::Rebuild));
+        out.push(pass(&b.commit, When::Rebuild));
         for (name, bound) in self.permutation.traffic() {
             out.push(PassTraffic::new(name, When::Rebuild, bound));
         }
@@ -1242,7 +1393,7 @@ impl GpuEngine {
     /// without `decide` and the rebuild chain (a quiet batch, `gpu::quiet`).
     fn record_step(&self, encoder: &mut wgpu::CommandEncoder, drift: Drift, quiet: bool) {
         let bound = &self.bound;
-        let (n, max) = (self.n, self.max_per_dim);
+        let max = self.max_per_dim;
         {
             let mut pass = encoder.begin_compute_pass(&Default::default());
             if drift != Drift::None {
@@ -1250,9 +1401,9 @@ impl GpuEngine {
                     Drift::AfterStep => &bound.collect_kick_drift,
                     _ => &bound.kick_drift,
                 };
-                first.per_particle(&mut pass, n, max);
+                first.indirect(&mut pass, &self.b.args, self.step_args);
                 if let Some(p) = &bound.wall_move {
-                    p.once(&mut pass, max);
+                    p.indirect(&mut pass, &self.b.args, self.step_args + 12);
                 }
             }
             if !quiet {
@@ -1261,26 +1412,30 @@ impl GpuEngine {
         }
         if !quiet {
             self.grid
-                .encode_indirect(encoder, &self.grid_keys, &self.args, 0);
+                .encode_indirect(encoder, &self.grid_keys, &self.b.args, 0);
             let mut pass = encoder.begin_compute_pass(&Default::default());
             let at = self.rebuild_args;
-            bound.gather.indirect(&mut pass, &self.args, at);
-            bound.count_neighbours.indirect(&mut pass, &self.args, at);
+            bound.gather.indirect(&mut pass, &self.b.args, at);
+            bound.count_neighbours.indirect(&mut pass, &self.b.args, at);
             for (scan, &offset) in self.scans.iter().zip(&self.scan_args) {
-                scan.record_indirect(&mut pass, &self.args, offset);
+                scan.record_indirect(&mut pass, &self.b.args, offset);
             }
-            bound.neighbours.indirect(&mut pass, &self.args, at);
-            self.permutation.encode_indirect(&mut pass, &self.args, at);
+            bound.neighbours.indirect(&mut pass, &self.b.args, at);
+            bound.commit.once(&mut pass, max);
+            self.permutation
+                .encode_indirect(&mut pass, &self.b.args, at);
             for p in [&bound.remap, &bound.copy_back_history] {
-                p.indirect(&mut pass, &self.args, at);
+                p.indirect(&mut pass, &self.b.args, at);
             }
         }
         // the state the forces see, drifted (and re-sorted on a rebuild)
         self.mirrors.encode(encoder);
         let mut pass = encoder.begin_compute_pass(&Default::default());
-        bound.force.per_particle(&mut pass, n, max);
+        bound
+            .force
+            .indirect(&mut pass, &self.b.args, self.step_args);
         if let Some(p) = &bound.wall_servo {
-            p.once(&mut pass, max);
+            p.indirect(&mut pass, &self.b.args, self.step_args + 12);
         }
     }
 
@@ -1288,12 +1443,99 @@ impl GpuEngine {
     /// with `kick`, the closing kick: at the end of a batch, or without the kick after the
     /// initial forces.
     fn record_finish(&self, encoder: &mut wgpu::CommandEncoder, kick: bool) {
-        let (n, max) = (self.n, self.max_per_dim);
+        let (args, at) = (&self.b.args, self.step_args);
         let mut pass = encoder.begin_compute_pass(&Default::default());
-        self.bound.collect.per_particle(&mut pass, n, max);
+        self.bound.collect.indirect(&mut pass, args, at);
         if kick {
-            self.bound.kick.per_particle(&mut pass, n, max);
+            self.bound.kick.indirect(&mut pass, args, at);
         }
+    }
+
+    /// Before a batch is submitted: the monitor zeroed, every step's dispatch arguments
+    /// set (a halt zeroes them).
+    fn start_batch(&self) {
+        let q = &self.ctx.queue;
+        q.write_buffer(&self.b.monitor, 0, &[0u8; MONITOR_BYTES as usize]);
+        q.write_buffer(
+            &self.b.args,
+            self.step_args,
+            bytemuck::cast_slice(&self.step_args_full),
+        );
+    }
+
+    /// Grows the neighbour lists to `need` entries and headroom (`commit` halted a batch
+    /// for them), keeping the current lists' history: the rebuild that needed the room
+    /// runs again and remaps it.
+    fn grow_lists(&mut self, need: u64) -> Result<(), PowderError> {
+        let entries = ((need as f64 * LIST_HEADROOM).ceil() as u64).max(need + 64);
+        self.growths += 1;
+        self.resize_lists(entries, true)
+    }
+
+    /// Reallocates every per-entry array for `entries` entries (copying A's lists'
+    /// history and ledger when `keep`), tells the kernels, and binds them again.
+    fn resize_lists(&mut self, entries: u64, keep: bool) -> Result<(), PowderError> {
+        let hb = self.kind.history_bytes();
+        let rotates = self.kind.rotation();
+        let widths = EntryWidths {
+            history: hb,
+            ledger: self.state.ledger.is_some(),
+            rotation: rotates,
+            split: self.split,
+        };
+        widths.check(entries, self.n as u64, self.ctx.max_storage_binding())?;
+        let device = &self.ctx.device;
+        let mut alloc = Allocator {
+            device,
+            list: Vec::new(),
+        };
+        let mut encoder = device.create_command_encoder(&Default::default());
+        let mut grown = |name: &str, old: &wgpu::Buffer, per: u64, keep: bool| {
+            let new = alloc.buffer(name, per * entries);
+            if keep {
+                encoder.copy_buffer_to_buffer(old, 0, &new, 0, old.size().min(new.size()));
+            }
+            new
+        };
+        let a = &mut self.state;
+        a.hist = grown("A.hist", &a.hist, hb, keep);
+        a.hist_pid = grown("A.hist_pid", &a.hist_pid, 4, keep);
+        if let Some(l) = &a.ledger {
+            a.ledger = Some(grown("A.ledger", l, 16, keep));
+        }
+        let b = &mut self._new_lists;
+        b.hist = grown("B.hist", &b.hist, hb, false);
+        b.hist_pid = grown("B.hist_pid", &b.hist_pid, 4, false);
+        if let Some(l) = &b.ledger {
+            b.ledger = Some(grown("B.ledger", l, 16, false));
+        }
+        let e = EntryArrays::new(&mut alloc, entries, self.split, rotates);
+        self.ctx.queue.submit([encoder.finish()]);
+        (self.b.nbr, self.b.lower) = (e.nbr, e.lower);
+        (self.b.pair_force, self.b.pair_torque) = (e.pair_force, e.pair_torque);
+        for (name, bytes) in alloc.list {
+            if let Some(entry) = self.buffers.iter_mut().find(|(n, _)| *n == name) {
+                entry.1 = bytes;
+            }
+        }
+        self.entries = entries;
+        self.ctx.queue.write_buffer(
+            &self.b.step,
+            std::mem::offset_of!(StepParams, list_capacity) as u64,
+            bytemuck::bytes_of(&(entries as u32)),
+        );
+        self.bound = bind_all(
+            &self.ctx.device,
+            &self.program,
+            &self.mirrors,
+            &self.grid,
+            [
+                self.state.named("a"),
+                self._new_lists.named(),
+                self.b.named(),
+            ],
+        )?;
+        Ok(())
     }
 
     /// What each pass of the step costs on this adapter: every pass is recorded `reps` times
@@ -1307,7 +1549,7 @@ impl GpuEngine {
         // a rebuild every step: the rebuild-only passes do their full work
         self.ctx
             .queue
-            .write_buffer(&self.skin, 4, bytemuck::bytes_of(&1u32));
+            .write_buffer(&self.b.skin, 4, bytemuck::bytes_of(&1u32));
         let time = |engine: &Self, record: &dyn Fn(&mut wgpu::CommandEncoder)| {
             let mut encoder = engine
                 .ctx
@@ -1317,7 +1559,7 @@ impl GpuEngine {
                 record(&mut encoder);
             }
             let t = std::time::Instant::now();
-            submit_and_read(&engine.ctx, encoder, &[(&engine.monitor, 4)]).map(|_| t.elapsed())
+            submit_and_read(&engine.ctx, encoder, &[(&engine.b.monitor, 4)]).map(|_| t.elapsed())
         };
         let empty = time(&self, &|_| {})?.as_secs_f64();
         let b = &self.bound;
@@ -1387,7 +1629,7 @@ impl GpuEngine {
     /// the device's counter back.
     pub fn rebuilds(&self) -> Result<u64, PowderError> {
         let encoder = self.ctx.device.create_command_encoder(&Default::default());
-        let out = submit_and_read(&self.ctx, encoder, &[(&self.skin, 16)])?;
+        let out = submit_and_read(&self.ctx, encoder, &[(&self.b.skin, 16)])?;
         Ok(u32s(&out[0])[2] as u64)
     }
 
@@ -1395,14 +1637,19 @@ impl GpuEngine {
     /// Contacts present at the start carry stored energy, not dissipation: the ledger's
     /// dissipation (booked from the contacts' entry edges) is zeroed afterwards, as on the CPU.
     fn initial_forces(&mut self) -> Result<(), PowderError> {
-        let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
-        self.ctx
-            .queue
-            .write_buffer(&self.monitor, 0, &[0u8; MONITOR_BYTES as usize]);
-        self.record_step(&mut encoder, Drift::None, false);
-        self.record_finish(&mut encoder, false);
-        self.check_monitor(encoder)?;
-        if let Some(buf) = &self.particle_ledger {
+        loop {
+            let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+            self.start_batch();
+            self.record_step(&mut encoder, Drift::None, false);
+            self.record_finish(&mut encoder, false);
+            let report = self.submit_batch(encoder)?;
+            // the first lists did not fit the first guess: grown, built again
+            match report.halted() {
+                Some(need) => self.grow_lists(need)?,
+                None => break self.apply_monitor(&report.monitor)?,
+            }
+        }
+        if let Some(buf) = &self.b.particle_ledger {
             let mut rows = self.read_particle_ledger()?;
             for p in rows.chunks_mut(4) {
                 p[2][0] = 0.0;
@@ -1415,17 +1662,12 @@ impl GpuEngine {
         Ok(())
     }
 
-    fn check_monitor(&mut self, encoder: wgpu::CommandEncoder) -> Result<(), PowderError> {
-        let report = self.submit_batch(encoder)?;
-        self.apply_monitor(&report.monitor)
-    }
-
     /// Submits a recorded batch and reads the monitor and the skin state back.
     fn submit_batch(&self, encoder: wgpu::CommandEncoder) -> Result<BatchReport, PowderError> {
         let out = submit_and_read(
             &self.ctx,
             encoder,
-            &[(&self.monitor, MONITOR_BYTES), (&self.skin, 16)],
+            &[(&self.b.monitor, MONITOR_BYTES), (&self.b.skin, 16)],
         )?;
         Ok(BatchReport {
             monitor: u32s(&out[0]),
@@ -1443,15 +1685,6 @@ impl GpuEngine {
         }
         if m[6] != 0 && self.escaped.is_none() {
             self.escaped = Some(m[6] as usize - 1);
-        }
-        if m[1] != 0 {
-            return Err(PowderError::Run(format!(
-                "step {}: the neighbour lists need more than the {} entries allocated ({} a particle on average; particle {} is past them); the scene is denser or more polydisperse than the capacity rule 5·(1 + r_max/r_min)²·(1 + skin/2r_min)³ expects",
-                self.steps,
-                self.n as u64 * self.cap as u64,
-                self.cap,
-                m[1] - 1,
-            )));
         }
         if m[2] != 0 {
             return Err(PowderError::Run(format!(
@@ -1483,7 +1716,7 @@ impl GpuEngine {
             let at = (w * std::mem::size_of::<WallGpu>()) as u64;
             self.ctx
                 .queue
-                .write_buffer(&self.walls, at, bytemuck::bytes_of(&wall));
+                .write_buffer(&self.b.walls, at, bytemuck::bytes_of(&wall));
             if let Some(t) = m.next_switch(self.time) {
                 // steps that start before the switch keep this velocity (as on the CPU)
                 valid = valid.min((((t - self.time) / self.dt).ceil() as u64).max(1));
@@ -1515,7 +1748,7 @@ impl GpuEngine {
             let flags: Vec<u32> = self.active.iter().map(|&a| a as u32).collect();
             self.ctx
                 .queue
-                .write_buffer(&self.active_buf, 0, bytemuck::cast_slice(&flags));
+                .write_buffer(&self.b.appeared, 0, bytemuck::cast_slice(&flags));
         }
         next
     }
@@ -1539,7 +1772,7 @@ impl GpuEngine {
             return Ok(Vec::new());
         }
         let encoder = self.ctx.device.create_command_encoder(&Default::default());
-        let out = submit_and_read(&self.ctx, encoder, &[(&self.walls, self.walls.size())])?;
+        let out = submit_and_read(&self.ctx, encoder, &[(&self.b.walls, self.b.walls.size())])?;
         let walls: Vec<WallGpu> = bytemuck::pod_collect_to_vec(&out[0]);
         Ok(walls
             .iter()
@@ -1563,36 +1796,60 @@ impl GpuEngine {
     pub fn run_steps(&mut self, steps: u64) -> Result<(), PowderError> {
         let mut left = steps;
         while left > 0 {
-            let batch = left
-                .min(STEPS_PER_SUBMIT)
-                .min(self.prescribe_walls())
-                .min(self.insert_due());
-            let report = match self.quiet_batch(batch)? {
+            // the rest of a halted batch starts with the halted step, drifted already, and
+            // keeps the batch's boundaries (walls and insertions are set at them)
+            let (batch, first) = match self.resume.take() {
+                Some(rest) => (rest.min(left), Drift::None),
+                None => {
+                    let batch = left
+                        .min(STEPS_PER_SUBMIT)
+                        .min(self.prescribe_walls())
+                        .min(self.insert_due());
+                    (batch, Drift::Plain)
+                }
+            };
+            let quiet = match first {
+                Drift::Plain => self.quiet_batch(batch)?,
+                _ => None,
+            };
+            let report = match quiet {
                 Some(report) => report,
                 None => {
-                    self.advance_prescribed_walls(batch);
-                    self.ctx
-                        .queue
-                        .write_buffer(&self.monitor, 0, &[0u8; MONITOR_BYTES as usize]);
+                    self.start_batch();
                     let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
                     for i in 0..batch {
-                        self.record_step(&mut encoder, Self::drift_of(i), false);
+                        let drift = if i == 0 { first } else { Drift::AfterStep };
+                        self.record_step(&mut encoder, drift, false);
                     }
                     self.record_finish(&mut encoder, true);
                     self.submit_batch(encoder)?
                 }
             };
-            self.steps += batch;
-            self.time += batch as f64 * self.dt;
-            left -= batch;
-            self.observe(batch, &report);
+            let done = match report.halted() {
+                Some(_) => report.completed(),
+                None => batch,
+            };
+            // the walls moved in every step begun with a drift
+            let moved = (done + u64::from(report.halted().is_some()))
+                .saturating_sub(u64::from(first == Drift::None));
+            self.advance_prescribed_walls(moved);
+            self.steps += done;
+            self.time += done as f64 * self.dt;
+            left -= done;
             self.apply_monitor(&report.monitor)?;
+            match report.halted() {
+                Some(need) => {
+                    self.grow_lists(need)?;
+                    self.resume = Some(batch - done);
+                }
+                None => self.observe(batch, &report),
+            }
         }
         Ok(())
     }
 
-    /// How step `i` of a batch starts: each step's closing kick goes with the next step's
-    /// drift.
+    /// How step `i` of a (quiet) batch starts: each step's closing kick goes with the next
+    /// step's drift.
     fn drift_of(i: u64) -> Drift {
         if i == 0 {
             Drift::Plain
@@ -1622,10 +1879,8 @@ impl GpuEngine {
         if !q.forecast.quiet(batch, q.mode) {
             return Ok(None);
         }
-        let copies = q.copies.clone();
-        self.ctx
-            .queue
-            .write_buffer(&self.monitor, 0, &[0u8; MONITOR_BYTES as usize]);
+        let copies = self.quiet_copies(q);
+        self.start_batch();
         let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
         for (a, saved) in &copies {
             encoder.copy_buffer_to_buffer(a, 0, saved, 0, a.size());
@@ -1650,12 +1905,25 @@ impl GpuEngine {
         }
         self.ctx
             .queue
-            .write_buffer(&self.skin, 0, bytemuck::bytes_of(&0u32));
+            .write_buffer(&self.b.skin, 0, bytemuck::bytes_of(&0u32));
         self.ctx.queue.submit([encoder.finish()]);
         if let Some(q) = &mut self.quiet {
             q.rolled_back += 1;
         }
         Ok(None)
+    }
+
+    /// (buffer a quiet batch changes, where its batch-start copy goes): the state into the
+    /// quiet batches' own copies, the lists' history and ledger into the new lists' (a
+    /// quiet batch does not rebuild).
+    fn quiet_copies(&self, q: &Quiet) -> Vec<(wgpu::Buffer, wgpu::Buffer)> {
+        let (a, b) = (&self.state, &self._new_lists);
+        let mut v = q.copies.clone();
+        v.push((a.hist.clone(), b.hist.clone()));
+        if let (Some(x), Some(y)) = (&a.ledger, &b.ledger) {
+            v.push((x.clone(), y.clone()));
+        }
+        v
     }
 
     /// Quiet batches kept and rolled back so far (`gpu::quiet`); (0, 0) where the scene or
@@ -1716,14 +1984,14 @@ impl GpuEngine {
     /// The state buffers, named as in [`GpuSavedState`].
     fn state_buffers(&self) -> Vec<(String, &wgpu::Buffer)> {
         let mut list = self.state.named("a");
-        list.push(("nbr".into(), &self.nbr));
-        list.push(("lower".into(), &self.lower));
-        list.push(("lower_count".into(), &self.lower_count));
-        list.push(("lower_row".into(), &self.lower_row));
-        list.push(("skin".into(), &self.skin));
-        list.push(("walls".into(), &self.walls));
-        list.push(("wall_ref".into(), &self.wall_ref));
-        if let Some(l) = &self.particle_ledger {
+        list.push(("nbr".into(), &self.b.nbr));
+        list.push(("lower".into(), &self.b.lower));
+        list.push(("lower_count".into(), &self.b.lower_count));
+        list.push(("lower_row".into(), &self.b.lower_row));
+        list.push(("skin".into(), &self.b.skin));
+        list.push(("walls".into(), &self.b.walls));
+        list.push(("wall_ref".into(), &self.b.wall_ref));
+        if let Some(l) = &self.b.particle_ledger {
             list.push(("particle_ledger".into(), l));
         }
         list
@@ -1773,6 +2041,15 @@ impl GpuEngine {
                 self.kind.layout()
             )));
         }
+        // the lists' capacity the state was saved with (its entries' partner ids)
+        let saved_entries = saved
+            .buffers
+            .iter()
+            .find(|(name, _)| name == "a_hist_pid")
+            .map(|(_, bytes)| bytes.len() as u64 / 4);
+        if let Some(entries) = saved_entries.filter(|&e| e != self.entries) {
+            self.resize_lists(entries, false)?;
+        }
         let list = self.state_buffers();
         let names: Vec<&String> = list.iter().map(|(n, _)| n).collect();
         let saved_names: Vec<&String> = saved.buffers.iter().map(|(n, _)| n).collect();
@@ -1794,7 +2071,7 @@ impl GpuEngine {
         // the servo's pushes of walls that are no candidates must read 0 (a rebuild zeroes
         // them; this state's candidates may differ from the ones last written)
         let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
-        encoder.clear_buffer(&self.wall_push, 0, None);
+        encoder.clear_buffer(&self.b.wall_push, 0, None);
         self.ctx.queue.submit([encoder.finish()]);
         if saved.wall_points.len() == self.wall_points.len() {
             self.wall_points = saved.wall_points;
@@ -1804,7 +2081,7 @@ impl GpuEngine {
             let flags: Vec<u32> = self.active.iter().map(|&a| a as u32).collect();
             self.ctx
                 .queue
-                .write_buffer(&self.active_buf, 0, bytemuck::cast_slice(&flags));
+                .write_buffer(&self.b.appeared, 0, bytemuck::cast_slice(&flags));
         }
         if let Some(q) = &mut self.quiet {
             q.forecast.forget();
@@ -1844,7 +2121,7 @@ impl GpuEngine {
     /// The per-particle ledger rows (4 × vec4 per persistent id), or an error naming why
     /// there are none.
     fn read_particle_ledger(&self) -> Result<Vec<[f32; 4]>, PowderError> {
-        let Some(buf) = &self.particle_ledger else {
+        let Some(buf) = &self.b.particle_ledger else {
             return Err(PowderError::Run(
                 "this GPU run keeps no energy ledger (GpuOptions { ledger: false })".into(),
             ));

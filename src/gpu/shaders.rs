@@ -220,6 +220,7 @@ mod tests {
                 "gather",
                 "count_neighbours",
                 "neighbours",
+                "commit",
                 "remap",
                 "copy_back_history",
                 "force",
