@@ -52,13 +52,8 @@ fn rot_drift(k: u32, r: RotState, pending_kick: bool) {
     a_wpred[k] = vec4<f32>(w + 0.5 * step.dt * r.alpha, 0.0);
 }
 
-// The predicted angular velocity of particle k (in the force pass: from its mirror, as
-// m_vpred in step.wgsl).
-@group(0) @binding(83) var m_wpred: texture_storage_2d<rgba32float, read>;
-
-fn rot_wpred(k: u32) -> vec3<f32> {
-    return textureLoad(m_wpred, mirror_texel(k)).xyz;
-}
+// (rot_wpred: the predicted angular velocity, from rotation_mirrors.wgsl or
+// rotation_buffers.wgsl)
 
 // force: the torque of k's own pairs and walls (alpha holds it until collect).
 fn rot_store_partial(k: u32, torque: vec3<f32>) {

@@ -201,25 +201,8 @@ override ONE_MATERIAL: bool = false;
 // particle: the f32 updates v += dt/2·a and o += dt·v add increments of
 // a few ulps (slow particles, small dt), whose rounding would otherwise accumulate
 // systematically; the true values are v − c_v and o − c_o.
-// Read-only texture copies of a_cell, a_off and a_vpred, made right before each force
-// pass (`gpu::mirror`): the force pass loads them for every pair, and on lavapipe a
-// read-only storage-texture load is one gather where a storage-buffer load is a loop over
-// the SIMD lanes (0.3 against 1.1–1.8 ns a vec4: examples/lavapipe_probe.rs). MIRROR_WIDTH
-// particles a row.
-const MIRROR_WIDTH: u32 = 4096u;
-@group(0) @binding(80) var m_cell: texture_storage_2d<rgba32sint, read>;
-@group(0) @binding(81) var m_off: texture_storage_2d<rgba32float, read>;
-@group(0) @binding(82) var m_vpred: texture_storage_2d<rgba32float, read>;
-// The cell and offset mirrors as a rebuild's `gather` writes them (the same textures): the
-// re-sorted positions, which `neighbours` then reads (a gather per candidate, not a loop
-// over the lanes); the copy before the force pass writes the same values again from A.
-@group(0) @binding(88) var m_cell_out: texture_storage_2d<rgba32sint, write>;
-@group(0) @binding(89) var m_off_out: texture_storage_2d<rgba32float, write>;
-
-fn mirror_texel(k: u32) -> vec2<u32> {
-    return vec2<u32>(k % MIRROR_WIDTH, k / MIRROR_WIDTH);
-}
-
+// (own_cell, own_off, own_vpred, sorted_cell, sorted_off, mirror_sorted: the state's
+// reads, from state_mirrors.wgsl or state_buffers.wgsl)
 @group(0) @binding(66) var<storage, read_write> a_kahan: array<vec4<f32>>;
 
 // x + dx with Kahan compensation c (x_true = x − c): returns (x', c').
@@ -439,8 +422,8 @@ fn drift_particle(i: u32, vel: vec4<f32>, acc: vec3<f32>, rot: RotState, pending
     var off: vec4<f32>;
     var cell0: vec4<i32>;
     if (pending_kick) {
-        off = textureLoad(m_off, mirror_texel(i));
-        cell0 = textureLoad(m_cell, mirror_texel(i));
+        off = own_off(i);
+        cell0 = own_cell(i);
     } else {
         off = a_off[i];
         cell0 = a_cell[i];
@@ -525,9 +508,7 @@ fn gather(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: v
     if (k >= grid.n_particles) {
         return;
     }
-    let o = sorted_index[k];
-    textureStore(m_cell_out, mirror_texel(k), a_cell[o]);
-    textureStore(m_off_out, mirror_texel(k), a_off[o]);
+    mirror_sorted(k, sorted_index[k]);
 }
 
 // Whether particle k evaluates its pair with j (d = x_k − x_j): when j lies ahead of k
@@ -559,9 +540,9 @@ fn evaluates(d: vec3<f32>, k: u32, j: u32) -> bool {
 // (evaluated by k, evaluated by the partner) counts; `fill`: also written to the new
 // lists at b_row[k] and lower_row[k], which the counts' scans placed.
 fn search(k: u32, fill: bool) -> vec2<u32> {
-    // (the re-sorted positions from the mirrors gather wrote: see m_cell_out)
-    let ck = textureLoad(m_cell, mirror_texel(k));
-    let ok = textureLoad(m_off, mirror_texel(k));
+    // (the positions in the new order: `sorted_cell`)
+    let ck = sorted_cell(k);
+    let ok = sorted_off(k);
     let hi = vec3<i32>(grid.dims) - vec3<i32>(1);
     let home = clamp(ck.xyz, vec3<i32>(0), hi);
     let cap = step.list_capacity;
@@ -606,8 +587,8 @@ fn search(k: u32, fill: bool) -> vec2<u32> {
                     if (j == k || !here || !is_active(a_pid[sorted_index[j]])) {
                         continue;
                     }
-                    let oj = textureLoad(m_off, mirror_texel(j));
-                    let d = separation(ck, ok, textureLoad(m_cell, mirror_texel(j)), oj);
+                    let oj = sorted_off(j);
+                    let d = separation(ck, ok, sorted_cell(j), oj);
                     let reach = cutoff + oj.w;
                     if (dot(d, d) < reach * reach) {
                         if (evaluates(d, k, j)) {
@@ -867,12 +848,12 @@ fn force(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
 // `row0`: pair row 0, the only one of a scene with ONE_MATERIAL.
 fn particle_forces(k: u32, row0: PairRow) {
     let first = a_row[k];
-    // (own and partners' state from the mirrors: see m_cell)
-    let ck = textureLoad(m_cell, mirror_texel(k));
-    let ok = textureLoad(m_off, mirror_texel(k));
+    // (own and partners' state: `own_cell`, from the mirrors on a software adapter)
+    let ck = own_cell(k);
+    let ok = own_off(k);
     let rk = ok.w;
     // vpred.w holds the mass
-    let pk = textureLoad(m_vpred, mirror_texel(k));
+    let pk = own_vpred(k);
     let mk = pk.w;
     let vk = pk.xyz;
     let wk = rot_wpred(k);
@@ -886,11 +867,11 @@ fn particle_forces(k: u32, row0: PairRow) {
     var peak = 0.0;
     for (var slot = first; slot < first + a_count[k]; slot++) {
         let j = nbr[slot];
-        let cj = textureLoad(m_cell, mirror_texel(j));
-        let oj = textureLoad(m_off, mirror_texel(j));
+        let cj = own_cell(j);
+        let oj = own_off(j);
         let rj = oj.w;
         // predicted velocity (xyz) and mass (w): one load
-        let pj = textureLoad(m_vpred, mirror_texel(j));
+        let pj = own_vpred(j);
         let mj = pj.w;
         let dc_raw = ck.xyz - cj.xyz;
         let dc_i = nearest_image(dc_raw);

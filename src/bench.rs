@@ -388,6 +388,8 @@ pub struct BenchOptions {
     pub profile: bool,
     /// Quiet batches of the GPU engine (`GpuOptions::quiet`).
     pub quiet: crate::gpu::QuietBatches,
+    /// The software adapter's paths (`GpuOptions::software_paths`; `None`: by the adapter).
+    pub software_paths: Option<bool>,
     /// Runs per (case, backend, size), each with a fresh engine; the row keeps the fastest
     /// and lists every run's rate (shared machines vary from run to run).
     pub repeats: u32,
@@ -407,6 +409,7 @@ impl Default for BenchOptions {
             ledger: false,
             profile: false,
             quiet: crate::gpu::QuietBatches::Auto,
+            software_paths: None,
             repeats: 1,
         }
     }
@@ -606,6 +609,7 @@ fn run_gpu(
         crate::gpu::GpuOptions {
             ledger: opts.ledger,
             quiet: opts.quiet,
+            software_paths: opts.software_paths,
             ..Default::default()
         },
     )?;

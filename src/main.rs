@@ -98,6 +98,10 @@ struct BenchArgs {
     /// GPU quiet batches: batches without the per-step rebuild check where none is expected.
     #[arg(long = "quiet-batches", value_enum, default_value = "auto")]
     quiet_batches: QuietChoice,
+    /// GPU: the software adapter's paths (texture mirrors of the state, quiet batches under
+    /// `auto`): `on`, `off`, or `auto` by the adapter kind (results are bitwise the same).
+    #[arg(long = "software-paths", value_enum, default_value = "auto")]
+    software_paths: SoftwarePaths,
     /// Runs per case, backend and size (fresh engines); the table shows the fastest, the
     /// JSON every run's rate.
     #[arg(long, default_value_t = 1)]
@@ -105,6 +109,27 @@ struct BenchArgs {
     /// Write the report (rows, machine, adapter, version, commit, date) as JSON.
     #[arg(long)]
     json: Option<PathBuf>,
+}
+
+/// `--software-paths` (`GpuOptions::software_paths`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum SoftwarePaths {
+    /// By the adapter kind.
+    Auto,
+    /// The software adapter's paths on any adapter.
+    On,
+    /// The GPU's paths on any adapter.
+    Off,
+}
+
+impl SoftwarePaths {
+    fn choice(self) -> Option<bool> {
+        match self {
+            Self::Auto => None,
+            Self::On => Some(true),
+            Self::Off => Some(false),
+        }
+    }
 }
 
 /// `--quiet-batches`: how the GPU engine uses quiet batches (`powder::gpu::QuietBatches`).
@@ -194,6 +219,7 @@ fn bench_cmd(a: &BenchArgs) -> Result<(), PowderError> {
         seed: a.seed,
         ledger: a.ledger,
         quiet: a.quiet_batches.into(),
+        software_paths: a.software_paths.choice(),
         profile: a.profile,
         repeats: a.repeats,
     };

@@ -262,6 +262,58 @@ fn growing_lists_mid_run_change_no_bit() {
     }
 }
 
+/// The software adapter's paths (the state read through texture mirrors, quiet batches)
+/// and the GPU's (the state's own buffers) give bitwise the same runs, with and without
+/// rotation; the GPU path allocates neither mirrors nor quiet copies.
+#[test]
+fn software_and_gpu_paths_give_the_same_bits() {
+    use common::assert_same_bits;
+    use powder::bench::{packing, Case};
+    use powder::gpu::GpuOptions;
+    let scenes = [
+        ("cohesive cluster", example("cohesive_cluster.toml"), 3000),
+        ("JKR packing", packing(Case::Jkr, 600, 1.0, 3).unwrap(), 600),
+    ];
+    for (name, mut scene, steps) in scenes {
+        let Some(ctx) = context() else { return };
+        // the particles in a scrambled order, so the rebuilds' re-sorts move them
+        let n = scene.particles.len();
+        for i in 0..n {
+            scene.particles.swap(i, (i * 7919 + 13) % n);
+        }
+        let path = |software| GpuOptions {
+            software_paths: Some(software),
+            ..Default::default()
+        };
+        let mut soft = GpuEngine::with_options(&scene, ctx, path(true)).unwrap();
+        let mut hard = GpuEngine::with_options(&scene, context().unwrap(), path(false)).unwrap();
+        assert!(soft.adapter_is_software() && !hard.adapter_is_software());
+        assert!(soft.variant_name().ends_with("_mirrors"), "{name}");
+        let names: Vec<String> = hard.buffers().into_iter().map(|(n, _)| n).collect();
+        assert!(
+            names
+                .iter()
+                .all(|n| !n.starts_with("mirror.") && !n.starts_with("quiet.")),
+            "{name}: {names:?}"
+        );
+        assert!(hard.buffer_bytes() < soft.buffer_bytes());
+        soft.run_steps(steps).unwrap();
+        hard.run_steps(steps).unwrap();
+        assert_same_bits(&soft.state().unwrap(), &hard.state().unwrap());
+        let (a, b) = (soft.state().unwrap(), hard.state().unwrap());
+        let bits = |v: &[glam::DVec3]| {
+            v.iter()
+                .map(|w| w.to_array().map(f64::to_bits))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(
+            bits(&a.angular_velocities),
+            bits(&b.angular_velocities),
+            "{name}"
+        );
+    }
+}
+
 mod collisions {
     use super::context;
     use powder::collide::{collide_on, Backend, CollideSpec};
@@ -1107,6 +1159,13 @@ fn split_pair_forces_give_the_same_bits() {
     split.run_steps(400).unwrap();
     let (sa, sb) = (one.state().unwrap(), split.state().unwrap());
     common::assert_same_bits(&sa, &sb);
+    // a limit below what a per-particle array needs: an error naming it, not a panic
+    let tiny = GpuContext::with_storage_binding_limit(8 * 1000).unwrap();
+    let err = GpuEngine::with_options(&scene, tiny, options)
+        .err()
+        .expect("arrays over the binding limit are refused");
+    let msg = err.to_string();
+    assert!(msg.contains("storage binding limit of 8000 bytes"), "{msg}");
 }
 
 /// The force pass reads the particles' state from texture mirrors, `MIRROR_WIDTH` (4096)

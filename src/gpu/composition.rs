@@ -10,7 +10,8 @@
 
 use super::layout::{CoulombSpringRow, HystereticPair, JkrPair, TwistingRow};
 use super::shaders::{
-    compose, ShaderVariant, LEDGER, LEDGER_OFF, OVERLAP, ROTATION, ROTATION_OFF, STEP,
+    compose, ShaderVariant, LEDGER, LEDGER_OFF, OVERLAP, ROTATION, ROTATION_BUFFERS,
+    ROTATION_MIRRORS, ROTATION_OFF, STATE_BUFFERS, STATE_MIRRORS, STEP,
 };
 use crate::model::friction::{rolling, sliding, twisting};
 use crate::model::history::{HistoryField, Mirror, Shape};
@@ -330,13 +331,12 @@ impl Composition {
         format!("step_{}", parts.join("+"))
     }
 
-    /// The name of the variant with or without the energy ledger (`_ledger` appended).
-    pub fn variant_name(&self, ledger: bool) -> String {
-        if ledger {
-            format!("{}_ledger", self.name())
-        } else {
-            self.name()
-        }
+    /// The name of the variant with or without the energy ledger (`_ledger` appended),
+    /// reading the state from buffers or from texture mirrors (`_mirrors` appended).
+    pub fn variant_name(&self, ledger: bool, mirrors: bool) -> String {
+        let ledger = if ledger { "_ledger" } else { "" };
+        let mirrors = if mirrors { "_mirrors" } else { "" };
+        format!("{}{ledger}{mirrors}", self.name())
     }
 
     /// Whether particles carry angular velocity: some sub-model exerts tangential forces
@@ -633,8 +633,9 @@ impl Composition {
     }
 
     /// The step's module: common, the laws' and sub-models' files, the generated interface,
-    /// the rotation and ledger hooks, the step.
-    pub fn variant(&self, ledger: bool) -> ShaderVariant {
+    /// the rotation and ledger hooks, the state's reads (its buffers, or texture mirrors:
+    /// the software adapter's path, `gpu::mirror`), the step.
+    pub fn variant(&self, ledger: bool, mirrors: bool) -> ShaderVariant {
         let interface = self.interface();
         let mut parts: Vec<&str> = self.laws().map(|l| l.source).collect();
         for s in self.subs() {
@@ -653,8 +654,20 @@ impl Composition {
             ROTATION_OFF
         });
         parts.push(if ledger { LEDGER } else { LEDGER_OFF });
+        parts.push(if mirrors {
+            STATE_MIRRORS
+        } else {
+            STATE_BUFFERS
+        });
+        if self.rotation() {
+            parts.push(if mirrors {
+                ROTATION_MIRRORS
+            } else {
+                ROTATION_BUFFERS
+            });
+        }
         ShaderVariant {
-            name: self.variant_name(ledger),
+            name: self.variant_name(ledger, mirrors),
             source: compose("shaders/step.wgsl", STEP, &parts),
         }
     }
@@ -713,7 +726,7 @@ mod tests {
         let c = Composition::of(&[jkr(0.0, 0.5, krijt), jkr(0.0, 0.0, Dissipation::None)]);
         assert_eq!(c.name(), "step_jkr+krijt+jkr_rolling");
         assert!(!c.interface().contains("mindlin_apply"));
-        assert!(!c.variant(false).source.contains("fn mindlin_apply"));
+        assert!(!c.variant(false, false).source.contains("fn mindlin_apply"));
     }
 
     #[test]

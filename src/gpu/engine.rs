@@ -85,6 +85,17 @@ impl Allocator<'_> {
         self.list.push((name.to_string(), b.size()));
         b
     }
+
+    /// An error naming the largest buffer when it exceeds the storage binding `limit`
+    /// (every buffer is bound whole) for `particles` particles.
+    fn check(&self, limit: u64, particles: usize) -> Result<(), PowderError> {
+        match self.list.iter().max_by_key(|(_, b)| *b) {
+            Some((name, bytes)) if *bytes > limit => Err(PowderError::Run(format!(
+                "{particles} particles need {bytes} bytes of `{name}`, over the adapter's storage binding limit of {limit} bytes (arrays are not yet split over bindings)"
+            ))),
+            _ => Ok(()),
+        }
+    }
 }
 
 /// The particle state (A): per particle, in the order of the last rebuild, with the
@@ -515,6 +526,10 @@ pub struct GpuOptions {
     /// halts at that rebuild and finishes after the growth, bitwise as without it — so
     /// this only saves those halts where the need is known.
     pub list_entries: Option<u64>,
+    /// The software adapter's paths: the state read through texture mirrors, and quiet
+    /// batches under [`QuietBatches::Auto`] (`None`: by the adapter kind,
+    /// `GpuContext::is_software`). Results are bitwise the same either way.
+    pub software_paths: Option<bool>,
 }
 
 impl Default for GpuOptions {
@@ -523,6 +538,7 @@ impl Default for GpuOptions {
             ledger: true,
             quiet: QuietBatches::Auto,
             list_entries: None,
+            software_paths: None,
         }
     }
 }
@@ -971,6 +987,8 @@ impl GpuEngine {
         // moved beyond skin/2 (flag set): the first step builds the lists
         let skin_init = [1u32, 0, 0, 0];
         q0.write_buffer(&skin_buf, 0, bytemuck::cast_slice(&skin_init));
+        // the software adapter's paths (texture mirrors; quiet batches under `auto`)
+        let software = options.software_paths.unwrap_or_else(|| ctx.is_software());
         let mut wanted = vec![
             "kick_drift",
             "decide",
@@ -994,7 +1012,12 @@ impl GpuEngine {
         }
         let mut constants = pipeline_constants(scene, &r, &all_models);
         constants.push(("SPLIT_PAIR_FORCE", f64::from(u8::from(split))));
-        let program = Program::specialized(&ctx, &kind.variant(ledger), Some(&wanted), &constants)?;
+        let program = Program::specialized(
+            &ctx,
+            &kind.variant(ledger, software),
+            Some(&wanted),
+            &constants,
+        )?;
         let max_per_dim = ctx.limits().max_compute_workgroups_per_dimension;
         // the scans that place the new lists (counts -> first entries)
         let scan_program = Program::with_entry_points(
@@ -1061,8 +1084,14 @@ impl GpuEngine {
         if let Some(w) = &s0.wpred {
             mirrored.push(("m_wpred", None, w, wgpu::TextureFormat::Rgba32Float));
         }
+        // (only on the software adapter's path)
+        if !software {
+            mirrored.clear();
+        }
         let mirrors = Mirrors::new(device, n as u32, &mirrored)?;
         alloc.list.extend(mirrors.sizes());
+        // (before anything binds them)
+        alloc.check(ctx.max_storage_binding(), n)?;
         let permutation = Permutation::new(
             &ctx,
             grid.params(),
@@ -1103,7 +1132,7 @@ impl GpuEngine {
         // quiet batches: not where walls move (their rebuild trigger is decide's) nor where
         // particles appear (an insertion rebuilds)
         let pouring = scene.particles.iter().any(|p| p.insert_at > 0.0);
-        let mode = options.quiet.on(&ctx);
+        let mode = options.quiet.on(software);
         let quiet = (mode != QuietBatches::Off && !moving_walls && !pouring).then(|| {
             let mut alloc = Allocator {
                 device,
@@ -1254,6 +1283,12 @@ impl GpuEngine {
         self.entries
     }
 
+    /// Whether the engine takes the software adapter's paths (texture mirrors, quiet
+    /// batches; `GpuOptions::software_paths`).
+    pub fn adapter_is_software(&self) -> bool {
+        !self.mirrors.is_empty()
+    }
+
     /// Name of the adapter the engine runs on.
     pub fn adapter(&self) -> &str {
         &self.ctx.summary.name
@@ -1282,7 +1317,8 @@ impl GpuEngine {
 
     /// The name of the step's shader module (`Composition::variant_name`).
     pub fn variant_name(&self) -> String {
-        self.kind.variant_name(self.has_ledger())
+        self.kind
+            .variant_name(self.has_ledger(), !self.mirrors.is_empty())
     }
 
     /// The step's kernels this engine built pipelines for (entry points of the step
@@ -1350,11 +1386,13 @@ impl GpuEngine {
         let mut out = vec![pass(&b.collect_kick_drift, When::Step)];
         out.extend(b.wall_move.as_ref().map(|p| pass(p, When::Step)));
         out.push(pass(&b.decide, When::Step));
-        out.push(PassTraffic::new(
-            "mirror copies",
-            When::Step,
-            self.mirrors.copy_traffic(),
-        ));
+        if !self.mirrors.is_empty() {
+            out.push(PassTraffic::new(
+                "mirror copies",
+                When::Step,
+                self.mirrors.copy_traffic(),
+            ));
+        }
         out.push(pass(&b.force, When::Step));
         out.extend(b.wall_servo.as_ref().map(|p| pass(p, When::Step)));
         for (name, bound) in self.grid.traffic(&self.state.cell) {
@@ -1364,7 +1402,9 @@ impl GpuEngine {
                 bound,
             ));
         }
-        out.push(pass(&b.gather, When::Rebuild));
+        if !self.mirrors.is_empty() {
+            out.push(pass(&b.gather, When::Rebuild));
+        }
         out.push(pass(&b.count_neighbours, When::Rebuild));
         for scan in &self.scans {
             for (name, bound) in scan.traffic() {
@@ -1415,7 +1455,9 @@ impl GpuEngine {
                 .encode_indirect(encoder, &self.grid_keys, &self.b.args, 0);
             let mut pass = encoder.begin_compute_pass(&Default::default());
             let at = self.rebuild_args;
-            bound.gather.indirect(&mut pass, &self.b.args, at);
+            if !self.mirrors.is_empty() {
+                bound.gather.indirect(&mut pass, &self.b.args, at);
+            }
             bound.count_neighbours.indirect(&mut pass, &self.b.args, at);
             for (scan, &offset) in self.scans.iter().zip(&self.scan_args) {
                 scan.record_indirect(&mut pass, &self.b.args, offset);

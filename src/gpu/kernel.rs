@@ -198,11 +198,20 @@ impl Kernel {
                 resource,
             });
         }
-        Ok(device.create_bind_group(&wgpu::BindGroupDescriptor {
+        // (a binding over the adapter's limits is an error here, not a panic)
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some(&self.name),
             layout: &self.layout,
             entries: &entries,
-        }))
+        });
+        match pollster::block_on(scope.pop()) {
+            Some(e) => Err(PowderError::Run(format!(
+                "cannot bind the buffers of kernel `{}`: {e}",
+                self.name
+            ))),
+            None => Ok(group),
+        }
     }
 
     /// (global name, bytes) of every distinct buffer or texture this kernel binds from

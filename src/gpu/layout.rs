@@ -896,7 +896,7 @@ mod tests {
             .into_iter()
             .max_by_key(|c| c.history_bytes())
             .unwrap();
-        let (jkr, _) = shaders::validate(&all.variant(true).source).unwrap();
+        let (jkr, _) = shaders::validate(&all.variant(true, true).source).unwrap();
         let (wsize, members) = wgsl_struct(&jkr, "PairRow");
         assert_eq!(wsize as usize, all.row_bytes(), "PairRow size");
         let jkr_at = 4 + size_of::<HystereticPair>() as u32;
@@ -993,7 +993,7 @@ mod tests {
     #[test]
     fn gpu_layout_history_strides_match_wgsl() {
         for kind in crate::gpu::composition::Composition::all() {
-            let (module, _) = shaders::validate(&kind.variant(true).source).unwrap();
+            let (module, _) = shaders::validate(&kind.variant(true, false).source).unwrap();
             for name in ["a_hist", "b_hist", "a_wall_hist"] {
                 let (_, g) = module
                     .global_variables

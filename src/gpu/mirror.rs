@@ -1,7 +1,9 @@
 //! Read-only texture mirrors of the per-particle state the force pass reads for every
 //! pair: the cell, the cell offset with the radius, the predicted velocity with the mass
 //! (and the predicted angular velocity when the scene rotates), copied from state A's
-//! buffers right before each force pass.
+//! buffers right before each force pass — on a software adapter only
+//! (`GpuOptions::software_paths`, `shaders/state_mirrors.wgsl`; a GPU reads the buffers,
+//! `shaders/state_buffers.wgsl`).
 //!
 //! Why: on Mesa lavapipe (the software adapter CI and most users without a GPU run on) a
 //! storage-buffer load with a per-invocation index is a scalar loop over the SIMD lanes
@@ -54,7 +56,8 @@ pub struct Mirrors {
 impl Mirrors {
     /// Textures for `sources` (WGSL global name, the name a kernel writes it under if
     /// any, buffer of `n` vec4s, texel format), or an error naming the limit when `n`
-    /// particles need more rows than the adapter allows.
+    /// particles need more rows than the adapter allows. No sources: no mirrors (the GPU
+    /// path, `shaders/state_buffers.wgsl`), and nothing to copy.
     pub fn new(
         device: &wgpu::Device,
         n: u32,
@@ -67,7 +70,7 @@ impl Mirrors {
     ) -> Result<Self, PowderError> {
         let rows = n.div_ceil(MIRROR_WIDTH).max(1);
         let max_rows = device.limits().max_texture_dimension_2d;
-        if rows > max_rows {
+        if rows > max_rows && !sources.is_empty() {
             return Err(PowderError::Run(format!(
                 "{n} particles need {rows} rows of {MIRROR_WIDTH} texels in the force pass's \
                  state mirrors; the adapter allows {max_rows} (at most {} particles)",
@@ -102,6 +105,11 @@ impl Mirrors {
             })
             .collect();
         Ok(Self { n, mirrors })
+    }
+
+    /// Whether there are none (the GPU path).
+    pub fn is_empty(&self) -> bool {
+        self.mirrors.is_empty()
     }
 
     /// (WGSL global name, texture view) of every mirror, for binding: under its read name
@@ -205,7 +213,8 @@ mod tests {
 
     #[test]
     fn gpu_mirror_width_matches_wgsl() {
-        let (module, _) = shaders::validate(&shaders::step_variant().source).unwrap();
+        let kind = &crate::gpu::composition::Composition::all()[0];
+        let (module, _) = shaders::validate(&kind.variant(false, true).source).unwrap();
         assert_eq!(wgsl_u32_const(&module, "MIRROR_WIDTH"), MIRROR_WIDTH);
         assert!(MIRROR_WIDTH.is_power_of_two());
         // a row's bytes meet the buffer-to-texture copy alignment

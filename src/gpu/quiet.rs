@@ -24,8 +24,6 @@
 //! The copies cost as much memory as the particle state, so `Auto` uses quiet batches on
 //! software adapters only ([`QuietBatches::on`]).
 
-use crate::gpu::context::GpuContext;
-
 /// How a GPU run uses quiet batches (`GpuOptions::quiet`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum QuietBatches {
@@ -39,12 +37,13 @@ pub enum QuietBatches {
 }
 
 impl QuietBatches {
-    /// What the choice means on `ctx`'s adapter: `Auto` tries quiet batches only on a
-    /// software adapter, where they pay (above); on a GPU their copies of the state
-    /// would cost memory for dispatches that launch no work.
-    pub fn on(self, ctx: &GpuContext) -> Self {
+    /// What the choice means with or without the software adapter's paths
+    /// (`GpuOptions::software_paths`): `Auto` tries quiet batches only there, where they
+    /// pay (above); on a GPU their copies of the state would cost memory for dispatches
+    /// that launch no work.
+    pub fn on(self, software: bool) -> Self {
         match self {
-            Self::Auto if !ctx.is_software() => Self::Off,
+            Self::Auto if !software => Self::Off,
             mode => mode,
         }
     }

@@ -24,6 +24,14 @@ pub const GRID: &str = include_str!("../../shaders/grid.wgsl");
 pub const ROTATION: &str = include_str!("../../shaders/rotation.wgsl");
 /// The rotation hooks as no-ops (a snippet of the step for scenes that do not rotate).
 pub const ROTATION_OFF: &str = include_str!("../../shaders/rotation_off.wgsl");
+/// The step's reads of the particle state on a GPU: the state's own buffers.
+pub const STATE_BUFFERS: &str = include_str!("../../shaders/state_buffers.wgsl");
+/// The step's reads of the particle state on a software adapter: texture mirrors.
+pub const STATE_MIRRORS: &str = include_str!("../../shaders/state_mirrors.wgsl");
+/// The predicted angular velocity from its buffer (with [`STATE_BUFFERS`]).
+pub const ROTATION_BUFFERS: &str = include_str!("../../shaders/rotation_buffers.wgsl");
+/// The predicted angular velocity from its mirror (with [`STATE_MIRRORS`]).
+pub const ROTATION_MIRRORS: &str = include_str!("../../shaders/rotation_mirrors.wgsl");
 /// The energy ledger and contact statistics (a snippet of the step, when a run wants them).
 pub const LEDGER: &str = include_str!("../../shaders/ledger.wgsl");
 /// The ledger hooks as no-ops (a snippet of the step for runs without the ledger).
@@ -43,7 +51,7 @@ pub fn step_variant() -> ShaderVariant {
         gamma0: 0.0,
         luding: Default::default(),
     });
-    Composition::of(&[lsd]).variant(true)
+    Composition::of(&[lsd]).variant(true, false)
 }
 
 /// A shader stage: one file of `shaders/`.
@@ -116,7 +124,9 @@ pub fn all_variants() -> Vec<ShaderVariant> {
         })
         .collect();
     for c in Composition::all() {
-        all.extend([false, true].map(|ledger| c.variant(ledger)));
+        for mirrors in [false, true] {
+            all.extend([false, true].map(|ledger| c.variant(ledger, mirrors)));
+        }
     }
     all
 }
@@ -207,11 +217,12 @@ mod tests {
 
     #[test]
     fn gpu_shaders_every_step_variant_has_the_step_kernels() {
-        for (kind, ledger) in Composition::all()
-            .into_iter()
-            .flat_map(|k| [(k.clone(), false), (k, true)])
-        {
-            let v = kind.variant(ledger);
+        let names: Vec<String> = all_variants().into_iter().map(|v| v.name).collect();
+        for (kind, ledger, mirrors) in Composition::all().into_iter().flat_map(|k| {
+            [(false, false), (true, false), (false, true), (true, true)]
+                .map(|(ledger, mirrors)| (k.clone(), ledger, mirrors))
+        }) {
+            let v = kind.variant(ledger, mirrors);
             let (module, _) = validate(&v.source).unwrap();
             let eps = compute_entry_points(&module);
             for name in [
@@ -259,11 +270,15 @@ mod tests {
             for name in ["a_ledger", "b_ledger", "a_wall_ledger", "particle_ledger"] {
                 assert_eq!(declared(name), ledger, "{}: {name}", v.name);
             }
-            assert!(
-                variant(&kind.variant_name(ledger)).is_some(),
-                "{} not in all_variants",
+            // the texture mirrors only on the software adapter's path
+            assert_eq!(declared("m_cell"), mirrors, "{}: m_cell", v.name);
+            assert_eq!(
+                declared("m_wpred"),
+                mirrors && kind.rotation(),
+                "{}: m_wpred",
                 v.name
             );
+            assert!(names.contains(&v.name), "{} not in all_variants", v.name);
         }
     }
 
