@@ -556,7 +556,8 @@ fn search(k: u32, fill: bool) -> vec2<u32> {
     // and their particles one range of the sorted order: 9 ranges instead of 27 cells.
     let rows = !periodic_axes().x;
     // (read once, not per candidate)
-    let cutoff = ok.w + step.reach + skin_width();
+    // (r_k + r_j first: both sides of a pair get bitwise the same cut-off)
+    let margin = step.reach + skin_width();
     for (var dz = -1; dz <= 1; dz++) {
         for (var dy = -1; dy <= 1; dy++) {
             for (var dx = -1; dx <= 1; dx++) {
@@ -589,7 +590,7 @@ fn search(k: u32, fill: bool) -> vec2<u32> {
                     }
                     let oj = sorted_off(j);
                     let d = separation(ck, ok, sorted_cell(j), oj);
-                    let reach = cutoff + oj.w;
+                    let reach = (ok.w + oj.w) + margin;
                     if (dot(d, d) < reach * reach) {
                         if (evaluates(d, k, j)) {
                             if (fill && b_row[k] + up < cap) {
@@ -641,7 +642,10 @@ fn neighbours(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nw
 // rebuild (`GpuEngine::run_steps`): the state is as the drift left it, the old lists whole.
 @compute @workgroup_size(1)
 fn commit() {
-    if (grid.n_particles == 0u) {
+    // (only on a step that rebuilds, and once: later steps of a halted batch see the same
+    // counts)
+    let rebuilding = atomicLoad(&skin[1]) != 0u && atomicLoad(&monitor[7]) == 0u;
+    if (grid.n_particles == 0u || !rebuilding) {
         return;
     }
     let last = grid.n_particles - 1u;

@@ -236,7 +236,12 @@ fn growing_lists_mid_run_change_no_bit() {
         };
         let mut fixed = GpuEngine::with_options(&scene, context().unwrap(), large).unwrap();
         let first = grown.list_entries();
-        grown.run_steps(steps).unwrap();
+        // a snapshot a quarter in, with the lists smaller than at the end
+        let early = steps / 4;
+        grown.run_steps(early).unwrap();
+        let snapshot = grown.save_state().unwrap();
+        let snapshot_entries = grown.list_entries();
+        grown.run_steps(steps - early).unwrap();
         fixed.run_steps(steps).unwrap();
         eprintln!(
             "{name}: {} growths, {first} -> {} entries ({:.2} a particle)",
@@ -251,6 +256,27 @@ fn growing_lists_mid_run_change_no_bit() {
         assert_eq!(
             grown.energies(&a).unwrap().dissipated.to_bits(),
             fixed.energies(&b).unwrap().dissipated.to_bits(),
+            "{name}"
+        );
+        assert_eq!(
+            grown.rebuilds().unwrap(),
+            fixed.rebuilds().unwrap(),
+            "{name}"
+        );
+        assert_eq!(grown.time.to_bits(), fixed.time.to_bits(), "{name}");
+        // back to the snapshot, whose lists are smaller than the grown ones, and on
+        // again: the same run (no halt for counts the snapshot does not hold)
+        assert!(
+            grown.list_entries() > snapshot_entries,
+            "{name}: no growth after the snapshot"
+        );
+        grown.restore_state(snapshot).unwrap();
+        assert_eq!(grown.list_entries(), snapshot_entries);
+        grown.run_steps(steps - early).unwrap();
+        assert_same_bits(&grown.state().unwrap(), &fixed.state().unwrap());
+        assert_eq!(
+            grown.rebuilds().unwrap(),
+            fixed.rebuilds().unwrap(),
             "{name}"
         );
         let mut resumed = GpuEngine::new(&scene, context().unwrap()).unwrap();

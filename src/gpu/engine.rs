@@ -614,8 +614,9 @@ pub struct GpuEngine {
     rebuild_args: u64,
     step_args: u64,
     step_args_full: [[u32; 3]; 2],
-    /// A halted batch's remaining steps, the first without its drift (`run_steps`).
-    resume: Option<u64>,
+    /// A halted batch's remaining steps, the first without its drift, and the time and
+    /// steps at the batch's start (`run_steps`).
+    resume: Option<(u64, (f64, u64))>,
     /// Times the lists grew (each a halted batch, or the first build).
     growths: u64,
     program: Program,
@@ -1840,14 +1841,14 @@ impl GpuEngine {
         while left > 0 {
             // the rest of a halted batch starts with the halted step, drifted already, and
             // keeps the batch's boundaries (walls and insertions are set at them)
-            let (batch, first) = match self.resume.take() {
-                Some(rest) => (rest.min(left), Drift::None),
+            let (batch, first, origin) = match self.resume.take() {
+                Some((rest, origin)) => (rest.min(left), Drift::None, origin),
                 None => {
                     let batch = left
                         .min(STEPS_PER_SUBMIT)
                         .min(self.prescribe_walls())
                         .min(self.insert_due());
-                    (batch, Drift::Plain)
+                    (batch, Drift::Plain, (self.time, self.steps))
                 }
             };
             let quiet = match first {
@@ -1876,13 +1877,14 @@ impl GpuEngine {
                 .saturating_sub(u64::from(first == Drift::None));
             self.advance_prescribed_walls(moved);
             self.steps += done;
-            self.time += done as f64 * self.dt;
+            // (from the batch's start: a halted batch ends at the same time, to the bit)
+            self.time = origin.0 + (self.steps - origin.1) as f64 * self.dt;
             left -= done;
             self.apply_monitor(&report.monitor)?;
             match report.halted() {
                 Some(need) => {
                     self.grow_lists(need)?;
-                    self.resume = Some(batch - done);
+                    self.resume = Some((batch - done, origin));
                 }
                 None => self.observe(batch, &report),
             }
@@ -2084,14 +2086,11 @@ impl GpuEngine {
             )));
         }
         // the lists' capacity the state was saved with (its entries' partner ids)
-        let saved_entries = saved
+        let entries = saved
             .buffers
             .iter()
             .find(|(name, _)| name == "a_hist_pid")
-            .map(|(_, bytes)| bytes.len() as u64 / 4);
-        if let Some(entries) = saved_entries.filter(|&e| e != self.entries) {
-            self.resize_lists(entries, false)?;
-        }
+            .map_or(self.entries, |(_, bytes)| bytes.len() as u64 / 4);
         let list = self.state_buffers();
         let names: Vec<&String> = list.iter().map(|(n, _)| n).collect();
         let saved_names: Vec<&String> = saved.buffers.iter().map(|(n, _)| n).collect();
@@ -2100,14 +2099,27 @@ impl GpuEngine {
                 "the saved GPU state holds buffers {saved_names:?}, this run needs {names:?} (another scene or step variant)"
             )));
         }
+        // every size checked before anything changes (the per-entry arrays at the saved
+        // capacity)
+        let per_entry = |name: &str| match name {
+            "a_hist" => Some(self.kind.history_bytes()),
+            "a_hist_pid" | "nbr" | "lower" => Some(4),
+            "a_ledger" => Some(16),
+            _ => None,
+        };
         for ((name, buf), (_, bytes)) in list.iter().zip(&saved.buffers) {
-            if bytes.len() as u64 != buf.size() {
+            let expected = per_entry(name).map_or(buf.size(), |b| (b * entries).max(4));
+            if bytes.len() as u64 != expected {
                 return Err(PowderError::Run(format!(
-                    "the saved GPU buffer `{name}` has {} bytes, this run's has {} (another scene?)",
+                    "the saved GPU buffer `{name}` has {} bytes, this run's has {expected} (another scene?)",
                     bytes.len(),
-                    buf.size()
                 )));
             }
+        }
+        if entries != self.entries {
+            self.resize_lists(entries, false)?;
+        }
+        for ((_, buf), (_, bytes)) in self.state_buffers().iter().zip(&saved.buffers) {
             self.ctx.queue.write_buffer(buf, 0, bytes);
         }
         // the servo's pushes of walls that are no candidates must read 0 (a rebuild zeroes
