@@ -1,7 +1,7 @@
 //! The GPU engine against the CPU reference on lavapipe (CI) or any adapter.
 
 mod common;
-use common::{example, gpu as context};
+use common::{example, gpu as context, max_distance};
 
 use powder::cpu::CpuEngine;
 use powder::gpu::GpuEngine;
@@ -23,12 +23,7 @@ fn cohesive_cluster_matches_the_cpu_reference() {
         gpu.run_steps(2000).unwrap();
         let s = gpu.state().unwrap();
         let r = scene.particles[0].radius;
-        let worst = cpu
-            .positions()
-            .iter()
-            .zip(&s.positions)
-            .map(|(a, b)| a.distance(*b))
-            .fold(0.0, f64::max);
+        let worst = max_distance(cpu.positions(), &s.positions);
         eprintln!(
             "round {round}: worst position difference {:.3e} radii",
             worst / r
@@ -56,13 +51,7 @@ fn settled_cluster_rebuilds_rarely_and_still_matches_the_cpu() {
     assert!(falling > 0 && falling < 2000, "{falling}");
     let r = scene.particles[0].radius;
     let worst = |cpu: &CpuEngine, gpu: &GpuEngine| {
-        let s = gpu.state().unwrap();
-        cpu.positions()
-            .iter()
-            .zip(&s.positions)
-            .map(|(a, b)| a.distance(*b))
-            .fold(0.0, f64::max)
-            / r
+        max_distance(cpu.positions(), &gpu.state().unwrap().positions) / r
     };
     let w = worst(&cpu, &gpu);
     eprintln!("after 2000 steps: worst position difference {w:.3e} radii");
@@ -174,13 +163,7 @@ positions = [{}]
     assert!(listed > 2 * cap, "{listed} partners, capacity {cap}");
     cpu.run_steps(400).unwrap();
     gpu.run_steps(400).unwrap();
-    let s = gpu.state().unwrap();
-    let worst = cpu
-        .positions()
-        .iter()
-        .zip(&s.positions)
-        .map(|(a, b)| a.distance(*b))
-        .fold(0.0, f64::max);
+    let worst = max_distance(cpu.positions(), &gpu.state().unwrap().positions);
     let moved = cpu
         .positions()
         .iter()

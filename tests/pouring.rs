@@ -94,12 +94,7 @@ fn batches_appear_on_time_and_the_ledger_books_them() {
         c.run_steps(n).unwrap();
         g.run_steps(n).unwrap();
         let s = g.state().unwrap();
-        let worst = c
-            .positions()
-            .iter()
-            .zip(&s.positions)
-            .map(|(a, b)| a.distance(*b))
-            .fold(0.0, f64::max);
+        let worst = common::max_distance(c.positions(), &s.positions);
         let (ec, eg) = (c.energies(), g.energies(&s).unwrap());
         eprintln!("t {:.3}: worst {worst:e} m; cpu {ec:?}; gpu {eg:?}", c.time);
         // (with the Kahan-compensated updates: 7.2e-10 m after 0.02 s, 3.8e-9 m after the

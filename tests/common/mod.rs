@@ -46,6 +46,15 @@ pub fn cluster_with_outputs() -> Scene {
     s
 }
 
+/// The largest distance between corresponding points of `a` and `b` (0 when empty).
+#[allow(dead_code)]
+pub fn max_distance(a: &[glam::DVec3], b: &[glam::DVec3]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| x.distance(*y))
+        .fold(0.0, f64::max)
+}
+
 /// Asserts that two GPU states hold bitwise the same positions and velocities.
 #[allow(dead_code)]
 pub fn assert_same_bits(a: &GpuState, b: &GpuState) {
