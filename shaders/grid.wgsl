@@ -53,11 +53,14 @@ struct ScanParams {
     n: u32,
     // ceil(n / SCAN_BLOCK): workgroups doing real work.
     n_blocks: u32,
-    _pad0: u32,
-    _pad1: u32,
+    // Where the elements start in scan_in and scan_out (the first level may scan one region
+    // of a buffer into another region of the same buffer).
+    in_offset: u32,
+    out_offset: u32,
 }
 @group(0) @binding(10) var<uniform> scan_params: ScanParams;
-@group(0) @binding(11) var<storage, read> scan_in: array<u32>;
+// (read_write: it may be scan_out's buffer, bound twice)
+@group(0) @binding(11) var<storage, read_write> scan_in: array<u32>;
 @group(0) @binding(12) var<storage, read_write> scan_out: array<u32>;
 @group(0) @binding(13) var<storage, read_write> scan_sums: array<u32>;
 @group(0) @binding(14) var<storage, read> scan_carry: array<u32>;
@@ -128,7 +131,7 @@ fn scan_blocks(
     for (var k = 0u; k < SCAN_ITEMS; k++) {
         prefix[k] = total;
         if (base + k < n) {
-            total += scan_in[base + k];
+            total += scan_in[scan_params.in_offset + base + k];
         }
     }
     scan_tmp[lid] = total;
@@ -165,7 +168,7 @@ fn scan_blocks(
     let carry = scan_tmp[lid];
     for (var k = 0u; k < SCAN_ITEMS; k++) {
         if (base + k < n) {
-            scan_out[base + k] = carry + prefix[k];
+            scan_out[scan_params.out_offset + base + k] = carry + prefix[k];
         }
     }
 }
@@ -179,7 +182,7 @@ fn scan_add(
 ) {
     let i = global_index(wid, nwg, lid);
     if (i < scan_params.n) {
-        scan_out[i] += scan_carry[i / SCAN_BLOCK];
+        scan_out[scan_params.out_offset + i] += scan_carry[i / SCAN_BLOCK];
     }
 }
 

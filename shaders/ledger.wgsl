@@ -30,9 +30,8 @@
 
 const LEDGER: bool = true;
 
-@group(0) @binding(60) var<storage, read_write> a_ledger: array<vec4<f32>>;
-@group(0) @binding(61) var<storage, read_write> b_ledger: array<vec4<f32>>;
-@group(0) @binding(62) var<storage, read_write> a_wall_ledger: array<vec4<f32>>;
+// (The slots' values: the `ledger` field of the entries, `new_ledger` of a rebuild's new
+// lists, `wall_ledger` of the wall contacts: `gpu::records`.)
 @group(0) @binding(64) var<storage, read_write> particle_ledger: array<vec4<f32>>;
 
 // What the force kernel gathers for one particle during a step.
@@ -96,11 +95,11 @@ fn ledger_count(acc: ptr<function, LedgerAcc>, k: Kin, engaged: bool, wall: bool
 // on both of its paths and stores it once: `ledger_save`; on lavapipe each access in the
 // code is a loop over the SIMD lanes, taken or not).
 fn ledger_load(slot: u32) -> vec4<f32> {
-    return a_ledger[slot];
+    return load_ledger(slot);
 }
 
 fn ledger_save(slot: u32, value: vec4<f32>) {
-    a_ledger[slot] = value;
+    store_ledger(slot, value);
 }
 
 // One evaluated particle–particle contact whose slot held `old` (after pair_contact):
@@ -117,12 +116,12 @@ fn ledger_pair(acc: ptr<function, LedgerAcc>, old: vec4<f32>, p: PairRow, k: Kin
 // Whether the wall contact in `slot` was engaged after the last step (the force kernel
 // then evaluates it even beyond reach, so its exit is booked).
 fn ledger_wall_engaged(slot: u32) -> bool {
-    return a_wall_ledger[slot].w != 0.0;
+    return load_wall_ledger(slot).w != 0.0;
 }
 
 // One evaluated wall contact; v_n is the wall's velocity along n.
 fn ledger_wall(acc: ptr<function, LedgerAcc>, slot: u32, p: PairRow, k: Kin, c: Contact, power: f32, v_n: f32) {
-    let old = a_wall_ledger[slot];
+    let old = load_wall_ledger(slot);
     if (v_n != 0.0) {
         (*acc).wall_work += 0.5 * (select(0.0, old.y, old.w != 0.0) + c.normal) * v_n * k.dt;
     }
@@ -130,7 +129,7 @@ fn ledger_wall(acc: ptr<function, LedgerAcc>, slot: u32, p: PairRow, k: Kin, c: 
     (*acc).dissipated += booked.x;
     (*acc).stored += c.potential;
     let engaged = booked.w != 0.0;
-    a_wall_ledger[slot] = select(vec4<f32>(0.0), vec4<f32>(k.delta, c.normal, c.potential - 0.5 * k.dt * power, 1.0), engaged);
+    store_wall_ledger(slot, select(vec4<f32>(0.0), vec4<f32>(k.delta, c.normal, c.potential - 0.5 * k.dt * power, 1.0), engaged));
     ledger_count(acc, k, engaged, true);
 }
 
@@ -164,18 +163,18 @@ fn ledger_store(pid: u32, acc: LedgerAcc) {
 
 // remap: the slot's ledger follows its history.
 fn ledger_carry(new_slot: u32, old_slot: u32) {
-    b_ledger[new_slot] = a_ledger[old_slot];
+    store_new_ledger(new_slot, load_ledger(old_slot));
 }
 
 fn ledger_clear(new_slot: u32) {
-    b_ledger[new_slot] = vec4<f32>(0.0);
+    store_new_ledger(new_slot, vec4<f32>(0.0));
 }
 
 // copy_back_history: the new list's entries row .. row + n return to A (the wall
 // contacts were re-sorted in place with their particle).
 fn ledger_copy_back(row: u32, n: u32) {
     for (var e = row; e < row + n; e++) {
-        a_ledger[e] = b_ledger[e];
+        store_ledger(e, load_new_ledger(e));
     }
 }
 
@@ -184,33 +183,32 @@ fn ledger_copy_back(row: u32, n: u32) {
 // booked as having left at its last overlap (U0 − ½·dt·P0; the CPU also adds the normal
 // work 0.5·f0·(delta − delta0) at its current overlap, which is not at hand here) and
 // counted in monitor[3], so the host can say so.
-fn ledger_dropped(pid: u32, o: u32, old_n: u32, k: u32) {
+fn ledger_dropped(pid: u32, old_row: u32, old_n: u32, k: u32) {
     var lost = 0.0;
-    let old_row = a_row[o];
     for (var m = 0u; m < old_n; m++) {
-        let old = a_ledger[old_row + m];
+        let old = load_ledger(old_row + m);
         if (old.w == 0.0) {
             continue;
         }
         // the pair is in k's new list, or in a partner's that lists k (`lower`, resolved)
-        let partner = a_hist_pid[old_row + m];
+        let partner = load_hist_pid(old_row + m);
         var found = false;
-        let row = b_row[k];
-        for (var e = row; e < row + b_count[k]; e++) {
-            if (b_hist_pid[e] == partner) {
+        let row = rows[row_at(ROWS_B_ROW, k)];
+        for (var e = row; e < row + rows[row_at(ROWS_B_COUNT, k)]; e++) {
+            if (load_new_hist_pid(e) == partner) {
                 found = true;
                 break;
             }
         }
-        let low = lower_row[k];
-        for (var s = low; s < low + lower_count[k] && !found; s++) {
-            if (a_pid[entry_owner(lower[s])] == partner) {
+        let low = rows[row_at(ROWS_LOWER_ROW, k)];
+        for (var s = low; s < low + rows[row_at(ROWS_LOWER_COUNT, k)] && !found; s++) {
+            if (load_ids(entry_owner(load_lower(s))).x == partner) {
                 found = true;
             }
         }
         if (!found) {
             lost += old.z;
-            atomicAdd(&monitor[3], 1u);
+            atomicAdd(&control[3], 1u);
         }
     }
     if (lost != 0.0) {

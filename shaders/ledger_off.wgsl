@@ -37,4 +37,4 @@ fn ledger_wall_engaged(slot: u32) -> bool {
     return false;
 }
 
-fn ledger_dropped(pid: u32, o: u32, old_n: u32, k: u32) {}
+fn ledger_dropped(pid: u32, old_row: u32, old_n: u32, k: u32) {}

@@ -1,7 +1,7 @@
 // overlap.wgsl — a pair's overlap to far below f32 rounding of positions (issue 15):
 // double-float (hi + lo) arithmetic on the compensated positions x = cell·h + o − c and
 // radii r − c_r (the Kahan compensations the drift keeps, and the radius's rounding
-// residual, both in `a_kahan[2k + 1]`). A separation of 2 mm has an f32 ulp of 2.3e-10 m,
+// residual, both in the state's `kahan_o`). A separation of 2 mm has an f32 ulp of 2.3e-10 m,
 // more than 4 % of a 5e-9 m adhesion range; this resolves the overlap to ~1e-16 m.
 //
 // Every intermediate goes through `opaque1` (step.wgsl): Mesa's NIR folds the error terms
@@ -48,7 +48,8 @@ struct Df3 {
 
 // The periods a nearest-image cell difference added to the raw one, per axis (−1, 0, 1).
 fn image_shift(image: vec3<i32>, raw: vec3<i32>) -> vec3<f32> {
-    return vec3<f32>((image - raw) / vec3<i32>(grid.dims));
+    // (in f32: the quotient of two small integers is exact; no signed integer division)
+    return vec3<f32>(image - raw) / vec3<f32>(grid.dims);
 }
 
 // x_i − x_j from cell differences `dc` (nearest image, `shift` periods from the raw one),

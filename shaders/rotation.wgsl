@@ -2,18 +2,16 @@
 // torques (JKR with friction or rolling resistance). Composed into the step instead of
 // rotation_off.wgsl, so a scene without them declares (and allocates) none of this.
 //
-// Per particle, in both state sets like vel/acc (B only on a rebuild): omega.xyz =
+// Per particle, like vel/acc: omega.xyz =
 // angular velocity, omega.w = the moment of inertia 2/5·m·r²; alpha.xyz = angular acceleration torque/I. Integrated
 // with the same half kicks as the velocity (CPU: `CpuEngine::step`); wpred is the
 // predicted omega + dt/2·alpha the forces see (as vpred for the velocity).
 
 const ROTATION: bool = true;
 
-@group(0) @binding(50) var<storage, read_write> a_omega: array<vec4<f32>>;
-@group(0) @binding(51) var<storage, read_write> a_alpha: array<vec4<f32>>;
-@group(0) @binding(54) var<storage, read_write> a_wpred: array<vec4<f32>>;
-// Per slot, this step: the torque the evaluated pair exerts on the partner (xyz).
-@group(0) @binding(72) var<storage, read_write> pair_torque: array<vec4<f32>>;
+// (omega, alpha, wpred: fields of the state, `gpu::state`)
+// (Per entry, this step: the torque the evaluated pair exerts on the partner, the entries'
+// `pair_torque`.)
 
 // One particle's angular state as its collect and drift read it, once per pass (on
 // lavapipe each storage access in the code is a loop over the SIMD lanes): omega (xyz)
@@ -24,15 +22,15 @@ struct RotState {
 }
 
 fn rot_load(k: u32) -> RotState {
-    return RotState(a_omega[k], a_alpha[k].xyz);
+    return RotState(load_omega(k), load_alpha(k).xyz);
 }
 
 // collect: alpha = (the torque of k's own pairs, which force left in alpha, + the partners'
 // share)/I, stored.
 fn rot_collect(k: u32, torque: vec3<f32>) -> RotState {
-    let omega = a_omega[k];
-    let alpha = (a_alpha[k].xyz + torque) / omega.w;
-    a_alpha[k] = vec4<f32>(alpha, 0.0);
+    let omega = load_omega(k);
+    let alpha = (load_alpha(k).xyz + torque) / omega.w;
+    store_alpha(k, vec4<f32>(alpha, 0.0));
     return RotState(omega, alpha);
 }
 
@@ -48,8 +46,8 @@ fn rot_drift(k: u32, r: RotState, pending_kick: bool) {
         w = w + 0.5 * step.dt * r.alpha;
     }
     w = w + 0.5 * step.dt * r.alpha;
-    a_omega[k] = vec4<f32>(w, r.omega.w);
-    a_wpred[k] = vec4<f32>(w + 0.5 * step.dt * r.alpha, 0.0);
+    store_omega(k, vec4<f32>(w, r.omega.w));
+    store_wpred(k, vec4<f32>(w + 0.5 * step.dt * r.alpha, 0.0));
 }
 
 // (rot_wpred: the predicted angular velocity, from rotation_mirrors.wgsl or
@@ -57,21 +55,21 @@ fn rot_drift(k: u32, r: RotState, pending_kick: bool) {
 
 // force: the torque of k's own pairs and walls (alpha holds it until collect).
 fn rot_store_partial(k: u32, torque: vec3<f32>) {
-    a_alpha[k] = vec4<f32>(torque, 0.0);
+    store_alpha(k, vec4<f32>(torque, 0.0));
 }
 
 
 // force: the torque an evaluated pair exerts on the partner (slot of the pair); collect
 // reads it back.
 fn rot_pair_store(slot: u32, torque: vec3<f32>) {
-    pair_torque[slot] = vec4<f32>(torque, 0.0);
+    store_pair_torque(slot, torque);
 }
 
 fn rot_pair_load(slot: u32) -> vec3<f32> {
-    return pair_torque[slot].xyz;
+    return load_pair_torque(slot);
 }
 
 // kick: omega += dt/2·alpha.
 fn rot_kick(k: u32) {
-    a_omega[k] = vec4<f32>(a_omega[k].xyz + 0.5 * step.dt * a_alpha[k].xyz, a_omega[k].w);
+    store_omega(k, vec4<f32>(load_omega(k).xyz + 0.5 * step.dt * load_alpha(k).xyz, load_omega(k).w));
 }

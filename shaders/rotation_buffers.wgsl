@@ -1,5 +1,5 @@
 // rotation_buffers.wgsl — the predicted angular velocity from its buffer (with
 // state_buffers.wgsl, where particles rotate).
 fn rot_wpred(k: u32) -> vec3<f32> {
-    return a_wpred[k].xyz;
+    return load_wpred(k).xyz;
 }

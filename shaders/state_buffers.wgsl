@@ -3,24 +3,24 @@
 
 // Particle k's cell, offset (w: radius) and predicted velocity (w: mass).
 fn own_cell(k: u32) -> vec4<i32> {
-    return a_cell[k];
+    return load_cell(k);
 }
 
 fn own_off(k: u32) -> vec4<f32> {
-    return a_off[k];
+    return load_off(k);
 }
 
 fn own_vpred(k: u32) -> vec4<f32> {
-    return a_vpred[k];
+    return load_vpred(k);
 }
 
 // The k-th particle of a rebuild's new order, before the state is re-sorted.
 fn sorted_cell(k: u32) -> vec4<i32> {
-    return a_cell[sorted_index[k]];
+    return load_cell(sorted_index[k]);
 }
 
 fn sorted_off(k: u32) -> vec4<f32> {
-    return a_off[sorted_index[k]];
+    return load_off(sorted_index[k]);
 }
 
 // gather: nothing to copy.

@@ -1,5 +1,5 @@
 // state_mirrors.wgsl — how the step reads the particle state on a software adapter: from
-// read-only texture copies of a_cell, a_off and a_vpred, made right before each force pass
+// read-only texture copies of the state's cell, off and vpred, made right before each force pass
 // (`gpu::mirror`). On lavapipe a read-only storage-texture load is one gather where a
 // storage-buffer load is a loop over the SIMD lanes (0.3 against 1.1–1.8 ns a vec4:
 // examples/lavapipe_probe.rs). The twin for GPUs is state_buffers.wgsl.
@@ -42,6 +42,6 @@ fn sorted_off(k: u32) -> vec4<f32> {
 
 // gather: the new order's positions into the mirrors.
 fn mirror_sorted(k: u32, o: u32) {
-    textureStore(m_cell_out, mirror_texel(k), a_cell[o]);
-    textureStore(m_off_out, mirror_texel(k), a_off[o]);
+    textureStore(m_cell_out, mirror_texel(k), load_cell(o));
+    textureStore(m_off_out, mirror_texel(k), load_off(o));
 }

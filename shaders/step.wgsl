@@ -37,7 +37,7 @@
 //   remap        per particle            resolves `lower`; each new entry finds its
 //                                        history in A's old lists by the persistent ids
 //   copy_back_history                    the B lists into A; disp = 0; the wall candidates
-//                                        (a_wall_near)
+//                                        (ids.w)
 // every step:
 //   <mirror copies>                      A's cell, offset, vpred (wpred) into the read-only
 //                                        textures m_* (`gpu::mirror`)
@@ -126,10 +126,12 @@ fn nearest_image(dc: vec3<i32>) -> vec3<i32> {
     return w;
 }
 
-// A cell coordinate wrapped into the grid on periodic axes.
+// A cell coordinate wrapped into the grid on periodic axes. (Only non-negative operands
+// of % and /: WGSL's remainder truncates, GLSL's % of a negative number is undefined.)
 fn wrap_cell(c: vec3<i32>) -> vec3<i32> {
     let n = vec3<i32>(grid.dims);
-    return select(c, ((c % n) + n) % n, periodic_axes());
+    let periods = select(vec3<i32>(0), max(-c - vec3<i32>(1), vec3<i32>(0)) / n + vec3<i32>(1), c < vec3<i32>(0));
+    return select(c, (c + periods * n) % n, periodic_axes());
 }
 
 // The run monitor's overlap limit over a12 (`run::MAX_OVERLAP_RATIO`; a test ties them).
@@ -172,38 +174,23 @@ override ONE_MATERIAL: bool = false;
 
 @group(0) @binding(20) var<uniform> step: StepParams;
 
-// State A (the current state, in the order of the last rebuild; a rebuild re-sorts it in
-// place) and its neighbour lists with their history; B is the lists a rebuild builds.
-@group(0) @binding(21) var<storage, read_write> a_cell: array<vec4<i32>>;
-@group(0) @binding(22) var<storage, read_write> a_off: array<vec4<f32>>;
-@group(0) @binding(23) var<storage, read_write> a_vel: array<vec4<f32>>;
-@group(0) @binding(24) var<storage, read_write> a_acc: array<vec4<f32>>;
-@group(0) @binding(25) var<storage, read_write> a_pid: array<u32>;
-@group(0) @binding(26) var<storage, read_write> a_count: array<u32>;
-@group(0) @binding(27) var<storage, read_write> a_hist: array<Hist>;
-@group(0) @binding(28) var<storage, read_write> a_hist_pid: array<u32>;
-@group(0) @binding(29) var<storage, read_write> a_wall_hist: array<Hist>;
-// Displacement (xyz) accumulated since the last neighbour-list rebuild, and (w) the largest
-// overlap/a12 of the particle's contacts over the steps of this batch so far: `force` leaves
-// each step's in acc.w, the next drift folds it in here (both accesses it makes anyway),
-// and the batch-end `collect` reduces it into the monitor. An atomic per particle and step
-// cost 5–10 % of the hysteretic step on lavapipe.
-@group(0) @binding(30) var<storage, read_write> a_disp: array<vec4<f32>>;
-// Predicted velocity v + dt/2·a for the velocity-dependent forces (xyz) and the mass (w),
-// written by kick_drift: the force kernel reads one vec4 per partner for both.
-@group(0) @binding(40) var<storage, read_write> a_vpred: array<vec4<f32>>;
-
-@group(0) @binding(36) var<storage, read_write> b_count: array<u32>;
-@group(0) @binding(37) var<storage, read_write> b_hist: array<Hist>;
-@group(0) @binding(38) var<storage, read_write> b_hist_pid: array<u32>;
-
-// Kahan compensation of the velocity (element 2i) and of the cell offset (2i + 1), per
-// particle: the f32 updates v += dt/2·a and o += dt·v add increments of
-// a few ulps (slow particles, small dt), whose rounding would otherwise accumulate
-// systematically; the true values are v − c_v and o − c_o.
+// The particle state (the buffers `state` and `motion`: the generated
+// load_<field>/store_<field> of `gpu::state`, composed before this file), in the order of
+// the last rebuild; a rebuild re-sorts it in place. Its fields: cell (w: material), off (w: radius), vel (w: mass),
+// acc (w: the force pass's largest overlap/a12), vpred = v + dt/2·a (w: mass; the force
+// pass reads one vec4 per partner for both), kahan_v and kahan_o (the Kahan compensations
+// of the velocity and the offset: the f32 updates v += dt/2·a and o += dt·v add
+// increments of a few ulps whose rounding would otherwise accumulate; true = stored − c),
+// disp (the displacement since the last rebuild, w: the batch's largest overlap/a12 so
+// far, folded in by the drift and reduced into the monitor by the batch-end collect),
+// ids (persistent id, first list entry, list length, wall candidates) and, where
+// particles rotate, omega, alpha, wpred.
 // (own_cell, own_off, own_vpred, sorted_cell, sorted_off, mirror_sorted: the state's
 // reads, from state_mirrors.wgsl or state_buffers.wgsl)
-@group(0) @binding(66) var<storage, read_write> a_kahan: array<vec4<f32>>;
+
+// The neighbour lists' entries (`entries`: partner, `lower`, partner id, history, pair
+// force and torque, ledger value), a rebuild's new lists (`new_entries`) and the wall
+// contacts (`wall_contacts`): the generated load_<field>/store_<field> of `gpu::records`.
 
 // x + dx with Kahan compensation c (x_true = x − c): returns (x', c').
 struct Compensated {
@@ -229,27 +216,36 @@ fn is_active(pid: u32) -> bool {
     return !POURING || appeared[pid] != 0u;
 }
 
-// The lists are compressed rows: particle k's entries are a_row[k] .. a_row[k] + a_count[k]
-// of the per-entry arrays (nbr, a_hist, a_hist_pid, the pair forces and torques, the
-// ledger), in sorted order, so consecutive particles' rows are consecutive; b_row and
-// b_count place the lists a rebuild builds, lower_row and lower_count the `lower` list.
-@group(0) @binding(90) var<storage, read_write> a_row: array<u32>;
-@group(0) @binding(91) var<storage, read_write> b_row: array<u32>;
-@group(0) @binding(92) var<storage, read_write> lower_row: array<u32>;
+// The lists are compressed rows: particle k's entries are ids.y .. ids.y + ids.z of the
+// per-entry arrays (nbr, a_hist, a_hist_pid, the pair forces and torques, the ledger), in
+// sorted order, so consecutive particles' rows are consecutive. `rows` holds four per-particle
+// regions (like the state's, `particle_stride` apart): the lengths and first entries of
+// the lists a rebuild builds (B) and of the `lower` lists; the scans of `gpu::grid` turn
+// each count region into its row region.
+@group(0) @binding(90) var<storage, read_write> rows: array<u32>;
+const ROWS_B_COUNT: u32 = 0u;
+const ROWS_B_ROW: u32 = 1u;
+const ROWS_LOWER_COUNT: u32 = 2u;
+const ROWS_LOWER_ROW: u32 = 3u;
+
+fn row_at(region: u32, k: u32) -> u32 {
+    return region * particle_stride() + k;
+}
 
 // The contact of particle k with wall w: wall-major, for the same reason.
 fn wall_slot(k: u32, w: u32) -> u32 {
     return w * grid.n_particles + k;
 }
 
-// The particle whose new list (b_row, b_count) holds entry e: the last with b_row <= e
+// The particle whose new list (ROWS_B_ROW, ROWS_B_COUNT) holds entry e: the last whose
+// first entry is <= e
 // (particles with empty lists share the next one's row).
 fn entry_owner(e: u32) -> u32 {
     var lo = 0u;
     var hi = grid.n_particles;
     while (hi - lo > 1u) {
         let mid = (lo + hi) / 2u;
-        if (b_row[mid] <= e) {
+        if (rows[row_at(ROWS_B_ROW, mid)] <= e) {
             lo = mid;
         } else {
             hi = mid;
@@ -259,40 +255,12 @@ fn entry_owner(e: u32) -> u32 {
 }
 
 // Half lists (Newton's third law: each pair evaluated once): particle k's list (`nbr`,
-// `a_count` long, with the history slots) holds the partners whose pairs k evaluates
-// (`evaluates`), `lower` (`lower_count` long) holds, for each other partner j, the slot of
-// the pair in j's list, where `force` leaves the pair's force for `collect`.
-@group(0) @binding(69) var<storage, read_write> lower: array<u32>;
-@group(0) @binding(70) var<storage, read_write> lower_count: array<u32>;
-// Per slot, this step: the force the evaluated pair exerts on the evaluator: one vec4 a
-// slot (`pair_force`, one access to store and one to load: on lavapipe each access in the
-// code is a loop over the SIMD lanes), or, when SPLIT_PAIR_FORCE is set because n·cap·16
-// bytes exceed the adapter's storage binding limit, x, y and z in three bindings (4 bytes
-// a slot each, as the lists and the smallest history: the limit does not bind sooner).
-// The other form's bindings hold one element.
-override SPLIT_PAIR_FORCE: bool = false;
-@group(0) @binding(76) var<storage, read_write> pair_force: array<vec4<f32>>;
-@group(0) @binding(71) var<storage, read_write> pair_force_x: array<f32>;
-@group(0) @binding(77) var<storage, read_write> pair_force_y: array<f32>;
-@group(0) @binding(73) var<storage, read_write> pair_force_z: array<f32>;
-
-fn store_pair_force(slot: u32, f: vec3<f32>) {
-    if (SPLIT_PAIR_FORCE) {
-        pair_force_x[slot] = f.x;
-        pair_force_y[slot] = f.y;
-        pair_force_z[slot] = f.z;
-    } else {
-        pair_force[slot] = vec4<f32>(f, 0.0);
-    }
-}
-
-fn load_pair_force(slot: u32) -> vec3<f32> {
-    if (SPLIT_PAIR_FORCE) {
-        return vec3<f32>(pair_force_x[slot], pair_force_y[slot], pair_force_z[slot]);
-    }
-    return pair_force[slot].xyz;
-}
-@group(0) @binding(42) var<storage, read_write> nbr: array<u32>;
+// ids.z long, with the history slots) holds the partners whose pairs k evaluates
+// (`evaluates`), `lower` (ROWS_LOWER_COUNT long) holds, for each other partner j, the slot of
+// the pair in j's list, where `force` leaves the pair's force for `collect` (the
+// entries' `lower` field: as many entries as the lists).
+// (Per entry, this step: the force the evaluated pair exerts on the evaluator, xyz, which
+// `collect` subtracts from the partner: `store_pair_force`, `load_pair_force`.)
 
 // From the grid sort.
 @group(0) @binding(43) var<storage, read> sorted_index: array<u32>;
@@ -302,9 +270,9 @@ fn load_pair_force(slot: u32) -> vec3<f32> {
 // Pair models: materials x materials, then walls x materials.
 @group(0) @binding(46) var<storage, read> pairs: array<PairRow>;
 @group(0) @binding(47) var<storage, read_write> walls: array<Wall>;
-// The normal force of each (particle, wall) contact this step, at wall_slot(k, w) (only
-// written when some wall is servo-controlled; summed by wall_servo).
-@group(0) @binding(59) var<storage, read_write> wall_push: array<f32>;
+// (`wall_push`, a field of the wall contacts: the normal force of each (particle, wall)
+// contact this step, at wall_slot(k, w), only written when some wall is servo-controlled;
+// summed by wall_servo.)
 
 // Each wall's point at the last rebuild (`decide`): a moving wall that has since moved more
 // than skin/2 along its normal triggers the next one.
@@ -315,15 +283,15 @@ struct WallRef {
 
 @group(0) @binding(74) var<storage, read_write> wall_ref: array<WallRef>;
 
-// Per particle (state A), the walls among the first 32 it may touch before the next
+// Per particle (ids.w), the walls among the first 32 it may touch before the next
 // rebuild, one bit each: those within reach + skin at the rebuild (or whose contact the
 // ledger holds engaged). Between rebuilds a particle moves less than skin/2 and a wall
 // less than skin/2 along its normal, so any other wall stays out of range: `force`
 // evaluates only these (and every wall from the 33rd on), and their history (zeroed at
 // the rebuild) is all a far wall needs.
-@group(0) @binding(75) var<storage, read_write> a_wall_near: array<u32>;
 
-// Monitor, zeroed per batch of steps and read back after it (no per-step read-back):
+// The control words: [0, 12) the monitor, zeroed per batch of steps and read back after
+// it (no per-step read-back):
 // [0] = largest neighbour count seen (atomicMax), [1] unused, [2] = non-finite
 // acceleration count, [3] = engaged
 // contacts dropped by a rebuild (ledger.wgsl), [4] = largest overlap/a12 of any contact
@@ -335,14 +303,17 @@ struct WallRef {
 // (f32 bits; `collect`), [9] = the steps since this batch's last rebuild (`decide`: 0 on a
 // rebuild, +1 on any other step); [10] = the steps begun before any halt (`decide`),
 // [11] = the list entries a halted rebuild needed.
-@group(0) @binding(48) var<storage, read_write> monitor: array<atomic<u32>, 12>;
+@group(0) @binding(48) var<storage, read_write> control: array<atomic<u32>, 16>;
 
-// Verlet skin state, persistent across batches: [0] = 1 once some particle has moved more
+// [12, 16): the Verlet skin state, persistent across batches: SKIN_MOVED = 1 once some
+// particle has moved more
 // than skin/2 since the last rebuild (set by kick_drift, only there: a store where it
 // happens rather than a maximum over all particles, which cost workgroup atomics and
-// barriers every step), [1] = 1 when this step rebuilds (written by decide), [2] =
-// rebuilds so far, [3] unused.
-@group(0) @binding(56) var<storage, read_write> skin: array<atomic<u32>, 4>;
+// barriers every step), SKIN_REBUILD = 1 when this step rebuilds (written by decide),
+// SKIN_REBUILDS = rebuilds so far.
+const SKIN_MOVED: u32 = 12u;
+const SKIN_REBUILD: u32 = 13u;
+const SKIN_REBUILDS: u32 = 14u;
 // Indirect dispatch arguments: first those of a rebuild (the grid sort's, the per-particle
 // passes', the list scans'), which decide copies from full_args or zeroes each step; then
 // those of every step's passes (per particle, one workgroup), which the host writes at
@@ -373,17 +344,17 @@ fn kick_drift(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nw
 fn collect_kick_drift(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let i = global_index(wid, nwg, lid);
     if (i < grid.n_particles) {
-        let vel = a_vel[i];
+        let vel = load_vel(i);
         let c = collect_particle(i, vel.w, false);
-        if (is_active(a_pid[i])) {
+        if (is_active(load_ids(i).x)) {
             drift_particle(i, vel, c.acc, c.rot, true, c.peak);
         }
     }
 }
 
 fn drift(i: u32) {
-    if (i < grid.n_particles && is_active(a_pid[i])) {
-        drift_particle(i, a_vel[i], a_acc[i].xyz, rot_load(i), false, 0.0);
+    if (i < grid.n_particles && is_active(load_ids(i).x)) {
+        drift_particle(i, load_vel(i), load_acc(i).xyz, rot_load(i), false, 0.0);
     }
 }
 
@@ -398,7 +369,7 @@ fn drift_particle(i: u32, vel: vec4<f32>, acc: vec3<f32>, rot: RotState, pending
     let h = grid.cell_width;
     let half_dv = 0.5 * step.dt * acc;
     var v0 = vel.xyz;
-    var c0 = a_kahan[2u * i].xyz;
+    var c0 = load_kahan_v(i).xyz;
     if (pending_kick) {
         let kk = kahan_add(v0, c0, half_dv);
         v0 = kk.x;
@@ -406,17 +377,17 @@ fn drift_particle(i: u32, vel: vec4<f32>, acc: vec3<f32>, rot: RotState, pending
     }
     let kv = kahan_add(v0, c0, half_dv);
     let v = kv.x;
-    a_vel[i] = vec4<f32>(v, vel.w);
-    a_kahan[2u * i] = vec4<f32>(kv.c, 0.0);
+    store_vel(i, vec4<f32>(v, vel.w));
+    store_kahan_v(i, vec4<f32>(kv.c, 0.0));
     // vel.w holds the mass
-    a_vpred[i] = vec4<f32>(v + half_dv, vel.w);
+    store_vpred(i, vec4<f32>(v + half_dv, vel.w));
     rot_drift(i, rot, pending_kick);
-    let disp0 = a_disp[i];
+    let disp0 = load_disp(i);
     let disp = disp0.xyz + step.dt * v;
-    a_disp[i] = vec4<f32>(disp, max(disp0.w, peak));
+    store_disp(i, vec4<f32>(disp, max(disp0.w, peak)));
     // (NaN forces a rebuild too)
     if (!(length(disp) <= 0.5 * skin_width())) {
-        atomicStore(&skin[0], 1u);
+        atomicStore(&control[SKIN_MOVED], 1u);
     }
     // the move with the compensated velocity, carried into whole cells (below)
     var off: vec4<f32>;
@@ -425,35 +396,35 @@ fn drift_particle(i: u32, vel: vec4<f32>, acc: vec3<f32>, rot: RotState, pending
         off = own_off(i);
         cell0 = own_cell(i);
     } else {
-        off = a_off[i];
-        cell0 = a_cell[i];
+        off = load_off(i);
+        cell0 = load_cell(i);
     }
     // the true step dt·(v − c_v): the velocity's compensation joins the offset's (v − c_v
     // itself rounds back to v); w: the radius's rounding residual, kept
-    let c_off = a_kahan[2u * i + 1u];
+    let c_off = load_kahan_o(i);
     let ko = kahan_add(off.xyz, c_off.xyz + step.dt * kv.c, step.dt * v);
     // whole cells carried exactly, their rounding booked into the compensation
     let carried = carry_cells(ko.x, h);
-    a_kahan[2u * i + 1u] = vec4<f32>(ko.c - carried.lo, c_off.w);
+    store_kahan_o(i, vec4<f32>(ko.c - carried.lo, c_off.w));
     let o = carried.offset;
     let carry = carried.carry;
     let raw = cell0.xyz + carry;
     let cell = wrap_cell(raw);
     // a wrap moves the stored position by dims·h, the true one by the period L
-    let wraps = vec3<f32>((cell - raw) / vec3<i32>(grid.dims));
+    let wraps = image_shift(cell, raw);
     if (any(wraps != vec3<f32>(0.0))) {
-        let c = a_kahan[2u * i + 1u];
-        a_kahan[2u * i + 1u] = vec4<f32>(c.xyz - wraps * step.period_lo, c.w);
+        let c = load_kahan_o(i);
+        store_kahan_o(i, vec4<f32>(c.xyz - wraps * step.period_lo, c.w));
     }
     // stored only where it changes (rarely): a masked store skips the work of idle lanes
     if (any(carry != vec3<i32>(0))) {
-        a_cell[i] = vec4<i32>(cell, cell0.w);
+        store_cell(i, vec4<i32>(cell, cell0.w));
     }
-    a_off[i] = vec4<f32>(o, off.w);
+    store_off(i, vec4<f32>(o, off.w));
     let at = vec3<f32>(cell) + o / h;
     let outside = (at < vec3<f32>(0.0)) | (at > step.extent_cells);
     if (any(outside & !periodic_axes())) {
-        atomicMax(&monitor[6], a_pid[i] + 1u);
+        atomicMax(&control[6], load_ids(i).x + 1u);
     }
 }
 
@@ -466,11 +437,11 @@ fn drift_particle(i: u32, vel: vec4<f32>, acc: vec3<f32>, rot: RotState, pending
 @compute @workgroup_size(1)
 fn decide() {
     // a halted batch runs nothing more (`commit`)
-    if (atomicLoad(&monitor[7]) != 0u) {
+    if (atomicLoad(&control[7]) != 0u) {
         return;
     }
-    atomicAdd(&monitor[10], 1u);
-    var rebuild = atomicLoad(&skin[0]) != 0u;
+    atomicAdd(&control[10], 1u);
+    var rebuild = atomicLoad(&control[SKIN_MOVED]) != 0u;
     // A moving wall that has moved more than skin/2 along its normal since the last rebuild
     // invalidates the particles' wall candidates as a particle's move does.
     for (var w = 0u; w < wall_count(); w++) {
@@ -487,13 +458,13 @@ fn decide() {
             wall_ref[w] = WallRef(walls[w].cell, walls[w].offset);
         }
     }
-    atomicStore(&skin[0], 0u);
-    atomicStore(&skin[1], select(0u, 1u, rebuild));
+    atomicStore(&control[SKIN_MOVED], 0u);
+    atomicStore(&control[SKIN_REBUILD], select(0u, 1u, rebuild));
     if (rebuild) {
-        atomicAdd(&skin[2], 1u);
-        atomicStore(&monitor[9], 0u);
+        atomicAdd(&control[SKIN_REBUILDS], 1u);
+        atomicStore(&control[9], 0u);
     } else {
-        atomicAdd(&monitor[9], 1u);
+        atomicAdd(&control[9], 1u);
     }
     for (var i = 0u; i < arrayLength(&full_args); i++) {
         args[i] = select(0u, full_args[i], rebuild);
@@ -551,29 +522,29 @@ fn search(k: u32, fill: bool) -> vec2<u32> {
     var up = 0u;
     var down = 0u;
     // a particle that has not appeared lists no neighbours (and is listed by none)
-    let here = is_active(a_pid[sorted_index[k]]);
+    let here = is_active(load_ids(sorted_index[k]).x);
     // Without wrapping along x, the three cells x−1, x, x+1 of a row are consecutive keys
     // and their particles one range of the sorted order: 9 ranges instead of 27 cells.
-    let rows = !periodic_axes().x;
+    let row_ranges = !periodic_axes().x;
     // (read once, not per candidate)
     // (r_k + r_j first: both sides of a pair get bitwise the same cut-off)
     let margin = step.reach + skin_width();
     for (var dz = -1; dz <= 1; dz++) {
         for (var dy = -1; dy <= 1; dy++) {
             for (var dx = -1; dx <= 1; dx++) {
-                if (rows && dx != 0) {
+                if (row_ranges && dx != 0) {
                     continue;
                 }
                 let c = wrap_cell(home + vec3<i32>(dx, dy, dz));
                 if (any(c < vec3<i32>(0)) || any(c > hi)) {
                     continue;
                 }
-                // (each form's loads only under its branch: without periodic axes `rows`
+                // (each form's loads only under its branch: without periodic axes `row_ranges`
                 // is a constant and the other form is compiled out; on lavapipe every
                 // load in the code costs, taken or not)
                 var start = 0u;
                 var end = 0u;
-                if (rows) {
+                if (row_ranges) {
                     let first = vec3<i32>(max(c.x - 1, 0), c.y, c.z);
                     let last = vec3<i32>(min(c.x + 1, hi.x), c.y, c.z);
                     start = cell_start[cell_key(first, grid.dims)];
@@ -585,7 +556,7 @@ fn search(k: u32, fill: bool) -> vec2<u32> {
                     end = start + cell_count[key];
                 }
                 for (var j = start; j < end; j++) {
-                    if (j == k || !here || !is_active(a_pid[sorted_index[j]])) {
+                    if (j == k || !here || !is_active(load_ids(sorted_index[j]).x)) {
                         continue;
                     }
                     let oj = sorted_off(j);
@@ -593,13 +564,13 @@ fn search(k: u32, fill: bool) -> vec2<u32> {
                     let reach = (ok.w + oj.w) + margin;
                     if (dot(d, d) < reach * reach) {
                         if (evaluates(d, k, j)) {
-                            if (fill && b_row[k] + up < cap) {
-                                nbr[b_row[k] + up] = j;
+                            if (fill && rows[row_at(ROWS_B_ROW, k)] + up < cap) {
+                                store_nbr(rows[row_at(ROWS_B_ROW, k)] + up, j);
                             }
                             up += 1u;
                         } else {
-                            if (fill && lower_row[k] + down < cap) {
-                                lower[lower_row[k] + down] = j;
+                            if (fill && rows[row_at(ROWS_LOWER_ROW, k)] + down < cap) {
+                                store_lower(rows[row_at(ROWS_LOWER_ROW, k)] + down, j);
                             }
                             down += 1u;
                         }
@@ -619,9 +590,9 @@ fn count_neighbours(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgrou
         return;
     }
     let c = search(k, false);
-    atomicMax(&monitor[0], max(c.x, c.y));
-    b_count[k] = c.x;
-    lower_count[k] = c.y;
+    atomicMax(&control[0], max(c.x, c.y));
+    rows[row_at(ROWS_B_COUNT, k)] = c.x;
+    rows[row_at(ROWS_LOWER_COUNT, k)] = c.y;
 }
 
 // On a rebuild, after the scans: the lists, each particle's at its place (what does not fit
@@ -644,17 +615,17 @@ fn neighbours(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nw
 fn commit() {
     // (only on a step that rebuilds, and once: later steps of a halted batch see the same
     // counts)
-    let rebuilding = atomicLoad(&skin[1]) != 0u && atomicLoad(&monitor[7]) == 0u;
+    let rebuilding = atomicLoad(&control[SKIN_REBUILD]) != 0u && atomicLoad(&control[7]) == 0u;
     if (grid.n_particles == 0u || !rebuilding) {
         return;
     }
     let last = grid.n_particles - 1u;
-    let need = max(b_row[last] + b_count[last], lower_row[last] + lower_count[last]);
+    let need = max(rows[row_at(ROWS_B_ROW, last)] + rows[row_at(ROWS_B_COUNT, last)], rows[row_at(ROWS_LOWER_ROW, last)] + rows[row_at(ROWS_LOWER_COUNT, last)]);
     if (need > step.list_capacity) {
-        atomicStore(&monitor[7], 1u);
-        atomicStore(&monitor[11], need);
-        atomicStore(&skin[0], 1u);
-        atomicSub(&skin[2], 1u);
+        atomicStore(&control[7], 1u);
+        atomicStore(&control[11], need);
+        atomicStore(&control[SKIN_MOVED], 1u);
+        atomicSub(&control[SKIN_REBUILDS], 1u);
         for (var i = 0u; i < arrayLength(&args); i++) {
             args[i] = 0u;
         }
@@ -668,54 +639,55 @@ fn remap(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
         return;
     }
     // the lower list: each such partner j lists k in its own list; keep that entry
-    let low = lower_row[k];
-    for (var s = 0u; s < lower_count[k]; s++) {
-        let j = lower[low + s];
-        let row_j = b_row[j];
-        for (var m = 0u; m < b_count[j]; m++) {
-            if (nbr[row_j + m] == k) {
-                lower[low + s] = row_j + m;
+    let low = rows[row_at(ROWS_LOWER_ROW, k)];
+    for (var s = 0u; s < rows[row_at(ROWS_LOWER_COUNT, k)]; s++) {
+        let j = load_lower(low + s);
+        let row_j = rows[row_at(ROWS_B_ROW, j)];
+        for (var m = 0u; m < rows[row_at(ROWS_B_COUNT, j)]; m++) {
+            if (load_nbr(row_j + m) == k) {
+                store_lower(low + s, row_j + m);
                 break;
             }
         }
     }
     // each new slot's history: from k's old list, or (when the pair's evaluator changed
     // with the new order) from the partner's, seen from the other side
-    let o = sorted_index[k];
-    let old_n = a_count[o];
-    let old_row = a_row[o];
-    let me = a_pid[k];
-    let row = b_row[k];
-    for (var s = 0u; s < b_count[k]; s++) {
+    // (the re-sort carried each particle's old list row and length with it in `ids`)
+    let ids = load_ids(k);
+    let me = ids.x;
+    let old_row = ids.y;
+    let old_n = ids.z;
+    let row = rows[row_at(ROWS_B_ROW, k)];
+    for (var s = 0u; s < rows[row_at(ROWS_B_COUNT, k)]; s++) {
         let e = row + s;
-        let j = nbr[e];
-        let partner = a_pid[j];
+        let j = load_nbr(e);
+        let partner = load_ids(j).x;
         var h = hist_zero();
         ledger_clear(e);
         var found = false;
         for (var m = 0u; m < old_n; m++) {
-            if (a_hist_pid[old_row + m] == partner) {
-                h = a_hist[old_row + m];
+            if (load_hist_pid(old_row + m) == partner) {
+                h = load_hist(old_row + m);
                 ledger_carry(e, old_row + m);
                 found = true;
                 break;
             }
         }
         if (!found) {
-            let oj = sorted_index[j];
-            let row_j = a_row[oj];
-            for (var m = 0u; m < a_count[oj]; m++) {
-                if (a_hist_pid[row_j + m] == me) {
-                    h = hist_mirror(a_hist[row_j + m]);
+            let mj = load_ids(j);
+            let row_j = mj.y;
+            for (var m = 0u; m < mj.z; m++) {
+                if (load_hist_pid(row_j + m) == me) {
+                    h = hist_mirror(load_hist(row_j + m));
                     ledger_carry(e, row_j + m);
                     break;
                 }
             }
         }
-        b_hist[e] = h;
-        b_hist_pid[e] = partner;
+        store_new_hist(e, h);
+        store_new_hist_pid(e, partner);
     }
-    ledger_dropped(me, o, old_n, k);
+    ledger_dropped(me, old_row, old_n, k);
 }
 
 // On a rebuild, last: the new lists' history returns to A, the displacements start
@@ -726,20 +698,18 @@ fn copy_back_history(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgro
     if (k >= grid.n_particles) {
         return;
     }
-    let n = b_count[k];
-    let row = b_row[k];
-    a_count[k] = n;
-    a_row[k] = row;
+    let n = rows[row_at(ROWS_B_COUNT, k)];
+    let row = rows[row_at(ROWS_B_ROW, k)];
     for (var e = row; e < row + n; e++) {
-        a_hist[e] = b_hist[e];
-        a_hist_pid[e] = b_hist_pid[e];
+        store_hist(e, load_new_hist(e));
+        store_hist_pid(e, load_new_hist_pid(e));
     }
     ledger_copy_back(row, n);
     // (w: the batch's largest overlap so far, which the re-sort carried)
-    a_disp[k] = vec4<f32>(0.0, 0.0, 0.0, a_disp[k].w);
+    store_disp(k, vec4<f32>(0.0, 0.0, 0.0, load_disp(k).w));
     // a wall out of reach + skin starts with the history of a contact out of range
-    let ck = a_cell[k];
-    let ok = a_off[k];
+    let ck = load_cell(k);
+    let ok = load_off(k);
     let margin = step.reach + skin_width();
     var near = 0u;
     for (var w = 0u; w < wall_count(); w++) {
@@ -751,14 +721,14 @@ fn copy_back_history(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgro
             near |= 1u << w;
         }
         if (!candidate && w < 32u) {
-            a_wall_hist[slot] = hist_zero();
+            store_wall_hist(slot, hist_zero());
         }
         if (step.servo_walls != 0u) {
             // a far wall's push stays 0 until the next rebuild (force writes candidates')
-            wall_push[slot] = 0.0;
+            store_wall_push(slot, 0.0);
         }
     }
-    a_wall_near[k] = near;
+    store_ids(k, vec4<u32>(load_ids(k).x, row, n, near));
 }
 
 // The relative motion of one contact, as the model sees it (`model::Kinematics` plus the
@@ -848,10 +818,10 @@ fn force(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
 }
 
 // The forces on particle k, stored in its acceleration's xyz, and its contacts' largest
-// overlap/a12 (0 without overlap) in w, for the run monitor (see a_disp).
+// overlap/a12 (0 without overlap) in w, for the run monitor (see disp).
 // `row0`: pair row 0, the only one of a scene with ONE_MATERIAL.
 fn particle_forces(k: u32, row0: PairRow) {
-    let first = a_row[k];
+    let first = load_ids(k).y;
     // (own and partners' state: `own_cell`, from the mirrors on a software adapter)
     let ck = own_cell(k);
     let ok = own_off(k);
@@ -864,13 +834,13 @@ fn particle_forces(k: u32, row0: PairRow) {
     let mat_k = u32(ck.w);
     // the position's compensation (xyz) and the radius's residual (w): the overlaps are
     // taken from them to below f32 rounding (overlap.wgsl)
-    let comp_k = a_kahan[2u * k + 1u];
+    let comp_k = load_kahan_o(k);
     var f = vec3<f32>(0.0);
     var torque = vec3<f32>(0.0);
     var ledger_acc = ledger_new();
     var peak = 0.0;
-    for (var slot = first; slot < first + a_count[k]; slot++) {
-        let j = nbr[slot];
+    for (var slot = first; slot < first + load_ids(k).z; slot++) {
+        let j = load_nbr(slot);
         let cj = own_cell(j);
         let oj = own_off(j);
         let rj = oj.w;
@@ -879,7 +849,7 @@ fn particle_forces(k: u32, row0: PairRow) {
         let mj = pj.w;
         let dc_raw = ck.xyz - cj.xyz;
         let dc_i = nearest_image(dc_raw);
-        let comp_j = a_kahan[2u * j + 1u];
+        let comp_j = load_kahan_o(j);
         let dd = precise_separation(vec3<f32>(dc_i), image_shift(dc_i, dc_raw), ok.xyz, oj.xyz, comp_k.xyz, comp_j.xyz);
         let d = dd.hi;
         let dist = length(d);
@@ -916,7 +886,7 @@ fn particle_forces(k: u32, row0: PairRow) {
             inv_a12,
             wk - wj,
         );
-        let h0 = a_hist[slot];
+        let h0 = load_hist(slot);
         var h = h0;
         var row = row0;
         if (!ONE_MATERIAL) {
@@ -947,21 +917,21 @@ fn particle_forces(k: u32, row0: PairRow) {
         // out of contact whose history stays zero, and a masked store skips the idle
         // lanes' work on lavapipe
         if (!hist_same(h, h0)) {
-            a_hist[slot] = h;
+            store_hist(slot, h);
         }
         store_pair_force(slot, fp);
         rot_pair_store(slot, t_partner);
         ledger_save(slot, led);
     }
     // a particle that has not appeared meets no wall
-    let present = WALLS && is_active(a_pid[k]);
+    let present = WALLS && is_active(load_ids(k).x);
     let n_walls = select(0u, step.n_walls, present);
-    // Only the wall candidates of the last rebuild are evaluated (`a_wall_near`), and every
+    // Only the wall candidates of the last rebuild are evaluated (ids.w), and every
     // wall from the 33rd on. On a SIMD adapter (lavapipe) a loop iteration costs as much for
     // a lane that skips it as for one that works, so the loop below runs as often as the
     // most candidates a lane of the group has, mostly 0 in a packing, rather than n_walls
     // times; the other walls' history stays as the rebuild left it, zero.
-    var near = select(0u, a_wall_near[k], present);
+    var near = select(0u, load_ids(k).w, present);
     let masked = min(n_walls, 32u);
     var rest = masked;
     loop {
@@ -988,14 +958,14 @@ fn particle_forces(k: u32, row0: PairRow) {
         let inv_a12 = 0.5 / rk;
         let kin = Kin(delta, -dot(v_rel, n), rk, mk, step.dt, n, v_t, rk * cross(wk, n) - 0.5 * v_t, inv_a12, wk);
         let slot = wall_slot(k, w);
-        var h = a_wall_hist[slot];
+        var h = load_wall_hist(slot);
         let row = pairs[step.n_materials * step.n_materials + w * step.n_materials + mat_k];
         let c = pair_contact(row, kin, &h);
-        a_wall_hist[slot] = h;
+        store_wall_hist(slot, h);
         peak = max(peak, delta * inv_a12);
         ledger_wall(&ledger_acc, slot, row, kin, c, dot(c.tangential, v_t) + dot(c.rolling, wk), dot(n, wall.velocity.xyz));
         if (step.servo_walls != 0u) {
-            wall_push[slot] = c.normal;
+            store_wall_push(slot, c.normal);
         }
         f += c.normal * n + c.tangential;
         if (ROTATION) {
@@ -1003,9 +973,9 @@ fn particle_forces(k: u32, row0: PairRow) {
         }
     }
     // the sums over k's own list and walls; collect adds the pairs evaluated by partners
-    a_acc[k] = vec4<f32>(f, peak);
+    store_acc(k, vec4<f32>(f, peak));
     rot_store_partial(k, torque);
-    ledger_store(a_pid[k], ledger_acc);
+    ledger_store(load_ids(k).x, ledger_acc);
 }
 
 // After force, per particle: adds the forces (and torques) of the pairs k's partners
@@ -1015,24 +985,24 @@ fn particle_forces(k: u32, row0: PairRow) {
 fn collect(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let k = global_index(wid, nwg, lid);
     if (k < grid.n_particles) {
-        let c = collect_particle(k, a_vel[k].w, true);
+        let c = collect_particle(k, load_vel(k).w, true);
         // the batch ends here (or the initial forces do): its overlap maximum, with this
         // step's, into the monitor (an atomic only where it grows), and a fresh start
-        let disp = a_disp[k];
+        let disp = load_disp(k);
         let ratio = max(disp.w, c.peak);
         let bits = bitcast<u32>(ratio);
-        if (bits > atomicLoad(&monitor[4])) {
-            atomicMax(&monitor[4], bits);
+        if (bits > atomicLoad(&control[4])) {
+            atomicMax(&control[4], bits);
         }
         if (ratio > MONITOR_MAX_OVERLAP_RATIO) {
-            atomicMax(&monitor[5], a_pid[k] + 1u);
+            atomicMax(&control[5], load_ids(k).x + 1u);
         }
         // the displacement since the last rebuild, for the host's rebuild forecast
         let moved = bitcast<u32>(length(disp.xyz));
-        if (moved > atomicLoad(&monitor[8])) {
-            atomicMax(&monitor[8], moved);
+        if (moved > atomicLoad(&control[8])) {
+            atomicMax(&control[8], moved);
         }
-        a_disp[k] = vec4<f32>(disp.xyz, 0.0);
+        store_disp(k, vec4<f32>(disp.xyz, 0.0));
     }
 }
 
@@ -1048,22 +1018,22 @@ struct Collected {
 // at the end of a batch (kick, the host and checkpoints read it there). Within a batch
 // the drift takes it from here and the next force pass overwrites it: no store.
 fn collect_particle(k: u32, mass: f32, store: bool) -> Collected {
-    let partial = a_acc[k];
+    let partial = load_acc(k);
     var f = partial.xyz;
     var torque = vec3<f32>(0.0);
-    let low = lower_row[k];
-    for (var s = low; s < low + lower_count[k]; s++) {
-        let slot = lower[s];
+    let low = rows[row_at(ROWS_LOWER_ROW, k)];
+    for (var s = low; s < low + rows[row_at(ROWS_LOWER_COUNT, k)]; s++) {
+        let slot = load_lower(s);
         f -= load_pair_force(slot);
         torque += rot_pair_load(slot);
     }
     let acc = f / mass + step.gravity;
     let rot = rot_collect(k, torque);
     if (any(acc != acc) || any(abs(acc) > vec3<f32>(3.0e38)) || !rot_finite(rot)) {
-        atomicAdd(&monitor[2], 1u);
+        atomicAdd(&control[2], 1u);
     }
     if (store) {
-        a_acc[k] = vec4<f32>(acc, 0.0);
+        store_acc(k, vec4<f32>(acc, 0.0));
     }
     return Collected(acc, rot, partial.w);
 }
@@ -1074,12 +1044,12 @@ fn kick(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     if (k >= grid.n_particles) {
         return;
     }
-    if (!is_active(a_pid[k])) {
+    if (!is_active(load_ids(k).x)) {
         return;
     }
-    let kv = kahan_add(a_vel[k].xyz, a_kahan[2u * k].xyz, 0.5 * step.dt * a_acc[k].xyz);
-    a_vel[k] = vec4<f32>(kv.x, a_vel[k].w);
-    a_kahan[2u * k] = vec4<f32>(kv.c, 0.0);
+    let kv = kahan_add(load_vel(k).xyz, load_kahan_v(k).xyz, 0.5 * step.dt * load_acc(k).xyz);
+    store_vel(k, vec4<f32>(kv.x, load_vel(k).w));
+    store_kahan_v(k, vec4<f32>(kv.c, 0.0));
     rot_kick(k);
 }
 
@@ -1125,7 +1095,7 @@ fn wall_servo(@builtin(local_invocation_index) lid: u32) {
         }
         var sum = 0.0;
         for (var k = lid; k < grid.n_particles; k += WG_SIZE) {
-            sum += wall_push[wall_slot(k, w)];
+            sum += load_wall_push(wall_slot(k, w));
         }
         wg_push[lid] = sum;
         workgroupBarrier();

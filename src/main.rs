@@ -288,6 +288,12 @@ struct SceneInfo {
     step_variant: String,
     kernels: Vec<String>,
     rotation: bool,
+    /// The particle state's fields (one buffer, `powder::gpu::state`).
+    state_fields: Vec<String>,
+    /// (kernel, storage buffers it binds), the most first.
+    storage_bindings: Vec<(String, u32)>,
+    /// (field, bytes) of a list entry (`powder::gpu::records`).
+    entry_fields: Vec<(String, u64)>,
     list_entries: u64,
     buffers: Vec<(String, u64)>,
     total_bytes: u64,
@@ -324,6 +330,17 @@ fn scene_info(
     let total = engine.buffer_bytes();
     let (buffers, particles) = (engine.buffers(), engine.len());
     let (rotation, list_entries) = (engine.rotates(), engine.list_entries());
+    let state_fields = engine
+        .state_fields()
+        .iter()
+        .map(|f| f.to_string())
+        .collect();
+    let storage_bindings = engine.storage_bindings();
+    let entry_fields = engine
+        .entry_fields()
+        .into_iter()
+        .map(|(f, b)| (f.to_string(), b))
+        .collect();
     let traffic = powder::gpu::TrafficEstimate::new(engine.traffic(), particles, 0, 0);
     let profile_us = if a.profile {
         engine.run_steps(a.after)?;
@@ -339,6 +356,9 @@ fn scene_info(
         step_variant: variant_name,
         kernels,
         rotation,
+        state_fields,
+        storage_bindings,
+        entry_fields,
         list_entries,
         buffers,
         total_bytes: total,
@@ -369,6 +389,16 @@ fn info_cmd(a: &InfoArgs) -> Result<(), PowderError> {
             if info.rotation { "on" } else { "off" }
         );
         println!("kernels          {}", info.kernels.join(", "));
+        println!("state fields     {}", info.state_fields.join(", "));
+        let entry: Vec<String> = info
+            .entry_fields
+            .iter()
+            .map(|(f, b)| format!("{f} {b}"))
+            .collect();
+        println!("entry fields     {} (bytes)", entry.join(", "));
+        if let Some((pass, most)) = info.storage_bindings.first() {
+            println!("storage buffers  at most {most} a pass ({pass})");
+        }
         println!(
             "list entries     {} ({:.2} a particle, after the first rebuild)",
             info.list_entries,

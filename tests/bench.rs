@@ -377,12 +377,19 @@ fn bench_and_info_report_the_traffic_estimate() {
         assert_eq!(pass("neighbours")["when"], "rebuild");
         assert_eq!(pass("grid.cell_keys")["when"], "rebuild");
         assert!(pass("mirror copies")["bytes"].as_u64().unwrap() >= 6 * 16 * 64);
-        // the force pass reads the neighbour list, counted once, whole
+        // the force pass binds the lists' entries once, counted by the fields it touches:
+        // partner, history, pair force (at least 5 words an entry), not `lower` (1 word)
         let bound = pass("force")["bound"].as_array().unwrap();
-        let nbr: Vec<_> = bound.iter().filter(|b| b[0] == "nbr").collect();
-        assert_eq!(nbr.len(), 1, "{bound:?}");
+        let e: Vec<_> = bound.iter().filter(|b| b[0] == "entries").collect();
+        assert_eq!(e.len(), 1, "{bound:?}");
         let entries = r["list_entries"].as_u64().unwrap();
-        assert_eq!(nbr[0][1].as_u64().unwrap(), 4 * entries);
+        let touched = e[0][1].as_u64().unwrap();
+        assert_eq!(touched % (4 * entries), 0, "{touched}");
+        assert!(touched >= 5 * 4 * entries, "{touched}");
+        let collect = pass("collect_kick_drift")["bound"].as_array().unwrap();
+        let c = collect.iter().find(|b| b[0] == "entries").unwrap();
+        // collect reads `lower` and the pair forces (and torques): less than force's
+        assert!(c[1].as_u64().unwrap() < touched, "{collect:?}");
         step.push((r["case"].as_str().unwrap().to_string(), per_step));
     }
     // friction and rolling bind more per step

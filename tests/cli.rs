@@ -699,6 +699,19 @@ fn info_scene_lists_kernels_buffers_and_leaves_out_rotation() {
         .map(|b| b[0].as_str().unwrap().to_string())
         .collect();
     assert!(!names.iter().any(|n| n.contains("omega")), "{names:?}");
+    let fields = |info: &serde_json::Value| -> Vec<String> {
+        info["state_fields"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|f| f.as_str().unwrap().to_string())
+            .collect()
+    };
+    assert!(fields(&plain).contains(&"cell".to_string()));
+    assert!(!fields(&plain).contains(&"omega".to_string()));
+    // every pass within GL's 16 storage buffers a stage
+    let most = plain["storage_bindings"][0][1].as_u64().unwrap();
+    assert!((1..=16).contains(&most), "{most}");
     assert!(plain["bytes_per_particle"].as_f64().unwrap() > 0.0);
     let kernels = plain["kernels"].as_array().unwrap();
     assert!(kernels.iter().any(|k| k == "force"));
@@ -712,11 +725,7 @@ fn info_scene_lists_kernels_buffers_and_leaves_out_rotation() {
         .any(|k| k == "wall_move"));
     let rolling = info("jkr_deposition.toml");
     assert_eq!(rolling["rotation"], true);
-    assert!(rolling["buffers"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .any(|b| b[0].as_str().unwrap().contains("omega")));
+    assert!(fields(&rolling).contains(&"omega".to_string()));
 }
 
 /// `powder info SCENE --profile` times the GPU step's passes on any scene (after `--after`

@@ -299,7 +299,14 @@ fn gpu_permute_resorts_every_field_in_place() {
         if blocks == 0 {
             fields.push(Field::per_particle(&format!("f{i}"), &buf, bytes));
         } else {
-            fields.extend(Field::wall_major(&format!("f{i}"), &buf, bytes, blocks, n));
+            fields.extend(Field::wall_major(
+                &format!("f{i}"),
+                &buf,
+                0,
+                bytes,
+                blocks,
+                n,
+            ));
         }
         before.push(data);
         buffers.push(buf);

@@ -9,10 +9,12 @@
 //! use is compiled in.
 
 use super::layout::{CoulombSpringRow, HystereticPair, JkrPair, TwistingRow};
+use super::records::RecordLayout;
 use super::shaders::{
     compose, ShaderVariant, LEDGER, LEDGER_OFF, OVERLAP, ROTATION, ROTATION_BUFFERS,
     ROTATION_MIRRORS, ROTATION_OFF, STATE_BUFFERS, STATE_MIRRORS, STEP,
 };
+use super::state::StateLayout;
 use crate::model::friction::{rolling, sliding, twisting};
 use crate::model::history::{HistoryField, Mirror, Shape};
 use crate::model::{hysteretic, jkr, krijt, ContactHistory, ContactModel, CoulombSpring};
@@ -632,12 +634,43 @@ impl Composition {
         w.push_str("    }\n");
     }
 
-    /// The step's module: common, the laws' and sub-models' files, the generated interface,
+    /// The f32 members of `struct Hist` (the stored history), in order.
+    pub fn hist_members(&self) -> Vec<String> {
+        self.history()
+            .iter()
+            .flat_map(|f| match f.shape {
+                Shape::Word | Shape::Flag => vec![f.name.to_string()],
+                Shape::Vec3 => ["x", "y", "z"]
+                    .iter()
+                    .map(|c| format!("{}_{c}", f.name))
+                    .collect(),
+            })
+            .collect()
+    }
+
+    /// The records of the lists' entries, a rebuild's new lists and the wall contacts
+    /// (`gpu::records`) for this composition, with or without the ledger.
+    pub fn records(&self, ledger: bool) -> [RecordLayout; 3] {
+        let hist = self.hist_members();
+        [
+            RecordLayout::entries(&hist, self.rotation(), ledger),
+            RecordLayout::new_entries(&hist, ledger),
+            RecordLayout::wall_contacts(&hist, ledger),
+        ]
+    }
+
+    /// The step's module: common, the state's accessors (`gpu::state`), the records'
+    /// (`gpu::records`), the laws' and
+    /// sub-models' files, the generated interface,
     /// the rotation and ledger hooks, the state's reads (its buffers, or texture mirrors:
     /// the software adapter's path, `gpu::mirror`), the step.
     pub fn variant(&self, ledger: bool, mirrors: bool) -> ShaderVariant {
         let interface = self.interface();
-        let mut parts: Vec<&str> = self.laws().map(|l| l.source).collect();
+        let state = StateLayout::wgsl(self.rotation());
+        let records: Vec<String> = self.records(ledger).iter().map(|r| r.wgsl()).collect();
+        let mut parts: Vec<&str> = vec![&state];
+        parts.extend(records.iter().map(String::as_str));
+        parts.extend(self.laws().map(|l| l.source));
         for s in self.subs() {
             for shared in s.shared {
                 if !parts.contains(shared) {

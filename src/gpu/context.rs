@@ -183,6 +183,16 @@ impl fmt::Display for AdapterSummary {
     }
 }
 
+/// The limits a device is opened with.
+enum Limits {
+    /// The adapter's own.
+    Adapter,
+    /// The adapter's, with the storage binding size capped (bytes).
+    BindingCapped(u64),
+    /// wgpu's defaults (WebGPU's).
+    WebGpuDefault,
+}
+
 /// How `POWDER_ADAPTER` restricts the choice.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum AdapterPreference {
@@ -325,22 +335,34 @@ impl GpuContext {
 
     /// Opens the best adapter allowed by `pref`.
     pub fn with_preference(pref: &AdapterPreference) -> Result<Self, PowderError> {
-        Self::open(pref, None)
+        Self::open(pref, Limits::Adapter)
     }
 
     /// Opens the adapter chosen by `POWDER_ADAPTER` with its storage binding limit lowered
     /// to at most `bytes`: what a scene needs and does on a smaller GPU, tried on this one
     /// (the engine splits or refuses per-slot buffers against this limit).
     pub fn with_storage_binding_limit(bytes: u64) -> Result<Self, PowderError> {
-        Self::open(&AdapterPreference::from_env(), Some(bytes))
+        Self::open(&AdapterPreference::from_env(), Limits::BindingCapped(bytes))
     }
 
-    fn open(pref: &AdapterPreference, max_binding: Option<u64>) -> Result<Self, PowderError> {
+    /// Opens the adapter chosen by `POWDER_ADAPTER` with wgpu's default limits (WebGPU's:
+    /// 8 storage buffers a stage, 128 MiB a binding, 256 MiB a buffer), what a browser or
+    /// the most modest backend gives.
+    pub fn with_default_limits() -> Result<Self, PowderError> {
+        Self::open(&AdapterPreference::from_env(), Limits::WebGpuDefault)
+    }
+
+    fn open(pref: &AdapterPreference, choice: Limits) -> Result<Self, PowderError> {
         let adapter = choose_adapter(enumerate_adapters(), pref)?;
         let summary = AdapterSummary::of(&adapter);
         let mut limits = adapter.limits();
-        if let Some(b) = max_binding {
-            limits.max_storage_buffer_binding_size = limits.max_storage_buffer_binding_size.min(b);
+        match choice {
+            Limits::Adapter => {}
+            Limits::BindingCapped(b) => {
+                limits.max_storage_buffer_binding_size =
+                    limits.max_storage_buffer_binding_size.min(b);
+            }
+            Limits::WebGpuDefault => limits = wgpu::Limits::default(),
         }
         let desc = wgpu::DeviceDescriptor {
             label: Some("powder"),

@@ -48,8 +48,10 @@ use crate::gpu::kernel::{
 };
 use crate::gpu::layout::{encode3, gpu_cell_width, HystereticPair, JkrPair, StepParams, WallGpu};
 use crate::gpu::mirror::Mirrors;
-use crate::gpu::permute::{Field, Permutation};
+use crate::gpu::permute::{Field, Permutation, ROW_WORDS};
 use crate::gpu::quiet::{Forecast, QuietBatches};
+use crate::gpu::records::RecordLayout;
+use crate::gpu::state::{particle_stride, Buffer, StateLayout};
 use crate::gpu::traffic::{PassTraffic, When};
 use crate::model::{ContactHistory, ContactModel};
 use crate::scene::Scene;
@@ -64,11 +66,19 @@ pub const SKIN: f64 = 0.1;
 /// grows them to what it needs (`GpuEngine::grow_lists`).
 const INITIAL_ENTRIES_PER_PARTICLE: u64 = 2;
 
-/// Headroom of a grown capacity over what a rebuild needed.
+/// Headroom of a grown capacity over what a rebuild needed (less where the entries'
+/// binding limit leaves less).
 const LIST_HEADROOM: f64 = 1.25;
 
-/// Bytes of the device monitor (`monitor` in `shaders/step.wgsl`).
+/// Bytes of the device monitor, the first part of `control` in `shaders/step.wgsl`.
 const MONITOR_BYTES: u64 = 48;
+
+/// Where the Verlet skin state follows it in `control` (4 words: moved, rebuild flag,
+/// rebuilds so far, unused).
+const SKIN_OFFSET: u64 = MONITOR_BYTES;
+
+/// Bytes of `control`.
+const CONTROL_BYTES: u64 = SKIN_OFFSET + 16;
 
 /// Steps recorded into one submission.
 pub const STEPS_PER_SUBMIT: u64 = 64;
@@ -98,40 +108,21 @@ impl Allocator<'_> {
     }
 }
 
-/// The particle state (A): per particle, in the order of the last rebuild, with the
-/// neighbour lists' history.
+/// The particle state (A): per particle, in the order of the last rebuild (`gpu::state`),
+/// with the neighbour lists' entries and the wall contacts (`gpu::records`).
 struct StateSet {
-    cell: wgpu::Buffer,
-    off: wgpu::Buffer,
-    vel: wgpu::Buffer,
-    acc: wgpu::Buffer,
-    pid: wgpu::Buffer,
-    /// Each particle's list: its length and first entry.
-    count: wgpu::Buffer,
-    row: wgpu::Buffer,
-    /// Per list entry: the contact's history and the partner's persistent id.
-    hist: wgpu::Buffer,
-    hist_pid: wgpu::Buffer,
-    wall_hist: wgpu::Buffer,
-    /// Displacement since the last neighbour-list rebuild (xyz).
-    disp: wgpu::Buffer,
-    /// The wall candidates of each particle (a bit per wall of the first 32), written by a
-    /// rebuild.
-    wall_near: wgpu::Buffer,
-    /// Predicted velocity (xyz) and mass (w), written by `kick_drift`.
-    vpred: wgpu::Buffer,
-    /// Kahan compensation of the velocity and the cell offset (2 × vec4 per particle).
-    kahan: wgpu::Buffer,
-    /// ω (xyz) and the moment of inertia (w); only when the scene rotates.
-    omega: Option<wgpu::Buffer>,
-    /// Angular acceleration torque/I; only when the scene rotates.
-    alpha: Option<wgpu::Buffer>,
-    /// Predicted ω; only when the scene rotates.
-    wpred: Option<wgpu::Buffer>,
-    /// The energy ledger's per-slot state of pair and wall contacts (`shaders/ledger.wgsl`);
-    /// only when the run keeps the ledger.
-    ledger: Option<wgpu::Buffer>,
-    wall_ledger: Option<wgpu::Buffer>,
+    /// Every per-particle field ([`StateLayout`]): `state` (what pairs read of a partner)
+    /// and `motion`.
+    state: wgpu::Buffer,
+    motion: wgpu::Buffer,
+    layout: StateLayout,
+    /// The lists' entries (partner, `lower`, partner id, history, pair force and torque,
+    /// ledger value) and their layout.
+    entries: wgpu::Buffer,
+    entry_layout: RecordLayout,
+    /// The particle–wall contacts (history, ledger value, servo push), wall-major.
+    wall_contacts: wgpu::Buffer,
+    wall_layout: RecordLayout,
 }
 
 impl StateSet {
@@ -139,130 +130,114 @@ impl StateSet {
         alloc: &mut Allocator,
         (n, entries, walls): (u64, u64, u64),
         kind: &Composition,
-        ledger: bool,
+        (ledger, servo): (bool, bool),
     ) -> Self {
+        let layout = StateLayout::new(n, kind.rotation());
+        let [entry_layout, _, wall_layout] = kind.records(ledger);
         let mut b = |name: &str, bytes: u64| alloc.buffer(&format!("A.{name}"), bytes);
-        let hb = kind.history_bytes();
+        // the servo's pushes only where a wall is servo-controlled (the last field)
+        let leave_out: &[&str] = if servo { &[] } else { &["wall_push"] };
         Self {
-            cell: b("cell", 16 * n),
-            off: b("off", 16 * n),
-            vel: b("vel", 16 * n),
-            acc: b("acc", 16 * n),
-            pid: b("pid", 4 * n),
-            count: b("count", 4 * n),
-            row: b("row", 4 * n),
-            hist: b("hist", hb * entries),
-            hist_pid: b("hist_pid", 4 * entries),
-            // without walls: one element, the smallest binding the kernels accept
-            wall_hist: b("wall_hist", hb * (n * walls).max(1)),
-            disp: b("disp", 16 * n),
-            wall_near: b("wall_near", 4 * if walls > 0 { n } else { 1 }),
-            vpred: b("vpred", 16 * n),
-            kahan: b("kahan", 32 * n),
-            omega: kind.rotation().then(|| b("omega", 16 * n)),
-            alpha: kind.rotation().then(|| b("alpha", 16 * n)),
-            wpred: kind.rotation().then(|| b("wpred", 16 * n)),
-            ledger: ledger.then(|| b("ledger", 16 * entries)),
-            wall_ledger: ledger.then(|| b("wall_ledger", 16 * (n * walls).max(1))),
+            state: b("state", layout.bytes(Buffer::State)),
+            motion: b("motion", layout.bytes(Buffer::Motion)),
+            layout,
+            entries: b("entries", entry_layout.bytes(entries, &[])),
+            entry_layout,
+            wall_contacts: b("wall_contacts", wall_layout.bytes(n * walls, leave_out)),
+            wall_layout,
         }
     }
 
-    fn named<'a>(&'a self, side: &str) -> Vec<(String, &'a wgpu::Buffer)> {
-        [
-            ("cell", Some(&self.cell)),
-            ("off", Some(&self.off)),
-            ("vel", Some(&self.vel)),
-            ("acc", Some(&self.acc)),
-            ("pid", Some(&self.pid)),
-            ("count", Some(&self.count)),
-            ("row", Some(&self.row)),
-            ("hist", Some(&self.hist)),
-            ("hist_pid", Some(&self.hist_pid)),
-            ("wall_hist", Some(&self.wall_hist)),
-            ("disp", Some(&self.disp)),
-            ("wall_near", Some(&self.wall_near)),
-            ("vpred", Some(&self.vpred)),
-            ("kahan", Some(&self.kahan)),
-            ("omega", self.omega.as_ref()),
-            ("alpha", self.alpha.as_ref()),
-            ("wpred", self.wpred.as_ref()),
-            ("ledger", self.ledger.as_ref()),
-            ("wall_ledger", self.wall_ledger.as_ref()),
-        ]
-        .into_iter()
-        .filter_map(|(n, b)| b.map(|b| (format!("{side}_{n}"), b)))
-        .collect()
-    }
-
-    /// The fields a rebuild re-sorts (`gpu::permute`): everything per particle but the
-    /// lists (rebuilt) and the wall candidates (recomputed).
-    fn permuted(&self, n: u32, walls: u32, history_bytes: u64) -> Vec<Field> {
-        let mut f = vec![
-            Field::per_particle("cell", &self.cell, 16),
-            Field::per_particle("off", &self.off, 16),
-            Field::per_particle("vel", &self.vel, 16),
-            Field::per_particle("acc", &self.acc, 16),
-            Field::per_particle("vpred", &self.vpred, 16),
-            Field::per_particle("kahan", &self.kahan, 32),
-            Field::per_particle("pid", &self.pid, 4),
-            Field::per_particle("disp", &self.disp, 16),
+    /// The buffers under the names the kernels bind them by.
+    fn named(&self) -> Vec<(String, &wgpu::Buffer)> {
+        let mut v = vec![
+            ("state".to_string(), &self.state),
+            ("motion".to_string(), &self.motion),
         ];
-        for (name, b) in [
-            ("omega", &self.omega),
-            ("alpha", &self.alpha),
-            ("wpred", &self.wpred),
-        ] {
-            f.extend(b.as_ref().map(|b| Field::per_particle(name, b, 16)));
+        v.push(("entries".to_string(), &self.entries));
+        v.push(("wall_contacts".to_string(), &self.wall_contacts));
+        v
+    }
+
+    /// The record layouts with their capacities: the entries', the new lists', the wall
+    /// contacts'.
+    fn records<'a>(
+        &'a self,
+        new: &'a NewLists,
+        entries: u64,
+        walls: u64,
+    ) -> [(&'a RecordLayout, u64); 3] {
+        let n = self.layout.field_bytes() / crate::gpu::state::FIELD_BYTES;
+        [
+            (&self.entry_layout, entries),
+            (&new.layout, entries),
+            (&self.wall_layout, n * walls),
+        ]
+    }
+
+    /// The buffer holding state buffer `b`.
+    fn buffer(&self, b: Buffer) -> &wgpu::Buffer {
+        match b {
+            Buffer::State => &self.state,
+            Buffer::Motion => &self.motion,
         }
-        f.extend(Field::wall_major(
-            "wall_hist",
-            &self.wall_hist,
-            history_bytes,
-            walls,
-            n,
-        ));
-        if let Some(l) = &self.wall_ledger {
-            f.extend(Field::wall_major("wall_ledger", l, 16, walls, n));
+    }
+
+    /// The fields a rebuild re-sorts (`gpu::permute`): every per-particle field (two
+    /// state fields a dispatch) but the lists (rebuilt).
+    fn permuted(&self, n: u32, walls: u32) -> Vec<Field> {
+        let stride = 4 * self.layout.stride() as u32;
+        let per_move = (ROW_WORDS / 4).max(1) as usize;
+        let mut f = Vec::new();
+        for b in Buffer::ALL {
+            let names: Vec<&str> = self.layout.in_buffer(b).map(|f| f.name).collect();
+            for (c, group) in names.chunks(per_move).enumerate() {
+                let first = (c * per_move) as u32;
+                f.push(Field::regions(
+                    &group.join("+"),
+                    self.buffer(b),
+                    4,
+                    (first * stride, stride, group.len() as u32),
+                ));
+            }
+        }
+        // the wall contacts' history and ledger values (not the servo's pushes, which the
+        // rebuild zeroes)
+        let capacity = n as u64 * walls as u64;
+        for name in ["wall_hist", "wall_ledger"] {
+            if let Some((before, words)) = self.wall_layout.place(name) {
+                f.extend(Field::wall_major(
+                    name,
+                    &self.wall_contacts,
+                    (before * capacity) as u32,
+                    4 * words,
+                    walls,
+                    n,
+                ));
+            }
         }
         f
     }
 }
 
-/// The neighbour lists a rebuild builds (B), copied back into A's at its end.
+/// The neighbour lists a rebuild builds (B: partner ids, history, ledger values), copied
+/// back into A's at its end.
 struct NewLists {
-    count: wgpu::Buffer,
-    row: wgpu::Buffer,
-    hist: wgpu::Buffer,
-    hist_pid: wgpu::Buffer,
-    ledger: Option<wgpu::Buffer>,
+    new_entries: wgpu::Buffer,
+    layout: RecordLayout,
 }
 
 impl NewLists {
-    fn new(
-        alloc: &mut Allocator,
-        (n, entries): (u64, u64),
-        kind: &Composition,
-        ledger: bool,
-    ) -> Self {
-        let mut b = |name: &str, bytes: u64| alloc.buffer(&format!("B.{name}"), bytes);
+    fn new(alloc: &mut Allocator, entries: u64, kind: &Composition, ledger: bool) -> Self {
+        let [_, layout, _] = kind.records(ledger);
         Self {
-            count: b("count", 4 * n),
-            row: b("row", 4 * n),
-            hist: b("hist", kind.history_bytes() * entries),
-            hist_pid: b("hist_pid", 4 * entries),
-            ledger: ledger.then(|| b("ledger", 16 * entries)),
+            new_entries: alloc.buffer("B.new_entries", layout.bytes(entries, &[])),
+            layout,
         }
     }
 
     fn named(&self) -> Vec<(String, &wgpu::Buffer)> {
-        let mut v = vec![
-            ("b_count".to_string(), &self.count),
-            ("b_row".to_string(), &self.row),
-            ("b_hist".to_string(), &self.hist),
-            ("b_hist_pid".to_string(), &self.hist_pid),
-        ];
-        v.extend(self.ledger.as_ref().map(|l| ("b_ledger".to_string(), l)));
-        v
+        vec![("new_entries".to_string(), &self.new_entries)]
     }
 }
 
@@ -274,14 +249,12 @@ struct StepBuffers {
     walls: wgpu::Buffer,
     /// Each wall's point at the last rebuild (the trigger for moving walls: state).
     wall_ref: wgpu::Buffer,
-    /// The servo's per-contact normal forces (scratch, cleared on a restore).
-    wall_push: wgpu::Buffer,
     /// Which particles have appeared (pouring), by persistent id.
     appeared: wgpu::Buffer,
-    monitor: wgpu::Buffer,
-    /// Verlet skin state (see `skin` in `shaders/step.wgsl`): [0] some particle moved more
-    /// than skin/2 since the last rebuild, [1] rebuild flag, [2] rebuilds so far, [3] skin.
-    skin: wgpu::Buffer,
+    /// The monitor (zeroed per batch) and the Verlet skin state (`control` in
+    /// `shaders/step.wgsl`): [0] some particle moved more than skin/2 since the last
+    /// rebuild, [1] rebuild flag, [2] rebuilds so far.
+    control: wgpu::Buffer,
     /// The indirect dispatch arguments: a rebuild's (written by `decide` each step), then
     /// every step's (written by the host at each batch's start; zeroed by a halt).
     args: wgpu::Buffer,
@@ -289,17 +262,9 @@ struct StepBuffers {
     /// Per particle (by persistent id): contact counts, overlaps, dissipated and stored
     /// energy (`particle_ledger` in `shaders/ledger.wgsl`); only with the ledger.
     particle_ledger: Option<wgpu::Buffer>,
-    /// The neighbour lists (they persist between rebuilds, so they are state): each
-    /// particle's half list, and the entries of the pairs its partners evaluate (`lower`,
-    /// with its rows).
-    nbr: wgpu::Buffer,
-    lower: wgpu::Buffer,
-    lower_count: wgpu::Buffer,
-    lower_row: wgpu::Buffer,
-    /// The pair forces in one vec4 an entry, or split (x, y, z) where that would exceed
-    /// the binding limit; the other form's buffers hold one element.
-    pair_force: [wgpu::Buffer; 4],
-    pair_torque: Option<wgpu::Buffer>,
+    /// The new lists' and the `lower` lists' lengths and first entries (`rows` in
+    /// `shaders/step.wgsl`: four regions [`particle_stride`] apart).
+    rows: wgpu::Buffer,
 }
 
 impl StepBuffers {
@@ -310,22 +275,12 @@ impl StepBuffers {
             ("pairs", &self.pairs),
             ("walls", &self.walls),
             ("wall_ref", &self.wall_ref),
-            ("wall_push", &self.wall_push),
             ("appeared", &self.appeared),
-            ("monitor", &self.monitor),
-            ("skin", &self.skin),
+            ("control", &self.control),
             ("args", &self.args),
             ("full_args", &self.full_args),
-            ("nbr", &self.nbr),
-            ("lower", &self.lower),
-            ("lower_count", &self.lower_count),
-            ("lower_row", &self.lower_row),
-            ("pair_force", &self.pair_force[0]),
-            ("pair_force_x", &self.pair_force[1]),
-            ("pair_force_y", &self.pair_force[2]),
-            ("pair_force_z", &self.pair_force[3]),
+            ("rows", &self.rows),
         ];
-        list.extend(self.pair_torque.as_ref().map(|t| ("pair_torque", t)));
         list.extend(
             self.particle_ledger
                 .as_ref()
@@ -335,68 +290,24 @@ impl StepBuffers {
     }
 }
 
-/// The per-entry arrays sized by the lists' capacity besides the lists' own history:
-/// partners, `lower`, the pair forces and torques.
-struct EntryArrays {
-    nbr: wgpu::Buffer,
-    lower: wgpu::Buffer,
-    pair_force: [wgpu::Buffer; 4],
-    pair_torque: Option<wgpu::Buffer>,
-}
-
-impl EntryArrays {
-    fn new(alloc: &mut Allocator, entries: u64, split: bool, rotation: bool) -> Self {
-        let (vec4, plane) = if split { (1, entries) } else { (entries, 1) };
-        Self {
-            nbr: alloc.buffer("nbr", 4 * entries),
-            lower: alloc.buffer("lower", 4 * entries),
-            pair_force: [
-                alloc.buffer("pair_force", 16 * vec4),
-                alloc.buffer("pair_force_x", 4 * plane),
-                alloc.buffer("pair_force_y", 4 * plane),
-                alloc.buffer("pair_force_z", 4 * plane),
-            ],
-            pair_torque: rotation.then(|| alloc.buffer("pair_torque", 16 * entries)),
-        }
+/// An error when `entries` list entries of `words` words each (the entries' records)
+/// exceed the adapter's storage binding limit (or the u32 entry indices).
+fn check_entries(entries: u64, words: u64, particles: u64, limit: u64) -> Result<(), PowderError> {
+    let bytes = 4 * words;
+    if entries * bytes > limit || entries * words > u32::MAX as u64 {
+        return Err(PowderError::Run(format!(
+            "the neighbour lists need {entries} entries ({:.1} a particle) of {bytes} bytes each (partner, history, pair force, ...), over the adapter's storage binding limit of {limit} bytes",
+            entries as f64 / particles.max(1) as f64
+        )));
     }
-}
-
-/// What a list entry takes in each per-entry array.
-struct EntryWidths {
-    history: u64,
-    ledger: bool,
-    rotation: bool,
-    split: bool,
-}
-
-impl EntryWidths {
-    /// An error naming the array when `entries` entries of it exceed the adapter's
-    /// storage binding limit (or the u32 entry indices).
-    fn check(&self, entries: u64, particles: u64, limit: u64) -> Result<(), PowderError> {
-        let (what, bytes) = [
-            ("neighbour lists", 4),
-            ("pair forces", if self.split { 4 } else { 16 }),
-            ("contact history", self.history),
-            ("energy ledger", if self.ledger { 16 } else { 0 }),
-            ("pair torques", if self.rotation { 16 } else { 0 }),
-        ]
-        .into_iter()
-        .max_by_key(|&(_, b)| b)
-        .unwrap_or(("neighbour lists", 4));
-        if entries * bytes > limit || entries > u32::MAX as u64 {
-            return Err(PowderError::Run(format!(
-                "the neighbour lists need {entries} entries ({:.1} a particle) of {bytes} bytes of {what}, over the adapter's storage binding limit of {limit} bytes",
-                entries as f64 / particles.max(1) as f64
-            )));
-        }
-        Ok(())
-    }
+    Ok(())
 }
 
 /// Binds every kernel of the step to the run's buffers and the mirrors' textures.
 fn bind_all(
     device: &wgpu::Device,
     program: &Program,
+    (layout, records): (&StateLayout, &[(&RecordLayout, u64)]),
     mirrors: &Mirrors,
     grid: &GridSort,
     buffers: [Vec<(String, &wgpu::Buffer)>; 3],
@@ -411,7 +322,17 @@ fn bind_all(
     let pass = |name: &str| -> Result<Pass, PowderError> {
         let kernel = program.kernel(name)?.clone();
         let group = kernel.bind_with_textures(device, &refs, &mirrors.views())?;
-        let bound = kernel.bound_bytes(&refs, &textures);
+        let mut bound = kernel.bound_bytes(&refs, &textures);
+        // the state: the fields the kernel's accessors touch, not the whole buffers
+        for (name, bytes) in &mut bound {
+            if let Some(b) = Buffer::ALL.into_iter().find(|b| b.name() == name) {
+                *bytes = layout.touched_bytes(b, &kernel.calls);
+            }
+            // and the records: the fields it touches
+            if let Some((r, capacity)) = records.iter().find(|(r, _)| r.global == name) {
+                *bytes = r.touched_bytes(&kernel.calls, *capacity);
+            }
+        }
         Ok(Pass {
             kernel,
             group,
@@ -547,7 +468,7 @@ impl Default for GpuOptions {
 /// the forecast and the counts.
 struct Quiet {
     mode: QuietBatches,
-    copies: Vec<(wgpu::Buffer, wgpu::Buffer)>,
+    copies: Vec<Saved>,
     forecast: Forecast,
     /// The device's rebuild count at the end of the last batch (u64::MAX: unknown).
     rebuilds: u64,
@@ -556,6 +477,37 @@ struct Quiet {
 }
 
 /// What the host reads after a batch: the monitor and the skin state.
+/// A range of a buffer a quiet batch may change, and where its batch-start copy goes.
+#[derive(Clone)]
+struct Saved {
+    from: wgpu::Buffer,
+    from_at: u64,
+    to: wgpu::Buffer,
+    to_at: u64,
+    bytes: u64,
+}
+
+impl Saved {
+    /// All of `from` into `to`.
+    fn whole(from: &wgpu::Buffer, to: wgpu::Buffer) -> Self {
+        Self {
+            from: from.clone(),
+            from_at: 0,
+            bytes: from.size(),
+            to,
+            to_at: 0,
+        }
+    }
+
+    fn save(&self, encoder: &mut wgpu::CommandEncoder) {
+        encoder.copy_buffer_to_buffer(&self.from, self.from_at, &self.to, self.to_at, self.bytes);
+    }
+
+    fn restore(&self, encoder: &mut wgpu::CommandEncoder) {
+        encoder.copy_buffer_to_buffer(&self.to, self.to_at, &self.from, self.from_at, self.bytes);
+    }
+}
+
 struct BatchReport {
     monitor: Vec<u32>,
     skin: Vec<u32>,
@@ -585,10 +537,6 @@ pub struct GpuEngine {
     n: u32,
     /// Entries the neighbour lists have room for (grown when a rebuild needs more).
     entries: u64,
-    /// Whether the pair forces are split over three bindings (`split_pair_force`), and
-    /// the entries the capacity rule sets aside that decided it.
-    split: bool,
-    rule_entries: u64,
     origin: DVec3,
     /// Cell width per axis (the f32 values the kernels use), m.
     h: DVec3,
@@ -749,13 +697,6 @@ fn pipeline_constants(
     constants
 }
 
-/// Whether the pair forces of `slots` neighbour slots go into three bindings (x, y, z) rather
-/// than one vec4 a slot: only where one would exceed the adapter's storage binding limit
-/// (the split form costs two more accesses per slot in `force` and `collect`).
-fn split_pair_force(slots: u64, max_binding: u64) -> bool {
-    16 * slots > max_binding
-}
-
 /// The step a scene's pair models need and their pair table as bytes.
 fn pair_table(models: &[ContactModel]) -> (Composition, Vec<u8>) {
     let kind = Composition::of(models);
@@ -787,12 +728,7 @@ impl GpuEngine {
             .iter()
             .map(|p| p.radius)
             .fold(f64::INFINITY, f64::min);
-        let q = r.r_max / r_min;
         let skin = SKIN * r_min;
-        // Neighbours within r_i + r_j + reach: about 5·(1 + q)² for size ratio q, times the
-        // volume the skin adds to the smallest pair's cut-off sphere.
-        let skin_volume = (1.0 + 0.5 * SKIN).powi(3);
-        let cap = ((5.0 * (1.0 + q) * (1.0 + q) * skin_volume).ceil() as u32).clamp(16, 1024);
         let origin = DVec3::from_array(scene.domain.min);
         let extent = DVec3::from_array(scene.domain.max) - origin;
         let cutoff = 2.0 * r.r_max + r.max_reach + skin;
@@ -839,24 +775,25 @@ impl GpuEngine {
                 ("grid.sorted_index".into(), grid.sorted_index().size()),
             ],
         };
-        // the pair forces go into three planes where the rule's capacity would exceed the
-        // binding limit in one (a pipeline constant: decided once)
-        let split = split_pair_force(n as u64 * cap as u64, ctx.max_storage_binding());
         // list entries: a first guess, grown by the first rebuild to what it needs
         let entries = options
             .list_entries
             .unwrap_or(INITIAL_ENTRIES_PER_PARTICLE * n as u64 + 256)
             .max(1);
-        let widths = EntryWidths {
-            history: kind.history_bytes(),
-            ledger,
-            rotation: kind.rotation(),
-            split,
-        };
-        widths.check(entries, n as u64, ctx.max_storage_binding())?;
+        let [entry_layout, ..] = kind.records(ledger);
+        check_entries(
+            entries,
+            entry_layout.words(),
+            n as u64,
+            ctx.max_storage_binding(),
+        )?;
+        let servo_walls = scene
+            .walls
+            .iter()
+            .any(|w| matches!(w.motion, crate::scene::WallMotion::Servo { .. }));
         let sizes = (n as u64, entries, n_walls);
-        let state = StateSet::new(&mut alloc, sizes, &kind, ledger);
-        let new_lists = NewLists::new(&mut alloc, (n as u64, entries), &kind, ledger);
+        let state = StateSet::new(&mut alloc, sizes, &kind, (ledger, servo_walls));
+        let new_lists = NewLists::new(&mut alloc, entries, &kind, ledger);
         let dt32 = r.dt as f32;
         let particle_ledger = ledger.then(|| alloc.buffer("particle_ledger", 64 * n as u64));
         // Initial state, in scene order (the first sort orders it).
@@ -865,7 +802,8 @@ impl GpuEngine {
         let mut vels = Vec::with_capacity(n);
         // the compensations (stored − true) of velocity and position, and the radius's
         // rounding residual: the kernels' x − c is the scene's value to ~1e-16 relative
-        let mut kahan: Vec<[f32; 4]> = Vec::with_capacity(2 * n);
+        let mut kahan_v: Vec<[f32; 4]> = Vec::with_capacity(n);
+        let mut kahan_o: Vec<[f32; 4]> = Vec::with_capacity(n);
         for (p, m) in scene.particles.iter().zip(&r.mass) {
             let x = DVec3::from_array(p.position);
             let (mut c, mut o) = encode3(x, origin, h);
@@ -875,8 +813,8 @@ impl GpuEngine {
             let v = p.velocity;
             let v32 = v.map(|c| c as f32);
             let cv = [0, 1, 2].map(|a| (v32[a] as f64 - v[a]) as f32);
-            kahan.push([cv[0], cv[1], cv[2], 0.0]);
-            kahan.push([
+            kahan_v.push([cv[0], cv[1], cv[2], 0.0]);
+            kahan_o.push([
                 dx.x as f32,
                 dx.y as f32,
                 dx.z as f32,
@@ -886,39 +824,47 @@ impl GpuEngine {
             offs.push(o);
             vels.push([v32[0], v32[1], v32[2], *m as f32]);
         }
-        let pid: Vec<u32> = (0..n as u32).collect();
         let g = scene.gravity;
-        let acc0: Vec<[f32; 4]> = vec![[g[0] as f32, g[1] as f32, g[2] as f32, 0.0]; n];
-        let q0 = &ctx.queue;
-        let s0 = &state;
-        q0.write_buffer(&s0.cell, 0, bytemuck::cast_slice(&cells));
-        q0.write_buffer(&s0.off, 0, bytemuck::cast_slice(&offs));
-        q0.write_buffer(&s0.vel, 0, bytemuck::cast_slice(&vels));
-        q0.write_buffer(&s0.kahan, 0, bytemuck::cast_slice(&kahan));
-        q0.write_buffer(&s0.acc, 0, bytemuck::cast_slice(&acc0));
+        let acc0 = [g[0] as f32, g[1] as f32, g[2] as f32, 0.0];
         // the prediction kick_drift writes each step, for the initial forces
         let vpred0: Vec<[f32; 4]> = vels
             .iter()
-            .zip(&acc0)
-            .map(|(v, a)| {
-                let p = |i: usize| v[i] + 0.5 * dt32 * a[i];
+            .map(|v| {
+                let p = |i: usize| v[i] + 0.5 * dt32 * acc0[i];
                 [p(0), p(1), p(2), v[3]]
             })
             .collect();
-        q0.write_buffer(&s0.vpred, 0, bytemuck::cast_slice(&vpred0));
-        q0.write_buffer(&s0.pid, 0, bytemuck::cast_slice(&pid));
-        if let Some(omega) = &s0.omega {
-            // ω as the scene gives it, w = I = 2/5·m·r²
-            let w: Vec<[f32; 4]> = scene
-                .particles
-                .iter()
-                .zip(&r.mass)
-                .map(|(p, m)| {
-                    let [x, y, z] = p.angular_velocity.map(|c| c as f32);
-                    [x, y, z, (0.4 * m * p.radius * p.radius) as f32]
-                })
-                .collect();
-            q0.write_buffer(omega, 0, bytemuck::cast_slice(&w));
+        let words = |v: &[[f32; 4]]| -> Vec<[u32; 4]> { bytemuck::cast_slice(v).to_vec() };
+        let initial = |name: &str| -> Option<Vec<[u32; 4]>> {
+            match name {
+                "cell" => Some(bytemuck::cast_slice(&cells).to_vec()),
+                "off" => Some(words(&offs)),
+                "vel" => Some(words(&vels)),
+                "acc" => Some(words(&vec![acc0; n])),
+                "vpred" => Some(words(&vpred0)),
+                "kahan_v" => Some(words(&kahan_v)),
+                "kahan_o" => Some(words(&kahan_o)),
+                // persistent id; the lists and wall candidates come with the first rebuild
+                "ids" => Some((0..n as u32).map(|i| [i, 0, 0, 0]).collect()),
+                // ω as the scene gives it, w = I = 2/5·m·r²
+                "omega" => Some(
+                    scene
+                        .particles
+                        .iter()
+                        .zip(&r.mass)
+                        .map(|(p, m)| {
+                            let [x, y, z] = p.angular_velocity.map(|c| c as f32);
+                            [x, y, z, (0.4 * m * p.radius * p.radius) as f32]
+                        })
+                        .map(bytemuck::cast)
+                        .collect(),
+                ),
+                _ => None,
+            }
+        };
+        let q0 = &ctx.queue;
+        for b in Buffer::ALL {
+            q0.write_buffer(state.buffer(b), 0, &state.layout.pack(b, &initial));
         }
         let walls: Vec<WallGpu> = scene
             .walls
@@ -926,10 +872,6 @@ impl GpuEngine {
             .map(|w| WallGpu::from_scene(w, origin, h))
             .collect();
         let moving_walls = scene.walls.iter().any(|w| w.motion.moves());
-        let servo_walls = scene
-            .walls
-            .iter()
-            .any(|w| matches!(w.motion, crate::scene::WallMotion::Servo { .. }));
         let step = StepParams {
             gravity: [g[0] as f32, g[1] as f32, g[2] as f32],
             dt: r.dt as f32,
@@ -974,20 +916,13 @@ impl GpuEngine {
         let active_buf = alloc.buffer("active", 4 * n as u64);
         let flags: Vec<u32> = active.iter().map(|&a| a as u32).collect();
         q0.write_buffer(&active_buf, 0, bytemuck::cast_slice(&flags));
-        // the servo's per-contact normal forces (one element without servo walls)
-        let wall_push = alloc.buffer(
-            "wall_push",
-            4 * if servo_walls { n as u64 * n_walls } else { 1 },
-        );
-        // the half lists' other side, and what each evaluated pair leaves for collect
-        let lower_count = alloc.buffer("lower_count", 4 * n as u64);
-        let lower_row = alloc.buffer("lower_row", 4 * n as u64);
-        let entry_arrays = EntryArrays::new(&mut alloc, entries, split, kind.rotation());
-        let monitor = alloc.buffer("monitor", MONITOR_BYTES);
-        let skin_buf = alloc.buffer("skin", 16);
+        // the new lists' and the `lower` lists' rows
+        let stride = particle_stride(n as u64);
+        let rows = alloc.buffer("rows", 4 * 4 * stride);
+        let control = alloc.buffer("control", CONTROL_BYTES);
         // moved beyond skin/2 (flag set): the first step builds the lists
         let skin_init = [1u32, 0, 0, 0];
-        q0.write_buffer(&skin_buf, 0, bytemuck::cast_slice(&skin_init));
+        q0.write_buffer(&control, SKIN_OFFSET, bytemuck::cast_slice(&skin_init));
         // the software adapter's paths (texture mirrors; quiet batches under `auto`)
         let software = options.software_paths.unwrap_or_else(|| ctx.is_software());
         let mut wanted = vec![
@@ -1011,8 +946,7 @@ impl GpuEngine {
         if servo_walls {
             wanted.push("wall_servo");
         }
-        let mut constants = pipeline_constants(scene, &r, &all_models);
-        constants.push(("SPLIT_PAIR_FORCE", f64::from(u8::from(split))));
+        let constants = pipeline_constants(scene, &r, &all_models);
         let program = Program::specialized(
             &ctx,
             &kind.variant(ledger, software),
@@ -1027,9 +961,17 @@ impl GpuEngine {
             Some(&["scan_blocks", "scan_add"]),
         )?;
         let n32 = n as u32;
+        let region = stride as u32;
         let scans = [
-            ExclusiveScan::new(&ctx, &scan_program, &new_lists.count, &new_lists.row, n32)?,
-            ExclusiveScan::new(&ctx, &scan_program, &lower_count, &lower_row, n32)?,
+            // (the regions of `rows`: B's counts and rows, then `lower`'s)
+            ExclusiveScan::with_offsets(&ctx, &scan_program, (&rows, 0), (&rows, region), n32)?,
+            ExclusiveScan::with_offsets(
+                &ctx,
+                &scan_program,
+                (&rows, 2 * region),
+                (&rows, 3 * region),
+                n32,
+            )?,
         ];
         // the indirect arguments of a rebuild (the grid sort's, one per-particle pass's,
         // the scans'), and the ones decide writes each step (those, or zeros)
@@ -1067,23 +1009,38 @@ impl GpuEngine {
         alloc.list.push(("args".into(), args.size()));
         // the force pass's read-only copies of what it loads per pair (`gpu::mirror`)
         let s0 = &state;
+        let at = |name: &str| s0.layout.place(name).map_or(0, |(_, at)| at);
         let mut mirrored = vec![
             (
                 "m_cell",
                 Some("m_cell_out"),
-                &s0.cell,
+                &s0.state,
+                at("cell"),
                 wgpu::TextureFormat::Rgba32Sint,
             ),
             (
                 "m_off",
                 Some("m_off_out"),
-                &s0.off,
+                &s0.state,
+                at("off"),
                 wgpu::TextureFormat::Rgba32Float,
             ),
-            ("m_vpred", None, &s0.vpred, wgpu::TextureFormat::Rgba32Float),
+            (
+                "m_vpred",
+                None,
+                &s0.state,
+                at("vpred"),
+                wgpu::TextureFormat::Rgba32Float,
+            ),
         ];
-        if let Some(w) = &s0.wpred {
-            mirrored.push(("m_wpred", None, w, wgpu::TextureFormat::Rgba32Float));
+        if let Some((_, w)) = s0.layout.place("wpred") {
+            mirrored.push((
+                "m_wpred",
+                None,
+                &s0.state,
+                w,
+                wgpu::TextureFormat::Rgba32Float,
+            ));
         }
         // (only on the software adapter's path)
         if !software {
@@ -1098,7 +1055,7 @@ impl GpuEngine {
             grid.params(),
             grid.sorted_index(),
             n as u32,
-            &state.permuted(n as u32, n_walls as u32, kind.history_bytes()),
+            &state.permuted(n as u32, n_walls as u32),
         )?;
         alloc
             .list
@@ -1109,26 +1066,20 @@ impl GpuEngine {
             pairs: pairs_buf,
             walls: walls_buf,
             wall_ref,
-            wall_push,
             appeared: active_buf,
-            monitor,
-            skin: skin_buf,
+            control,
             args,
             full_args,
             particle_ledger,
-            nbr: entry_arrays.nbr,
-            lower: entry_arrays.lower,
-            lower_count,
-            lower_row,
-            pair_force: entry_arrays.pair_force,
-            pair_torque: entry_arrays.pair_torque,
+            rows,
         };
         let bound = bind_all(
             device,
             &program,
+            (&state.layout, &state.records(&new_lists, entries, n_walls)),
             &mirrors,
             &grid,
-            [state.named("a"), new_lists.named(), b.named()],
+            [state.named(), new_lists.named(), b.named()],
         )?;
         // quiet batches: not where walls move (their rebuild trigger is decide's) nor where
         // particles appear (an insertion rebuilds)
@@ -1144,24 +1095,15 @@ impl GpuEngine {
             let mut copies = Vec::new();
             let a = &state;
             let own = [
-                ("cell", Some(&a.cell)),
-                ("off", Some(&a.off)),
-                ("vel", Some(&a.vel)),
-                ("acc", Some(&a.acc)),
-                ("vpred", Some(&a.vpred)),
-                ("kahan", Some(&a.kahan)),
-                ("wall_hist", Some(&a.wall_hist)),
-                ("disp", Some(&a.disp)),
-                ("omega", a.omega.as_ref()),
-                ("alpha", a.alpha.as_ref()),
-                ("wpred", a.wpred.as_ref()),
-                ("wall_ledger", a.wall_ledger.as_ref()),
+                ("state", Some(&a.state)),
+                ("motion", Some(&a.motion)),
+                ("wall_contacts", Some(&a.wall_contacts)),
                 ("particle_ledger", b.particle_ledger.as_ref()),
             ];
             for (name, b) in own {
                 if let Some(b) = b {
                     let copy = alloc.buffer(&format!("quiet.{name}"), b.size());
-                    copies.push((b.clone(), copy));
+                    copies.push(Saved::whole(b, copy));
                 }
             }
             let q = Quiet {
@@ -1188,13 +1130,11 @@ impl GpuEngine {
             dt: r.dt,
             n: n as u32,
             entries,
-            split,
-            rule_entries: n as u64 * cap as u64,
             origin,
             h,
             radius,
             mass: mass.clone(),
-            grid_keys: grid.keys_bind_group(&state.cell),
+            grid_keys: grid.keys_bind_group(&state.state),
             mirrors,
             quiet,
             grid,
@@ -1269,13 +1209,6 @@ impl GpuEngine {
     /// lists did not fit, finished after the growth (the first build included).
     pub fn list_growths(&self) -> u64 {
         self.growths
-    }
-
-    /// The list entries the capacity rule 5·(1 + r_max/r_min)²·(1 + skin/2r_min)³ sets aside
-    /// for all particles: the pair forces are split over three bindings where 16 bytes
-    /// each would exceed the adapter's binding limit (a pipeline constant, decided once).
-    pub fn capacity_rule(&self) -> u64 {
-        self.rule_entries
     }
 
     /// Entries the neighbour lists have room for now (each pair a particle evaluates takes
@@ -1354,6 +1287,34 @@ impl GpuEngine {
         .collect()
     }
 
+    /// The fields of the particle state, in buffer order (`gpu::state`).
+    pub fn state_fields(&self) -> Vec<&'static str> {
+        self.state.layout.names()
+    }
+
+    /// The fields of a list entry (`gpu::records`) with their bytes, in buffer order: the
+    /// entries buffer (`A.entries`) holds this many bytes per entry of capacity.
+    pub fn entry_fields(&self) -> Vec<(&'static str, u64)> {
+        let l = &self.state.entry_layout;
+        l.fields
+            .iter()
+            .map(|f| (f.name, 4 * f.kind.words()))
+            .collect()
+    }
+
+    /// (kernel, storage buffers it binds) of every kernel built for the step, the most
+    /// first: wgpu limits them per shader stage (WebGPU's default: 8).
+    pub fn storage_bindings(&self) -> Vec<(String, u32)> {
+        let mut v: Vec<(String, u32)> = self
+            .program
+            .kernels
+            .values()
+            .map(|k| (k.name.clone(), k.storage_buffers))
+            .collect();
+        v.sort_by_key(|(name, b)| (std::cmp::Reverse(*b), name.clone()));
+        v
+    }
+
     /// The step variant this scene runs (see [`Self::variant_name`]).
     pub fn kind(&self) -> &Composition {
         &self.kind
@@ -1396,7 +1357,13 @@ impl GpuEngine {
         }
         out.push(pass(&b.force, When::Step));
         out.extend(b.wall_servo.as_ref().map(|p| pass(p, When::Step)));
-        for (name, bound) in self.grid.traffic(&self.state.cell) {
+        for (name, mut bound) in self.grid.traffic(&self.state.state) {
+            // the sort reads the state's first field, the cells
+            for (global, bytes) in &mut bound {
+                if global == "cells" {
+                    *bytes = self.state.layout.field_bytes();
+                }
+            }
             out.push(PassTraffic::new(
                 format!("grid.{name}"),
                 When::Rebuild,
@@ -1498,7 +1465,7 @@ impl GpuEngine {
     /// set (a halt zeroes them).
     fn start_batch(&self) {
         let q = &self.ctx.queue;
-        q.write_buffer(&self.b.monitor, 0, &[0u8; MONITOR_BYTES as usize]);
+        q.write_buffer(&self.b.control, 0, &[0u8; MONITOR_BYTES as usize]);
         q.write_buffer(
             &self.b.args,
             self.step_args,
@@ -1510,52 +1477,49 @@ impl GpuEngine {
     /// for them), keeping the current lists' history: the rebuild that needed the room
     /// runs again and remaps it.
     fn grow_lists(&mut self, need: u64) -> Result<(), PowderError> {
-        let entries = ((need as f64 * LIST_HEADROOM).ceil() as u64).max(need + 64);
+        // the headroom only as far as one binding holds (`need` itself is checked)
+        let most = self.ctx.max_storage_binding() / (4 * self.state.entry_layout.words());
+        let entries = ((need as f64 * LIST_HEADROOM).ceil() as u64)
+            .max(need + 64)
+            .min(most)
+            .max(need);
         self.growths += 1;
         self.resize_lists(entries, true)
     }
 
-    /// Reallocates every per-entry array for `entries` entries (copying A's lists'
-    /// history and ledger when `keep`), tells the kernels, and binds them again.
+    /// Reallocates the lists' entries for `entries` entries (copying A's partner ids,
+    /// history and ledger values when `keep`), tells the kernels, and binds them again.
     fn resize_lists(&mut self, entries: u64, keep: bool) -> Result<(), PowderError> {
-        let hb = self.kind.history_bytes();
-        let rotates = self.kind.rotation();
-        let widths = EntryWidths {
-            history: hb,
-            ledger: self.state.ledger.is_some(),
-            rotation: rotates,
-            split: self.split,
-        };
-        widths.check(entries, self.n as u64, self.ctx.max_storage_binding())?;
+        let layout = self.state.entry_layout.clone();
+        check_entries(
+            entries,
+            layout.words(),
+            self.n as u64,
+            self.ctx.max_storage_binding(),
+        )?;
         let device = &self.ctx.device;
         let mut alloc = Allocator {
             device,
             list: Vec::new(),
         };
         let mut encoder = device.create_command_encoder(&Default::default());
-        let mut grown = |name: &str, old: &wgpu::Buffer, per: u64, keep: bool| {
-            let new = alloc.buffer(name, per * entries);
-            if keep {
-                encoder.copy_buffer_to_buffer(old, 0, &new, 0, old.size().min(new.size()));
+        let old = (self.state.entries.clone(), self.entries);
+        let new = alloc.buffer("A.entries", layout.bytes(entries, &[]));
+        if keep {
+            // region by region: each region's start moves with the capacity
+            for name in ["hist_pid", "hist", "ledger"] {
+                if let Some((_, words)) = layout.place(name) {
+                    let from = layout.offset(name, old.1).unwrap_or(0);
+                    let to = layout.offset(name, entries).unwrap_or(0);
+                    let bytes = 4 * words * old.1.min(entries);
+                    encoder.copy_buffer_to_buffer(&old.0, from, &new, to, bytes);
+                }
             }
-            new
-        };
-        let a = &mut self.state;
-        a.hist = grown("A.hist", &a.hist, hb, keep);
-        a.hist_pid = grown("A.hist_pid", &a.hist_pid, 4, keep);
-        if let Some(l) = &a.ledger {
-            a.ledger = Some(grown("A.ledger", l, 16, keep));
         }
+        self.state.entries = new;
         let b = &mut self._new_lists;
-        b.hist = grown("B.hist", &b.hist, hb, false);
-        b.hist_pid = grown("B.hist_pid", &b.hist_pid, 4, false);
-        if let Some(l) = &b.ledger {
-            b.ledger = Some(grown("B.ledger", l, 16, false));
-        }
-        let e = EntryArrays::new(&mut alloc, entries, self.split, rotates);
+        b.new_entries = alloc.buffer("B.new_entries", b.layout.bytes(entries, &[]));
         self.ctx.queue.submit([encoder.finish()]);
-        (self.b.nbr, self.b.lower) = (e.nbr, e.lower);
-        (self.b.pair_force, self.b.pair_torque) = (e.pair_force, e.pair_torque);
         for (name, bytes) in alloc.list {
             if let Some(entry) = self.buffers.iter_mut().find(|(n, _)| *n == name) {
                 entry.1 = bytes;
@@ -1570,13 +1534,15 @@ impl GpuEngine {
         self.bound = bind_all(
             &self.ctx.device,
             &self.program,
+            (
+                &self.state.layout,
+                &self
+                    .state
+                    .records(&self._new_lists, entries, self.n_walls as u64),
+            ),
             &self.mirrors,
             &self.grid,
-            [
-                self.state.named("a"),
-                self._new_lists.named(),
-                self.b.named(),
-            ],
+            [self.state.named(), self._new_lists.named(), self.b.named()],
         )?;
         Ok(())
     }
@@ -1592,7 +1558,7 @@ impl GpuEngine {
         // a rebuild every step: the rebuild-only passes do their full work
         self.ctx
             .queue
-            .write_buffer(&self.b.skin, 4, bytemuck::bytes_of(&1u32));
+            .write_buffer(&self.b.control, SKIN_OFFSET + 4, bytemuck::bytes_of(&1u32));
         let time = |engine: &Self, record: &dyn Fn(&mut wgpu::CommandEncoder)| {
             let mut encoder = engine
                 .ctx
@@ -1602,7 +1568,7 @@ impl GpuEngine {
                 record(&mut encoder);
             }
             let t = std::time::Instant::now();
-            submit_and_read(&engine.ctx, encoder, &[(&engine.b.monitor, 4)]).map(|_| t.elapsed())
+            submit_and_read(&engine.ctx, encoder, &[(&engine.b.control, 4)]).map(|_| t.elapsed())
         };
         let empty = time(&self, &|_| {})?.as_secs_f64();
         let b = &self.bound;
@@ -1624,7 +1590,7 @@ impl GpuEngine {
         ];
         let record = |e: &mut wgpu::CommandEncoder, id: usize| {
             if id == 2 {
-                self.grid.encode(e, &self.state.cell);
+                self.grid.encode(e, &self.state.state);
                 return;
             }
             if id == 10 {
@@ -1672,8 +1638,8 @@ impl GpuEngine {
     /// the device's counter back.
     pub fn rebuilds(&self) -> Result<u64, PowderError> {
         let encoder = self.ctx.device.create_command_encoder(&Default::default());
-        let out = submit_and_read(&self.ctx, encoder, &[(&self.b.skin, 16)])?;
-        Ok(u32s(&out[0])[2] as u64)
+        let out = submit_and_read(&self.ctx, encoder, &[(&self.b.control, CONTROL_BYTES)])?;
+        Ok(u32s(&out[0])[SKIN_OFFSET as usize / 4 + 2] as u64)
     }
 
     /// The forces of the initial state (no drift, no kick), so the first step kicks with them.
@@ -1707,14 +1673,12 @@ impl GpuEngine {
 
     /// Submits a recorded batch and reads the monitor and the skin state back.
     fn submit_batch(&self, encoder: wgpu::CommandEncoder) -> Result<BatchReport, PowderError> {
-        let out = submit_and_read(
-            &self.ctx,
-            encoder,
-            &[(&self.b.monitor, MONITOR_BYTES), (&self.b.skin, 16)],
-        )?;
+        let out = submit_and_read(&self.ctx, encoder, &[(&self.b.control, CONTROL_BYTES)])?;
+        let words = u32s(&out[0]);
+        let (monitor, skin) = words.split_at(MONITOR_BYTES as usize / 4);
         Ok(BatchReport {
-            monitor: u32s(&out[0]),
-            skin: u32s(&out[1]),
+            monitor: monitor.to_vec(),
+            skin: skin.to_vec(),
         })
     }
 
@@ -1926,8 +1890,8 @@ impl GpuEngine {
         let copies = self.quiet_copies(q);
         self.start_batch();
         let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
-        for (a, saved) in &copies {
-            encoder.copy_buffer_to_buffer(a, 0, saved, 0, a.size());
+        for c in &copies {
+            c.save(&mut encoder);
         }
         for i in 0..batch {
             self.record_step(&mut encoder, Self::drift_of(i), true);
@@ -1944,12 +1908,12 @@ impl GpuEngine {
         // some step needed a rebuild: back to the batch's start (its monitor is void: the
         // steps after the missed rebuild ran with stale lists)
         let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
-        for (a, saved) in &copies {
-            encoder.copy_buffer_to_buffer(saved, 0, a, 0, a.size());
+        for c in &copies {
+            c.restore(&mut encoder);
         }
         self.ctx
             .queue
-            .write_buffer(&self.b.skin, 0, bytemuck::bytes_of(&0u32));
+            .write_buffer(&self.b.control, SKIN_OFFSET, bytemuck::bytes_of(&0u32));
         self.ctx.queue.submit([encoder.finish()]);
         if let Some(q) = &mut self.quiet {
             q.rolled_back += 1;
@@ -1960,12 +1924,24 @@ impl GpuEngine {
     /// (buffer a quiet batch changes, where its batch-start copy goes): the state into the
     /// quiet batches' own copies, the lists' history and ledger into the new lists' (a
     /// quiet batch does not rebuild).
-    fn quiet_copies(&self, q: &Quiet) -> Vec<(wgpu::Buffer, wgpu::Buffer)> {
+    fn quiet_copies(&self, q: &Quiet) -> Vec<Saved> {
         let (a, b) = (&self.state, &self._new_lists);
         let mut v = q.copies.clone();
-        v.push((a.hist.clone(), b.hist.clone()));
-        if let (Some(x), Some(y)) = (&a.ledger, &b.ledger) {
-            v.push((x.clone(), y.clone()));
+        for (from, to) in [("hist", "new_hist"), ("ledger", "new_ledger")] {
+            let cap = self.entries;
+            if let (Some(at), Some(to_at), Some((_, words))) = (
+                a.entry_layout.offset(from, cap),
+                b.layout.offset(to, cap),
+                a.entry_layout.place(from),
+            ) {
+                v.push(Saved {
+                    from: a.entries.clone(),
+                    from_at: at,
+                    to: b.new_entries.clone(),
+                    to_at,
+                    bytes: 4 * words * cap,
+                });
+            }
         }
         v
     }
@@ -1982,38 +1958,31 @@ impl GpuEngine {
     /// in the scene's particle order.
     pub fn state(&self) -> Result<GpuState, PowderError> {
         let s = &self.state;
-        let n = self.n as u64;
         let encoder = self.ctx.device.create_command_encoder(&Default::default());
-        let mut sources = vec![
-            (&s.cell, 16 * n),
-            (&s.off, 16 * n),
-            (&s.vel, 16 * n),
-            (&s.pid, 4 * n),
-            (&s.kahan, 32 * n),
-        ];
-        if let Some(omega) = &s.omega {
-            sources.push((omega, 16 * n));
-        }
-        let out = submit_and_read(&self.ctx, encoder, &sources)?;
-        let cells: Vec<[i32; 4]> = bytemuck::pod_collect_to_vec(&out[0]);
-        let offs: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&out[1]);
-        let vels: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&out[2]);
-        let pid = u32s(&out[3]);
-        let kahan: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&out[4]);
-        let omegas: Vec<[f32; 4]> = out
-            .get(5)
-            .map(|b| bytemuck::pod_collect_to_vec(b))
-            .unwrap_or_default();
+        let out = submit_and_read(
+            &self.ctx,
+            encoder,
+            &[(&s.state, s.state.size()), (&s.motion, s.motion.size())],
+        )?;
+        let l = &s.layout;
+        let (state, motion) = (&out[0], &out[1]);
+        let cells: Vec<[i32; 4]> = l.unpack(state, "cell");
+        let offs: Vec<[f32; 4]> = l.unpack(state, "off");
+        let vels: Vec<[f32; 4]> = l.unpack(motion, "vel");
+        let ids: Vec<[u32; 4]> = l.unpack(state, "ids");
+        let kahan_v: Vec<[f32; 4]> = l.unpack(motion, "kahan_v");
+        let kahan_o: Vec<[f32; 4]> = l.unpack(state, "kahan_o");
+        let omegas: Vec<[f32; 4]> = l.unpack(motion, "omega");
         let vec3 = |v: [f32; 4]| DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64);
         let mut positions = vec![DVec3::ZERO; self.n as usize];
         let mut velocities = vec![DVec3::ZERO; self.n as usize];
         let mut angular_velocities = vec![DVec3::ZERO; omegas.len()];
         for k in 0..self.n as usize {
-            let i = pid[k] as usize;
+            let i = ids[k][0] as usize;
             // the compensated values: x − c
             positions[i] = crate::gpu::layout::decode3(cells[k], offs[k], self.origin, self.h)
-                - vec3(kahan[2 * k + 1]);
-            velocities[i] = vec3(vels[k]) - vec3(kahan[2 * k]);
+                - vec3(kahan_o[k]);
+            velocities[i] = vec3(vels[k]) - vec3(kahan_v[k]);
             if let Some(w) = omegas.get(k) {
                 angular_velocities[i] = vec3(*w);
             }
@@ -2027,12 +1996,9 @@ impl GpuEngine {
 
     /// The state buffers, named as in [`GpuSavedState`].
     fn state_buffers(&self) -> Vec<(String, &wgpu::Buffer)> {
-        let mut list = self.state.named("a");
-        list.push(("nbr".into(), &self.b.nbr));
-        list.push(("lower".into(), &self.b.lower));
-        list.push(("lower_count".into(), &self.b.lower_count));
-        list.push(("lower_row".into(), &self.b.lower_row));
-        list.push(("skin".into(), &self.b.skin));
+        let mut list = self.state.named();
+        list.push(("rows".into(), &self.b.rows));
+        list.push(("control".into(), &self.b.control));
         list.push(("walls".into(), &self.b.walls));
         list.push(("wall_ref".into(), &self.b.wall_ref));
         if let Some(l) = &self.b.particle_ledger {
@@ -2085,12 +2051,13 @@ impl GpuEngine {
                 self.kind.layout()
             )));
         }
-        // the lists' capacity the state was saved with (its entries' partner ids)
+        // the lists' capacity the state was saved with (its entries' size)
+        let entry_bytes = 4 * self.state.entry_layout.words();
         let entries = saved
             .buffers
             .iter()
-            .find(|(name, _)| name == "a_hist_pid")
-            .map_or(self.entries, |(_, bytes)| bytes.len() as u64 / 4);
+            .find(|(name, _)| name == "entries")
+            .map_or(self.entries, |(_, bytes)| bytes.len() as u64 / entry_bytes);
         let list = self.state_buffers();
         let names: Vec<&String> = list.iter().map(|(n, _)| n).collect();
         let saved_names: Vec<&String> = saved.buffers.iter().map(|(n, _)| n).collect();
@@ -2101,14 +2068,12 @@ impl GpuEngine {
         }
         // every size checked before anything changes (the per-entry arrays at the saved
         // capacity)
-        let per_entry = |name: &str| match name {
-            "a_hist" => Some(self.kind.history_bytes()),
-            "a_hist_pid" | "nbr" | "lower" => Some(4),
-            "a_ledger" => Some(16),
-            _ => None,
-        };
         for ((name, buf), (_, bytes)) in list.iter().zip(&saved.buffers) {
-            let expected = per_entry(name).map_or(buf.size(), |b| (b * entries).max(4));
+            let expected = if name == "entries" {
+                (entry_bytes * entries).max(4)
+            } else {
+                buf.size()
+            };
             if bytes.len() as u64 != expected {
                 return Err(PowderError::Run(format!(
                     "the saved GPU buffer `{name}` has {} bytes, this run's has {expected} (another scene?)",
@@ -2124,9 +2089,15 @@ impl GpuEngine {
         }
         // the servo's pushes of walls that are no candidates must read 0 (a rebuild zeroes
         // them; this state's candidates may differ from the ones last written)
-        let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
-        encoder.clear_buffer(&self.b.wall_push, 0, None);
-        self.ctx.queue.submit([encoder.finish()]);
+        let walls = &self.state.wall_contacts;
+        let capacity = self.n as u64 * self.n_walls as u64;
+        if let Some(at) = self.state.wall_layout.offset("wall_push", capacity) {
+            if at < walls.size() {
+                let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+                encoder.clear_buffer(walls, at, None);
+                self.ctx.queue.submit([encoder.finish()]);
+            }
+        }
         if saved.wall_points.len() == self.wall_points.len() {
             self.wall_points = saved.wall_points;
         }
@@ -2255,15 +2226,18 @@ impl GpuEngine {
         if walls == 0 {
             return Ok(f);
         }
-        let Some(buf) = &self.state.wall_ledger else {
+        let capacity = self.n as u64 * walls as u64;
+        let Some(at) = self.state.wall_layout.offset("wall_ledger", capacity) else {
             return Err(PowderError::Run(
                 "this GPU run keeps no energy ledger (GpuOptions { ledger: false }), which holds the wall forces".into(),
             ));
         };
+        let buf = &self.state.wall_contacts;
         let encoder = self.ctx.device.create_command_encoder(&Default::default());
-        let bytes = 16 * self.n as u64 * walls as u64;
-        let out = submit_and_read(&self.ctx, encoder, &[(buf, bytes)])?;
-        let rows: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&out[0]);
+        let out = submit_and_read(&self.ctx, encoder, &[(buf, buf.size())])?;
+        let at = at as usize;
+        let rows: Vec<[f32; 4]> =
+            bytemuck::pod_collect_to_vec(&out[0][at..at + 16 * capacity as usize]);
         // slot w·n + k (`wall_slot`): (overlap, normal force, .., engaged)
         for (slot, r) in rows.iter().enumerate() {
             if r[3] != 0.0 {
@@ -2278,14 +2252,17 @@ impl GpuEngine {
     /// accelerations, in the scene's particle order (N). For traces and diagnostics.
     pub fn contact_forces(&self) -> Result<Vec<DVec3>, PowderError> {
         let s = &self.state;
-        let n = self.n as u64;
         let encoder = self.ctx.device.create_command_encoder(&Default::default());
-        let out = submit_and_read(&self.ctx, encoder, &[(&s.acc, 16 * n), (&s.pid, 4 * n)])?;
-        let acc: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&out[0]);
-        let pid = u32s(&out[1]);
+        let out = submit_and_read(
+            &self.ctx,
+            encoder,
+            &[(&s.state, s.state.size()), (&s.motion, s.motion.size())],
+        )?;
+        let acc: Vec<[f32; 4]> = s.layout.unpack(&out[1], "acc");
+        let ids: Vec<[u32; 4]> = s.layout.unpack(&out[0], "ids");
         let mut f = vec![DVec3::ZERO; self.n as usize];
         for k in 0..self.n as usize {
-            let i = pid[k] as usize;
+            let i = ids[k][0] as usize;
             let a = DVec3::new(acc[k][0] as f64, acc[k][1] as f64, acc[k][2] as f64);
             f[i] = self.mass[i] * (a - self.gravity);
         }
@@ -2360,33 +2337,30 @@ impl GpuEngine {
     /// For comparisons and diagnostics: reads the lists back.
     pub fn contact_histories(&self) -> Result<Vec<KeyedHistory>, PowderError> {
         let s = &self.state;
-        let n = self.n as u64;
         let hb = self.kind.history_bytes();
         let encoder = self.ctx.device.create_command_encoder(&Default::default());
         let out = submit_and_read(
             &self.ctx,
             encoder,
-            &[
-                (&s.pid, 4 * n),
-                (&s.count, 4 * n),
-                (&s.row, 4 * n),
-                (&s.hist_pid, s.hist_pid.size()),
-                (&s.hist, s.hist.size()),
-            ],
+            &[(&s.state, s.state.size()), (&s.entries, s.entries.size())],
         )?;
-        let (pid, count, row) = (u32s(&out[0]), u32s(&out[1]), u32s(&out[2]));
-        let hist_pid = u32s(&out[3]);
+        let ids: Vec<[u32; 4]> = s.layout.unpack(&out[0], "ids");
+        let cap = self.entries;
+        let region = |name: &str| s.entry_layout.offset(name, cap).unwrap_or(0) as usize;
+        let (pid_at, hist_at) = (region("hist_pid"), region("hist"));
+        let hist_pid = u32s(&out[1][pid_at..pid_at + 4 * cap as usize]);
+        let hist = &out[1][hist_at..];
         let hb = hb as usize;
         let mut list = Vec::new();
-        for k in 0..n as usize {
-            // particle k's entries, as `a_row` in shaders/step.wgsl
-            for slot in row[k] as usize..(row[k] + count[k]) as usize {
+        for &[pid, row, count, _] in &ids {
+            // a particle's entries (ids.y, ids.z as in shaders/step.wgsl)
+            for slot in row as usize..(row + count) as usize {
                 // one stored history per pair, in its evaluator's frame; the partner sees
                 // it mirrored (the tangential spring negated)
-                let h = self.decode_history(&out[4][slot * hb..(slot + 1) * hb]);
+                let h = self.decode_history(&hist[slot * hb..(slot + 1) * hb]);
                 let seen_by_partner = self.kind.mirror_history(h);
-                list.push(((pid[k], hist_pid[slot]), h));
-                list.push(((hist_pid[slot], pid[k]), seen_by_partner));
+                list.push(((pid, hist_pid[slot]), h));
+                list.push(((hist_pid[slot], pid), seen_by_partner));
             }
         }
         list.sort_by_key(|c| c.0);
@@ -2409,15 +2383,45 @@ impl GpuEngine {
         let out = submit_and_read(
             &self.ctx,
             encoder,
-            &[(&s.pid, 4 * n), (&s.wall_hist, (hb * walls) as u64 * n)],
+            &[
+                (&s.state, s.state.size()),
+                (&s.wall_contacts, s.wall_contacts.size()),
+            ],
         )?;
-        let pid = u32s(&out[0]);
-        let k = pid
+        let at = s
+            .wall_layout
+            .offset("wall_hist", n * walls as u64)
+            .unwrap_or(0) as usize;
+        let ids: Vec<[u32; 4]> = s.layout.unpack(&out[0], "ids");
+        let k = ids
             .iter()
-            .position(|&p| p as usize == i)
+            .position(|p| p[0] as usize == i)
             .ok_or_else(|| PowderError::Run(format!("particle {i} does not exist")))?;
         // wall-major, as `wall_slot` in shaders/step.wgsl
         let slot = w * n as usize + k;
-        Ok(self.decode_history(&out[1][slot * hb..(slot + 1) * hb]))
+        Ok(self.decode_history(&out[1][at + slot * hb..at + (slot + 1) * hb]))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gpu::shaders::{self, wgsl_u32_const};
+
+    #[test]
+    fn gpu_control_layout_matches_wgsl() {
+        let (module, _) = shaders::validate(&shaders::step_variant().source).unwrap();
+        let (_, control) = module
+            .global_variables
+            .iter()
+            .find(|(_, g)| g.name.as_deref() == Some("control"))
+            .expect("the step declares `control`");
+        let bytes = module.types[control.ty].inner.size(module.to_ctx());
+        assert_eq!(bytes as u64, CONTROL_BYTES);
+        assert_eq!(
+            wgsl_u32_const(&module, "SKIN_MOVED") as u64 * 4,
+            SKIN_OFFSET
+        );
+        assert_eq!(wgsl_u32_const(&module, "SKIN_REBUILDS"), 14);
     }
 }

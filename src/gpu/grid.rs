@@ -96,6 +96,18 @@ impl ExclusiveScan {
         output: &wgpu::Buffer,
         n: u32,
     ) -> Result<Self, PowderError> {
+        Self::with_offsets(ctx, program, (input, 0), (output, 0), n)
+    }
+
+    /// Scans `n` elements of `input` from element `input.1` into `output` from element
+    /// `output.1`; the two may be one buffer when the ranges do not overlap.
+    pub fn with_offsets(
+        ctx: &GpuContext,
+        program: &Program,
+        (input, in_offset): (&wgpu::Buffer, u32),
+        (output, out_offset): (&wgpu::Buffer, u32),
+        n: u32,
+    ) -> Result<Self, PowderError> {
         check_binding(ctx, "exclusive scan", n as u64, 4, "elements")?;
         let device = &ctx.device;
         let scan_blocks = program.kernel("scan_blocks")?.clone();
@@ -103,6 +115,7 @@ impl ExclusiveScan {
         let mut levels: Vec<ScanLevel> = Vec::new();
         let mut buffers = Vec::new();
         let (mut level_in, mut level_out, mut level_n) = (input.clone(), output.clone(), n);
+        let mut offsets = (in_offset, out_offset);
         loop {
             let n_blocks = level_n.div_ceil(SCAN_BLOCK).max(1);
             let params = kernel::uniform_buffer(
@@ -111,7 +124,8 @@ impl ExclusiveScan {
                 bytemuck::bytes_of(&ScanParams {
                     n: level_n,
                     n_blocks,
-                    _pad: [0; 2],
+                    in_offset: offsets.0,
+                    out_offset: offsets.1,
                 }),
             );
             let sums = kernel::storage_buffer(device, "scan block sums", n_blocks as u64 * 4);
@@ -149,6 +163,7 @@ impl ExclusiveScan {
             level_in = sums;
             level_out = scanned_sums;
             level_n = n_blocks;
+            offsets = (0, 0);
         }
         Ok(Self {
             n,

@@ -24,6 +24,11 @@ pub struct Kernel {
     pub layout: wgpu::BindGroupLayout,
     /// (global variable name, binding) of every group-0 global the entry point uses.
     pub bindings: Vec<(String, u32)>,
+    /// Names of the functions the entry point calls, directly or through others (for the
+    /// traffic estimate: which state fields' accessors it uses).
+    pub calls: std::collections::BTreeSet<String>,
+    /// Storage buffers the entry point binds (wgpu limits them per shader stage).
+    pub storage_buffers: u32,
     /// `@workgroup_size` of the entry point (x, y, z).
     pub workgroup_size: [u32; 3],
 }
@@ -134,6 +139,8 @@ impl Program {
                     pipeline,
                     layout,
                     bindings,
+                    calls: called_functions(&module, &ep.function),
+                    storage_buffers: storage,
                     workgroup_size: ep.workgroup_size,
                 },
             );
@@ -384,6 +391,50 @@ pub fn submit_and_read(
 /// Reinterprets read-back bytes as u32s.
 pub fn u32s(bytes: &[u8]) -> Vec<u32> {
     bytemuck::pod_collect_to_vec(bytes)
+}
+
+/// The names of every function `function` calls, directly or through the functions it
+/// calls.
+pub fn called_functions(
+    module: &naga::Module,
+    function: &naga::Function,
+) -> std::collections::BTreeSet<String> {
+    fn walk(block: &naga::Block, out: &mut Vec<naga::Handle<naga::Function>>) {
+        for statement in block.iter() {
+            match statement {
+                naga::Statement::Call { function, .. } => out.push(*function),
+                naga::Statement::Block(b) => walk(b, out),
+                naga::Statement::If { accept, reject, .. } => {
+                    walk(accept, out);
+                    walk(reject, out);
+                }
+                naga::Statement::Switch { cases, .. } => {
+                    for c in cases {
+                        walk(&c.body, out);
+                    }
+                }
+                naga::Statement::Loop {
+                    body, continuing, ..
+                } => {
+                    walk(body, out);
+                    walk(continuing, out);
+                }
+                _ => {}
+            }
+        }
+    }
+    let mut seen = std::collections::BTreeSet::new();
+    let mut names = std::collections::BTreeSet::new();
+    let mut todo = Vec::new();
+    walk(&function.body, &mut todo);
+    while let Some(h) = todo.pop() {
+        if seen.insert(h) {
+            let f = &module.functions[h];
+            names.extend(f.name.clone());
+            walk(&f.body, &mut todo);
+        }
+    }
+    names
 }
 
 #[cfg(test)]

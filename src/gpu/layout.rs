@@ -65,8 +65,10 @@ pub struct ScanParams {
     pub n: u32,
     /// Workgroups doing real work: `ceil(n / SCAN_BLOCK)`.
     pub n_blocks: u32,
-    /// Padding (size a multiple of 16 bytes); always 0.
-    pub _pad: [u32; 2],
+    /// Where the elements start in the input (elements).
+    pub in_offset: u32,
+    /// Where they go in the output (elements).
+    pub out_offset: u32,
 }
 
 /// The f32-representable cell width nearest `h`: what the kernels will see.
@@ -988,29 +990,28 @@ mod tests {
     }
 
     /// The stored history of each composition is as large as the host allocates
-    /// (`Composition::history_bytes`): the array stride of `a_hist`, `b_hist` and
-    /// `a_wall_hist` in naga's layout (the re-sort moves `history_bytes` per wall contact).
+    /// (`Composition::history_bytes`): `struct Hist` in naga's layout, and the history
+    /// fields of the entries, the new lists and the wall contacts (the re-sort moves
+    /// `history_bytes` per wall contact).
     #[test]
     fn gpu_layout_history_strides_match_wgsl() {
         for kind in crate::gpu::composition::Composition::all() {
             let (module, _) = shaders::validate(&kind.variant(true, false).source).unwrap();
-            for name in ["a_hist", "b_hist", "a_wall_hist"] {
-                let (_, g) = module
-                    .global_variables
-                    .iter()
-                    .find(|(_, g)| g.name.as_deref() == Some(name))
-                    .unwrap_or_else(|| panic!("{}: {name}", kind.name()));
-                match module.types[g.ty].inner {
-                    naga::TypeInner::Array { stride, .. } => {
-                        assert_eq!(
-                            stride as u64,
-                            kind.history_bytes(),
-                            "{}: {name}",
-                            kind.name()
-                        )
-                    }
-                    ref other => panic!("{name} is {other:?}"),
-                }
+            let (_, hist) = module
+                .types
+                .iter()
+                .find(|(_, t)| t.name.as_deref() == Some("Hist"))
+                .unwrap_or_else(|| panic!("{}: no Hist", kind.name()));
+            assert_eq!(
+                hist.inner.size(module.to_ctx()) as u64,
+                kind.history_bytes(),
+                "{}",
+                kind.name()
+            );
+            let records = kind.records(true);
+            for (r, name) in records.iter().zip(["hist", "new_hist", "wall_hist"]) {
+                let (_, words) = r.place(name).expect("a history field");
+                assert_eq!(4 * words, kind.history_bytes(), "{}: {name}", kind.name());
             }
         }
     }

@@ -1,7 +1,7 @@
 //! Read-only texture mirrors of the per-particle state the force pass reads for every
 //! pair: the cell, the cell offset with the radius, the predicted velocity with the mass
-//! (and the predicted angular velocity when the scene rotates), copied from state A's
-//! buffers right before each force pass — on a software adapter only
+//! (and the predicted angular velocity when the scene rotates), copied from the state's
+//! fields right before each force pass — on a software adapter only
 //! (`GpuOptions::software_paths`, `shaders/state_mirrors.wgsl`; a GPU reads the buffers,
 //! `shaders/state_buffers.wgsl`).
 //!
@@ -43,6 +43,8 @@ struct Mirror {
     /// `gather`), if any.
     write_name: Option<&'static str>,
     source: wgpu::Buffer,
+    /// Byte offset of the mirrored field in `source`.
+    offset: u64,
     texture: wgpu::Texture,
     view: wgpu::TextureView,
 }
@@ -55,7 +57,7 @@ pub struct Mirrors {
 
 impl Mirrors {
     /// Textures for `sources` (WGSL global name, the name a kernel writes it under if
-    /// any, buffer of `n` vec4s, texel format), or an error naming the limit when `n`
+    /// any, buffer holding `n` vec4s from a byte offset (a multiple of 16), texel format), or an error naming the limit when `n`
     /// particles need more rows than the adapter allows. No sources: no mirrors (the GPU
     /// path, `shaders/state_buffers.wgsl`), and nothing to copy.
     pub fn new(
@@ -65,6 +67,7 @@ impl Mirrors {
             &'static str,
             Option<&'static str>,
             &wgpu::Buffer,
+            u64,
             wgpu::TextureFormat,
         )],
     ) -> Result<Self, PowderError> {
@@ -79,7 +82,7 @@ impl Mirrors {
         }
         let mirrors = sources
             .iter()
-            .map(|&(name, write_name, source, format)| {
+            .map(|&(name, write_name, source, offset, format)| {
                 let texture = device.create_texture(&wgpu::TextureDescriptor {
                     label: Some(name),
                     size: wgpu::Extent3d {
@@ -99,6 +102,7 @@ impl Mirrors {
                     name,
                     write_name,
                     source: source.clone(),
+                    offset,
                     texture,
                     view,
                 }
@@ -172,7 +176,7 @@ impl Mirrors {
                     wgpu::TexelCopyBufferInfo {
                         buffer: &m.source,
                         layout: wgpu::TexelCopyBufferLayout {
-                            offset: row as u64 * (MIRROR_WIDTH * TEXEL_BYTES) as u64,
+                            offset: m.offset + row as u64 * (MIRROR_WIDTH * TEXEL_BYTES) as u64,
                             bytes_per_row: Some(MIRROR_WIDTH * TEXEL_BYTES),
                             rows_per_image: None,
                         },

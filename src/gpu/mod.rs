@@ -48,7 +48,9 @@ pub mod layout;
 pub mod mirror;
 pub mod permute;
 pub mod quiet;
+pub mod records;
 pub mod shaders;
+pub mod state;
 pub mod traffic;
 
 pub use context::{AdapterPreference, AdapterSummary, GpuContext, LimitsSummary};

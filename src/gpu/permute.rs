@@ -63,11 +63,34 @@ impl Field {
         }
     }
 
-    /// A wall-major contact array (contact of particle k with wall w at element w·n + k)
-    /// of `bytes` per contact: one field per group of walls that fits [`ROW_WORDS`].
+    /// `blocks` consecutive regions of one buffer, each `words` u32 per particle, the first
+    /// at word `base`, `stride` words apart: moved together (`blocks · words` at most
+    /// [`ROW_WORDS`] unless a single region is wider).
+    pub fn regions(
+        name: &str,
+        buffer: &wgpu::Buffer,
+        words: u32,
+        (base, stride, blocks): (u32, u32, u32),
+    ) -> Self {
+        Self {
+            name: name.to_string(),
+            buffer: buffer.clone(),
+            place: FieldPlace {
+                words,
+                blocks,
+                base,
+                stride,
+            },
+        }
+    }
+
+    /// A wall-major contact array from word `base` of `buffer` (contact of particle k with
+    /// wall w at element w·n + k) of `bytes` per contact: one field per group of walls
+    /// that fits [`ROW_WORDS`].
     pub fn wall_major(
         name: &str,
         buffer: &wgpu::Buffer,
+        base: u32,
         bytes: u64,
         walls: u32,
         n: u32,
@@ -82,7 +105,7 @@ impl Field {
                 place: FieldPlace {
                     words,
                     blocks: group.min(walls - first),
-                    base: first * n * words,
+                    base: base + first * n * words,
                     stride: n * words,
                 },
             })

@@ -197,6 +197,63 @@ mod tests {
         }
     }
 
+    /// Every entry point of every variant fits wgpu's default limits (WebGPU's): at most 8
+    /// storage buffers and 4 storage textures a stage, workgroups of at most 256
+    /// invocations and 16 KiB of workgroup memory — so the engine runs on GL (16 storage
+    /// buffers) and within a browser's limits.
+    #[test]
+    fn gpu_shaders_every_kernel_fits_the_default_limits() {
+        let limits = wgpu::Limits::default();
+        for v in all_variants() {
+            let (module, info) = validate(&v.source).unwrap();
+            for (index, ep) in module.entry_points.iter().enumerate() {
+                let uses = info.get_entry_point(index);
+                let (mut buffers, mut textures, mut shared) = (0, 0, 0);
+                for (handle, var) in module.global_variables.iter() {
+                    if uses[handle].is_empty() {
+                        continue;
+                    }
+                    match var.space {
+                        naga::AddressSpace::Storage { .. } => buffers += 1,
+                        naga::AddressSpace::WorkGroup => {
+                            shared += module.types[var.ty].inner.size(module.to_ctx())
+                        }
+                        naga::AddressSpace::Handle => {
+                            if matches!(
+                                module.types[var.ty].inner,
+                                naga::TypeInner::Image {
+                                    class: naga::ImageClass::Storage { .. },
+                                    ..
+                                }
+                            ) {
+                                textures += 1;
+                            }
+                        }
+                        _ => {}
+                    }
+                }
+                let what = format!("{}::{}", v.name, ep.name);
+                assert!(
+                    buffers <= limits.max_storage_buffers_per_shader_stage,
+                    "{what}: {buffers} storage buffers"
+                );
+                assert!(
+                    textures <= limits.max_storage_textures_per_shader_stage,
+                    "{what}: {textures} storage textures"
+                );
+                assert!(
+                    shared <= limits.max_compute_workgroup_storage_size,
+                    "{what}: {shared} bytes of workgroup memory"
+                );
+                let size: u32 = ep.workgroup_size.iter().product();
+                assert!(
+                    size <= limits.max_compute_invocations_per_workgroup,
+                    "{what}: workgroups of {size}"
+                );
+            }
+        }
+    }
+
     #[test]
     fn gpu_shaders_grid_has_the_sort_kernels() {
         let (module, _) = validate(&variant("grid").unwrap().source).unwrap();
@@ -243,14 +300,18 @@ mod tests {
                     v.name
                 );
             }
-            // the angular buffers exist only where particles rotate
+            // the angular state and pair torques exist only where particles rotate
             let declared = |name: &str| {
                 module
                     .global_variables
                     .iter()
                     .any(|(_, g)| g.name.as_deref() == Some(name))
+                    || module
+                        .functions
+                        .iter()
+                        .any(|(_, f)| f.name.as_deref() == Some(name))
             };
-            for name in ["a_omega", "a_alpha", "a_wpred"] {
+            for name in ["load_omega", "load_alpha", "load_wpred", "load_pair_torque"] {
                 assert_eq!(declared(name), kind.rotation(), "{}: {name}", v.name);
             }
             // the Krijt dynamics only where the history stores the contact radius
@@ -267,7 +328,12 @@ mod tests {
                 v.name
             );
             // and the ledger's only where the run keeps one
-            for name in ["a_ledger", "b_ledger", "a_wall_ledger", "particle_ledger"] {
+            for name in [
+                "load_ledger",
+                "load_new_ledger",
+                "load_wall_ledger",
+                "particle_ledger",
+            ] {
                 assert_eq!(declared(name), ledger, "{}: {name}", v.name);
             }
             // the texture mirrors only on the software adapter's path

@@ -18,6 +18,21 @@ pub fn gpu() -> Option<GpuContext> {
     }
 }
 
+/// A context on the OpenGL backend (llvmpipe in CI), or `None` (with a notice) when there
+/// is none outside CI; in CI a missing GL adapter fails the test.
+#[allow(dead_code)]
+pub fn gl() -> Option<GpuContext> {
+    let gl = powder::gpu::AdapterPreference::Name("gl".into());
+    match GpuContext::with_preference(&gl) {
+        Ok(ctx) => Some(ctx),
+        Err(e) if std::env::var_os("CI").is_none() => {
+            eprintln!("skipping GL test: {e}");
+            None
+        }
+        Err(e) => panic!("CI needs the GL adapter (llvmpipe): {e}"),
+    }
+}
+
 /// An example scene from `examples/`, loaded.
 #[allow(dead_code)]
 pub fn example(name: &str) -> Scene {

@@ -1,0 +1,273 @@
+//! Arrays of records packed into one `array<u32>` buffer each, declared once here: the
+//! neighbour lists' entries (`entries`, and a rebuild's new lists, `new_entries`) and the
+//! particle–wall contacts (`wall_contacts`). A record's fields lie in regions, one after
+//! the other, each `capacity × width` words, a record's words consecutive within its
+//! region (record r's field at `before · capacity + r · width`). So a kernel binds one
+//! buffer for all of a record's fields; the WGSL accessors (`load_<field>`,
+//! `store_<field>`), the host's offsets and the traffic estimate follow from the layout.
+
+use std::collections::BTreeSet;
+use std::fmt::Write;
+
+/// What one field of a record holds.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Kind {
+    /// One `u32`.
+    U32,
+    /// One `f32`.
+    F32,
+    /// A `vec3<f32>` (three words).
+    Vec3,
+    /// A `vec4<f32>` (four words).
+    Vec4,
+    /// A contact's stored history, `struct Hist` of the composition: its f32 members, in
+    /// order.
+    Hist(Vec<String>),
+}
+
+impl Kind {
+    /// Words a record takes in the field's region.
+    pub fn words(&self) -> u64 {
+        match self {
+            Kind::U32 | Kind::F32 => 1,
+            Kind::Vec3 => 3,
+            Kind::Vec4 => 4,
+            Kind::Hist(members) => members.len().max(1) as u64,
+        }
+    }
+
+    fn wgsl_type(&self) -> &'static str {
+        match self {
+            Kind::U32 => "u32",
+            Kind::F32 => "f32",
+            Kind::Vec3 => "vec3<f32>",
+            Kind::Vec4 => "vec4<f32>",
+            Kind::Hist(_) => "Hist",
+        }
+    }
+}
+
+/// One field of a record.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Field {
+    /// Name: the accessors are `load_<name>` and `store_<name>`.
+    pub name: &'static str,
+    /// What it holds.
+    pub kind: Kind,
+}
+
+/// The records of one buffer.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RecordLayout {
+    /// The WGSL global (and host buffer) name.
+    pub global: &'static str,
+    /// Its binding.
+    pub binding: u32,
+    /// The WGSL expression for the records the buffer holds (the regions' capacity).
+    pub capacity_wgsl: &'static str,
+    /// The fields, in region order.
+    pub fields: Vec<Field>,
+}
+
+impl RecordLayout {
+    /// The neighbour lists' entries: each entry's partner (`nbr`), the slot of its pair in
+    /// the partner's list for the `lower` list at the same index, the partner's persistent
+    /// id and the contact's history, this step's pair force (and torque on the partner
+    /// where particles rotate), the ledger's value (with the ledger).
+    pub fn entries(hist: &[String], rotation: bool, ledger: bool) -> Self {
+        let mut fields = vec![
+            field("nbr", Kind::U32),
+            field("lower", Kind::U32),
+            field("hist_pid", Kind::U32),
+            field("hist", Kind::Hist(hist.to_vec())),
+            field("pair_force", Kind::Vec3),
+        ];
+        if rotation {
+            fields.push(field("pair_torque", Kind::Vec3));
+        }
+        if ledger {
+            fields.push(field("ledger", Kind::Vec4));
+        }
+        Self {
+            global: "entries",
+            binding: 27,
+            capacity_wgsl: "step.list_capacity",
+            fields,
+        }
+    }
+
+    /// The lists a rebuild builds: each entry's partner id and history (and ledger
+    /// value), remapped from the old lists and copied back into [`Self::entries`].
+    pub fn new_entries(hist: &[String], ledger: bool) -> Self {
+        let mut fields = vec![
+            field("new_hist_pid", Kind::U32),
+            field("new_hist", Kind::Hist(hist.to_vec())),
+        ];
+        if ledger {
+            fields.push(field("new_ledger", Kind::Vec4));
+        }
+        Self {
+            global: "new_entries",
+            binding: 37,
+            capacity_wgsl: "step.list_capacity",
+            fields,
+        }
+    }
+
+    /// The particle–wall contacts, wall-major (particle k and wall w at record
+    /// `w·n + k`): history, the ledger's value (with the ledger), and last the normal
+    /// force servo walls sum (allocated only where a wall is servo-controlled).
+    pub fn wall_contacts(hist: &[String], ledger: bool) -> Self {
+        let mut fields = vec![field("wall_hist", Kind::Hist(hist.to_vec()))];
+        if ledger {
+            fields.push(field("wall_ledger", Kind::Vec4));
+        }
+        fields.push(field("wall_push", Kind::F32));
+        Self {
+            global: "wall_contacts",
+            binding: 29,
+            capacity_wgsl: "(grid.n_particles * step.n_walls)",
+            fields,
+        }
+    }
+
+    /// Words of one record, all fields.
+    pub fn words(&self) -> u64 {
+        self.fields.iter().map(|f| f.kind.words()).sum()
+    }
+
+    /// (words of the regions before field `name`, the field's words), if there is one.
+    pub fn place(&self, name: &str) -> Option<(u64, u64)> {
+        let mut before = 0;
+        for f in &self.fields {
+            if f.name == name {
+                return Some((before, f.kind.words()));
+            }
+            before += f.kind.words();
+        }
+        None
+    }
+
+    /// Byte offset of field `name`'s region in a buffer of `capacity` records.
+    pub fn offset(&self, name: &str, capacity: u64) -> Option<u64> {
+        self.place(name).map(|(before, _)| 4 * before * capacity)
+    }
+
+    /// Bytes of a buffer of `capacity` records, without the fields in `leave_out` (which
+    /// must come last; at least 4).
+    pub fn bytes(&self, capacity: u64, leave_out: &[&str]) -> u64 {
+        let words: u64 = self
+            .fields
+            .iter()
+            .filter(|f| !leave_out.contains(&f.name))
+            .map(|f| f.kind.words())
+            .sum();
+        (4 * words * capacity).max(4)
+    }
+
+    /// Bytes of the fields a kernel calling `calls` touches, for `capacity` records (the
+    /// traffic estimate).
+    pub fn touched_bytes(&self, calls: &BTreeSet<String>, capacity: u64) -> u64 {
+        self.fields
+            .iter()
+            .filter(|f| {
+                calls.contains(&format!("load_{}", f.name))
+                    || calls.contains(&format!("store_{}", f.name))
+            })
+            .map(|f| 4 * f.kind.words() * capacity)
+            .sum()
+    }
+
+    /// The binding and every field's accessors.
+    pub fn wgsl(&self) -> String {
+        let g = self.global;
+        let mut w = String::new();
+        let _ = writeln!(
+            w,
+            "// `{g}` (`src/gpu/records.rs`, generated): {} words a record.\n\
+             @group(0) @binding({}) var<storage, read_write> {g}: array<u32>;\n\n\
+             fn {g}_at(before: u32, width: u32, r: u32) -> u32 {{\n    \
+             return before * {} + r * width;\n}}\n",
+            self.words(),
+            self.binding,
+            self.capacity_wgsl
+        );
+        let mut before = 0;
+        for f in &self.fields {
+            let (n, ty, width) = (f.name, f.kind.wgsl_type(), f.kind.words());
+            let at = format!("{g}_at({before}u, {width}u, r)");
+            let word = |i: u64| format!("{g}[at + {i}u]");
+            let (load, store) = match &f.kind {
+                Kind::U32 => (format!("{g}[{at}]"), vec![format!("{g}[{at}] = v;")]),
+                Kind::F32 => (
+                    format!("bitcast<f32>({g}[{at}])"),
+                    vec![format!("{g}[{at}] = bitcast<u32>(v);")],
+                ),
+                Kind::Vec3 | Kind::Vec4 => {
+                    let parts: Vec<String> = (0..width)
+                        .map(|i| format!("bitcast<f32>({})", word(i)))
+                        .collect();
+                    let comps = ["x", "y", "z", "w"];
+                    (
+                        format!("{ty}({})", parts.join(", ")),
+                        (0..width)
+                            .map(|i| {
+                                format!("{} = bitcast<u32>(v.{});", word(i), comps[i as usize])
+                            })
+                            .collect(),
+                    )
+                }
+                Kind::Hist(members) => {
+                    let parts: Vec<String> = (0..width)
+                        .map(|i| format!("bitcast<f32>({})", word(i)))
+                        .collect();
+                    (
+                        format!("Hist({})", parts.join(", ")),
+                        members
+                            .iter()
+                            .enumerate()
+                            .map(|(i, m)| format!("{} = bitcast<u32>(v.{m});", word(i as u64)))
+                            .collect(),
+                    )
+                }
+            };
+            let bind_at = if matches!(f.kind, Kind::U32 | Kind::F32) {
+                String::new()
+            } else {
+                format!("    let at = {at};\n")
+            };
+            let _ = writeln!(
+                w,
+                "fn load_{n}(r: u32) -> {ty} {{\n{bind_at}    return {load};\n}}\n\n\
+                 fn store_{n}(r: u32, v: {ty}) {{\n{bind_at}    {}\n}}\n",
+                store.join("\n    ")
+            );
+            before += width;
+        }
+        w
+    }
+}
+
+fn field(name: &'static str, kind: Kind) -> Field {
+    Field { name, kind }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn records_place_fields_one_region_after_another() {
+        let hist = vec!["a".to_string(), "b".to_string()];
+        let e = RecordLayout::entries(&hist, true, true);
+        assert_eq!(e.words(), 1 + 1 + 1 + 2 + 3 + 3 + 4);
+        assert_eq!(e.place("hist"), Some((3, 2)));
+        assert_eq!(e.offset("pair_force", 10), Some(4 * 5 * 10));
+        assert_eq!(e.place("missing"), None);
+        let w = RecordLayout::wall_contacts(&hist, false);
+        assert_eq!(w.bytes(7, &["wall_push"]), 4 * 2 * 7);
+        assert_eq!(w.bytes(7, &[]), 4 * 3 * 7);
+        let calls: BTreeSet<String> = ["load_hist".to_string(), "store_nbr".to_string()].into();
+        assert_eq!(e.touched_bytes(&calls, 10), 4 * (2 + 1) * 10);
+    }
+}

@@ -1,0 +1,373 @@
+//! The per-particle state in two storage buffers, declared once here: each field is one
+//! 16-byte vector a particle, laid out field-major within its buffer (field f of particle
+//! k at element f·stride + k, stride = the particles rounded up to 16), so a kernel
+//! touching any number of fields binds at most two buffers and each field is read
+//! coalesced. `state` holds what the force pass reads of a partner (position, predicted
+//! velocity, compensation, ids), `motion` the rest (each buffer must fit one binding:
+//! two halves reach twice as many particles as one). The WGSL accessors
+//! (`load_<field>`, `store_<field>`), the host's offsets, the re-sort's fields and the
+//! traffic estimate all follow from [`FIELDS`].
+
+use std::fmt::Write;
+
+/// The scalar type of a field's four components (the buffer holds `vec4<u32>`; the
+/// accessors bitcast).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Scalar {
+    /// `vec4<f32>`.
+    F32,
+    /// `vec4<i32>`.
+    I32,
+    /// `vec4<u32>`.
+    U32,
+}
+
+impl Scalar {
+    fn wgsl(self) -> &'static str {
+        match self {
+            Scalar::F32 => "vec4<f32>",
+            Scalar::I32 => "vec4<i32>",
+            Scalar::U32 => "vec4<u32>",
+        }
+    }
+}
+
+/// The buffer a field lives in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Buffer {
+    /// `state`: what the force pass reads of a partner (and the grid sort's cells).
+    State,
+    /// `motion`: the rest.
+    Motion,
+}
+
+impl Buffer {
+    /// Both, in binding order.
+    pub const ALL: [Buffer; 2] = [Buffer::State, Buffer::Motion];
+
+    /// The WGSL global (and host buffer) name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Buffer::State => "state",
+            Buffer::Motion => "motion",
+        }
+    }
+
+    fn binding(self) -> u32 {
+        match self {
+            Buffer::State => 21,
+            Buffer::Motion => 22,
+        }
+    }
+}
+
+/// One per-particle field of the state.
+#[derive(Debug)]
+pub struct StateField {
+    /// Name (the accessors are `load_<name>` and `store_<name>`).
+    pub name: &'static str,
+    /// Which buffer holds it.
+    pub buffer: Buffer,
+    /// Component type.
+    pub scalar: Scalar,
+    /// Only where the scene's particles rotate.
+    pub rotation: bool,
+    /// What the four components hold.
+    pub doc: &'static str,
+}
+
+const fn field(
+    name: &'static str,
+    buffer: Buffer,
+    scalar: Scalar,
+    rotation: bool,
+    doc: &'static str,
+) -> StateField {
+    StateField {
+        name,
+        buffer,
+        scalar,
+        rotation,
+        doc,
+    }
+}
+
+/// Every field, in buffer order. `cell` comes first: the grid sort reads the cells as the
+/// `state` buffer's first n elements.
+pub const FIELDS: &[StateField] = &[
+    field(
+        "cell",
+        Buffer::State,
+        Scalar::I32,
+        false,
+        "integer cell (xyz), material (w)",
+    ),
+    field(
+        "off",
+        Buffer::State,
+        Scalar::F32,
+        false,
+        "offset inside the cell (xyz), radius (w)",
+    ),
+    field(
+        "vel",
+        Buffer::Motion,
+        Scalar::F32,
+        false,
+        "velocity (xyz), mass (w)",
+    ),
+    field(
+        "acc",
+        Buffer::Motion,
+        Scalar::F32,
+        false,
+        "acceleration (xyz), the last force pass's largest overlap/a12 (w)",
+    ),
+    field(
+        "vpred",
+        Buffer::State,
+        Scalar::F32,
+        false,
+        "predicted velocity v + dt/2·a (xyz), mass (w)",
+    ),
+    field(
+        "kahan_v",
+        Buffer::Motion,
+        Scalar::F32,
+        false,
+        "the velocity's Kahan compensation (xyz; true = stored − c)",
+    ),
+    field(
+        "kahan_o",
+        Buffer::State,
+        Scalar::F32,
+        false,
+        "the offset's compensation (xyz), the radius's rounding residual (w)",
+    ),
+    field(
+        "disp",
+        Buffer::Motion,
+        Scalar::F32,
+        false,
+        "displacement since the last rebuild (xyz), the batch's largest overlap/a12 (w)",
+    ),
+    field(
+        "ids",
+        Buffer::State,
+        Scalar::U32,
+        false,
+        "persistent id, first list entry, list length, wall candidates (a bit per wall)",
+    ),
+    field(
+        "omega",
+        Buffer::Motion,
+        Scalar::F32,
+        true,
+        "angular velocity (xyz), moment of inertia (w)",
+    ),
+    field(
+        "alpha",
+        Buffer::Motion,
+        Scalar::F32,
+        true,
+        "angular acceleration torque/I (xyz)",
+    ),
+    field(
+        "wpred",
+        Buffer::State,
+        Scalar::F32,
+        true,
+        "predicted angular velocity ω + dt/2·α (xyz)",
+    ),
+];
+
+/// Bytes of one field of one particle.
+pub const FIELD_BYTES: u64 = 16;
+
+/// Particles a field's region is rounded up to (so every region starts 256-byte aligned,
+/// as buffer-to-texture copies and binding offsets want).
+pub const STRIDE_ALIGN: u64 = 16;
+
+/// Elements from one per-particle region of a buffer to the next, for `n` particles (the
+/// state's fields, `rows` in the step): `n` rounded up to [`STRIDE_ALIGN`].
+pub fn particle_stride(n: u64) -> u64 {
+    n.div_ceil(STRIDE_ALIGN) * STRIDE_ALIGN
+}
+
+/// The fields of a scene's state (with or without the angular ones) for `n` particles.
+#[derive(Clone, Debug)]
+pub struct StateLayout {
+    fields: Vec<&'static StateField>,
+    n: u64,
+    stride: u64,
+}
+
+impl StateLayout {
+    /// The layout for `n` particles; `rotation` adds the angular fields.
+    pub fn new(n: u64, rotation: bool) -> Self {
+        Self {
+            fields: fields(rotation).collect(),
+            n,
+            stride: particle_stride(n),
+        }
+    }
+
+    /// Field names, `state`'s then `motion`'s, each in buffer order.
+    pub fn names(&self) -> Vec<&'static str> {
+        Buffer::ALL
+            .iter()
+            .flat_map(|&b| self.in_buffer(b))
+            .map(|f| f.name)
+            .collect()
+    }
+
+    /// The fields of buffer `b`, in order.
+    pub fn in_buffer(&self, b: Buffer) -> impl Iterator<Item = &'static StateField> + '_ {
+        self.fields.iter().copied().filter(move |f| f.buffer == b)
+    }
+
+    /// Elements (particles) from one field's region to the next.
+    pub fn stride(&self) -> u64 {
+        self.stride
+    }
+
+    /// Bytes of buffer `b` (at least one element).
+    pub fn bytes(&self, b: Buffer) -> u64 {
+        (self.in_buffer(b).count() as u64 * self.stride * FIELD_BYTES).max(FIELD_BYTES)
+    }
+
+    /// The buffer of field `name` and the byte offset of its region there, if the layout
+    /// has it.
+    pub fn place(&self, name: &str) -> Option<(Buffer, u64)> {
+        let f = self.fields.iter().find(|f| f.name == name)?;
+        let at = self.in_buffer(f.buffer).position(|g| g.name == name)?;
+        Some((f.buffer, at as u64 * self.stride * FIELD_BYTES))
+    }
+
+    /// Bytes of one field's `n` particles.
+    pub fn field_bytes(&self) -> u64 {
+        self.n * FIELD_BYTES
+    }
+
+    /// Bytes of the fields of buffer `b` a kernel calling `calls` touches (through their
+    /// accessors), for the traffic estimate: each field's `n` vectors once.
+    pub fn touched_bytes(&self, b: Buffer, calls: &std::collections::BTreeSet<String>) -> u64 {
+        let used = self
+            .in_buffer(b)
+            .filter(|f| {
+                calls.contains(&format!("load_{}", f.name))
+                    || calls.contains(&format!("store_{}", f.name))
+            })
+            .count();
+        used as u64 * self.field_bytes()
+    }
+
+    /// Buffer `b`'s contents from `values(name)` per field (`n` vectors each; a field it
+    /// gives none for is zero).
+    pub fn pack(&self, b: Buffer, values: &dyn Fn(&str) -> Option<Vec<[u32; 4]>>) -> Vec<u8> {
+        let mut out = vec![0u8; self.bytes(b) as usize];
+        for f in self.in_buffer(b) {
+            if let (Some(v), Some((_, at))) = (values(f.name), self.place(f.name)) {
+                let bytes: &[u8] = bytemuck::cast_slice(&v[..v.len().min(self.n as usize)]);
+                out[at as usize..at as usize + bytes.len()].copy_from_slice(bytes);
+            }
+        }
+        out
+    }
+
+    /// Field `name`'s `n` vectors from its buffer's bytes (empty when absent or short).
+    pub fn unpack<T: bytemuck::Pod>(&self, bytes: &[u8], name: &str) -> Vec<T> {
+        let Some((_, at)) = self.place(name) else {
+            return Vec::new();
+        };
+        let (at, len) = (at as usize, self.field_bytes() as usize);
+        bytes
+            .get(at..at + len)
+            .map(bytemuck::pod_collect_to_vec)
+            .unwrap_or_default()
+    }
+
+    /// The WGSL of the state: the two bindings and each field's accessors.
+    pub fn wgsl(rotation: bool) -> String {
+        let mut w = String::from(
+            "// The particle state (`src/gpu/state.rs`, generated): one vec4 per particle and\n\
+             // field, field-major in two buffers, the regions STRIDE_ALIGN-aligned.\n",
+        );
+        for b in Buffer::ALL {
+            let _ = writeln!(
+                w,
+                "@group(0) @binding({}) var<storage, read_write> {}: array<vec4<u32>>;",
+                b.binding(),
+                b.name()
+            );
+        }
+        let _ = writeln!(
+            w,
+            "\n// Elements from one per-particle region to the next (`state::particle_stride`).\nfn particle_stride() -> u32 {{\n    return (grid.n_particles + {a}u) / {s}u * {s}u;\n}}\n\nfn state_at(f: u32, k: u32) -> u32 {{\n    return f * particle_stride() + k;\n}}\n",
+            a = STRIDE_ALIGN - 1,
+            s = STRIDE_ALIGN
+        );
+        let layout = Self::new(0, rotation);
+        for field in fields(rotation) {
+            let ty = field.scalar.wgsl();
+            let buf = field.buffer.name();
+            let f = layout
+                .in_buffer(field.buffer)
+                .position(|g| g.name == field.name)
+                .unwrap_or(0);
+            let _ = writeln!(w, "// {}", field.doc);
+            let _ = writeln!(
+                w,
+                "fn load_{n}(k: u32) -> {ty} {{\n    return bitcast<{ty}>({buf}[state_at({f}u, k)]);\n}}\n",
+                n = field.name
+            );
+            let _ = writeln!(
+                w,
+                "fn store_{n}(k: u32, v: {ty}) {{\n    {buf}[state_at({f}u, k)] = bitcast<vec4<u32>>(v);\n}}\n",
+                n = field.name
+            );
+        }
+        w
+    }
+}
+
+/// The fields of a scene's state.
+fn fields(rotation: bool) -> impl Iterator<Item = &'static StateField> {
+    FIELDS.iter().filter(move |f| rotation || !f.rotation)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn state_layout_regions_are_aligned_and_disjoint() {
+        for (n, rotation) in [(0, false), (1, false), (17, true), (1000, true)] {
+            let l = StateLayout::new(n, rotation);
+            for b in Buffer::ALL {
+                let mut last_end = 0;
+                for f in l.in_buffer(b) {
+                    let (buffer, at) = l.place(f.name).expect("a field of the layout");
+                    assert_eq!(buffer, b);
+                    assert_eq!(at % 256, 0, "{} at {at}", f.name);
+                    assert!(at >= last_end);
+                    last_end = at + l.field_bytes();
+                }
+                assert!(last_end <= l.bytes(b));
+            }
+            assert_eq!(l.place("omega").is_some(), rotation);
+            // the grid sort reads the cells at the start of `state`
+            assert_eq!(l.place("cell"), Some((Buffer::State, 0)));
+        }
+    }
+
+    #[test]
+    fn state_pack_and_unpack_round_trip() {
+        let l = StateLayout::new(3, false);
+        let ids = vec![[1u32, 2, 3, 4], [5, 6, 7, 8], [9, 10, 11, 12]];
+        let bytes = l.pack(Buffer::State, &|name| (name == "ids").then(|| ids.clone()));
+        assert_eq!(l.unpack::<[u32; 4]>(&bytes, "ids"), ids);
+        assert_eq!(l.unpack::<[u32; 4]>(&bytes, "cell"), vec![[0; 4]; 3]);
+        assert!(l.unpack::<[u32; 4]>(&bytes, "omega").is_empty());
+    }
+}
