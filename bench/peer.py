@@ -435,9 +435,12 @@ def run_cmd(cmd, cwd, timeout):
     return r.stdout, r.stderr, time.time() - t
 
 
-def run_powder(args, scene, backend, steps):
+def run_powder(args, scene, backend, steps, threads=None):
     cmd = [powder_bin(args), "run", scene, "--backend", backend, "--steps", str(steps),
            "--no-output", "--json"]
+    if threads is not None:
+        # the CPU engine: every core by default, or this many threads
+        cmd += ["--threads", str(threads)]
     if backend == "gpu":
         # the peers keep no energy ledger: time powder's GPU step without its own
         cmd.append("--no-ledger")
@@ -446,7 +449,8 @@ def run_powder(args, scene, backend, steps):
     if j.get("backend") != backend:
         raise RuntimeError(f"powder ran on {j.get('backend')} instead of {backend}: {err[-500:]}")
     return dict(seconds=j["wall_seconds"], particles=j["particles"], steps=steps,
-                adapter=j.get("adapter"), rebuilds=j.get("rebuilds"), ledger=j.get("ledger"))
+                adapter=j.get("adapter"), rebuilds=j.get("rebuilds"), ledger=j.get("ledger"),
+                threads=j.get("threads"))
 
 
 LOOP_RE = re.compile(r"Loop time of ([0-9.eE+-]+) on (\d+) procs for (\d+) steps with (\d+) atoms")
@@ -560,10 +564,15 @@ def bench(args):
         files, info = generated[n]
         for case in ("jkr", "hysteretic"):
             scene = files[case]["powder"]
-            for backend in ("cpu", "gpu"):
-                if want(f"powder-{backend}"):
-                    plan.append((n, case, f"powder {backend}",
-                                 lambda s=scene, b=backend: run_powder(args, s, b, steps)))
+            # the CPU engine on 1 thread and on every core, the GPU engine
+            for code, label, backend, threads in (
+                    ("powder-cpu-1", "powder cpu 1 thread", "cpu", 1),
+                    ("powder-cpu", "powder cpu", "cpu", 0),
+                    ("powder-gpu", "powder gpu", "gpu", None)):
+                if want(code):
+                    plan.append((n, case, label,
+                                 lambda s=scene, b=backend, t=threads:
+                                 run_powder(args, s, b, steps, t)))
             peer_exe, deck_key, peer = (("lmp", "lammps", "LAMMPS") if case == "jkr"
                                         else ("liggghts", "liggghts", "LIGGGHTS"))
             available = have_lmp if case == "jkr" else have_lig
@@ -608,7 +617,7 @@ def ratio_table(runs):
             by = {r["code"]: r["particle_steps_per_second"] for r in ok
                   if r["n"] == n and r["case"] == case}
             peer = "LAMMPS" if case == "jkr" else "LIGGGHTS"
-            for mine in ("powder cpu", "powder gpu"):
+            for mine in ("powder cpu 1 thread", "powder cpu", "powder gpu"):
                 for ranks in ("1 rank", "2 ranks"):
                     other = f"{peer} {ranks}"
                     if mine in by and other in by:
@@ -629,7 +638,10 @@ def print_table(results, table):
             print(f"| {r['n']} | {r['case']} | {r['code']} | failed | |")
         else:
             secs = ", ".join(f"{s:.2f}" for s in r["all_seconds"])
-            print(f"| {r['n']} | {r['case']} | {r['code']} | {r['particle_steps_per_second']:.3e} | {secs} |")
+            code = r["code"]
+            if code == "powder cpu" and r.get("threads"):
+                code += f" ({r['threads']} threads)"
+            print(f"| {r['n']} | {r['case']} | {code} | {r['particle_steps_per_second']:.3e} | {secs} |")
     if any(r["code"] == "powder gpu" for r in results["runs"]):
         print("\npowder gpu ran with `powder run --no-ledger` (no energy ledger, as the peers keep none)")
     if table:
@@ -812,7 +824,7 @@ def main():
     ap.add_argument("--sizes", help="comma-separated particle counts (default 1e4,1e5)")
     ap.add_argument("--steps", type=int, help="steps per run (default 2000)")
     ap.add_argument("--repeats", type=int, help="runs per code, the best counts (default 3)")
-    ap.add_argument("--only", help="comma-separated subset of powder-cpu,powder-gpu,"
+    ap.add_argument("--only", help="comma-separated subset of powder-cpu-1,powder-cpu,powder-gpu,"
                     "lammps-1,lammps-2,liggghts-1,liggghts-2")
     ap.add_argument("--workdir", help="where the inputs go (default a new temporary directory)")
     ap.add_argument("--json", help="where the results go (default WORKDIR/peer.json)")

@@ -19,7 +19,7 @@
 
 use crate::collide::Backend;
 use crate::cpu::cells::CellGrid;
-use crate::cpu::CpuEngine;
+use crate::cpu::{CpuEngine, Threads};
 use crate::error::{ParamError, PowderError};
 use crate::gpu::{GpuContext, GpuEngine};
 use crate::model::{
@@ -393,6 +393,9 @@ pub struct BenchOptions {
     /// Runs per (case, backend, size), each with a fresh engine; the row keeps the fastest
     /// and lists every run's rate (shared machines vary from run to run).
     pub repeats: u32,
+    /// The CPU engine's thread counts, each measured as its own series (0: every core);
+    /// rows after the first count show their speed-up over it.
+    pub threads: Vec<usize>,
 }
 
 impl Default for BenchOptions {
@@ -411,6 +414,7 @@ impl Default for BenchOptions {
             quiet: crate::gpu::QuietBatches::Auto,
             software_paths: None,
             repeats: 1,
+            threads: vec![0],
         }
     }
 }
@@ -449,6 +453,9 @@ impl BenchOptions {
         if self.repeats == 0 {
             return Err(ParamError::new("repeats", "run each size at least once").into());
         }
+        if self.threads.is_empty() {
+            return Err(ParamError::new("threads", "give at least one thread count").into());
+        }
         crate::error::require_positive("max-seconds", self.max_seconds, "the time budget")?;
         crate::error::require_non_negative(
             "velocity-scale",
@@ -466,6 +473,11 @@ pub struct BenchRow {
     pub case: &'static str,
     /// `cpu` or `gpu`.
     pub backend: &'static str,
+    /// CPU: the threads the engine ran on.
+    pub threads: Option<usize>,
+    /// CPU: the rate over the rate of the first thread count measured (`--threads 1,2`:
+    /// the speed-up from 1 to 2 threads).
+    pub speedup: Option<f64>,
     /// N.
     pub particles: usize,
     /// `ran`, `skipped` (by the time or memory budget, or after a larger size stopped) or
@@ -515,6 +527,8 @@ impl BenchRow {
         Self {
             case: case.name(),
             backend: backend_name(backend),
+            threads: None,
+            speedup: None,
             particles: n,
             status: "skipped",
             note: Some(note),
@@ -559,10 +573,16 @@ pub struct BenchReport {
     pub rows: Vec<BenchRow>,
 }
 
-fn run_cpu(scene: &Scene, case: Case, opts: &BenchOptions) -> Result<BenchRow, PowderError> {
+fn run_cpu(
+    scene: &Scene,
+    case: Case,
+    threads: &Threads,
+    opts: &BenchOptions,
+) -> Result<BenchRow, PowderError> {
     let n = scene.particles.len();
     let t0 = Instant::now();
     let mut engine = CpuEngine::new(scene)?;
+    engine.set_threads(threads.clone());
     let setup = t0.elapsed().as_secs_f64();
     engine.run_steps(opts.warmup)?;
     let before = engine.rebuilds();
@@ -574,6 +594,8 @@ fn run_cpu(scene: &Scene, case: Case, opts: &BenchOptions) -> Result<BenchRow, P
     Ok(BenchRow {
         case: case.name(),
         backend: "cpu",
+        threads: Some(threads.count()),
+        speedup: None,
         particles: n,
         status: "ran",
         note: None,
@@ -638,6 +660,8 @@ fn run_gpu(
         passes,
         case: case.name(),
         backend: "gpu",
+        threads: None,
+        speedup: None,
         particles: n,
         status: "ran",
         note: None,
@@ -681,13 +705,29 @@ pub fn bench(
     }
     let software = adapter.as_ref().is_some_and(|a| a.device_type == "Cpu");
     let mut rows = Vec::new();
+    // the series: each backend, the CPU once per thread count
+    let mut series: Vec<(Backend, Option<Threads>)> = Vec::new();
+    for &backend in &opts.backends {
+        match backend {
+            Backend::Cpu => {
+                for &t in &opts.threads {
+                    series.push((backend, Some(Threads::new(t)?)));
+                }
+            }
+            Backend::Gpu => series.push((backend, None)),
+        }
+    }
     for &case in &opts.cases {
-        for &backend in &opts.backends {
+        for (backend, threads) in &series {
+            let backend = *backend;
             // (particles, s per particle-step, setup s per particle, bytes per particle)
             let mut last: Option<(usize, f64, f64, f64)> = None;
             let mut stopped: Option<String> = None;
             for &n in &sizes {
-                let skip = |note: String| BenchRow::skipped(case, backend, n, opts.steps, note);
+                let skip = |note: String| BenchRow {
+                    threads: threads.as_ref().map(Threads::count),
+                    ..BenchRow::skipped(case, backend, n, opts.steps, note)
+                };
                 let row = if let Some(why) = &stopped {
                     skip(format!("not run: {why}"))
                 } else if let (Backend::Gpu, Some(e)) = (backend, &gpu_error) {
@@ -700,9 +740,9 @@ pub fn bench(
                     skip(why)
                 } else {
                     let scene = packing(case, n, opts.velocity_scale, opts.seed)?;
-                    let result = best_of(opts.repeats, || match backend {
-                        Backend::Cpu => run_cpu(&scene, case, opts),
-                        Backend::Gpu => run_gpu(&scene, case, GpuContext::new()?, opts),
+                    let result = best_of(opts.repeats, || match threads {
+                        Some(threads) => run_cpu(&scene, case, threads, opts),
+                        None => run_gpu(&scene, case, GpuContext::new()?, opts),
                     });
                     match result {
                         Ok(row) => row,
@@ -715,6 +755,8 @@ pub fn bench(
                         }
                     }
                 };
+                let mut row = row;
+                row.speedup = speedup(&rows, &row);
                 if let (Some(wall), Some(setup)) = (row.wall_seconds, row.setup_seconds) {
                     let work = (n as f64 * opts.steps as f64).max(1.0);
                     last = Some((
@@ -739,6 +781,18 @@ pub fn bench(
         seed: opts.seed,
         rows,
     })
+}
+
+/// A CPU row's rate over the rate of the first thread count's row of the same case and
+/// size (None for that row itself, and where either did not run).
+fn speedup(rows: &[BenchRow], row: &BenchRow) -> Option<f64> {
+    let first = rows
+        .iter()
+        .find(|r| r.backend == "cpu" && r.case == row.case && r.particles == row.particles)?;
+    if first.threads == row.threads {
+        return None;
+    }
+    Some(row.particle_steps_per_second? / first.particle_steps_per_second?)
 }
 
 /// Why size `n` would exceed the time budget, predicted from the last measured size
@@ -837,7 +891,7 @@ fn opt(x: Option<f64>, f: impl Fn(f64) -> String) -> String {
 /// The table `powder bench` prints (one header, then [`table_line`] per row).
 pub fn table_header() -> String {
     format!(
-        "{:<11} {:<4} {:>9} {:>6} {:>8} {:>9} {:>10} {:>12} {:>9} {:>9} {:>8} {:>6}  note",
+        "{:<11} {:<6} {:>9} {:>6} {:>8} {:>9} {:>10} {:>12} {:>7} {:>9} {:>9} {:>8} {:>6}  note",
         "case",
         "back",
         "particles",
@@ -846,6 +900,7 @@ pub fn table_header() -> String {
         "wall s",
         "s/step",
         "p-steps/s",
+        "speedup",
         "GPU B/p",
         "B/p-step",
         "rebuilds",
@@ -856,15 +911,19 @@ pub fn table_header() -> String {
 /// One row of the table.
 pub fn table_line(r: &BenchRow) -> String {
     format!(
-        "{:<11} {:<4} {:>9} {:>6} {:>8} {:>9} {:>10} {:>12} {:>9} {:>9} {:>8} {:>6}  {}",
+        "{:<11} {:<6} {:>9} {:>6} {:>8} {:>9} {:>10} {:>12} {:>7} {:>9} {:>9} {:>8} {:>6}  {}",
         r.case,
-        r.backend,
+        match r.threads {
+            Some(t) => format!("{}×{t}", r.backend),
+            None => r.backend.to_string(),
+        },
         r.particles,
         r.steps,
         opt(r.setup_seconds, |v| format!("{v:.2}")),
         opt(r.wall_seconds, |v| format!("{v:.3}")),
         opt(r.seconds_per_step, |v| format!("{v:.3e}")),
         opt(r.particle_steps_per_second, |v| format!("{v:.3e}")),
+        opt(r.speedup, |v| format!("{v:.2}×")),
         opt(r.gpu_bytes_per_particle, |v| format!("{v:.0}")),
         opt(
             r.traffic.as_ref().map(|t| t.bytes_per_particle_step),

@@ -1,7 +1,9 @@
 //! `powder`: a discrete element method (DEM) engine for cohesive powders.
 //!
 //! * [`model`] — contact models in f64, one module each, plus the papers' closed forms;
-//! * [`cpu`] — the f64 CPU reference backend (linked cells, per-contact history, Verlet);
+//! * [`cpu`] — the f64 CPU reference backend (linked cells, per-contact history, Verlet),
+//!   spread over every core with the same bits on any thread count;
+//! * [`backend`] — which engine a command runs on (`auto`: a hardware GPU, else the CPU);
 //! * [`scene`] — the TOML scene description and its validation;
 //! * [`collide`] — the head-on two-sphere collision used to check models against theory;
 //! * [`output`] — plots and atomically written files;
@@ -12,6 +14,7 @@
 #![warn(missing_docs)]
 
 pub mod accuracy;
+pub mod backend;
 pub mod bench;
 pub mod checkpoint;
 pub mod collide;

@@ -39,18 +39,31 @@ enum Command {
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 enum BackendChoice {
+    /// A hardware GPU if there is one, else the CPU engine (see `powder run --help`).
+    Auto,
     Cpu,
     Gpu,
     Both,
 }
 
+/// The engine `--backend auto` picks (a hardware GPU, else the CPU), its reason on stderr.
+fn auto_backend() -> Result<collide::Backend, PowderError> {
+    let chosen = powder::backend::choose(powder::backend::BackendRequest::Auto)?;
+    eprintln!("backend: {}", chosen.reason);
+    Ok(match chosen.gpu {
+        Some(_) => collide::Backend::Gpu,
+        None => collide::Backend::Cpu,
+    })
+}
+
 impl BackendChoice {
-    fn list(self) -> Vec<collide::Backend> {
-        match self {
+    fn list(self) -> Result<Vec<collide::Backend>, PowderError> {
+        Ok(match self {
+            BackendChoice::Auto => vec![auto_backend()?],
             BackendChoice::Cpu => vec![collide::Backend::Cpu],
             BackendChoice::Gpu => vec![collide::Backend::Gpu],
             BackendChoice::Both => vec![collide::Backend::Cpu, collide::Backend::Gpu],
-        }
+        })
     }
 }
 
@@ -75,7 +88,9 @@ struct BenchArgs {
     /// Untimed warm-up steps before the timed ones.
     #[arg(long, default_value_t = 32)]
     warmup: u64,
-    #[arg(long, value_enum, default_value = "both")]
+    /// `auto`: a hardware GPU if there is one, else the CPU engine; `both` measures the CPU
+    /// engine and the GPU engine (the software adapter where there is no GPU).
+    #[arg(long, value_enum, default_value = "auto")]
     backend: BackendChoice,
     #[arg(long = "case", value_enum, default_value = "both")]
     case: BenchCase,
@@ -106,6 +121,10 @@ struct BenchArgs {
     /// JSON every run's rate.
     #[arg(long, default_value_t = 1)]
     repeats: u32,
+    /// CPU thread counts, comma-separated, each measured (0: every core); `1,2` shows the
+    /// speed-up from 1 to 2 threads.
+    #[arg(long, default_value = "0")]
+    threads: String,
     /// Write the report (rows, machine, adapter, version, commit, date) as JSON.
     #[arg(long)]
     json: Option<PathBuf>,
@@ -202,6 +221,23 @@ fn write_json<T: serde::Serialize>(path: &std::path::Path, value: &T) -> Result<
     Ok(())
 }
 
+/// Parses `--threads`: comma-separated thread counts (0: every core).
+fn parse_threads(text: &str) -> Result<Vec<usize>, PowderError> {
+    text.split(',')
+        .map(str::trim)
+        .filter(|t| !t.is_empty())
+        .map(|t| {
+            t.parse().map_err(|_| {
+                powder::ParamError::new(
+                    "threads",
+                    format!("`{t}` is not a thread count; expected e.g. 1,2 (0: every core)"),
+                )
+                .into()
+            })
+        })
+        .collect()
+}
+
 fn bench_cmd(a: &BenchArgs) -> Result<(), PowderError> {
     use powder::bench::{self, BenchOptions, Case};
     let opts = BenchOptions {
@@ -211,7 +247,7 @@ fn bench_cmd(a: &BenchArgs) -> Result<(), PowderError> {
             BenchCase::Jkr => vec![Case::Jkr],
             BenchCase::Both => vec![Case::Hysteretic, Case::Jkr],
         },
-        backends: a.backend.list(),
+        backends: a.backend.list()?,
         steps: a.steps,
         warmup: a.warmup,
         max_seconds: a.max_seconds,
@@ -222,6 +258,7 @@ fn bench_cmd(a: &BenchArgs) -> Result<(), PowderError> {
         software_paths: a.software_paths.choice(),
         profile: a.profile,
         repeats: a.repeats,
+        threads: parse_threads(&a.threads)?,
     };
     opts.validate()?;
     println!("{}", bench::table_header());
@@ -440,6 +477,9 @@ fn info_cmd(a: &InfoArgs) -> Result<(), PowderError> {
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 enum Backend {
+    /// A hardware GPU if there is one, else the CPU engine on every core (the software
+    /// adapter only when asked for: `--backend gpu`, or `POWDER_ADAPTER` set).
+    Auto,
     /// The f64 CPU reference engine.
     Cpu,
     /// The wgpu engine (every model; the same outputs, checkpoints and run monitor).
@@ -447,10 +487,20 @@ enum Backend {
 }
 
 impl Backend {
-    fn collide(self) -> collide::Backend {
-        match self {
+    fn collide(self) -> Result<collide::Backend, PowderError> {
+        Ok(match self {
+            Backend::Auto => auto_backend()?,
             Backend::Cpu => collide::Backend::Cpu,
             Backend::Gpu => collide::Backend::Gpu,
+        })
+    }
+
+    fn request(self) -> powder::backend::BackendRequest {
+        use powder::backend::BackendRequest as R;
+        match self {
+            Backend::Auto => R::Auto,
+            Backend::Cpu => R::Cpu,
+            Backend::Gpu => R::Gpu,
         }
     }
 }
@@ -460,11 +510,14 @@ struct RunArgs {
     /// Scene file (TOML); see the README for the schema. Without one, the built-in
     /// cohesive cluster (examples/cohesive_cluster.toml) runs.
     scene: Option<PathBuf>,
-    #[arg(long, value_enum, default_value = "cpu")]
+    #[arg(long, value_enum, default_value = "auto")]
     backend: Backend,
     /// Stop after this many steps in total (default: the scene's duration).
     #[arg(long)]
     steps: Option<u64>,
+    /// CPU engine threads (0: every core); the results are bitwise the same on any count.
+    #[arg(long, default_value_t = 0)]
+    threads: usize,
     /// Output directory: VTK snapshots and a .pvd collection for ParaView, series.csv,
     /// checkpoint.bin, summary.json (default: out/<scene name>).
     #[arg(long)]
@@ -794,7 +847,7 @@ fn collide_cmd(a: &CollideArgs) -> Result<(), PowderError> {
             )
             .into());
         }
-        let (result, rows) = collide::collide_traced_on(&spec, a.backend.collide())?;
+        let (result, rows) = collide::collide_traced_on(&spec, a.backend.collide()?)?;
         if let Some(path) = &a.trace {
             let mut text = String::from(collide::TraceRow::CSV_HEADER);
             text.push('\n');
@@ -827,9 +880,9 @@ fn collide_cmd(a: &CollideArgs) -> Result<(), PowderError> {
             }
             let vs = collide::sweep_velocities(text, a.log)?;
             spec.validate()?;
-            collide::sweep_on(&spec, &vs, a.backend.collide())?
+            collide::sweep_on(&spec, &vs, a.backend.collide()?)?
         }
-        None => vec![collide::collide_on(&spec, a.backend.collide())?],
+        None => vec![collide::collide_on(&spec, a.backend.collide()?)?],
     };
     if let Some(path) = &a.plot {
         collide::restitution_plot(&spec, &results, a.log).write_svg(path)?;
@@ -861,7 +914,7 @@ fn accuracy_cmd(a: &AccuracyArgs) -> Result<(), PowderError> {
     use powder::accuracy::{self, AccuracyOptions};
     let opts = AccuracyOptions {
         divisors: accuracy::parse_divisors(&a.divisors)?,
-        backends: a.backend.list(),
+        backends: a.backend.list()?,
         pair: a.case != AccuracyCase::Packing,
         packing: a.case != AccuracyCase::Pair,
         reference_divisor: a.reference_divisor,
@@ -1042,16 +1095,9 @@ fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
             )?
         }
     };
-    let gpu = match a.backend {
-        Backend::Gpu => match powder::gpu::GpuContext::new() {
-            Ok(ctx) => Some(ctx),
-            Err(e) => {
-                eprintln!("notice: {e}\nnotice: running on the CPU backend instead");
-                None
-            }
-        },
-        Backend::Cpu => None,
-    };
+    let chosen = powder::backend::choose(a.backend.request())?;
+    eprintln!("backend: {}", chosen.reason);
+    let gpu = chosen.gpu;
     let interrupt = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
     {
         let flag = interrupt.clone();
@@ -1089,6 +1135,8 @@ fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
             ..Default::default()
         },
         tabor_dmin: a.tabor_dmin,
+        threads: powder::cpu::Threads::new(a.threads)?,
+        backend_reason: Some(chosen.reason),
     };
     let summary = match gpu {
         Some(ctx) => powder::run::run_gpu_with(&scene, ctx, &opts, |_| {})?,

@@ -5,7 +5,7 @@
 //! --no-ledger`) leaves what only the ledger knows absent: empty CSV cells, keys left out
 //! of the JSON, "n/a" in the progress line.
 
-use crate::cpu::{ContactStats, CpuEngine};
+use crate::cpu::{ContactStats, CpuEngine, Threads};
 use crate::error::PowderError;
 use crate::gpu::{GpuContext, GpuEngine, GpuOptions};
 use crate::observed::ObservedEnergies;
@@ -41,6 +41,10 @@ pub struct RunSummary {
     pub backend: &'static str,
     /// The GPU adapter (GPU backend).
     pub adapter: Option<String>,
+    /// The CPU threads the step ran on (CPU backend; the results do not depend on it).
+    pub threads: Option<usize>,
+    /// Why this backend ran (`--backend auto`: what was found), when it was chosen.
+    pub backend_reason: Option<String>,
     /// Number of particles.
     pub particles: usize,
     /// Whether the run kept the energy ledger (off: `powder run --no-ledger` on the GPU;
@@ -217,6 +221,10 @@ pub struct RunOptions {
     /// D_min of the Tabor parameter in the scene's length unit; `None`: the paper's
     /// 1.65 Å ([`crate::model::analytic::TABOR_MIN_SEPARATION`]).
     pub tabor_dmin: Option<f64>,
+    /// The CPU engine's threads (every core by default; the results do not depend on it).
+    pub threads: Threads,
+    /// Why the backend was chosen, for the summary (`powder run --backend auto`).
+    pub backend_reason: Option<String>,
 }
 
 /// Header of `series.csv`: per wall the force of the particles on it and, for a moving
@@ -451,7 +459,8 @@ pub fn run_cpu_with(
     opts: &RunOptions,
     progress: impl FnMut(&Snapshot),
 ) -> Result<RunSummary, PowderError> {
-    let engine = CpuEngine::new(scene)?;
+    let mut engine = CpuEngine::new(scene)?;
+    engine.set_threads(opts.threads.clone());
     let rule = engine.time_step().reason.clone();
     run_with(scene, engine, &rule, opts, progress)
 }
@@ -659,6 +668,8 @@ pub fn run_with<S: Simulation>(
         scene: scene.name.clone(),
         backend: engine.backend(),
         adapter: engine.adapter(),
+        threads: engine.threads(),
+        backend_reason: opts.backend_reason.clone(),
         particles: engine.len(),
         ledger: engine.has_ledger(),
         dt: engine.dt(),

@@ -48,6 +48,10 @@ pub trait Simulation {
     fn backend(&self) -> &'static str;
     /// The GPU adapter, if any.
     fn adapter(&self) -> Option<String>;
+    /// The CPU threads the step is spread over (the CPU engine).
+    fn threads(&self) -> Option<usize> {
+        None
+    }
     /// Steps taken.
     fn steps(&self) -> u64;
     /// Simulated time, s.
@@ -98,6 +102,9 @@ impl Simulation for CpuEngine {
     type Saved = CpuState;
     fn backend(&self) -> &'static str {
         "cpu"
+    }
+    fn threads(&self) -> Option<usize> {
+        Some(CpuEngine::threads(self))
     }
     fn adapter(&self) -> Option<String> {
         None

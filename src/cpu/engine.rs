@@ -9,6 +9,7 @@
 //! whenever the list is rebuilt (a restored checkpoint rebuilds it around its contacts).
 
 use crate::cpu::cells::CellGrid;
+use crate::cpu::threads::{chunks, Threads, CHUNK};
 use crate::error::PowderError;
 use crate::model::{ContactHistory, ContactModel, Kinematics, PairGeometry, Response, TimeStep};
 use crate::scene::Scene;
@@ -34,6 +35,10 @@ struct PairList {
     /// Whether the entry holds a contact (its record is meaningful).
     live: Vec<bool>,
     record: Vec<ContactRecord>,
+    /// The entries naming particle j as partner: `incoming[in_start[j]..in_start[j + 1]]`,
+    /// ascending (so by i), for summing j's forces in key order.
+    in_start: Vec<usize>,
+    incoming: Vec<u32>,
 }
 
 impl PairList {
@@ -41,6 +46,7 @@ impl PairList {
     fn empty(n: usize) -> Self {
         Self {
             start: vec![0; n + 1],
+            in_start: vec![0; n + 1],
             ..Default::default()
         }
     }
@@ -58,7 +64,28 @@ impl PairList {
         list.partner = contacts.iter().map(|((_, j), _)| *j).collect();
         list.live = vec![true; contacts.len()];
         list.record = contacts.into_iter().map(|(_, r)| r).collect();
+        list.index_incoming();
         list
+    }
+
+    /// Builds the incoming index from the entries.
+    fn index_incoming(&mut self) {
+        let n = self.start.len().saturating_sub(1);
+        self.in_start.clear();
+        self.in_start.resize(n + 1, 0);
+        for &j in &self.partner {
+            self.in_start[j as usize + 1] += 1;
+        }
+        for j in 0..n {
+            self.in_start[j + 1] += self.in_start[j];
+        }
+        let mut next = self.in_start[..n].to_vec();
+        self.incoming.clear();
+        self.incoming.resize(self.partner.len(), 0);
+        for (k, &j) in self.partner.iter().enumerate() {
+            self.incoming[next[j as usize]] = k as u32;
+            next[j as usize] += 1;
+        }
     }
 
     /// The entry of pair (i, j), i < j.
@@ -177,26 +204,26 @@ fn non_finite(i: usize, partner: Partner, delta: f64) -> String {
     format!("non-finite contact force between {between} (overlap {delta:e} m)")
 }
 
-/// What the force loops gather over a step besides the forces: the energy the contacts
-/// dissipated, the deepest overlap and the first non-finite force.
-struct StepLog<'a> {
+/// What the force loops gather over a step (or a chunk of it) besides the forces: the
+/// energy the contacts dissipated, the deepest overlap and the first non-finite force.
+struct StepLog {
     dt: f64,
     /// Energy of the contacts visited, and of those that left without a visit, each
     /// summed in key order.
     dissipated: f64,
     departed: f64,
     peak: Option<(f64, usize, Partner)>,
-    failure: &'a mut Option<String>,
+    failure: Option<String>,
 }
 
-impl<'a> StepLog<'a> {
-    fn new(dt: f64, peak: Option<(f64, usize, Partner)>, failure: &'a mut Option<String>) -> Self {
+impl StepLog {
+    fn new(dt: f64, peak: Option<(f64, usize, Partner)>) -> Self {
         Self {
             dt,
             dissipated: 0.0,
             departed: 0.0,
             peak,
-            failure,
+            failure: None,
         }
     }
 
@@ -209,7 +236,7 @@ impl<'a> StepLog<'a> {
         let mut history = prior.map(|p| p.history).unwrap_or_default();
         let r = c.model.respond(kin, geom, self.dt, &mut history);
         if !(r.normal.force.is_finite() && r.tangential.is_finite()) && self.failure.is_none() {
-            *self.failure = Some(non_finite(c.i, c.partner, kin.delta));
+            self.failure = Some(non_finite(c.i, c.partner, kin.delta));
         }
         let motion = Motion {
             delta: kin.delta,
@@ -219,11 +246,15 @@ impl<'a> StepLog<'a> {
         let record = ContactRecord::new(history, kin.delta, &r, &motion);
         let edges = || c.model.edges(geom, kin.delta_dot);
         self.dissipated += CpuEngine::book(prior, &record, &motion, self.dt, edges);
-        let ratio = kin.delta / geom.a12;
-        if self.peak.is_none_or(|p| ratio > p.0) {
-            self.peak = Some((ratio, c.i, c.partner));
-        }
+        self.note_peak(kin.delta / geom.a12, c.i, c.partner);
         record
+    }
+
+    /// Keeps the deepest overlap ratio, the first one seen among equals.
+    fn note_peak(&mut self, ratio: f64, i: usize, partner: Partner) {
+        if self.peak.is_none_or(|p| ratio > p.0) {
+            self.peak = Some((ratio, i, partner));
+        }
     }
 
     /// Books a contact that left the range without a visit, with overlap `delta` now.
@@ -231,9 +262,397 @@ impl<'a> StepLog<'a> {
         self.departed += CpuEngine::book_departed(c, delta, self.dt);
     }
 
+    /// Appends the log of the chunk that follows this one (in key order): sums added, the
+    /// first failure and the first deepest overlap kept, as one log over both would.
+    fn append(&mut self, next: StepLog) {
+        self.dissipated += next.dissipated;
+        self.departed += next.departed;
+        if let Some((ratio, i, partner)) = next.peak {
+            self.note_peak(ratio, i, partner);
+        }
+        if self.failure.is_none() {
+            self.failure = next.failure;
+        }
+    }
+
     /// The energy dissipated over the step.
     fn total(&self) -> f64 {
         self.dissipated + self.departed
+    }
+}
+
+/// What a rebuild's neighbour search reads: the positions now, the grid binned from them,
+/// and the old list whose contacts carry over.
+struct Search<'a> {
+    pos: &'a [DVec3],
+    radius: &'a [f64],
+    active: &'a [bool],
+    cutoff_pad: &'a [f64],
+    skin: f64,
+    periodic: [bool; 3],
+    domain: (DVec3, DVec3),
+    grid: &'a CellGrid,
+    old: &'a PairList,
+}
+
+/// The new list's entries of one chunk of particles, and how many each particle has.
+struct ChunkList {
+    counts: Vec<usize>,
+    partner: Vec<u32>,
+    live: Vec<bool>,
+    record: Vec<ContactRecord>,
+}
+
+impl Search<'_> {
+    /// The entries of particles `range`: for each, the union of its candidates j > i and
+    /// its old list's contacts, both ascending.
+    fn chunk(&self, range: std::ops::Range<usize>) -> ChunkList {
+        let (pos, radius, active, old) = (self.pos, self.radius, self.active, self.old);
+        let any_periodic = self.periodic.iter().any(|&p| p);
+        let mut out = ChunkList {
+            counts: Vec::with_capacity(range.len()),
+            partner: Vec::new(),
+            live: Vec::new(),
+            record: Vec::new(),
+        };
+        let mut cand: Vec<u32> = Vec::new();
+        for i in range {
+            cand.clear();
+            if active[i] {
+                let pi = pos[i];
+                let pad = self.cutoff_pad[i] + self.skin;
+                self.grid.for_each_near(pi, |j| {
+                    if j > i && active[j] {
+                        let mut d = pi - pos[j];
+                        if any_periodic {
+                            d = minimum_image(d, self.periodic, self.domain);
+                        }
+                        let reach = pad + radius[j];
+                        if d.length_squared() < reach * reach {
+                            cand.push(j as u32);
+                        }
+                    }
+                });
+                cand.sort_unstable();
+            }
+            let before = out.partner.len();
+            let (mut a, mut b) = (0, old.start.get(i).copied().unwrap_or(0));
+            let end = old.start.get(i + 1).copied().unwrap_or(b);
+            loop {
+                while b < end && !old.live[b] {
+                    b += 1;
+                }
+                let kept = (b < end).then(|| old.partner[b]);
+                let next = cand.get(a).copied();
+                let (j, record) = match (next, kept) {
+                    (None, None) => break,
+                    (Some(c), Some(o)) if c == o => {
+                        a += 1;
+                        b += 1;
+                        (c, Some(old.record[b - 1]))
+                    }
+                    (Some(c), o) if o.is_none_or(|o| c < o) => {
+                        a += 1;
+                        (c, None)
+                    }
+                    (_, Some(o)) => {
+                        b += 1;
+                        (o, Some(old.record[b - 1]))
+                    }
+                    (Some(_), None) => unreachable!(),
+                };
+                out.partner.push(j);
+                out.live.push(record.is_some());
+                out.record.push(record.unwrap_or_default());
+            }
+            out.counts.push(out.partner.len() - before);
+        }
+        out
+    }
+}
+
+/// What the pair forces read: the particles, their models, the list's rows and partners,
+/// and the predicted velocities of the step.
+struct PairInputs<'a> {
+    pos: &'a [DVec3],
+    radius: &'a [f64],
+    pad: &'a [f64],
+    mass: &'a [f64],
+    material: &'a [usize],
+    models: &'a [ContactModel],
+    ranges: &'a [f64],
+    n_materials: usize,
+    periodic: [bool; 3],
+    domain: (DVec3, DVec3),
+    start: &'a [usize],
+    partner: &'a [u32],
+    v_pred: &'a [DVec3],
+    w_pred: &'a [DVec3],
+    dt: f64,
+}
+
+/// One chunk of particles of the pair forces, with what it writes: its entries' records,
+/// whether they stay, their forces on i and torques on j, and its particles' own sums.
+struct PairChunk<'a> {
+    range: std::ops::Range<usize>,
+    record: &'a mut [ContactRecord],
+    live: &'a mut [bool],
+    entry_force: &'a mut [DVec3],
+    entry_torque: &'a mut [DVec3],
+    own_force: &'a mut [DVec3],
+    own_torque: &'a mut [DVec3],
+}
+
+impl PairInputs<'_> {
+    /// The entries of one chunk, in key order; returns the chunk's log.
+    #[inline(never)]
+    fn chunk<const ROT: bool>(&self, c: PairChunk) -> StepLog {
+        let omega_of = |i: usize| if ROT { self.w_pred[i] } else { DVec3::ZERO };
+        let (pos, radius, pad, mass, material) =
+            (self.pos, self.radius, self.pad, self.mass, self.material);
+        let (periodic, domain) = (self.periodic, self.domain);
+        let any_periodic = periodic.iter().any(|&p| p);
+        let nm = self.n_materials;
+        let mut log = StepLog::new(self.dt, None);
+        let base = self.start[c.range.start];
+        for (a, i) in c.range.clone().enumerate() {
+            let (s, e) = (self.start[i], self.start[i + 1]);
+            if s == e {
+                continue;
+            }
+            let (pi, ri, pad_i, mi) = (pos[i], radius[i], pad[i], material[i] * nm);
+            let (vi, wi) = (self.v_pred[i], omega_of(i));
+            // i's own sums
+            let (mut fi, mut ti) = (DVec3::ZERO, DVec3::ZERO);
+            // the pair geometry and rolling factor of the last partner's radius and
+            // mass (the same values: partners of a packing share them)
+            let mut shape: Option<(u64, u64, PairGeometry, f64)> = None;
+            for k in s..e {
+                let x = k - base;
+                let j = self.partner[k] as usize;
+                let mut d = pi - pos[j];
+                if any_periodic {
+                    d = minimum_image(d, periodic, domain);
+                }
+                let dist2 = d.length_squared();
+                let reach = pad_i + radius[j];
+                let live = c.live[x];
+                if dist2 >= reach * reach {
+                    if live {
+                        log.depart(&c.record[x], ri + radius[j] - dist2.sqrt());
+                        c.live[x] = false;
+                    }
+                    c.entry_force[x] = DVec3::ZERO;
+                    if ROT {
+                        c.entry_torque[x] = DVec3::ZERO;
+                    }
+                    continue;
+                }
+                let dist = dist2.sqrt();
+                let delta = ri + radius[j] - dist;
+                let (model, range) = (
+                    &self.models[mi + material[j]],
+                    self.ranges[mi + material[j]],
+                );
+                if delta <= -range && !live {
+                    c.entry_force[x] = DVec3::ZERO;
+                    if ROT {
+                        c.entry_torque[x] = DVec3::ZERO;
+                    }
+                    continue;
+                }
+                let prior = live.then(|| &c.record[x]);
+                let n = if dist > 0.0 { d / dist } else { DVec3::Z };
+                let (geom, roll) = match shape {
+                    Some((r, m, g, roll)) if r == radius[j].to_bits() && m == mass[j].to_bits() => {
+                        (g, roll)
+                    }
+                    _ => {
+                        let g = PairGeometry::spheres(ri, radius[j], mass[i], mass[j]);
+                        let roll = 0.5 * (ri - radius[j]) / (ri + radius[j]);
+                        shape = Some((radius[j].to_bits(), mass[j].to_bits(), g, roll));
+                        (g, roll)
+                    }
+                };
+                let wj = omega_of(j);
+                let v_rel = vi - self.v_pred[j];
+                let v_c = if ROT {
+                    v_rel - ri * wi.cross(n) - radius[j] * wj.cross(n)
+                } else {
+                    v_rel
+                };
+                let v_t = v_c - n * v_c.dot(n);
+                // rolling needs rotation: no model reads v_roll without it
+                let v_roll = if ROT {
+                    geom.r_eff() * (wi - wj).cross(n) + roll * v_t
+                } else {
+                    DVec3::ZERO
+                };
+                let contact = Contact {
+                    model,
+                    geom,
+                    kin: Kinematics {
+                        delta,
+                        delta_dot: -v_rel.dot(n),
+                        n,
+                        v_t,
+                        v_roll,
+                        omega_rel: wi - wj,
+                    },
+                    i,
+                    partner: Partner::Particle(j),
+                };
+                let r = log.contact(contact, prior);
+                let f = r.force * n + r.tangential;
+                fi += f;
+                c.entry_force[x] = f;
+                if ROT {
+                    let t = n.cross(r.tangential);
+                    ti += -ri * t + r.couple;
+                    c.entry_torque[x] = -radius[j] * t - r.couple;
+                }
+                let keep = r.stays(range);
+                if keep {
+                    c.record[x] = r;
+                }
+                c.live[x] = keep;
+            }
+            c.own_force[a] = fi;
+            if ROT {
+                c.own_torque[a] = ti;
+            }
+        }
+        log
+    }
+}
+
+/// Keeps the two largest values seen in `top` (largest first).
+fn push_top(top: &mut [f64; 2], x: f64) {
+    if x > top[1] {
+        if x > top[0] {
+            top[1] = top[0];
+            top[0] = x;
+        } else {
+            top[1] = x;
+        }
+    }
+}
+
+/// What the wall contacts read: the particles, the walls and their models, the candidates
+/// and the old contacts, and the predicted velocities of the step.
+struct WallInputs<'a> {
+    pos: &'a [DVec3],
+    radius: &'a [f64],
+    mass: &'a [f64],
+    material: &'a [usize],
+    n_materials: usize,
+    walls: &'a [WallPlane],
+    wall_models: &'a [ContactModel],
+    wall_ranges: &'a [f64],
+    candidates: &'a [u32],
+    old: &'a WallList,
+    v_pred: &'a [DVec3],
+    w_pred: &'a [DVec3],
+    dt: f64,
+}
+
+/// A piece of the wall contacts: candidates of one wall, and the old contacts it books.
+struct WallPiece {
+    wall: usize,
+    candidates: std::ops::Range<usize>,
+    old: std::ops::Range<usize>,
+}
+
+/// What a piece found: the contacts kept, each visited particle's force and torque, its log.
+struct WallOut {
+    kept: WallList,
+    pushes: Vec<(u32, DVec3, DVec3)>,
+    log: StepLog,
+}
+
+impl WallInputs<'_> {
+    /// The contacts of one piece, in key order.
+    #[inline(never)]
+    fn piece(&self, p: WallPiece) -> WallOut {
+        let rotation = !self.w_pred.is_empty();
+        let old = self.old;
+        let mut out = WallOut {
+            kept: WallList::default(),
+            pushes: Vec::with_capacity(p.candidates.len()),
+            log: StepLog::new(self.dt, None),
+        };
+        let mut cursor = p.old.start;
+        // books the old contacts before `key` (all of the piece's for None): not visited
+        // this step (none while particles stay active), so they left
+        let leave = |log: &mut StepLog, cursor: &mut usize, key: Option<(u32, u32)>| {
+            while *cursor < p.old.end && key.is_none_or(|k| old.key[*cursor] < k) {
+                let (w, i) = old.key[*cursor];
+                let wall = &self.walls[w as usize];
+                let i = i as usize;
+                let delta = self.radius[i] - (self.pos[i] - wall.point).dot(wall.normal);
+                log.depart(&old.record[*cursor], delta);
+                *cursor += 1;
+            }
+        };
+        let w = p.wall;
+        for &i in &self.candidates[p.candidates.clone()] {
+            let wall = &self.walls[w];
+            let n = wall.normal;
+            let i = i as usize;
+            let key = (w as u32, i as u32);
+            leave(&mut out.log, &mut cursor, Some(key));
+            let prior = if cursor < p.old.end && old.key[cursor] == key {
+                cursor += 1;
+                Some(&old.record[cursor - 1])
+            } else {
+                None
+            };
+            // relative to the (possibly moving) wall
+            let v = self.v_pred[i] - wall.velocity;
+            let delta = self.radius[i] - (self.pos[i] - wall.point).dot(n);
+            let m = w * self.n_materials + self.material[i];
+            let (model, range) = (&self.wall_models[m], self.wall_ranges[m]);
+            if delta <= -range && prior.is_none() {
+                continue;
+            }
+            let geom = PairGeometry::wall(self.radius[i], self.mass[i]);
+            let wi = if rotation {
+                self.w_pred[i]
+            } else {
+                DVec3::ZERO
+            };
+            let v_c = v - self.radius[i] * wi.cross(n);
+            let v_t = v_c - n * v_c.dot(n);
+            let contact = Contact {
+                model,
+                geom,
+                kin: Kinematics {
+                    delta,
+                    delta_dot: -v.dot(n),
+                    n,
+                    v_t,
+                    // eq. 20 with r_j → ∞: (r_i − r_j)/(r_i + r_j) → −1
+                    v_roll: geom.r_eff() * wi.cross(n) - 0.5 * v_t,
+                    omega_rel: wi,
+                },
+                i,
+                partner: Partner::Wall(w),
+            };
+            let r = out.log.contact(contact, prior);
+            let torque = if rotation {
+                -self.radius[i] * n.cross(r.tangential) + r.couple
+            } else {
+                DVec3::ZERO
+            };
+            out.pushes
+                .push((i as u32, r.force * n + r.tangential, torque));
+            if r.stays(range) {
+                out.kept.key.push(key);
+                out.kept.record.push(r);
+            }
+        }
+        leave(&mut out.log, &mut cursor, None);
+        out
     }
 }
 
@@ -368,8 +787,14 @@ pub struct CpuEngine {
     rebuild_due: bool,
     /// List rebuilds so far (not part of the state).
     rebuilds: u64,
-    /// Scratch: one particle's new candidates at a rebuild.
-    candidates: Vec<u32>,
+    /// The threads the step is spread over.
+    threads: Threads,
+    /// Scratch of the pair forces: each entry's force on i (and torque on its partner j),
+    /// each particle's sum over its own entries.
+    entry_force: Vec<DVec3>,
+    entry_torque: Vec<DVec3>,
+    own_force: Vec<DVec3>,
+    own_torque: Vec<DVec3>,
     wall_contacts: WallList,
     spare_walls: WallList,
     /// Wall candidates, rebuilt with the pair list: the active particles within
@@ -530,7 +955,11 @@ impl CpuEngine {
             pos_ref: Vec::new(),
             rebuild_due: true,
             rebuilds: 0,
-            candidates: Vec::new(),
+            threads: Threads::default(),
+            entry_force: Vec::new(),
+            entry_torque: Vec::new(),
+            own_force: Vec::new(),
+            own_torque: Vec::new(),
             wall_contacts: WallList::default(),
             spare_walls: WallList::default(),
             wall_start: Vec::new(),
@@ -554,6 +983,17 @@ impl CpuEngine {
         // Contacts present at the start carry stored energy, not dissipation.
         engine.dissipated = 0.0;
         Ok(engine)
+    }
+
+    /// Spreads the step over `threads` (every core by default). The results are bitwise
+    /// the same on any number of threads.
+    pub fn set_threads(&mut self, threads: Threads) {
+        self.threads = threads;
+    }
+
+    /// The number of threads the step is spread over.
+    pub fn threads(&self) -> usize {
+        self.threads.count()
     }
 
     /// The time step, s.
@@ -824,9 +1264,15 @@ impl CpuEngine {
     }
 
     fn update_acceleration(&mut self) {
-        for i in 0..self.pos.len() {
-            self.acc[i] = self.force[i] / self.mass[i] + self.gravity;
-        }
+        let (force, mass, gravity) = (&self.force, &self.mass, self.gravity);
+        let work: Vec<_> = (self.acc.chunks_mut(CHUNK))
+            .zip(chunks(self.pos.len()))
+            .collect();
+        self.threads.map(work, |(acc, range)| {
+            for (a, i) in range.enumerate() {
+                acc[a] = force[i] / mass[i] + gravity;
+            }
+        });
     }
 
     /// One velocity-Verlet step. Velocity-dependent forces see the predicted velocity
@@ -834,19 +1280,26 @@ impl CpuEngine {
     pub fn step(&mut self) -> Result<(), PowderError> {
         let dt = self.dt;
         self.insert_due();
-        let mut v_pred = std::mem::take(&mut self.v_pred);
-        v_pred.clear();
-        for i in 0..self.pos.len() {
-            if !self.active[i] {
-                v_pred.push(self.vel[i]);
-                continue;
+        let n = self.pos.len();
+        self.v_pred.resize(n, DVec3::ZERO);
+        let (acc, active) = (&self.acc, &self.active);
+        let work: Vec<_> = (self.pos.chunks_mut(CHUNK))
+            .zip(self.vel.chunks_mut(CHUNK))
+            .zip(self.v_pred.chunks_mut(CHUNK))
+            .zip(chunks(n))
+            .collect();
+        self.threads.map(work, |(((pos, vel), v_pred), range)| {
+            for (a, i) in range.enumerate() {
+                if !active[i] {
+                    v_pred[a] = vel[a];
+                    continue;
+                }
+                let v_half = vel[a] + 0.5 * dt * acc[i];
+                pos[a] += dt * v_half;
+                v_pred[a] = v_half + 0.5 * dt * acc[i];
+                vel[a] = v_half;
             }
-            let v_half = self.vel[i] + 0.5 * dt * self.acc[i];
-            self.pos[i] += dt * v_half;
-            v_pred.push(v_half + 0.5 * dt * self.acc[i]);
-            self.vel[i] = v_half;
-        }
-        self.v_pred = v_pred;
+        });
         if self.periodic.iter().any(|&p| p) {
             self.wrap_positions();
         }
@@ -875,12 +1328,20 @@ impl CpuEngine {
                 wall.point += dt * wall.velocity;
             }
         }
-        self.w_pred.clear();
-        for i in 0..self.omega.len() {
-            let alpha = self.torque[i] / self.inertia[i];
-            self.omega[i] += 0.5 * dt * alpha;
-            self.w_pred.push(self.omega[i] + 0.5 * dt * alpha);
-        }
+        self.w_pred.resize(self.omega.len(), DVec3::ZERO);
+        let (torque, inertia) = (&self.torque, &self.inertia);
+        let spinning = self.omega.len();
+        let work: Vec<_> = (self.omega.chunks_mut(CHUNK))
+            .zip(self.w_pred.chunks_mut(CHUNK))
+            .zip(chunks(spinning))
+            .collect();
+        self.threads.map(work, |((omega, w_pred), range)| {
+            for (a, i) in range.enumerate() {
+                let alpha = torque[i] / inertia[i];
+                omega[a] += 0.5 * dt * alpha;
+                w_pred[a] = omega[a] + 0.5 * dt * alpha;
+            }
+        });
         self.compute_forces()?;
         if let Some(before) = push_before {
             let after = self.wall_forces();
@@ -890,14 +1351,24 @@ impl CpuEngine {
             }
         }
         self.update_acceleration();
-        for i in 0..self.pos.len() {
-            if self.active[i] {
-                self.vel[i] += 0.5 * dt * self.acc[i];
+        let (acc, active) = (&self.acc, &self.active);
+        let work: Vec<_> = self.vel.chunks_mut(CHUNK).zip(chunks(n)).collect();
+        self.threads.map(work, |(vel, range)| {
+            for (a, i) in range.enumerate() {
+                if active[i] {
+                    vel[a] += 0.5 * dt * acc[i];
+                }
             }
-        }
-        for i in 0..self.omega.len() {
-            self.omega[i] += 0.5 * dt * self.torque[i] / self.inertia[i];
-        }
+        });
+        let (torque, inertia) = (&self.torque, &self.inertia);
+        let work: Vec<_> = (self.omega.chunks_mut(CHUNK))
+            .zip(chunks(spinning))
+            .collect();
+        self.threads.map(work, |(omega, range)| {
+            for (a, i) in range.enumerate() {
+                omega[a] += 0.5 * dt * torque[i] / inertia[i];
+            }
+        });
         self.time += dt;
         self.steps += 1;
         Ok(())
@@ -1019,103 +1490,83 @@ impl CpuEngine {
             .map(|(w, r)| (w.point - *r).length())
             .fold(0.0f64, f64::max);
         let any_periodic = self.periodic.iter().any(|&p| p);
-        let (mut m1, mut m2) = (0.0f64, 0.0f64);
-        for i in 0..self.pos.len() {
-            if !self.active[i] {
-                continue;
-            }
-            let mut d = self.pos[i] - self.pos_ref[i];
-            if any_periodic {
-                d = minimum_image(d, self.periodic, self.domain);
-            }
-            let d2 = d.length_squared();
-            if d2.is_nan() {
-                return true;
-            }
-            if d2 > m2 {
-                if d2 > m1 {
-                    m2 = m1;
-                    m1 = d2;
-                } else {
-                    m2 = d2;
+        // the two largest squared displacements of each chunk (None: one is NaN)
+        let (pos, pos_ref, active) = (&self.pos, &self.pos_ref, &self.active);
+        let (periodic, domain) = (self.periodic, self.domain);
+        let tops = self.threads.map(chunks(pos.len()).collect(), |range| {
+            let mut top = [0.0f64; 2];
+            for i in range {
+                if !active[i] {
+                    continue;
                 }
+                let mut d = pos[i] - pos_ref[i];
+                if any_periodic {
+                    d = minimum_image(d, periodic, domain);
+                }
+                let d2 = d.length_squared();
+                if d2.is_nan() {
+                    return None;
+                }
+                push_top(&mut top, d2);
             }
+            Some(top)
+        });
+        let (mut m1, mut m2) = (0.0f64, 0.0f64);
+        for top in tops {
+            let Some(top) = top else {
+                return true;
+            };
+            let mut both = [m1, m2];
+            push_top(&mut both, top[0]);
+            push_top(&mut both, top[1]);
+            [m1, m2] = both;
         }
         m1.sqrt() + m2.sqrt().max(wall_moved) >= 0.99 * self.skin
     }
 
     /// Rebuilds the pair list from the positions now: every active pair closer than
     /// r_i + r_j + reach + skin, and every contact of the old list (with its record),
-    /// in key order.
+    /// in key order. Chunks of particles are searched in parallel and joined in order.
     fn rebuild_list(&mut self) {
         let n = self.pos.len();
         self.grid.rebuild(&self.pos);
         // the old list is freed after the merge (not kept for its allocations: the list is
         // most of the engine's memory, and rebuilds are rare)
         let old = std::mem::take(&mut self.pairs);
+        let search = Search {
+            pos: &self.pos,
+            radius: &self.radius,
+            active: &self.active,
+            cutoff_pad: &self.cutoff_pad,
+            skin: self.skin,
+            periodic: self.periodic,
+            domain: self.domain,
+            grid: &self.grid,
+            old: &old,
+        };
+        let parts = self
+            .threads
+            .map(chunks(n).collect(), |range| search.chunk(range));
+        let total: usize = parts.iter().map(|p| p.partner.len()).sum();
         let mut new = PairList {
             start: Vec::with_capacity(n + 1),
-            partner: Vec::with_capacity(old.partner.len()),
-            live: Vec::with_capacity(old.partner.len()),
-            record: Vec::with_capacity(old.partner.len()),
+            partner: Vec::with_capacity(total),
+            live: Vec::with_capacity(total),
+            record: Vec::with_capacity(total),
+            ..Default::default()
         };
         new.start.push(0);
-        let mut cand = std::mem::take(&mut self.candidates);
-        let any_periodic = self.periodic.iter().any(|&p| p);
-        let (pos, radius, active) = (&self.pos, &self.radius, &self.active);
-        let (periodic, domain) = (self.periodic, self.domain);
-        for i in 0..n {
-            cand.clear();
-            if active[i] {
-                let pi = pos[i];
-                let pad = self.cutoff_pad[i] + self.skin;
-                self.grid.for_each_near(pi, |j| {
-                    if j > i && active[j] {
-                        let mut d = pi - pos[j];
-                        if any_periodic {
-                            d = minimum_image(d, periodic, domain);
-                        }
-                        let reach = pad + radius[j];
-                        if d.length_squared() < reach * reach {
-                            cand.push(j as u32);
-                        }
-                    }
-                });
-                cand.sort_unstable();
+        for part in parts {
+            for count in part.counts {
+                new.start
+                    .push(new.start.last().copied().unwrap_or(0) + count);
             }
-            // the union of the candidates and the old list's contacts, both sorted
-            let (mut a, mut b) = (0, old.start.get(i).copied().unwrap_or(0));
-            let end = old.start.get(i + 1).copied().unwrap_or(b);
-            loop {
-                while b < end && !old.live[b] {
-                    b += 1;
-                }
-                let kept = (b < end).then(|| old.partner[b]);
-                let next = cand.get(a).copied();
-                let (j, record) = match (next, kept) {
-                    (None, None) => break,
-                    (Some(c), Some(o)) if c == o => {
-                        a += 1;
-                        b += 1;
-                        (c, Some(old.record[b - 1]))
-                    }
-                    (Some(c), o) if o.is_none_or(|o| c < o) => {
-                        a += 1;
-                        (c, None)
-                    }
-                    (_, Some(o)) => {
-                        b += 1;
-                        (o, Some(old.record[b - 1]))
-                    }
-                    (Some(_), None) => unreachable!(),
-                };
-                new.partner.push(j);
-                new.live.push(record.is_some());
-                new.record.push(record.unwrap_or_default());
-            }
-            new.start.push(new.partner.len());
+            new.partner.extend(part.partner);
+            new.live.extend(part.live);
+            new.record.extend(part.record);
         }
-        self.candidates = cand;
+        new.index_incoming();
+        drop(old);
         self.pairs = new;
         self.rebuild_wall_candidates();
         self.pos_ref.clone_from(&self.pos);
@@ -1153,248 +1604,209 @@ impl CpuEngine {
     }
 
     /// Forces of the particle pairs of the list (visited in key order) for the predicted
-    /// velocities; returns the energy they dissipated over the step.
+    /// velocities; returns the step's log of them. Chunks of particles evaluate their
+    /// entries in parallel (each entry's force kept), then each particle sums the forces
+    /// of the entries naming it, in key order, before its own: the bits of a serial sweep.
     /// `ROT`: particles rotate (`w_pred` holds their angular velocities).
     #[inline(never)]
-    fn pair_forces<const ROT: bool>(
-        &mut self,
-        v_pred: &[DVec3],
-        w_pred: &[DVec3],
-        failure: &mut Option<String>,
-    ) -> f64 {
-        let rotation = ROT;
-        let omega_of = |i: usize| if ROT { w_pred[i] } else { DVec3::ZERO };
-        let mut log = StepLog::new(self.dt, self.peak, failure);
+    fn pair_forces<const ROT: bool>(&mut self, v_pred: &[DVec3], w_pred: &[DVec3]) -> StepLog {
+        let n = self.pos.len();
+        let PairList {
+            start,
+            partner,
+            live,
+            record,
+            in_start,
+            incoming,
+        } = &mut self.pairs;
+        let entries = partner.len();
+        self.entry_force.resize(entries, DVec3::ZERO);
+        self.own_force.resize(n, DVec3::ZERO);
+        if ROT {
+            self.entry_torque.resize(entries, DVec3::ZERO);
+            self.own_torque.resize(n, DVec3::ZERO);
+        }
+        // each chunk's particles and entries, as disjoint mutable slices
+        let mut work = Vec::with_capacity(n.div_ceil(CHUNK));
         {
-            let pos = &self.pos;
-            let radius = &self.radius;
-            let pad = &self.cutoff_pad;
-            let force = &mut self.force;
-            let torque = &mut self.torque;
-            let (periodic, domain) = (self.periodic, self.domain);
-            let any_periodic = periodic.iter().any(|&p| p);
-            let (models, nm, mass, material) =
-                (&self.models, self.n_materials, &self.mass, &self.material);
-            let ranges = &self.ranges;
-            let list = &mut self.pairs;
-            for i in 0..pos.len() {
-                let (s, e) = (list.start[i], list.start[i + 1]);
-                if s == e {
-                    continue;
-                }
-                let (pi, ri, pad_i, mi) = (pos[i], radius[i], pad[i], material[i] * nm);
-                let (vi, wi) = (v_pred[i], omega_of(i));
-                // i's own sums, added to force[i] once
-                let (mut fi, mut ti) = (DVec3::ZERO, DVec3::ZERO);
-                // the pair geometry and rolling factor of the last partner's radius and
-                // mass (the same values: partners of a packing share them)
-                let mut shape: Option<(u64, u64, PairGeometry, f64)> = None;
-                for k in s..e {
-                    let j = list.partner[k] as usize;
-                    let mut d = pi - pos[j];
-                    if any_periodic {
-                        d = minimum_image(d, periodic, domain);
-                    }
-                    let dist2 = d.length_squared();
-                    let reach = pad_i + radius[j];
-                    let live = list.live[k];
-                    if dist2 >= reach * reach {
-                        if live {
-                            log.depart(&list.record[k], ri + radius[j] - dist2.sqrt());
-                            list.live[k] = false;
-                        }
-                        continue;
-                    }
-                    let dist = dist2.sqrt();
-                    let delta = ri + radius[j] - dist;
-                    let (model, range) = (&models[mi + material[j]], ranges[mi + material[j]]);
-                    if delta <= -range && !live {
-                        continue;
-                    }
-                    let prior = live.then(|| &list.record[k]);
-                    let n = if dist > 0.0 { d / dist } else { DVec3::Z };
-                    let (geom, roll) = match shape {
-                        Some((r, m, g, roll))
-                            if r == radius[j].to_bits() && m == mass[j].to_bits() =>
-                        {
-                            (g, roll)
-                        }
-                        _ => {
-                            let g = PairGeometry::spheres(ri, radius[j], mass[i], mass[j]);
-                            let roll = 0.5 * (ri - radius[j]) / (ri + radius[j]);
-                            shape = Some((radius[j].to_bits(), mass[j].to_bits(), g, roll));
-                            (g, roll)
-                        }
-                    };
-                    let wj = omega_of(j);
-                    let v_rel = vi - v_pred[j];
-                    let v_c = if ROT {
-                        v_rel - ri * wi.cross(n) - radius[j] * wj.cross(n)
-                    } else {
-                        v_rel
-                    };
-                    let v_t = v_c - n * v_c.dot(n);
-                    // rolling needs rotation: no model reads v_roll without it
-                    let v_roll = if ROT {
-                        geom.r_eff() * (wi - wj).cross(n) + roll * v_t
-                    } else {
-                        DVec3::ZERO
-                    };
-                    let contact = Contact {
-                        model,
-                        geom,
-                        kin: Kinematics {
-                            delta,
-                            delta_dot: -v_rel.dot(n),
-                            n,
-                            v_t,
-                            v_roll,
-                            omega_rel: wi - wj,
-                        },
-                        i,
-                        partner: Partner::Particle(j),
-                    };
-                    let r = log.contact(contact, prior);
-                    let f = r.force * n + r.tangential;
-                    fi += f;
-                    force[j] -= f;
-                    if rotation {
-                        let t = n.cross(r.tangential);
-                        ti += -ri * t + r.couple;
-                        torque[j] += -radius[j] * t - r.couple;
-                    }
-                    let keep = r.stays(range);
-                    if keep {
-                        list.record[k] = r;
-                    }
-                    list.live[k] = keep;
-                }
-                force[i] += fi;
-                if rotation {
-                    torque[i] += ti;
-                }
+            let (mut rec, mut liv) = (&mut record[..], &mut live[..]);
+            let (mut ef, mut et) = (&mut self.entry_force[..], &mut self.entry_torque[..]);
+            let (mut of, mut ot) = (&mut self.own_force[..], &mut self.own_torque[..]);
+            for range in chunks(n) {
+                let e = start[range.end] - start[range.start];
+                let p = range.len();
+                let t = if ROT { e } else { 0 };
+                let tp = if ROT { p } else { 0 };
+                let (r0, r1) = std::mem::take(&mut rec).split_at_mut(e);
+                let (l0, l1) = std::mem::take(&mut liv).split_at_mut(e);
+                let (f0, f1) = std::mem::take(&mut ef).split_at_mut(e);
+                let (t0, t1) = std::mem::take(&mut et).split_at_mut(t);
+                let (o0, o1) = std::mem::take(&mut of).split_at_mut(p);
+                let (q0, q1) = std::mem::take(&mut ot).split_at_mut(tp);
+                (rec, liv, ef, et, of, ot) = (r1, l1, f1, t1, o1, q1);
+                work.push(PairChunk {
+                    range,
+                    record: r0,
+                    live: l0,
+                    entry_force: f0,
+                    entry_torque: t0,
+                    own_force: o0,
+                    own_torque: q0,
+                });
             }
         }
-        self.peak = log.peak;
-        log.total()
+        let inputs = PairInputs {
+            pos: &self.pos,
+            radius: &self.radius,
+            pad: &self.cutoff_pad,
+            mass: &self.mass,
+            material: &self.material,
+            models: &self.models,
+            ranges: &self.ranges,
+            n_materials: self.n_materials,
+            periodic: self.periodic,
+            domain: self.domain,
+            start,
+            partner,
+            v_pred,
+            w_pred,
+            dt: self.dt,
+        };
+        let logs = self.threads.map(work, |c| inputs.chunk::<ROT>(c));
+        let mut log = StepLog::new(self.dt, self.peak);
+        for l in logs {
+            log.append(l);
+        }
+        // each particle's force: the entries naming it (key order), then its own sum
+        let (start, in_start, incoming) = (&*start, &*in_start, &*incoming);
+        let (entry_force, entry_torque) = (&self.entry_force, &self.entry_torque);
+        let (own_force, own_torque) = (&self.own_force, &self.own_torque);
+        let torque_chunks: Vec<&mut [DVec3]> = if ROT {
+            self.torque.chunks_mut(CHUNK).collect()
+        } else {
+            chunks(n).map(|_| <&mut [DVec3]>::default()).collect()
+        };
+        let gather: Vec<_> = self
+            .force
+            .chunks_mut(CHUNK)
+            .zip(torque_chunks)
+            .zip(chunks(n))
+            .collect();
+        self.threads.map(gather, |((force, torque), range)| {
+            for (a, j) in range.enumerate() {
+                let (s, e) = (in_start[j], in_start[j + 1]);
+                let mut f = DVec3::ZERO;
+                let mut t = DVec3::ZERO;
+                for &k in &incoming[s..e] {
+                    f -= entry_force[k as usize];
+                    if ROT {
+                        t += entry_torque[k as usize];
+                    }
+                }
+                if start[j] != start[j + 1] {
+                    f += own_force[j];
+                    if ROT {
+                        t += own_torque[j];
+                    }
+                }
+                force[a] = f;
+                if ROT {
+                    torque[a] = t;
+                }
+            }
+        });
+        log
     }
 
     /// Forces of the wall contacts (visited in key order (wall, particle), merged with the
-    /// old list); returns the energy they dissipated over the step.
+    /// old list); returns the step's log of them. The candidates are cut into pieces
+    /// evaluated in parallel; their forces are added in key order afterwards.
     #[inline(never)]
-    fn wall_contact_forces(
-        &mut self,
-        v_pred: &[DVec3],
-        w_pred: &[DVec3],
-        failure: &mut Option<String>,
-    ) -> f64 {
-        let rotation = !w_pred.is_empty();
-        let omega_of = |i: usize| if rotation { w_pred[i] } else { DVec3::ZERO };
-        let mut log = StepLog::new(self.dt, self.peak, failure);
-        // the wall contacts, visited in key order (wall, particle) and merged with the old
+    fn wall_contact_forces(&mut self, v_pred: &[DVec3], w_pred: &[DVec3]) -> StepLog {
         let old = std::mem::take(&mut self.wall_contacts);
-        let mut new = std::mem::take(&mut self.spare_walls);
-        new.clear();
-        let mut cursor = 0;
-        for (w, wall) in self.walls.iter().enumerate() {
-            let n = wall.normal;
-            // the others are out of range and not in contact: skipped anyway
-            let candidates = &self.wall_candidates[self.wall_start[w]..self.wall_start[w + 1]];
-            for &i in candidates {
-                let i = i as usize;
-                let key = (w as u32, i as u32);
-                self.leave_walls(&mut log, &old, &mut cursor, Some(key));
-                let prior = if old.key.get(cursor) == Some(&key) {
-                    cursor += 1;
-                    Some(&old.record[cursor - 1])
-                } else {
-                    None
-                };
-                // relative to the (possibly moving) wall
-                let v = v_pred[i] - wall.velocity;
-                let delta = self.radius[i] - (self.pos[i] - wall.point).dot(n);
-                let m = w * self.n_materials + self.material[i];
-                let (model, range) = (&self.wall_models[m], self.wall_ranges[m]);
-                if delta <= -range && prior.is_none() {
-                    continue;
-                }
-                let geom = PairGeometry::wall(self.radius[i], self.mass[i]);
-                let wi = omega_of(i);
-                let v_c = v - self.radius[i] * wi.cross(n);
-                let v_t = v_c - n * v_c.dot(n);
-                let contact = Contact {
-                    model,
-                    geom,
-                    kin: Kinematics {
-                        delta,
-                        delta_dot: -v.dot(n),
-                        n,
-                        v_t,
-                        // eq. 20 with r_j → ∞: (r_i − r_j)/(r_i + r_j) → −1
-                        v_roll: geom.r_eff() * wi.cross(n) - 0.5 * v_t,
-                        omega_rel: wi,
-                    },
-                    i,
-                    partner: Partner::Wall(w),
-                };
-                let r = log.contact(contact, prior);
-                self.force[i] += r.force * n + r.tangential;
-                if rotation {
-                    self.torque[i] += -self.radius[i] * n.cross(r.tangential) + r.couple;
-                }
-                if r.stays(range) {
-                    new.key.push(key);
-                    new.record.push(r);
-                }
+        // pieces of at most CHUNK candidates of one wall, each booking the old contacts
+        // from its first key up to the next piece's (the first from the start, the last
+        // to the end): together every old contact, once
+        let mut pieces: Vec<(usize, std::ops::Range<usize>)> = Vec::new();
+        for w in 0..self.walls.len() {
+            let (s, e) = (self.wall_start[w], self.wall_start[w + 1]);
+            for c in (s..e).step_by(CHUNK) {
+                pieces.push((w, c..(c + CHUNK).min(e)));
             }
         }
-        self.leave_walls(&mut log, &old, &mut cursor, None);
+        if pieces.is_empty() {
+            pieces.push((0, 0..0));
+        }
+        let first_old = |p: usize| match pieces.get(p) {
+            _ if p == 0 => 0,
+            None => old.key.len(),
+            Some((w, r)) => {
+                let key = (*w as u32, self.wall_candidates[r.start]);
+                old.key.partition_point(|k| *k < key)
+            }
+        };
+        let work: Vec<WallPiece> = (0..pieces.len())
+            .map(|p| WallPiece {
+                wall: pieces[p].0,
+                candidates: pieces[p].1.clone(),
+                old: first_old(p)..first_old(p + 1),
+            })
+            .collect();
+        let inputs = WallInputs {
+            pos: &self.pos,
+            radius: &self.radius,
+            mass: &self.mass,
+            material: &self.material,
+            n_materials: self.n_materials,
+            walls: &self.walls,
+            wall_models: &self.wall_models,
+            wall_ranges: &self.wall_ranges,
+            candidates: &self.wall_candidates,
+            old: &old,
+            v_pred,
+            w_pred,
+            dt: self.dt,
+        };
+        let outs = self.threads.map(work, |piece| inputs.piece(piece));
+        let mut log = StepLog::new(self.dt, self.peak);
+        let mut new = std::mem::take(&mut self.spare_walls);
+        new.clear();
+        let rotation = !w_pred.is_empty();
+        for out in outs {
+            for (i, f, t) in out.pushes {
+                self.force[i as usize] += f;
+                if rotation {
+                    self.torque[i as usize] += t;
+                }
+            }
+            new.key.extend(out.kept.key);
+            new.record.extend(out.kept.record);
+            log.append(out.log);
+        }
         self.wall_contacts = new;
         self.spare_walls = old;
         self.peak = log.peak;
-        log.total()
-    }
-
-    /// Books the old wall contacts from `cursor` on that come before `key` (all of them
-    /// for None): the step does not visit them (none while particles stay active), so
-    /// they left.
-    #[inline(always)]
-    fn leave_walls(
-        &self,
-        log: &mut StepLog,
-        old: &WallList,
-        cursor: &mut usize,
-        key: Option<(u32, u32)>,
-    ) {
-        while *cursor < old.key.len() && key.is_none_or(|k| old.key[*cursor] < k) {
-            let (w, i) = old.key[*cursor];
-            log.depart(
-                &old.record[*cursor],
-                self.wall_overlap(w as usize, i as usize),
-            );
-            *cursor += 1;
-        }
+        log
     }
 
     fn compute_forces(&mut self) -> Result<(), PowderError> {
-        self.force.iter_mut().for_each(|f| *f = DVec3::ZERO);
-        self.torque.iter_mut().for_each(|t| *t = DVec3::ZERO);
+        // the pair forces overwrite every force and torque, the walls' add to them
         if self.list_stale() {
             self.rebuild_list();
         }
         let v_pred = std::mem::take(&mut self.v_pred);
         let w_pred = std::mem::take(&mut self.w_pred);
-        let mut failure = None;
-        let mut dissipated = if w_pred.is_empty() {
-            self.pair_forces::<false>(&v_pred, &w_pred, &mut failure)
+        let pairs = if w_pred.is_empty() {
+            self.pair_forces::<false>(&v_pred, &w_pred)
         } else {
-            self.pair_forces::<true>(&v_pred, &w_pred, &mut failure)
+            self.pair_forces::<true>(&v_pred, &w_pred)
         };
-        dissipated += self.wall_contact_forces(&v_pred, &w_pred, &mut failure);
+        self.peak = pairs.peak;
+        let walls = self.wall_contact_forces(&v_pred, &w_pred);
         self.v_pred = v_pred;
         self.w_pred = w_pred;
-        self.dissipated += dissipated;
-        if let Some(msg) = failure {
+        self.dissipated += pairs.total() + walls.total();
+        if let Some(msg) = pairs.failure.or(walls.failure) {
             return Err(PowderError::Run(format!(
                 "step {} (t = {:e} s): {msg}; the time step may be too large for the stiffest contact ({})",
                 self.steps + 1,

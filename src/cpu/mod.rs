@@ -2,5 +2,7 @@
 
 pub mod cells;
 pub mod engine;
+pub mod threads;
 
 pub use engine::{ContactStats, CpuEngine, CpuState, Energies, Partner};
+pub use threads::Threads;

@@ -1,0 +1,78 @@
+//! Which engine a command runs on. `auto` takes a hardware GPU when there is one and the
+//! CPU engine (on every core) otherwise: the software adapter is slower than the CPU
+//! engine, so it runs only when asked for (`--backend gpu`, or `POWDER_ADAPTER` set).
+
+use crate::gpu::context::{enumerate_adapters, ADAPTER_ENV};
+use crate::gpu::{AdapterPreference, GpuContext};
+use crate::PowderError;
+
+/// What the user asked for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BackendRequest {
+    /// A hardware GPU if present, else the CPU engine.
+    Auto,
+    /// The CPU engine.
+    Cpu,
+    /// The GPU engine on the adapter `POWDER_ADAPTER` picks (the software one if no other).
+    Gpu,
+}
+
+/// The engine chosen, and why.
+pub struct Chosen {
+    /// The device of the GPU engine; `None`: the CPU engine.
+    pub gpu: Option<GpuContext>,
+    /// Why, in a sentence for stderr and the summary.
+    pub reason: String,
+}
+
+/// Chooses the engine for `request`. `--backend gpu` without any adapter falls back to the
+/// CPU engine (saying so in the reason); an adapter `POWDER_ADAPTER` names that cannot be
+/// opened is an error.
+pub fn choose(request: BackendRequest) -> Result<Chosen, PowderError> {
+    let gpu = |ctx: GpuContext, why: String| Chosen {
+        reason: format!("{why}: {}", ctx.summary),
+        gpu: Some(ctx),
+    };
+    match request {
+        BackendRequest::Cpu => Ok(Chosen {
+            gpu: None,
+            reason: "--backend cpu".into(),
+        }),
+        BackendRequest::Gpu => match GpuContext::new() {
+            Ok(ctx) => Ok(gpu(ctx, "--backend gpu".into())),
+            Err(e) => Ok(Chosen {
+                gpu: None,
+                reason: format!("--backend gpu, but {e}; the CPU engine runs instead"),
+            }),
+        },
+        BackendRequest::Auto => {
+            let pref = AdapterPreference::from_env();
+            if pref != AdapterPreference::Auto {
+                let ctx = GpuContext::with_preference(&pref)?;
+                let value = std::env::var(ADAPTER_ENV).unwrap_or_default();
+                return Ok(gpu(ctx, format!("{ADAPTER_ENV}={value}")));
+            }
+            let found: Vec<String> = enumerate_adapters()
+                .iter()
+                .map(|a| {
+                    let info = a.get_info();
+                    format!("{} ({:?})", info.name, info.device_type)
+                })
+                .collect();
+            match GpuContext::with_preference(&AdapterPreference::Hardware) {
+                Ok(ctx) => Ok(gpu(ctx, "--backend auto found a hardware GPU".into())),
+                Err(_) => Ok(Chosen {
+                    gpu: None,
+                    reason: format!(
+                        "--backend auto found no hardware GPU ({}): the CPU engine, faster here than the software adapter (--backend gpu runs that)",
+                        if found.is_empty() {
+                            "no adapter at all".to_string()
+                        } else {
+                            format!("adapters: {}", found.join(", "))
+                        }
+                    ),
+                }),
+            }
+        }
+    }
+}

@@ -1,0 +1,106 @@
+//! The CPU engine's work split over cores: particles in fixed chunks of [`CHUNK`], each
+//! chunk's work done whole by one thread, and per-chunk results combined in chunk order.
+//! The chunks, not the threads, fix every summation order, so a run gives the same bits
+//! on any number of threads.
+
+use crate::error::PowderError;
+use rayon::prelude::*;
+use std::ops::Range;
+use std::sync::Arc;
+
+/// Particles per chunk. Fixed (never derived from the thread count): it decides the order
+/// of the reductions, hence the bits of the results.
+pub const CHUNK: usize = 512;
+
+/// The particle ranges of the chunks over `n` particles.
+pub fn chunks(n: usize) -> impl ExactSizeIterator<Item = Range<usize>> + Clone {
+    (0..n.div_ceil(CHUNK)).map(move |c| c * CHUNK..((c + 1) * CHUNK).min(n))
+}
+
+/// How many threads a CPU engine uses, and the pool they come from.
+#[derive(Clone, Debug)]
+pub struct Threads {
+    /// `None`: the current rayon pool (rayon's global pool: all cores unless configured).
+    pool: Option<Arc<rayon::ThreadPool>>,
+    count: usize,
+}
+
+impl Default for Threads {
+    /// Every core, through rayon's global pool.
+    fn default() -> Self {
+        Self {
+            pool: None,
+            count: rayon::current_num_threads(),
+        }
+    }
+}
+
+impl Threads {
+    /// `count` threads of a pool of their own; 0 means every core ([`Threads::default`]),
+    /// 1 runs on the calling thread without a pool.
+    pub fn new(count: usize) -> Result<Self, PowderError> {
+        match count {
+            0 => Ok(Self::default()),
+            1 => Ok(Self {
+                pool: None,
+                count: 1,
+            }),
+            _ => {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(count)
+                    .thread_name(|i| format!("powder-cpu-{i}"))
+                    .build()
+                    .map_err(|e| {
+                        PowderError::Run(format!("cannot start {count} CPU threads: {e}"))
+                    })?;
+                Ok(Self {
+                    pool: Some(Arc::new(pool)),
+                    count,
+                })
+            }
+        }
+    }
+
+    /// The number of threads.
+    pub fn count(&self) -> usize {
+        self.count
+    }
+
+    /// `f` applied to every item, results in item order: on the calling thread with one
+    /// thread or one item, otherwise spread over the threads (each item whole on one).
+    pub fn map<T: Send, R: Send>(&self, items: Vec<T>, f: impl Fn(T) -> R + Sync) -> Vec<R> {
+        if self.count <= 1 || items.len() <= 1 {
+            return items.into_iter().map(f).collect();
+        }
+        let work = || items.into_par_iter().with_max_len(1).map(&f).collect();
+        match &self.pool {
+            Some(pool) => pool.install(work),
+            None => work(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn chunks_cover_every_particle_once_in_order() {
+        for n in [0, 1, CHUNK - 1, CHUNK, CHUNK + 1, 5 * CHUNK + 3] {
+            let all: Vec<usize> = chunks(n).flatten().collect();
+            assert_eq!(all, (0..n).collect::<Vec<_>>());
+            assert!(chunks(n).all(|r| !r.is_empty() && r.len() <= CHUNK));
+        }
+    }
+
+    #[test]
+    fn map_keeps_item_order_on_any_thread_count() {
+        let items: Vec<usize> = (0..1000).collect();
+        let want: Vec<usize> = items.iter().map(|x| x * x).collect();
+        for t in [1, 2, 3] {
+            let threads = Threads::new(t).unwrap();
+            assert_eq!(threads.count(), t);
+            assert_eq!(threads.map(items.clone(), |x| x * x), want);
+        }
+    }
+}

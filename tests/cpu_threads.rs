@@ -1,0 +1,100 @@
+//! The CPU engine spread over threads: the same bits on any thread count.
+
+use powder::bench::{packing, Case};
+use powder::cpu::threads::CHUNK;
+use powder::cpu::{CpuEngine, Threads};
+use powder::scene::Scene;
+use std::process::Command;
+
+/// Runs `scene` for `steps` on `threads` threads; returns the checkpoint state's bytes.
+fn state_after(scene: &Scene, threads: usize, steps: u64) -> Vec<u8> {
+    let mut e = CpuEngine::new(scene).unwrap();
+    e.set_threads(Threads::new(threads).unwrap());
+    assert_eq!(e.threads(), threads);
+    e.run_steps(steps).unwrap();
+    let energies = e.energies();
+    let mut bytes = bincode::serialize(&e.state()).unwrap();
+    bytes.extend(serde_json::to_vec(&energies).unwrap());
+    bytes
+}
+
+fn same_on_1_2_and_3_threads(scene: &Scene, steps: u64) {
+    // several chunks, or the test would prove nothing
+    assert!(scene.particles.len() > 3 * CHUNK);
+    let one = state_after(scene, 1, steps);
+    for t in [2, 3] {
+        assert!(
+            one == state_after(scene, t, steps),
+            "{t} threads differ from 1"
+        );
+    }
+}
+
+#[test]
+fn jkr_packing_with_rotation_and_walls_is_bitwise_the_same_on_any_thread_count() {
+    // fast random velocities: contacts form and break, the lists are rebuilt
+    let scene = packing(Case::Jkr, 2500, 20.0, 3).unwrap();
+    same_on_1_2_and_3_threads(&scene, 120);
+}
+
+#[test]
+fn hysteretic_packing_is_bitwise_the_same_on_any_thread_count() {
+    let scene = packing(Case::Hysteretic, 2500, 20.0, 4).unwrap();
+    same_on_1_2_and_3_threads(&scene, 200);
+}
+
+#[test]
+fn run_checkpoints_are_the_same_with_1_and_2_threads() {
+    let dir = tempfile::tempdir().unwrap();
+    let cluster = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/examples/cohesive_cluster.toml"
+    );
+    let run = |threads: &str| {
+        let out = dir.path().join(format!("t{threads}"));
+        let status = Command::new(env!("CARGO_BIN_EXE_powder"))
+            .args([
+                "run",
+                cluster,
+                "--backend",
+                "cpu",
+                "--threads",
+                threads,
+                "--steps",
+                "6000",
+                // 1600 smaller spheres (several chunks) under stronger gravity: a heap
+                // with ~2200 contacts by the end
+                "--set",
+                "particles[0].count=1600",
+                "--set",
+                "particles[0].radius=5e-4",
+                "--set",
+                "particles[0].max=[0.019,0.019,0.02]",
+                "--set",
+                "simulation.gravity=[0.0,0.0,-200.0]",
+                "--set",
+                "simulation.output_every=2000",
+                "--out",
+            ])
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(
+            status.status.success(),
+            "{}",
+            String::from_utf8_lossy(&status.stderr)
+        );
+        let summary: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+        assert_eq!(summary["threads"], threads.parse::<u64>().unwrap());
+        assert!(summary["last"]["contacts"]["contacts"].as_u64().unwrap() > 1000);
+        (
+            std::fs::read(out.join("checkpoint.bin")).unwrap(),
+            std::fs::read(out.join("series.csv")).unwrap(),
+        )
+    };
+    let one = run("1");
+    let two = run("2");
+    assert!(one.0 == two.0, "the checkpoints of 1 and 2 threads differ");
+    assert!(one.1 == two.1, "the series of 1 and 2 threads differ");
+}
