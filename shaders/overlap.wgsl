@@ -48,8 +48,10 @@ struct Df3 {
 
 // The periods a nearest-image cell difference added to the raw one, per axis (−1, 0, 1).
 fn image_shift(image: vec3<i32>, raw: vec3<i32>) -> vec3<f32> {
-    // (in f32: the quotient of two small integers is exact; no signed integer division)
-    return vec3<f32>(image - raw) / vec3<f32>(grid.dims);
+    // |d| / dims of non-negative integers: exact (f32 division may be 2.5 ULP off, and
+    // GLSL leaves the signed integer division undefined)
+    let d = image - raw;
+    return vec3<f32>(sign(d) * (abs(d) / vec3<i32>(grid.dims)));
 }
 
 // x_i − x_j from cell differences `dc` (nearest image, `shift` periods from the raw one),

@@ -1161,6 +1161,21 @@ fn arrays_over_the_binding_limit_are_refused() {
         .expect("arrays over the binding limit are refused");
     let msg = err.to_string();
     assert!(msg.contains("storage binding limit of 8000 bytes"), "{msg}");
+    // lists that fit, a particle state that does not (80 bytes a particle): refused by
+    // name before anything is written into it
+    let small = GpuContext::with_storage_binding_limit(70_000).unwrap();
+    let options = GpuOptions {
+        list_entries: Some(1),
+        ..options
+    };
+    let err = GpuEngine::with_options(&scene, small, options)
+        .err()
+        .expect("a state over the binding limit is refused");
+    let msg = err.to_string();
+    assert!(
+        msg.contains("`A.state`") && msg.contains("limit of 70000 bytes"),
+        "{msg}"
+    );
 }
 
 /// The force pass reads the particles' state from texture mirrors, `MIRROR_WIDTH` (4096)

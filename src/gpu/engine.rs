@@ -84,24 +84,39 @@ const CONTROL_BYTES: u64 = SKIN_OFFSET + 16;
 pub const STEPS_PER_SUBMIT: u64 = 64;
 
 /// Creates storage buffers and records their names and sizes (for [`GpuEngine::buffers`]).
+/// A buffer over the storage binding limit (every buffer is bound whole; u32 word indices)
+/// is not created: a 4-byte stand-in takes its place and [`Allocator::check`] refuses.
 struct Allocator<'a> {
     device: &'a wgpu::Device,
     list: Vec<(String, u64)>,
+    /// The largest binding a buffer may be, bytes.
+    limit: u64,
 }
 
-impl Allocator<'_> {
+impl<'a> Allocator<'a> {
+    fn new(device: &'a wgpu::Device, limit: u64) -> Self {
+        Self {
+            device,
+            list: Vec::new(),
+            limit: limit.min(4 * u32::MAX as u64),
+        }
+    }
+
     fn buffer(&mut self, name: &str, bytes: u64) -> wgpu::Buffer {
-        let b = storage_buffer(self.device, name, bytes);
-        self.list.push((name.to_string(), b.size()));
+        let fits = bytes <= self.limit;
+        let b = storage_buffer(self.device, name, if fits { bytes } else { 4 });
+        self.list
+            .push((name.to_string(), if fits { b.size() } else { bytes }));
         b
     }
 
-    /// An error naming the largest buffer when it exceeds the storage binding `limit`
-    /// (every buffer is bound whole) for `particles` particles.
-    fn check(&self, limit: u64, particles: usize) -> Result<(), PowderError> {
+    /// An error naming the largest buffer when it exceeds the storage binding limit, for
+    /// `particles` particles. Call it before anything writes or binds the buffers.
+    fn check(&self, particles: usize) -> Result<(), PowderError> {
         match self.list.iter().max_by_key(|(_, b)| *b) {
-            Some((name, bytes)) if *bytes > limit => Err(PowderError::Run(format!(
-                "{particles} particles need {bytes} bytes of `{name}`, over the adapter's storage binding limit of {limit} bytes (arrays are not yet split over bindings)"
+            Some((name, bytes)) if *bytes > self.limit => Err(PowderError::Run(format!(
+                "{particles} particles need {bytes} bytes of `{name}`, over the adapter's storage binding limit of {} bytes (arrays are not yet split over bindings)",
+                self.limit
             ))),
             _ => Ok(()),
         }
@@ -765,16 +780,14 @@ impl GpuEngine {
             GridSort::with_cell_widths(&ctx, n as u32, dims, [h.x as f32, h.y as f32, h.z as f32])?;
         let device = &ctx.device;
         let n_walls = scene.walls.len() as u64;
-        let mut alloc = Allocator {
-            device,
-            list: vec![
-                ("grid.params".into(), grid.params().size()),
-                ("grid.keys".into(), grid.keys().size()),
-                ("grid.cell_count".into(), grid.cell_count().size()),
-                ("grid.cell_start".into(), grid.cell_start().size()),
-                ("grid.sorted_index".into(), grid.sorted_index().size()),
-            ],
-        };
+        let mut alloc = Allocator::new(device, ctx.max_storage_binding());
+        alloc.list = vec![
+            ("grid.params".into(), grid.params().size()),
+            ("grid.keys".into(), grid.keys().size()),
+            ("grid.cell_count".into(), grid.cell_count().size()),
+            ("grid.cell_start".into(), grid.cell_start().size()),
+            ("grid.sorted_index".into(), grid.sorted_index().size()),
+        ];
         // list entries: a first guess, grown by the first rebuild to what it needs
         let entries = options
             .list_entries
@@ -796,6 +809,8 @@ impl GpuEngine {
         let new_lists = NewLists::new(&mut alloc, entries, &kind, ledger);
         let dt32 = r.dt as f32;
         let particle_ledger = ledger.then(|| alloc.buffer("particle_ledger", 64 * n as u64));
+        // the per-particle buffers fit before the initial state is written into them
+        alloc.check(n)?;
         // Initial state, in scene order (the first sort orders it).
         let mut cells = Vec::with_capacity(n);
         let mut offs = Vec::with_capacity(n);
@@ -1049,7 +1064,7 @@ impl GpuEngine {
         let mirrors = Mirrors::new(device, n as u32, &mirrored)?;
         alloc.list.extend(mirrors.sizes());
         // (before anything binds them)
-        alloc.check(ctx.max_storage_binding(), n)?;
+        alloc.check(n)?;
         let permutation = Permutation::new(
             &ctx,
             grid.params(),
@@ -1086,10 +1101,8 @@ impl GpuEngine {
         let pouring = scene.particles.iter().any(|p| p.insert_at > 0.0);
         let mode = options.quiet.on(software);
         let quiet = (mode != QuietBatches::Off && !moving_walls && !pouring).then(|| {
-            let mut alloc = Allocator {
-                device,
-                list: Vec::new(),
-            };
+            // copies of buffers that fit
+            let mut alloc = Allocator::new(device, u64::MAX);
             // the state into copies of its own (the lists' history goes into the new lists':
             // `quiet_copies`)
             let mut copies = Vec::new();
@@ -1498,10 +1511,7 @@ impl GpuEngine {
             self.ctx.max_storage_binding(),
         )?;
         let device = &self.ctx.device;
-        let mut alloc = Allocator {
-            device,
-            list: Vec::new(),
-        };
+        let mut alloc = Allocator::new(device, self.ctx.max_storage_binding());
         let mut encoder = device.create_command_encoder(&Default::default());
         let old = (self.state.entries.clone(), self.entries);
         let new = alloc.buffer("A.entries", layout.bytes(entries, &[]));
