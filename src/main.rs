@@ -1085,6 +1085,7 @@ static INTERRUPTED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBoo
 const DEFAULT_SCENE: &str = include_str!("../examples/cohesive_cluster.toml");
 
 fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
+    let threads = powder::cpu::Threads::new(a.threads)?;
     let scene = match &a.scene {
         Some(path) => Scene::load_with(path, &a.set)?,
         None => {
@@ -1135,7 +1136,7 @@ fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
             ..Default::default()
         },
         tabor_dmin: a.tabor_dmin,
-        threads: powder::cpu::Threads::new(a.threads)?,
+        threads,
         backend_reason: Some(chosen.reason),
     };
     let summary = match gpu {

@@ -98,3 +98,47 @@ fn run_checkpoints_are_the_same_with_1_and_2_threads() {
     assert!(one.0 == two.0, "the checkpoints of 1 and 2 threads differ");
     assert!(one.1 == two.1, "the series of 1 and 2 threads differ");
 }
+
+#[test]
+fn auto_backend_says_what_it_chose_and_why() {
+    let out = Command::new(env!("CARGO_BIN_EXE_powder"))
+        .args(["run", "--steps", "20", "--no-output", "--json"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let summary: serde_json::Value =
+        serde_json::from_str(&stdout[stdout.find('{').unwrap()..]).unwrap();
+    let reason = summary["backend_reason"].as_str().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains(&format!("backend: {reason}")), "{stderr}");
+    match summary["backend"].as_str().unwrap() {
+        // no hardware GPU (CI): the CPU engine on every core
+        "cpu" => {
+            assert!(reason.contains("no hardware GPU"), "{reason}");
+            assert!(summary["threads"].as_u64().unwrap() >= 1);
+        }
+        // a hardware GPU, or the adapter POWDER_ADAPTER names
+        _ => assert!(
+            reason.contains("hardware GPU") || reason.contains("POWDER_ADAPTER"),
+            "{reason}"
+        ),
+    }
+}
+
+#[test]
+fn bad_thread_counts_are_refused_with_the_option_named() {
+    for (cmd, value) in [("run", "x"), ("bench", "1,x"), ("run", "5000")] {
+        let out = Command::new(env!("CARGO_BIN_EXE_powder"))
+            .args([cmd, "--threads", value, "--backend", "cpu", "--steps", "1"])
+            .output()
+            .unwrap();
+        assert!(!out.status.success());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains("threads"), "{cmd} --threads {value}: {err}");
+    }
+}

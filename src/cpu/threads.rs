@@ -17,6 +17,9 @@ pub fn chunks(n: usize) -> impl ExactSizeIterator<Item = Range<usize>> + Clone {
     (0..n.div_ceil(CHUNK)).map(move |c| c * CHUNK..((c + 1) * CHUNK).min(n))
 }
 
+/// The most threads a CPU engine may be given.
+pub const MAX_THREADS: usize = 1024;
+
 /// How many threads a CPU engine uses, and the pool they come from.
 #[derive(Clone, Debug)]
 pub struct Threads {
@@ -39,6 +42,15 @@ impl Threads {
     /// `count` threads of a pool of their own; 0 means every core ([`Threads::default`]),
     /// 1 runs on the calling thread without a pool.
     pub fn new(count: usize) -> Result<Self, PowderError> {
+        if count > MAX_THREADS {
+            return Err(crate::ParamError::new(
+                "threads",
+                format!(
+                    "{count} threads is more than the {MAX_THREADS} allowed (0 means every core)"
+                ),
+            )
+            .into());
+        }
         match count {
             0 => Ok(Self::default()),
             1 => Ok(Self {
@@ -102,5 +114,7 @@ mod tests {
             assert_eq!(threads.count(), t);
             assert_eq!(threads.map(items.clone(), |x| x * x), want);
         }
+        let err = Threads::new(MAX_THREADS + 1).unwrap_err().to_string();
+        assert!(err.contains("threads") && err.contains("1025"), "{err}");
     }
 }
