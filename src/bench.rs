@@ -786,6 +786,9 @@ pub fn bench(
 /// A CPU row's rate over the rate of the first thread count's row of the same case and
 /// size (None for that row itself, and where either did not run).
 fn speedup(rows: &[BenchRow], row: &BenchRow) -> Option<f64> {
+    if row.backend != "cpu" {
+        return None;
+    }
     let first = rows
         .iter()
         .find(|r| r.backend == "cpu" && r.case == row.case && r.particles == row.particles)?;

@@ -414,3 +414,42 @@ fn bench_and_info_report_the_traffic_estimate() {
     assert!(v["traffic"]["step_bytes_per_particle"].as_f64().unwrap() > 100.0);
     assert_eq!(v["traffic"]["rebuilds_per_step"], 0.0);
 }
+
+#[test]
+fn bench_measures_each_thread_count_and_its_speedup() {
+    let gpu = gpu_available();
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("bench.json");
+    let (ok, out, err) = powder(&[
+        "bench",
+        "--sizes",
+        "1200",
+        "--steps",
+        "4",
+        "--warmup",
+        "1",
+        "--case",
+        "hysteretic",
+        "--backend",
+        if gpu { "both" } else { "cpu" },
+        "--threads",
+        "1,2",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(out.contains("cpu×2"), "{out}");
+    let v = read_json(&json);
+    let rows = v["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), if gpu { 3 } else { 2 });
+    for r in rows {
+        assert_eq!(r["status"], "ran", "{r}");
+        match (r["backend"].as_str().unwrap(), r["threads"].as_u64()) {
+            // the first count is the baseline; the second its rate over the first's
+            ("cpu", Some(1)) => assert!(r["speedup"].is_null(), "{r}"),
+            ("cpu", Some(2)) => assert!(r["speedup"].as_f64().unwrap() > 0.0, "{r}"),
+            ("gpu", None) => assert!(r["speedup"].is_null(), "{r}"),
+            _ => panic!("unexpected row {r}"),
+        }
+    }
+}
