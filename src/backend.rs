@@ -61,10 +61,10 @@ pub fn choose(request: BackendRequest) -> Result<Chosen, PowderError> {
                 .collect();
             match GpuContext::with_preference(&AdapterPreference::Hardware) {
                 Ok(ctx) => Ok(gpu(ctx, "--backend auto found a hardware GPU".into())),
-                Err(_) => Ok(Chosen {
+                Err(e) => Ok(Chosen {
                     gpu: None,
                     reason: format!(
-                        "--backend auto found no hardware GPU ({}): the CPU engine, faster here than the software adapter (--backend gpu runs that)",
+                        "--backend auto found no hardware GPU that opens ({}; {e}): the CPU engine, faster here than the software adapter (--backend gpu runs that)",
                         if found.is_empty() {
                             "no adapter at all".to_string()
                         } else {

@@ -456,6 +456,20 @@ impl BenchOptions {
         if self.threads.is_empty() {
             return Err(ParamError::new("threads", "give at least one thread count").into());
         }
+        if let Some(t) = self
+            .threads
+            .iter()
+            .find(|&&t| t > crate::cpu::threads::MAX_THREADS)
+        {
+            return Err(ParamError::new(
+                "threads",
+                format!(
+                    "{t} threads is more than the {} allowed (0 means every core)",
+                    crate::cpu::threads::MAX_THREADS
+                ),
+            )
+            .into());
+        }
         crate::error::require_positive("max-seconds", self.max_seconds, "the time budget")?;
         crate::error::require_non_negative(
             "velocity-scale",
@@ -581,8 +595,7 @@ fn run_cpu(
 ) -> Result<BenchRow, PowderError> {
     let n = scene.particles.len();
     let t0 = Instant::now();
-    let mut engine = CpuEngine::new(scene)?;
-    engine.set_threads(threads.clone());
+    let mut engine = CpuEngine::with_threads(scene, threads.clone())?;
     let setup = t0.elapsed().as_secs_f64();
     engine.run_steps(opts.warmup)?;
     let before = engine.rebuilds();

@@ -29,8 +29,9 @@ fn codec(limit: u64) -> impl bincode::Options {
 /// Bumped whenever the state layout changes, or the GPU step's arithmetic does (a resume
 /// continues bitwise only with the same arithmetic; 6: the hysteretic model's divisions
 /// became multiplications by host-derived constants; 7: the contact history holds Luding's
-/// twisting spring and the models their friction parameters).
-const FORMAT: u32 = 7;
+/// twisting spring and the models their friction parameters; 8: the CPU's JKR contact-radius
+/// solve stops once converged).
+const FORMAT: u32 = 8;
 
 #[derive(Serialize, Deserialize)]
 struct Header {
@@ -103,6 +104,39 @@ fn save_state<T: Serialize>(
     write_atomic(path, &bytes)
 }
 
+fn not_a_checkpoint(path: &Path) -> PowderError {
+    PowderError::Run(format!(
+        "`{}` is not a powder checkpoint (or is truncated)",
+        path.display()
+    ))
+}
+
+/// The header of a checkpoint's bytes, and a cursor on the state after it.
+fn read_header<'a>(
+    bytes: &'a [u8],
+    path: &Path,
+) -> Result<(Header, std::io::Cursor<&'a [u8]>), PowderError> {
+    use bincode::Options;
+    if !bytes.starts_with(PREFIX) {
+        return Err(not_a_checkpoint(path));
+    }
+    let mut cursor = std::io::Cursor::new(&bytes[PREFIX.len()..]);
+    let header: Header = codec(bytes.len() as u64)
+        .deserialize_from(&mut cursor)
+        .map_err(|_| not_a_checkpoint(path))?;
+    if header.magic != MAGIC {
+        return Err(not_a_checkpoint(path));
+    }
+    Ok((header, cursor))
+}
+
+/// The backend (`"cpu"` or `"gpu"`) that wrote the checkpoint at `path`.
+pub fn backend_of(path: &Path) -> Result<String, PowderError> {
+    let bytes = std::fs::read(path)
+        .map_err(|e| PowderError::io(format!("cannot read checkpoint `{}`", path.display()), e))?;
+    Ok(read_header(&bytes, path)?.0.backend)
+}
+
 fn load_state<T: DeserializeOwned>(
     path: &Path,
     scene: &Scene,
@@ -110,24 +144,10 @@ fn load_state<T: DeserializeOwned>(
 ) -> Result<T, PowderError> {
     let bytes = std::fs::read(path)
         .map_err(|e| PowderError::io(format!("cannot read checkpoint `{}`", path.display()), e))?;
-    let not_ours = || {
-        PowderError::Run(format!(
-            "`{}` is not a powder checkpoint (or is truncated)",
-            path.display()
-        ))
-    };
-    use bincode::Options;
-    if !bytes.starts_with(PREFIX) {
-        return Err(not_ours());
-    }
+    let (header, mut cursor) = read_header(&bytes, path)?;
+    let not_ours = || not_a_checkpoint(path);
     let limit = bytes.len() as u64;
-    let mut cursor = std::io::Cursor::new(&bytes[PREFIX.len()..]);
-    let header: Header = codec(limit)
-        .deserialize_from(&mut cursor)
-        .map_err(|_| not_ours())?;
-    if header.magic != MAGIC {
-        return Err(not_ours());
-    }
+    use bincode::Options;
     if header.format != FORMAT || header.version != env!("CARGO_PKG_VERSION") {
         return Err(PowderError::Run(format!(
             "checkpoint `{}` was written by powder {} (format {}); this is powder {} (format {FORMAT}): rerun the scene from the start",

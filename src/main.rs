@@ -1096,7 +1096,21 @@ fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
             )?
         }
     };
-    let chosen = powder::backend::choose(a.backend.request())?;
+    // auto resumes a checkpoint on the backend that wrote it
+    let request = match (&a.resume, a.backend) {
+        (Some(path), Backend::Auto) => match powder::checkpoint::backend_of(path)?.as_str() {
+            "gpu" => powder::backend::BackendRequest::Gpu,
+            _ => powder::backend::BackendRequest::Cpu,
+        },
+        _ => a.backend.request(),
+    };
+    let mut chosen = powder::backend::choose(request)?;
+    if a.resume.is_some() && a.backend == Backend::Auto {
+        chosen.reason = format!(
+            "--backend auto resumes on the checkpoint's backend ({})",
+            chosen.reason
+        );
+    }
     eprintln!("backend: {}", chosen.reason);
     let gpu = chosen.gpu;
     let interrupt = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));

@@ -459,8 +459,7 @@ pub fn run_cpu_with(
     opts: &RunOptions,
     progress: impl FnMut(&Snapshot),
 ) -> Result<RunSummary, PowderError> {
-    let mut engine = CpuEngine::new(scene)?;
-    engine.set_threads(opts.threads.clone());
+    let engine = CpuEngine::with_threads(scene, opts.threads.clone())?;
     let rule = engine.time_step().reason.clone();
     run_with(scene, engine, &rule, opts, progress)
 }

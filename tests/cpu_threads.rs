@@ -142,3 +142,70 @@ fn bad_thread_counts_are_refused_with_the_option_named() {
         assert!(err.contains("threads"), "{cmd} --threads {value}: {err}");
     }
 }
+
+/// The trajectory does not depend on where chunks and wall pieces end (only the energy
+/// ledger's last bits do): chunks of 7 particles put a chunk boundary between most pairs
+/// and cut each wall's ~200 candidates into ~30 pieces, with contacts forming and leaving.
+#[test]
+fn chunk_and_piece_boundaries_change_no_trajectory_bit() {
+    for (case, seed) in [(Case::Hysteretic, 5), (Case::Jkr, 6)] {
+        let scene = packing(case, 2500, 20.0, seed).unwrap();
+        let run = |chunk: usize| {
+            let threads = Threads::new(2).unwrap().with_chunk(chunk);
+            let mut e = CpuEngine::with_threads(&scene, threads).unwrap();
+            e.run_steps(150).unwrap();
+            e
+        };
+        let (a, b) = (run(512), run(7));
+        let bits = |e: &CpuEngine| {
+            bincode::serialize(&(
+                e.positions(),
+                e.velocities(),
+                e.angular_velocities(),
+                e.forces(),
+                e.contacts(),
+                e.wall_forces(),
+            ))
+            .unwrap()
+        };
+        assert!(bits(&a) == bits(&b), "{case:?}: the trajectory moved");
+        let (da, db) = (a.energies().dissipated, b.energies().dissipated);
+        assert!(
+            da > 0.0 && (da - db).abs() <= 1e-9 * da,
+            "{case:?}: {da} vs {db}"
+        );
+    }
+}
+
+#[test]
+fn auto_resumes_on_the_backend_that_wrote_the_checkpoint() {
+    let dir = tempfile::tempdir().unwrap();
+    let powder = |args: &[&str]| {
+        let out = Command::new(env!("CARGO_BIN_EXE_powder"))
+            .args(args)
+            .arg("--out")
+            .arg(dir.path())
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    powder(&["run", "--backend", "cpu", "--steps", "200"]);
+    let checkpoint = dir.path().join("checkpoint.bin");
+    // with a GPU (or POWDER_ADAPTER set) auto alone would pick the GPU and refuse it
+    let err = powder(&[
+        "run",
+        "--steps",
+        "400",
+        "--resume",
+        checkpoint.to_str().unwrap(),
+    ]);
+    assert!(
+        err.contains("resumes on the checkpoint's backend (--backend cpu)"),
+        "{err}"
+    );
+}

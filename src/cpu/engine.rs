@@ -9,7 +9,7 @@
 //! whenever the list is rebuilt (a restored checkpoint rebuilds it around its contacts).
 
 use crate::cpu::cells::CellGrid;
-use crate::cpu::threads::{chunks, Threads, CHUNK};
+use crate::cpu::threads::{chunks, Threads};
 use crate::error::PowderError;
 use crate::model::{ContactHistory, ContactModel, Kinematics, PairGeometry, Response, TimeStep};
 use crate::scene::Scene;
@@ -252,7 +252,8 @@ impl StepLog {
 
     /// Keeps the deepest overlap ratio, the first one seen among equals.
     fn note_peak(&mut self, ratio: f64, i: usize, partner: Partner) {
-        if self.peak.is_none_or(|p| ratio > p.0) {
+        // (a NaN ratio is left out: kept, it would hide every later one)
+        if !ratio.is_nan() && self.peak.is_none_or(|p| ratio > p.0) {
             self.peak = Some((ratio, i, partner));
         }
     }
@@ -843,8 +844,14 @@ pub enum Partner {
 }
 
 impl CpuEngine {
-    /// Builds the engine from a validated scene, resolving pair models and the time step.
+    /// Builds the engine from a validated scene, resolving pair models and the time step;
+    /// it runs on every core ([`Threads::default`]).
     pub fn new(scene: &Scene) -> Result<Self, PowderError> {
+        Self::with_threads(scene, Threads::default())
+    }
+
+    /// [`Self::new`] on `threads` (the first force evaluation included).
+    pub fn with_threads(scene: &Scene, threads: Threads) -> Result<Self, PowderError> {
         let Resolved {
             n_materials,
             models,
@@ -955,7 +962,7 @@ impl CpuEngine {
             pos_ref: Vec::new(),
             rebuild_due: true,
             rebuilds: 0,
-            threads: Threads::default(),
+            threads,
             entry_force: Vec::new(),
             entry_torque: Vec::new(),
             own_force: Vec::new(),
@@ -1264,9 +1271,10 @@ impl CpuEngine {
     }
 
     fn update_acceleration(&mut self) {
+        let chunk = self.threads.chunk();
         let (force, mass, gravity) = (&self.force, &self.mass, self.gravity);
-        let work: Vec<_> = (self.acc.chunks_mut(CHUNK))
-            .zip(chunks(self.pos.len()))
+        let work: Vec<_> = (self.acc.chunks_mut(chunk))
+            .zip(chunks(self.pos.len(), chunk))
             .collect();
         self.threads.map(work, |(acc, range)| {
             for (a, i) in range.enumerate() {
@@ -1278,15 +1286,16 @@ impl CpuEngine {
     /// One velocity-Verlet step. Velocity-dependent forces see the predicted velocity
     /// v + a·dt (and ω + α·dt), which keeps the damped oscillator second-order accurate.
     pub fn step(&mut self) -> Result<(), PowderError> {
+        let chunk = self.threads.chunk();
         let dt = self.dt;
         self.insert_due();
         let n = self.pos.len();
         self.v_pred.resize(n, DVec3::ZERO);
         let (acc, active) = (&self.acc, &self.active);
-        let work: Vec<_> = (self.pos.chunks_mut(CHUNK))
-            .zip(self.vel.chunks_mut(CHUNK))
-            .zip(self.v_pred.chunks_mut(CHUNK))
-            .zip(chunks(n))
+        let work: Vec<_> = (self.pos.chunks_mut(chunk))
+            .zip(self.vel.chunks_mut(chunk))
+            .zip(self.v_pred.chunks_mut(chunk))
+            .zip(chunks(n, chunk))
             .collect();
         self.threads.map(work, |(((pos, vel), v_pred), range)| {
             for (a, i) in range.enumerate() {
@@ -1331,9 +1340,9 @@ impl CpuEngine {
         self.w_pred.resize(self.omega.len(), DVec3::ZERO);
         let (torque, inertia) = (&self.torque, &self.inertia);
         let spinning = self.omega.len();
-        let work: Vec<_> = (self.omega.chunks_mut(CHUNK))
-            .zip(self.w_pred.chunks_mut(CHUNK))
-            .zip(chunks(spinning))
+        let work: Vec<_> = (self.omega.chunks_mut(chunk))
+            .zip(self.w_pred.chunks_mut(chunk))
+            .zip(chunks(spinning, chunk))
             .collect();
         self.threads.map(work, |((omega, w_pred), range)| {
             for (a, i) in range.enumerate() {
@@ -1352,7 +1361,7 @@ impl CpuEngine {
         }
         self.update_acceleration();
         let (acc, active) = (&self.acc, &self.active);
-        let work: Vec<_> = self.vel.chunks_mut(CHUNK).zip(chunks(n)).collect();
+        let work: Vec<_> = self.vel.chunks_mut(chunk).zip(chunks(n, chunk)).collect();
         self.threads.map(work, |(vel, range)| {
             for (a, i) in range.enumerate() {
                 if active[i] {
@@ -1361,8 +1370,8 @@ impl CpuEngine {
             }
         });
         let (torque, inertia) = (&self.torque, &self.inertia);
-        let work: Vec<_> = (self.omega.chunks_mut(CHUNK))
-            .zip(chunks(spinning))
+        let work: Vec<_> = (self.omega.chunks_mut(chunk))
+            .zip(chunks(spinning, chunk))
             .collect();
         self.threads.map(work, |(omega, range)| {
             for (a, i) in range.enumerate() {
@@ -1476,6 +1485,7 @@ impl CpuEngine {
     /// rebuild (the two largest displacements together reach 99 % of it), or a rebuild is
     /// due.
     fn list_stale(&self) -> bool {
+        let chunk = self.threads.chunk();
         if self.rebuild_due
             || self.pos_ref.len() != self.pos.len()
             || self.wall_ref.len() != self.walls.len()
@@ -1493,24 +1503,26 @@ impl CpuEngine {
         // the two largest squared displacements of each chunk (None: one is NaN)
         let (pos, pos_ref, active) = (&self.pos, &self.pos_ref, &self.active);
         let (periodic, domain) = (self.periodic, self.domain);
-        let tops = self.threads.map(chunks(pos.len()).collect(), |range| {
-            let mut top = [0.0f64; 2];
-            for i in range {
-                if !active[i] {
-                    continue;
+        let tops = self
+            .threads
+            .map(chunks(pos.len(), chunk).collect(), |range| {
+                let mut top = [0.0f64; 2];
+                for i in range {
+                    if !active[i] {
+                        continue;
+                    }
+                    let mut d = pos[i] - pos_ref[i];
+                    if any_periodic {
+                        d = minimum_image(d, periodic, domain);
+                    }
+                    let d2 = d.length_squared();
+                    if d2.is_nan() {
+                        return None;
+                    }
+                    push_top(&mut top, d2);
                 }
-                let mut d = pos[i] - pos_ref[i];
-                if any_periodic {
-                    d = minimum_image(d, periodic, domain);
-                }
-                let d2 = d.length_squared();
-                if d2.is_nan() {
-                    return None;
-                }
-                push_top(&mut top, d2);
-            }
-            Some(top)
-        });
+                Some(top)
+            });
         let (mut m1, mut m2) = (0.0f64, 0.0f64);
         for top in tops {
             let Some(top) = top else {
@@ -1528,6 +1540,7 @@ impl CpuEngine {
     /// r_i + r_j + reach + skin, and every contact of the old list (with its record),
     /// in key order. Chunks of particles are searched in parallel and joined in order.
     fn rebuild_list(&mut self) {
+        let chunk = self.threads.chunk();
         let n = self.pos.len();
         self.grid.rebuild(&self.pos);
         // the old list is freed after the merge (not kept for its allocations: the list is
@@ -1546,7 +1559,7 @@ impl CpuEngine {
         };
         let parts = self
             .threads
-            .map(chunks(n).collect(), |range| search.chunk(range));
+            .map(chunks(n, chunk).collect(), |range| search.chunk(range));
         let total: usize = parts.iter().map(|p| p.partner.len()).sum();
         let mut new = PairList {
             start: Vec::with_capacity(n + 1),
@@ -1610,6 +1623,7 @@ impl CpuEngine {
     /// `ROT`: particles rotate (`w_pred` holds their angular velocities).
     #[inline(never)]
     fn pair_forces<const ROT: bool>(&mut self, v_pred: &[DVec3], w_pred: &[DVec3]) -> StepLog {
+        let chunk = self.threads.chunk();
         let n = self.pos.len();
         let PairList {
             start,
@@ -1627,12 +1641,12 @@ impl CpuEngine {
             self.own_torque.resize(n, DVec3::ZERO);
         }
         // each chunk's particles and entries, as disjoint mutable slices
-        let mut work = Vec::with_capacity(n.div_ceil(CHUNK));
+        let mut work = Vec::with_capacity(n.div_ceil(chunk));
         {
             let (mut rec, mut liv) = (&mut record[..], &mut live[..]);
             let (mut ef, mut et) = (&mut self.entry_force[..], &mut self.entry_torque[..]);
             let (mut of, mut ot) = (&mut self.own_force[..], &mut self.own_torque[..]);
-            for range in chunks(n) {
+            for range in chunks(n, chunk) {
                 let e = start[range.end] - start[range.start];
                 let p = range.len();
                 let t = if ROT { e } else { 0 };
@@ -1682,15 +1696,17 @@ impl CpuEngine {
         let (entry_force, entry_torque) = (&self.entry_force, &self.entry_torque);
         let (own_force, own_torque) = (&self.own_force, &self.own_torque);
         let torque_chunks: Vec<&mut [DVec3]> = if ROT {
-            self.torque.chunks_mut(CHUNK).collect()
+            self.torque.chunks_mut(chunk).collect()
         } else {
-            chunks(n).map(|_| <&mut [DVec3]>::default()).collect()
+            chunks(n, chunk)
+                .map(|_| <&mut [DVec3]>::default())
+                .collect()
         };
         let gather: Vec<_> = self
             .force
-            .chunks_mut(CHUNK)
+            .chunks_mut(chunk)
             .zip(torque_chunks)
-            .zip(chunks(n))
+            .zip(chunks(n, chunk))
             .collect();
         self.threads.map(gather, |((force, torque), range)| {
             for (a, j) in range.enumerate() {
@@ -1723,15 +1739,16 @@ impl CpuEngine {
     /// evaluated in parallel; their forces are added in key order afterwards.
     #[inline(never)]
     fn wall_contact_forces(&mut self, v_pred: &[DVec3], w_pred: &[DVec3]) -> StepLog {
+        let chunk = self.threads.chunk();
         let old = std::mem::take(&mut self.wall_contacts);
-        // pieces of at most CHUNK candidates of one wall, each booking the old contacts
+        // pieces of at most a chunk of candidates of one wall, each booking the old contacts
         // from its first key up to the next piece's (the first from the start, the last
         // to the end): together every old contact, once
         let mut pieces: Vec<(usize, std::ops::Range<usize>)> = Vec::new();
         for w in 0..self.walls.len() {
             let (s, e) = (self.wall_start[w], self.wall_start[w + 1]);
-            for c in (s..e).step_by(CHUNK) {
-                pieces.push((w, c..(c + CHUNK).min(e)));
+            for c in (s..e).step_by(chunk) {
+                pieces.push((w, c..(c + chunk).min(e)));
             }
         }
         if pieces.is_empty() {

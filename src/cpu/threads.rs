@@ -12,9 +12,9 @@ use std::sync::Arc;
 /// of the reductions, hence the bits of the results.
 pub const CHUNK: usize = 512;
 
-/// The particle ranges of the chunks over `n` particles.
-pub fn chunks(n: usize) -> impl ExactSizeIterator<Item = Range<usize>> + Clone {
-    (0..n.div_ceil(CHUNK)).map(move |c| c * CHUNK..((c + 1) * CHUNK).min(n))
+/// The particle ranges of chunks of `chunk` over `n` particles.
+pub fn chunks(n: usize, chunk: usize) -> impl ExactSizeIterator<Item = Range<usize>> + Clone {
+    (0..n.div_ceil(chunk)).map(move |c| c * chunk..((c + 1) * chunk).min(n))
 }
 
 /// The most threads a CPU engine may be given.
@@ -26,6 +26,8 @@ pub struct Threads {
     /// `None`: the current rayon pool (rayon's global pool: all cores unless configured).
     pool: Option<Arc<rayon::ThreadPool>>,
     count: usize,
+    /// Particles per chunk ([`CHUNK`]).
+    chunk: usize,
 }
 
 impl Default for Threads {
@@ -34,6 +36,7 @@ impl Default for Threads {
         Self {
             pool: None,
             count: rayon::current_num_threads(),
+            chunk: CHUNK,
         }
     }
 }
@@ -56,6 +59,7 @@ impl Threads {
             1 => Ok(Self {
                 pool: None,
                 count: 1,
+                chunk: CHUNK,
             }),
             _ => {
                 let pool = rayon::ThreadPoolBuilder::new()
@@ -68,6 +72,7 @@ impl Threads {
                 Ok(Self {
                     pool: Some(Arc::new(pool)),
                     count,
+                    chunk: CHUNK,
                 })
             }
         }
@@ -76,6 +81,19 @@ impl Threads {
     /// The number of threads.
     pub fn count(&self) -> usize {
         self.count
+    }
+
+    /// With chunks of `chunk` particles (at least 1) instead of [`CHUNK`]. The trajectory
+    /// does not depend on it, only the last bits of the energy ledger's sums; small chunks
+    /// put chunk and wall-piece boundaries everywhere (tests).
+    pub fn with_chunk(mut self, chunk: usize) -> Self {
+        self.chunk = chunk.max(1);
+        self
+    }
+
+    /// Particles per chunk.
+    pub fn chunk(&self) -> usize {
+        self.chunk
     }
 
     /// `f` applied to every item, results in item order: on the calling thread with one
@@ -99,9 +117,9 @@ mod tests {
     #[test]
     fn chunks_cover_every_particle_once_in_order() {
         for n in [0, 1, CHUNK - 1, CHUNK, CHUNK + 1, 5 * CHUNK + 3] {
-            let all: Vec<usize> = chunks(n).flatten().collect();
+            let all: Vec<usize> = chunks(n, CHUNK).flatten().collect();
             assert_eq!(all, (0..n).collect::<Vec<_>>());
-            assert!(chunks(n).all(|r| !r.is_empty() && r.len() <= CHUNK));
+            assert!(chunks(n, CHUNK).all(|r| !r.is_empty() && r.len() <= CHUNK));
         }
     }
 
