@@ -1784,7 +1784,10 @@ impl CpuEngine {
             w_pred,
             dt: self.dt,
         };
-        let outs = self.threads.map(work, |piece| inputs.piece(piece));
+        let candidates = self.wall_candidates.len();
+        let outs = self
+            .threads
+            .map_work(candidates, work, |piece| inputs.piece(piece));
         let mut log = StepLog::new(self.dt, self.peak);
         let mut new = std::mem::take(&mut self.spare_walls);
         new.clear();

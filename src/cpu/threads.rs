@@ -110,6 +110,23 @@ impl Threads {
     }
 }
 
+impl Threads {
+    /// [`Self::map`], but on the calling thread when the items hold no more than a chunk
+    /// of `work` (particles, contacts) in all: handing tiny items to the pool costs more
+    /// than they do (the wall pieces of a small scene).
+    pub fn map_work<T: Send, R: Send>(
+        &self,
+        work: usize,
+        items: Vec<T>,
+        f: impl Fn(T) -> R + Sync,
+    ) -> Vec<R> {
+        if work <= self.chunk {
+            return items.into_iter().map(f).collect();
+        }
+        self.map(items, f)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
