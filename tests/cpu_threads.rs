@@ -6,10 +6,20 @@ use powder::cpu::{CpuEngine, Threads};
 use powder::scene::Scene;
 use std::process::Command;
 
+/// Runs the `powder` binary, which must succeed; returns its (stdout, stderr).
+fn powder_ok<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> (String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_powder"))
+        .args(args)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(out.status.success(), "{stderr}");
+    (String::from_utf8_lossy(&out.stdout).into_owned(), stderr)
+}
+
 /// Runs `scene` for `steps` on `threads` threads; returns the checkpoint state's bytes.
 fn state_after(scene: &Scene, threads: usize, steps: u64) -> Vec<u8> {
-    let mut e = CpuEngine::new(scene).unwrap();
-    e.set_threads(Threads::new(threads).unwrap());
+    let mut e = CpuEngine::with_threads(scene, Threads::new(threads).unwrap()).unwrap();
     assert_eq!(e.threads(), threads);
     e.run_steps(steps).unwrap();
     let energies = e.energies();
@@ -52,38 +62,31 @@ fn run_checkpoints_are_the_same_with_1_and_2_threads() {
     );
     let run = |threads: &str| {
         let out = dir.path().join(format!("t{threads}"));
-        let status = Command::new(env!("CARGO_BIN_EXE_powder"))
-            .args([
-                "run",
-                cluster,
-                "--backend",
-                "cpu",
-                "--threads",
-                threads,
-                "--steps",
-                "6000",
-                // 1600 smaller spheres (several chunks) under stronger gravity: a heap
-                // with ~2200 contacts by the end
-                "--set",
-                "particles[0].count=1600",
-                "--set",
-                "particles[0].radius=5e-4",
-                "--set",
-                "particles[0].max=[0.019,0.019,0.02]",
-                "--set",
-                "simulation.gravity=[0.0,0.0,-200.0]",
-                "--set",
-                "simulation.output_every=2000",
-                "--out",
-            ])
-            .arg(&out)
-            .output()
-            .unwrap();
-        assert!(
-            status.status.success(),
-            "{}",
-            String::from_utf8_lossy(&status.stderr)
-        );
+        let out_dir = out.to_str().unwrap();
+        powder_ok(&[
+            "run",
+            cluster,
+            "--backend",
+            "cpu",
+            "--threads",
+            threads,
+            "--steps",
+            "6000",
+            // 1600 smaller spheres (several chunks) under stronger gravity: a heap
+            // with ~2200 contacts by the end
+            "--set",
+            "particles[0].count=1600",
+            "--set",
+            "particles[0].radius=5e-4",
+            "--set",
+            "particles[0].max=[0.019,0.019,0.02]",
+            "--set",
+            "simulation.gravity=[0.0,0.0,-200.0]",
+            "--set",
+            "simulation.output_every=2000",
+            "--out",
+            out_dir,
+        ]);
         let summary: serde_json::Value =
             serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
         assert_eq!(summary["threads"], threads.parse::<u64>().unwrap());
@@ -101,20 +104,10 @@ fn run_checkpoints_are_the_same_with_1_and_2_threads() {
 
 #[test]
 fn auto_backend_says_what_it_chose_and_why() {
-    let out = Command::new(env!("CARGO_BIN_EXE_powder"))
-        .args(["run", "--steps", "20", "--no-output", "--json"])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let stdout = String::from_utf8_lossy(&out.stdout);
+    let (stdout, stderr) = powder_ok(&["run", "--steps", "20", "--no-output", "--json"]);
     let summary: serde_json::Value =
         serde_json::from_str(&stdout[stdout.find('{').unwrap()..]).unwrap();
     let reason = summary["backend_reason"].as_str().unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains(&format!("backend: {reason}")), "{stderr}");
     match summary["backend"].as_str().unwrap() {
         // no hardware GPU (CI): the CPU engine on every core
@@ -180,20 +173,8 @@ fn chunk_and_piece_boundaries_change_no_trajectory_bit() {
 #[test]
 fn auto_resumes_on_the_backend_that_wrote_the_checkpoint() {
     let dir = tempfile::tempdir().unwrap();
-    let powder = |args: &[&str]| {
-        let out = Command::new(env!("CARGO_BIN_EXE_powder"))
-            .args(args)
-            .arg("--out")
-            .arg(dir.path())
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        String::from_utf8_lossy(&out.stderr).into_owned()
-    };
+    let out = dir.path().to_str().unwrap();
+    let powder = |args: &[&str]| powder_ok(&[args, &["--out", out]].concat()).1;
     powder(&["run", "--backend", "cpu", "--steps", "200"]);
     let checkpoint = dir.path().join("checkpoint.bin");
     // with a GPU (or POWDER_ADAPTER set) auto alone would pick the GPU and refuse it

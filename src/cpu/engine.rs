@@ -590,7 +590,7 @@ impl WallInputs<'_> {
                 let (w, i) = old.key[*cursor];
                 let wall = &self.walls[w as usize];
                 let i = i as usize;
-                let delta = self.radius[i] - (self.pos[i] - wall.point).dot(wall.normal);
+                let delta = wall.overlap(self.pos[i], self.radius[i]);
                 log.depart(&old.record[*cursor], delta);
                 *cursor += 1;
             }
@@ -610,7 +610,7 @@ impl WallInputs<'_> {
             };
             // relative to the (possibly moving) wall
             let v = self.v_pred[i] - wall.velocity;
-            let delta = self.radius[i] - (self.pos[i] - wall.point).dot(n);
+            let delta = wall.overlap(self.pos[i], self.radius[i]);
             let m = w * self.n_materials + self.material[i];
             let (model, range) = (&self.wall_models[m], self.wall_ranges[m]);
             if delta <= -range && prior.is_none() {
@@ -666,6 +666,13 @@ struct WallPlane {
     motion: crate::scene::WallMotion,
     /// Velocity over the current step.
     velocity: DVec3,
+}
+
+impl WallPlane {
+    /// Overlap of a sphere of radius `r` centred at `x` with the plane.
+    fn overlap(&self, x: DVec3, r: f64) -> f64 {
+        r - (x - self.point).dot(self.normal)
+    }
 }
 
 /// Energies of the whole system, J.
@@ -1235,7 +1242,7 @@ impl CpuEngine {
     /// Overlap of particle `i` with wall `w`.
     pub fn wall_overlap(&self, w: usize, i: usize) -> f64 {
         let wall = &self.walls[w];
-        self.radius[i] - (self.pos[i] - wall.point).dot(wall.normal)
+        wall.overlap(self.pos[i], self.radius[i])
     }
 
     /// Particles outside the domain box (informational; they still interact).
@@ -1605,7 +1612,7 @@ impl CpuEngine {
                     cursor += 1;
                 }
                 let in_contact = keys.get(cursor) == Some(&key);
-                let delta = self.radius[i] - (self.pos[i] - wall.point).dot(wall.normal);
+                let delta = wall.overlap(self.pos[i], self.radius[i]);
                 let range = self.wall_ranges[w * self.n_materials + self.material[i]];
                 if in_contact || delta > -(range + self.skin) {
                     self.wall_candidates.push(i as u32);
