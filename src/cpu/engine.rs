@@ -463,7 +463,11 @@ impl PairInputs<'_> {
                     continue;
                 }
                 let prior = live.then(|| &c.record[x]);
-                let n = if dist > 0.0 { d / dist } else { DVec3::Z };
+                let n = if dist > 0.0 {
+                    d * (1.0 / dist)
+                } else {
+                    DVec3::Z
+                };
                 let (geom, roll) = match shape {
                     Some((r, m, g, roll)) if r == radius[j].to_bits() && m == mass[j].to_bits() => {
                         (g, roll)

@@ -211,14 +211,15 @@ pub fn reset(history: &mut ContactHistory) {
 /// old length keeps |v| and ½k|v|² (the usual history rotation of LIGGGHTS/LAMMPS, Luding
 /// 2008 eq. 17 per LAMMPS).
 pub fn rotate_into_plane(v: DVec3, n: DVec3) -> DVec3 {
-    let len = v.length();
-    if len == 0.0 {
+    let len2 = v.length_squared();
+    if len2 == 0.0 {
         return DVec3::ZERO;
     }
     let p = v - n * n.dot(v);
-    let lp = p.length();
-    if lp > 1e-12 * len {
-        p * (len / lp)
+    let lp2 = p.length_squared();
+    // |p| > 1e-12·|v|, squared
+    if lp2 > 1e-24 * len2 {
+        p * (len2 / lp2).sqrt()
     } else {
         DVec3::ZERO
     }

@@ -51,26 +51,26 @@ impl JkrParams {
         let (n, v_t, delta) = (k.n, k.v_t, k.delta);
         let r = 0.5 * geom.a12;
         let mut s = rotate_into_plane(*spring, n) + v_t * dt;
-        let st = 8.0 * self.g_star() * normal.contact_radius;
+        let gs8 = 8.0 * self.g_star();
+        let st = gs8 * normal.contact_radius;
         let ct = match self.dissipation {
             Dissipation::Tsuji {
                 restitution,
                 stiffness,
             } => {
                 // the dashpot's St: the spring's 8G*·a, or paper 002's 8G*·√(R*δ)
-                let st_damp =
-                    8.0 * self.g_star() * stiffness.radius(normal.contact_radius, delta, r);
+                let st_damp = gs8 * stiffness.radius(normal.contact_radius, delta, r);
                 -TSUJI_PREFACTOR * tsuji_beta(restitution) * (st_damp * geom.reduced_mass).sqrt()
             }
             _ => 0.0,
         };
         let mut force = -st * s - ct * v_t;
         let limit = self.friction * (normal.conservative + 2.0 * self.fc(r)).abs();
-        let magnitude = force.length();
+        let magnitude2 = force.length_squared();
         let mut sliding = false;
-        if magnitude > limit {
+        if magnitude2 > limit * limit {
             sliding = true;
-            force *= limit / magnitude;
+            force *= limit / magnitude2.sqrt();
             if st > 0.0 {
                 s = -(force + ct * v_t) / st;
             }

@@ -25,6 +25,7 @@
 use crate::error::ParamError;
 
 pub mod mindlin;
+mod radius;
 pub mod rolling;
 mod twisting;
 
@@ -33,6 +34,8 @@ use crate::model::history::{HistoryField, HostField, Mirror, Shape};
 use crate::model::krijt::{self, KrijtLaw, Relaxation};
 use crate::model::{ContactHistory, NormalForce, PairGeometry};
 pub use mindlin::Tangential;
+pub use radius::contact_radius_f32;
+use radius::solve_t_f64;
 pub use rolling::Rolling;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
@@ -60,9 +63,13 @@ pub const X_PULLOFF_DISPLACEMENT: f64 = 0.30285343213869;
 pub const X_PULLOFF_FORCE: f64 = 0.6299605249474366;
 /// a/a0 at the first touch (δ = 0), (2/3)^(2/3).
 pub const X_TOUCH: f64 = 0.7631428283688879;
+/// [`potential_shape`] at [`X_PULLOFF_DISPLACEMENT`], [`X_PULLOFF_FORCE`] and [`X_TOUCH`].
+const P_PULLOFF_DISPLACEMENT: f64 = 0.07337616108654725;
+const P_PULLOFF_FORCE: f64 = -0.31748021039364027;
+const P_TOUCH: f64 = -0.6988643717890397;
 
-/// Newton iterations of the f64 contact-radius solver at most (converged to rounding
-/// everywhere); it stops after a step below 1e-8 of the root (then at rounding).
+/// Newton iterations of the iterative f64 contact-radius solve at most (converged to
+/// rounding everywhere); it stops after a step below 1e-8 of the root (then at rounding).
 pub const NEWTON_ITERATIONS_F64: usize = 5;
 /// Newton iterations of the f32 contact-radius solver (the WGSL kernel's count).
 pub const NEWTON_ITERATIONS_F32: usize = 3;
@@ -243,6 +250,15 @@ impl Pulloff {
             Self::Zero => X_TOUCH,
         }
     }
+
+    /// [`potential_shape`] at the break radius ratio (tested against it).
+    pub fn break_potential_shape(self) -> f64 {
+        match self {
+            Self::Displacement => P_PULLOFF_DISPLACEMENT,
+            Self::Force => P_PULLOFF_FORCE,
+            Self::Zero => P_TOUCH,
+        }
+    }
 }
 
 fn default_stiffness_scale() -> f64 {
@@ -338,88 +354,54 @@ pub fn tsuji_beta(restitution: f64) -> f64 {
     })
 }
 
+/// The length scales a0 and δ0 of a pair (scaled γ and E*).
+#[derive(Clone, Copy, Debug)]
+struct Scales {
+    a0: f64,
+    d0: f64,
+}
+
+impl Scales {
+    /// a0 = (9πγR*²/E*)^(1/3) and δ0 = a0²/(3R*).
+    fn new(r_eff: f64, es: f64, gamma: f64) -> Self {
+        let a0 = memo_cbrt(9.0 * PI * gamma * r_eff * r_eff / es);
+        Self {
+            a0,
+            d0: a0 * a0 / (3.0 * r_eff),
+        }
+    }
+
+    /// Contact radius a(δ) on the stable JKR branch (γ > 0), see
+    /// [`JkrParams::contact_radius`].
+    fn contact_radius(&self, delta: f64) -> f64 {
+        let s = self.root(delta);
+        self.a0 * s * s
+    }
+
+    /// s = √(a/a0) on the stable branch at overlap `delta`.
+    fn root(&self, delta: f64) -> f64 {
+        S_MIN + solve_t_f64(delta / self.d0 - D_PULLOFF_DISPLACEMENT)
+    }
+}
+
+/// Elastic JKR force 4E*a³/(3R*) − 4√(πγE*a³), see [`JkrParams::elastic_force`].
+fn elastic_force(a: f64, r_eff: f64, es: f64, gamma: f64) -> f64 {
+    let a3 = a * a * a;
+    4.0 * es * a3 / (3.0 * r_eff) - 4.0 * (PI * gamma * es * a3).sqrt()
+}
+
 /// P(x) = (24/5)x⁵ − 8x^(7/2) + 2x², x = a/a0: ∫F dδ = Fc·δ0·P(x) + const along the
 /// stable JKR branch (dδ = δ0·(6x − x^(−1/2))·dx and F = Fc·(4x³ − 4x^(3/2)) give the
 /// integrand Fc·δ0·(24x⁴ − 28x^(5/2) + 4x)).
 pub fn potential_shape(x: f64) -> f64 {
-    let x2 = x * x;
-    4.8 * x2 * x2 * x - 8.0 * x2 * x * x.sqrt() + 2.0 * x2
+    potential_shape_of_root(x.sqrt())
 }
 
-// Constants of the deflated solve (see `solve_t_f64`): c = 2·s_min, b = 2·s_min²,
-// √18·s_min = dk/dt at t = 0.
-const C_T: f64 = 2.0 * S_MIN;
-const B_T: f64 = 2.0 * S_MIN * S_MIN;
-const SQRT3: f64 = 1.7320508075688772;
-const SLOPE0: f64 = 2.3348151486780315;
-
-/// Solves 3s⁴ − 2s = d for s = s_min + t on the stable branch, given e = d − d_min ≥ 0,
-/// returning t ≥ 0.
-///
-/// With s = s_min + t and 12·s_min³ = 2 the linear term cancels:
-/// 3s⁴ − 2s − d = 3t²·((t + c)² + b) − e with c = 2s_min, b = 2s_min²: a double root at
-/// t = 0 when e = 0. Newton is therefore run on the deflated function
-/// k(t) = √3·t·√((t + c)² + b) − √e, which is increasing and convex on t ≥ 0 with
-/// k'(0) = √18·s_min > 0 (no double root), started from an upper bound so it decreases
-/// monotonically. Upper bounds: k ≥ √18·s_min·t and k ≥ √3·t·(t + c); t0 is the smaller
-/// of their roots, within a few % of the root everywhere. The Newton update is written
-/// without cancellation: t ← (t²(t + c) + √e·w^(1/2)/√3)/(w + t(t + c)), w = (t + c)² + b.
-fn solve_t_f64(e: f64) -> f64 {
-    let r = e.max(0.0).sqrt();
-    let q = 2.0 * r / SQRT3;
-    let mut t = (r / SLOPE0).min(q / (C_T + (C_T * C_T + 2.0 * q).sqrt()));
-    for _ in 0..NEWTON_ITERATIONS_F64 {
-        let tc = t + C_T;
-        let w = tc * tc + B_T;
-        let next = (t * t * tc + r * w.sqrt() / SQRT3) / (w + t * tc);
-        // quadratic convergence: after a step of at most 1e-8·t the error is at rounding
-        // (the iterates are 9e-2, 1.5e-3, 4.5e-7, 4e-14 off at s = 1)
-        let converged = (t - next).abs() <= 1e-8 * next;
-        t = next;
-        if converged {
-            break;
-        }
-    }
-    t
-}
-
-/// The f32 twin of [`JkrParams::contact_radius`]: the same deflated guarded Newton
-/// ([`NEWTON_ITERATIONS_F32`] iterations), only +, −, ×, ÷, sqrt and min, as in the WGSL
-/// kernel. `a0` = 0 or `delta0` = 0 means Hertz: a = √(R·max(δ, 0)).
-///
-/// Measured relative error against the f64 solve of the same f32 inputs: see
-/// [`JkrParams::contact_radius`].
-pub fn contact_radius_f32(delta: f32, r_eff: f32, a0: f32, delta0: f32) -> f32 {
-    contact_radius_f32_iterations(delta, r_eff, a0, delta0, NEWTON_ITERATIONS_F32)
-}
-
-fn contact_radius_f32_iterations(
-    delta: f32,
-    r_eff: f32,
-    a0: f32,
-    delta0: f32,
-    iterations: usize,
-) -> f32 {
-    if a0 <= 0.0 || delta0 <= 0.0 {
-        return (r_eff * delta.max(0.0)).sqrt();
-    }
-    const SMIN: f32 = S_MIN as f32;
-    const DMIN: f32 = D_PULLOFF_DISPLACEMENT as f32;
-    const C: f32 = C_T as f32;
-    const B: f32 = B_T as f32;
-    const S3: f32 = SQRT3 as f32;
-    const K0: f32 = SLOPE0 as f32;
-    let e = (delta / delta0 - DMIN).max(0.0);
-    let r = e.sqrt();
-    let q = 2.0 * r / S3;
-    let mut t = (r / K0).min(q / (C + (C * C + 2.0 * q).sqrt()));
-    for _ in 0..iterations {
-        let tc = t + C;
-        let w = tc * tc + B;
-        t = (t * t * tc + r * w.sqrt() / S3) / (w + t * tc);
-    }
-    let s = SMIN + t;
-    a0 * s * s
+/// [`potential_shape`] of x = s²: s⁴·(4.8·s⁶ − 8·s³ + 2).
+fn potential_shape_of_root(s: f64) -> f64 {
+    let s3 = s * s * s;
+    let s4 = s3 * s;
+    s4 * (4.8 * s3 * s3 - 8.0 * s3 + 2.0)
 }
 
 impl JkrParams {
@@ -555,8 +537,7 @@ impl JkrParams {
 
     /// Effective shear modulus after scaling, G* = G/(2(2−ν)) with G = S·E/(2(1+ν)), Pa.
     pub fn g_star(&self) -> f64 {
-        let g = self.stiffness_scale * self.youngs / (2.0 * (1.0 + self.poisson));
-        g / (2.0 * (2.0 - self.poisson))
+        self.stiffness_scale * self.youngs / (4.0 * (1.0 + self.poisson) * (2.0 - self.poisson))
     }
 
     /// Surface energy after scaling, γ·S^(2/5) (paper 002 eq. 24), J/m².
@@ -575,13 +556,17 @@ impl JkrParams {
 
     /// Equilibrium contact radius a0 = (9πγR*²/E*)^(1/3) (scaled γ, E*), m.
     pub fn a0(&self, r_eff: f64) -> f64 {
-        memo_cbrt(9.0 * PI * self.gamma() * r_eff * r_eff / self.e_star())
+        self.scales(r_eff).a0
+    }
+
+    /// The length scales of a pair of effective radius `r_eff`.
+    fn scales(&self, r_eff: f64) -> Scales {
+        Scales::new(r_eff, self.e_star(), self.gamma())
     }
 
     /// Equilibrium overlap δ0 = a0²/(3R*) (scaled), m.
     pub fn delta0(&self, r_eff: f64) -> f64 {
-        let a0 = self.a0(r_eff);
-        a0 * a0 / (3.0 * r_eff)
+        self.scales(r_eff).d0
     }
 
     /// Unscaled Fc = 3πγR* (the rolling model keeps it, paper 002 §3.2), N.
@@ -615,8 +600,10 @@ impl JkrParams {
     /// increasing and convex with a non-zero slope at t = 0, started to the right of the
     /// root (guarded Newton, monotone, quadratic everywhere).
     ///
-    /// Guarded Newton in f64, stopped after a step below 1e-8 of the root (4 iterations
-    /// near equilibrium, 3 far above it, at most 5; δ(a(δ)) round-trips to 1e-12 over δ/δ0 ∈ [δc/δ0, 10⁸]). The f32 twin [`contact_radius_f32`], guarded Newton,
+    /// In f64: a cubic Hermite start from a table over √(δ/δ0 − δc/δ0) and one Newton step,
+    /// within 4 ulp of the guarded Newton run to convergence (which it uses past
+    /// δ/δ0 ≈ 1023); δ(a(δ)) round-trips to 1e-12 over δ/δ0 ∈ [δc/δ0, 10⁸]. The f32 twin
+    /// [`contact_radius_f32`], guarded Newton,
     /// 3 iterations (the initial guess is within 8.5 %; 2 iterations give 7.7e-7, 3 reach the
     /// f32 rounding floor): f32 relative error ≤ 4.4e-7 over δ/δ0 ∈ [−0.8255, 1000]
     /// against the f64 solve of the same rounded δ/δ0, including at the pull-off point.
@@ -631,11 +618,7 @@ impl JkrParams {
         if self.gamma() == 0.0 {
             return (r_eff * delta.max(0.0)).sqrt();
         }
-        let a0 = self.a0(r_eff);
-        // δ0 = a0²/(3R*) from this a0 (bitwise what `delta0` gives, one cube root fewer)
-        let d = delta / (a0 * a0 / (3.0 * r_eff));
-        let s = S_MIN + solve_t_f64(d - D_PULLOFF_DISPLACEMENT);
-        a0 * s * s
+        self.scales(r_eff).contact_radius(delta)
     }
 
     /// Overlap δ(a) = a²/R − 2√(πγa/E*) (paper 001 eq. 5), the inverse of
@@ -647,9 +630,7 @@ impl JkrParams {
     /// Elastic JKR force F = 4E*a³/(3R*) − 4√(πγE*a³) (paper 001 eq. 6, paper 002 eqs. 8–9),
     /// repulsive positive.
     pub fn elastic_force(&self, a: f64, r_eff: f64) -> f64 {
-        let es = self.e_star();
-        let a3 = a * a * a;
-        4.0 * es * a3 / (3.0 * r_eff) - 4.0 * (PI * self.gamma() * es * a3).sqrt()
+        elastic_force(a, r_eff, self.e_star(), self.gamma())
     }
 
     /// The material constants of the Krijt law (after the stiffness scale).
@@ -682,7 +663,14 @@ impl JkrParams {
 
     /// The dissipative normal force for contact radius `a` at overlap `delta` and approach
     /// speed `delta_dot`, repulsive positive (it opposes δ̇).
-    fn normal_dissipation(&self, a: f64, delta: f64, delta_dot: f64, geom: &PairGeometry) -> f64 {
+    fn normal_dissipation(
+        &self,
+        a: f64,
+        delta: f64,
+        delta_dot: f64,
+        geom: &PairGeometry,
+        es: f64,
+    ) -> f64 {
         let m = geom.reduced_mass;
         match self.dissipation {
             Dissipation::None => 0.0,
@@ -693,18 +681,14 @@ impl JkrParams {
                 // Sn = 2E*·a by default (paper 002 eq. 13 writes 2E*√(Rδ), which is 2E*·a
                 // for Hertz; the contact radius also exists at negative overlap in JKR), or
                 // paper 002's 2E*·√(R*δ) (zero at δ ≤ 0)
-                let sn = 2.0 * self.e_star() * stiffness.radius(a, delta, geom.r_eff());
+                let sn = 2.0 * es * stiffness.radius(a, delta, geom.r_eff());
                 -TSUJI_PREFACTOR * tsuji_beta(restitution) * (sn * m).sqrt() * delta_dot
             }
             Dissipation::PowerLaw { d, alpha, beta } => {
                 if delta_dot == 0.0 {
                     0.0
                 } else {
-                    delta_dot.signum()
-                        * d
-                        * self.e_star()
-                        * delta_dot.abs().powf(alpha)
-                        * a.powf(beta)
+                    delta_dot.signum() * d * es * delta_dot.abs().powf(alpha) * a.powf(beta)
                 }
             }
             Dissipation::Krijt { .. } | Dissipation::Stress { .. } => {
@@ -726,7 +710,8 @@ impl JkrParams {
         let r = 0.5 * geom.a12;
         let at = |delta: f64| {
             let a = self.contact_radius(delta, r);
-            self.elastic_force(a, r) + self.normal_dissipation(a, delta, delta_dot, geom)
+            self.elastic_force(a, r)
+                + self.normal_dissipation(a, delta, delta_dot, geom, self.e_star())
         };
         let exit = self.pulloff_overlap(r);
         [(0.0, at(0.0)), (exit, at(exit))]
@@ -781,13 +766,13 @@ impl JkrParams {
     ) -> NormalForce {
         let r = 0.5 * geom.a12;
         let gamma = self.gamma();
+        let es = self.e_star();
         let (a, conservative, potential) = if gamma == 0.0 {
             if delta <= 0.0 {
                 *history = ContactHistory::default();
                 return NormalForce::default();
             }
             let a = (r * delta).sqrt();
-            let es = self.e_star();
             let conservative = 4.0 * es * a * a * a / (3.0 * r);
             let potential = 8.0 / 15.0 * es * r.sqrt() * delta * delta * delta.sqrt();
             (a, conservative, potential)
@@ -796,13 +781,14 @@ impl JkrParams {
                 *history = ContactHistory::default();
                 return NormalForce::default();
             }
-            let d0 = self.delta0(r);
+            let sc = Scales::new(r, es, gamma);
+            let (a0, d0) = (sc.a0, sc.d0);
             if delta <= self.pulloff.break_overlap_ratio() * d0 {
                 *history = ContactHistory::default();
                 return NormalForce::default();
             }
-            let a0 = self.a0(r);
-            let a_eq = self.contact_radius(delta, r);
+            let s = sc.root(delta);
+            let a_eq = a0 * s * s;
             if let Some(law) = self.dissipation.krijt_law() {
                 let mat = self.krijt_material();
                 let a_old = if history.contact_radius > 0.0 {
@@ -823,17 +809,19 @@ impl JkrParams {
                 let potential = krijt::stored_energy(a, delta, r, es, gamma) - reference;
                 (a, krijt::elastic_force(a, delta, r, es), potential)
             } else {
-                let x = a_eq / a0;
-                let potential = self.fc(r)
-                    * d0
-                    * (potential_shape(x) - potential_shape(self.pulloff.break_radius_ratio()));
-                (a_eq, self.elastic_force(a_eq, r), potential)
+                // in s = √(a/a0): F = Fc·4(s⁶ − s³), the stored energy Fc·δ0·(P(s²) − P_break)
+                let fc = 3.0 * PI * gamma * r;
+                let s3 = s * s * s;
+                let conservative = 4.0 * fc * s3 * (s3 - 1.0);
+                let potential =
+                    fc * d0 * (potential_shape_of_root(s) - self.pulloff.break_potential_shape());
+                (a_eq, conservative, potential)
             }
         };
         history.touched = true;
         history.delta_max = history.delta_max.max(delta);
         NormalForce {
-            force: conservative + self.normal_dissipation(a, delta, delta_dot, geom),
+            force: conservative + self.normal_dissipation(a, delta, delta_dot, geom, es),
             conservative,
             potential,
             in_contact: true,
@@ -963,6 +951,17 @@ mod tests {
             D_PULLOFF_DISPLACEMENT,
             max_relative = 1e-14
         );
+    }
+
+    #[test]
+    fn break_potential_shapes_are_the_potential_at_the_break() {
+        for rule in [Pulloff::Displacement, Pulloff::Force, Pulloff::Zero] {
+            assert_eq!(
+                rule.break_potential_shape(),
+                potential_shape(rule.break_radius_ratio()),
+                "{rule:?}"
+            );
+        }
     }
 
     #[test]
