@@ -46,6 +46,7 @@ fn scene() -> Scene {
         gravity: [0.0, 0.0, -9.81],
         dt: DtSetting::Auto,
         force_dt: false,
+        jump_impulses: None,
         duration: 0.05,
         output_every: 1000,
         impact_velocity: 1.0,

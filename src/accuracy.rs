@@ -6,6 +6,10 @@
 //!   [`crate::collide::sweep_on`]; the error is max |e − e_closed| over the sweep against the
 //!   closed forms of [`crate::model::analytic`], the run time that of the whole sweep
 //!   (each collision builds its engine: on the GPU that includes the pipelines);
+//! * **jkr** — head-on JKR collisions (both pull-off rules, equal spheres) from 1.05 to 5
+//!   times the sticking speed; the error is max |e − e_closed| over the sweep; on the CPU
+//!   also with the force jumps left to plain velocity Verlet (`-verlet` cases), which shows
+//!   what placing them inside the step ([`crate::cpu::jump`]) gains;
 //! * **packing** — a small cohesive packing ([`crate::bench::packing`], hysteretic with
 //!   kc = 100 N/m and viscous damping, under gravity in a box) against a CPU f64 reference
 //!   at a much finer time step; after a fixed physical time T = K·tc the error is the RMS
@@ -23,7 +27,8 @@ use crate::collide::{self, Backend, CollideSpec};
 use crate::cpu::CpuEngine;
 use crate::error::{ParamError, PowderError};
 use crate::gpu::{GpuContext, GpuEngine};
-use crate::model::{analytic, AdhesionMode, ContactModel, HystereticParams, K2Rule};
+use crate::model::jkr::Pulloff;
+use crate::model::{analytic, AdhesionMode, ContactModel, HystereticParams, JkrParams, K2Rule};
 use crate::output::plot::{Legend, Plot, Series, Style};
 use crate::scene::{DtSetting, Scene};
 use glam::DVec3;
@@ -42,6 +47,8 @@ pub struct AccuracyOptions {
     pub backends: Vec<Backend>,
     /// Run the pair case.
     pub pair: bool,
+    /// Run the JKR pair case.
+    pub jkr: bool,
     /// Run the packing case.
     pub packing: bool,
     /// Packing: the CPU reference's divisor (above every divisor).
@@ -65,6 +72,7 @@ impl Default for AccuracyOptions {
             divisors: vec![10.0, 20.0, 50.0, 100.0, 200.0, 400.0],
             backends: vec![Backend::Cpu, Backend::Gpu],
             pair: true,
+            jkr: true,
             packing: true,
             reference_divisor: 800.0,
             particles: 216,
@@ -90,7 +98,7 @@ impl AccuracyOptions {
                 .into());
             }
         }
-        if !self.pair && !self.packing {
+        if !self.pair && !self.jkr && !self.packing {
             return Err(ParamError::new("case", "nothing to measure").into());
         }
         if self.backends.is_empty() {
@@ -126,7 +134,7 @@ impl AccuracyOptions {
                 .into());
             }
         }
-        if self.pair && self.chi_points < 2 {
+        if (self.pair || self.jkr) && self.chi_points < 2 {
             return Err(
                 ParamError::new("chi-points", "the χ sweep needs at least 2 points").into(),
             );
@@ -186,6 +194,141 @@ pub struct PairSetup {
     pub e_closed: Vec<f64>,
 }
 
+/// The JKR pair case's set-up: one sweep per pull-off rule.
+#[derive(Clone, Debug, Serialize)]
+pub struct JkrSetup {
+    /// Young's modulus, Pa.
+    pub youngs: f64,
+    /// Poisson's ratio.
+    pub poisson: f64,
+    /// Surface energy per surface, J/m².
+    pub surface_energy: f64,
+    /// Radius of both spheres, m.
+    pub radius: f64,
+    /// kg/m³.
+    pub density: f64,
+    /// The contact time of the time-step rule at the fastest impact, s (dt = tc/D).
+    pub tc: f64,
+    /// The sweeps.
+    pub rules: Vec<JkrSweep>,
+}
+
+/// One pull-off rule's sweep of the JKR pair case.
+#[derive(Clone, Debug, Serialize)]
+pub struct JkrSweep {
+    /// The pull-off rule.
+    pub pulloff: Pulloff,
+    /// The sticking speed √(2W/m*), m/s.
+    pub sticking_velocity: f64,
+    /// The impact speeds (1.05 … 5 times the sticking speed, log-spaced), m/s.
+    pub velocities: Vec<f64>,
+    /// The closed-form restitution √(1 − W/(½m*v²)) at each.
+    pub e_closed: Vec<f64>,
+}
+
+/// The JKR material of the pair case (README's e(v) example: sticking below 0.66 m/s).
+const JKR_MATERIAL: (f64, f64, f64) = (1e9, 0.3, 0.05);
+const JKR_RADIUS: f64 = 1e-6;
+/// The JKR sweep's range of v/v_stick.
+pub const JKR_RANGE: (f64, f64) = (1.05, 5.0);
+
+fn jkr_spec(pulloff: Pulloff) -> CollideSpec {
+    let (youngs, poisson, gamma) = JKR_MATERIAL;
+    let p = JkrParams {
+        pulloff,
+        ..JkrParams::jkr(youngs, poisson, gamma)
+    };
+    CollideSpec::head_on(ContactModel::Jkr(p), JKR_RADIUS, PAIR_DENSITY, 1.0)
+}
+
+fn jkr_setup(points: usize) -> JkrSetup {
+    let (lo, hi) = JKR_RANGE;
+    let mut tc = f64::INFINITY;
+    let rules = [Pulloff::Displacement, Pulloff::Force]
+        .into_iter()
+        .map(|pulloff| {
+            let spec = jkr_spec(pulloff);
+            let g = spec.geometry();
+            let ContactModel::Jkr(p) = spec.model else {
+                unreachable!("a JKR spec")
+            };
+            let r = g.r_eff();
+            let w = analytic::jkr_loss(pulloff) * p.fc(r) * p.delta0(r);
+            let v_stick = analytic::jkr_sticking_velocity(w, g.reduced_mass);
+            let velocities: Vec<f64> = (0..points)
+                .map(|k| v_stick * lo * (hi / lo).powf(k as f64 / (points - 1) as f64))
+                .collect();
+            let fastest = CollideSpec {
+                velocity: v_stick * hi,
+                ..spec.clone()
+            };
+            tc = tc.min(fastest.time_step().contact_time);
+            JkrSweep {
+                pulloff,
+                sticking_velocity: v_stick,
+                e_closed: velocities
+                    .iter()
+                    .map(|&v| analytic::jkr_restitution(w, g.reduced_mass, v).unwrap_or(f64::NAN))
+                    .collect(),
+                velocities,
+            }
+        })
+        .collect();
+    let (youngs, poisson, surface_energy) = JKR_MATERIAL;
+    JkrSetup {
+        youngs,
+        poisson,
+        surface_energy,
+        radius: JKR_RADIUS,
+        density: PAIR_DENSITY,
+        tc,
+        rules,
+    }
+}
+
+/// One JKR sweep at dt = tc/`divisor`; `verlet` leaves the force jumps to plain velocity
+/// Verlet (CPU).
+fn jkr_point(
+    setup: &JkrSetup,
+    sweep: &JkrSweep,
+    divisor: f64,
+    backend: Backend,
+    verlet: bool,
+) -> Result<AccuracyPoint, PowderError> {
+    let pulloff = sweep.pulloff;
+    let dt = setup.tc / divisor;
+    let spec = CollideSpec {
+        dt: Some(dt),
+        force: true,
+        jump_impulses: verlet.then_some(false),
+        ..jkr_spec(pulloff)
+    };
+    let (results, wall) = timed(|| collide::sweep_on(&spec, &sweep.velocities, backend))?;
+    let error = results
+        .iter()
+        .zip(&sweep.e_closed)
+        .map(|(r, e)| (r.e - e).abs())
+        .fold(0.0, f64::max);
+    let case = match (pulloff, verlet) {
+        (Pulloff::Force, false) => "jkr-force",
+        (Pulloff::Force, true) => "jkr-force-verlet",
+        (_, false) => "jkr-displacement",
+        (_, true) => "jkr-displacement-verlet",
+    };
+    Ok(AccuracyPoint {
+        case,
+        backend: bench::backend_name(backend),
+        divisor,
+        dt,
+        steps: results.iter().map(|r| r.steps).sum(),
+        wall_seconds: wall,
+        error,
+        max_position_error: None,
+        kinetic_error: None,
+        setup_seconds: None,
+    })
+}
+
 /// The packing case's set-up and reference.
 #[derive(Clone, Debug, Serialize)]
 pub struct PackingSetup {
@@ -221,6 +364,8 @@ pub struct AccuracyReport {
     pub adapter: Option<Adapter>,
     /// The pair case's set-up, when it ran.
     pub pair: Option<PairSetup>,
+    /// The JKR pair case's set-up, when it ran.
+    pub jkr: Option<JkrSetup>,
     /// The packing case's set-up and reference, when it ran.
     pub packing: Option<PackingSetup>,
     /// Every (case, backend, dt) measured.
@@ -428,6 +573,28 @@ pub fn accuracy(
         }
         pair = Some(setup);
     }
+    let mut jkr = None;
+    if opts.jkr {
+        let setup = jkr_setup(opts.chi_points);
+        if backends.contains(&Backend::Gpu) {
+            notes.push("jkr on the GPU: the force jumps are left to velocity Verlet (the GPU engine does not place them yet)".into());
+        }
+        for sweep in &setup.rules {
+            for &backend in &backends {
+                for verlet in [false, true] {
+                    if verlet && backend == Backend::Gpu {
+                        continue;
+                    }
+                    for &d in &opts.divisors {
+                        let p = jkr_point(&setup, sweep, d, backend, verlet)?;
+                        progress(&p);
+                        points.push(p);
+                    }
+                }
+            }
+        }
+        jkr = Some(setup);
+    }
     let mut packing = None;
     if opts.packing {
         let base = bench::packing(bench::Case::Hysteretic, opts.particles, 1.0, opts.seed)?;
@@ -487,6 +654,7 @@ pub fn accuracy(
         provenance,
         adapter,
         pair,
+        jkr,
         packing,
         points,
         notes,
@@ -503,6 +671,19 @@ pub fn work_precision_plot(report: &AccuracyReport) -> Plot {
     );
     for (case, label) in [
         ("pair", "pair, max |e - e_closed| over chi"),
+        (
+            "jkr-displacement",
+            "JKR displacement pull-off, max |e - e_closed|",
+        ),
+        (
+            "jkr-displacement-verlet",
+            "JKR displacement pull-off, jumps left to Verlet",
+        ),
+        ("jkr-force", "JKR force pull-off, max |e - e_closed|"),
+        (
+            "jkr-force-verlet",
+            "JKR force pull-off, jumps left to Verlet",
+        ),
         ("packing", "packing, RMS |x - x_ref|/r"),
     ] {
         for backend in ["cpu", "gpu"] {

@@ -163,6 +163,7 @@ pub fn packing(case: Case, n: usize, velocity_scale: f64, seed: u64) -> Result<S
         gravity: [0.0, 0.0, -9.81],
         dt: DtSetting::Auto,
         force_dt: false,
+        jump_impulses: None,
         duration: 1.0,
         output_every: 1000,
         impact_velocity,

@@ -31,7 +31,8 @@ fn codec(limit: u64) -> impl bincode::Options {
 /// became multiplications by host-derived constants; 7: the contact history holds Luding's
 /// twisting spring and the models their friction parameters; 8: the CPU's JKR contact-radius
 /// solve stops once converged; 9: the CPU's JKR solve starts from a table, its force and
-/// energy come from √(a/a0), the history rotation takes one square root).
+/// energy come from √(a/a0), the history rotation takes one square root; the scene has
+/// `jump_impulses`).
 const FORMAT: u32 = 9;
 
 #[derive(Serialize, Deserialize)]

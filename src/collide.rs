@@ -41,6 +41,9 @@ pub struct CollideSpec {
     /// Angle between the approach velocity and the tangent plane at contact, degrees
     /// (90 = head-on, as ψ in paper 002 §5).
     pub impact_angle: f64,
+    /// Place the impulses of force jumps inside the step (the scene's `jump_impulses`);
+    /// `None`: where the engine can.
+    pub jump_impulses: Option<bool>,
 }
 
 impl CollideSpec {
@@ -56,6 +59,7 @@ impl CollideSpec {
             force: false,
             wall: false,
             impact_angle: 90.0,
+            jump_impulses: None,
         }
     }
 }
@@ -299,6 +303,7 @@ impl CollideSpec {
             gravity: [0.0; 3],
             dt: DtSetting::Fixed(dt),
             force_dt: true,
+            jump_impulses: self.jump_impulses,
             duration: f64::INFINITY,
             output_every: u64::MAX,
             impact_velocity: vn,

@@ -178,9 +178,15 @@ impl From<QuietChoice> for powder::gpu::QuietBatches {
 enum AccuracyCase {
     /// The hysteretic pair over a chi sweep against the closed forms.
     Pair,
+    /// JKR pairs (both pull-off rules) from 1.05 to 5 times the sticking speed against
+    /// the closed form.
+    Jkr,
     /// A small cohesive packing against a fine-dt CPU reference.
     Packing,
+    /// The hysteretic pair and the packing.
     Both,
+    /// All three.
+    All,
 }
 
 #[derive(Args)]
@@ -191,7 +197,7 @@ struct AccuracyArgs {
     divisors: String,
     #[arg(long, value_enum, default_value = "both")]
     backend: BackendChoice,
-    #[arg(long = "case", value_enum, default_value = "both")]
+    #[arg(long = "case", value_enum, default_value = "all")]
     case: AccuracyCase,
     /// Packing: the reference's divisor (CPU, f64, dt = tc/D); above every --divisors.
     #[arg(long = "reference-divisor", default_value_t = 800.0)]
@@ -202,7 +208,8 @@ struct AccuracyArgs {
     /// Packing: the physical time compared, in units of tc.
     #[arg(long = "packing-time", default_value_t = 20)]
     packing_time: u64,
-    /// Pair: points of the chi sweep (log-spaced over chi = 0.1 ... 5).
+    /// Pair: points of the chi sweep (log-spaced over chi = 0.1 ... 5); jkr: of the
+    /// velocity sweep (log-spaced over 1.05 ... 5 times the sticking speed).
     #[arg(long = "chi-points", default_value_t = 8)]
     chi_points: usize,
     /// Write the report as JSON.
@@ -591,6 +598,10 @@ struct CollideArgs {
     /// Collide one sphere with a plane of the same material.
     #[arg(long)]
     wall: bool,
+    /// Place the impulse of a force jump (JKR touch and pull-off) inside the step: true or
+    /// false (plain velocity Verlet); default true on the CPU (the GPU cannot yet).
+    #[arg(long = "jump-impulses", value_name = "BOOL")]
+    jump_impulses: Option<bool>,
     /// Radius of sphere 1, m.
     #[arg(long)]
     radius: f64,
@@ -830,6 +841,7 @@ fn collide_cmd(a: &CollideArgs) -> Result<(), PowderError> {
         force: a.force,
         wall: a.wall,
         impact_angle: a.impact_angle,
+        jump_impulses: a.jump_impulses,
     };
     let report = collide_report(a, &spec)?;
     if let ContactModel::Jkr(p) = &spec.model {
@@ -915,8 +927,15 @@ fn accuracy_cmd(a: &AccuracyArgs) -> Result<(), PowderError> {
     let opts = AccuracyOptions {
         divisors: accuracy::parse_divisors(&a.divisors)?,
         backends: a.backend.list()?,
-        pair: a.case != AccuracyCase::Packing,
-        packing: a.case != AccuracyCase::Pair,
+        pair: matches!(
+            a.case,
+            AccuracyCase::Pair | AccuracyCase::Both | AccuracyCase::All
+        ),
+        jkr: matches!(a.case, AccuracyCase::Jkr | AccuracyCase::All),
+        packing: matches!(
+            a.case,
+            AccuracyCase::Packing | AccuracyCase::Both | AccuracyCase::All
+        ),
         reference_divisor: a.reference_divisor,
         particles: a.particles,
         packing_time: a.packing_time,
@@ -925,13 +944,13 @@ fn accuracy_cmd(a: &AccuracyArgs) -> Result<(), PowderError> {
     };
     opts.validate()?;
     println!(
-        "{:<8} {:<4} {:>6} {:>11} {:>8} {:>10} {:>10} {:>10} {:>10}",
+        "{:<23} {:<4} {:>6} {:>11} {:>8} {:>10} {:>10} {:>10} {:>10}",
         "case", "back", "dt/tc", "dt (s)", "steps", "wall s", "error", "max dx/r", "dE_kin"
     );
     let report = accuracy::accuracy(&opts, |p| {
         let opt = |x: Option<f64>| x.map_or_else(|| "-".to_string(), |v| format!("{v:.3e}"));
         println!(
-            "{:<8} {:<4} {:>6} {:>11.4e} {:>8} {:>10.3e} {:>10.3e} {:>10} {:>10}",
+            "{:<23} {:<4} {:>6} {:>11.4e} {:>8} {:>10.3e} {:>10.3e} {:>10} {:>10}",
             p.case,
             p.backend,
             format!("1/{}", p.divisor),
@@ -967,6 +986,25 @@ fn accuracy_cmd(a: &AccuracyArgs) -> Result<(), PowderError> {
             pr.chi[0],
             pr.chi[pr.chi.len() - 1],
             pr.tc
+        );
+    }
+    if let Some(j) = &report.jkr {
+        println!(
+            "jkr: E = {} Pa, nu = {}, gamma = {} J/m^2, radius {} m, {} kg/m^3, {} impacts over {} ... {} times the sticking speed ({}) (tc = {:.4e} s); error = max |e - e_closed|; -verlet: the force jumps left to velocity Verlet",
+            j.youngs,
+            j.poisson,
+            j.surface_energy,
+            j.radius,
+            j.density,
+            j.rules[0].velocities.len(),
+            accuracy::JKR_RANGE.0,
+            accuracy::JKR_RANGE.1,
+            j.rules
+                .iter()
+                .map(|r| format!("{:?}: {:.4} m/s", r.pulloff, r.sticking_velocity))
+                .collect::<Vec<_>>()
+                .join(", "),
+            j.tc
         );
     }
     for n in &report.notes {

@@ -21,6 +21,9 @@
 //! duration = 0.05               # required, s, > 0: simulated time
 //! dt = "auto"                   # "auto" (default: from the stiffest contact) or a time step in s, > 0
 //! force_dt = false              # default false; true accepts a dt above the stability limit
+//! jump_impulses = true          # default: true on the CPU, false on the GPU (which cannot yet):
+//!                               # place the impulse of a contact force's jump (JKR touch and
+//!                               # pull-off, jump-in adhesion) inside the step, second order in dt
 //! output_every = 1000           # default 1000, >= 1: steps between outputs (progress line,
 //!                               # VTK snapshot, CSV row of `powder run`)
 //! gravity = [0.0, 0.0, -9.81]   # m/s^2, default [0, 0, 0]
@@ -340,6 +343,9 @@ pub struct Scene {
     pub dt: DtSetting,
     /// Accept a dt above the stability limit.
     pub force_dt: bool,
+    /// Place the impulse of a contact force's jump inside the step ([`crate::cpu::jump`]);
+    /// `None`: where the engine can (the CPU engine; the GPU engine cannot yet).
+    pub jump_impulses: Option<bool>,
     /// Simulated time, s.
     pub duration: f64,
     /// Steps between progress/summary lines.
@@ -435,6 +441,7 @@ const SIMULATION_KEYS: &[&str] = &[
     "duration",
     "dt",
     "force_dt",
+    "jump_impulses",
     "output_every",
     "gravity",
     "impact_velocity",
@@ -1005,6 +1012,7 @@ fn parse_scene(src: &Src) -> Res<Scene> {
         gravity: sim.gravity,
         dt: sim.dt,
         force_dt: sim.force_dt,
+        jump_impulses: sim.jump_impulses,
         impact_velocity: sim.impact_velocity,
         checkpoint_every: sim.checkpoint_every,
         duration: sim.duration,
@@ -1066,6 +1074,7 @@ struct SimSettings {
     duration: f64,
     dt: DtSetting,
     force_dt: bool,
+    jump_impulses: Option<bool>,
     output_every: u64,
     impact_velocity: f64,
     checkpoint_every: u64,
@@ -1102,6 +1111,7 @@ fn parse_simulation(root: &Tbl) -> Res<SimSettings> {
         },
     };
     let force_dt = t.bool("force_dt")?.unwrap_or(false);
+    let jump_impulses = t.bool("jump_impulses")?;
     let output_every = t.u64("output_every")?.unwrap_or(1000);
     if output_every == 0 {
         return Err(t.err_key(
@@ -1129,6 +1139,7 @@ fn parse_simulation(root: &Tbl) -> Res<SimSettings> {
         duration,
         dt,
         force_dt,
+        jump_impulses,
         output_every,
         gravity,
     })

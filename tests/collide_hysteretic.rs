@@ -26,6 +26,7 @@ fn spec(p: HystereticParams, r2: f64, v: f64) -> CollideSpec {
         force: false,
         wall: false,
         impact_angle: 90.0,
+        jump_impulses: None,
     }
 }
 

@@ -266,7 +266,6 @@ fn lj_example_restitution_peaks_at_low_speed_then_declines() {
 mod gpu {
     use super::{krijt, params, spec, stress, GAMMA, R, SIGMA0, TVIS};
     use powder::collide::{collide_on, Backend, CollideResult, CollideSpec};
-    use powder::cpu::CpuEngine;
     use powder::gpu::GpuEngine;
     use powder::model::{Dissipation, JkrParams};
     use powder::scene::Scene;
@@ -275,7 +274,7 @@ mod gpu {
 
     fn both(s: &CollideSpec) -> (CollideResult, CollideResult) {
         let g = collide_on(s, Backend::Gpu).unwrap();
-        let c = collide_on(s, Backend::Cpu).unwrap();
+        let c = collide_on(&crate::common::verlet(s), Backend::Cpu).unwrap();
         assert_eq!(g.backend, "gpu");
         (g, c)
     }
@@ -432,7 +431,7 @@ mod gpu {
             0.3 + u
         );
         let scene = Scene::from_toml_str(&text, "drifting pair").unwrap();
-        let mut cpu = CpuEngine::new(&scene).unwrap();
+        let mut cpu = crate::common::verlet_cpu(&scene);
         let mut gpu = GpuEngine::new(&scene, ctx).unwrap();
         assert_eq!(gpu.kind().name(), "step_jkr+krijt");
         let mut compared = 0;
@@ -514,7 +513,7 @@ mod gpu {
         }
         use powder::collide::collide_traced_on;
         let s = spec(krijt(TVIS), 0.1);
-        let (_, cpu) = collide_traced_on(&s, Backend::Cpu).unwrap();
+        let (_, cpu) = collide_traced_on(&crate::common::verlet(&s), Backend::Cpu).unwrap();
         let (_, gpu) = collide_traced_on(&s, Backend::Gpu).unwrap();
         assert_eq!(cpu.len(), gpu.len());
         let f_max = cpu.iter().map(|r| r.force.abs()).fold(0.0, f64::max);

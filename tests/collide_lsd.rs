@@ -14,6 +14,7 @@ fn spec(k: f64, gamma0: f64, r2: f64) -> CollideSpec {
         force: false,
         wall: false,
         impact_angle: 90.0,
+        jump_impulses: None,
     }
 }
 

@@ -20,6 +20,7 @@ fn scene(
         gravity: [0.0, 0.0, gravity],
         dt: DtSetting::Auto,
         force_dt: false,
+        jump_impulses: None,
         duration: 1.0,
         output_every: 1000,
         impact_velocity: 1.0,

@@ -10,7 +10,7 @@ use powder::gpu::GpuEngine;
 fn cohesive_cluster_matches_the_cpu_reference() {
     let Some(ctx) = context() else { return };
     let scene = example("cohesive_cluster.toml");
-    let mut cpu = CpuEngine::new(&scene).unwrap();
+    let mut cpu = crate::common::verlet_cpu(&scene);
     let mut gpu = GpuEngine::new(&scene, ctx).unwrap();
     assert_eq!(cpu.dt(), gpu.dt());
     // f32 on the device (Kahan-compensated velocity and offset updates) against f64: equal
@@ -39,7 +39,7 @@ fn cohesive_cluster_matches_the_cpu_reference() {
 fn settled_cluster_rebuilds_rarely_and_still_matches_the_cpu() {
     let Some(ctx) = context() else { return };
     let scene = example("cohesive_cluster.toml");
-    let mut cpu = CpuEngine::new(&scene).unwrap();
+    let mut cpu = crate::common::verlet_cpu(&scene);
     let mut gpu = GpuEngine::new(&scene, ctx).unwrap();
     // the initial build, before the first step
     assert_eq!(gpu.rebuilds().unwrap(), 1);
@@ -149,7 +149,7 @@ positions = [{}]
         positions.join(", ")
     );
     let scene = powder::scene::Scene::from_toml_str(&text, "crowded").unwrap();
-    let mut cpu = CpuEngine::new(&scene).unwrap();
+    let mut cpu = crate::common::verlet_cpu(&scene);
     let mut gpu = GpuEngine::new(&scene, ctx).unwrap();
     // the fixed bound of the engine's earlier slot lists, 5·(1 + r_max/r_min)²·(1 + skin/2)³
     // for equal spheres
@@ -348,7 +348,7 @@ mod collisions {
             let s = hysteretic(10.0, v);
             let (g, c) = (
                 collide_on(&s, Backend::Gpu).unwrap(),
-                collide_on(&s, Backend::Cpu).unwrap(),
+                collide_on(&crate::common::verlet(&s), Backend::Cpu).unwrap(),
             );
             assert_eq!(g.backend, "gpu");
             assert!(g.adapter.is_some());
@@ -392,7 +392,7 @@ mod collisions {
                 let s = CollideSpec::head_on(ContactModel::Hysteretic(p), 1.1e-3, 2000.0, v);
                 let (g, c) = (
                     collide_on(&s, Backend::Gpu).unwrap(),
-                    collide_on(&s, Backend::Cpu).unwrap(),
+                    collide_on(&crate::common::verlet(&s), Backend::Cpu).unwrap(),
                 );
                 assert_eq!(g.stuck, c.stuck, "{p:?} v {v}");
                 assert!(
@@ -429,7 +429,7 @@ mod collisions {
         let s = hysteretic(100.0, 0.8 * 0.29116);
         let (g, c) = (
             collide_on(&s, Backend::Gpu).unwrap(),
-            collide_on(&s, Backend::Cpu).unwrap(),
+            collide_on(&crate::common::verlet(&s), Backend::Cpu).unwrap(),
         );
         assert!(g.stuck && c.stuck);
         let (dg, dc) = (g.delta_c.unwrap(), c.delta_c.unwrap());
@@ -447,7 +447,7 @@ mod collisions {
         };
         let (g, c) = (
             collide_on(&s, Backend::Gpu).unwrap(),
-            collide_on(&s, Backend::Cpu).unwrap(),
+            collide_on(&crate::common::verlet(&s), Backend::Cpu).unwrap(),
         );
         assert!((g.e - c.e).abs() < 1e-3, "wall: gpu {} cpu {}", g.e, c.e);
     }
@@ -457,7 +457,6 @@ mod collisions {
 mod jkr {
     use super::context;
     use powder::collide::{collide_on, Backend, CollideResult, CollideSpec};
-    use powder::cpu::CpuEngine;
     use powder::gpu::GpuEngine;
     use powder::model::{
         analytic, ContactModel, Dissipation, JkrParams, PairGeometry, Pulloff, TsujiStiffness,
@@ -477,7 +476,7 @@ mod jkr {
 
     fn both(s: &CollideSpec) -> (CollideResult, CollideResult) {
         let g = collide_on(s, Backend::Gpu).unwrap();
-        let c = collide_on(s, Backend::Cpu).unwrap();
+        let c = collide_on(&crate::common::verlet(s), Backend::Cpu).unwrap();
         assert_eq!(g.backend, "gpu");
         (g, c)
     }
@@ -799,7 +798,7 @@ radius = {r:e}
             let mut s = base.clone();
             s.gravity = [f_hat * f_yield / m, 0.0, 0.0];
             let mut g = GpuEngine::new(&s, ctx.take().or_else(context).unwrap()).unwrap();
-            let mut c = CpuEngine::new(&s).unwrap();
+            let mut c = crate::common::verlet_cpu(&s);
             assert!(g.rotates() && c.rotates());
             let (mut x_max, mut x_max_cpu): (f64, f64) = (0.0, 0.0);
             let (mut x_half, mut x_half_cpu) = (0.0, 0.0);
@@ -972,7 +971,7 @@ velocity = [-0.1, 0.05, -0.3]
     fn gpu_sticky_pile_follows_the_cpu_at_first() {
         let Some(ctx) = context() else { return };
         let scene = sticky_pile(0.3, 0.5);
-        let mut cpu = CpuEngine::new(&scene).unwrap();
+        let mut cpu = crate::common::verlet_cpu(&scene);
         let mut gpu = GpuEngine::new(&scene, ctx).unwrap();
         assert_eq!(cpu.dt(), gpu.dt());
         let r = scene.particles[0].radius;
@@ -1188,7 +1187,7 @@ fn state_mirrors_past_one_texture_row_match_the_cpu() {
     for case in [Case::Hysteretic, Case::Jkr] {
         let Some(ctx) = context() else { return };
         let scene = packing(case, 4500, 1.0, 7).unwrap();
-        let mut cpu = CpuEngine::new(&scene).unwrap();
+        let mut cpu = crate::common::verlet_cpu(&scene);
         let mut gpu = GpuEngine::with_options(
             &scene,
             ctx,

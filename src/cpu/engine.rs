@@ -9,6 +9,7 @@
 //! whenever the list is rebuilt (a restored checkpoint rebuilds it around its contacts).
 
 use crate::cpu::cells::CellGrid;
+use crate::cpu::jump::Crossing;
 use crate::cpu::threads::{chunks, Threads};
 use crate::error::PowderError;
 use crate::model::{ContactHistory, ContactModel, Kinematics, PairGeometry, Response, TimeStep};
@@ -193,6 +194,15 @@ struct Contact<'a> {
     partner: Partner,
 }
 
+/// The impulse of a force jump inside a step on particle i (−it on a particle partner),
+/// added to the velocities at the end of the step ([`crate::cpu::jump`]).
+#[derive(Clone, Copy, Debug)]
+struct Jump {
+    i: usize,
+    partner: Partner,
+    impulse: DVec3,
+}
+
 /// The error message of a contact whose force is not finite.
 #[cold]
 #[inline(never)]
@@ -208,6 +218,8 @@ fn non_finite(i: usize, partner: Partner, delta: f64) -> String {
 /// energy the contacts dissipated, the deepest overlap and the first non-finite force.
 struct StepLog {
     dt: f64,
+    /// The impulses of the force jumps inside the step, in key order.
+    jumps: Vec<Jump>,
     /// Energy of the contacts visited, and of those that left without a visit, each
     /// summed in key order.
     dissipated: f64,
@@ -220,6 +232,7 @@ impl StepLog {
     fn new(dt: f64, peak: Option<(f64, usize, Partner)>) -> Self {
         Self {
             dt,
+            jumps: Vec::new(),
             dissipated: 0.0,
             departed: 0.0,
             peak,
@@ -244,8 +257,43 @@ impl StepLog {
             omega_rel: kin.omega_rel,
         };
         let record = ContactRecord::new(history, kin.delta, &r, &motion);
-        let edges = || c.model.edges(geom, kin.delta_dot);
+        let was_in = prior.is_some_and(ContactRecord::engaged);
+        let is_in = record.engaged();
+        // the edges only where the step crosses one (JKR's cost a contact-radius solve each)
+        let edges = if was_in != is_in {
+            c.model.edges(geom, kin.delta_dot)
+        } else {
+            [(0.0, 0.0); 2]
+        };
         self.dissipated += CpuEngine::book(prior, &record, &motion, self.dt, edges);
+        if was_in != is_in {
+            // the overlap at the start of the step: the prior record's, or back along δ̇
+            let before = prior.map_or(kin.delta - kin.delta_dot * self.dt, |p| p.delta);
+            let after = kin.delta;
+            let crossing = if is_in {
+                Crossing::Entry {
+                    before,
+                    after,
+                    edge: edges[0],
+                    force_after: record.force,
+                }
+            } else {
+                Crossing::Exit {
+                    before,
+                    after,
+                    force_before: prior.map_or(0.0, |p| p.force),
+                    edge: edges[1],
+                }
+            };
+            let impulse = crossing.impulse(self.dt);
+            if impulse != 0.0 {
+                self.jumps.push(Jump {
+                    i: c.i,
+                    partner: c.partner,
+                    impulse: impulse * kin.n,
+                });
+            }
+        }
         self.note_peak(kin.delta / geom.a12, c.i, c.partner);
         record
     }
@@ -265,7 +313,8 @@ impl StepLog {
 
     /// Appends the log of the chunk that follows this one (in key order): sums added, the
     /// first failure and the first deepest overlap kept, as one log over both would.
-    fn append(&mut self, next: StepLog) {
+    fn append(&mut self, mut next: StepLog) {
+        self.jumps.append(&mut next.jumps);
         self.dissipated += next.dissipated;
         self.departed += next.departed;
         if let Some((ratio, i, partner)) = next.peak {
@@ -390,6 +439,9 @@ struct PairInputs<'a> {
     v_pred: &'a [DVec3],
     w_pred: &'a [DVec3],
     dt: f64,
+    /// Visit an engaged contact that broke beyond the reach (to place its force jump)
+    /// rather than book it as departed.
+    visit_breaks: bool,
 }
 
 /// One chunk of particles of the pair forces, with what it writes: its entries' records,
@@ -438,7 +490,10 @@ impl PairInputs<'_> {
                 let dist2 = d.length_squared();
                 let reach = pad_i + radius[j];
                 let live = c.live[x];
-                if dist2 >= reach * reach {
+                // an engaged contact beyond the reach broke within the step: visited with
+                // jump impulses, so its exit edge is booked and its force jump placed
+                let visit = self.visit_breaks && live && c.record[x].engaged();
+                if dist2 >= reach * reach && !visit {
                     if live {
                         log.depart(&c.record[x], ri + radius[j] - dist2.sqrt());
                         c.live[x] = false;
@@ -809,6 +864,10 @@ pub struct CpuEngine {
     own_torque: Vec<DVec3>,
     wall_contacts: WallList,
     spare_walls: WallList,
+    /// The impulses of the force jumps of the step being taken (pairs, then walls).
+    jumps: Vec<Jump>,
+    /// Whether they are added (the scene's `jump_impulses`, default on).
+    jump_impulses: bool,
     /// Wall candidates, rebuilt with the pair list: the active particles within
     /// range + skin of wall w then, or in contact with it, ascending, at
     /// `wall_candidates[wall_start[w]..wall_start[w + 1]]`.
@@ -980,6 +1039,8 @@ impl CpuEngine {
             own_torque: Vec::new(),
             wall_contacts: WallList::default(),
             spare_walls: WallList::default(),
+            jumps: Vec::new(),
+            jump_impulses: scene.jump_impulses.unwrap_or(true),
             wall_start: Vec::new(),
             wall_candidates: Vec::new(),
             wall_ref: Vec::new(),
@@ -998,8 +1059,10 @@ impl CpuEngine {
         engine.w_pred.clone_from(&engine.omega);
         engine.compute_forces()?;
         engine.update_acceleration();
-        // Contacts present at the start carry stored energy, not dissipation.
+        // Contacts present at the start carry stored energy, not dissipation, and
+        // crossed no edge.
         engine.dissipated = 0.0;
+        engine.jumps.clear();
         Ok(engine)
     }
 
@@ -1380,6 +1443,16 @@ impl CpuEngine {
                 }
             }
         });
+        // the impulses velocity Verlet misplaced at force jumps, in key order
+        let jumps = std::mem::take(&mut self.jumps);
+        if self.jump_impulses {
+            for jump in jumps {
+                self.vel[jump.i] += jump.impulse / self.mass[jump.i];
+                if let Partner::Particle(j) = jump.partner {
+                    self.vel[j] -= jump.impulse / self.mass[j];
+                }
+            }
+        }
         let (torque, inertia) = (&self.torque, &self.inertia);
         let work: Vec<_> = (self.omega.chunks_mut(chunk))
             .zip(chunks(spinning, chunk))
@@ -1446,18 +1519,12 @@ impl CpuEngine {
         new: &ContactRecord,
         m: &Motion,
         dt: f64,
-        edges: impl FnOnce() -> [(f64, f64); 2],
+        edges: [(f64, f64); 2],
     ) -> f64 {
         let was_in = old.is_some_and(ContactRecord::engaged);
         let is_in = new.engaged();
         let blank = ContactRecord::default();
         let o = old.unwrap_or(&blank);
-        // the edges only where the step crosses one (JKR's cost a contact-radius solve each)
-        let edges = if was_in != is_in {
-            edges()
-        } else {
-            [(0.0, 0.0); 2]
-        };
         let (d0, f0) = if was_in { (o.delta, o.force) } else { edges[0] };
         let (d1, f1) = if is_in {
             (m.delta, new.force)
@@ -1483,7 +1550,7 @@ impl CpuEngine {
             ..Default::default()
         };
         let edges = [(0.0, 0.0), (motion.delta, 0.0)];
-        Self::book(Some(c), &ContactRecord::default(), &motion, dt, || edges)
+        Self::book(Some(c), &ContactRecord::default(), &motion, dt, edges)
     }
 
     /// Neighbour-list rebuilds so far (since the engine was built; not part of the state).
@@ -1696,6 +1763,7 @@ impl CpuEngine {
             v_pred,
             w_pred,
             dt: self.dt,
+            visit_breaks: self.jump_impulses,
         };
         let logs = self.threads.map(work, |c| inputs.chunk::<ROT>(c));
         let mut log = StepLog::new(self.dt, self.peak);
@@ -1837,6 +1905,8 @@ impl CpuEngine {
         self.v_pred = v_pred;
         self.w_pred = w_pred;
         self.dissipated += pairs.total() + walls.total();
+        self.jumps = pairs.jumps;
+        self.jumps.extend(walls.jumps);
         if let Some(msg) = pairs.failure.or(walls.failure) {
             return Err(PowderError::Run(format!(
                 "step {} (t = {:e} s): {msg}; the time step may be too large for the stiffest contact ({})",

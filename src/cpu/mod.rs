@@ -2,6 +2,7 @@
 
 pub mod cells;
 pub mod engine;
+pub mod jump;
 pub mod threads;
 
 pub use engine::{ContactStats, CpuEngine, CpuState, Energies, Partner};
