@@ -2387,6 +2387,7 @@ radius = 1e-3
         assert_eq!(s.gravity, [0.0, 0.0, -9.81]);
         assert_eq!(s.dt, DtSetting::Auto);
         assert!(!s.force_dt);
+        assert_eq!(s.jump_impulses, None);
         assert_eq!(s.duration, 0.05);
         assert_eq!(s.output_every, 1000);
         assert_eq!(s.materials.len(), 2);
@@ -2459,11 +2460,15 @@ kca = "inf"
         )
         .replace(
             "duration = 0.1",
-            "duration = 0.1\ndt = 1e-6\nforce_dt = true\noutput_every = 7",
+            "duration = 0.1\ndt = 1e-6\nforce_dt = true\njump_impulses = false\noutput_every = 7",
         );
         let s = parse(&text).unwrap();
         assert_eq!(s.dt, DtSetting::Fixed(1e-6));
         assert!(s.force_dt);
+        assert_eq!(s.jump_impulses, Some(false));
+        let bad = text.replace("jump_impulses = false", "jump_impulses = 1");
+        let e = parse(&bad).unwrap_err().to_string();
+        assert!(e.contains("jump_impulses"), "{e}");
         assert_eq!(s.output_every, 7);
         let ContactModel::Hysteretic(h) = s.materials[1].model else {
             panic!()

@@ -488,6 +488,32 @@ mod jkr {
         analytic::jkr_sticking_velocity(w, g.reduced_mass)
     }
 
+    /// The GPU engine cannot place force jumps yet: asked to, it refuses by name.
+    #[test]
+    fn gpu_refuses_jump_impulses_by_name() {
+        if context().is_none() {
+            return;
+        }
+        let s = CollideSpec {
+            jump_impulses: Some(true),
+            ..spec(jkr(), 2.0 * v_stick(&jkr()))
+        };
+        let e = collide_on(&s, Backend::Gpu).unwrap_err().to_string();
+        assert!(e.contains("jump_impulses") && e.contains("GPU"), "{e}");
+        // without the key it runs (velocity Verlet)
+        assert!(
+            !collide_on(
+                &CollideSpec {
+                    jump_impulses: None,
+                    ..s
+                },
+                Backend::Gpu
+            )
+            .unwrap()
+            .stuck
+        );
+    }
+
     #[test]
     fn gpu_jkr_collisions_match_the_cpu_for_both_pulloff_rules() {
         if context().is_none() {
