@@ -135,9 +135,11 @@ impl AccuracyOptions {
             }
         }
         if (self.pair || self.jkr) && self.chi_points < 2 {
-            return Err(
-                ParamError::new("chi-points", "the χ sweep needs at least 2 points").into(),
-            );
+            return Err(ParamError::new(
+                "chi-points",
+                "the χ and velocity sweeps need at least 2 points",
+            )
+            .into());
         }
         Ok(())
     }
@@ -304,11 +306,19 @@ fn jkr_point(
         ..jkr_spec(pulloff)
     };
     let (results, wall) = timed(|| collide::sweep_on(&spec, &sweep.velocities, backend))?;
+    debug_assert_eq!(results.len(), sweep.e_closed.len());
+    // a NaN (no closed form, a failed run) must show, not vanish in the max
     let error = results
         .iter()
         .zip(&sweep.e_closed)
         .map(|(r, e)| (r.e - e).abs())
-        .fold(0.0, f64::max);
+        .fold(0.0, |worst: f64, x| {
+            if x.is_nan() || worst.is_nan() {
+                f64::NAN
+            } else {
+                worst.max(x)
+            }
+        });
     let case = match (pulloff, verlet) {
         (Pulloff::Force, false) => "jkr-force",
         (Pulloff::Force, true) => "jkr-force-verlet",
@@ -697,6 +707,8 @@ pub fn work_precision_plot(report: &AccuracyReport) -> Plot {
             }
             let who = if backend == "cpu" {
                 "CPU f64".to_string()
+            } else if case.starts_with("jkr") {
+                format!("{adapter}; jumps left to Verlet")
             } else {
                 adapter.clone()
             };

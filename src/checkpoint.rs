@@ -32,8 +32,8 @@ fn codec(limit: u64) -> impl bincode::Options {
 /// twisting spring and the models their friction parameters; 8: the CPU's JKR contact-radius
 /// solve stops once converged; 9: the CPU's JKR solve starts from a table, its force and
 /// energy come from √(a/a0), the history rotation takes one square root; the scene has
-/// `jump_impulses`).
-const FORMAT: u32 = 9;
+/// `jump_impulses`; 10: the CPU places force jumps inside the step by default).
+const FORMAT: u32 = 10;
 
 #[derive(Serialize, Deserialize)]
 struct Header {

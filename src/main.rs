@@ -1140,6 +1140,10 @@ fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
             "gpu" => powder::backend::BackendRequest::Gpu,
             _ => powder::backend::BackendRequest::Cpu,
         },
+        // only the CPU engine places force jumps inside the step
+        (None, Backend::Auto) if scene.jump_impulses == Some(true) => {
+            powder::backend::BackendRequest::Cpu
+        }
         _ => a.backend.request(),
     };
     let mut chosen = powder::backend::choose(request)?;
@@ -1148,6 +1152,8 @@ fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
             "--backend auto resumes on the checkpoint's backend ({})",
             chosen.reason
         );
+    } else if a.backend == Backend::Auto && scene.jump_impulses == Some(true) {
+        chosen.reason = "--backend auto with jump_impulses = true: the CPU engine (the GPU engine does not place force jumps yet)".into();
     }
     eprintln!("backend: {}", chosen.reason);
     let gpu = chosen.gpu;

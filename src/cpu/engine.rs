@@ -1448,8 +1448,12 @@ impl CpuEngine {
         if self.jump_impulses {
             for jump in jumps {
                 self.vel[jump.i] += jump.impulse / self.mass[jump.i];
-                if let Partner::Particle(j) = jump.partner {
-                    self.vel[j] -= jump.impulse / self.mass[j];
+                match jump.partner {
+                    Partner::Particle(j) => self.vel[j] -= jump.impulse / self.mass[j],
+                    // a moving wall does the impulse's work on the particle
+                    Partner::Wall(w) => {
+                        self.wall_work += jump.impulse.dot(self.walls[w].velocity);
+                    }
                 }
             }
         }
