@@ -325,18 +325,33 @@ fn jkr_point(
         (_, false) => "jkr-displacement",
         (_, true) => "jkr-displacement-verlet",
     };
-    Ok(AccuracyPoint {
+    Ok(sweep_point(
+        case, backend, divisor, dt, &results, wall, error,
+    ))
+}
+
+/// The point of a collision sweep (pair or JKR): steps summed over the sweep.
+fn sweep_point(
+    case: &'static str,
+    backend: Backend,
+    divisor: f64,
+    dt: f64,
+    results: &[collide::CollideResult],
+    wall_seconds: f64,
+    error: f64,
+) -> AccuracyPoint {
+    AccuracyPoint {
         case,
         backend: bench::backend_name(backend),
         divisor,
         dt,
         steps: results.iter().map(|r| r.steps).sum(),
-        wall_seconds: wall,
+        wall_seconds,
         error,
         max_position_error: None,
         kinetic_error: None,
         setup_seconds: None,
-    })
+    }
 }
 
 /// The packing case's set-up and reference.
@@ -459,18 +474,9 @@ fn pair_point(
         .iter()
         .filter_map(|r| r.e_analytic.map(|ea| (r.e - ea).abs()))
         .fold(0.0, f64::max);
-    Ok(AccuracyPoint {
-        case: "pair",
-        backend: bench::backend_name(backend),
-        divisor,
-        dt,
-        steps: results.iter().map(|r| r.steps).sum(),
-        wall_seconds: wall,
-        error,
-        max_position_error: None,
-        kinetic_error: None,
-        setup_seconds: None,
-    })
+    Ok(sweep_point(
+        "pair", backend, divisor, dt, &results, wall, error,
+    ))
 }
 
 /// The packing scene with dt = `time`/`steps` exactly.
