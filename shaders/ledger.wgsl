@@ -11,9 +11,8 @@
 // once, by the particle whose half list holds it (see step.wgsl), which books all of it
 // (and counts it twice: once for each particle); so does a wall contact.
 //
-// What the next step needs of a contact is kept per slot next to its history and moves
-// with it through re-sorts: (delta, f, U − ½·dt·P, 1), or zeros while it is not engaged
-// (engaged: the model's touched flag, a force or a stored energy, as `is_in` on the CPU).
+// What the last step left of a contact comes from the entries' `prior` (step.wgsl), kept
+// per slot next to its history and moved with it through re-sorts.
 //
 // Per particle, indexed by its persistent id (each invocation writes only its own
 // particle, so no atomics and bitwise reproducible sums), four vec4:
@@ -24,14 +23,13 @@
 //   [2] (dissipated energy so far: Kahan sum and its compensation; the stored energy of
 //        the pairs it evaluates and of its walls; 0);
 //   [3] (work moving walls did on it so far: Kahan sum and compensation; 0; 0) — the
-//        normal force's work 0.5·(f0 + f1)·(n·v_wall)·dt, exact for walls moving along
-//        their normal (the tangential force's is left out).
+//        normal force's work 0.5·(f0 + f1)·(n·v_wall)·dt and a placed force jump's
+//        J·(n·v_wall), exact for walls moving along their normal (the tangential force's
+//        is left out).
 // The host reads them back only when asked and sums in f64 in id order.
 
 const LEDGER: bool = true;
 
-// (The slots' values: the `ledger` field of the entries, `new_ledger` of a rebuild's new
-// lists, `wall_ledger` of the wall contacts: `gpu::records`.)
 @group(0) @binding(64) var<storage, read_write> particle_ledger: array<vec4<f32>>;
 
 // What the force kernel gathers for one particle during a step.
@@ -48,32 +46,28 @@ fn ledger_new() -> LedgerAcc {
     return LedgerAcc(0.0, 0.0, 0.0, vec4<f32>(0.0), vec4<f32>(0.0));
 }
 
-// The energy one contact dissipated this step, and its new slot value.
-fn ledger_book(old: vec4<f32>, p: PairRow, k: Kin, c: Contact, power: f32) -> vec4<f32> {
-    let was_in = old.w != 0.0;
-    let is_in = c.engaged || c.potential != 0.0 || c.normal != 0.0;
+// The energy one contact dissipated this step: `old` its prior, `is_in` whether it is
+// engaged now, `edges` the law's where the step crossed one.
+fn ledger_book(old: vec4<f32>, k: Kin, c: Contact, power: f32, is_in: bool, edges: vec4<f32>) -> f32 {
+    let was_in = old.w > 0.0;
     var d0 = old.x;
     var f0 = old.y;
     var d1 = k.delta;
     var f1 = c.normal;
-    if (was_in != is_in) {
-        let edges = pair_edges(p, k);
-        if (!was_in) {
-            d0 = edges.x;
-            f0 = edges.y;
-        }
-        if (!is_in) {
-            d1 = edges.z;
-            f1 = edges.w;
-        }
+    if (!was_in) {
+        d0 = edges.x;
+        f0 = edges.y;
+    }
+    if (!is_in) {
+        d1 = edges.z;
+        f1 = edges.w;
     }
     var normal = 0.0;
     if (was_in || is_in) {
         normal = 0.5 * (f0 + f1) * (d1 - d0);
     }
     // old.z = U0 − ½·dt·P0 (zero when the contact was not engaged)
-    let dissipated = normal - 0.5 * k.dt * power - c.potential + old.z;
-    return vec4<f32>(dissipated, 0.0, 0.0, select(0.0, 1.0, is_in));
+    return normal - 0.5 * k.dt * power - c.potential + old.z;
 }
 
 fn ledger_count(acc: ptr<function, LedgerAcc>, k: Kin, engaged: bool, wall: bool) {
@@ -91,53 +85,29 @@ fn ledger_count(acc: ptr<function, LedgerAcc>, k: Kin, engaged: bool, wall: bool
     }
 }
 
-// A pair slot's ledger value, read once per pair (the force pass computes the new value
-// on both of its paths and stores it once: `ledger_save`; on lavapipe each access in the
-// code is a loop over the SIMD lanes, taken or not).
-fn ledger_load(slot: u32) -> vec4<f32> {
-    return load_ledger(slot);
-}
-
-fn ledger_save(slot: u32, value: vec4<f32>) {
-    store_ledger(slot, value);
-}
-
-// One evaluated particle–particle contact whose slot held `old` (after pair_contact):
-// returns the slot's new value.
-fn ledger_pair(acc: ptr<function, LedgerAcc>, old: vec4<f32>, p: PairRow, k: Kin, c: Contact, power: f32) -> vec4<f32> {
-    let booked = ledger_book(old, p, k, c, power);
-    (*acc).dissipated += booked.x;
+// One evaluated particle–particle contact (after pair_contact), whose prior was `old`.
+fn ledger_pair(acc: ptr<function, LedgerAcc>, old: vec4<f32>, k: Kin, c: Contact, power: f32, is_in: bool, edges: vec4<f32>) {
+    (*acc).dissipated += ledger_book(old, k, c, power, is_in, edges);
     (*acc).stored += c.potential;
-    let engaged = booked.w != 0.0;
-    ledger_count(acc, k, engaged, false);
-    return select(vec4<f32>(0.0), vec4<f32>(k.delta, c.normal, c.potential - 0.5 * k.dt * power, 1.0), engaged);
+    ledger_count(acc, k, is_in, false);
 }
 
-// Whether the wall contact in `slot` was engaged after the last step (the force kernel
-// then evaluates it even beyond reach, so its exit is booked).
-fn ledger_wall_engaged(slot: u32) -> bool {
-    return load_wall_ledger(slot).w != 0.0;
-}
-
-// One evaluated wall contact; v_n is the wall's velocity along n.
-fn ledger_wall(acc: ptr<function, LedgerAcc>, slot: u32, p: PairRow, k: Kin, c: Contact, power: f32, v_n: f32) {
-    let old = load_wall_ledger(slot);
+// One evaluated wall contact; v_n is the wall's velocity along n, `jump` the impulse of a
+// force jump placed at the end of the step (the wall does its work too).
+fn ledger_wall(acc: ptr<function, LedgerAcc>, old: vec4<f32>, k: Kin, c: Contact, power: f32, is_in: bool, edges: vec4<f32>, v_n: f32, jump: f32) {
     if (v_n != 0.0) {
-        (*acc).wall_work += 0.5 * (select(0.0, old.y, old.w != 0.0) + c.normal) * v_n * k.dt;
+        (*acc).wall_work += (0.5 * (select(0.0, old.y, old.w > 0.0) + c.normal) * k.dt + jump) * v_n;
     }
-    let booked = ledger_book(old, p, k, c, power);
-    (*acc).dissipated += booked.x;
+    (*acc).dissipated += ledger_book(old, k, c, power, is_in, edges);
     (*acc).stored += c.potential;
-    let engaged = booked.w != 0.0;
-    store_wall_ledger(slot, select(vec4<f32>(0.0), vec4<f32>(k.delta, c.normal, c.potential - 0.5 * k.dt * power, 1.0), engaged));
-    ledger_count(acc, k, engaged, true);
+    ledger_count(acc, k, is_in, true);
 }
 
-// A listed pair beyond every model's reach whose slot held `old`: if it was engaged it
+// A listed pair beyond every model's reach whose prior was `old`: if it was engaged it
 // leaves with its last force, as the CPU's `book_departed`:
-// 0.5·f0·(delta − delta0) + U0 − ½·dt·P0. The slot's new value is zero.
+// 0.5·f0·(delta − delta0) + U0 − ½·dt·P0.
 fn ledger_departed(acc: ptr<function, LedgerAcc>, old: vec4<f32>, delta: f32) {
-    if (old.w != 0.0) {
+    if (old.w > 0.0) {
         (*acc).dissipated += 0.5 * old.y * (delta - old.x) + old.z;
     }
 }
@@ -161,23 +131,6 @@ fn ledger_store(pid: u32, acc: LedgerAcc) {
     }
 }
 
-// remap: the slot's ledger follows its history.
-fn ledger_carry(new_slot: u32, old_slot: u32) {
-    store_new_ledger(new_slot, load_ledger(old_slot));
-}
-
-fn ledger_clear(new_slot: u32) {
-    store_new_ledger(new_slot, vec4<f32>(0.0));
-}
-
-// copy_back_history: the new list's entries row .. row + n return to A (the wall
-// contacts were re-sorted in place with their particle).
-fn ledger_copy_back(row: u32, n: u32) {
-    for (var e = row; e < row + n; e++) {
-        store_ledger(e, load_new_ledger(e));
-    }
-}
-
 // remap on a rebuild: an engaged contact of the old list whose pair is in no new list
 // moved out of reach + skin within one step (only a violent step does that). It is
 // booked as having left at its last overlap (U0 − ½·dt·P0; the CPU also adds the normal
@@ -186,8 +139,8 @@ fn ledger_copy_back(row: u32, n: u32) {
 fn ledger_dropped(pid: u32, old_row: u32, old_n: u32, k: u32) {
     var lost = 0.0;
     for (var m = 0u; m < old_n; m++) {
-        let old = load_ledger(old_row + m);
-        if (old.w == 0.0) {
+        let old = load_prior(old_row + m);
+        if (old.w <= 0.0) {
             continue;
         }
         // the pair is in k's new list, or in a partner's that lists k (`lower`, resolved)

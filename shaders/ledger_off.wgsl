@@ -11,30 +11,12 @@ fn ledger_new() -> LedgerAcc {
     return LedgerAcc(0.0);
 }
 
-fn ledger_load(slot: u32) -> vec4<f32> {
-    return vec4<f32>(0.0);
-}
+fn ledger_pair(acc: ptr<function, LedgerAcc>, old: vec4<f32>, k: Kin, c: Contact, power: f32, is_in: bool, edges: vec4<f32>) {}
 
-fn ledger_save(slot: u32, value: vec4<f32>) {}
-
-fn ledger_pair(acc: ptr<function, LedgerAcc>, old: vec4<f32>, p: PairRow, k: Kin, c: Contact, power: f32) -> vec4<f32> {
-    return vec4<f32>(0.0);
-}
-
-fn ledger_wall(acc: ptr<function, LedgerAcc>, slot: u32, p: PairRow, k: Kin, c: Contact, power: f32, v_n: f32) {}
+fn ledger_wall(acc: ptr<function, LedgerAcc>, old: vec4<f32>, k: Kin, c: Contact, power: f32, is_in: bool, edges: vec4<f32>, v_n: f32, jump: f32) {}
 
 fn ledger_departed(acc: ptr<function, LedgerAcc>, old: vec4<f32>, delta: f32) {}
 
 fn ledger_store(pid: u32, acc: LedgerAcc) {}
-
-fn ledger_carry(new_slot: u32, old_slot: u32) {}
-
-fn ledger_clear(new_slot: u32) {}
-
-fn ledger_copy_back(row: u32, n: u32) {}
-
-fn ledger_wall_engaged(slot: u32) -> bool {
-    return false;
-}
 
 fn ledger_dropped(pid: u32, old_row: u32, old_n: u32, k: u32) {}

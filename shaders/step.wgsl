@@ -44,9 +44,13 @@
 //   force        per particle (A)        evaluates the pairs of its list in slot order
 //                                        (candidates beyond reach skipped) and its wall
 //                                        candidates;
-//                                        leaves each pair's force in its slot
+//                                        leaves each pair's force in its slot; with the
+//                                        force jumps (jump.wgsl) the impulse of a jump
+//                                        inside the step: k's into its velocity, the
+//                                        partner's in the slot (`jump`, `jump_normal`)
 //   collect      per particle (A)        adds the pairs its partners evaluated (no atomics:
-//                                        deterministic), gravity -> acc (alpha)
+//                                        deterministic), gravity -> acc (alpha); the
+//                                        partners' force-jump impulses into v
 //   kick         per particle (A)        v += dt/2·a (omega += dt/2·alpha)
 // (collect and kick are recorded as kernels only at the end of a batch; within it they
 // run with the next step's drift.) Between rebuilds a step touches each particle's state in place, once per pass, and
@@ -95,6 +99,9 @@ struct StepParams {
     // The Verlet skin (m). A uniform rather than a storage value: on lavapipe each storage
     // access is a loop over the SIMD lanes.
     skin: f32,
+    // 1 when the variant's force jumps are placed (`jump.wgsl`); 0 for the initial forces,
+    // whose contacts crossed nothing.
+    jumps: u32,
     // Per periodic axis, the scene's period less dims·h (h is rounded to f32), m: a wrap
     // and a separation across the seam add it (overlap.wgsl; 0 on other axes).
     period_lo: vec3<f32>,
@@ -202,6 +209,16 @@ fn kahan_add(x: vec3<f32>, c: vec3<f32>, dx: vec3<f32>) -> Compensated {
     let y = dx - c;
     let t = opaque(x + y);
     return Compensated(t, (t - x) - y);
+}
+
+// kahan_add, leaving (x, c) as they are where dx is zero (a force jump's velocity change,
+// zero in most steps: added the same way at a batch's end and within it, so batches of
+// any length give the same bits).
+fn kahan_add_nonzero(x: vec3<f32>, c: vec3<f32>, dx: vec3<f32>) -> Compensated {
+    if (all(dx == vec3<f32>(0.0))) {
+        return Compensated(x, c);
+    }
+    return kahan_add(x, c, dx);
 }
 
 // Whether each particle (by persistent id) has appeared (pouring: written by the host at the
@@ -347,14 +364,14 @@ fn collect_kick_drift(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgr
         let vel = load_vel(i);
         let c = collect_particle(i, vel.w, false);
         if (is_active(load_ids(i).x)) {
-            drift_particle(i, vel, c.acc, c.rot, true, c.peak);
+            drift_particle(i, vel, c.acc, c.rot, true, c.peak, c.dv);
         }
     }
 }
 
 fn drift(i: u32) {
     if (i < grid.n_particles && is_active(load_ids(i).x)) {
-        drift_particle(i, load_vel(i), load_acc(i).xyz, rot_load(i), false, 0.0);
+        drift_particle(i, load_vel(i), load_acc(i).xyz, rot_load(i), false, 0.0, vec3<f32>(0.0));
     }
 }
 
@@ -365,13 +382,16 @@ fn drift(i: u32) {
 // hold the cell and offset the last force pass saw (nothing wrote them since): read from
 // there (a gather on lavapipe, not a loop over the lanes). At a batch's first step the host
 // may have written the state since (a restore): read the buffers.
-fn drift_particle(i: u32, vel: vec4<f32>, acc: vec3<f32>, rot: RotState, pending_kick: bool, peak: f32) {
+// `jump_dv`: with the pending kick, the partners' force jumps at the end of that step.
+fn drift_particle(i: u32, vel: vec4<f32>, acc: vec3<f32>, rot: RotState, pending_kick: bool, peak: f32, jump_dv: vec3<f32>) {
     let h = grid.cell_width;
     let half_dv = 0.5 * step.dt * acc;
     var v0 = vel.xyz;
     var c0 = load_kahan_v(i).xyz;
     if (pending_kick) {
-        let kk = kahan_add(v0, c0, half_dv);
+        // the partners' force jumps first, as collect adds them at a batch's end
+        let kj = kahan_add_nonzero(v0, c0, jump_dv);
+        let kk = kahan_add(kj.x, kj.c, half_dv);
         v0 = kk.x;
         c0 = kk.c;
     }
@@ -663,12 +683,12 @@ fn remap(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
         let j = load_nbr(e);
         let partner = load_ids(j).x;
         var h = hist_zero();
-        ledger_clear(e);
+        store_new_prior(e, vec4<f32>(0.0));
         var found = false;
         for (var m = 0u; m < old_n; m++) {
             if (load_hist_pid(old_row + m) == partner) {
                 h = load_hist(old_row + m);
-                ledger_carry(e, old_row + m);
+                store_new_prior(e, load_prior(old_row + m));
                 found = true;
                 break;
             }
@@ -679,7 +699,7 @@ fn remap(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
             for (var m = 0u; m < mj.z; m++) {
                 if (load_hist_pid(row_j + m) == me) {
                     h = hist_mirror(load_hist(row_j + m));
-                    ledger_carry(e, row_j + m);
+                    store_new_prior(e, load_prior(row_j + m));
                     break;
                 }
             }
@@ -703,8 +723,8 @@ fn copy_back_history(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgro
     for (var e = row; e < row + n; e++) {
         store_hist(e, load_new_hist(e));
         store_hist_pid(e, load_new_hist_pid(e));
+        store_prior(e, load_new_prior(e));
     }
-    ledger_copy_back(row, n);
     // (w: the batch's largest overlap so far, which the re-sort carried)
     store_disp(k, vec4<f32>(0.0, 0.0, 0.0, load_disp(k).w));
     // a wall out of reach + skin starts with the history of a contact out of range
@@ -716,12 +736,13 @@ fn copy_back_history(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgro
         let wall = walls[w];
         let slot = wall_slot(k, w);
         let delta = ok.w - dot(separation(ck, ok, wall.cell, wall.offset), wall.normal.xyz);
-        let candidate = !(delta < -margin) || ledger_wall_engaged(slot);
+        let candidate = !(delta < -margin) || load_wall_prior(slot).w > 0.0;
         if (candidate && w < 32u) {
             near |= 1u << w;
         }
         if (!candidate && w < 32u) {
             store_wall_hist(slot, hist_zero());
+            store_wall_prior(slot, vec4<f32>(0.0));
         }
         if (step.servo_walls != 0u) {
             // a far wall's push stays 0 until the next rebuild (force writes candidates')
@@ -804,6 +825,22 @@ struct Contact {
     engaged: bool,
 }
 
+// Whether a contact is engaged after the step (the ledger's and the force jumps' "in"):
+// the law's touched flag, or a force or stored energy.
+fn contact_is_in(c: Contact) -> bool {
+    return c.engaged || c.potential != 0.0 || c.normal != 0.0;
+}
+
+// What the next step needs of a contact (the entries' `prior`, with the ledger or the
+// force jumps): (δ, normal force, U − ½·dt·P, 1) while it is engaged, (δ, 0, 0, −1) while
+// it is not; a slot a rebuild just made holds zeros (nothing known).
+fn prior_of(k: Kin, c: Contact, power: f32, is_in: bool) -> vec4<f32> {
+    if (is_in) {
+        return vec4<f32>(k.delta, c.normal, c.potential - 0.5 * k.dt * power, 1.0);
+    }
+    return vec4<f32>(k.delta, 0.0, 0.0, -1.0);
+}
+
 @compute @workgroup_size(WG_SIZE)
 fn force(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let k = global_index(wid, nwg, lid);
@@ -839,6 +876,8 @@ fn particle_forces(k: u32, row0: PairRow) {
     var torque = vec3<f32>(0.0);
     var ledger_acc = ledger_new();
     var peak = 0.0;
+    // the force jumps' impulses on k (placed at the end of the step)
+    var impulse = vec3<f32>(0.0);
     for (var slot = first; slot < first + load_ids(k).z; slot++) {
         let j = load_nbr(slot);
         let cj = own_cell(j);
@@ -861,7 +900,11 @@ fn particle_forces(k: u32, row0: PairRow) {
         // the history a pair out of range has (the models reset it there too). One store
         // site per buffer for both cases: on a SIMD adapter (lavapipe) every store in the
         // code costs a loop over the lanes, whether any lane takes its branch or not.
-        let far = delta < -step.reach;
+        let old = load_prior(slot);
+        let was_in = old.w > 0.0;
+        // (where force jumps are placed, an engaged contact that broke beyond the reach
+        // within the step is evaluated, so its exit impulse is placed and booked)
+        let far = delta < -step.reach && !(JUMPS && was_in);
         var n = vec3<f32>(0.0, 0.0, 1.0);
         if (dist > 0.0) {
             n = d * inv_dist;
@@ -893,17 +936,30 @@ fn particle_forces(k: u32, row0: PairRow) {
             row = pairs[mat_k * step.n_materials + u32(cj.w)];
         }
         let c = pair_contact(row, kin, &h);
+        let is_in = contact_is_in(c);
         var fp = c.normal * n + c.tangential;
         var t_partner = vec3<f32>(0.0);
-        let led0 = ledger_load(slot);
-        var led = vec4<f32>(0.0);
+        var prior = vec4<f32>(delta, 0.0, 0.0, -1.0);
+        var jump = 0.0;
         if (far) {
             h = hist_zero();
             fp = vec3<f32>(0.0);
-            ledger_departed(&ledger_acc, led0, delta);
+            ledger_departed(&ledger_acc, old, delta);
         } else {
             peak = max(peak, delta * inv_a12);
-            led = ledger_pair(&ledger_acc, led0, row, kin, c, dot(c.tangential, v_t) + dot(c.rolling, wk - wj));
+            let power = dot(c.tangential, v_t) + dot(c.rolling, wk - wj);
+            var edges = vec4<f32>(0.0);
+            if ((LEDGER || JUMPS) && was_in != is_in) {
+                edges = pair_edges(row, kin);
+            }
+            ledger_pair(&ledger_acc, old, kin, c, power, is_in, edges);
+            prior = prior_of(kin, c, power, is_in);
+            jump = contact_jump(old, kin, c, is_in, edges);
+            // (n stored only in the rare step that places one)
+            if (jump != 0.0) {
+                impulse += jump * n;
+                store_jump_normal(slot, n);
+            }
             f += fp;
             if (ROTATION) {
                 // the partner sees n and the tangential force negated (their cross product
@@ -921,7 +977,8 @@ fn particle_forces(k: u32, row0: PairRow) {
         }
         store_pair_force(slot, fp);
         rot_pair_store(slot, t_partner);
-        ledger_save(slot, led);
+        store_prior(slot, prior);
+        store_jump(slot, jump);
     }
     // a particle that has not appeared meets no wall
     let present = WALLS && is_active(load_ids(k).x);
@@ -959,11 +1016,21 @@ fn particle_forces(k: u32, row0: PairRow) {
         let kin = Kin(delta, -dot(v_rel, n), rk, mk, step.dt, n, v_t, rk * cross(wk, n) - 0.5 * v_t, inv_a12, wk);
         let slot = wall_slot(k, w);
         var h = load_wall_hist(slot);
+        let old = load_wall_prior(slot);
         let row = pairs[step.n_materials * step.n_materials + w * step.n_materials + mat_k];
         let c = pair_contact(row, kin, &h);
         store_wall_hist(slot, h);
         peak = max(peak, delta * inv_a12);
-        ledger_wall(&ledger_acc, slot, row, kin, c, dot(c.tangential, v_t) + dot(c.rolling, wk), dot(n, wall.velocity.xyz));
+        let is_in = contact_is_in(c);
+        let power = dot(c.tangential, v_t) + dot(c.rolling, wk);
+        var edges = vec4<f32>(0.0);
+        if ((LEDGER || JUMPS) && (old.w > 0.0) != is_in) {
+            edges = pair_edges(row, kin);
+        }
+        let jump = contact_jump(old, kin, c, is_in, edges);
+        impulse += jump * n;
+        ledger_wall(&ledger_acc, old, kin, c, power, is_in, edges, dot(n, wall.velocity.xyz), jump);
+        store_wall_prior(slot, prior_of(kin, c, power, is_in));
         if (step.servo_walls != 0u) {
             store_wall_push(slot, c.normal);
         }
@@ -976,6 +1043,9 @@ fn particle_forces(k: u32, row0: PairRow) {
     store_acc(k, vec4<f32>(f, peak));
     rot_store_partial(k, torque);
     ledger_store(load_ids(k).x, ledger_acc);
+    // k's share of the force jumps, into its velocity now (the kicks around the end of
+    // the step add to it; nothing reads it before): the partners' comes through collect
+    jump_kick(k, impulse / mk);
 }
 
 // After force, per particle: adds the forces (and torques) of the pairs k's partners
@@ -986,6 +1056,9 @@ fn collect(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: 
     let k = global_index(wid, nwg, lid);
     if (k < grid.n_particles) {
         let c = collect_particle(k, load_vel(k).w, true);
+        // the partners' force jumps, at the end of the step (before the closing kick:
+        // the sum is the same)
+        jump_kick(k, c.dv);
         // the batch ends here (or the initial forces do): its overlap maximum, with this
         // step's, into the monitor (an atomic only where it grows), and a fresh start
         let disp = load_disp(k);
@@ -1012,6 +1085,8 @@ struct Collected {
     rot: RotState,
     // The largest overlap/a12 of the force pass just collected.
     peak: f32,
+    // The velocity change of the force jumps the partners placed (the end of the step).
+    dv: vec3<f32>,
 }
 
 // Returns the acceleration (and the angular state, stored); `store`: the acceleration too,
@@ -1021,11 +1096,17 @@ fn collect_particle(k: u32, mass: f32, store: bool) -> Collected {
     let partial = load_acc(k);
     var f = partial.xyz;
     var torque = vec3<f32>(0.0);
+    var impulse = vec3<f32>(0.0);
     let low = rows[row_at(ROWS_LOWER_ROW, k)];
     for (var s = low; s < low + rows[row_at(ROWS_LOWER_COUNT, k)]; s++) {
         let slot = load_lower(s);
         f -= load_pair_force(slot);
         torque += rot_pair_load(slot);
+        // a force jump's impulse (0 without the force jumps: no field, no load)
+        let jump = load_jump(slot);
+        if (jump != 0.0) {
+            impulse -= jump * load_jump_normal(slot);
+        }
     }
     let acc = f / mass + step.gravity;
     let rot = rot_collect(k, torque);
@@ -1035,7 +1116,7 @@ fn collect_particle(k: u32, mass: f32, store: bool) -> Collected {
     if (store) {
         store_acc(k, vec4<f32>(acc, 0.0));
     }
-    return Collected(acc, rot, partial.w);
+    return Collected(acc, rot, partial.w, impulse / mass);
 }
 
 @compute @workgroup_size(WG_SIZE)

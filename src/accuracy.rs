@@ -592,9 +592,6 @@ pub fn accuracy(
     let mut jkr = None;
     if opts.jkr {
         let setup = jkr_setup(opts.chi_points);
-        if backends.contains(&Backend::Gpu) {
-            notes.push("jkr on the GPU: the force jumps are left to velocity Verlet (the GPU engine does not place them yet)".into());
-        }
         for sweep in &setup.rules {
             for &backend in &backends {
                 for verlet in [false, true] {
@@ -713,8 +710,6 @@ pub fn work_precision_plot(report: &AccuracyReport) -> Plot {
             }
             let who = if backend == "cpu" {
                 "CPU f64".to_string()
-            } else if case.starts_with("jkr") {
-                format!("{adapter}; jumps left to Verlet")
             } else {
                 adapter.clone()
             };

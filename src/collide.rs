@@ -42,7 +42,7 @@ pub struct CollideSpec {
     /// (90 = head-on, as ψ in paper 002 §5).
     pub impact_angle: f64,
     /// Place the impulses of force jumps inside the step (the scene's `jump_impulses`);
-    /// `None`: where the engine can.
+    /// `None`: the engine's default (yes, where the law's force can jump).
     pub jump_impulses: Option<bool>,
 }
 

@@ -190,13 +190,7 @@ pub fn compare(
     every: u64,
     tol: Tolerances,
 ) -> Result<Comparison, PowderError> {
-    // like with like: the GPU engine leaves force jumps to velocity Verlet (it cannot place
-    // them yet), so the reference does too unless the scene asks otherwise
-    let reference = Scene {
-        jump_impulses: scene.jump_impulses.or(Some(false)),
-        ..scene.clone()
-    };
-    let mut cpu = CpuEngine::new(&reference)?;
+    let mut cpu = CpuEngine::new(scene)?;
     let mut gpu = GpuEngine::new(scene, ctx)?;
     let radius = cpu.radii().to_vec();
     let r_min = radius.iter().copied().fold(f64::INFINITY, f64::min);

@@ -599,7 +599,7 @@ struct CollideArgs {
     #[arg(long)]
     wall: bool,
     /// Place the impulse of a force jump (JKR touch and pull-off) inside the step: true or
-    /// false (plain velocity Verlet); default true on the CPU (the GPU cannot yet).
+    /// false (plain velocity Verlet); default true, on both backends.
     #[arg(long = "jump-impulses", value_name = "BOOL")]
     jump_impulses: Option<bool>,
     /// Radius of sphere 1, m.
@@ -1140,10 +1140,6 @@ fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
             "gpu" => powder::backend::BackendRequest::Gpu,
             _ => powder::backend::BackendRequest::Cpu,
         },
-        // only the CPU engine places force jumps inside the step
-        (None, Backend::Auto) if scene.jump_impulses == Some(true) => {
-            powder::backend::BackendRequest::Cpu
-        }
         _ => a.backend.request(),
     };
     let mut chosen = powder::backend::choose(request)?;
@@ -1152,8 +1148,6 @@ fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
             "--backend auto resumes on the checkpoint's backend ({})",
             chosen.reason
         );
-    } else if a.backend == Backend::Auto && scene.jump_impulses == Some(true) {
-        chosen.reason = "--backend auto with jump_impulses = true: the CPU engine (the GPU engine does not place force jumps yet)".into();
     }
     eprintln!("backend: {}", chosen.reason);
     let gpu = chosen.gpu;

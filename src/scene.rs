@@ -21,9 +21,10 @@
 //! duration = 0.05               # required, s, > 0: simulated time
 //! dt = "auto"                   # "auto" (default: from the stiffest contact) or a time step in s, > 0
 //! force_dt = false              # default false; true accepts a dt above the stability limit
-//! jump_impulses = true          # default: true on the CPU, false on the GPU (which cannot yet):
+//! jump_impulses = true          # default true (the GPU: where some contact's force can jump):
 //!                               # place the impulse of a contact force's jump (JKR touch and
-//!                               # pull-off, jump-in adhesion) inside the step, second order in dt
+//!                               # pull-off, jump-in adhesion, a viscous first touch) inside the
+//!                               # step, second order in dt; false: plain velocity Verlet
 //! output_every = 1000           # default 1000, >= 1: steps between outputs (progress line,
 //!                               # VTK snapshot, CSV row of `powder run`)
 //! gravity = [0.0, 0.0, -9.81]   # m/s^2, default [0, 0, 0]
@@ -343,8 +344,9 @@ pub struct Scene {
     pub dt: DtSetting,
     /// Accept a dt above the stability limit.
     pub force_dt: bool,
-    /// Place the impulse of a contact force's jump inside the step ([`crate::cpu::jump`]);
-    /// `None`: where the engine can (the CPU engine; the GPU engine cannot yet).
+    /// Place the impulse of a contact force's jump inside the step ([`crate::cpu::jump`],
+    /// `shaders/jump.wgsl`); `None`: yes (the GPU engine: where some contact law's force
+    /// can jump, [`crate::model::ContactModel::has_force_jumps`]).
     pub jump_impulses: Option<bool>,
     /// Simulated time, s.
     pub duration: f64,

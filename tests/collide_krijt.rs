@@ -274,7 +274,7 @@ mod gpu {
 
     fn both(s: &CollideSpec) -> (CollideResult, CollideResult) {
         let g = collide_on(s, Backend::Gpu).unwrap();
-        let c = collide_on(&crate::common::verlet(s), Backend::Cpu).unwrap();
+        let c = collide_on(s, Backend::Cpu).unwrap();
         assert_eq!(g.backend, "gpu");
         (g, c)
     }
@@ -431,7 +431,7 @@ mod gpu {
             0.3 + u
         );
         let scene = Scene::from_toml_str(&text, "drifting pair").unwrap();
-        let mut cpu = crate::common::verlet_cpu(&scene);
+        let mut cpu = powder::cpu::CpuEngine::new(&scene).unwrap();
         let mut gpu = GpuEngine::new(&scene, ctx).unwrap();
         assert_eq!(gpu.kind().name(), "step_jkr+krijt");
         let mut compared = 0;
@@ -513,7 +513,7 @@ mod gpu {
         }
         use powder::collide::collide_traced_on;
         let s = spec(krijt(TVIS), 0.1);
-        let (_, cpu) = collide_traced_on(&crate::common::verlet(&s), Backend::Cpu).unwrap();
+        let (_, cpu) = collide_traced_on(&s, Backend::Cpu).unwrap();
         let (_, gpu) = collide_traced_on(&s, Backend::Gpu).unwrap();
         assert_eq!(cpu.len(), gpu.len());
         let f_max = cpu.iter().map(|r| r.force.abs()).fold(0.0, f64::max);

@@ -123,25 +123,6 @@ fn auto_backend_says_what_it_chose_and_why() {
     }
 }
 
-/// A scene that asks for placed force jumps runs on the CPU engine under auto, even with a
-/// GPU (the GPU engine would refuse it), and says why.
-#[test]
-fn auto_takes_the_cpu_for_jump_impulses() {
-    let (stdout, stderr) = powder_ok(&[
-        "run",
-        "--steps",
-        "5",
-        "--no-output",
-        "--json",
-        "--set",
-        "simulation.jump_impulses=true",
-    ]);
-    let summary: serde_json::Value =
-        serde_json::from_str(&stdout[stdout.find('{').unwrap()..]).unwrap();
-    assert_eq!(summary["backend"], "cpu");
-    assert!(stderr.contains("jump_impulses = true"), "{stderr}");
-}
-
 #[test]
 fn bad_thread_counts_are_refused_with_the_option_named() {
     for (cmd, value) in [("run", "x"), ("bench", "1,x"), ("run", "5000")] {

@@ -10,7 +10,7 @@ use powder::gpu::GpuEngine;
 fn cohesive_cluster_matches_the_cpu_reference() {
     let Some(ctx) = context() else { return };
     let scene = example("cohesive_cluster.toml");
-    let mut cpu = crate::common::verlet_cpu(&scene);
+    let mut cpu = powder::cpu::CpuEngine::new(&scene).unwrap();
     let mut gpu = GpuEngine::new(&scene, ctx).unwrap();
     assert_eq!(cpu.dt(), gpu.dt());
     // f32 on the device (Kahan-compensated velocity and offset updates) against f64: equal
@@ -39,7 +39,7 @@ fn cohesive_cluster_matches_the_cpu_reference() {
 fn settled_cluster_rebuilds_rarely_and_still_matches_the_cpu() {
     let Some(ctx) = context() else { return };
     let scene = example("cohesive_cluster.toml");
-    let mut cpu = crate::common::verlet_cpu(&scene);
+    let mut cpu = powder::cpu::CpuEngine::new(&scene).unwrap();
     let mut gpu = GpuEngine::new(&scene, ctx).unwrap();
     // the initial build, before the first step
     assert_eq!(gpu.rebuilds().unwrap(), 1);
@@ -149,7 +149,7 @@ positions = [{}]
         positions.join(", ")
     );
     let scene = powder::scene::Scene::from_toml_str(&text, "crowded").unwrap();
-    let mut cpu = crate::common::verlet_cpu(&scene);
+    let mut cpu = powder::cpu::CpuEngine::new(&scene).unwrap();
     let mut gpu = GpuEngine::new(&scene, ctx).unwrap();
     // the fixed bound of the engine's earlier slot lists, 5·(1 + r_max/r_min)²·(1 + skin/2)³
     // for equal spheres
@@ -348,7 +348,7 @@ mod collisions {
             let s = hysteretic(10.0, v);
             let (g, c) = (
                 collide_on(&s, Backend::Gpu).unwrap(),
-                collide_on(&crate::common::verlet(&s), Backend::Cpu).unwrap(),
+                collide_on(&s, Backend::Cpu).unwrap(),
             );
             assert_eq!(g.backend, "gpu");
             assert!(g.adapter.is_some());
@@ -392,7 +392,7 @@ mod collisions {
                 let s = CollideSpec::head_on(ContactModel::Hysteretic(p), 1.1e-3, 2000.0, v);
                 let (g, c) = (
                     collide_on(&s, Backend::Gpu).unwrap(),
-                    collide_on(&crate::common::verlet(&s), Backend::Cpu).unwrap(),
+                    collide_on(&s, Backend::Cpu).unwrap(),
                 );
                 assert_eq!(g.stuck, c.stuck, "{p:?} v {v}");
                 assert!(
@@ -429,7 +429,7 @@ mod collisions {
         let s = hysteretic(100.0, 0.8 * 0.29116);
         let (g, c) = (
             collide_on(&s, Backend::Gpu).unwrap(),
-            collide_on(&crate::common::verlet(&s), Backend::Cpu).unwrap(),
+            collide_on(&s, Backend::Cpu).unwrap(),
         );
         assert!(g.stuck && c.stuck);
         let (dg, dc) = (g.delta_c.unwrap(), c.delta_c.unwrap());
@@ -447,7 +447,7 @@ mod collisions {
         };
         let (g, c) = (
             collide_on(&s, Backend::Gpu).unwrap(),
-            collide_on(&crate::common::verlet(&s), Backend::Cpu).unwrap(),
+            collide_on(&s, Backend::Cpu).unwrap(),
         );
         assert!((g.e - c.e).abs() < 1e-3, "wall: gpu {} cpu {}", g.e, c.e);
     }
@@ -476,7 +476,7 @@ mod jkr {
 
     fn both(s: &CollideSpec) -> (CollideResult, CollideResult) {
         let g = collide_on(s, Backend::Gpu).unwrap();
-        let c = collide_on(&crate::common::verlet(s), Backend::Cpu).unwrap();
+        let c = collide_on(s, Backend::Cpu).unwrap();
         assert_eq!(g.backend, "gpu");
         (g, c)
     }
@@ -486,32 +486,6 @@ mod jkr {
         let g = PairGeometry::spheres(R, R, m, m);
         let w = analytic::jkr_loss(p.pulloff) * p.fc(g.r_eff()) * p.delta0(g.r_eff());
         analytic::jkr_sticking_velocity(w, g.reduced_mass)
-    }
-
-    /// The GPU engine cannot place force jumps yet: asked to, it refuses by name.
-    #[test]
-    fn gpu_refuses_jump_impulses_by_name() {
-        if context().is_none() {
-            return;
-        }
-        let s = CollideSpec {
-            jump_impulses: Some(true),
-            ..spec(jkr(), 2.0 * v_stick(&jkr()))
-        };
-        let e = collide_on(&s, Backend::Gpu).unwrap_err().to_string();
-        assert!(e.contains("jump_impulses") && e.contains("GPU"), "{e}");
-        // without the key it runs (velocity Verlet)
-        assert!(
-            !collide_on(
-                &CollideSpec {
-                    jump_impulses: None,
-                    ..s
-                },
-                Backend::Gpu
-            )
-            .unwrap()
-            .stuck
-        );
     }
 
     #[test]
@@ -824,7 +798,7 @@ radius = {r:e}
             let mut s = base.clone();
             s.gravity = [f_hat * f_yield / m, 0.0, 0.0];
             let mut g = GpuEngine::new(&s, ctx.take().or_else(context).unwrap()).unwrap();
-            let mut c = crate::common::verlet_cpu(&s);
+            let mut c = powder::cpu::CpuEngine::new(&s).unwrap();
             assert!(g.rotates() && c.rotates());
             let (mut x_max, mut x_max_cpu): (f64, f64) = (0.0, 0.0);
             let (mut x_half, mut x_half_cpu) = (0.0, 0.0);
@@ -997,7 +971,7 @@ velocity = [-0.1, 0.05, -0.3]
     fn gpu_sticky_pile_follows_the_cpu_at_first() {
         let Some(ctx) = context() else { return };
         let scene = sticky_pile(0.3, 0.5);
-        let mut cpu = crate::common::verlet_cpu(&scene);
+        let mut cpu = powder::cpu::CpuEngine::new(&scene).unwrap();
         let mut gpu = GpuEngine::new(&scene, ctx).unwrap();
         assert_eq!(cpu.dt(), gpu.dt());
         let r = scene.particles[0].radius;
@@ -1175,7 +1149,11 @@ fn arrays_over_the_binding_limit_are_refused() {
     if context().is_none() {
         return;
     }
-    let scene = packing(Case::Hysteretic, 1000, 1.0, 7).unwrap();
+    // (without the ledger and the force jumps: no per-contact prior)
+    let scene = powder::scene::Scene {
+        jump_impulses: Some(false),
+        ..packing(Case::Hysteretic, 1000, 1.0, 7).unwrap()
+    };
     let options = GpuOptions {
         ledger: false,
         ..Default::default()
@@ -1213,7 +1191,7 @@ fn state_mirrors_past_one_texture_row_match_the_cpu() {
     for case in [Case::Hysteretic, Case::Jkr] {
         let Some(ctx) = context() else { return };
         let scene = packing(case, 4500, 1.0, 7).unwrap();
-        let mut cpu = crate::common::verlet_cpu(&scene);
+        let mut cpu = powder::cpu::CpuEngine::new(&scene).unwrap();
         let mut gpu = GpuEngine::with_options(
             &scene,
             ctx,
@@ -1259,7 +1237,11 @@ fn list_growth_stops_at_the_binding_limit() {
     use powder::bench::{packing, Case};
     use powder::gpu::{GpuContext, GpuOptions};
     let Some(ctx) = context() else { return };
-    let scene = packing(Case::Hysteretic, 1000, 1.0, 7).unwrap();
+    // (without the ledger and the force jumps: no per-contact prior)
+    let scene = powder::scene::Scene {
+        jump_impulses: Some(false),
+        ..packing(Case::Hysteretic, 1000, 1.0, 7).unwrap()
+    };
     let options = GpuOptions {
         ledger: false,
         ..Default::default()

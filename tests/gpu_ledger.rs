@@ -163,8 +163,13 @@ fn gpu_without_ledger_allocates_none_and_moves_the_same() {
     } else {
         ""
     };
-    assert_eq!(without.variant_name(), format!("step_hysteretic{m}"));
-    assert_eq!(with.variant_name(), format!("step_hysteretic_ledger{m}"));
+    // (`_jumps`: the cluster's jump-in adhesion has its force jumps placed by default)
+    assert!(with.places_jumps() && without.places_jumps());
+    assert_eq!(without.variant_name(), format!("step_hysteretic_jumps{m}"));
+    assert_eq!(
+        with.variant_name(),
+        format!("step_hysteretic_ledger_jumps{m}")
+    );
     assert!(without.buffers().iter().all(|(n, _)| !n.contains("ledger")));
     assert!(with.buffers().iter().any(|(n, _)| n == "particle_ledger"));
     assert!(without.buffer_bytes() < with.buffer_bytes());

@@ -37,7 +37,7 @@ fn verdicts(p: HystereticParams, v: f64, wall: bool) -> bool {
 
 fn verdicts_of(spec: &CollideSpec) -> bool {
     let (v, wall) = (spec.velocity, spec.wall);
-    let c = collide_on(&crate::common::verlet(spec), Backend::Cpu).unwrap();
+    let c = collide_on(spec, Backend::Cpu).unwrap();
     let g = collide_on(spec, Backend::Gpu).unwrap();
     eprintln!(
         "v {v:.5e} wall {wall}: cpu e {:.6} stuck {}, gpu e {:.6} stuck {}",
@@ -200,7 +200,7 @@ positions = [[{:e}, {:e}, {:e}]]
         centre.z
     );
     let scene = Scene::from_toml_str(&text, "tilted").unwrap();
-    let mut cpu = crate::common::verlet_cpu(&scene);
+    let mut cpu = powder::cpu::CpuEngine::new(&scene).unwrap();
     let mut gpu = powder::gpu::GpuEngine::new(&scene, ctx).unwrap();
     for _ in 0..3000 {
         cpu.step().unwrap();
@@ -276,7 +276,7 @@ velocities = [[{:e}, 0.0, 0.0], [{:e}, 0.0, 0.0]]
             -0.5 * v
         );
         let scene = Scene::from_toml_str(&text, "seam").unwrap();
-        let mut cpu = crate::common::verlet_cpu(&scene);
+        let mut cpu = powder::cpu::CpuEngine::new(&scene).unwrap();
         let mut gpu = powder::gpu::GpuEngine::new(&scene, gpu().unwrap()).unwrap();
         for _ in 0..3000 {
             cpu.step().unwrap();

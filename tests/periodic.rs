@@ -42,7 +42,7 @@ fn a_pair_collides_across_the_periodic_face() {
     let scene = Scene::from_toml_str(&pair_text(""), "pair").unwrap();
     let m = 2000.0 * 4.0 / 3.0 * std::f64::consts::PI * 1e-9;
     let e = analytic::lsd_restitution(100.0, 2e-3, 0.5 * m).unwrap();
-    let mut cpu = crate::common::verlet_cpu(&scene);
+    let mut cpu = powder::cpu::CpuEngine::new(&scene).unwrap();
     let steps = (0.03 / cpu.dt()) as u64;
     cpu.run_steps(steps).unwrap();
     let v = cpu.velocities();

@@ -56,7 +56,7 @@ fn batches_appear_on_time_and_the_ledger_books_them() {
         let n = times.iter().filter(|&&t| t == 0.04 * k as f64).count();
         assert_eq!(n, 15, "batch {k}");
     }
-    let mut cpu = crate::common::verlet_cpu(&scene);
+    let mut cpu = powder::cpu::CpuEngine::new(&scene).unwrap();
     let total0 = cpu.energies().total();
     let dt = cpu.dt();
     let active = |e: &CpuEngine| (0..e.len()).filter(|&i| e.is_active(i)).count();
@@ -85,7 +85,7 @@ fn batches_appear_on_time_and_the_ledger_books_them() {
     assert!(e.dissipated > 0.0 && e.inserted > 0.0, "{e:?}");
     // the GPU inserts at the same steps and keeps the same ledger
     let Some(ctx) = gpu() else { return };
-    let mut c = crate::common::verlet_cpu(&scene);
+    let mut c = powder::cpu::CpuEngine::new(&scene).unwrap();
     let mut g = GpuEngine::new(&scene, ctx).unwrap();
     // (two samples before the second batch lands: once collisions chain up, f32 and f64
     // separate as in every granular flow)

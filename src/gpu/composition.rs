@@ -11,13 +11,51 @@
 use super::layout::{CoulombSpringRow, HystereticPair, JkrPair, TwistingRow};
 use super::records::RecordLayout;
 use super::shaders::{
-    compose, ShaderVariant, LEDGER, LEDGER_OFF, OVERLAP, ROTATION, ROTATION_BUFFERS,
-    ROTATION_MIRRORS, ROTATION_OFF, STATE_BUFFERS, STATE_MIRRORS, STEP,
+    compose, ShaderVariant, JUMP, JUMP_OFF, LEDGER, LEDGER_OFF, OVERLAP, ROTATION,
+    ROTATION_BUFFERS, ROTATION_MIRRORS, ROTATION_OFF, STATE_BUFFERS, STATE_MIRRORS, STEP,
 };
 use super::state::StateLayout;
 use crate::model::friction::{rolling, sliding, twisting};
 use crate::model::history::{HistoryField, Mirror, Shape};
 use crate::model::{hysteretic, jkr, krijt, ContactHistory, ContactModel, CoulombSpring};
+
+/// What a step variant keeps beyond the forces: the energy ledger (`shaders/ledger.wgsl`)
+/// and the impulses of force jumps inside the step (`shaders/jump.wgsl`). Both need each
+/// contact as the last step left it (the entries' `prior`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct Keeps {
+    /// The energy ledger and contact statistics.
+    pub ledger: bool,
+    /// The force jumps' impulses (the scene's `jump_impulses`).
+    pub jumps: bool,
+}
+
+impl Keeps {
+    /// Every combination, for the tests that compile each variant.
+    pub const ALL: [Keeps; 4] = [
+        Keeps {
+            ledger: false,
+            jumps: false,
+        },
+        Keeps {
+            ledger: true,
+            jumps: false,
+        },
+        Keeps {
+            ledger: false,
+            jumps: true,
+        },
+        Keeps {
+            ledger: true,
+            jumps: true,
+        },
+    ];
+
+    /// Whether each contact's state at the end of the last step is kept.
+    pub fn prior(&self) -> bool {
+        self.ledger || self.jumps
+    }
+}
 
 /// A block of the pair-table row: a WGSL struct of f32/u32 scalars (so blocks concatenate
 /// without padding) and how a pair's model fills it.
@@ -333,12 +371,14 @@ impl Composition {
         format!("step_{}", parts.join("+"))
     }
 
-    /// The name of the variant with or without the energy ledger (`_ledger` appended),
-    /// reading the state from buffers or from texture mirrors (`_mirrors` appended).
-    pub fn variant_name(&self, ledger: bool, mirrors: bool) -> String {
-        let ledger = if ledger { "_ledger" } else { "" };
+    /// The name of the variant with or without the energy ledger (`_ledger` appended) and
+    /// the force jumps (`_jumps`), reading the state from buffers or from texture mirrors
+    /// (`_mirrors` appended).
+    pub fn variant_name(&self, keeps: Keeps, mirrors: bool) -> String {
+        let ledger = if keeps.ledger { "_ledger" } else { "" };
+        let jumps = if keeps.jumps { "_jumps" } else { "" };
         let mirrors = if mirrors { "_mirrors" } else { "" };
-        format!("{}{ledger}{mirrors}", self.name())
+        format!("{}{ledger}{jumps}{mirrors}", self.name())
     }
 
     /// Whether particles carry angular velocity: some sub-model exerts tangential forces
@@ -649,13 +689,13 @@ impl Composition {
     }
 
     /// The records of the lists' entries, a rebuild's new lists and the wall contacts
-    /// (`gpu::records`) for this composition, with or without the ledger.
-    pub fn records(&self, ledger: bool) -> [RecordLayout; 3] {
+    /// (`gpu::records`) for this composition, with what the variant keeps.
+    pub fn records(&self, keeps: Keeps) -> [RecordLayout; 3] {
         let hist = self.hist_members();
         [
-            RecordLayout::entries(&hist, self.rotation(), ledger),
-            RecordLayout::new_entries(&hist, ledger),
-            RecordLayout::wall_contacts(&hist, ledger),
+            RecordLayout::entries(&hist, self.rotation(), keeps),
+            RecordLayout::new_entries(&hist, keeps),
+            RecordLayout::wall_contacts(&hist, keeps),
         ]
     }
 
@@ -664,10 +704,10 @@ impl Composition {
     /// sub-models' files, the generated interface,
     /// the rotation and ledger hooks, the state's reads (its buffers, or texture mirrors:
     /// the software adapter's path, `gpu::mirror`), the step.
-    pub fn variant(&self, ledger: bool, mirrors: bool) -> ShaderVariant {
+    pub fn variant(&self, keeps: Keeps, mirrors: bool) -> ShaderVariant {
         let interface = self.interface();
         let state = StateLayout::wgsl(self.rotation());
-        let records: Vec<String> = self.records(ledger).iter().map(|r| r.wgsl()).collect();
+        let records: Vec<String> = self.records(keeps).iter().map(|r| r.wgsl()).collect();
         let mut parts: Vec<&str> = vec![&state];
         parts.extend(records.iter().map(String::as_str));
         parts.extend(self.laws().map(|l| l.source));
@@ -686,7 +726,8 @@ impl Composition {
         } else {
             ROTATION_OFF
         });
-        parts.push(if ledger { LEDGER } else { LEDGER_OFF });
+        parts.push(if keeps.ledger { LEDGER } else { LEDGER_OFF });
+        parts.push(if keeps.jumps { JUMP } else { JUMP_OFF });
         parts.push(if mirrors {
             STATE_MIRRORS
         } else {
@@ -700,7 +741,7 @@ impl Composition {
             });
         }
         ShaderVariant {
-            name: self.variant_name(ledger, mirrors),
+            name: self.variant_name(keeps, mirrors),
             source: compose("shaders/step.wgsl", STEP, &parts),
         }
     }
@@ -759,7 +800,10 @@ mod tests {
         let c = Composition::of(&[jkr(0.0, 0.5, krijt), jkr(0.0, 0.0, Dissipation::None)]);
         assert_eq!(c.name(), "step_jkr+krijt+jkr_rolling");
         assert!(!c.interface().contains("mindlin_apply"));
-        assert!(!c.variant(false, false).source.contains("fn mindlin_apply"));
+        assert!(!c
+            .variant(Keeps::default(), false)
+            .source
+            .contains("fn mindlin_apply"));
     }
 
     #[test]

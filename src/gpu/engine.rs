@@ -39,8 +39,8 @@
 //! Every run stays bitwise deterministic (the decision is a pure function of the state).
 
 use crate::cpu::{ContactStats, Energies};
-use crate::error::{ParamError, PowderError};
-use crate::gpu::composition::Composition;
+use crate::error::PowderError;
+use crate::gpu::composition::{Composition, Keeps};
 use crate::gpu::context::GpuContext;
 use crate::gpu::grid::{ExclusiveScan, GridSort};
 use crate::gpu::kernel::{
@@ -53,7 +53,7 @@ use crate::gpu::quiet::{Forecast, QuietBatches};
 use crate::gpu::records::RecordLayout;
 use crate::gpu::state::{particle_stride, Buffer, StateLayout};
 use crate::gpu::traffic::{PassTraffic, When};
-use crate::model::{ContactHistory, ContactModel};
+use crate::model::{ContactHistory, ContactModel, PairGeometry};
 use crate::scene::Scene;
 use crate::setup::Resolved;
 use glam::DVec3;
@@ -79,6 +79,16 @@ const SKIN_OFFSET: u64 = MONITOR_BYTES;
 
 /// Bytes of `control`.
 const CONTROL_BYTES: u64 = SKIN_OFFSET + 16;
+
+/// Whether the step places force jumps: as the scene says (`jump_impulses`), by default
+/// where some contact law's force can jump (on the CPU they cost nothing where none does;
+/// here they are fields and code the step would carry for nothing).
+fn places_jumps(scene: &Scene, models: &[ContactModel], r_max: f64) -> bool {
+    scene.jump_impulses.unwrap_or_else(|| {
+        let geom = PairGeometry::spheres(r_max, r_max, 1.0, 1.0);
+        models.iter().any(|m| m.has_force_jumps(&geom))
+    })
+}
 
 /// Steps recorded into one submission.
 pub const STEPS_PER_SUBMIT: u64 = 64;
@@ -132,10 +142,10 @@ struct StateSet {
     motion: wgpu::Buffer,
     layout: StateLayout,
     /// The lists' entries (partner, `lower`, partner id, history, pair force and torque,
-    /// ledger value) and their layout.
+    /// the contact's prior, a force jump's impulse) and their layout.
     entries: wgpu::Buffer,
     entry_layout: RecordLayout,
-    /// The particle–wall contacts (history, ledger value, servo push), wall-major.
+    /// The particle–wall contacts (history, prior, servo push), wall-major.
     wall_contacts: wgpu::Buffer,
     wall_layout: RecordLayout,
 }
@@ -145,10 +155,10 @@ impl StateSet {
         alloc: &mut Allocator,
         (n, entries, walls): (u64, u64, u64),
         kind: &Composition,
-        (ledger, servo): (bool, bool),
+        (keeps, servo): (Keeps, bool),
     ) -> Self {
         let layout = StateLayout::new(n, kind.rotation());
-        let [entry_layout, _, wall_layout] = kind.records(ledger);
+        let [entry_layout, _, wall_layout] = kind.records(keeps);
         let mut b = |name: &str, bytes: u64| alloc.buffer(&format!("A.{name}"), bytes);
         // the servo's pushes only where a wall is servo-controlled (the last field)
         let leave_out: &[&str] = if servo { &[] } else { &["wall_push"] };
@@ -216,10 +226,10 @@ impl StateSet {
                 ));
             }
         }
-        // the wall contacts' history and ledger values (not the servo's pushes, which the
-        // rebuild zeroes)
+        // the wall contacts' history and priors (not the servo's pushes, which the rebuild
+        // zeroes)
         let capacity = n as u64 * walls as u64;
-        for name in ["wall_hist", "wall_ledger"] {
+        for name in ["wall_hist", "wall_prior"] {
             if let Some((before, words)) = self.wall_layout.place(name) {
                 f.extend(Field::wall_major(
                     name,
@@ -235,7 +245,7 @@ impl StateSet {
     }
 }
 
-/// The neighbour lists a rebuild builds (B: partner ids, history, ledger values), copied
+/// The neighbour lists a rebuild builds (B: partner ids, history, priors), copied
 /// back into A's at its end.
 struct NewLists {
     new_entries: wgpu::Buffer,
@@ -243,8 +253,8 @@ struct NewLists {
 }
 
 impl NewLists {
-    fn new(alloc: &mut Allocator, entries: u64, kind: &Composition, ledger: bool) -> Self {
-        let [_, layout, _] = kind.records(ledger);
+    fn new(alloc: &mut Allocator, entries: u64, kind: &Composition, keeps: Keeps) -> Self {
+        let [_, layout, _] = kind.records(keeps);
         Self {
             new_entries: alloc.buffer("B.new_entries", layout.bytes(entries, &[])),
             layout,
@@ -586,6 +596,8 @@ pub struct GpuEngine {
     bound: Bound,
     max_per_dim: u32,
     kind: Composition,
+    /// What the step variant keeps beyond the forces (ledger, force jumps).
+    keeps: Keeps,
     n_walls: u32,
     /// (name, bytes) of every buffer allocated for the run.
     buffers: Vec<(String, u64)>,
@@ -732,17 +744,14 @@ impl GpuEngine {
         options: GpuOptions,
     ) -> Result<Self, PowderError> {
         let ledger = options.ledger;
-        if scene.jump_impulses == Some(true) {
-            return Err(ParamError::new(
-                "jump_impulses",
-                "the GPU engine does not place force jumps inside the step yet (it integrates them as velocity Verlet does): leave `jump_impulses` out or set it false, or run on the CPU engine",
-            )
-            .into());
-        }
         let r = Resolved::new(scene)?;
         let n = scene.particles.len();
         let all_models: Vec<ContactModel> =
             r.models.iter().chain(&r.wall_models).copied().collect();
+        let keeps = Keeps {
+            ledger,
+            jumps: places_jumps(scene, &all_models, r.r_max),
+        };
         let (kind, pairs) = pair_table(&all_models);
         debug_assert_eq!(kind.rotation(), r.rotation);
         let r_min = scene
@@ -800,7 +809,7 @@ impl GpuEngine {
             .list_entries
             .unwrap_or(INITIAL_ENTRIES_PER_PARTICLE * n as u64 + 256)
             .max(1);
-        let [entry_layout, ..] = kind.records(ledger);
+        let [entry_layout, ..] = kind.records(keeps);
         check_entries(
             entries,
             entry_layout.words(),
@@ -812,8 +821,8 @@ impl GpuEngine {
             .iter()
             .any(|w| matches!(w.motion, crate::scene::WallMotion::Servo { .. }));
         let sizes = (n as u64, entries, n_walls);
-        let state = StateSet::new(&mut alloc, sizes, &kind, (ledger, servo_walls));
-        let new_lists = NewLists::new(&mut alloc, entries, &kind, ledger);
+        let state = StateSet::new(&mut alloc, sizes, &kind, (keeps, servo_walls));
+        let new_lists = NewLists::new(&mut alloc, entries, &kind, keeps);
         let dt32 = r.dt as f32;
         let particle_ledger = ledger.then(|| alloc.buffer("particle_ledger", 64 * n as u64));
         // the per-particle buffers fit before the initial state is written into them
@@ -910,7 +919,9 @@ impl GpuEngine {
             periodic: periodic.map(u32::from),
             zero: 0,
             skin: skin as f32,
-            _pad: [0; 3],
+            // on once the initial forces are in (`initial_forces`)
+            jumps: 0,
+            _pad: [0; 2],
             period_lo: [0, 1, 2].map(|a| {
                 if periodic[a] {
                     (extent[a] - dims[a] as f64 * h[a]) as f32
@@ -971,7 +982,7 @@ impl GpuEngine {
         let constants = pipeline_constants(scene, &r, &all_models);
         let program = Program::specialized(
             &ctx,
-            &kind.variant(ledger, software),
+            &kind.variant(keeps, software),
             Some(&wanted),
             &constants,
         )?;
@@ -1171,6 +1182,7 @@ impl GpuEngine {
             bound,
             max_per_dim,
             kind,
+            keeps,
             n_walls: n_walls as u32,
             buffers,
             gravity: DVec3::from_array(scene.gravity),
@@ -1269,10 +1281,15 @@ impl GpuEngine {
         self.b.particle_ledger.is_some()
     }
 
+    /// Whether the run places the impulses of force jumps inside the step (the scene's
+    /// `jump_impulses`).
+    pub fn places_jumps(&self) -> bool {
+        self.keeps.jumps
+    }
+
     /// The name of the step's shader module (`Composition::variant_name`).
     pub fn variant_name(&self) -> String {
-        self.kind
-            .variant_name(self.has_ledger(), !self.mirrors.is_empty())
+        self.kind.variant_name(self.keeps, !self.mirrors.is_empty())
     }
 
     /// The step's kernels this engine built pipelines for (entry points of the step
@@ -1524,7 +1541,7 @@ impl GpuEngine {
         let new = alloc.buffer("A.entries", layout.bytes(entries, &[]));
         if keep {
             // region by region: each region's start moves with the capacity
-            for name in ["hist_pid", "hist", "ledger"] {
+            for name in ["hist_pid", "hist", "prior"] {
                 if let Some((_, words)) = layout.place(name) {
                     let from = layout.offset(name, old.1).unwrap_or(0);
                     let to = layout.offset(name, entries).unwrap_or(0);
@@ -1663,6 +1680,8 @@ impl GpuEngine {
     /// Contacts present at the start carry stored energy, not dissipation: the ledger's
     /// dissipation (booked from the contacts' entry edges) is zeroed afterwards, as on the CPU.
     fn initial_forces(&mut self) -> Result<(), PowderError> {
+        // the initial contacts crossed nothing: no force jump placed
+        self.set_jumps(false);
         loop {
             let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
             self.start_batch();
@@ -1685,7 +1704,16 @@ impl GpuEngine {
                 .queue
                 .write_buffer(buf, 0, bytemuck::cast_slice(&rows));
         }
+        self.set_jumps(self.keeps.jumps);
         Ok(())
+    }
+
+    /// Whether the steps recorded from now on place the force jumps (`StepParams::jumps`).
+    fn set_jumps(&self, on: bool) {
+        let at = std::mem::offset_of!(StepParams, jumps) as u64;
+        self.ctx
+            .queue
+            .write_buffer(&self.b.step, at, bytemuck::bytes_of(&u32::from(on)));
     }
 
     /// Submits a recorded batch and reads the monitor and the skin state back.
@@ -1944,7 +1972,7 @@ impl GpuEngine {
     fn quiet_copies(&self, q: &Quiet) -> Vec<Saved> {
         let (a, b) = (&self.state, &self._new_lists);
         let mut v = q.copies.clone();
-        for (from, to) in [("hist", "new_hist"), ("ledger", "new_ledger")] {
+        for (from, to) in [("hist", "new_hist"), ("prior", "new_prior")] {
             let cap = self.entries;
             if let (Some(at), Some(to_at), Some((_, words))) = (
                 a.entry_layout.offset(from, cap),
@@ -2244,9 +2272,9 @@ impl GpuEngine {
             return Ok(f);
         }
         let capacity = self.n as u64 * walls as u64;
-        let Some(at) = self.state.wall_layout.offset("wall_ledger", capacity) else {
+        let Some(at) = self.state.wall_layout.offset("wall_prior", capacity) else {
             return Err(PowderError::Run(
-                "this GPU run keeps no energy ledger (GpuOptions { ledger: false }), which holds the wall forces".into(),
+                "this GPU run keeps neither the energy ledger (GpuOptions { ledger: false }) nor force jumps, whose per-contact records hold the wall forces".into(),
             ));
         };
         let buf = &self.state.wall_contacts;
@@ -2255,9 +2283,9 @@ impl GpuEngine {
         let at = at as usize;
         let rows: Vec<[f32; 4]> =
             bytemuck::pod_collect_to_vec(&out[0][at..at + 16 * capacity as usize]);
-        // slot w·n + k (`wall_slot`): (overlap, normal force, .., engaged)
+        // slot w·n + k (`wall_slot`): (overlap, normal force, .., 1 while engaged)
         for (slot, r) in rows.iter().enumerate() {
-            if r[3] != 0.0 {
+            if r[3] > 0.0 {
                 let w = slot / self.n as usize;
                 f[w] -= r[1] as f64 * self.wall_normals[w];
             }

@@ -517,8 +517,11 @@ pub struct StepParams {
     /// The Verlet skin, m: a rebuild comes once a particle (or a moving wall, along its
     /// normal) has moved more than half of it.
     pub skin: f32,
+    /// 1 when the force jumps of a variant that places them are placed (0 for the initial
+    /// forces, whose contacts crossed nothing).
+    pub jumps: u32,
     /// Pads `period_lo` to its 16-byte alignment.
-    pub _pad: [u32; 3],
+    pub _pad: [u32; 2],
     /// Per periodic axis, the scene's period less the device's, L − dims·h, m (h is
     /// rounded to f32): a wrap and a separation across the seam add it (0 elsewhere).
     pub period_lo: [f32; 3],
@@ -604,6 +607,7 @@ impl WallGpu {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::gpu::composition::Keeps;
     use crate::gpu::shaders;
     use rand::{Rng, SeedableRng};
     use rand_pcg::Pcg64;
@@ -898,7 +902,7 @@ mod tests {
             .into_iter()
             .max_by_key(|c| c.history_bytes())
             .unwrap();
-        let (jkr, _) = shaders::validate(&all.variant(true, true).source).unwrap();
+        let (jkr, _) = shaders::validate(&all.variant(Keeps::ALL[3], true).source).unwrap();
         let (wsize, members) = wgsl_struct(&jkr, "PairRow");
         assert_eq!(wsize as usize, all.row_bytes(), "PairRow size");
         let jkr_at = 4 + size_of::<HystereticPair>() as u32;
@@ -996,7 +1000,8 @@ mod tests {
     #[test]
     fn gpu_layout_history_strides_match_wgsl() {
         for kind in crate::gpu::composition::Composition::all() {
-            let (module, _) = shaders::validate(&kind.variant(true, false).source).unwrap();
+            let (module, _) =
+                shaders::validate(&kind.variant(Keeps::ALL[3], false).source).unwrap();
             let (_, hist) = module
                 .types
                 .iter()
@@ -1008,7 +1013,7 @@ mod tests {
                 "{}",
                 kind.name()
             );
-            let records = kind.records(true);
+            let records = kind.records(Keeps::ALL[3]);
             for (r, name) in records.iter().zip(["hist", "new_hist", "wall_hist"]) {
                 let (_, words) = r.place(name).expect("a history field");
                 assert_eq!(4 * words, kind.history_bytes(), "{}: {name}", kind.name());

@@ -218,7 +218,12 @@ mod tests {
     #[test]
     fn gpu_mirror_width_matches_wgsl() {
         let kind = &crate::gpu::composition::Composition::all()[0];
-        let (module, _) = shaders::validate(&kind.variant(false, true).source).unwrap();
+        let (module, _) = shaders::validate(
+            &kind
+                .variant(crate::gpu::composition::Keeps::default(), true)
+                .source,
+        )
+        .unwrap();
         assert_eq!(wgsl_u32_const(&module, "MIRROR_WIDTH"), MIRROR_WIDTH);
         assert!(MIRROR_WIDTH.is_power_of_two());
         // a row's bytes meet the buffer-to-texture copy alignment

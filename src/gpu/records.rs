@@ -9,6 +9,8 @@
 use std::collections::BTreeSet;
 use std::fmt::Write;
 
+use crate::gpu::composition::Keeps;
+
 /// What one field of a record holds.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Kind {
@@ -67,14 +69,20 @@ pub struct RecordLayout {
     pub capacity_wgsl: &'static str,
     /// The fields, in region order.
     pub fields: Vec<Field>,
+    /// Optional fields this composition leaves out: their accessors are no-ops (a load
+    /// returns zeros), so the kernels call them unconditionally and the compiler drops them.
+    pub absent: Vec<Field>,
 }
 
 impl RecordLayout {
     /// The neighbour lists' entries: each entry's partner (`nbr`), the slot of its pair in
     /// the partner's list for the `lower` list at the same index, the partner's persistent
     /// id and the contact's history, this step's pair force (and torque on the partner
-    /// where particles rotate), the ledger's value (with the ledger).
-    pub fn entries(hist: &[String], rotation: bool, ledger: bool) -> Self {
+    /// where particles rotate), the contact at the end of the last step (`prior`: with the
+    /// ledger or the force jumps) and with the force jumps this step's impulse of the
+    /// pair's force jump along n on the evaluator (`jump`, 0 without one; the partner
+    /// subtracts it) and n (`jump_normal`, written only where `jump` is not 0).
+    pub fn entries(hist: &[String], rotation: bool, keeps: Keeps) -> Self {
         let mut fields = vec![
             field("nbr", Kind::U32),
             field("lower", Kind::U32),
@@ -85,50 +93,60 @@ impl RecordLayout {
         if rotation {
             fields.push(field("pair_torque", Kind::Vec3));
         }
-        if ledger {
-            fields.push(field("ledger", Kind::Vec4));
-        }
         Self {
             global: "entries",
             binding: 27,
             capacity_wgsl: "step.list_capacity",
             fields,
+            absent: Vec::new(),
         }
+        .optional(field("prior", Kind::Vec4), keeps.prior())
+        .optional(field("jump", Kind::F32), keeps.jumps)
+        .optional(field("jump_normal", Kind::Vec3), keeps.jumps)
     }
 
-    /// The lists a rebuild builds: each entry's partner id and history (and ledger
-    /// value), remapped from the old lists and copied back into [`Self::entries`].
-    pub fn new_entries(hist: &[String], ledger: bool) -> Self {
-        let mut fields = vec![
-            field("new_hist_pid", Kind::U32),
-            field("new_hist", Kind::Hist(hist.to_vec())),
-        ];
-        if ledger {
-            fields.push(field("new_ledger", Kind::Vec4));
-        }
+    /// The lists a rebuild builds: each entry's partner id and history (and the contact
+    /// at the end of the last step), remapped from the old lists and copied back into
+    /// [`Self::entries`].
+    pub fn new_entries(hist: &[String], keeps: Keeps) -> Self {
         Self {
             global: "new_entries",
             binding: 37,
             capacity_wgsl: "step.list_capacity",
-            fields,
+            fields: vec![
+                field("new_hist_pid", Kind::U32),
+                field("new_hist", Kind::Hist(hist.to_vec())),
+            ],
+            absent: Vec::new(),
         }
+        .optional(field("new_prior", Kind::Vec4), keeps.prior())
     }
 
     /// The particle–wall contacts, wall-major (particle k and wall w at record
-    /// `w·n + k`): history, the ledger's value (with the ledger), and last the normal
-    /// force servo walls sum (allocated only where a wall is servo-controlled).
-    pub fn wall_contacts(hist: &[String], ledger: bool) -> Self {
-        let mut fields = vec![field("wall_hist", Kind::Hist(hist.to_vec()))];
-        if ledger {
-            fields.push(field("wall_ledger", Kind::Vec4));
-        }
-        fields.push(field("wall_push", Kind::F32));
-        Self {
+    /// `w·n + k`): history, the contact at the end of the last step (with the ledger or
+    /// the force jumps), and last the normal force servo walls sum (allocated only where a
+    /// wall is servo-controlled).
+    pub fn wall_contacts(hist: &[String], keeps: Keeps) -> Self {
+        let mut layout = Self {
             global: "wall_contacts",
             binding: 29,
             capacity_wgsl: "(grid.n_particles * step.n_walls)",
-            fields,
+            fields: vec![field("wall_hist", Kind::Hist(hist.to_vec()))],
+            absent: Vec::new(),
         }
+        .optional(field("wall_prior", Kind::Vec4), keeps.prior());
+        layout.fields.push(field("wall_push", Kind::F32));
+        layout
+    }
+
+    /// `f` appended to the fields when `present`, else to the absent ones.
+    fn optional(mut self, f: Field, present: bool) -> Self {
+        if present {
+            self.fields.push(f);
+        } else {
+            self.absent.push(f);
+        }
+        self
     }
 
     /// Words of one record, all fields.
@@ -244,6 +262,20 @@ impl RecordLayout {
             );
             before += width;
         }
+        for f in &self.absent {
+            let (n, ty) = (f.name, f.kind.wgsl_type());
+            let zero = match f.kind {
+                Kind::U32 => "0u".to_string(),
+                Kind::Hist(_) => "hist_zero()".to_string(),
+                _ => format!("{ty}()"),
+            };
+            let _ = writeln!(
+                w,
+                "// `{n}`: not kept by this composition\n\
+                 fn load_{n}(r: u32) -> {ty} {{\n    return {zero};\n}}\n\n\
+                 fn store_{n}(r: u32, v: {ty}) {{}}\n"
+            );
+        }
         w
     }
 }
@@ -259,12 +291,21 @@ mod tests {
     #[test]
     fn records_place_fields_one_region_after_another() {
         let hist = vec!["a".to_string(), "b".to_string()];
-        let e = RecordLayout::entries(&hist, true, true);
+        let keeps = Keeps {
+            ledger: true,
+            jumps: false,
+        };
+        let e = RecordLayout::entries(&hist, true, keeps);
         assert_eq!(e.words(), 1 + 1 + 1 + 2 + 3 + 3 + 4);
+        // the force jumps' impulses left out: no-op accessors, no words
+        assert_eq!(e.place("jump_normal"), None);
+        assert!(e
+            .wgsl()
+            .contains("fn store_jump_normal(r: u32, v: vec3<f32>) {}"));
         assert_eq!(e.place("hist"), Some((3, 2)));
         assert_eq!(e.offset("pair_force", 10), Some(4 * 5 * 10));
         assert_eq!(e.place("missing"), None);
-        let w = RecordLayout::wall_contacts(&hist, false);
+        let w = RecordLayout::wall_contacts(&hist, Keeps::default());
         assert_eq!(w.bytes(7, &["wall_push"]), 4 * 2 * 7);
         assert_eq!(w.bytes(7, &[]), 4 * 3 * 7);
         let calls: BTreeSet<String> = ["load_hist".to_string(), "store_nbr".to_string()].into();

@@ -13,7 +13,7 @@
 //! no 64-bit integers, no float atomics, no subgroups, no push constants), so whatever
 //! validates here runs on every backend and adapter wgpu supports.
 
-use super::composition::Composition;
+use super::composition::{Composition, Keeps};
 use crate::model::ContactModel;
 
 /// Shared declarations, prepended to every stage.
@@ -36,6 +36,11 @@ pub const ROTATION_MIRRORS: &str = include_str!("../../shaders/rotation_mirrors.
 pub const LEDGER: &str = include_str!("../../shaders/ledger.wgsl");
 /// The ledger hooks as no-ops (a snippet of the step for runs without the ledger).
 pub const LEDGER_OFF: &str = include_str!("../../shaders/ledger_off.wgsl");
+/// The impulse velocity Verlet misplaces where a contact's force jumps inside the step
+/// (twin of `cpu::jump`), for the variants that place it.
+pub const JUMP: &str = include_str!("../../shaders/jump.wgsl");
+/// The force-jump hooks as no-ops (a snippet of the step for scenes that place none).
+pub const JUMP_OFF: &str = include_str!("../../shaders/jump_off.wgsl");
 /// Overlaps to below f32 rounding of positions (double-float on the compensated state).
 pub const OVERLAP: &str = include_str!("../../shaders/overlap.wgsl");
 /// A rebuild's in-place re-sort of the particle state through one scratch buffer.
@@ -51,7 +56,13 @@ pub fn step_variant() -> ShaderVariant {
         gamma0: 0.0,
         luding: Default::default(),
     });
-    Composition::of(&[lsd]).variant(true, false)
+    Composition::of(&[lsd]).variant(
+        Keeps {
+            ledger: true,
+            jumps: false,
+        },
+        false,
+    )
 }
 
 /// A shader stage: one file of `shaders/`.
@@ -125,7 +136,7 @@ pub fn all_variants() -> Vec<ShaderVariant> {
         .collect();
     for c in Composition::all() {
         for mirrors in [false, true] {
-            all.extend([false, true].map(|ledger| c.variant(ledger, mirrors)));
+            all.extend(Keeps::ALL.map(|keeps| c.variant(keeps, mirrors)));
         }
     }
     all
@@ -275,11 +286,13 @@ mod tests {
     #[test]
     fn gpu_shaders_every_step_variant_has_the_step_kernels() {
         let names: Vec<String> = all_variants().into_iter().map(|v| v.name).collect();
-        for (kind, ledger, mirrors) in Composition::all().into_iter().flat_map(|k| {
-            [(false, false), (true, false), (false, true), (true, true)]
-                .map(|(ledger, mirrors)| (k.clone(), ledger, mirrors))
+        for (kind, keeps, mirrors) in Composition::all().into_iter().flat_map(|k| {
+            Keeps::ALL
+                .into_iter()
+                .flat_map(move |keeps| [false, true].map(|mirrors| (keeps, mirrors)))
+                .map(move |(keeps, mirrors)| (k.clone(), keeps, mirrors))
         }) {
-            let v = kind.variant(ledger, mirrors);
+            let v = kind.variant(keeps, mirrors);
             let (module, _) = validate(&v.source).unwrap();
             let eps = compute_entry_points(&module);
             for name in [
@@ -328,14 +341,29 @@ mod tests {
                 v.name
             );
             // and the ledger's only where the run keeps one
-            for name in [
-                "load_ledger",
-                "load_new_ledger",
-                "load_wall_ledger",
-                "particle_ledger",
-            ] {
-                assert_eq!(declared(name), ledger, "{}: {name}", v.name);
+            assert_eq!(declared("particle_ledger"), keeps.ledger, "{}", v.name);
+            // the contacts' priors with the ledger or the force jumps, the impulses for
+            // the partners with the force jumps: each field of the entries only where kept
+            let kept = |name: &str| kind.records(keeps).iter().any(|r| r.place(name).is_some());
+            for name in ["prior", "new_prior", "wall_prior"] {
+                assert_eq!(kept(name), keeps.prior(), "{}: {name}", v.name);
             }
+            for name in ["jump", "jump_normal"] {
+                assert_eq!(kept(name), keeps.jumps, "{}: {name}", v.name);
+            }
+            // and without the force jumps the force pass touches no velocity
+            let force = module
+                .entry_points
+                .iter()
+                .find(|e| e.name == "force")
+                .unwrap();
+            let calls = crate::gpu::kernel::called_functions(&module, &force.function);
+            assert_eq!(
+                calls.contains("store_vel"),
+                keeps.jumps,
+                "{}: the force pass's velocity kick",
+                v.name
+            );
             // the texture mirrors only on the software adapter's path
             assert_eq!(declared("m_cell"), mirrors, "{}: m_cell", v.name);
             assert_eq!(

@@ -319,6 +319,16 @@ impl ContactModel {
         }
     }
 
+    /// Whether the normal force can jump at an edge of the contact (a force just inside
+    /// an edge, approaching or separating: JKR with adhesion, zero-range jump-in adhesion,
+    /// viscous damping at first touch), so a step crossing one misplaces an impulse.
+    pub fn has_force_jumps(&self, geom: &PairGeometry) -> bool {
+        [-1.0, 1.0]
+            .iter()
+            .flat_map(|&v| self.edges(geom, v))
+            .any(|(_, f)| f != 0.0)
+    }
+
     /// The friction oscillators of a pair (Luding's sliding, rolling and twisting where
     /// they act; the JKR family's twisting with the stiffness of the largest contact radius
     /// at `impact_velocity`), for the time step.

@@ -132,24 +132,3 @@ angular_velocity = [{:e}, {:e}, {:e}]
     );
     Scene::from_toml_str(&text, "floor").unwrap()
 }
-
-/// The CPU engine integrating force jumps as the GPU engine does (plain velocity Verlet:
-/// the GPU does not place them inside the step yet), for comparisons of the two.
-#[allow(dead_code)]
-pub fn verlet_cpu(scene: &Scene) -> powder::cpu::CpuEngine {
-    powder::cpu::CpuEngine::new(&Scene {
-        jump_impulses: Some(false),
-        ..scene.clone()
-    })
-    .unwrap()
-}
-
-/// A collision whose CPU run integrates force jumps as the GPU engine does (see
-/// [`verlet_cpu`]).
-#[allow(dead_code)]
-pub fn verlet(spec: &powder::collide::CollideSpec) -> powder::collide::CollideSpec {
-    powder::collide::CollideSpec {
-        jump_impulses: Some(false),
-        ..spec.clone()
-    }
-}
