@@ -96,12 +96,14 @@ def jkr_derived(m=JKR):
 def jkr_dt(m=JKR):
     """powder's automatic JKR time step (model::ContactModel::time_step): tc / 50 with tc
     the smallest of the Hertz contact time at the impact velocity, the oscillation time
-    about the equilibrium overlap and the time delta0/v to cross the adhesive zone."""
+    about the equilibrium overlap and the time delta0/v to cross the adhesive zone, v the
+    impact velocity but at most the adhesion speed sqrt(2 Fc delta0 / m*)."""
     d = jkr_derived(m)
     v = m["impact_velocity"]
     hertz = 2.87 * (d["m_star"] ** 2 / (d["r_star"] * d["e_star"] ** 2 * v)) ** 0.2
     osc = math.pi * math.sqrt(d["m_star"] / d["k_eq"])
-    zone = d["delta0"] / v
+    v_adhesion = math.sqrt(2.0 * d["fc"] * d["delta0"] / d["m_star"])
+    zone = d["delta0"] / min(v, v_adhesion)
     return min(hertz, osc, zone) / DT_FRACTION
 
 

@@ -104,7 +104,9 @@ fn a_mixed_scene_runs_on_the_gpu_and_matches_the_cpu() {
     assert!(g.rotates());
     drop(g);
     let Some(ctx) = gpu() else { return };
-    let c = compare(&scene, ctx, 8000, 1000, Tolerances::default()).unwrap();
+    // (7 ms of the collapse: the GPU and CPU drift apart like any chaotic pair of runs
+    // beyond that; dt = 5.8e-6 s, the adhesive zone crossed at the adhesion speed)
+    let c = compare(&scene, ctx, 1200, 300, Tolerances::default()).unwrap();
     for s in &c.samples {
         eprintln!(
             "step {}: pos {:.2e} vel {:.2e} energy {:.2e} contacts {}/{} history {:.2e} over {}",
@@ -217,7 +219,8 @@ gamma0 = 1e-3
     assert_eq!(g.kind().name(), "step_hysteretic+jkr+krijt+mindlin");
     drop(g);
     let Some(ctx) = gpu() else { return };
-    let c = compare(&scene, ctx, 8000, 2000, Tolerances::default()).unwrap();
+    // (7 ms of the collapse, as above)
+    let c = compare(&scene, ctx, 1200, 400, Tolerances::default()).unwrap();
     let last = c.samples.last().unwrap();
     eprintln!("{last:?}");
     assert!(last.contacts_cpu > 5 && last.history_pairs > 0, "{last:?}");

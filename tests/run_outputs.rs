@@ -91,28 +91,28 @@ fn gpu_outputs_and_bitwise_resume() {
 fn gpu_krijt_checkpoint_mid_contact_resumes_bitwise() {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/lj_krijt_pair.toml");
     let mut scene = Scene::load(Path::new(path)).unwrap();
-    scene.output_every = 100;
-    scene.checkpoint_every = 300;
+    scene.output_every = 50;
+    scene.checkpoint_every = 100;
     let (straight, split) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
     let Some(ctx) = gpu() else { return };
-    // contact from t ≈ 20 (step ≈ 60) for about 230 (≈ 670 steps)
-    let a = run_gpu_with(&scene, ctx, &options(straight.path(), 500, None), |_| {}).unwrap();
+    // contact from t ≈ 20 (step ≈ 19) for about 230 (≈ 216 steps of dt = 1.07)
+    let a = run_gpu_with(&scene, ctx, &options(straight.path(), 200, None), |_| {}).unwrap();
     assert!(
         a.last.contacts.is_some_and(|c| c.contacts > 0),
-        "in contact at step 500"
+        "in contact at step 200"
     );
     let Some(ctx) = gpu() else { return };
-    run_gpu_with(&scene, ctx, &options(split.path(), 300, None), |_| {}).unwrap();
+    run_gpu_with(&scene, ctx, &options(split.path(), 100, None), |_| {}).unwrap();
     let ckpt = split.path().join("checkpoint.bin");
     let Some(ctx) = gpu() else { return };
     let b = run_gpu_with(
         &scene,
         ctx,
-        &options(split.path(), 500, Some(&ckpt)),
+        &options(split.path(), 200, Some(&ckpt)),
         |_| {},
     )
     .unwrap();
-    assert_eq!(b.resumed_from, Some(300));
+    assert_eq!(b.resumed_from, Some(100));
     let bytes = |d: &Path| std::fs::read(d.join("checkpoint.bin")).unwrap();
     assert!(
         bytes(straight.path()) == bytes(split.path()),

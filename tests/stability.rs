@@ -618,9 +618,11 @@ fn stiff_and_extreme_cases_on_the_gpu() {
     );
     assert!((g.e - c.e).abs() < 1e-3, "{} vs {}", g.e, c.e);
     assert!(g.energy.balance_error.unwrap() < 1e-3);
-    // adhesion so strong everything sticks (the so-weak case needs 10^6 steps at 0.05 m/s:
-    // the adhesive zone δ0 shrinks with γ and the time step with it; CPU only)
+    // adhesion so strong everything sticks, so weak nothing does (the weak zone is
+    // crossed at the adhesion speed: 70 steps at 0.05 m/s, 1.5·10⁶ when it was crossed at
+    // the impact speed)
     let strong = JkrParams::jkr(1e9, 0.3, 50.0);
+    let weak = JkrParams::jkr(1e9, 0.3, 1e-6);
     for v in [0.05, 5.0] {
         let s = on_gpu(&CollideSpec::head_on(
             ContactModel::Jkr(strong),
@@ -629,5 +631,12 @@ fn stiff_and_extreme_cases_on_the_gpu() {
             v,
         ));
         assert!(s.stuck, "strong, v {v}");
+        let w = on_gpu(&CollideSpec::head_on(
+            ContactModel::Jkr(weak),
+            1e-6,
+            2000.0,
+            v,
+        ));
+        assert!(!w.stuck && w.e > 0.99, "weak, v {v}: {}", w.e);
     }
 }

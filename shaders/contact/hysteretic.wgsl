@@ -228,14 +228,18 @@ fn hyst_normal(p: HystereticPair, k: Kin, h: ptr<function, History>) -> Normal {
 
 // Where a contact starts and ends and the force just inside those edges, for the energy
 // ledger (`ContactModel::edges`): (entry delta, entry force, exit delta, exit force).
-// With a non-contact range both edges are at -range with zero force; without one the
-// force jumps at delta = 0 by the adhesion -fa and the viscous gamma0·delta_dot (LSD:
-// fa = 0).
+// At the first touch the force jumps by the adhesion -fa and the viscous
+// gamma0·delta_dot (LSD: fa = 0); with a non-contact range a contact leaves at -range with
+// zero force, and enters there too where the adhesion is reversible (jump-in: an untouched
+// pair feels nothing in the range, it enters at the touch).
 fn hyst_edges(p: HystereticPair, k: Kin) -> vec4<f32> {
     let range = hyst_range(p);
-    if (range > 0.0) {
-        return vec4<f32>(-range, 0.0, -range, 0.0);
-    }
     let f = -p.fa + p.gamma0 * k.delta_dot;
-    return vec4<f32>(0.0, f, 0.0, f);
+    if (range == 0.0) {
+        return vec4<f32>(0.0, f, 0.0, f);
+    }
+    if (hyst_flag(p, HYST_JUMP_IN)) {
+        return vec4<f32>(0.0, f, -range, 0.0);
+    }
+    return vec4<f32>(-range, 0.0, -range, 0.0);
 }

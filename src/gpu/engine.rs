@@ -2057,7 +2057,15 @@ impl GpuEngine {
         let list = self.state_buffers();
         let encoder = self.ctx.device.create_command_encoder(&Default::default());
         let sources: Vec<(&wgpu::Buffer, u64)> = list.iter().map(|(_, b)| (*b, b.size())).collect();
-        let out = submit_and_read(&self.ctx, encoder, &sources)?;
+        let mut out = submit_and_read(&self.ctx, encoder, &sources)?;
+        // the monitor words are a batch's scratch (zeroed when one starts): left out, so a
+        // state saved after a quiet batch (no `decide` counting steps) and one saved after
+        // a normal batch are the same bytes
+        for ((name, _), bytes) in list.iter().zip(&mut out) {
+            if name == "control" {
+                bytes[..MONITOR_BYTES as usize].fill(0);
+            }
+        }
         Ok(GpuSavedState {
             time: self.time,
             steps: self.steps,

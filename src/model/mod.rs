@@ -304,11 +304,16 @@ impl ContactModel {
         match self {
             Self::Hysteretic(p) => {
                 let range = p.range();
-                if range > 0.0 {
-                    [(-range, 0.0), (-range, 0.0)]
+                // the first touch: the adhesion −fa and the viscous force jump on
+                let touch = (0.0, -p.fa + p.gamma0 * delta_dot);
+                if range == 0.0 {
+                    [touch, touch]
+                } else if p.adhesion == AdhesionMode::JumpIn {
+                    // an untouched pair feels nothing in the range: it enters at the touch
+                    // and leaves at the range's end, where the adhesion has fallen to 0
+                    [touch, (-range, 0.0)]
                 } else {
-                    let f = -p.fa + p.gamma0 * delta_dot;
-                    [(0.0, f), (0.0, f)]
+                    [(-range, 0.0), (-range, 0.0)]
                 }
             }
             Self::Lsd(p) => {
@@ -353,8 +358,9 @@ impl ContactModel {
     /// when finite and larger; k for LSD); for Hertz/JKR the Hertz time
     /// 2.87·(m*²/(R*·E*²·v))^(1/5) at the impact velocity, and for JKR no longer than the
     /// oscillation time π·√(m*/k_eq) about the equilibrium overlap (k_eq = dF/dδ at δ0)
-    /// nor the time δ0/v to cross the adhesive zone, whose force jumps at touch and
-    /// pull-off make the error first order in dt.
+    /// nor the time δ0/v to cross the adhesive zone at v = the impact velocity, at most the
+    /// adhesion speed √(2·Fc·δ0/m*) (faster impacts lose too little of their energy there
+    /// for its error to matter: [`JkrParams::adhesion_speed`]).
     ///
     /// Where friction acts, no longer than the half-period π·√(m/k) of each friction
     /// oscillator ([`Self::friction_oscillators`]: tangential k_t with m_t = 2/7·m_r,
@@ -384,11 +390,14 @@ impl ContactModel {
                 let visc = p.viscous_coefficient_estimate(geom, impact_velocity);
                 if p.surface_energy > 0.0 {
                     let eq = std::f64::consts::PI * (mr / p.equilibrium_stiffness(r)).sqrt();
-                    // the force jumps at touch and pull-off: the adhesive zone (depth ~δ0)
-                    // must be crossed in many steps, or the loss W is off by O(Fc·v·dt)
-                    let zone = p.delta0(r) / impact_velocity;
+                    // the adhesive zone (depth ~δ0, force jumps at its edges) crossed in many
+                    // steps: the loss W is off by O(dt²) (O(dt) with the jumps left to
+                    // Verlet), which moves e by δW/(2·e·E), so only where W is a sizeable
+                    // part of E: up to the adhesion speed (docs/force_jumps.md)
+                    let v_zone = impact_velocity.min(p.adhesion_speed(r, mr));
+                    let zone = p.delta0(r) / v_zone;
                     if zone < eq.min(hertz) {
-                        (zone, format!("tc = delta0/v, the time to cross the JKR adhesive zone delta0 = {:.4e} m at the impact velocity {impact_velocity} m/s", p.delta0(r)), visc)
+                        (zone, format!("tc = delta0/v, the time to cross the JKR adhesive zone delta0 = {:.4e} m at {v_zone:.4e} m/s (the impact velocity {impact_velocity} m/s, at most the adhesion speed)", p.delta0(r)), visc)
                     } else if eq < hertz {
                         (eq, format!("tc = pi*sqrt(m*/k_eq), the JKR oscillation about the equilibrium overlap (k_eq = {:.4e} N/m)", p.equilibrium_stiffness(r)), visc)
                     } else {

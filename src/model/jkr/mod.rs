@@ -843,6 +843,13 @@ impl JkrParams {
         std::f64::consts::PI * radius * (density / g).sqrt() / (0.1631 * self.poisson + 0.8766)
     }
 
+    /// The adhesion speed √(2·Fc·δ0/m*), m/s: an impact slower than it loses a sizeable
+    /// part of its kinetic energy to the adhesive zone (the undamped loss W is 0.77·Fc·δ0
+    /// or less, so the sticking speed √(2W/m*) is below it).
+    pub fn adhesion_speed(&self, r_eff: f64, reduced_mass: f64) -> f64 {
+        (2.0 * self.fc(r_eff) * self.delta0(r_eff) / reduced_mass).sqrt()
+    }
+
     /// Stiffness dF/dδ at the equilibrium overlap δ0: 1.2·Fc/δ0 (dF/dx = 6Fc and
     /// dδ/dx = 5δ0 at x = 1), N/m; 0 for Hertz.
     pub fn equilibrium_stiffness(&self, r_eff: f64) -> f64 {
@@ -1716,6 +1723,34 @@ mod tests {
             max_relative = 1e-15
         );
         assert_eq!(p.equilibrium_stiffness(r), 0.0);
+    }
+
+    /// The time step crosses the adhesive zone in 50 steps at the impact velocity, but
+    /// never at more than the adhesion speed: faster impacts get the same dt (until the
+    /// Hertz time binds), and the sticking speeds of both pull-off rules are below it.
+    #[test]
+    fn zone_rule_stops_at_the_adhesion_speed() {
+        let p = JkrParams::jkr(1e9, 0.3, 0.05);
+        let m = 2000.0 * 4.0 / 3.0 * PI * R1.powi(3);
+        let g = PairGeometry::spheres(R1, R1, m, m);
+        let (r, m) = (g.r_eff(), g.reduced_mass);
+        let va = p.adhesion_speed(r, m);
+        let slow = crate::model::ContactModel::Jkr(p).time_step(&g, 0.5 * va);
+        assert_relative_eq!(
+            slow.contact_time,
+            2.0 * p.delta0(r) / va,
+            max_relative = 1e-12
+        );
+        for f in [1.0, 3.0, 10.0] {
+            let fast = crate::model::ContactModel::Jkr(p).time_step(&g, f * va);
+            assert_relative_eq!(fast.contact_time, p.delta0(r) / va, max_relative = 1e-12);
+            assert!(fast.reason.contains("adhesion speed"), "{}", fast.reason);
+        }
+        for pulloff in [Pulloff::Displacement, Pulloff::Force] {
+            let w = crate::model::analytic::jkr_loss(pulloff) * p.fc(r) * p.delta0(r);
+            let v_stick = crate::model::analytic::jkr_sticking_velocity(w, m);
+            assert!(v_stick < va, "{pulloff:?}");
+        }
     }
 
     #[test]
