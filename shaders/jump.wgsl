@@ -36,19 +36,24 @@ fn jump_impulse(entered: bool, before: f32, after: f32, edge: vec2<f32>, force: 
 
 // One contact's force jump over the step, along n on the evaluator: `old` the contact as
 // the last step left it (the entries' `prior`), `is_in` whether it is engaged now, `edges`
-// the law's (entry δ, F, exit δ, F) where the step crossed one (`pair_edges`).
-fn contact_jump(old: vec4<f32>, k: Kin, c: Contact, is_in: bool, edges: vec4<f32>) -> f32 {
+// the law's (entry δ, F, exit δ, F) where the step crossed one (`pair_edges`), `touch` the
+// force that switched at δ = 0 inside the engaged contact (`touch_crossed`).
+fn contact_jump(old: vec4<f32>, k: Kin, c: Contact, is_in: bool, edges: vec4<f32>, touch: f32) -> f32 {
     let was_in = old.w > 0.0;
-    if (step.jumps == 0u || was_in == is_in) {
+    if (step.jumps == 0u) {
         return 0.0;
     }
-    // the overlap at the start of the step: the prior's, or back along the approach speed
-    // for a contact the last step did not see (a slot a rebuild just made)
-    let before = select(k.delta - k.delta_dot * k.dt, old.x, old.w != 0.0);
-    if (is_in) {
-        return jump_impulse(true, before, k.delta, edges.xy, c.normal, k.dt);
+    let before = overlap_before(old, k);
+    var j = 0.0;
+    if (touch != 0.0) {
+        j = jump_impulse(k.delta > 0.0, before, k.delta, vec2<f32>(0.0, touch), touch, k.dt);
     }
-    return jump_impulse(false, before, k.delta, edges.zw, old.y, k.dt);
+    if (was_in != is_in && is_in) {
+        j += jump_impulse(true, before, k.delta, edges.xy, c.normal, k.dt);
+    } else if (was_in != is_in) {
+        j += jump_impulse(false, before, k.delta, edges.zw, old.y, k.dt);
+    }
+    return j;
 }
 
 // Adds a velocity change (a force jump's impulse over the mass) to particle k's velocity,

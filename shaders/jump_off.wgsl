@@ -3,7 +3,7 @@
 
 const JUMPS: bool = false;
 
-fn contact_jump(old: vec4<f32>, k: Kin, c: Contact, is_in: bool, edges: vec4<f32>) -> f32 {
+fn contact_jump(old: vec4<f32>, k: Kin, c: Contact, is_in: bool, edges: vec4<f32>, touch: f32) -> f32 {
     return 0.0;
 }
 

@@ -47,8 +47,10 @@ fn ledger_new() -> LedgerAcc {
 }
 
 // The energy one contact dissipated this step: `old` its prior, `is_in` whether it is
-// engaged now, `edges` the law's where the step crossed one.
-fn ledger_book(old: vec4<f32>, k: Kin, c: Contact, power: f32, is_in: bool, edges: vec4<f32>) -> f32 {
+// engaged now, `edges` the law's where the step crossed one, `touch` the force that
+// switched at δ = 0 inside it (its work only over the part of the step on the contact
+// side, not the trapezoid's).
+fn ledger_book(old: vec4<f32>, k: Kin, c: Contact, power: f32, is_in: bool, edges: vec4<f32>, touch: f32) -> f32 {
     let was_in = old.w > 0.0;
     var d0 = old.x;
     var f0 = old.y;
@@ -65,6 +67,10 @@ fn ledger_book(old: vec4<f32>, k: Kin, c: Contact, power: f32, is_in: bool, edge
     var normal = 0.0;
     if (was_in || is_in) {
         normal = 0.5 * (f0 + f1) * (d1 - d0);
+    }
+    if (touch != 0.0) {
+        let inside = select(-d0, d1, d1 > 0.0);
+        normal += touch * inside - 0.5 * touch * (d1 - d0);
     }
     // old.z = U0 − ½·dt·P0 (zero when the contact was not engaged)
     return normal - 0.5 * k.dt * power - c.potential + old.z;
@@ -86,19 +92,19 @@ fn ledger_count(acc: ptr<function, LedgerAcc>, k: Kin, engaged: bool, wall: bool
 }
 
 // One evaluated particle–particle contact (after pair_contact), whose prior was `old`.
-fn ledger_pair(acc: ptr<function, LedgerAcc>, old: vec4<f32>, k: Kin, c: Contact, power: f32, is_in: bool, edges: vec4<f32>) {
-    (*acc).dissipated += ledger_book(old, k, c, power, is_in, edges);
+fn ledger_pair(acc: ptr<function, LedgerAcc>, old: vec4<f32>, k: Kin, c: Contact, power: f32, is_in: bool, edges: vec4<f32>, touch: f32) {
+    (*acc).dissipated += ledger_book(old, k, c, power, is_in, edges, touch);
     (*acc).stored += c.potential;
     ledger_count(acc, k, is_in, false);
 }
 
 // One evaluated wall contact; v_n is the wall's velocity along n, `jump` the impulse of a
 // force jump placed at the end of the step (the wall does its work too).
-fn ledger_wall(acc: ptr<function, LedgerAcc>, old: vec4<f32>, k: Kin, c: Contact, power: f32, is_in: bool, edges: vec4<f32>, v_n: f32, jump: f32) {
+fn ledger_wall(acc: ptr<function, LedgerAcc>, old: vec4<f32>, k: Kin, c: Contact, power: f32, is_in: bool, edges: vec4<f32>, touch: f32, v_n: f32, jump: f32) {
     if (v_n != 0.0) {
         (*acc).wall_work += (0.5 * (select(0.0, old.y, old.w > 0.0) + c.normal) * k.dt + jump) * v_n;
     }
-    (*acc).dissipated += ledger_book(old, k, c, power, is_in, edges);
+    (*acc).dissipated += ledger_book(old, k, c, power, is_in, edges, touch);
     (*acc).stored += c.potential;
     ledger_count(acc, k, is_in, true);
 }

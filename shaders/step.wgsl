@@ -7,7 +7,7 @@
 //   struct PairRow  the pair-table row,   struct Hist  one contact's stored history,
 //   fn hist_zero() -> Hist, fn hist_same(Hist, Hist) -> bool, fn hist_mirror(Hist) -> Hist,
 //   fn pair_contact(PairRow, Kin, ptr<function, Hist>) -> Contact,
-//   fn pair_edges(PairRow, Kin) -> vec4<f32>
+//   fn pair_edges(PairRow, Kin) -> vec4<f32>, fn pair_touch_jump(PairRow, Kin) -> f32
 // and <rotation> is rotation.wgsl (angular velocity, torques) or rotation_off.wgsl (no
 // rotation: no angular buffers declared at all), with the state RotState and the hooks
 // rot_load, rot_collect, rot_finite, rot_drift, rot_wpred,
@@ -841,6 +841,24 @@ fn prior_of(k: Kin, c: Contact, power: f32, is_in: bool) -> vec4<f32> {
     return vec4<f32>(k.delta, 0.0, 0.0, -1.0);
 }
 
+// The overlap at the start of the step: the prior's, or back along the approach speed for
+// a contact the last step did not see (a slot a rebuild just made).
+fn overlap_before(old: vec4<f32>, k: Kin) -> f32 {
+    return select(k.delta - k.delta_dot * k.dt, old.x, old.w != 0.0);
+}
+
+// The force that switched on or off at δ = 0 within the step (`pair_touch_jump`) where
+// the contact is engaged on the contact side (inside it, or with an edge crossed in the
+// same step); 0 where δ = 0 was not crossed or nothing switches there.
+fn touch_crossed(p: PairRow, k: Kin, old: vec4<f32>, is_in: bool) -> f32 {
+    let before = overlap_before(old, k);
+    let contact_side_in = select(old.w > 0.0, is_in, k.delta > 0.0);
+    if ((LEDGER || JUMPS) && (before > 0.0) != (k.delta > 0.0) && contact_side_in) {
+        return pair_touch_jump(p, k);
+    }
+    return 0.0;
+}
+
 @compute @workgroup_size(WG_SIZE)
 fn force(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let k = global_index(wid, nwg, lid);
@@ -952,9 +970,10 @@ fn particle_forces(k: u32, row0: PairRow) {
             if ((LEDGER || JUMPS) && was_in != is_in) {
                 edges = pair_edges(row, kin);
             }
-            ledger_pair(&ledger_acc, old, kin, c, power, is_in, edges);
+            let touch = touch_crossed(row, kin, old, is_in);
+            ledger_pair(&ledger_acc, old, kin, c, power, is_in, edges, touch);
             prior = prior_of(kin, c, power, is_in);
-            jump = contact_jump(old, kin, c, is_in, edges);
+            jump = contact_jump(old, kin, c, is_in, edges, touch);
             // (n stored only in the rare step that places one)
             if (jump != 0.0) {
                 impulse += jump * n;
@@ -1027,9 +1046,10 @@ fn particle_forces(k: u32, row0: PairRow) {
         if ((LEDGER || JUMPS) && (old.w > 0.0) != is_in) {
             edges = pair_edges(row, kin);
         }
-        let jump = contact_jump(old, kin, c, is_in, edges);
+        let touch = touch_crossed(row, kin, old, is_in);
+        let jump = contact_jump(old, kin, c, is_in, edges, touch);
         impulse += jump * n;
-        ledger_wall(&ledger_acc, old, kin, c, power, is_in, edges, dot(n, wall.velocity.xyz), jump);
+        ledger_wall(&ledger_acc, old, kin, c, power, is_in, edges, touch, dot(n, wall.velocity.xyz), jump);
         store_wall_prior(slot, prior_of(kin, c, power, is_in));
         if (step.servo_walls != 0u) {
             store_wall_push(slot, c.normal);

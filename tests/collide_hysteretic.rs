@@ -216,6 +216,55 @@ fn jump_in_adhesion_with_a_range_enters_at_the_touch() {
     assert!(verlet_worst > 1.5e-4, "{verlet_worst:e}");
 }
 
+/// Reversible adhesion with a range and viscous damping: the contact is engaged across
+/// δ = 0, where the viscous force γ0·δ̇ switches on and off (`ContactModel::touch_jump`).
+/// Placed (impulse and ledger work), the collision converges at second order: at dt/16
+/// e is within 10⁻⁶ of a dt = 10⁻⁹ s reference and the ledger balances to 2·10⁻⁶
+/// (measured ≤ 2.6·10⁻⁷ and 7.3·10⁻⁷); left to velocity Verlet, 6.1·10⁻⁶ … 2.3·10⁻⁵ and
+/// up to 4.2·10⁻⁵.
+#[test]
+fn the_viscous_force_switching_at_the_touch_inside_the_range_is_placed() {
+    let p = HystereticParams {
+        phi_f: 0.1,
+        fa: 1e-4,
+        kca: 100.0,
+        gamma0: 5e-4,
+        adhesion: AdhesionMode::Reversible,
+        ..params(100.0)
+    };
+    let mut verlet_worst: f64 = 0.0;
+    for v in [0.8, 2.0] {
+        let base = spec(p, RADIUS, v);
+        let reference = collide(&CollideSpec {
+            dt: Some(1e-9),
+            ..base.clone()
+        })
+        .unwrap()
+        .e;
+        let dt = base.time_step().default / 16.0;
+        let placed = collide(&CollideSpec {
+            dt: Some(dt),
+            ..base.clone()
+        })
+        .unwrap();
+        let balance = placed.energy.balance_error.unwrap();
+        assert!(
+            (placed.e - reference).abs() < 1e-6,
+            "v {v}: {} vs {reference}",
+            placed.e
+        );
+        assert!(balance < 2e-6, "v {v}: ledger balance {balance:e}");
+        let verlet = collide(&CollideSpec {
+            dt: Some(dt),
+            jump_impulses: Some(false),
+            ..base
+        })
+        .unwrap();
+        verlet_worst = verlet_worst.max((verlet.e - reference).abs());
+    }
+    assert!(verlet_worst > 5e-6, "{verlet_worst:e}");
+}
+
 #[test]
 fn sticking_limits_eqs_34_and_37() {
     let (eta, beta) = (4.0, 1.0);

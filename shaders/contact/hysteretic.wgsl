@@ -243,3 +243,10 @@ fn hyst_edges(p: HystereticPair, k: Kin) -> vec4<f32> {
     }
     return vec4<f32>(-range, 0.0, -range, 0.0);
 }
+
+// The force that switches on at delta = 0 inside an engaged contact
+// (`ContactModel::touch_jump`): the viscous gamma0·delta_dot where a non-contact range
+// surrounds the touch (there the contact and non-contact forces meet at -fa).
+fn hyst_touch_jump(p: HystereticPair, k: Kin) -> f32 {
+    return select(0.0, p.gamma0 * k.delta_dot, hyst_range(p) > 0.0);
+}

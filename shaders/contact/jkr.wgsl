@@ -269,3 +269,9 @@ fn jkr_edges(p: JkrPair, k: Kin) -> vec4<f32> {
     let f_out = 4.0 * fc * (x_out * x_out * x_out - x_out * s_out) + jkr_damping(p, a0 * x_out, a0, jkr_at_edge(k, d_out));
     return vec4<f32>(0.0, f_in, d_out, f_out);
 }
+
+// The force that switches on at delta = 0 inside an engaged contact
+// (`ContactModel::touch_jump`): none, the JKR force is continuous there.
+fn jkr_touch_jump(p: JkrPair, k: Kin) -> f32 {
+    return 0.0;
+}

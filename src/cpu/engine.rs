@@ -266,10 +266,18 @@ impl StepLog {
             [(0.0, 0.0); 2]
         };
         self.dissipated += CpuEngine::book(prior, &record, &motion, self.dt, edges);
+        // the overlap at the start of the step: the prior record's, or back along δ̇
+        let before = prior.map_or(kin.delta - kin.delta_dot * self.dt, |p| p.delta);
+        let after = kin.delta;
+        // δ = 0 crossed with the contact side engaged (inside the contact, or with an edge
+        // in the same step): the trapezoid the ledger booked spans the edge it used
+        let contact_side_in = if after > 0.0 { is_in } else { was_in };
+        if (before > 0.0) != (after > 0.0) && contact_side_in {
+            let d0 = if was_in { before } else { edges[0].0 };
+            let d1 = if is_in { after } else { edges[1].0 };
+            self.touch(&c, (before, after), (d0, d1));
+        }
         if was_in != is_in {
-            // the overlap at the start of the step: the prior record's, or back along δ̇
-            let before = prior.map_or(kin.delta - kin.delta_dot * self.dt, |p| p.delta);
-            let after = kin.delta;
             let crossing = if is_in {
                 Crossing::Entry {
                     before,
@@ -296,6 +304,43 @@ impl StepLog {
         }
         self.note_peak(kin.delta / geom.a12, c.i, c.partner);
         record
+    }
+
+    /// A contact that crossed δ = 0 within the step, engaged on the contact side, where a
+    /// force switches on or off ([`ContactModel::touch_jump`]): its impulse placed as at an
+    /// edge, from the overlaps (before, after), and the work the ledger's trapezoid over
+    /// (d0, d1) gave the jump corrected to the part of the step on the contact side.
+    fn touch(&mut self, c: &Contact, (before, after): (f64, f64), (d0, d1): (f64, f64)) {
+        let j = c.model.touch_jump(c.kin.delta_dot);
+        if j == 0.0 {
+            return;
+        }
+        let (crossing, inside) = if after > 0.0 {
+            let entry = Crossing::Entry {
+                before,
+                after,
+                edge: (0.0, j),
+                force_after: j,
+            };
+            (entry, d1)
+        } else {
+            let exit = Crossing::Exit {
+                before,
+                after,
+                force_before: j,
+                edge: (0.0, j),
+            };
+            (exit, -d0)
+        };
+        self.dissipated += j * inside - 0.5 * j * (d1 - d0);
+        let impulse = crossing.impulse(self.dt);
+        if impulse != 0.0 {
+            self.jumps.push(Jump {
+                i: c.i,
+                partner: c.partner,
+                impulse: impulse * c.kin.n,
+            });
+        }
     }
 
     /// Keeps the deepest overlap ratio, the first one seen among equals.

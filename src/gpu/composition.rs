@@ -93,6 +93,9 @@ pub struct NormalLaw {
     pub normal: &'static str,
     /// `fn(p: <row struct>, k: Kin) -> vec4<f32>`: the energy ledger's contact edges.
     pub edges: &'static str,
+    /// `fn(p: <row struct>, k: Kin) -> f32`: the force that switches on at δ = 0 inside an
+    /// engaged contact (`ContactModel::touch_jump`).
+    pub touch_jump: &'static str,
     /// Its hooks.
     pub hooks: &'static [Hook],
 }
@@ -145,6 +148,7 @@ pub const LAWS: &[NormalLaw] = &[
         history: hysteretic::HISTORY,
         normal: "hyst_normal",
         edges: "hyst_edges",
+        touch_jump: "hyst_touch_jump",
         hooks: &[],
     },
     NormalLaw {
@@ -162,6 +166,7 @@ pub const LAWS: &[NormalLaw] = &[
         history: jkr::HISTORY,
         normal: "jkr_normal",
         edges: "jkr_edges",
+        touch_jump: "jkr_touch_jump",
         hooks: &[
             Hook {
                 signature: "fn jkr_damping(p: JkrPair, a: f32, a0: f32, k: Kin) -> f32",
@@ -652,7 +657,12 @@ impl Composition {
         self.dispatch(&mut w, &|l| {
             format!("e = {}(p.{}, k);", l.edges, l.row.member)
         });
-        w.push_str("    return e;\n}\n");
+        w.push_str("    return e;\n}\n\n");
+        w.push_str("fn pair_touch_jump(p: PairRow, k: Kin) -> f32 {\n    var t: f32;\n");
+        self.dispatch(&mut w, &|l| {
+            format!("t = {}(p.{}, k);", l.touch_jump, l.row.member)
+        });
+        w.push_str("    return t;\n}\n");
         w
     }
 

@@ -324,14 +324,25 @@ impl ContactModel {
         }
     }
 
-    /// Whether the normal force can jump at an edge of the contact (a force just inside
-    /// an edge, approaching or separating: JKR with adhesion, zero-range jump-in adhesion,
-    /// viscous damping at first touch), so a step crossing one misplaces an impulse.
+    /// The force that switches on at δ = 0 inside an engaged contact, where δ = 0 is not
+    /// one of its [`Self::edges`]: the mechanical contact's viscous force γ0·δ̇ where a
+    /// non-contact range surrounds the touch (the hysteretic contact and non-contact
+    /// forces meet at −fa there); 0 where the force is continuous at δ = 0.
+    pub fn touch_jump(&self, delta_dot: f64) -> f64 {
+        match self {
+            Self::Hysteretic(p) if p.range() > 0.0 => p.gamma0 * delta_dot,
+            _ => 0.0,
+        }
+    }
+
+    /// Whether the normal force can jump inside a step: at an edge of the contact (a force
+    /// just inside an edge, approaching or separating: JKR with adhesion, zero-range
+    /// jump-in adhesion, viscous damping at first touch) or at the touch inside it
+    /// ([`Self::touch_jump`]), so a step crossing one misplaces an impulse.
     pub fn has_force_jumps(&self, geom: &PairGeometry) -> bool {
-        [-1.0, 1.0]
-            .iter()
-            .flat_map(|&v| self.edges(geom, v))
-            .any(|(_, f)| f != 0.0)
+        [-1.0, 1.0].iter().any(|&v| {
+            self.touch_jump(v) != 0.0 || self.edges(geom, v).iter().any(|&(_, f)| f != 0.0)
+        })
     }
 
     /// The friction oscillators of a pair (Luding's sliding, rolling and twisting where
