@@ -849,11 +849,14 @@ fn overlap_before(old: vec4<f32>, k: Kin) -> f32 {
 
 // The force that switched on or off at δ = 0 within the step (`pair_touch_jump`) where
 // the contact is engaged on the contact side (inside it, or with an edge crossed in the
-// same step); 0 where δ = 0 was not crossed or nothing switches there.
-fn touch_crossed(p: PairRow, k: Kin, old: vec4<f32>, is_in: bool) -> f32 {
+// same step); 0 where δ = 0 was not crossed, nothing switches there, or the edge crossed
+// is at δ = 0 (its `edges` hold what jumps there).
+fn touch_crossed(p: PairRow, k: Kin, old: vec4<f32>, is_in: bool, edges: vec4<f32>) -> f32 {
     let before = overlap_before(old, k);
-    let contact_side_in = select(old.w > 0.0, is_in, k.delta > 0.0);
-    if ((LEDGER || JUMPS) && (before > 0.0) != (k.delta > 0.0) && contact_side_in) {
+    let was_in = old.w > 0.0;
+    let contact_side_in = select(was_in, is_in, k.delta > 0.0);
+    let edge_at_touch = was_in != is_in && select(edges.z, edges.x, is_in) == 0.0;
+    if ((LEDGER || JUMPS) && (before > 0.0) != (k.delta > 0.0) && contact_side_in && !edge_at_touch) {
         return pair_touch_jump(p, k);
     }
     return 0.0;
@@ -920,9 +923,10 @@ fn particle_forces(k: u32, row0: PairRow) {
         // code costs a loop over the lanes, whether any lane takes its branch or not.
         let old = load_prior(slot);
         let was_in = old.w > 0.0;
-        // (where force jumps are placed, an engaged contact that broke beyond the reach
-        // within the step is evaluated, so its exit impulse is placed and booked)
-        let far = delta < -step.reach && !(JUMPS && was_in);
+        // (an engaged contact that broke beyond the reach within the step is evaluated, so
+        // its exit edge is booked and its force jump placed, as on the CPU; without the
+        // ledger and the jumps nothing is known of it, and nothing booked)
+        let far = delta < -step.reach && !((LEDGER || JUMPS) && was_in);
         var n = vec3<f32>(0.0, 0.0, 1.0);
         if (dist > 0.0) {
             n = d * inv_dist;
@@ -970,7 +974,7 @@ fn particle_forces(k: u32, row0: PairRow) {
             if ((LEDGER || JUMPS) && was_in != is_in) {
                 edges = pair_edges(row, kin);
             }
-            let touch = touch_crossed(row, kin, old, is_in);
+            let touch = touch_crossed(row, kin, old, is_in, edges);
             ledger_pair(&ledger_acc, old, kin, c, power, is_in, edges, touch);
             prior = prior_of(kin, c, power, is_in);
             jump = contact_jump(old, kin, c, is_in, edges, touch);
@@ -1046,7 +1050,7 @@ fn particle_forces(k: u32, row0: PairRow) {
         if ((LEDGER || JUMPS) && (old.w > 0.0) != is_in) {
             edges = pair_edges(row, kin);
         }
-        let touch = touch_crossed(row, kin, old, is_in);
+        let touch = touch_crossed(row, kin, old, is_in, edges);
         let jump = contact_jump(old, kin, c, is_in, edges, touch);
         impulse += jump * n;
         ledger_wall(&ledger_acc, old, kin, c, power, is_in, edges, touch, dot(n, wall.velocity.xyz), jump);

@@ -32,8 +32,10 @@ fn codec(limit: u64) -> impl bincode::Options {
 /// twisting spring and the models their friction parameters; 8: the CPU's JKR contact-radius
 /// solve stops once converged; 9: the CPU's JKR solve starts from a table, its force and
 /// energy come from √(a/a0), the history rotation takes one square root; the scene has
-/// `jump_impulses`; 10: the CPU places force jumps inside the step by default).
-const FORMAT: u32 = 10;
+/// `jump_impulses`; 10: the CPU places force jumps inside the step by default; 11: the GPU
+/// places them too (each list entry's `prior` and the jumps' fields), the JKR zone rule
+/// stops at the adhesion speed, the hysteretic edges and touch jumps changed).
+const FORMAT: u32 = 11;
 
 #[derive(Serialize, Deserialize)]
 struct Header {

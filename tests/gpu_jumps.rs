@@ -92,8 +92,9 @@ fn gpu_jkr_without_the_force_jumps_is_first_order() {
 }
 
 /// The hysteretic law's jumps on the GPU as on the CPU: jump-in adhesion with a range
-/// (the force jumps to −fa at the touch, an edge) and reversible adhesion with a range and
-/// damping (γ0·δ̇ switches at δ = 0 inside the engaged range): e within 10⁻⁶ of the CPU's
+/// (the force jumps to −fa at the touch, an edge), with and without damping, and
+/// reversible adhesion with a range and damping (γ0·δ̇ switches at δ = 0 inside the engaged
+/// range): e within 10⁻⁶ of the CPU's
 /// (measured 1·10⁻⁷) and the same ledger balance, where the jumps move e by 2·10⁻⁴.
 #[test]
 fn gpu_hysteretic_jumps_as_the_cpu() {
@@ -102,6 +103,7 @@ fn gpu_hysteretic_jumps_as_the_cpu() {
     }
     for (adhesion, gamma0) in [
         (AdhesionMode::JumpIn, 0.0),
+        (AdhesionMode::JumpIn, 5e-4),
         (AdhesionMode::Reversible, 5e-4),
     ] {
         let p = HystereticParams {

@@ -272,7 +272,9 @@ impl StepLog {
         // δ = 0 crossed with the contact side engaged (inside the contact, or with an edge
         // in the same step): the trapezoid the ledger booked spans the edge it used
         let contact_side_in = if after > 0.0 { is_in } else { was_in };
-        if (before > 0.0) != (after > 0.0) && contact_side_in {
+        // (an edge crossed at δ = 0 already placed what jumps there)
+        let edge_at_touch = was_in != is_in && edges[usize::from(!is_in)].0 == 0.0;
+        if (before > 0.0) != (after > 0.0) && contact_side_in && !edge_at_touch {
             let d0 = if was_in { before } else { edges[0].0 };
             let d1 = if is_in { after } else { edges[1].0 };
             self.touch(&c, (before, after), (d0, d1));
@@ -484,9 +486,6 @@ struct PairInputs<'a> {
     v_pred: &'a [DVec3],
     w_pred: &'a [DVec3],
     dt: f64,
-    /// Visit an engaged contact that broke beyond the reach (to place its force jump)
-    /// rather than book it as departed.
-    visit_breaks: bool,
 }
 
 /// One chunk of particles of the pair forces, with what it writes: its entries' records,
@@ -535,9 +534,9 @@ impl PairInputs<'_> {
                 let dist2 = d.length_squared();
                 let reach = pad_i + radius[j];
                 let live = c.live[x];
-                // an engaged contact beyond the reach broke within the step: visited with
-                // jump impulses, so its exit edge is booked and its force jump placed
-                let visit = self.visit_breaks && live && c.record[x].engaged();
+                // an engaged contact beyond the reach broke within the step: visited, so its
+                // exit edge is booked and its force jump placed (as on the GPU)
+                let visit = live && c.record[x].engaged();
                 if dist2 >= reach * reach && !visit {
                     if live {
                         log.depart(&c.record[x], ri + radius[j] - dist2.sqrt());
@@ -1812,7 +1811,6 @@ impl CpuEngine {
             v_pred,
             w_pred,
             dt: self.dt,
-            visit_breaks: self.jump_impulses,
         };
         let logs = self.threads.map(work, |c| inputs.chunk::<ROT>(c));
         let mut log = StepLog::new(self.dt, self.peak);

@@ -2061,9 +2061,23 @@ impl GpuEngine {
         // the monitor words are a batch's scratch (zeroed when one starts): left out, so a
         // state saved after a quiet batch (no `decide` counting steps) and one saved after
         // a normal batch are the same bytes
+        // so are the entries' per-step fields (pair forces and torques, the jumps' impulses:
+        // the batch's last collect consumed them; `jump_normal` is written only in a step
+        // that places a jump, so a rolled-back quiet batch may leave other bytes there)
         for ((name, _), bytes) in list.iter().zip(&mut out) {
             if name == "control" {
                 bytes[..MONITOR_BYTES as usize].fill(0);
+            }
+            if name == "entries" {
+                let layout = &self.state.entry_layout;
+                for field in ["pair_force", "pair_torque", "jump", "jump_normal"] {
+                    if let (Some(at), Some((_, words))) =
+                        (layout.offset(field, self.entries), layout.place(field))
+                    {
+                        let (at, len) = (at as usize, (4 * words * self.entries) as usize);
+                        bytes[at..at + len].fill(0);
+                    }
+                }
             }
         }
         Ok(GpuSavedState {
