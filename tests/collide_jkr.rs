@@ -1,5 +1,7 @@
 //! JKR, Hertz and their options through `collide`, against papers 001 and 002.
 
+mod common;
+
 use powder::collide::{collide, CollideResult, CollideSpec};
 use powder::model::{
     analytic, ContactModel, Dissipation, JkrParams, PairGeometry, Pulloff, TsujiStiffness,
@@ -101,29 +103,14 @@ fn undamped_jkr_loses_0_7722_fc_delta0_per_collision() {
 /// equal and unequal radii, at `dt_factor` times the default dt.
 fn worst_restitution_error(pulloff: Pulloff, dt_factor: f64, jump_impulses: Option<bool>) -> f64 {
     let p = JkrParams { pulloff, ..jkr() };
+    let pairs = [(R, false), (2.0 * R, false)];
     let mut worst: f64 = 0.0;
-    for r2 in [R, 2.0 * R] {
-        let base = CollideSpec {
-            radius2: r2,
-            jump_impulses,
-            ..spec(p, 1.0)
-        };
-        let g = base.geometry();
-        let r = g.r_eff();
-        let w = analytic::jkr_loss(pulloff) * p.fc(r) * p.delta0(r);
-        let v_stick = analytic::jkr_sticking_velocity(w, g.reduced_mass);
-        for f in [1.05, 1.3, 2.0, 5.0] {
-            let v = f * v_stick;
-            let s = CollideSpec {
-                velocity: v,
-                ..base.clone()
-            };
-            let dt = dt_factor * s.time_step().default;
-            let c = collide(&CollideSpec { dt: Some(dt), ..s }).unwrap();
-            let e = analytic::jkr_restitution(w, g.reduced_mass, v).unwrap();
-            assert!(!c.stuck, "{pulloff:?} r2 {r2} v/v_stick {f}");
-            worst = worst.max((c.e - e).abs());
-        }
+    for (s, e) in common::jkr_collisions(p, &pairs, jump_impulses) {
+        let dt = dt_factor * s.time_step().default;
+        let what = format!("{pulloff:?} r2 {} v {}", s.radius2, s.velocity);
+        let c = collide(&CollideSpec { dt: Some(dt), ..s }).unwrap();
+        assert!(!c.stuck, "{what}");
+        worst = worst.max((c.e - e).abs());
     }
     worst
 }

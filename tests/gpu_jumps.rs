@@ -7,10 +7,9 @@ mod common;
 use common::gpu;
 
 use powder::collide::{collide_on, Backend, CollideSpec};
-use powder::model::{analytic, AdhesionMode, ContactModel, HystereticParams, JkrParams, Pulloff};
+use powder::model::{AdhesionMode, ContactModel, HystereticParams, JkrParams, Pulloff};
 
 const R: f64 = 1e-6;
-const RHO: f64 = 2000.0;
 
 /// (partner radius, wall): two equal spheres, unequal ones, one on a plane.
 const PAIRS: [(f64, bool); 3] = [(R, false), (2.0 * R, false), (R, true)];
@@ -21,31 +20,7 @@ fn collisions(pulloff: Pulloff, jump_impulses: Option<bool>) -> Vec<(CollideSpec
         pulloff,
         ..JkrParams::jkr(1e9, 0.3, 0.05)
     };
-    let mut out = Vec::new();
-    for (radius2, wall) in PAIRS {
-        let base = CollideSpec {
-            radius2,
-            wall,
-            jump_impulses,
-            ..CollideSpec::head_on(ContactModel::Jkr(p), R, RHO, 1.0)
-        };
-        let g = base.geometry();
-        let r = g.r_eff();
-        let w = analytic::jkr_loss(pulloff) * p.fc(r) * p.delta0(r);
-        let v_stick = analytic::jkr_sticking_velocity(w, g.reduced_mass);
-        for f in [1.05, 1.3, 2.0, 5.0] {
-            let v = f * v_stick;
-            let e = analytic::jkr_restitution(w, g.reduced_mass, v).unwrap();
-            out.push((
-                CollideSpec {
-                    velocity: v,
-                    ..base.clone()
-                },
-                e,
-            ));
-        }
-    }
-    out
+    common::jkr_collisions(p, &PAIRS, jump_impulses)
 }
 
 /// Within 2e-3 of the closed forms on the GPU (measured ≤ 2.2e-4, as the CPU's), within

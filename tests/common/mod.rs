@@ -132,3 +132,39 @@ angular_velocity = [{:e}, {:e}, {:e}]
     );
     Scene::from_toml_str(&text, "floor").unwrap()
 }
+
+/// Head-on collisions of 1 µm spheres of 2000 kg/m³ with JKR law `p`, one per (partner
+/// radius, wall) of `pairs`, at 1.05, 1.3, 2 and 5 times the sticking speed: each spec with
+/// the closed-form e (paper 002's loss W of `p`'s pull-off rule).
+#[allow(dead_code)]
+pub fn jkr_collisions(
+    p: powder::model::JkrParams,
+    pairs: &[(f64, bool)],
+    jump_impulses: Option<bool>,
+) -> Vec<(powder::collide::CollideSpec, f64)> {
+    use powder::collide::CollideSpec;
+    use powder::model::{analytic, ContactModel};
+    let mut out = Vec::new();
+    for &(radius2, wall) in pairs {
+        let base = CollideSpec {
+            radius2,
+            wall,
+            jump_impulses,
+            ..CollideSpec::head_on(ContactModel::Jkr(p), 1e-6, 2000.0, 1.0)
+        };
+        let g = base.geometry();
+        let r = g.r_eff();
+        let w = analytic::jkr_loss(p.pulloff) * p.fc(r) * p.delta0(r);
+        let v_stick = analytic::jkr_sticking_velocity(w, g.reduced_mass);
+        for f in [1.05, 1.3, 2.0, 5.0] {
+            let v = f * v_stick;
+            let e = analytic::jkr_restitution(w, g.reduced_mass, v).unwrap();
+            let spec = CollideSpec {
+                velocity: v,
+                ..base.clone()
+            };
+            out.push((spec, e));
+        }
+    }
+    out
+}
