@@ -24,9 +24,41 @@ struct GridParams {
     cell_width: vec3<f32>,
     // dims.x * dims.y * dims.z.
     n_cells: u32,
+    // The windows (`gpu::window`): shift (k >> shift is particle k's window), len
+    // (particles a window holds), rec_shift (a record index's window bits start there),
+    // the `state` buffer's fields.
+    window: vec4<u32>,
 }
 
 @group(0) @binding(0) var<uniform> grid: GridParams;
+
+// Particle k's window and its index within (one window: 0 and k).
+fn win_of(k: u32) -> u32 {
+    return k >> grid.window.x;
+}
+
+fn win_local(k: u32) -> u32 {
+    return k & ((1u << grid.window.x) - 1u);
+}
+
+// Element of particle k in an array blocked by window with `fields` per-particle regions
+// (region f of window w at (w·fields + f)·len).
+fn blocked(fields: u32, f: u32, k: u32) -> u32 {
+    return (win_of(k) * fields + f) * grid.window.y + win_local(k);
+}
+
+// A record index: local record i of window w, and back.
+fn record_index(w: u32, i: u32) -> u32 {
+    return (w << grid.window.z) | i;
+}
+
+fn rec_window(r: u32) -> u32 {
+    return r >> grid.window.z;
+}
+
+fn rec_local(r: u32) -> u32 {
+    return r & ((1u << grid.window.z) - 1u);
+}
 
 // Linear cell key of an integer cell coordinate: each component clamped to
 // [0, dims - 1] (particles outside the grid land in its boundary cells), x fastest.

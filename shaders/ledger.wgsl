@@ -152,15 +152,15 @@ fn ledger_dropped(pid: u32, old_row: u32, old_n: u32, k: u32) {
         // the pair is in k's new list, or in a partner's that lists k (`lower`, resolved)
         let partner = load_hist_pid(old_row + m);
         var found = false;
-        let row = rows[row_at(ROWS_B_ROW, k)];
-        for (var e = row; e < row + rows[row_at(ROWS_B_COUNT, k)]; e++) {
+        let row = b_first(k);
+        for (var e = row; e < row + b_len(k); e++) {
             if (load_new_hist_pid(e) == partner) {
                 found = true;
                 break;
             }
         }
-        let low = rows[row_at(ROWS_LOWER_ROW, k)];
-        for (var s = low; s < low + rows[row_at(ROWS_LOWER_COUNT, k)] && !found; s++) {
+        let low = lower_first(k);
+        for (var s = low; s < low + lower_len(k) && !found; s++) {
             if (load_ids(entry_owner(load_lower(s))).x == partner) {
                 found = true;
             }

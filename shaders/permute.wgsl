@@ -6,7 +6,8 @@
 // and sorted place k, so one dispatch does both without a race.
 
 // Where a field lies in its buffer: `blocks` blocks (one per wall for the wall-major
-// contact arrays, else 1) of `words` u32 per particle, block b at word base + b·stride.
+// contact arrays, else 1) of `words` u32 per particle, block b at word base + b·stride
+// of the particle's window's block (`window` words a window, `gpu::window`).
 struct Field {
     words: u32,
     blocks: u32,
@@ -15,14 +16,15 @@ struct Field {
 }
 
 // One dispatch: the field it stores (words 0: none), the one it loads (words 0: none) and
-// the scratch's words per particle. Layout: mirrored by `permute::MoveParams`.
+// the scratch's words per particle, and the words of a window's block of the stored and
+// the loaded field's buffer. Layout: mirrored by `permute::MoveParams`.
 struct Move {
     store: Field,
     load: Field,
     row: u32,
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
+    store_window: u32,
+    load_window: u32,
+    _pad: u32,
 }
 
 @group(0) @binding(1) var<uniform> mv: Move;
@@ -41,7 +43,7 @@ fn permute(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: 
     let row = k * mv.row;
     var s = row;
     for (var b = 0u; b < mv.store.blocks; b++) {
-        let at = mv.store.base + b * mv.store.stride + k * mv.store.words;
+        let at = win_of(k) * mv.store_window + mv.store.base + b * mv.store.stride + win_local(k) * mv.store.words;
         for (var c = 0u; c < mv.store.words; c++) {
             stored[at + c] = scratch[s];
             s++;
@@ -50,7 +52,7 @@ fn permute(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: 
     let o = sorted_index[k];
     s = row;
     for (var b = 0u; b < mv.load.blocks; b++) {
-        let at = mv.load.base + b * mv.load.stride + o * mv.load.words;
+        let at = win_of(o) * mv.load_window + mv.load.base + b * mv.load.stride + win_local(o) * mv.load.words;
         for (var c = 0u; c < mv.load.words; c++) {
             scratch[s] = loaded[at + c];
             s++;

@@ -235,34 +235,57 @@ fn is_active(pid: u32) -> bool {
 
 // The lists are compressed rows: particle k's entries are ids.y .. ids.y + ids.z of the
 // per-entry arrays (nbr, a_hist, a_hist_pid, the pair forces and torques, the ledger), in
-// sorted order, so consecutive particles' rows are consecutive. `rows` holds four per-particle
-// regions (like the state's, `particle_stride` apart): the lengths and first entries of
-// the lists a rebuild builds (B) and of the `lower` lists; the scans of `gpu::grid` turn
-// each count region into its row region.
+// sorted order, so consecutive particles' rows are consecutive within a window. `rows`
+// holds four per-particle regions (blocked by window like the state's): the lengths and
+// first entries of the lists a rebuild builds (B) and of the `lower` lists; the scans of
+// `gpu::grid` turn each window's count region into its row region.
 @group(0) @binding(90) var<storage, read_write> rows: array<u32>;
 const ROWS_B_COUNT: u32 = 0u;
 const ROWS_B_ROW: u32 = 1u;
 const ROWS_LOWER_COUNT: u32 = 2u;
 const ROWS_LOWER_ROW: u32 = 3u;
 
+// (blocked by window like the state; the rows are local to the particle's window: the
+// lists of a window's particles fill its block of entries, `gpu::window`)
 fn row_at(region: u32, k: u32) -> u32 {
-    return region * particle_stride() + k;
+    return blocked(4u, region, k);
 }
 
-// The contact of particle k with wall w: wall-major, for the same reason.
+// Particle k's new list (B) and its `lower` list: the first entry (a record index) and
+// the length.
+fn b_first(k: u32) -> u32 {
+    return record_index(win_of(k), rows[row_at(ROWS_B_ROW, k)]);
+}
+
+fn b_len(k: u32) -> u32 {
+    return rows[row_at(ROWS_B_COUNT, k)];
+}
+
+fn lower_first(k: u32) -> u32 {
+    return record_index(win_of(k), rows[row_at(ROWS_LOWER_ROW, k)]);
+}
+
+fn lower_len(k: u32) -> u32 {
+    return rows[row_at(ROWS_LOWER_COUNT, k)];
+}
+
+// The contact of particle k with wall w: wall-major within k's window, for the same
+// reason.
 fn wall_slot(k: u32, w: u32) -> u32 {
-    return w * grid.n_particles + k;
+    return record_index(win_of(k), w * grid.window.y + win_local(k));
 }
 
-// The particle whose new list (ROWS_B_ROW, ROWS_B_COUNT) holds entry e: the last whose
-// first entry is <= e
+// The particle whose new list (ROWS_B_ROW, ROWS_B_COUNT) holds entry e: the last of e's
+// window whose first entry is <= e
 // (particles with empty lists share the next one's row).
 fn entry_owner(e: u32) -> u32 {
-    var lo = 0u;
-    var hi = grid.n_particles;
+    let w = rec_window(e);
+    let local = rec_local(e);
+    var lo = w * grid.window.y;
+    var hi = min(lo + grid.window.y, grid.n_particles);
     while (hi - lo > 1u) {
         let mid = (lo + hi) / 2u;
-        if (rows[row_at(ROWS_B_ROW, mid)] <= e) {
+        if (rows[row_at(ROWS_B_ROW, mid)] <= local) {
             lo = mid;
         } else {
             hi = mid;
@@ -585,12 +608,12 @@ fn search(k: u32, fill: bool) -> vec2<u32> {
                     if (dot(d, d) < reach * reach) {
                         if (evaluates(d, k, j)) {
                             if (fill && rows[row_at(ROWS_B_ROW, k)] + up < cap) {
-                                store_nbr(rows[row_at(ROWS_B_ROW, k)] + up, j);
+                                store_nbr(b_first(k) + up, j);
                             }
                             up += 1u;
                         } else {
                             if (fill && rows[row_at(ROWS_LOWER_ROW, k)] + down < cap) {
-                                store_lower(rows[row_at(ROWS_LOWER_ROW, k)] + down, j);
+                                store_lower(lower_first(k) + down, j);
                             }
                             down += 1u;
                         }
@@ -639,8 +662,12 @@ fn commit() {
     if (grid.n_particles == 0u || !rebuilding) {
         return;
     }
-    let last = grid.n_particles - 1u;
-    let need = max(rows[row_at(ROWS_B_ROW, last)] + rows[row_at(ROWS_B_COUNT, last)], rows[row_at(ROWS_LOWER_ROW, last)] + rows[row_at(ROWS_LOWER_COUNT, last)]);
+    // each window's lists fill its block of entries: the fullest decides
+    var need = 0u;
+    for (var first = 0u; first < grid.n_particles; first += grid.window.y) {
+        let last = min(first + grid.window.y, grid.n_particles) - 1u;
+        need = max(need, max(rows[row_at(ROWS_B_ROW, last)] + b_len(last), rows[row_at(ROWS_LOWER_ROW, last)] + lower_len(last)));
+    }
     if (need > step.list_capacity) {
         atomicStore(&control[7], 1u);
         atomicStore(&control[11], need);
@@ -659,11 +686,11 @@ fn remap(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
         return;
     }
     // the lower list: each such partner j lists k in its own list; keep that entry
-    let low = rows[row_at(ROWS_LOWER_ROW, k)];
-    for (var s = 0u; s < rows[row_at(ROWS_LOWER_COUNT, k)]; s++) {
+    let low = lower_first(k);
+    for (var s = 0u; s < lower_len(k); s++) {
         let j = load_lower(low + s);
-        let row_j = rows[row_at(ROWS_B_ROW, j)];
-        for (var m = 0u; m < rows[row_at(ROWS_B_COUNT, j)]; m++) {
+        let row_j = b_first(j);
+        for (var m = 0u; m < b_len(j); m++) {
             if (load_nbr(row_j + m) == k) {
                 store_lower(low + s, row_j + m);
                 break;
@@ -677,8 +704,8 @@ fn remap(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
     let me = ids.x;
     let old_row = ids.y;
     let old_n = ids.z;
-    let row = rows[row_at(ROWS_B_ROW, k)];
-    for (var s = 0u; s < rows[row_at(ROWS_B_COUNT, k)]; s++) {
+    let row = b_first(k);
+    for (var s = 0u; s < b_len(k); s++) {
         let e = row + s;
         let j = load_nbr(e);
         let partner = load_ids(j).x;
@@ -718,8 +745,8 @@ fn copy_back_history(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgro
     if (k >= grid.n_particles) {
         return;
     }
-    let n = rows[row_at(ROWS_B_COUNT, k)];
-    let row = rows[row_at(ROWS_B_ROW, k)];
+    let n = b_len(k);
+    let row = b_first(k);
     for (var e = row; e < row + n; e++) {
         store_hist(e, load_new_hist(e));
         store_hist_pid(e, load_new_hist_pid(e));
@@ -1121,8 +1148,8 @@ fn collect_particle(k: u32, mass: f32, store: bool) -> Collected {
     var f = partial.xyz;
     var torque = vec3<f32>(0.0);
     var impulse = vec3<f32>(0.0);
-    let low = rows[row_at(ROWS_LOWER_ROW, k)];
-    for (var s = low; s < low + rows[row_at(ROWS_LOWER_COUNT, k)]; s++) {
+    let low = lower_first(k);
+    for (var s = low; s < low + lower_len(k); s++) {
         let slot = load_lower(s);
         f -= load_pair_force(slot);
         torque += rot_pair_load(slot);

@@ -325,6 +325,113 @@ fn software_and_gpu_paths_give_the_same_bits() {
     }
 }
 
+/// Windows (`gpu::window`: every array blocked by ranges of particles, the lists' entries
+/// by window) change no bit: positions, velocities, spins, the ledger, the contacts'
+/// history and the wall forces of runs in windows of 64 particles are those of one
+/// window, on scenes with moving and servo-controlled walls, adhesion, rotation and list
+/// growth; a windowed state restores into a windowed engine, not into another layout.
+#[test]
+fn windows_change_no_bit() {
+    use common::assert_same_bits;
+    use powder::bench::{packing, Case};
+    use powder::gpu::GpuOptions;
+    let text = std::fs::read_to_string(common::example_path("compression.toml")).unwrap();
+    let early = text.replace(
+        "times = [0.1, 0.3, 0.33, 0.36]",
+        "times = [0.0, 0.04, 0.045, 0.05]",
+    );
+    let servo = text.replace(
+        "velocities = [[0.0, 0.0, -0.029], [0.0, 0.0, 0.029], [0.0, 0.0, -0.029], [0.0, 0.0, 0.029]]\ntimes = [0.1, 0.3, 0.33, 0.36]",
+        "servo_force = 0.02\nservo_gain = 2.0\nservo_max_speed = 0.05",
+    );
+    assert!(early != text && servo != text);
+    let toml = |t: &str| powder::scene::Scene::from_toml_str(t, "c").unwrap();
+    let scenes = [
+        ("compression", toml(&early), 3000),
+        ("servo compression", toml(&servo), 3000),
+        ("cohesive cluster", example("cohesive_cluster.toml"), 3000),
+        ("JKR packing", packing(Case::Jkr, 600, 1.0, 3).unwrap(), 600),
+    ];
+    for (name, mut scene, steps) in scenes {
+        let Some(ctx) = context() else { return };
+        // scrambled, so the re-sorts move particles across windows
+        let n = scene.particles.len();
+        for i in 0..n {
+            scene.particles.swap(i, (i * 7919 + 13) % n);
+        }
+        // (the windowed lists from one entry a window: they grow)
+        let options = |window: Option<u64>| GpuOptions {
+            software_paths: Some(false),
+            window_particles: window,
+            list_entries: window.map(|_| 1),
+            ..Default::default()
+        };
+        let mut one = GpuEngine::with_options(&scene, ctx, options(None)).unwrap();
+        let mut many =
+            GpuEngine::with_options(&scene, context().unwrap(), options(Some(64))).unwrap();
+        assert_eq!(one.windows().count, 1);
+        assert_eq!(many.windows().count, (n as u64).div_ceil(64), "{name}");
+        let half = steps / 2;
+        one.run_steps(half).unwrap();
+        many.run_steps(half).unwrap();
+        let saved = many.save_state().unwrap();
+        // another layout refuses it by name
+        let mut other = GpuEngine::with_options(&scene, context().unwrap(), options(None)).unwrap();
+        let refused = other.restore_state(saved.clone()).unwrap_err().to_string();
+        assert!(refused.contains("windows of 64"), "{name}: {refused}");
+        one.run_steps(steps - half).unwrap();
+        many.run_steps(steps - half).unwrap();
+        let (a, b) = (one.state().unwrap(), many.state().unwrap());
+        assert_same_bits(&a, &b);
+        let bits = |v: &[glam::DVec3]| {
+            v.iter()
+                .map(|w| w.to_array().map(f64::to_bits))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(
+            bits(&a.angular_velocities),
+            bits(&b.angular_velocities),
+            "{name}"
+        );
+        let (ea, eb) = (one.energies(&a).unwrap(), many.energies(&b).unwrap());
+        assert_eq!(ea.dissipated.to_bits(), eb.dissipated.to_bits(), "{name}");
+        assert_eq!(ea.wall_work.to_bits(), eb.wall_work.to_bits(), "{name}");
+        assert_eq!(one.rebuilds().unwrap(), many.rebuilds().unwrap(), "{name}");
+        assert!(many.list_growths() >= 1, "{name}");
+        assert_eq!(
+            one.contact_histories().unwrap(),
+            many.contact_histories().unwrap(),
+            "{name}"
+        );
+        assert_eq!(
+            bits(&one.wall_forces().unwrap()),
+            bits(&many.wall_forces().unwrap()),
+            "{name}"
+        );
+        for w in 0..scene.walls.len() {
+            for i in [0, n / 2, n - 1] {
+                assert_eq!(
+                    one.wall_contact_history(w, i).unwrap(),
+                    many.wall_contact_history(w, i).unwrap(),
+                    "{name}: wall {w}, particle {i}"
+                );
+            }
+        }
+        // the windowed state resumes in a windowed engine bitwise
+        let mut resumed =
+            GpuEngine::with_options(&scene, context().unwrap(), options(Some(64))).unwrap();
+        resumed.restore_state(saved).unwrap();
+        resumed.run_steps(steps - half).unwrap();
+        assert_same_bits(&resumed.state().unwrap(), &b);
+        eprintln!(
+            "{name}: {n} particles in {} windows, {} list entries (one window: {})",
+            many.windows().count,
+            many.list_entries(),
+            one.list_entries()
+        );
+    }
+}
+
 mod collisions {
     use super::context;
     use powder::collide::{collide_on, Backend, CollideSpec};

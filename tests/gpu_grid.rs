@@ -280,6 +280,7 @@ fn gpu_permute_resorts_every_field_in_place() {
         n_particles: n,
         cell_width: [1.0; 3],
         n_cells: 1,
+        window: powder::gpu::window::Windows::one(n as u64).params(1),
     };
     let grid = uniform_buffer(&ctx.device, "grid", bytemuck::bytes_of(&params));
     let sorted = storage_buffer(&ctx.device, "sorted", 4 * n as u64);

@@ -51,8 +51,9 @@ use crate::gpu::mirror::Mirrors;
 use crate::gpu::permute::{Field, Permutation, ROW_WORDS};
 use crate::gpu::quiet::{Forecast, QuietBatches};
 use crate::gpu::records::RecordLayout;
-use crate::gpu::state::{particle_stride, Buffer, StateLayout};
+use crate::gpu::state::{Buffer, StateLayout};
 use crate::gpu::traffic::{PassTraffic, When};
+use crate::gpu::window::Windows;
 use crate::model::{ContactHistory, ContactModel, PairGeometry};
 use crate::scene::Scene;
 use crate::setup::Resolved;
@@ -153,22 +154,29 @@ struct StateSet {
 impl StateSet {
     fn new(
         alloc: &mut Allocator,
-        (n, entries, walls): (u64, u64, u64),
+        (n, entries, walls, windows): (u64, u64, u64, Windows),
         kind: &Composition,
         (keeps, servo): (Keeps, bool),
     ) -> Self {
-        let layout = StateLayout::new(n, kind.rotation());
+        let layout = StateLayout::windowed(n, kind.rotation(), windows);
         let [entry_layout, _, wall_layout] = kind.records(keeps);
         let mut b = |name: &str, bytes: u64| alloc.buffer(&format!("A.{name}"), bytes);
         // the servo's pushes only where a wall is servo-controlled (the last field)
         let leave_out: &[&str] = if servo { &[] } else { &["wall_push"] };
+        let wall_capacity = windows.len * walls;
         Self {
             state: b("state", layout.bytes(Buffer::State)),
             motion: b("motion", layout.bytes(Buffer::Motion)),
             layout,
-            entries: b("entries", entry_layout.bytes(entries, &[])),
+            entries: b(
+                "entries",
+                entry_layout.windowed_bytes(entries, &windows, &[]),
+            ),
             entry_layout,
-            wall_contacts: b("wall_contacts", wall_layout.bytes(n * walls, leave_out)),
+            wall_contacts: b(
+                "wall_contacts",
+                wall_layout.windowed_bytes(wall_capacity, &windows, leave_out),
+            ),
             wall_layout,
         }
     }
@@ -184,20 +192,25 @@ impl StateSet {
         v
     }
 
-    /// The record layouts with their capacities: the entries', the new lists', the wall
-    /// contacts'.
+    /// The record layouts with their records (all windows'): the entries', the new
+    /// lists', the wall contacts'.
     fn records<'a>(
         &'a self,
         new: &'a NewLists,
         entries: u64,
         walls: u64,
     ) -> [(&'a RecordLayout, u64); 3] {
-        let n = self.layout.field_bytes() / crate::gpu::state::FIELD_BYTES;
+        let w = self.layout.windows();
         [
-            (&self.entry_layout, entries),
-            (&new.layout, entries),
-            (&self.wall_layout, n * walls),
+            (&self.entry_layout, entries * w.count),
+            (&new.layout, entries * w.count),
+            (&self.wall_layout, w.len * walls * w.count),
         ]
+    }
+
+    /// Records a window's block of wall contacts holds.
+    fn wall_capacity(&self, walls: u64) -> u64 {
+        self.layout.windows().len * walls
     }
 
     /// The buffer holding state buffer `b`.
@@ -210,35 +223,44 @@ impl StateSet {
 
     /// The fields a rebuild re-sorts (`gpu::permute`): every per-particle field (two
     /// state fields a dispatch) but the lists (rebuilt).
-    fn permuted(&self, n: u32, walls: u32) -> Vec<Field> {
+    fn permuted(&self, walls: u32) -> Vec<Field> {
         let stride = 4 * self.layout.stride() as u32;
         let per_move = (ROW_WORDS / 4).max(1) as usize;
         let mut f = Vec::new();
         for b in Buffer::ALL {
             let names: Vec<&str> = self.layout.in_buffer(b).map(|f| f.name).collect();
+            let block = stride * names.len() as u32;
             for (c, group) in names.chunks(per_move).enumerate() {
                 let first = (c * per_move) as u32;
-                f.push(Field::regions(
-                    &group.join("+"),
-                    self.buffer(b),
-                    4,
-                    (first * stride, stride, group.len() as u32),
-                ));
+                f.push(
+                    Field::regions(
+                        &group.join("+"),
+                        self.buffer(b),
+                        4,
+                        (first * stride, stride, group.len() as u32),
+                    )
+                    .windowed(block),
+                );
             }
         }
         // the wall contacts' history and priors (not the servo's pushes, which the rebuild
         // zeroes)
-        let capacity = n as u64 * walls as u64;
+        let capacity = self.wall_capacity(walls as u64);
+        let block = (capacity * self.wall_layout.words()) as u32;
         for name in ["wall_hist", "wall_prior"] {
             if let Some((before, words)) = self.wall_layout.place(name) {
-                f.extend(Field::wall_major(
-                    name,
-                    &self.wall_contacts,
-                    (before * capacity) as u32,
-                    4 * words,
-                    walls,
-                    n,
-                ));
+                f.extend(
+                    Field::wall_major(
+                        name,
+                        &self.wall_contacts,
+                        (before * capacity) as u32,
+                        4 * words,
+                        walls,
+                        self.layout.stride() as u32,
+                    )
+                    .into_iter()
+                    .map(|f| f.windowed(block)),
+                );
             }
         }
         f
@@ -253,10 +275,18 @@ struct NewLists {
 }
 
 impl NewLists {
-    fn new(alloc: &mut Allocator, entries: u64, kind: &Composition, keeps: Keeps) -> Self {
+    fn new(
+        alloc: &mut Allocator,
+        (entries, windows): (u64, &Windows),
+        kind: &Composition,
+        keeps: Keeps,
+    ) -> Self {
         let [_, layout, _] = kind.records(keeps);
         Self {
-            new_entries: alloc.buffer("B.new_entries", layout.bytes(entries, &[])),
+            new_entries: alloc.buffer(
+                "B.new_entries",
+                layout.windowed_bytes(entries, windows, &[]),
+            ),
             layout,
         }
     }
@@ -288,7 +318,7 @@ struct StepBuffers {
     /// energy (`particle_ledger` in `shaders/ledger.wgsl`); only with the ledger.
     particle_ledger: Option<wgpu::Buffer>,
     /// The new lists' and the `lower` lists' lengths and first entries (`rows` in
-    /// `shaders/step.wgsl`: four regions [`particle_stride`] apart).
+    /// `shaders/step.wgsl`: four regions a window, blocked like the state).
     rows: wgpu::Buffer,
 }
 
@@ -315,9 +345,22 @@ impl StepBuffers {
     }
 }
 
-/// An error when `entries` list entries of `words` words each (the entries' records)
-/// exceed the adapter's storage binding limit (or the u32 entry indices).
-fn check_entries(entries: u64, words: u64, particles: u64, limit: u64) -> Result<(), PowderError> {
+/// An error when `entries` list entries a window of `words` words each (the entries'
+/// records) exceed the adapter's storage binding limit (or the u32 entry indices).
+fn check_entries(
+    (entries, windows): (u64, &Windows),
+    words: u64,
+    particles: u64,
+    limit: u64,
+) -> Result<(), PowderError> {
+    if entries > windows.max_records() {
+        return Err(PowderError::Run(format!(
+            "the neighbour lists need {entries} entries in a window of {} particles, more than the {} a window's entries are numbered with: use smaller windows",
+            windows.len,
+            windows.max_records()
+        )));
+    }
+    let entries = entries * windows.count;
     let bytes = 4 * words;
     if entries * bytes > limit || entries * words > u32::MAX as u64 {
         return Err(PowderError::Run(format!(
@@ -476,6 +519,11 @@ pub struct GpuOptions {
     /// batches under [`QuietBatches::Auto`] (`None`: by the adapter kind,
     /// `GpuContext::is_software`). Results are bitwise the same either way.
     pub software_paths: Option<bool>,
+    /// Particles a window holds (`gpu::window`: a power of two; every array blocked by
+    /// window), `None` for one window holding all. Results are bitwise the same either
+    /// way; more windows take more list entries (each window's block is sized for the
+    /// fullest).
+    pub window_particles: Option<u64>,
 }
 
 impl Default for GpuOptions {
@@ -485,6 +533,7 @@ impl Default for GpuOptions {
             quiet: QuietBatches::Auto,
             list_entries: None,
             software_paths: None,
+            window_particles: None,
         }
     }
 }
@@ -611,7 +660,8 @@ pub struct GpuEngine {
     escaped: Option<usize>,
     /// A rebuild's scans of the new lists' lengths into their first entries (the pair
     /// lists', `lower`'s), dispatched indirectly from `args` at `scan_args`.
-    scans: [ExclusiveScan; 2],
+    /// Two a window, in window order (`lower`'s after each window's pair lists').
+    scans: Vec<ExclusiveScan>,
     scan_args: [u64; 2],
     /// Unit normals of the walls (into the domain).
     wall_normals: Vec<DVec3>,
@@ -794,6 +844,12 @@ impl GpuEngine {
         }
         let grid =
             GridSort::with_cell_widths(&ctx, n as u32, dims, [h.x as f32, h.y as f32, h.z as f32])?;
+        let windows = match options.window_particles {
+            Some(len) => Windows::of(n as u64, len)?,
+            None => Windows::one(n as u64),
+        };
+        let state_fields = StateLayout::new(0, kind.rotation()).count(Buffer::State);
+        grid.set_windows(&ctx.queue, &windows, state_fields as u32);
         let device = &ctx.device;
         let n_walls = scene.walls.len() as u64;
         let mut alloc = Allocator::new(device, ctx.max_storage_binding());
@@ -804,14 +860,19 @@ impl GpuEngine {
             ("grid.cell_start".into(), grid.cell_start().size()),
             ("grid.sorted_index".into(), grid.sorted_index().size()),
         ];
-        // list entries: a first guess, grown by the first rebuild to what it needs
+        // list entries a window: a first guess, grown by the first rebuild to what it needs
+        let per_window = if windows.count == 1 {
+            n as u64
+        } else {
+            windows.len
+        };
         let entries = options
             .list_entries
-            .unwrap_or(INITIAL_ENTRIES_PER_PARTICLE * n as u64 + 256)
+            .unwrap_or(INITIAL_ENTRIES_PER_PARTICLE * per_window + 256)
             .max(1);
         let [entry_layout, ..] = kind.records(keeps);
         check_entries(
-            entries,
+            (entries, &windows),
             entry_layout.words(),
             n as u64,
             ctx.max_storage_binding(),
@@ -820,9 +881,9 @@ impl GpuEngine {
             .walls
             .iter()
             .any(|w| matches!(w.motion, crate::scene::WallMotion::Servo { .. }));
-        let sizes = (n as u64, entries, n_walls);
+        let sizes = (n as u64, entries, n_walls, windows);
         let state = StateSet::new(&mut alloc, sizes, &kind, (keeps, servo_walls));
-        let new_lists = NewLists::new(&mut alloc, entries, &kind, keeps);
+        let new_lists = NewLists::new(&mut alloc, (entries, &windows), &kind, keeps);
         let dt32 = r.dt as f32;
         let particle_ledger = ledger.then(|| alloc.buffer("particle_ledger", 64 * n as u64));
         // the per-particle buffers fit before the initial state is written into them
@@ -949,15 +1010,23 @@ impl GpuEngine {
         let active_buf = alloc.buffer("active", 4 * n as u64);
         let flags: Vec<u32> = active.iter().map(|&a| a as u32).collect();
         q0.write_buffer(&active_buf, 0, bytemuck::cast_slice(&flags));
-        // the new lists' and the `lower` lists' rows
-        let stride = particle_stride(n as u64);
-        let rows = alloc.buffer("rows", 4 * 4 * stride);
+        // the new lists' and the `lower` lists' rows (four regions a window)
+        let rows = alloc.buffer("rows", 4 * 4 * windows.len * windows.count);
         let control = alloc.buffer("control", CONTROL_BYTES);
         // moved beyond skin/2 (flag set): the first step builds the lists
         let skin_init = [1u32, 0, 0, 0];
         q0.write_buffer(&control, SKIN_OFFSET, bytemuck::cast_slice(&skin_init));
         // the software adapter's paths (texture mirrors; quiet batches under `auto`)
-        let software = options.software_paths.unwrap_or_else(|| ctx.is_software());
+        // (the mirrors copy a field's region: one window only)
+        let software = options
+            .software_paths
+            .unwrap_or_else(|| ctx.is_software() && windows.count == 1);
+        if software && windows.count > 1 {
+            return Err(PowderError::Run(format!(
+                "the software adapter's paths (texture mirrors) need one window, and {} particles in windows of {} make {}: turn them off (`--software-paths off`, GpuOptions::software_paths)",
+                n, windows.len, windows.count
+            )));
+        }
         let mut wanted = vec![
             "kick_drift",
             "decide",
@@ -993,19 +1062,27 @@ impl GpuEngine {
             &crate::gpu::shaders::stage("grid").expect("grid is a stage"),
             Some(&["scan_blocks", "scan_add"]),
         )?;
-        let n32 = n as u32;
-        let region = stride as u32;
-        let scans = [
+        // each window's: a window's n (the last one's counts beyond n stay 0)
+        let scanned = if windows.count == 1 {
+            n as u32
+        } else {
+            windows.len as u32
+        };
+        let region = windows.len as u32;
+        let mut scans = Vec::new();
+        for w in 0..windows.count as u32 {
+            let block = 4 * region * w;
             // (the regions of `rows`: B's counts and rows, then `lower`'s)
-            ExclusiveScan::with_offsets(&ctx, &scan_program, (&rows, 0), (&rows, region), n32)?,
-            ExclusiveScan::with_offsets(
-                &ctx,
-                &scan_program,
-                (&rows, 2 * region),
-                (&rows, 3 * region),
-                n32,
-            )?,
-        ];
+            for (count, row) in [(0, 1), (2, 3)] {
+                scans.push(ExclusiveScan::with_offsets(
+                    &ctx,
+                    &scan_program,
+                    (&rows, block + count * region),
+                    (&rows, block + row * region),
+                    scanned,
+                )?);
+            }
+        }
         // the indirect arguments of a rebuild (the grid sort's, one per-particle pass's,
         // the scans'), and the ones decide writes each step (those, or zeros)
         let sort_args = grid.indirect_args();
@@ -1015,6 +1092,7 @@ impl GpuEngine {
             .iter()
             .product::<u32>();
         let particle_args = split_workgroups((n as u32).div_ceil(per_group), max_per_dim);
+        // (every window's scans have the first window's dispatches)
         let rebuild_args = 12 * sort_args.len() as u64;
         let scan_args = [
             rebuild_args + 12,
@@ -1088,7 +1166,7 @@ impl GpuEngine {
             grid.params(),
             grid.sorted_index(),
             n as u32,
-            &state.permuted(n as u32, n_walls as u32),
+            &state.permuted(n_walls as u32),
         )?;
         alloc
             .list
@@ -1243,10 +1321,16 @@ impl GpuEngine {
         self.growths
     }
 
-    /// Entries the neighbour lists have room for now (each pair a particle evaluates takes
-    /// one, and its partner's `lower` one): grown by a rebuild that needs more.
+    /// Entries the neighbour lists have room for now, all windows' (each pair a particle
+    /// evaluates takes one, and its partner's `lower` one): grown by a rebuild that needs
+    /// more.
     pub fn list_entries(&self) -> u64 {
-        self.entries
+        self.entries * self.state.layout.windows().count
+    }
+
+    /// The windows the particles are blocked into (`gpu::window`).
+    pub fn windows(&self) -> Windows {
+        *self.state.layout.windows()
     }
 
     /// Whether the engine takes the software adapter's paths (texture mirrors, quiet
@@ -1464,7 +1548,7 @@ impl GpuEngine {
                 bound.gather.indirect(&mut pass, &self.b.args, at);
             }
             bound.count_neighbours.indirect(&mut pass, &self.b.args, at);
-            for (scan, &offset) in self.scans.iter().zip(&self.scan_args) {
+            for (scan, &offset) in self.scans.iter().zip(self.scan_args.iter().cycle()) {
                 scan.record_indirect(&mut pass, &self.b.args, offset);
             }
             bound.neighbours.indirect(&mut pass, &self.b.args, at);
@@ -1515,7 +1599,10 @@ impl GpuEngine {
     /// runs again and remaps it.
     fn grow_lists(&mut self, need: u64) -> Result<(), PowderError> {
         // the headroom only as far as one binding holds (`need` itself is checked)
-        let most = self.ctx.max_storage_binding() / (4 * self.state.entry_layout.words());
+        let windows = *self.state.layout.windows();
+        let most = (self.ctx.max_storage_binding()
+            / (4 * self.state.entry_layout.words() * windows.count))
+            .min(windows.max_records());
         let entries = ((need as f64 * LIST_HEADROOM).ceil() as u64)
             .max(need + 64)
             .min(most)
@@ -1528,8 +1615,9 @@ impl GpuEngine {
     /// history and ledger values when `keep`), tells the kernels, and binds them again.
     fn resize_lists(&mut self, entries: u64, keep: bool) -> Result<(), PowderError> {
         let layout = self.state.entry_layout.clone();
+        let windows = *self.state.layout.windows();
         check_entries(
-            entries,
+            (entries, &windows),
             layout.words(),
             self.n as u64,
             self.ctx.max_storage_binding(),
@@ -1538,21 +1626,28 @@ impl GpuEngine {
         let mut alloc = Allocator::new(device, self.ctx.max_storage_binding());
         let mut encoder = device.create_command_encoder(&Default::default());
         let old = (self.state.entries.clone(), self.entries);
-        let new = alloc.buffer("A.entries", layout.bytes(entries, &[]));
+        let new = alloc.buffer("A.entries", layout.windowed_bytes(entries, &windows, &[]));
         if keep {
-            // region by region: each region's start moves with the capacity
-            for name in ["hist_pid", "hist", "prior"] {
-                if let Some((_, words)) = layout.place(name) {
-                    let from = layout.offset(name, old.1).unwrap_or(0);
-                    let to = layout.offset(name, entries).unwrap_or(0);
-                    let bytes = 4 * words * old.1.min(entries);
-                    encoder.copy_buffer_to_buffer(&old.0, from, &new, to, bytes);
+            // window by window, region by region: each region's start moves with the
+            // capacity
+            for w in 0..windows.count {
+                for name in ["hist_pid", "hist", "prior"] {
+                    if let Some((_, words)) = layout.place(name) {
+                        let first = windows.record(w, 0);
+                        let from = layout.byte_of(name, old.1, &windows, first).unwrap_or(0);
+                        let to = layout.byte_of(name, entries, &windows, first).unwrap_or(0);
+                        let bytes = 4 * words * old.1.min(entries);
+                        encoder.copy_buffer_to_buffer(&old.0, from, &new, to, bytes);
+                    }
                 }
             }
         }
         self.state.entries = new;
         let b = &mut self._new_lists;
-        b.new_entries = alloc.buffer("B.new_entries", b.layout.bytes(entries, &[]));
+        b.new_entries = alloc.buffer(
+            "B.new_entries",
+            b.layout.windowed_bytes(entries, &windows, &[]),
+        );
         self.ctx.queue.submit([encoder.finish()]);
         for (name, bytes) in alloc.list {
             if let Some(entry) = self.buffers.iter_mut().find(|(n, _)| *n == name) {
@@ -1972,20 +2067,24 @@ impl GpuEngine {
     fn quiet_copies(&self, q: &Quiet) -> Vec<Saved> {
         let (a, b) = (&self.state, &self._new_lists);
         let mut v = q.copies.clone();
-        for (from, to) in [("hist", "new_hist"), ("prior", "new_prior")] {
-            let cap = self.entries;
-            if let (Some(at), Some(to_at), Some((_, words))) = (
-                a.entry_layout.offset(from, cap),
-                b.layout.offset(to, cap),
-                a.entry_layout.place(from),
-            ) {
-                v.push(Saved {
-                    from: a.entries.clone(),
-                    from_at: at,
-                    to: b.new_entries.clone(),
-                    to_at,
-                    bytes: 4 * words * cap,
-                });
+        let windows = a.layout.windows();
+        for w in 0..windows.count {
+            let first = windows.record(w, 0);
+            for (from, to) in [("hist", "new_hist"), ("prior", "new_prior")] {
+                let cap = self.entries;
+                if let (Some(at), Some(to_at), Some((_, words))) = (
+                    a.entry_layout.byte_of(from, cap, windows, first),
+                    b.layout.byte_of(to, cap, windows, first),
+                    a.entry_layout.place(from),
+                ) {
+                    v.push(Saved {
+                        from: a.entries.clone(),
+                        from_at: at,
+                        to: b.new_entries.clone(),
+                        to_at,
+                        bytes: 4 * words * cap,
+                    });
+                }
             }
         }
         v
@@ -2070,12 +2169,17 @@ impl GpuEngine {
             }
             if name == "entries" {
                 let layout = &self.state.entry_layout;
-                for field in ["pair_force", "pair_torque", "jump", "jump_normal"] {
-                    if let (Some(at), Some((_, words))) =
-                        (layout.offset(field, self.entries), layout.place(field))
-                    {
-                        let (at, len) = (at as usize, (4 * words * self.entries) as usize);
-                        bytes[at..at + len].fill(0);
+                let windows = self.state.layout.windows();
+                for w in 0..windows.count {
+                    let first = windows.record(w, 0);
+                    for field in ["pair_force", "pair_torque", "jump", "jump_normal"] {
+                        if let (Some(at), Some((_, words))) = (
+                            layout.byte_of(field, self.entries, windows, first),
+                            layout.place(field),
+                        ) {
+                            let (at, len) = (at as usize, (4 * words * self.entries) as usize);
+                            bytes[at..at + len].fill(0);
+                        }
                     }
                 }
             }
@@ -2089,8 +2193,18 @@ impl GpuEngine {
             wall_points: self.wall_points.clone(),
             active: self.active.clone(),
             inserted: self.inserted,
-            layout: self.kind.layout(),
+            layout: self.saved_layout(),
         })
+    }
+
+    /// What a saved state's words mean: the contact law's layout (`Composition::layout`)
+    /// and the windows where there are several.
+    fn saved_layout(&self) -> String {
+        let w = self.state.layout.windows();
+        match w.count {
+            1 => self.kind.layout(),
+            _ => format!("{} in windows of {} particles", self.kind.layout(), w.len),
+        }
     }
 
     /// Writes a saved state back: the run continues exactly as it would have from there.
@@ -2111,15 +2225,16 @@ impl GpuEngine {
             }
             _ => {}
         }
-        if saved.layout != self.kind.layout() {
+        if saved.layout != self.saved_layout() {
             return Err(PowderError::Run(format!(
-                "the saved GPU state's contact law is laid out as `{}`, this run's as `{}` (another scene or powder version): rerun the scene from the start",
+                "the saved GPU state's contact law is laid out as `{}`, this run's as `{}` (another scene, window size or powder version): rerun the scene from the start",
                 saved.layout,
-                self.kind.layout()
+                self.saved_layout()
             )));
         }
         // the lists' capacity the state was saved with (its entries' size)
-        let entry_bytes = 4 * self.state.entry_layout.words();
+        let windows = *self.state.layout.windows();
+        let entry_bytes = 4 * self.state.entry_layout.words() * windows.count;
         let entries = saved
             .buffers
             .iter()
@@ -2157,14 +2272,18 @@ impl GpuEngine {
         // the servo's pushes of walls that are no candidates must read 0 (a rebuild zeroes
         // them; this state's candidates may differ from the ones last written)
         let walls = &self.state.wall_contacts;
-        let capacity = self.n as u64 * self.n_walls as u64;
-        if let Some(at) = self.state.wall_layout.offset("wall_push", capacity) {
-            if at < walls.size() {
-                let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
-                encoder.clear_buffer(walls, at, None);
-                self.ctx.queue.submit([encoder.finish()]);
+        let capacity = self.state.wall_capacity(self.n_walls as u64);
+        let layout = &self.state.wall_layout;
+        let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+        for w in 0..windows.count {
+            if let Some(at) = layout.byte_of("wall_push", capacity, &windows, windows.record(w, 0))
+            {
+                if at < walls.size() {
+                    encoder.clear_buffer(walls, at, Some(4 * capacity));
+                }
             }
         }
+        self.ctx.queue.submit([encoder.finish()]);
         if saved.wall_points.len() == self.wall_points.len() {
             self.wall_points = saved.wall_points;
         }
@@ -2293,23 +2412,27 @@ impl GpuEngine {
         if walls == 0 {
             return Ok(f);
         }
-        let capacity = self.n as u64 * walls as u64;
-        let Some(at) = self.state.wall_layout.offset("wall_prior", capacity) else {
+        let s = &self.state;
+        let capacity = s.wall_capacity(walls as u64);
+        if s.wall_layout.place("wall_prior").is_none() {
             return Err(PowderError::Run(
                 "this GPU run keeps neither the energy ledger (GpuOptions { ledger: false }) nor force jumps, whose per-contact records hold the wall forces".into(),
             ));
-        };
-        let buf = &self.state.wall_contacts;
+        }
+        let buf = &s.wall_contacts;
         let encoder = self.ctx.device.create_command_encoder(&Default::default());
         let out = submit_and_read(&self.ctx, encoder, &[(buf, buf.size())])?;
-        let at = at as usize;
-        let rows: Vec<[f32; 4]> =
-            bytemuck::pod_collect_to_vec(&out[0][at..at + 16 * capacity as usize]);
-        // slot w·n + k (`wall_slot`): (overlap, normal force, .., 1 while engaged)
-        for (slot, r) in rows.iter().enumerate() {
-            if r[3] > 0.0 {
-                let w = slot / self.n as usize;
-                f[w] -= r[1] as f64 * self.wall_normals[w];
+        let windows = s.layout.windows();
+        // (overlap, normal force, .., 1 while engaged) at `wall_slot`
+        for (w, (f, normal)) in f.iter_mut().zip(&self.wall_normals).enumerate() {
+            for k in 0..self.n as u64 {
+                let r = windows.wall_record(k, w as u64);
+                let at = s.wall_layout.byte_of("wall_prior", capacity, windows, r);
+                let at = at.unwrap_or(0) as usize;
+                let row: [f32; 4] = bytemuck::pod_read_unaligned(&out[0][at..at + 16]);
+                if row[3] > 0.0 {
+                    *f -= row[1] as f64 * *normal;
+                }
             }
         }
         Ok(f)
@@ -2413,21 +2536,21 @@ impl GpuEngine {
         )?;
         let ids: Vec<[u32; 4]> = s.layout.unpack(&out[0], "ids");
         let cap = self.entries;
-        let region = |name: &str| s.entry_layout.offset(name, cap).unwrap_or(0) as usize;
-        let (pid_at, hist_at) = (region("hist_pid"), region("hist"));
-        let hist_pid = u32s(&out[1][pid_at..pid_at + 4 * cap as usize]);
-        let hist = &out[1][hist_at..];
+        let windows = s.layout.windows();
+        let at = |name: &str, e: u64| s.entry_layout.byte_of(name, cap, windows, e).unwrap_or(0);
         let hb = hb as usize;
         let mut list = Vec::new();
         for &[pid, row, count, _] in &ids {
             // a particle's entries (ids.y, ids.z as in shaders/step.wgsl)
-            for slot in row as usize..(row + count) as usize {
+            for e in row as u64..(row + count) as u64 {
+                let partner = u32s(&out[1][at("hist_pid", e) as usize..][..4])[0];
+                let h = at("hist", e) as usize;
                 // one stored history per pair, in its evaluator's frame; the partner sees
                 // it mirrored (the tangential spring negated)
-                let h = self.decode_history(&hist[slot * hb..(slot + 1) * hb]);
+                let h = self.decode_history(&out[1][h..h + hb]);
                 let seen_by_partner = self.kind.mirror_history(h);
-                list.push(((pid, hist_pid[slot]), h));
-                list.push(((hist_pid[slot], pid), seen_by_partner));
+                list.push(((pid, partner), h));
+                list.push(((partner, pid), seen_by_partner));
             }
         }
         list.sort_by_key(|c| c.0);
@@ -2438,7 +2561,6 @@ impl GpuEngine {
     /// they are apart). For tests and diagnostics: reads buffers back.
     pub fn wall_contact_history(&self, w: usize, i: usize) -> Result<ContactHistory, PowderError> {
         let s = &self.state;
-        let n = self.n as u64;
         let walls = self.n_walls as usize;
         if w >= walls {
             return Err(PowderError::Run(format!(
@@ -2455,18 +2577,20 @@ impl GpuEngine {
                 (&s.wall_contacts, s.wall_contacts.size()),
             ],
         )?;
-        let at = s
-            .wall_layout
-            .offset("wall_hist", n * walls as u64)
-            .unwrap_or(0) as usize;
         let ids: Vec<[u32; 4]> = s.layout.unpack(&out[0], "ids");
         let k = ids
             .iter()
             .position(|p| p[0] as usize == i)
             .ok_or_else(|| PowderError::Run(format!("particle {i} does not exist")))?;
-        // wall-major, as `wall_slot` in shaders/step.wgsl
-        let slot = w * n as usize + k;
-        Ok(self.decode_history(&out[1][at + slot * hb..at + (slot + 1) * hb]))
+        // as `wall_slot` in shaders/step.wgsl
+        let windows = s.layout.windows();
+        let slot = windows.wall_record(k as u64, w as u64);
+        let capacity = s.wall_capacity(walls as u64);
+        let at = s
+            .wall_layout
+            .byte_of("wall_hist", capacity, windows, slot)
+            .unwrap_or(0) as usize;
+        Ok(self.decode_history(&out[1][at..at + hb]))
     }
 }
 

@@ -398,6 +398,8 @@ impl GridSort {
                 n_particles,
                 cell_width,
                 n_cells,
+                // one window; `cells` a plain array (`set_windows` for a blocked state)
+                window: crate::gpu::window::Windows::one(n_particles as u64).params(1),
             }),
         );
         let n4 = n_particles as u64 * 4;
@@ -510,6 +512,22 @@ impl GridSort {
     /// The uniform `GridParams` buffer.
     pub fn params(&self) -> &wgpu::Buffer {
         &self.params
+    }
+
+    /// Tells the kernels the run's windows (`GridParams::window`), `cells` then being the
+    /// blocked particle state with `state_fields` fields a particle.
+    pub fn set_windows(
+        &self,
+        queue: &wgpu::Queue,
+        windows: &crate::gpu::window::Windows,
+        state_fields: u32,
+    ) {
+        let at = std::mem::offset_of!(GridParams, window) as u64;
+        queue.write_buffer(
+            &self.params,
+            at,
+            bytemuck::cast_slice(&windows.params(state_fields)),
+        );
     }
 
     /// The bind group of `cell_keys` for this cell buffer (for [`Self::encode_indirect`]:

@@ -55,6 +55,8 @@ pub struct GridParams {
     pub cell_width: [f32; 3],
     /// `dims[0] * dims[1] * dims[2]`.
     pub n_cells: u32,
+    /// The windows ([`crate::gpu::window::Windows::params`]).
+    pub window: [u32; 4],
 }
 
 /// One level of the exclusive scan: twin of `ScanParams` in `shaders/grid.wgsl`.

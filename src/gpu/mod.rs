@@ -52,6 +52,7 @@ pub mod records;
 pub mod shaders;
 pub mod state;
 pub mod traffic;
+pub mod window;
 
 pub use context::{AdapterPreference, AdapterSummary, GpuContext, LimitsSummary};
 pub use engine::{GpuEngine, GpuOptions, GpuSavedState, GpuState};

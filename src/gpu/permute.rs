@@ -36,7 +36,11 @@ pub struct MoveParams {
     pub load: FieldPlace,
     /// Scratch words per particle.
     pub row: u32,
-    _pad: [u32; 3],
+    /// Words of a window's block of the stored field's buffer (0: one window).
+    pub store_window: u32,
+    /// Words of a window's block of the loaded field's buffer.
+    pub load_window: u32,
+    _pad: u32,
 }
 
 /// One field of the particle state to re-sort.
@@ -46,6 +50,8 @@ pub struct Field {
     pub name: String,
     buffer: wgpu::Buffer,
     place: FieldPlace,
+    /// Words of a window's block of the buffer (0 with one window).
+    window: u32,
 }
 
 impl Field {
@@ -60,7 +66,16 @@ impl Field {
                 base: 0,
                 stride: 0,
             },
+            window: 0,
         }
+    }
+
+    /// The field in a buffer blocked by window (`gpu::window`), `words` a window's block:
+    /// `base` and `stride` are then within a block, and the particle's index its index in
+    /// its window.
+    pub fn windowed(mut self, words: u32) -> Self {
+        self.window = words;
+        self
     }
 
     /// `blocks` consecutive regions of one buffer, each `words` u32 per particle, the first
@@ -81,6 +96,7 @@ impl Field {
                 base,
                 stride,
             },
+            window: 0,
         }
     }
 
@@ -108,6 +124,7 @@ impl Field {
                     base: base + first * n * words,
                     stride: n * words,
                 },
+                window: 0,
             })
             .collect()
     }
@@ -173,7 +190,9 @@ impl Permutation {
                 store: store.map_or(none, |f| f.place),
                 load: load.map_or(none, |f| f.place),
                 row,
-                _pad: [0; 3],
+                store_window: store.map_or(0, |f| f.window),
+                load_window: load.map_or(0, |f| f.window),
+                _pad: 0,
             };
             let uniform = uniform_buffer(&ctx.device, "permute.move", bytemuck::bytes_of(&params));
             let group = kernel.bind(

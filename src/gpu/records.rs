@@ -1,8 +1,9 @@
 //! Arrays of records packed into one `array<u32>` buffer each, declared once here: the
 //! neighbour lists' entries (`entries`, and a rebuild's new lists, `new_entries`) and the
-//! particle–wall contacts (`wall_contacts`). A record's fields lie in regions, one after
-//! the other, each `capacity × width` words, a record's words consecutive within its
-//! region (record r's field at `before · capacity + r · width`). So a kernel binds one
+//! particle–wall contacts (`wall_contacts`). Each window (`gpu::window`) has a block of
+//! `capacity` records; in it a record's fields lie in regions, one after the other, each
+//! `capacity × width` words, a record's words consecutive within its region (local record
+//! i's field at `before · capacity + i · width` of its window's block). So a kernel binds one
 //! buffer for all of a record's fields; the WGSL accessors (`load_<field>`,
 //! `store_<field>`), the host's offsets and the traffic estimate follow from the layout.
 
@@ -10,6 +11,7 @@ use std::collections::BTreeSet;
 use std::fmt::Write;
 
 use crate::gpu::composition::Keeps;
+use crate::gpu::window::Windows;
 
 /// What one field of a record holds.
 #[derive(Clone, Debug, PartialEq)]
@@ -65,7 +67,8 @@ pub struct RecordLayout {
     pub global: &'static str,
     /// Its binding.
     pub binding: u32,
-    /// The WGSL expression for the records the buffer holds (the regions' capacity).
+    /// The WGSL expression for the records a window's block holds (the regions'
+    /// capacity).
     pub capacity_wgsl: &'static str,
     /// The fields, in region order.
     pub fields: Vec<Field>,
@@ -122,15 +125,15 @@ impl RecordLayout {
         .optional(field("new_prior", Kind::Vec4), keeps.prior())
     }
 
-    /// The particle–wall contacts, wall-major (particle k and wall w at record
-    /// `w·n + k`): history, the contact at the end of the last step (with the ledger or
+    /// The particle–wall contacts, wall-major within each window (particle i of a window
+    /// and wall w at its local record `w·len + i`, [`Windows::wall_record`]): history, the contact at the end of the last step (with the ledger or
     /// the force jumps), and last the normal force servo walls sum (allocated only where a
     /// wall is servo-controlled).
     pub fn wall_contacts(hist: &[String], keeps: Keeps) -> Self {
         let mut layout = Self {
             global: "wall_contacts",
             binding: 29,
-            capacity_wgsl: "(grid.n_particles * step.n_walls)",
+            capacity_wgsl: "(grid.window.y * step.n_walls)",
             fields: vec![field("wall_hist", Kind::Hist(hist.to_vec()))],
             absent: Vec::new(),
         }
@@ -166,9 +169,27 @@ impl RecordLayout {
         None
     }
 
-    /// Byte offset of field `name`'s region in a buffer of `capacity` records.
+    /// Byte offset of field `name`'s region in window 0's block of `capacity` records.
     pub fn offset(&self, name: &str, capacity: u64) -> Option<u64> {
         self.place(name).map(|(before, _)| 4 * before * capacity)
+    }
+
+    /// Byte offset of field `name` of record `r` (a [`Windows::record`] index) in a
+    /// buffer of `capacity` records a window.
+    pub fn byte_of(&self, name: &str, capacity: u64, windows: &Windows, r: u64) -> Option<u64> {
+        let (before, width) = self.place(name)?;
+        let (w, i) = windows.split_record(r);
+        Some(4 * (w * capacity * self.words() + before * capacity + i * width))
+    }
+
+    /// Bytes of a buffer of `capacity` records a window over `windows` (without the
+    /// trailing fields in `leave_out` where there is one window: see [`Self::bytes`]).
+    pub fn windowed_bytes(&self, capacity: u64, windows: &Windows, leave_out: &[&str]) -> u64 {
+        if windows.count == 1 {
+            self.bytes(capacity, leave_out)
+        } else {
+            (4 * self.words() * capacity * windows.count).max(4)
+        }
     }
 
     /// Bytes of a buffer of `capacity` records, without the fields in `leave_out` (which
@@ -205,10 +226,12 @@ impl RecordLayout {
             "// `{g}` (`src/gpu/records.rs`, generated): {} words a record.\n\
              @group(0) @binding({}) var<storage, read_write> {g}: array<u32>;\n\n\
              fn {g}_at(before: u32, width: u32, r: u32) -> u32 {{\n    \
-             return before * {} + r * width;\n}}\n",
+             let capacity = {};\n    \
+             return rec_window(r) * (capacity * {}u) + before * capacity + rec_local(r) * width;\n}}\n",
             self.words(),
             self.binding,
-            self.capacity_wgsl
+            self.capacity_wgsl,
+            self.words(),
         );
         let mut before = 0;
         for f in &self.fields {

@@ -1,6 +1,7 @@
 //! The per-particle state in two storage buffers, declared once here: each field is one
-//! 16-byte vector a particle, laid out field-major within its buffer (field f of particle
-//! k at element f·stride + k, stride = the particles rounded up to 16), so a kernel
+//! 16-byte vector a particle, laid out field-major within each window of its buffer
+//! (field f of particle k at element (w·F + f)·len + i for k = i of window w, F fields in
+//! the buffer; with one window, f·len + k, len = the particles rounded up to 16), so a kernel
 //! touching any number of fields binds at most two buffers and each field is read
 //! coalesced. `state` holds what the force pass reads of a partner (position, predicted
 //! velocity, compensation, ids), `motion` the rest (each buffer must fit one binding:
@@ -9,6 +10,8 @@
 //! traffic estimate all follow from [`FIELDS`].
 
 use std::fmt::Write;
+
+use crate::gpu::window::Windows;
 
 /// The scalar type of a field's four components (the buffer holds `vec4<u32>`; the
 /// accessors bitcast).
@@ -199,17 +202,27 @@ pub fn particle_stride(n: u64) -> u64 {
 pub struct StateLayout {
     fields: Vec<&'static StateField>,
     n: u64,
-    stride: u64,
+    windows: Windows,
 }
 
 impl StateLayout {
-    /// The layout for `n` particles; `rotation` adds the angular fields.
+    /// The layout for `n` particles in one window; `rotation` adds the angular fields.
     pub fn new(n: u64, rotation: bool) -> Self {
+        Self::windowed(n, rotation, Windows::one(n))
+    }
+
+    /// The layout for `n` particles blocked into `windows`.
+    pub fn windowed(n: u64, rotation: bool, windows: Windows) -> Self {
         Self {
             fields: fields(rotation).collect(),
             n,
-            stride: particle_stride(n),
+            windows,
         }
+    }
+
+    /// The windows it is blocked into.
+    pub fn windows(&self) -> &Windows {
+        &self.windows
     }
 
     /// Field names, `state`'s then `motion`'s, each in buffer order.
@@ -226,22 +239,34 @@ impl StateLayout {
         self.fields.iter().copied().filter(move |f| f.buffer == b)
     }
 
-    /// Elements (particles) from one field's region to the next.
+    /// Elements (particles) from one field's region to the next within a window.
     pub fn stride(&self) -> u64 {
-        self.stride
+        self.windows.len
+    }
+
+    /// Fields of buffer `b`.
+    pub fn count(&self, b: Buffer) -> u64 {
+        self.in_buffer(b).count() as u64
     }
 
     /// Bytes of buffer `b` (at least one element).
     pub fn bytes(&self, b: Buffer) -> u64 {
-        (self.in_buffer(b).count() as u64 * self.stride * FIELD_BYTES).max(FIELD_BYTES)
+        (self.windows.count * self.count(b) * self.windows.len * FIELD_BYTES).max(FIELD_BYTES)
     }
 
-    /// The buffer of field `name` and the byte offset of its region there, if the layout
-    /// has it.
+    /// The buffer of field `name` and the byte offset of its region in the first window,
+    /// if the layout has it.
     pub fn place(&self, name: &str) -> Option<(Buffer, u64)> {
         let f = self.fields.iter().find(|f| f.name == name)?;
         let at = self.in_buffer(f.buffer).position(|g| g.name == name)?;
-        Some((f.buffer, at as u64 * self.stride * FIELD_BYTES))
+        Some((f.buffer, at as u64 * self.windows.len * FIELD_BYTES))
+    }
+
+    /// The buffer of field `name` and its position among that buffer's fields.
+    fn position(&self, name: &str) -> Option<(Buffer, u64)> {
+        let f = self.fields.iter().find(|f| f.name == name)?;
+        let at = self.in_buffer(f.buffer).position(|g| g.name == name)?;
+        Some((f.buffer, at as u64))
     }
 
     /// Bytes of one field's `n` particles.
@@ -266,10 +291,13 @@ impl StateLayout {
     /// gives none for is zero).
     pub fn pack(&self, b: Buffer, values: &dyn Fn(&str) -> Option<Vec<[u32; 4]>>) -> Vec<u8> {
         let mut out = vec![0u8; self.bytes(b) as usize];
+        let fields = self.count(b);
         for f in self.in_buffer(b) {
-            if let (Some(v), Some((_, at))) = (values(f.name), self.place(f.name)) {
-                let bytes: &[u8] = bytemuck::cast_slice(&v[..v.len().min(self.n as usize)]);
-                out[at as usize..at as usize + bytes.len()].copy_from_slice(bytes);
+            if let (Some(v), Some((_, at))) = (values(f.name), self.position(f.name)) {
+                for (k, x) in v.iter().take(self.n as usize).enumerate() {
+                    let e = (self.windows.element(fields, at, k as u64) * FIELD_BYTES) as usize;
+                    out[e..e + FIELD_BYTES as usize].copy_from_slice(bytemuck::bytes_of(x));
+                }
             }
         }
         out
@@ -277,21 +305,26 @@ impl StateLayout {
 
     /// Field `name`'s `n` vectors from its buffer's bytes (empty when absent or short).
     pub fn unpack<T: bytemuck::Pod>(&self, bytes: &[u8], name: &str) -> Vec<T> {
-        let Some((_, at)) = self.place(name) else {
+        let Some((b, at)) = self.position(name) else {
             return Vec::new();
         };
-        let (at, len) = (at as usize, self.field_bytes() as usize);
-        bytes
-            .get(at..at + len)
-            .map(bytemuck::pod_collect_to_vec)
-            .unwrap_or_default()
+        let (fields, size) = (self.count(b), std::mem::size_of::<T>());
+        let mut out = Vec::with_capacity(self.n as usize);
+        for k in 0..self.n {
+            let e = (self.windows.element(fields, at, k) * FIELD_BYTES) as usize;
+            match bytes.get(e..e + size) {
+                Some(x) => out.push(bytemuck::pod_read_unaligned(x)),
+                None => return Vec::new(),
+            }
+        }
+        out
     }
 
     /// The WGSL of the state: the two bindings and each field's accessors.
     pub fn wgsl(rotation: bool) -> String {
         let mut w = String::from(
             "// The particle state (`src/gpu/state.rs`, generated): one vec4 per particle and\n\
-             // field, field-major in two buffers, the regions STRIDE_ALIGN-aligned.\n",
+             // field, field-major within each window (`blocked`) of two buffers.\n",
         );
         for b in Buffer::ALL {
             let _ = writeln!(
@@ -301,12 +334,6 @@ impl StateLayout {
                 b.name()
             );
         }
-        let _ = writeln!(
-            w,
-            "\n// Elements from one per-particle region to the next (`state::particle_stride`).\nfn particle_stride() -> u32 {{\n    return (grid.n_particles + {a}u) / {s}u * {s}u;\n}}\n\nfn state_at(f: u32, k: u32) -> u32 {{\n    return f * particle_stride() + k;\n}}\n",
-            a = STRIDE_ALIGN - 1,
-            s = STRIDE_ALIGN
-        );
         let layout = Self::new(0, rotation);
         for field in fields(rotation) {
             let ty = field.scalar.wgsl();
@@ -315,15 +342,16 @@ impl StateLayout {
                 .in_buffer(field.buffer)
                 .position(|g| g.name == field.name)
                 .unwrap_or(0);
+            let f = format!("{}u, {f}u", layout.count(field.buffer));
             let _ = writeln!(w, "// {}", field.doc);
             let _ = writeln!(
                 w,
-                "fn load_{n}(k: u32) -> {ty} {{\n    return bitcast<{ty}>({buf}[state_at({f}u, k)]);\n}}\n",
+                "fn load_{n}(k: u32) -> {ty} {{\n    return bitcast<{ty}>({buf}[blocked({f}, k)]);\n}}\n",
                 n = field.name
             );
             let _ = writeln!(
                 w,
-                "fn store_{n}(k: u32, v: {ty}) {{\n    {buf}[state_at({f}u, k)] = bitcast<vec4<u32>>(v);\n}}\n",
+                "fn store_{n}(k: u32, v: {ty}) {{\n    {buf}[blocked({f}, k)] = bitcast<vec4<u32>>(v);\n}}\n",
                 n = field.name
             );
         }
