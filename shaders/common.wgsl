@@ -32,6 +32,34 @@ struct GridParams {
 
 @group(0) @binding(0) var<uniform> grid: GridParams;
 
+// The window a dispatch works on (`gpu::window`; twin of `window::WindowParams`): its
+// first particle, the first window its bindings of blocked arrays start at (they cover
+// that one and the next two: a particle's partners are in its own window or a
+// neighbouring one), and its index.
+struct WindowParams {
+    first: u32,
+    bound: u32,
+    index: u32,
+    _pad: u32,
+}
+
+@group(0) @binding(19) var<uniform> win: WindowParams;
+
+// The particle of this invocation of a per-particle dispatch over the window, and the end
+// of the window's particles.
+fn particle_index(wid: vec3<u32>, nwg: vec3<u32>, lid: u32) -> u32 {
+    return win.first + global_index(wid, nwg, lid);
+}
+
+fn particle_end() -> u32 {
+    return min(win.first + grid.window.y, grid.n_particles);
+}
+
+// Whether particle k's data is in this dispatch's bindings.
+fn in_bindings(k: u32) -> bool {
+    return k >> grid.window.x >= win.bound && (k >> grid.window.x) - win.bound < 3u;
+}
+
 // Particle k's window and its index within (one window: 0 and k).
 fn win_of(k: u32) -> u32 {
     return k >> grid.window.x;
@@ -42,9 +70,9 @@ fn win_local(k: u32) -> u32 {
 }
 
 // Element of particle k in an array blocked by window with `fields` per-particle regions
-// (region f of window w at (w·fields + f)·len).
+// (region f of window w at (w·fields + f)·len), in this dispatch's binding of it.
 fn blocked(fields: u32, f: u32, k: u32) -> u32 {
-    return (win_of(k) * fields + f) * grid.window.y + win_local(k);
+    return ((win_of(k) - win.bound) * fields + f) * grid.window.y + win_local(k);
 }
 
 // A record index: local record i of window w, and back.

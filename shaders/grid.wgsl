@@ -92,8 +92,8 @@ fn cell_keys(
     @builtin(num_workgroups) nwg: vec3<u32>,
     @builtin(local_invocation_index) lid: u32,
 ) {
-    let i = global_index(wid, nwg, lid);
-    if (i < grid.n_particles) {
+    let i = particle_index(wid, nwg, lid);
+    if (i < particle_end()) {
         keys[i] = cell_key(cells[blocked(grid.window.w, 0u, i)].xyz, grid.dims);
     }
 }

@@ -36,14 +36,15 @@ struct Move {
 
 @compute @workgroup_size(WG_SIZE)
 fn permute(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
-    let k = global_index(wid, nwg, lid);
-    if (k >= grid.n_particles) {
+    let k = particle_index(wid, nwg, lid);
+    if (k >= particle_end()) {
         return;
     }
-    let row = k * mv.row;
+    // (the scratch is blocked by window like the state: `gpu::window`)
+    let row = ((win_of(k) - win.bound) * grid.window.y + win_local(k)) * mv.row;
     var s = row;
     for (var b = 0u; b < mv.store.blocks; b++) {
-        let at = win_of(k) * mv.store_window + mv.store.base + b * mv.store.stride + win_local(k) * mv.store.words;
+        let at = (win_of(k) - win.bound) * mv.store_window + mv.store.base + b * mv.store.stride + win_local(k) * mv.store.words;
         for (var c = 0u; c < mv.store.words; c++) {
             stored[at + c] = scratch[s];
             s++;
@@ -52,7 +53,7 @@ fn permute(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: 
     let o = sorted_index[k];
     s = row;
     for (var b = 0u; b < mv.load.blocks; b++) {
-        let at = win_of(o) * mv.load_window + mv.load.base + b * mv.load.stride + win_local(o) * mv.load.words;
+        let at = (win_of(o) - win.bound) * mv.load_window + mv.load.base + b * mv.load.stride + win_local(o) * mv.load.words;
         for (var c = 0u; c < mv.load.words; c++) {
             scratch[s] = loaded[at + c];
             s++;

@@ -332,7 +332,8 @@ struct WallRef {
 
 // The control words: [0, 12) the monitor, zeroed per batch of steps and read back after
 // it (no per-step read-back):
-// [0] = largest neighbour count seen (atomicMax), [1] unused, [2] = non-finite
+// [0] = largest neighbour count seen (atomicMax), [1] = 1 when a rebuild found a
+// particle's neighbours beyond its window's bindings (`search`), [2] = non-finite
 // acceleration count, [3] = engaged
 // contacts dropped by a rebuild (ledger.wgsl), [4] = largest overlap/a12 of any contact
 // (f32 bits, atomicMax; non-negative f32 bits order as the values), [5] = persistent id
@@ -372,7 +373,7 @@ fn separation(ci: vec4<i32>, oi: vec4<f32>, cj: vec4<i32>, oj: vec4<f32>) -> vec
 
 @compute @workgroup_size(WG_SIZE)
 fn kick_drift(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
-    drift(global_index(wid, nwg, lid));
+    drift(particle_index(wid, nwg, lid));
 }
 
 // The previous step's collect and closing kick and this step's kick_drift in one pass
@@ -382,8 +383,8 @@ fn kick_drift(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nw
 // and two sweeps over the state fewer.
 @compute @workgroup_size(WG_SIZE)
 fn collect_kick_drift(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
-    let i = global_index(wid, nwg, lid);
-    if (i < grid.n_particles) {
+    let i = particle_index(wid, nwg, lid);
+    if (i < particle_end()) {
         let vel = load_vel(i);
         let c = collect_particle(i, vel.w, false);
         if (is_active(load_ids(i).x)) {
@@ -393,7 +394,7 @@ fn collect_kick_drift(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgr
 }
 
 fn drift(i: u32) {
-    if (i < grid.n_particles && is_active(load_ids(i).x)) {
+    if (i < particle_end() && is_active(load_ids(i).x)) {
         drift_particle(i, load_vel(i), load_acc(i).xyz, rot_load(i), false, 0.0, vec3<f32>(0.0));
     }
 }
@@ -518,8 +519,8 @@ fn decide() {
 // order, for `neighbours`.
 @compute @workgroup_size(WG_SIZE)
 fn gather(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
-    let k = global_index(wid, nwg, lid);
-    if (k >= grid.n_particles) {
+    let k = particle_index(wid, nwg, lid);
+    if (k >= particle_end()) {
         return;
     }
     mirror_sorted(k, sorted_index[k]);
@@ -564,6 +565,11 @@ fn search(k: u32, fill: bool) -> vec2<u32> {
     // evaluations reach k through `lower`)
     var up = 0u;
     var down = 0u;
+    // (a particle whose data lies beyond this window's bindings stops the run: monitor[1])
+    if (!in_bindings(sorted_index[k])) {
+        atomicMax(&control[1], 1u);
+        return vec2<u32>(0u);
+    }
     // a particle that has not appeared lists no neighbours (and is listed by none)
     let here = is_active(load_ids(sorted_index[k]).x);
     // Without wrapping along x, the three cells x−1, x, x+1 of a row are consecutive keys
@@ -599,6 +605,10 @@ fn search(k: u32, fill: bool) -> vec2<u32> {
                     end = start + cell_count[key];
                 }
                 for (var j = start; j < end; j++) {
+                    if (!in_bindings(j) || !in_bindings(sorted_index[j])) {
+                        atomicMax(&control[1], 1u);
+                        continue;
+                    }
                     if (j == k || !here || !is_active(load_ids(sorted_index[j]).x)) {
                         continue;
                     }
@@ -628,8 +638,8 @@ fn search(k: u32, fill: bool) -> vec2<u32> {
 // On a rebuild: each particle's list lengths, for the scans that place the lists.
 @compute @workgroup_size(WG_SIZE)
 fn count_neighbours(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
-    let k = global_index(wid, nwg, lid);
-    if (k >= grid.n_particles) {
+    let k = particle_index(wid, nwg, lid);
+    if (k >= particle_end()) {
         return;
     }
     let c = search(k, false);
@@ -642,37 +652,34 @@ fn count_neighbours(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgrou
 // the capacity is not written; `commit` halts then).
 @compute @workgroup_size(WG_SIZE)
 fn neighbours(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
-    let k = global_index(wid, nwg, lid);
-    if (k >= grid.n_particles) {
+    let k = particle_index(wid, nwg, lid);
+    if (k >= particle_end()) {
         return;
     }
     search(k, true);
 }
 
-// On a rebuild, after the lists are filled and before anything is re-sorted: when the new
-// lists need more entries than there are, halt the batch — zero every indirect argument, so
-// the rest of this rebuild and every later pass of the batch launches nothing — and leave
-// the skin flag raised. The host grows the lists and finishes the batch from this step's
-// rebuild (`GpuEngine::run_steps`): the state is as the drift left it, the old lists whole.
+// On a rebuild, after the lists are filled and before anything is re-sorted, once per
+// window: when the window's new lists need more entries than its block has (or a
+// particle's neighbours lay beyond the windows bound, monitor[1]), halt the batch — zero
+// every indirect argument, so the rest of this rebuild and every later pass of the batch
+// launches nothing — and leave the skin flag raised. The host grows the lists (or stops)
+// and finishes the batch from this step's rebuild (`GpuEngine::run_steps`): the state is
+// as the drift left it, the old lists whole. (Later steps of a halted batch see the same
+// counts: the same need, the halt's bookkeeping done once.)
 @compute @workgroup_size(1)
 fn commit() {
-    // (only on a step that rebuilds, and once: later steps of a halted batch see the same
-    // counts)
-    let rebuilding = atomicLoad(&control[SKIN_REBUILD]) != 0u && atomicLoad(&control[7]) == 0u;
-    if (grid.n_particles == 0u || !rebuilding) {
+    if (atomicLoad(&control[SKIN_REBUILD]) == 0u || win.first >= grid.n_particles) {
         return;
     }
-    // each window's lists fill its block of entries: the fullest decides
-    var need = 0u;
-    for (var first = 0u; first < grid.n_particles; first += grid.window.y) {
-        let last = min(first + grid.window.y, grid.n_particles) - 1u;
-        need = max(need, max(rows[row_at(ROWS_B_ROW, last)] + b_len(last), rows[row_at(ROWS_LOWER_ROW, last)] + lower_len(last)));
-    }
-    if (need > step.list_capacity) {
-        atomicStore(&control[7], 1u);
-        atomicStore(&control[11], need);
-        atomicStore(&control[SKIN_MOVED], 1u);
-        atomicSub(&control[SKIN_REBUILDS], 1u);
+    let last = particle_end() - 1u;
+    let need = max(rows[row_at(ROWS_B_ROW, last)] + b_len(last), rows[row_at(ROWS_LOWER_ROW, last)] + lower_len(last));
+    if (need > step.list_capacity || atomicLoad(&control[1]) != 0u) {
+        atomicMax(&control[11], need);
+        if (atomicExchange(&control[7], 1u) == 0u) {
+            atomicStore(&control[SKIN_MOVED], 1u);
+            atomicSub(&control[SKIN_REBUILDS], 1u);
+        }
         for (var i = 0u; i < arrayLength(&args); i++) {
             args[i] = 0u;
         }
@@ -681,8 +688,8 @@ fn commit() {
 
 @compute @workgroup_size(WG_SIZE)
 fn remap(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
-    let k = global_index(wid, nwg, lid);
-    if (k >= grid.n_particles) {
+    let k = particle_index(wid, nwg, lid);
+    if (k >= particle_end()) {
         return;
     }
     // the lower list: each such partner j lists k in its own list; keep that entry
@@ -741,8 +748,8 @@ fn remap(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
 // afresh, and the wall candidates are found from the re-sorted positions.
 @compute @workgroup_size(WG_SIZE)
 fn copy_back_history(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
-    let k = global_index(wid, nwg, lid);
-    if (k >= grid.n_particles) {
+    let k = particle_index(wid, nwg, lid);
+    if (k >= particle_end()) {
         return;
     }
     let n = b_len(k);
@@ -891,13 +898,13 @@ fn touch_crossed(p: PairRow, k: Kin, old: vec4<f32>, is_in: bool, edges: vec4<f3
 
 @compute @workgroup_size(WG_SIZE)
 fn force(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
-    let k = global_index(wid, nwg, lid);
+    let k = particle_index(wid, nwg, lid);
     // Loaded here, outside any branch: lavapipe loads a uniform address as one scalar only
     // where invocation 0 is known to be active (no enclosing if or loop); inside the pair
     // loop each of the row's words was a loop over the SIMD lanes — a fifth of the force
     // pass (perf on the JIT code). Dead, and dropped, unless ONE_MATERIAL.
     let row0 = pairs[0];
-    if (k < grid.n_particles) {
+    if (k < particle_end()) {
         particle_forces(k, row0);
     }
 }
@@ -1104,8 +1111,8 @@ fn particle_forces(k: u32, row0: PairRow) {
 // acceleration (and angular acceleration).
 @compute @workgroup_size(WG_SIZE)
 fn collect(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
-    let k = global_index(wid, nwg, lid);
-    if (k < grid.n_particles) {
+    let k = particle_index(wid, nwg, lid);
+    if (k < particle_end()) {
         let c = collect_particle(k, load_vel(k).w, true);
         // the partners' force jumps, at the end of the step (before the closing kick:
         // the sum is the same)
@@ -1172,8 +1179,8 @@ fn collect_particle(k: u32, mass: f32, store: bool) -> Collected {
 
 @compute @workgroup_size(WG_SIZE)
 fn kick(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
-    let k = global_index(wid, nwg, lid);
-    if (k >= grid.n_particles) {
+    let k = particle_index(wid, nwg, lid);
+    if (k >= particle_end()) {
         return;
     }
     if (!is_active(load_ids(k).x)) {
@@ -1212,13 +1219,20 @@ fn wall_move() {
 }
 
 // Servo control, after force (dispatched only when some wall is servo-controlled): one
-// workgroup sums each servo wall's normal force over the particles in a fixed order (a
-// strided sum per invocation, then a tree), so the result is reproducible, and sets the
-// wall's velocity for the next step: clamp(gain·(force − pushed), ±max_speed) along n.
+// workgroup per window sums each servo wall's normal force over the window's particles in
+// a fixed order (a strided sum per invocation, then a tree) into `servo_sums`, so the
+// result is reproducible; wall_servo_apply sets the wall's velocity for the next step:
+// clamp(gain·(force − pushed), ±max_speed) along n.
 var<workgroup> wg_push: array<f32, WG_SIZE>;
+
+// Per window and wall, the window's push on the wall this step.
+@group(0) @binding(76) var<storage, read_write> servo_sums: array<f32>;
 
 @compute @workgroup_size(WG_SIZE)
 fn wall_servo(@builtin(local_invocation_index) lid: u32) {
+    if (win.first >= grid.n_particles) {
+        return;
+    }
     for (var w = 0u; w < wall_count(); w++) {
         // uniform control flow: every invocation reads the same wall
         let m = walls[w].motion;
@@ -1226,7 +1240,7 @@ fn wall_servo(@builtin(local_invocation_index) lid: u32) {
             continue;
         }
         var sum = 0.0;
-        for (var k = lid; k < grid.n_particles; k += WG_SIZE) {
+        for (var k = win.first + lid; k < particle_end(); k += WG_SIZE) {
             sum += load_wall_push(wall_slot(k, w));
         }
         wg_push[lid] = sum;
@@ -1238,9 +1252,27 @@ fn wall_servo(@builtin(local_invocation_index) lid: u32) {
             workgroupBarrier();
         }
         if (lid == 0u) {
-            let speed = clamp(m.z * (m.y - wg_push[0]), -m.w, m.w);
-            walls[w].velocity = vec4<f32>(speed * walls[w].normal.xyz, 0.0);
+            servo_sums[win.index * step.n_walls + w] = wg_push[0];
         }
         workgroupBarrier();
+    }
+}
+
+// After every window's wall_servo: each servo wall's velocity from the windows' pushes,
+// summed in window order.
+@compute @workgroup_size(1)
+fn wall_servo_apply() {
+    let windows = (grid.n_particles + grid.window.y - 1u) / grid.window.y;
+    for (var w = 0u; w < wall_count(); w++) {
+        let m = walls[w].motion;
+        if (m.x != WALL_SERVO) {
+            continue;
+        }
+        var push = 0.0;
+        for (var i = 0u; i < windows; i++) {
+            push += servo_sums[i * step.n_walls + w];
+        }
+        let speed = clamp(m.z * (m.y - push), -m.w, m.w);
+        walls[w].velocity = vec4<f32>(speed * walls[w].normal.xyz, 0.0);
     }
 }

@@ -168,7 +168,8 @@ fn gpu_scan_matches_cpu() {
 fn gpu_sort_rejects_buffers_over_the_binding_limit() {
     let Some((_lock, ctx)) = gpu() else { return };
     let limit = ctx.max_storage_binding();
-    let too_many = (limit / 16 + 1).min(u32::MAX as u64) as u32;
+    // (the keys and the sorted index, 4 bytes a particle each)
+    let too_many = (limit / 4 + 1).min(u32::MAX as u64) as u32;
     let e = match GridSort::new(ctx, too_many, [10, 10, 10], 1.0) {
         Err(e) => e.to_string(),
         Ok(_) => panic!("{too_many} particles should exceed the {limit}-byte binding limit"),
@@ -312,7 +313,11 @@ fn gpu_permute_resorts_every_field_in_place() {
         before.push(data);
         buffers.push(buf);
     }
-    let perm = Permutation::new(ctx, &grid, &sorted, n, &fields).unwrap();
+    let one = powder::gpu::window::WindowBindings::new(
+        &ctx.device,
+        powder::gpu::window::Windows::one(n as u64),
+    );
+    let perm = Permutation::new(ctx, (&grid, &sorted), n, &fields, &one).unwrap();
     // 1 + 1 + 3 + 1 fields, one dispatch more; the scratch as wide as the 28-byte contact
     assert_eq!(fields.len(), 6);
     assert_eq!(perm.dispatches(), 7);

@@ -44,7 +44,7 @@ use crate::gpu::composition::{Composition, Keeps};
 use crate::gpu::context::GpuContext;
 use crate::gpu::grid::{ExclusiveScan, GridSort};
 use crate::gpu::kernel::{
-    split_workgroups, storage_buffer, submit_and_read, u32s, uniform_buffer, Kernel, Program,
+    split_workgroups, storage_buffer, submit_and_read, u32s, uniform_buffer, Kernel, Part, Program,
 };
 use crate::gpu::layout::{encode3, gpu_cell_width, HystereticPair, JkrPair, StepParams, WallGpu};
 use crate::gpu::mirror::Mirrors;
@@ -53,7 +53,7 @@ use crate::gpu::quiet::{Forecast, QuietBatches};
 use crate::gpu::records::RecordLayout;
 use crate::gpu::state::{Buffer, StateLayout};
 use crate::gpu::traffic::{PassTraffic, When};
-use crate::gpu::window::Windows;
+use crate::gpu::window::{Blocks, WindowBindings, Windows, MIN_WINDOW};
 use crate::model::{ContactHistory, ContactModel, PairGeometry};
 use crate::scene::Scene;
 use crate::setup::Resolved;
@@ -94,14 +94,31 @@ fn places_jumps(scene: &Scene, models: &[ContactModel], r_max: f64) -> bool {
 /// Steps recorded into one submission.
 pub const STEPS_PER_SUBMIT: u64 = 64;
 
+/// The particles (by index into `cells`) in the order of the grid sort (`grid.wgsl`):
+/// by clamped linear cell key, x fastest, then by index.
+fn grid_order(cells: &[[i32; 4]], dims: [u32; 3]) -> Vec<usize> {
+    let key = |c: &[i32; 4]| {
+        let k: [u64; 3] = [0, 1, 2].map(|a| c[a].clamp(0, dims[a] as i32 - 1) as u64);
+        k[0] + dims[0] as u64 * (k[1] + dims[1] as u64 * k[2])
+    };
+    let mut order: Vec<usize> = (0..cells.len()).collect();
+    order.sort_by_key(|&i| (key(&cells[i]), i));
+    order
+}
+
 /// Creates storage buffers and records their names and sizes (for [`GpuEngine::buffers`]).
-/// A buffer over the storage binding limit (every buffer is bound whole; u32 word indices)
-/// is not created: a 4-byte stand-in takes its place and [`Allocator::check`] refuses.
+/// A buffer that does not fit (bound whole: over the storage binding limit; bound a
+/// window's part at a time: a part over it, or the buffer over the largest buffer) is not
+/// created: a 4-byte stand-in takes its place and [`Allocator::check`] refuses.
 struct Allocator<'a> {
     device: &'a wgpu::Device,
     list: Vec<(String, u64)>,
     /// The largest binding a buffer may be, bytes.
     limit: u64,
+    /// The largest buffer, bytes.
+    max_buffer: u64,
+    /// What does not fit, said for the user.
+    refused: Vec<String>,
 }
 
 impl<'a> Allocator<'a> {
@@ -110,26 +127,55 @@ impl<'a> Allocator<'a> {
             device,
             list: Vec::new(),
             limit: limit.min(4 * u32::MAX as u64),
+            max_buffer: device.limits().max_buffer_size,
+            refused: Vec::new(),
         }
     }
 
+    /// A buffer bound whole.
     fn buffer(&mut self, name: &str, bytes: u64) -> wgpu::Buffer {
         let fits = bytes <= self.limit;
+        if !fits {
+            self.refused.push(format!(
+                "{bytes} bytes of `{name}`, over the adapter's storage binding limit of {} bytes",
+                self.limit
+            ));
+        }
+        self.create(name, bytes, fits)
+    }
+
+    /// A buffer blocked by window, `part` bytes of it bound at a time (`gpu::window`).
+    fn blocked(&mut self, name: &str, bytes: u64, part: u64) -> wgpu::Buffer {
+        if part > self.limit {
+            self.refused.push(format!(
+                "{part} bytes of `{name}` bound at a time (a window and its neighbours), over the adapter's storage binding limit of {} bytes",
+                self.limit
+            ));
+        } else if bytes > self.max_buffer {
+            self.refused.push(format!(
+                "{bytes} bytes of `{name}`, over the adapter's largest buffer of {} bytes",
+                self.max_buffer
+            ));
+        }
+        let fits = part <= self.limit && bytes <= self.max_buffer;
+        self.create(name, bytes, fits)
+    }
+
+    fn create(&mut self, name: &str, bytes: u64, fits: bool) -> wgpu::Buffer {
         let b = storage_buffer(self.device, name, if fits { bytes } else { 4 });
         self.list
             .push((name.to_string(), if fits { b.size() } else { bytes }));
         b
     }
 
-    /// An error naming the largest buffer when it exceeds the storage binding limit, for
-    /// `particles` particles. Call it before anything writes or binds the buffers.
+    /// An error naming the first buffer that does not fit, for `particles` particles.
+    /// Call it before anything writes or binds the buffers.
     fn check(&self, particles: usize) -> Result<(), PowderError> {
-        match self.list.iter().max_by_key(|(_, b)| *b) {
-            Some((name, bytes)) if *bytes > self.limit => Err(PowderError::Run(format!(
-                "{particles} particles need {bytes} bytes of `{name}`, over the adapter's storage binding limit of {} bytes (arrays are not yet split over bindings)",
-                self.limit
+        match self.refused.first() {
+            Some(what) => Err(PowderError::Run(format!(
+                "{particles} particles need {what}"
             ))),
-            _ => Ok(()),
+            None => Ok(()),
         }
     }
 }
@@ -160,25 +206,58 @@ impl StateSet {
     ) -> Self {
         let layout = StateLayout::windowed(n, kind.rotation(), windows);
         let [entry_layout, _, wall_layout] = kind.records(keeps);
-        let mut b = |name: &str, bytes: u64| alloc.buffer(&format!("A.{name}"), bytes);
         // the servo's pushes only where a wall is servo-controlled (the last field)
         let leave_out: &[&str] = if servo { &[] } else { &["wall_push"] };
         let wall_capacity = windows.len * walls;
+        let blocks = Self::blocks_of(&layout, (&entry_layout, entries), (&wall_layout, walls));
+        let mut b = |name: &'static str, bytes: u64| {
+            let block = blocks.iter().find(|(n, _)| *n == name).map_or(0, |b| b.1);
+            blocked_buffer(alloc, &windows, (&format!("A.{name}"), bytes), block)
+        };
         Self {
             state: b("state", layout.bytes(Buffer::State)),
             motion: b("motion", layout.bytes(Buffer::Motion)),
-            layout,
             entries: b(
                 "entries",
                 entry_layout.windowed_bytes(entries, &windows, &[]),
             ),
-            entry_layout,
             wall_contacts: b(
                 "wall_contacts",
                 wall_layout.windowed_bytes(wall_capacity, &windows, leave_out),
             ),
+            layout,
+            entry_layout,
             wall_layout,
         }
+    }
+
+    /// Bytes of a window's block of each blocked buffer of the set (`gpu::window`), by
+    /// the name the kernels bind it by, for `entries` list entries a window.
+    fn blocks_of(
+        layout: &StateLayout,
+        (entry_layout, entries): (&RecordLayout, u64),
+        (wall_layout, walls): (&RecordLayout, u64),
+    ) -> Vec<(&'static str, u64)> {
+        let len = layout.stride();
+        let field = crate::gpu::state::FIELD_BYTES;
+        vec![
+            ("state", layout.count(Buffer::State) * len * field),
+            ("motion", layout.count(Buffer::Motion) * len * field),
+            ("entries", 4 * entries * entry_layout.words()),
+            ("wall_contacts", 4 * len * walls * wall_layout.words()),
+        ]
+    }
+
+    /// [`Self::blocks_of`] this set, with the new lists' and `rows`.
+    fn blocks(&self, new: &NewLists, entries: u64, walls: u64) -> Vec<(&'static str, u64)> {
+        let mut v = Self::blocks_of(
+            &self.layout,
+            (&self.entry_layout, entries),
+            (&self.wall_layout, walls),
+        );
+        v.push(("new_entries", 4 * entries * new.layout.words()));
+        v.push(("rows", 4 * 4 * self.layout.stride()));
+        v
     }
 
     /// The buffers under the names the kernels bind them by.
@@ -267,6 +346,21 @@ impl StateSet {
     }
 }
 
+/// A storage buffer of `bytes` blocked by window, `block` bytes a window: bound whole with
+/// one window, else a window and its neighbours at a time.
+fn blocked_buffer(
+    alloc: &mut Allocator,
+    windows: &Windows,
+    (name, bytes): (&str, u64),
+    block: u64,
+) -> wgpu::Buffer {
+    if windows.count == 1 {
+        alloc.buffer(name, bytes)
+    } else {
+        alloc.blocked(name, bytes, windows.covered() * block)
+    }
+}
+
 /// The neighbour lists a rebuild builds (B: partner ids, history, priors), copied
 /// back into A's at its end.
 struct NewLists {
@@ -282,11 +376,10 @@ impl NewLists {
         keeps: Keeps,
     ) -> Self {
         let [_, layout, _] = kind.records(keeps);
+        let bytes = layout.windowed_bytes(entries, windows, &[]);
+        let block = 4 * entries * layout.words();
         Self {
-            new_entries: alloc.buffer(
-                "B.new_entries",
-                layout.windowed_bytes(entries, windows, &[]),
-            ),
+            new_entries: blocked_buffer(alloc, windows, ("B.new_entries", bytes), block),
             layout,
         }
     }
@@ -320,6 +413,8 @@ struct StepBuffers {
     /// The new lists' and the `lower` lists' lengths and first entries (`rows` in
     /// `shaders/step.wgsl`: four regions a window, blocked like the state).
     rows: wgpu::Buffer,
+    /// Each window's push on each servo wall this step.
+    servo_sums: wgpu::Buffer,
 }
 
 impl StepBuffers {
@@ -335,6 +430,7 @@ impl StepBuffers {
             ("args", &self.args),
             ("full_args", &self.full_args),
             ("rows", &self.rows),
+            ("servo_sums", &self.servo_sums),
         ];
         list.extend(
             self.particle_ledger
@@ -346,12 +442,14 @@ impl StepBuffers {
 }
 
 /// An error when `entries` list entries a window of `words` words each (the entries'
-/// records) exceed the adapter's storage binding limit (or the u32 entry indices).
+/// records) do not fit: a window's numbering, the adapter's storage binding limit (the
+/// whole buffer with one window, a window and its neighbours with several), its largest
+/// buffer, or u32 word indices.
 fn check_entries(
     (entries, windows): (u64, &Windows),
     words: u64,
     particles: u64,
-    limit: u64,
+    (limit, max_buffer): (u64, u64),
 ) -> Result<(), PowderError> {
     if entries > windows.max_records() {
         return Err(PowderError::Run(format!(
@@ -360,23 +458,46 @@ fn check_entries(
             windows.max_records()
         )));
     }
-    let entries = entries * windows.count;
     let bytes = 4 * words;
-    if entries * bytes > limit || entries * words > u32::MAX as u64 {
+    let total = entries * windows.count;
+    let bound = entries * windows.covered();
+    let per_particle = total as f64 / particles.max(1) as f64;
+    let what = format!("{total} entries ({per_particle:.1} a particle) of {bytes} bytes each (partner, history, pair force, ...)");
+    if bound * bytes > limit || total * words > u32::MAX as u64 {
         return Err(PowderError::Run(format!(
-            "the neighbour lists need {entries} entries ({:.1} a particle) of {bytes} bytes each (partner, history, pair force, ...), over the adapter's storage binding limit of {limit} bytes",
-            entries as f64 / particles.max(1) as f64
+            "the neighbour lists need {what}, {} bytes bound at a time, over the adapter's storage binding limit of {limit} bytes",
+            bound * bytes
+        )));
+    }
+    if total * bytes > max_buffer {
+        return Err(PowderError::Run(format!(
+            "the neighbour lists need {what}, over the adapter's largest buffer of {max_buffer} bytes"
         )));
     }
     Ok(())
 }
 
-/// Binds every kernel of the step to the run's buffers and the mirrors' textures.
+/// List entries a window rounded up so a window's block of entries is a whole number of
+/// 256 bytes where there are several (binding offsets).
+fn window_entries(windows: &Windows, entries: u64) -> u64 {
+    match windows.count {
+        1 => entries,
+        _ => entries.div_ceil(MIN_WINDOW) * MIN_WINDOW,
+    }
+}
+
+/// List entries a particle the automatic windows leave room for (the lists hold 3.3–3.7 a
+/// particle with their headroom on the dense bench packings, `powder bench`).
+const WINDOW_ENTRIES_PER_PARTICLE: u64 = 6;
+
+/// Binds every kernel of the step to the run's buffers and the mirrors' textures, window
+/// by window where a kernel works on windows (`blocks`: the blocked buffers' bytes a
+/// window).
 fn bind_all(
     device: &wgpu::Device,
     program: &Program,
-    (layout, records): (&StateLayout, &[(&RecordLayout, u64)]),
-    mirrors: &Mirrors,
+    (layout, records, blocks): (&StateLayout, &[(&RecordLayout, u64)], &Blocks),
+    (mirrors, windows): (&Mirrors, &WindowBindings),
     grid: &GridSort,
     buffers: [Vec<(String, &wgpu::Buffer)>; 3],
 ) -> Result<Bound, PowderError> {
@@ -389,7 +510,7 @@ fn bind_all(
     let textures = mirrors.view_bytes();
     let pass = |name: &str| -> Result<Pass, PowderError> {
         let kernel = program.kernel(name)?.clone();
-        let group = kernel.bind_with_textures(device, &refs, &mirrors.views())?;
+        let groups = windows.groups(device, &kernel, (&refs, blocks), &mirrors.views())?;
         let mut bound = kernel.bound_bytes(&refs, &textures);
         // the state: the fields the kernel's accessors touch, not the whole buffers
         for (name, bytes) in &mut bound {
@@ -403,7 +524,7 @@ fn bind_all(
         }
         Ok(Pass {
             kernel,
-            group,
+            groups,
             bound,
         })
     };
@@ -423,6 +544,7 @@ fn bind_all(
         collect: pass("collect")?,
         wall_move: optional("wall_move").transpose()?,
         wall_servo: optional("wall_servo").transpose()?,
+        wall_servo_apply: optional("wall_servo_apply").transpose()?,
     })
 }
 
@@ -443,32 +565,37 @@ struct Bound {
     /// The moving-wall kernels, only for scenes with moving / servo-controlled walls.
     wall_move: Option<Pass>,
     wall_servo: Option<Pass>,
+    wall_servo_apply: Option<Pass>,
 }
 
-/// One kernel with its bind group.
+/// One kernel with its bind groups: one a window where it works on windows, else one.
 struct Pass {
     kernel: Kernel,
-    group: wgpu::BindGroup,
+    groups: Vec<wgpu::BindGroup>,
     /// (global name, bytes) of every distinct resource the group binds (`gpu::traffic`).
     bound: Vec<(String, u64)>,
 }
 
 impl Pass {
-    /// One invocation per particle (`n`).
-    fn per_particle(&self, pass: &mut wgpu::ComputePass<'_>, n: u32, max_per_dim: u32) {
-        self.kernel.dispatch(pass, &self.group, n, max_per_dim);
+    /// One invocation per particle of each window (`per_window`: the window's particles).
+    fn per_particle(&self, pass: &mut wgpu::ComputePass<'_>, per_window: u32, max_per_dim: u32) {
+        for group in &self.groups {
+            self.kernel.dispatch(pass, group, per_window, max_per_dim);
+        }
     }
 
-    /// One workgroup.
+    /// One workgroup (a window).
     fn once(&self, pass: &mut wgpu::ComputePass<'_>, max_per_dim: u32) {
-        self.kernel
-            .dispatch_workgroups(pass, &self.group, 1, max_per_dim);
+        for group in &self.groups {
+            self.kernel.dispatch_workgroups(pass, group, 1, max_per_dim);
+        }
     }
 
-    /// Workgroup counts from `args` at byte `offset`.
+    /// Workgroup counts from `args` at byte `offset` (each window's dispatch the same).
     fn indirect(&self, pass: &mut wgpu::ComputePass<'_>, args: &wgpu::Buffer, offset: u64) {
-        self.kernel
-            .dispatch_indirect(pass, &self.group, args, offset);
+        for group in &self.groups {
+            self.kernel.dispatch_indirect(pass, group, args, offset);
+        }
     }
 }
 
@@ -618,7 +745,10 @@ pub struct GpuEngine {
     mass: Vec<f64>,
     grid: GridSort,
     /// The grid sort's key pass bound to A's cells (made once: the buffer never changes).
-    grid_keys: wgpu::BindGroup,
+    /// The grid sort's `cell_keys` bind groups, one a window.
+    grid_keys: Vec<wgpu::BindGroup>,
+    /// The windows and their uniforms (`gpu::window`).
+    windowing: WindowBindings,
     /// The state (A).
     state: StateSet,
     /// Texture copies of A's cells, offsets and predictions for the force pass.
@@ -842,16 +972,42 @@ impl GpuEngine {
                 dims[a] = ((extent[a] / h0).ceil() as u32).clamp(1, 1 << 20);
             }
         }
-        let grid =
+        let mut grid =
             GridSort::with_cell_widths(&ctx, n as u32, dims, [h.x as f32, h.y as f32, h.z as f32])?;
+        // the windows (`gpu::window`): asked for, or one where every array fits a binding
+        let n_walls = scene.walls.len() as u64;
+        let layout0 = StateLayout::new(0, kind.rotation());
+        let state_fields = layout0.count(Buffer::State);
         let windows = match options.window_particles {
             Some(len) => Windows::of(n as u64, len)?,
-            None => Windows::one(n as u64),
+            None => {
+                // one window where the per-particle arrays and the lists' first guess fit
+                // a binding each (the lists grow to the limit), else windows with room
+                // for WINDOW_ENTRIES_PER_PARTICLE entries a particle
+                let [entry, new, wall] = kind.records(keeps);
+                let per_particle = [
+                    layout0.count(Buffer::State) * crate::gpu::state::FIELD_BYTES,
+                    layout0.count(Buffer::Motion) * crate::gpu::state::FIELD_BYTES,
+                    4 * n_walls * wall.words(),
+                    4 * ROW_WORDS as u64,
+                ]
+                .into_iter()
+                .max()
+                .unwrap_or(1);
+                let limit = ctx.max_storage_binding();
+                let words = entry.words().max(new.words());
+                let first = 4 * words * (INITIAL_ENTRIES_PER_PARTICLE * n as u64 + 256);
+                if n as u64 * per_particle <= limit && first <= limit {
+                    Windows::one(n as u64)
+                } else {
+                    let lists = 4 * WINDOW_ENTRIES_PER_PARTICLE * words;
+                    Windows::choose(n as u64, per_particle.max(lists), limit)
+                }
+            }
         };
-        let state_fields = StateLayout::new(0, kind.rotation()).count(Buffer::State);
         grid.set_windows(&ctx.queue, &windows, state_fields as u32);
+        let windowing = WindowBindings::new(&ctx.device, windows);
         let device = &ctx.device;
-        let n_walls = scene.walls.len() as u64;
         let mut alloc = Allocator::new(device, ctx.max_storage_binding());
         alloc.list = vec![
             ("grid.params".into(), grid.params().size()),
@@ -870,12 +1026,13 @@ impl GpuEngine {
             .list_entries
             .unwrap_or(INITIAL_ENTRIES_PER_PARTICLE * per_window + 256)
             .max(1);
+        let entries = window_entries(&windows, entries);
         let [entry_layout, ..] = kind.records(keeps);
         check_entries(
             (entries, &windows),
             entry_layout.words(),
             n as u64,
-            ctx.max_storage_binding(),
+            (ctx.max_storage_binding(), alloc.max_buffer),
         )?;
         let servo_walls = scene
             .walls
@@ -926,10 +1083,15 @@ impl GpuEngine {
                 [p(0), p(1), p(2), v[3]]
             })
             .collect();
-        let words = |v: &[[f32; 4]]| -> Vec<[u32; 4]> { bytemuck::cast_slice(v).to_vec() };
+        // uploaded in the grid's order (the first sort keeps it): every particle starts in
+        // its window, and a window's neighbours hold its partners (`gpu::window`)
+        let order = grid_order(&cells, dims);
+        let words = |v: &[[f32; 4]]| -> Vec<[u32; 4]> {
+            order.iter().map(|&i| bytemuck::cast(v[i])).collect()
+        };
         let initial = |name: &str| -> Option<Vec<[u32; 4]>> {
             match name {
-                "cell" => Some(bytemuck::cast_slice(&cells).to_vec()),
+                "cell" => Some(order.iter().map(|&i| bytemuck::cast(cells[i])).collect()),
                 "off" => Some(words(&offs)),
                 "vel" => Some(words(&vels)),
                 "acc" => Some(words(&vec![acc0; n])),
@@ -937,10 +1099,10 @@ impl GpuEngine {
                 "kahan_v" => Some(words(&kahan_v)),
                 "kahan_o" => Some(words(&kahan_o)),
                 // persistent id; the lists and wall candidates come with the first rebuild
-                "ids" => Some((0..n as u32).map(|i| [i, 0, 0, 0]).collect()),
+                "ids" => Some(order.iter().map(|&i| [i as u32, 0, 0, 0]).collect()),
                 // ω as the scene gives it, w = I = 2/5·m·r²
-                "omega" => Some(
-                    scene
+                "omega" => {
+                    let omega: Vec<[f32; 4]> = scene
                         .particles
                         .iter()
                         .zip(&r.mass)
@@ -948,9 +1110,9 @@ impl GpuEngine {
                             let [x, y, z] = p.angular_velocity.map(|c| c as f32);
                             [x, y, z, (0.4 * m * p.radius * p.radius) as f32]
                         })
-                        .map(bytemuck::cast)
-                        .collect(),
-                ),
+                        .collect();
+                    Some(words(&omega))
+                }
                 _ => None,
             }
         };
@@ -1011,7 +1173,14 @@ impl GpuEngine {
         let flags: Vec<u32> = active.iter().map(|&a| a as u32).collect();
         q0.write_buffer(&active_buf, 0, bytemuck::cast_slice(&flags));
         // the new lists' and the `lower` lists' rows (four regions a window)
-        let rows = alloc.buffer("rows", 4 * 4 * windows.len * windows.count);
+        let rows = blocked_buffer(
+            &mut alloc,
+            &windows,
+            ("rows", 4 * 4 * windows.len * windows.count),
+            4 * 4 * windows.len,
+        );
+        // each window's push on each servo wall (`wall_servo`)
+        let servo_sums = alloc.buffer("servo_sums", 4 * (windows.count * n_walls).max(1));
         let control = alloc.buffer("control", CONTROL_BYTES);
         // moved beyond skin/2 (flag set): the first step builds the lists
         let skin_init = [1u32, 0, 0, 0];
@@ -1046,7 +1215,7 @@ impl GpuEngine {
             wanted.push("wall_move");
         }
         if servo_walls {
-            wanted.push("wall_servo");
+            wanted.extend(["wall_servo", "wall_servo_apply"]);
         }
         let constants = pipeline_constants(scene, &r, &all_models);
         let program = Program::specialized(
@@ -1070,15 +1239,23 @@ impl GpuEngine {
         };
         let region = windows.len as u32;
         let mut scans = Vec::new();
-        for w in 0..windows.count as u32 {
-            let block = 4 * region * w;
-            // (the regions of `rows`: B's counts and rows, then `lower`'s)
+        for w in 0..windows.count {
+            // (window w's block of `rows`: B's counts and rows, then `lower`'s)
+            let block = 4 * 4 * windows.len;
+            let part = match windows.count {
+                1 => Part::whole(&rows),
+                _ => Part {
+                    buffer: &rows,
+                    offset: w * block,
+                    size: Some(block),
+                },
+            };
             for (count, row) in [(0, 1), (2, 3)] {
-                scans.push(ExclusiveScan::with_offsets(
+                scans.push(ExclusiveScan::with_parts(
                     &ctx,
                     &scan_program,
-                    (&rows, block + count * region),
-                    (&rows, block + row * region),
+                    (part, count * region),
+                    (part, row * region),
                     scanned,
                 )?);
             }
@@ -1091,7 +1268,9 @@ impl GpuEngine {
             .workgroup_size
             .iter()
             .product::<u32>();
-        let particle_args = split_workgroups((n as u32).div_ceil(per_group), max_per_dim);
+        // (a window's particles: every window's dispatch the same)
+        let per_window = (n as u64).min(windows.len) as u32;
+        let particle_args = split_workgroups(per_window.div_ceil(per_group), max_per_dim);
         // (every window's scans have the first window's dispatches)
         let rebuild_args = 12 * sort_args.len() as u64;
         let scan_args = [
@@ -1163,10 +1342,10 @@ impl GpuEngine {
         alloc.check(n)?;
         let permutation = Permutation::new(
             &ctx,
-            grid.params(),
-            grid.sorted_index(),
+            (grid.params(), grid.sorted_index()),
             n as u32,
             &state.permuted(n_walls as u32),
+            &windowing,
         )?;
         alloc
             .list
@@ -1183,15 +1362,38 @@ impl GpuEngine {
             full_args,
             particle_ledger,
             rows,
+            servo_sums,
         };
         let bound = bind_all(
             device,
             &program,
-            (&state.layout, &state.records(&new_lists, entries, n_walls)),
-            &mirrors,
+            (
+                &state.layout,
+                &state.records(&new_lists, entries, n_walls),
+                &state.blocks(&new_lists, entries, n_walls),
+            ),
+            (&mirrors, &windowing),
             &grid,
             [state.named(), new_lists.named(), b.named()],
         )?;
+        // the grid sort's keys, a window at a time
+        let state_block = state_fields * windows.len * crate::gpu::state::FIELD_BYTES;
+        let grid_keys = (0..windows.count)
+            .map(|w| {
+                let cells = match windows.count {
+                    1 => Part::whole(&state.state),
+                    _ => {
+                        let (offset, size) = windows.part(state_block, w);
+                        Part {
+                            buffer: &state.state,
+                            offset,
+                            size: Some(size),
+                        }
+                    }
+                };
+                grid.keys_bind_group_part(cells, &windowing.uniforms[w as usize])
+            })
+            .collect::<Result<Vec<_>, _>>()?;
         // quiet batches: not where walls move (their rebuild trigger is decide's) nor where
         // particles appear (an insertion rebuilds)
         let pouring = scene.particles.iter().any(|p| p.insert_at > 0.0);
@@ -1243,7 +1445,8 @@ impl GpuEngine {
             h,
             radius,
             mass: mass.clone(),
-            grid_keys: grid.keys_bind_group(&state.state),
+            grid_keys,
+            windowing,
             mirrors,
             quiet,
             grid,
@@ -1568,6 +1771,9 @@ impl GpuEngine {
         if let Some(p) = &bound.wall_servo {
             p.indirect(&mut pass, &self.b.args, self.step_args + 12);
         }
+        if let Some(p) = &bound.wall_servo_apply {
+            p.indirect(&mut pass, &self.b.args, self.step_args + 12);
+        }
     }
 
     /// Records `collect` (the forces of the step just recorded are then complete) and,
@@ -1598,15 +1804,25 @@ impl GpuEngine {
     /// for them), keeping the current lists' history: the rebuild that needed the room
     /// runs again and remaps it.
     fn grow_lists(&mut self, need: u64) -> Result<(), PowderError> {
-        // the headroom only as far as one binding holds (`need` itself is checked)
+        // the headroom only as far as the bindings and the largest buffer hold (`need`
+        // itself is checked)
         let windows = *self.state.layout.windows();
-        let most = (self.ctx.max_storage_binding()
-            / (4 * self.state.entry_layout.words() * windows.count))
+        let bytes = 4 * self.state.entry_layout.words();
+        let max_buffer = self.ctx.limits().max_buffer_size;
+        let most = (self.ctx.max_storage_binding() / (bytes * windows.covered()))
+            .min(max_buffer / (bytes * windows.count))
             .min(windows.max_records());
-        let entries = ((need as f64 * LIST_HEADROOM).ceil() as u64)
-            .max(need + 64)
-            .min(most)
-            .max(need);
+        // (a window's block a whole number of 256 bytes where there are several)
+        let most = match windows.count {
+            1 => most,
+            _ => most / MIN_WINDOW * MIN_WINDOW,
+        };
+        let entries = window_entries(
+            &windows,
+            ((need as f64 * LIST_HEADROOM).ceil() as u64).max(need + 64),
+        )
+        .min(most)
+        .max(window_entries(&windows, need));
         self.growths += 1;
         self.resize_lists(entries, true)
     }
@@ -1620,7 +1836,10 @@ impl GpuEngine {
             (entries, &windows),
             layout.words(),
             self.n as u64,
-            self.ctx.max_storage_binding(),
+            (
+                self.ctx.max_storage_binding(),
+                self.ctx.limits().max_buffer_size,
+            ),
         )?;
         let device = &self.ctx.device;
         let mut alloc = Allocator::new(device, self.ctx.max_storage_binding());
@@ -1660,16 +1879,16 @@ impl GpuEngine {
             std::mem::offset_of!(StepParams, list_capacity) as u64,
             bytemuck::bytes_of(&(entries as u32)),
         );
+        let walls = self.n_walls as u64;
         self.bound = bind_all(
             &self.ctx.device,
             &self.program,
             (
                 &self.state.layout,
-                &self
-                    .state
-                    .records(&self._new_lists, entries, self.n_walls as u64),
+                &self.state.records(&self._new_lists, entries, walls),
+                &self.state.blocks(&self._new_lists, entries, walls),
             ),
-            &self.mirrors,
+            (&self.mirrors, &self.windowing),
             &self.grid,
             [self.state.named(), self._new_lists.named(), self.b.named()],
         )?;
@@ -1684,6 +1903,11 @@ impl GpuEngine {
     pub fn profile_passes(self, reps: u32) -> Result<Vec<(String, f64)>, PowderError> {
         let reps = reps.max(1);
         let (n, max) = (self.n, self.max_per_dim);
+        if self.windows().count > 1 {
+            return Err(PowderError::Run(
+                "the pass profile needs one window (the state fits one binding)".into(),
+            ));
+        }
         // a rebuild every step: the rebuild-only passes do their full work
         self.ctx
             .queue
@@ -1785,7 +2009,10 @@ impl GpuEngine {
             let report = self.submit_batch(encoder)?;
             // the first lists did not fit the first guess: grown, built again
             match report.halted() {
-                Some(need) => self.grow_lists(need)?,
+                Some(need) => {
+                    self.check_windows(&report.monitor)?;
+                    self.grow_lists(need)?
+                }
                 None => break self.apply_monitor(&report.monitor)?,
             }
         }
@@ -1823,6 +2050,19 @@ impl GpuEngine {
     }
 
     /// Takes in what a batch's monitor holds: its records, and an error for what stops a run.
+    /// An error where a rebuild found a particle's neighbours beyond its window's
+    /// bindings (monitor[1]): the batch halted before anything read them.
+    fn check_windows(&self, m: &[u32]) -> Result<(), PowderError> {
+        if m[1] == 0 {
+            return Ok(());
+        }
+        let w = self.state.layout.windows();
+        Err(PowderError::Run(format!(
+            "step {}: a particle's neighbours lie more than one window of {} particles away in the sorted order (a window's dispatches bind it and its neighbours only): the packing's layers of cells hold more particles than a window; run with larger windows (GpuOptions::window_particles) where the adapter's binding limit allows",
+            self.steps, w.len
+        )))
+    }
+
     fn apply_monitor(&mut self, m: &[u32]) -> Result<(), PowderError> {
         self.dropped += m[3] as u64;
         let ratio = f32::from_bits(m[4]) as f64;
@@ -1987,6 +2227,7 @@ impl GpuEngine {
             self.apply_monitor(&report.monitor)?;
             match report.halted() {
                 Some(need) => {
+                    self.check_windows(&report.monitor)?;
                     self.grow_lists(need)?;
                     self.resume = Some((batch - done, origin));
                 }

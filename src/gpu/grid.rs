@@ -19,7 +19,7 @@
 //! are dispatches of one compute pass in the caller's encoder: no submission in between.
 
 use crate::gpu::context::GpuContext;
-use crate::gpu::kernel::{self, split_workgroups, Kernel, Program};
+use crate::gpu::kernel::{self, split_workgroups, Kernel, Part, Program};
 use crate::gpu::layout::{GridParams, ScanParams};
 use crate::gpu::shaders;
 use crate::PowderError;
@@ -108,13 +108,39 @@ impl ExclusiveScan {
         (output, out_offset): (&wgpu::Buffer, u32),
         n: u32,
     ) -> Result<Self, PowderError> {
+        Self::with_parts(
+            ctx,
+            program,
+            (Part::whole(input), in_offset),
+            (Part::whole(output), out_offset),
+            n,
+        )
+    }
+
+    /// As [`Self::with_offsets`], the input and output bound in part (the offsets then
+    /// count from the parts' starts).
+    pub fn with_parts(
+        ctx: &GpuContext,
+        program: &Program,
+        (input, in_offset): (Part, u32),
+        (output, out_offset): (Part, u32),
+        n: u32,
+    ) -> Result<Self, PowderError> {
         check_binding(ctx, "exclusive scan", n as u64, 4, "elements")?;
         let device = &ctx.device;
         let scan_blocks = program.kernel("scan_blocks")?.clone();
         let scan_add = program.kernel("scan_add")?.clone();
         let mut levels: Vec<ScanLevel> = Vec::new();
         let mut buffers = Vec::new();
-        let (mut level_in, mut level_out, mut level_n) = (input.clone(), output.clone(), n);
+        let own = |p: Part| (p.buffer.clone(), p.offset, p.size);
+        let (mut level_in, mut level_out, mut level_n) = (own(input), own(output), n);
+        fn part((buffer, offset, size): &(wgpu::Buffer, u64, Option<u64>)) -> Part<'_> {
+            Part {
+                buffer,
+                offset: *offset,
+                size: *size,
+            }
+        }
         let mut offsets = (in_offset, out_offset);
         loop {
             let n_blocks = level_n.div_ceil(SCAN_BLOCK).max(1);
@@ -131,11 +157,20 @@ impl ExclusiveScan {
             let sums = kernel::storage_buffer(device, "scan block sums", n_blocks as u64 * 4);
             let named: &[(&str, &wgpu::Buffer)] = &[
                 ("scan_params", &params),
-                ("scan_in", &level_in),
-                ("scan_out", &level_out),
+                ("scan_in", &level_in.0),
+                ("scan_out", &level_out.0),
                 ("scan_sums", &sums),
             ];
-            let blocks = scan_blocks.bind(device, named)?;
+            let blocks = scan_blocks.bind_parts(
+                device,
+                &[
+                    ("scan_params", Part::whole(&params)),
+                    ("scan_in", part(&level_in)),
+                    ("scan_out", part(&level_out)),
+                    ("scan_sums", Part::whole(&sums)),
+                ],
+                &[],
+            )?;
             let mut level = ScanLevel {
                 n: level_n,
                 n_blocks,
@@ -153,15 +188,23 @@ impl ExclusiveScan {
                 kernel::storage_buffer(device, "scanned block sums", n_blocks as u64 * 4);
             let named: &[(&str, &wgpu::Buffer)] = &[
                 ("scan_params", &params),
-                ("scan_out", &level_out),
+                ("scan_out", &level_out.0),
                 ("scan_carry", &scanned_sums),
             ];
-            level.add = Some(scan_add.bind(device, named)?);
+            level.add = Some(scan_add.bind_parts(
+                device,
+                &[
+                    ("scan_params", Part::whole(&params)),
+                    ("scan_out", part(&level_out)),
+                    ("scan_carry", Part::whole(&scanned_sums)),
+                ],
+                &[],
+            )?);
             level.add_bound = scan_add.bound_bytes(named, &[]);
             levels.push(level);
             buffers.extend([params, sums.clone(), scanned_sums.clone()]);
-            level_in = sums;
-            level_out = scanned_sums;
+            level_in = (sums, 0, None);
+            level_out = (scanned_sums, 0, None);
             level_n = n_blocks;
             offsets = (0, 0);
         }
@@ -320,6 +363,10 @@ pub struct GridSort {
     cell_width: [f32; 3],
     max_per_dim: u32,
     large_groups: u32,
+    /// Particles one `cell_keys` dispatch covers (all, or a window's).
+    key_invocations: u32,
+    /// The window uniform of a dispatch over all particles (`win`, `gpu::window`).
+    whole_window: wgpu::Buffer,
     cell_keys: Kernel,
     clear_counts: Kernel,
     count: Kernel,
@@ -378,13 +425,9 @@ impl GridSort {
             )));
         }
         let grid_name = format!("grid sort of {}x{}x{} cells", dims[0], dims[1], dims[2]);
-        check_binding(
-            ctx,
-            "grid sort",
-            n_particles as u64,
-            CELL_BYTES,
-            "particles",
-        )?;
+        // (the keys and the sorted index, 4 bytes a particle; the cells may be bound a
+        // window at a time, `keys_bind_group_part`)
+        check_binding(ctx, "grid sort", n_particles as u64, 4, "particles")?;
         check_binding(ctx, &grid_name, n_cells as u64, 4, "cells")?;
 
         let device = &ctx.device;
@@ -448,6 +491,12 @@ impl GridSort {
             cell_width,
             max_per_dim: ctx.limits().max_compute_workgroups_per_dimension,
             large_groups: large_capacity.min(LARGE_CELL_GROUPS),
+            key_invocations: n_particles,
+            whole_window: kernel::uniform_buffer(
+                device,
+                "grid window",
+                bytemuck::bytes_of(&crate::gpu::window::WindowParams::default()),
+            ),
             cell_keys: k("cell_keys")?,
             clear_counts,
             count,
@@ -517,11 +566,13 @@ impl GridSort {
     /// Tells the kernels the run's windows (`GridParams::window`), `cells` then being the
     /// blocked particle state with `state_fields` fields a particle.
     pub fn set_windows(
-        &self,
+        &mut self,
         queue: &wgpu::Queue,
         windows: &crate::gpu::window::Windows,
         state_fields: u32,
     ) {
+        // `cell_keys` then runs once a window
+        self.key_invocations = self.n_particles.min(windows.len as u32);
         let at = std::mem::offset_of!(GridParams, window) as u64;
         queue.write_buffer(
             &self.params,
@@ -533,16 +584,27 @@ impl GridSort {
     /// The bind group of `cell_keys` for this cell buffer (for [`Self::encode_indirect`]:
     /// a stepping loop makes it once, not per step).
     pub fn keys_bind_group(&self, cells: &wgpu::Buffer) -> wgpu::BindGroup {
-        self.cell_keys
-            .bind(
-                &self.device,
-                &[
-                    ("grid", &self.params),
-                    ("cells", cells),
-                    ("keys", &self.keys),
-                ],
-            )
-            .expect("cell_keys binds grid, cells and keys")
+        self.keys_bind_group_part(Part::whole(cells), &self.whole_window)
+            .expect("cell_keys binds grid, cells, keys and its window")
+    }
+
+    /// The bind group of `cell_keys` for one window: `cells` the part of the blocked
+    /// particle state its window's dispatch binds, `window` its uniform.
+    pub fn keys_bind_group_part(
+        &self,
+        cells: Part,
+        window: &wgpu::Buffer,
+    ) -> Result<wgpu::BindGroup, PowderError> {
+        self.cell_keys.bind_parts(
+            &self.device,
+            &[
+                ("grid", Part::whole(&self.params)),
+                ("cells", cells),
+                ("keys", Part::whole(&self.keys)),
+                ("win", Part::whole(window)),
+            ],
+            &[],
+        )
     }
 
     /// Records the whole sort into `encoder` as one compute pass. `cells` holds one
@@ -582,7 +644,11 @@ impl GridSort {
                 Some(&self.bg_clear),
                 workgroups(&self.clear_counts, c),
             ),
-            (&self.cell_keys, None, workgroups(&self.cell_keys, n)),
+            (
+                &self.cell_keys,
+                None,
+                workgroups(&self.cell_keys, self.key_invocations),
+            ),
             (
                 &self.count,
                 Some(&self.bg_count),
@@ -658,11 +724,12 @@ impl GridSort {
     /// Records the sort as [`Self::encode`] does, but every dispatch indirect: dispatch
     /// `i` reads its `[x, y, z]` from `args` at byte `offset + 12·i` (a buffer with
     /// `INDIRECT` usage holding [`Self::indirect_args`] to sort, or zeros to skip the
-    /// sort and keep the previous result). `keys`: [`Self::keys_bind_group`] of the cells.
+    /// sort and keep the previous result). `keys`: [`Self::keys_bind_group`] of the cells,
+    /// or one [`Self::keys_bind_group_part`] a window.
     pub fn encode_indirect(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        keys: &wgpu::BindGroup,
+        keys: &[wgpu::BindGroup],
         args: &wgpu::Buffer,
         offset: u64,
     ) {
@@ -672,8 +739,12 @@ impl GridSort {
         });
         for (i, (kernel, bind_group, _)) in self.plan().into_iter().enumerate() {
             pass.set_pipeline(&kernel.pipeline);
-            pass.set_bind_group(0, bind_group.unwrap_or(keys), &[]);
-            pass.dispatch_workgroups_indirect(args, offset + 12 * i as u64);
+            // (`cell_keys`: once per window, each with the same workgroup counts)
+            let groups = bind_group.map_or(keys, std::slice::from_ref);
+            for group in groups {
+                pass.set_bind_group(0, group, &[]);
+                pass.dispatch_workgroups_indirect(args, offset + 12 * i as u64);
+            }
         }
     }
 

@@ -168,6 +168,41 @@ impl Program {
     }
 }
 
+/// A buffer, or the range of one a binding covers (a window's, `gpu::window`).
+#[derive(Clone, Copy, Debug)]
+pub struct Part<'a> {
+    /// The buffer.
+    pub buffer: &'a wgpu::Buffer,
+    /// First byte bound.
+    pub offset: u64,
+    /// Bytes bound (`None`: to the end).
+    pub size: Option<u64>,
+}
+
+impl<'a> Part<'a> {
+    /// The whole buffer.
+    pub fn whole(buffer: &'a wgpu::Buffer) -> Self {
+        Self {
+            buffer,
+            offset: 0,
+            size: None,
+        }
+    }
+
+    /// Bytes bound.
+    pub fn bytes(&self) -> u64 {
+        self.size.unwrap_or(self.buffer.size() - self.offset)
+    }
+
+    fn resource(&self) -> wgpu::BindingResource<'a> {
+        wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+            buffer: self.buffer,
+            offset: self.offset,
+            size: self.size.and_then(std::num::NonZeroU64::new),
+        })
+    }
+}
+
 impl Kernel {
     /// Bind group 0 for this kernel from `(global name, buffer)` pairs (whole buffers).
     /// Names the kernel does not use are ignored; a missing one is an error.
@@ -179,6 +214,11 @@ impl Kernel {
         self.bind_with_textures(device, buffers, &[])
     }
 
+    /// Whether the kernel binds the global `name`.
+    pub fn uses(&self, name: &str) -> bool {
+        self.bindings.iter().any(|(n, _)| n == name)
+    }
+
     /// As [`Self::bind`], with `(global name, texture view)` pairs for texture globals.
     pub fn bind_with_textures(
         &self,
@@ -186,12 +226,23 @@ impl Kernel {
         buffers: &[(&str, &wgpu::Buffer)],
         textures: &[(&str, &wgpu::TextureView)],
     ) -> Result<wgpu::BindGroup, PowderError> {
+        let parts: Vec<(&str, Part)> = buffers.iter().map(|&(n, b)| (n, Part::whole(b))).collect();
+        self.bind_parts(device, &parts, textures)
+    }
+
+    /// As [`Self::bind_with_textures`], each buffer bound whole or in part.
+    pub fn bind_parts(
+        &self,
+        device: &wgpu::Device,
+        buffers: &[(&str, Part)],
+        textures: &[(&str, &wgpu::TextureView)],
+    ) -> Result<wgpu::BindGroup, PowderError> {
         let mut entries = Vec::with_capacity(self.bindings.len());
         for (name, binding) in &self.bindings {
             let buffer = buffers.iter().find(|(n, _)| n == name).map(|(_, b)| *b);
             let texture = textures.iter().find(|(n, _)| n == name).map(|(_, t)| *t);
             let resource = match (buffer, texture) {
-                (Some(b), _) => b.as_entire_binding(),
+                (Some(b), _) => b.resource(),
                 (None, Some(t)) => wgpu::BindingResource::TextureView(t),
                 (None, None) => {
                     return Err(PowderError::Run(format!(

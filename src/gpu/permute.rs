@@ -7,6 +7,7 @@ use crate::error::PowderError;
 use crate::gpu::context::GpuContext;
 use crate::gpu::kernel::{storage_buffer, uniform_buffer, Kernel, Program};
 use crate::gpu::shaders;
+use crate::gpu::window::WindowBindings;
 
 /// Words of a scratch row the wall-major arrays are grouped into (a particle's field is
 /// never split, so a wall contact larger than this takes a row of its own).
@@ -137,7 +138,8 @@ impl Field {
 
 /// One dispatch of the re-sort.
 struct Move {
-    group: wgpu::BindGroup,
+    /// One a window.
+    groups: Vec<wgpu::BindGroup>,
     /// `permute <field loaded>` (or the last field stored).
     name: String,
     /// What it touches, as (name, bytes) (`gpu::traffic`).
@@ -154,13 +156,16 @@ pub struct Permutation {
 impl Permutation {
     /// The re-sort of `fields` for `n` particles by the grid sort's `sorted_index` (the
     /// k-th particle of the new order was `sorted_index[k]`), with `grid` its parameters.
+    /// Dispatched once a window of `windowing` (the fields' buffers and the scratch bound
+    /// a window and its neighbours at a time where there are several).
     pub fn new(
         ctx: &GpuContext,
-        grid: &wgpu::Buffer,
-        sorted_index: &wgpu::Buffer,
+        (grid, sorted_index): (&wgpu::Buffer, &wgpu::Buffer),
         n: u32,
         fields: &[Field],
+        windowing: &WindowBindings,
     ) -> Result<Self, PowderError> {
+        let windows = &windowing.windows;
         let variant = shaders::stage("permute").expect("permute is a stage");
         let program = Program::new(ctx, &variant)?;
         let kernel = program.kernel("permute")?.clone();
@@ -170,10 +175,17 @@ impl Permutation {
             .max()
             .unwrap_or(1)
             .max(1);
-        let scratch_bytes = 4 * row as u64 * n as u64;
-        if scratch_bytes > ctx.max_storage_binding() {
+        // (blocked by window like the state where there are several)
+        let (scratch_bytes, bound_bytes) = match windows.count {
+            1 => (4 * row as u64 * n as u64, 4 * row as u64 * n as u64),
+            count => {
+                let block = 4 * row as u64 * windows.len;
+                (count * block, windows.covered() * block)
+            }
+        };
+        if bound_bytes > ctx.max_storage_binding() {
             return Err(PowderError::Run(format!(
-                "the re-sort's scratch needs {scratch_bytes} bytes for {n} particles, over the adapter's storage binding limit of {} bytes",
+                "the re-sort's scratch needs {bound_bytes} bytes for {n} particles bound at a time, over the adapter's storage binding limit of {} bytes",
                 ctx.max_storage_binding()
             )));
         }
@@ -195,16 +207,27 @@ impl Permutation {
                 _pad: 0,
             };
             let uniform = uniform_buffer(&ctx.device, "permute.move", bytemuck::bytes_of(&params));
-            let group = kernel.bind(
+            let (stored, loaded) = (store.unwrap_or(any), load.unwrap_or(any));
+            let blocks = [
+                ("scratch", 4 * row as u64 * windows.len),
+                ("stored", 4 * stored.window as u64),
+                ("loaded", 4 * loaded.window as u64),
+            ];
+            let groups = windowing.groups(
                 &ctx.device,
-                &[
-                    ("grid", grid),
-                    ("mv", &uniform),
-                    ("sorted_index", sorted_index),
-                    ("scratch", &scratch),
-                    ("stored", &store.unwrap_or(any).buffer),
-                    ("loaded", &load.unwrap_or(any).buffer),
-                ],
+                &kernel,
+                (
+                    &[
+                        ("grid", grid),
+                        ("mv", &uniform),
+                        ("sorted_index", sorted_index),
+                        ("scratch", &scratch),
+                        ("stored", &stored.buffer),
+                        ("loaded", &loaded.buffer),
+                    ],
+                    &blocks,
+                ),
+                &[],
             )?;
             let touched = |f: &Field| 4 * f.row_words() as u64 * n as u64;
             let scratch_touched = store.map_or(0, touched) + load.map_or(0, touched);
@@ -220,7 +243,7 @@ impl Permutation {
                 None => format!("permute (store {})", any.name),
             };
             moves.push(Move {
-                group,
+                groups,
                 name,
                 touched,
             });
@@ -251,14 +274,18 @@ impl Permutation {
         offset: u64,
     ) {
         for m in &self.moves {
-            self.kernel.dispatch_indirect(pass, &m.group, args, offset);
+            for group in &m.groups {
+                self.kernel.dispatch_indirect(pass, group, args, offset);
+            }
         }
     }
 
-    /// Records the re-sort's dispatches for `n` particles (`Kernel::dispatch`).
+    /// Records the re-sort's dispatches for `n` particles a window (`Kernel::dispatch`).
     pub fn encode(&self, pass: &mut wgpu::ComputePass<'_>, n: u32, max_per_dim: u32) {
         for m in &self.moves {
-            self.kernel.dispatch(pass, &m.group, n, max_per_dim);
+            for group in &m.groups {
+                self.kernel.dispatch(pass, group, n, max_per_dim);
+            }
         }
     }
 

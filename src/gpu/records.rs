@@ -227,7 +227,7 @@ impl RecordLayout {
              @group(0) @binding({}) var<storage, read_write> {g}: array<u32>;\n\n\
              fn {g}_at(before: u32, width: u32, r: u32) -> u32 {{\n    \
              let capacity = {};\n    \
-             return rec_window(r) * (capacity * {}u) + before * capacity + rec_local(r) * width;\n}}\n",
+             return (rec_window(r) - win.bound) * (capacity * {}u) + before * capacity + rec_local(r) * width;\n}}\n",
             self.words(),
             self.binding,
             self.capacity_wgsl,

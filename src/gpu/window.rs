@@ -7,7 +7,21 @@
 //! the arrays fit one binding) lays everything out as before windows existed.
 
 use crate::error::PowderError;
+use crate::gpu::kernel::{uniform_buffer, Kernel, Part};
 use crate::gpu::state::{particle_stride, STRIDE_ALIGN};
+
+/// A dispatch's window (`WindowParams` in common.wgsl).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct WindowParams {
+    /// Its first particle.
+    pub first: u32,
+    /// The first window its bindings of blocked arrays start at ([`Windows::bound`]).
+    pub bound: u32,
+    /// The window.
+    pub index: u32,
+    _pad: u32,
+}
 
 /// The fewest particles a window holds: every window's block of any array (4-byte records
 /// included) is then a multiple of 256 bytes, as binding offsets want.
@@ -59,6 +73,22 @@ impl Windows {
         })
     }
 
+    /// The windows for `n` particles whose blocked arrays take at most `per_particle`
+    /// bytes a particle each: one where they all fit `limit` bytes whole (a binding),
+    /// else the largest whose parts (a window and its two neighbours) fit, at least
+    /// [`MIN_WINDOW`] (where even those do not fit, the buffers are refused by name).
+    pub fn choose(n: u64, per_particle: u64, limit: u64) -> Self {
+        if n * per_particle <= limit {
+            return Self::one(n);
+        }
+        let most = limit / (3 * per_particle.max(1));
+        let len = match most {
+            0 => MIN_WINDOW,
+            m => (1u64 << (63 - m.leading_zeros())).clamp(MIN_WINDOW, 1 << 30),
+        };
+        Self::of(n, len).unwrap_or_else(|_| Self::one(n))
+    }
+
     /// `(1 << shift) − 1`: a particle's index within its window.
     pub fn mask(&self) -> u64 {
         (1u64 << self.shift) - 1
@@ -98,10 +128,100 @@ impl Windows {
         self.record(w, wall * self.len + i)
     }
 
+    /// The first window the bindings of window w's dispatches start at: they cover it
+    /// and the next two (or all windows where there are fewer), so w and its neighbours.
+    pub fn bound(&self, w: u64) -> u64 {
+        w.saturating_sub(1).min(self.count.saturating_sub(3))
+    }
+
+    /// Windows a binding covers.
+    pub fn covered(&self) -> u64 {
+        self.count.min(3)
+    }
+
+    /// (offset, size) in bytes of the part of a blocked buffer with `block` bytes a window
+    /// that window w's dispatches bind.
+    pub fn part(&self, block: u64, w: u64) -> (u64, u64) {
+        (self.bound(w) * block, self.covered() * block)
+    }
+
+    /// The uniform of window w's dispatches (`win` in common.wgsl).
+    pub fn window_params(&self, w: u64) -> WindowParams {
+        WindowParams {
+            first: (w * self.len) as u32,
+            bound: self.bound(w) as u32,
+            index: w as u32,
+            _pad: 0,
+        }
+    }
+
     /// The WGSL `vec4<u32>` of `GridParams::window`: shift, len, rec_shift and the
     /// `state` buffer's fields (for the grid sort's reads of the cells).
     pub fn params(&self, state_fields: u32) -> [u32; 4] {
         [self.shift, self.len as u32, self.rec_shift, state_fields]
+    }
+}
+
+/// The blocked buffers' bytes a window, by the name the kernels bind them by.
+pub type Blocks<'a> = [(&'a str, u64)];
+
+/// What binds kernels window by window: the windows and one `win` uniform each.
+pub struct WindowBindings {
+    /// The windows.
+    pub windows: Windows,
+    /// Window w's [`WindowParams`].
+    pub uniforms: Vec<wgpu::Buffer>,
+}
+
+impl WindowBindings {
+    /// The uniforms of `windows`.
+    pub fn new(device: &wgpu::Device, windows: Windows) -> Self {
+        let uniforms = (0..windows.count)
+            .map(|w| {
+                let params = windows.window_params(w);
+                uniform_buffer(device, "window", bytemuck::bytes_of(&params))
+            })
+            .collect();
+        Self { windows, uniforms }
+    }
+
+    /// The bind groups of `kernel`: one a window where it binds `win` (each blocked
+    /// buffer, named in `blocks` with its bytes a window, bound over the window and its
+    /// neighbours; with one window, whole), else one binding everything whole.
+    pub fn groups(
+        &self,
+        device: &wgpu::Device,
+        kernel: &Kernel,
+        (buffers, blocks): (&[(&str, &wgpu::Buffer)], &Blocks),
+        textures: &[(&str, &wgpu::TextureView)],
+    ) -> Result<Vec<wgpu::BindGroup>, PowderError> {
+        if !kernel.uses("win") {
+            return Ok(vec![kernel.bind_with_textures(device, buffers, textures)?]);
+        }
+        (0..self.windows.count)
+            .map(|w| {
+                let mut parts: Vec<(&str, Part)> = buffers
+                    .iter()
+                    .map(|&(name, buffer)| {
+                        let block = blocks.iter().find(|(n, _)| *n == name);
+                        let part = match block {
+                            Some(&(_, block)) if self.windows.count > 1 => {
+                                let (offset, size) = self.windows.part(block, w);
+                                Part {
+                                    buffer,
+                                    offset,
+                                    size: Some(size),
+                                }
+                            }
+                            _ => Part::whole(buffer),
+                        };
+                        (name, part)
+                    })
+                    .collect();
+                parts.push(("win", Part::whole(&self.uniforms[w as usize])));
+                kernel.bind_parts(device, &parts, textures)
+            })
+            .collect()
     }
 }
 
@@ -134,5 +254,20 @@ mod tests {
         // 2^k windows need k bits
         assert_eq!(Windows::of(1024, 64).unwrap().rec_shift, 28);
         assert_eq!(Windows::of(1025, 64).unwrap().rec_shift, 27);
+        // each window's bindings cover it and its neighbours, three windows wide
+        for i in 0..w.count {
+            let b = w.bound(i);
+            assert!(b + 3 <= w.count && b <= i.saturating_sub(1));
+            assert!(i + 1 < b + 3 || i + 1 == w.count);
+            assert_eq!(w.part(256, i), (b * 256, 3 * 256));
+        }
+        // chosen: one window where the arrays fit a binding, else parts that fit
+        assert_eq!(Windows::choose(1000, 100, 100_000), Windows::one(1000));
+        let c = Windows::choose(1000, 100, 99_999);
+        assert_eq!((c.len, c.count), (256, 4));
+        assert!(3 * c.len * 100 <= 99_999);
+        assert_eq!(Windows::choose(1000, 100, 1000).len, MIN_WINDOW);
+        let two = Windows::of(100, 64).unwrap();
+        assert_eq!((two.count, two.bound(1), two.part(8, 1)), (2, 0, (0, 16)));
     }
 }
