@@ -34,8 +34,10 @@ fn codec(limit: u64) -> impl bincode::Options {
 /// energy come from √(a/a0), the history rotation takes one square root; the scene has
 /// `jump_impulses`; 10: the CPU places force jumps inside the step by default; 11: the GPU
 /// places them too (each list entry's `prior` and the jumps' fields), the JKR zone rule
-/// stops at the adhesion speed, the hysteretic edges and touch jumps changed).
-const FORMAT: u32 = 11;
+/// stops at the adhesion speed, the hysteretic edges and touch jumps changed; 12: the GPU's
+/// arrays are blocked by windows (the wall contacts by window; the state uploaded in the
+/// grid's order) and a prior without the ledger is three words).
+const FORMAT: u32 = 12;
 
 #[derive(Serialize, Deserialize)]
 struct Header {

@@ -1845,7 +1845,14 @@ impl GpuEngine {
         let mut alloc = Allocator::new(device, self.ctx.max_storage_binding());
         let mut encoder = device.create_command_encoder(&Default::default());
         let old = (self.state.entries.clone(), self.entries);
-        let new = alloc.buffer("A.entries", layout.windowed_bytes(entries, &windows, &[]));
+        let bytes = layout.windowed_bytes(entries, &windows, &[]);
+        let block = 4 * entries * layout.words();
+        let new = blocked_buffer(&mut alloc, &windows, ("A.entries", bytes), block);
+        let b = &self._new_lists;
+        let bytes = b.layout.windowed_bytes(entries, &windows, &[]);
+        let block = 4 * entries * b.layout.words();
+        let new_entries = blocked_buffer(&mut alloc, &windows, ("B.new_entries", bytes), block);
+        alloc.check(self.n as usize)?;
         if keep {
             // window by window, region by region: each region's start moves with the
             // capacity
@@ -1862,11 +1869,7 @@ impl GpuEngine {
             }
         }
         self.state.entries = new;
-        let b = &mut self._new_lists;
-        b.new_entries = alloc.buffer(
-            "B.new_entries",
-            b.layout.windowed_bytes(entries, &windows, &[]),
-        );
+        self._new_lists.new_entries = new_entries;
         self.ctx.queue.submit([encoder.finish()]);
         for (name, bytes) in alloc.list {
             if let Some(entry) = self.buffers.iter_mut().find(|(n, _)| *n == name) {
@@ -2668,9 +2671,10 @@ impl GpuEngine {
         for (w, (f, normal)) in f.iter_mut().zip(&self.wall_normals).enumerate() {
             for k in 0..self.n as u64 {
                 let r = windows.wall_record(k, w as u64);
-                let at = s.wall_layout.byte_of("wall_prior", capacity, windows, r);
-                let at = at.unwrap_or(0) as usize;
-                let row: [f32; 4] = bytemuck::pod_read_unaligned(&out[0][at..at + 16]);
+                let read = s
+                    .wall_layout
+                    .read_vec4(&out[0], "wall_prior", (capacity, windows), r);
+                let row = read.unwrap_or_default();
                 if row[3] > 0.0 {
                     *f -= row[1] as f64 * *normal;
                 }

@@ -24,6 +24,8 @@ pub enum Kind {
     Vec3,
     /// A `vec4<f32>` (four words).
     Vec4,
+    /// A `vec4<f32>` whose z is not kept (three words: x, y, w; z loads as 0).
+    Vec4Xyw,
     /// A contact's stored history, `struct Hist` of the composition: its f32 members, in
     /// order.
     Hist(Vec<String>),
@@ -34,7 +36,7 @@ impl Kind {
     pub fn words(&self) -> u64 {
         match self {
             Kind::U32 | Kind::F32 => 1,
-            Kind::Vec3 => 3,
+            Kind::Vec3 | Kind::Vec4Xyw => 3,
             Kind::Vec4 => 4,
             Kind::Hist(members) => members.len().max(1) as u64,
         }
@@ -45,7 +47,7 @@ impl Kind {
             Kind::U32 => "u32",
             Kind::F32 => "f32",
             Kind::Vec3 => "vec3<f32>",
-            Kind::Vec4 => "vec4<f32>",
+            Kind::Vec4 | Kind::Vec4Xyw => "vec4<f32>",
             Kind::Hist(_) => "Hist",
         }
     }
@@ -103,7 +105,7 @@ impl RecordLayout {
             fields,
             absent: Vec::new(),
         }
-        .optional(field("prior", Kind::Vec4), keeps.prior())
+        .optional(field("prior", prior_kind(keeps)), keeps.prior())
         .optional(field("jump", Kind::F32), keeps.jumps)
         .optional(field("jump_normal", Kind::Vec3), keeps.jumps)
     }
@@ -122,7 +124,7 @@ impl RecordLayout {
             ],
             absent: Vec::new(),
         }
-        .optional(field("new_prior", Kind::Vec4), keeps.prior())
+        .optional(field("new_prior", prior_kind(keeps)), keeps.prior())
     }
 
     /// The particle–wall contacts, wall-major within each window (particle i of a window
@@ -137,7 +139,7 @@ impl RecordLayout {
             fields: vec![field("wall_hist", Kind::Hist(hist.to_vec()))],
             absent: Vec::new(),
         }
-        .optional(field("wall_prior", Kind::Vec4), keeps.prior());
+        .optional(field("wall_prior", prior_kind(keeps)), keeps.prior());
         layout.fields.push(field("wall_push", Kind::F32));
         layout
     }
@@ -180,6 +182,29 @@ impl RecordLayout {
         let (before, width) = self.place(name)?;
         let (w, i) = windows.split_record(r);
         Some(4 * (w * capacity * self.words() + before * capacity + i * width))
+    }
+
+    /// Field `name` (a `Vec4` or `Vec4Xyw`) of record `r` from a buffer's `bytes` of
+    /// `capacity` records a window, as (x, y, z, w) (z 0 where it is not kept).
+    pub fn read_vec4(
+        &self,
+        bytes: &[u8],
+        name: &str,
+        (capacity, windows): (u64, &Windows),
+        r: u64,
+    ) -> Option<[f32; 4]> {
+        let kind = &self.fields.iter().find(|f| f.name == name)?.kind;
+        let at = self.byte_of(name, capacity, windows, r)? as usize;
+        let word = |i: usize| -> Option<f32> {
+            bytes
+                .get(at + 4 * i..at + 4 * i + 4)
+                .map(bytemuck::pod_read_unaligned)
+        };
+        match kind {
+            Kind::Vec4 => Some([word(0)?, word(1)?, word(2)?, word(3)?]),
+            Kind::Vec4Xyw => Some([word(0)?, word(1)?, 0.0, word(2)?]),
+            _ => None,
+        }
     }
 
     /// Bytes of a buffer of `capacity` records a window over `windows` (without the
@@ -258,6 +283,19 @@ impl RecordLayout {
                             .collect(),
                     )
                 }
+                Kind::Vec4Xyw => (
+                    format!(
+                        "vec4<f32>(bitcast<f32>({}), bitcast<f32>({}), 0.0, bitcast<f32>({}))",
+                        word(0),
+                        word(1),
+                        word(2)
+                    ),
+                    vec![
+                        format!("{} = bitcast<u32>(v.x);", word(0)),
+                        format!("{} = bitcast<u32>(v.y);", word(1)),
+                        format!("{} = bitcast<u32>(v.w);", word(2)),
+                    ],
+                ),
                 Kind::Hist(members) => {
                     let parts: Vec<String> = (0..width)
                         .map(|i| format!("bitcast<f32>({})", word(i)))
@@ -303,6 +341,15 @@ impl RecordLayout {
     }
 }
 
+/// A contact's prior: (δ, F_n, U − ½·dt·P, state), the third only for the ledger.
+fn prior_kind(keeps: Keeps) -> Kind {
+    if keeps.ledger {
+        Kind::Vec4
+    } else {
+        Kind::Vec4Xyw
+    }
+}
+
 fn field(name: &'static str, kind: Kind) -> Field {
     Field { name, kind }
 }
@@ -333,5 +380,20 @@ mod tests {
         assert_eq!(w.bytes(7, &[]), 4 * 3 * 7);
         let calls: BTreeSet<String> = ["load_hist".to_string(), "store_nbr".to_string()].into();
         assert_eq!(e.touched_bytes(&calls, 10), 4 * (2 + 1) * 10);
+        // without the ledger the prior keeps (δ, F, state): three words, z reads 0
+        let jumps = Keeps {
+            ledger: false,
+            jumps: true,
+        };
+        let j = RecordLayout::entries(&hist, false, jumps);
+        assert_eq!(j.place("prior"), Some((8, 3)));
+        assert_eq!(j.words(), 8 + 3 + 1 + 3);
+        assert!(j.wgsl().contains("0.0, bitcast<f32>(entries[at + 2u]))"));
+        let windows = Windows::one(4);
+        let mut bytes = vec![0u8; j.bytes(4, &[]) as usize];
+        let at = j.byte_of("prior", 4, &windows, 1).unwrap() as usize;
+        bytes[at..at + 12].copy_from_slice(bytemuck::cast_slice(&[1.0f32, 2.0, 3.0]));
+        let read = j.read_vec4(&bytes, "prior", (4, &windows), 1);
+        assert_eq!(read, Some([1.0, 2.0, 0.0, 3.0]));
     }
 }
