@@ -14,7 +14,7 @@ const WG_SIZE: u32 = 256u;
 
 // Grid parameters of a run (uniform). The grid's origin (the domain's min corner) is
 // implicit: particle cells are integer coordinates relative to it.
-// Layout: mirrored by `layout::GridParams` (32 bytes).
+// Layout: mirrored by `layout::GridParams` (48 bytes).
 struct GridParams {
     // Number of cells per axis.
     dims: vec3<u32>,

@@ -555,6 +555,11 @@ fn evaluates(d: vec3<f32>, k: u32, j: u32) -> bool {
 // (evaluated by k, evaluated by the partner) counts; `fill`: also written to the new
 // lists at b_row[k] and lower_row[k], which the counts' scans placed.
 fn search(k: u32, fill: bool) -> vec2<u32> {
+    // (a particle whose data lies beyond this window's bindings stops the run: monitor[1])
+    if (!in_bindings(sorted_index[k])) {
+        atomicMax(&control[1], 1u);
+        return vec2<u32>(0u);
+    }
     // (the positions in the new order: `sorted_cell`)
     let ck = sorted_cell(k);
     let ok = sorted_off(k);
@@ -565,11 +570,6 @@ fn search(k: u32, fill: bool) -> vec2<u32> {
     // evaluations reach k through `lower`)
     var up = 0u;
     var down = 0u;
-    // (a particle whose data lies beyond this window's bindings stops the run: monitor[1])
-    if (!in_bindings(sorted_index[k])) {
-        atomicMax(&control[1], 1u);
-        return vec2<u32>(0u);
-    }
     // a particle that has not appeared lists no neighbours (and is listed by none)
     let here = is_active(load_ids(sorted_index[k]).x);
     // Without wrapping along x, the three cells x−1, x, x+1 of a row are consecutive keys
@@ -605,11 +605,14 @@ fn search(k: u32, fill: bool) -> vec2<u32> {
                     end = start + cell_count[key];
                 }
                 for (var j = start; j < end; j++) {
+                    if (j == k || !here) {
+                        continue;
+                    }
                     if (!in_bindings(j) || !in_bindings(sorted_index[j])) {
                         atomicMax(&control[1], 1u);
                         continue;
                     }
-                    if (j == k || !here || !is_active(load_ids(sorted_index[j]).x)) {
+                    if (!is_active(load_ids(sorted_index[j]).x)) {
                         continue;
                     }
                     let oj = sorted_off(j);
@@ -1218,32 +1221,48 @@ fn wall_move() {
     }
 }
 
-// Servo control, after force (dispatched only when some wall is servo-controlled): one
-// workgroup per window sums each servo wall's normal force over the window's particles in
-// a fixed order (a strided sum per invocation, then a tree) into `servo_sums`, so the
-// result is reproducible; wall_servo_apply sets the wall's velocity for the next step:
-// clamp(gain·(force − pushed), ±max_speed) along n.
+// Servo control, after force (dispatched only when some wall is servo-controlled): each
+// servo wall's normal force summed over the particles in a fixed order, so the result is
+// reproducible and the same in any windows: lane l of `servo_lanes` adds the pushes of the
+// particles l, l + WG_SIZE, l + 2·WG_SIZE, ... in order (one invocation a lane and window,
+// the windows in order), then wall_servo_apply adds the lanes as a tree and sets the
+// wall's velocity for the next step: clamp(gain·(force − pushed), ±max_speed) along n.
 var<workgroup> wg_push: array<f32, WG_SIZE>;
 
-// Per window and wall, the window's push on the wall this step.
-@group(0) @binding(76) var<storage, read_write> servo_sums: array<f32>;
+// Per wall and lane, the pushes summed so far this step (zeroed by wall_servo_apply).
+@group(0) @binding(76) var<storage, read_write> servo_lanes: array<f32>;
 
 @compute @workgroup_size(WG_SIZE)
 fn wall_servo(@builtin(local_invocation_index) lid: u32) {
-    if (win.first >= grid.n_particles) {
+    let first = win.first + lid;
+    if (first >= particle_end()) {
         return;
     }
+    let lane = first % WG_SIZE;
+    for (var w = 0u; w < wall_count(); w++) {
+        if (walls[w].motion.x != WALL_SERVO) {
+            continue;
+        }
+        var sum = servo_lanes[w * WG_SIZE + lane];
+        for (var k = first; k < particle_end(); k += WG_SIZE) {
+            sum += load_wall_push(wall_slot(k, w));
+        }
+        servo_lanes[w * WG_SIZE + lane] = sum;
+    }
+}
+
+// After every window's wall_servo: each servo wall's push, the lanes added as a tree, and
+// its velocity; the lanes start afresh.
+@compute @workgroup_size(WG_SIZE)
+fn wall_servo_apply(@builtin(local_invocation_index) lid: u32) {
     for (var w = 0u; w < wall_count(); w++) {
         // uniform control flow: every invocation reads the same wall
         let m = walls[w].motion;
         if (m.x != WALL_SERVO) {
             continue;
         }
-        var sum = 0.0;
-        for (var k = win.first + lid; k < particle_end(); k += WG_SIZE) {
-            sum += load_wall_push(wall_slot(k, w));
-        }
-        wg_push[lid] = sum;
+        wg_push[lid] = servo_lanes[w * WG_SIZE + lid];
+        servo_lanes[w * WG_SIZE + lid] = 0.0;
         workgroupBarrier();
         for (var half = WG_SIZE / 2u; half > 0u; half /= 2u) {
             if (lid < half) {
@@ -1252,27 +1271,9 @@ fn wall_servo(@builtin(local_invocation_index) lid: u32) {
             workgroupBarrier();
         }
         if (lid == 0u) {
-            servo_sums[win.index * step.n_walls + w] = wg_push[0];
+            let speed = clamp(m.z * (m.y - wg_push[0]), -m.w, m.w);
+            walls[w].velocity = vec4<f32>(speed * walls[w].normal.xyz, 0.0);
         }
         workgroupBarrier();
-    }
-}
-
-// After every window's wall_servo: each servo wall's velocity from the windows' pushes,
-// summed in window order.
-@compute @workgroup_size(1)
-fn wall_servo_apply() {
-    let windows = (grid.n_particles + grid.window.y - 1u) / grid.window.y;
-    for (var w = 0u; w < wall_count(); w++) {
-        let m = walls[w].motion;
-        if (m.x != WALL_SERVO) {
-            continue;
-        }
-        var push = 0.0;
-        for (var i = 0u; i < windows; i++) {
-            push += servo_sums[i * step.n_walls + w];
-        }
-        let speed = clamp(m.z * (m.y - push), -m.w, m.w);
-        walls[w].velocity = vec4<f32>(speed * walls[w].normal.xyz, 0.0);
     }
 }

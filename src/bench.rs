@@ -520,6 +520,9 @@ pub struct BenchRow {
     /// Entries the GPU engine's neighbour lists had room for at the end (grown to 1.25×
     /// what a rebuild needs).
     pub list_entries: Option<u64>,
+    /// GPU: the windows the particles were blocked into (particles a window, windows;
+    /// `gpu::window`).
+    pub windows: Option<(u64, u64)>,
     /// Neighbour-list rebuilds during the timed steps (both backends keep a Verlet list
     /// with a skin).
     pub rebuilds: Option<u64>,
@@ -556,6 +559,7 @@ impl BenchRow {
             gpu_bytes: None,
             gpu_bytes_per_particle: None,
             list_entries: None,
+            windows: None,
             rebuilds: None,
             quiet_batches: None,
             runs: Vec::new(),
@@ -622,6 +626,7 @@ fn run_cpu(
         gpu_bytes: None,
         gpu_bytes_per_particle: None,
         list_entries: None,
+        windows: None,
         rebuilds: Some(rebuilds),
         quiet_batches: None,
         runs: Vec::new(),
@@ -665,11 +670,24 @@ fn run_gpu(
     let bytes = engine.buffer_bytes();
     let traffic = crate::gpu::TrafficEstimate::new(engine.traffic(), n, rebuilds, opts.steps);
     let (dt, entries) = (engine.dt(), engine.list_entries());
-    let passes = if opts.profile {
+    let windows = engine.windows();
+    // (the pass profile times one window's dispatches: one window only)
+    let passes = if opts.profile && windows.count == 1 {
         Some(engine.profile_passes(16)?)
     } else {
         None
     };
+    let note = (windows.count > 1).then(|| {
+        let profile = if opts.profile {
+            "; no pass profile (one window only)"
+        } else {
+            ""
+        };
+        format!(
+            "{} windows of {} particles{profile}",
+            windows.count, windows.len
+        )
+    });
     Ok(BenchRow {
         passes,
         case: case.name(),
@@ -678,7 +696,7 @@ fn run_gpu(
         speedup: None,
         particles: n,
         status: "ran",
-        note: None,
+        note,
         dt: Some(dt),
         steps: opts.steps,
         setup_seconds: Some(setup),
@@ -688,6 +706,7 @@ fn run_gpu(
         gpu_bytes: Some(bytes),
         gpu_bytes_per_particle: Some(bytes as f64 / n as f64),
         list_entries: Some(entries),
+        windows: Some((windows.len, windows.count)),
         rebuilds: Some(rebuilds),
         quiet_batches: Some(quiet),
         runs: Vec::new(),

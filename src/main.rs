@@ -339,6 +339,8 @@ struct SceneInfo {
     /// (field, bytes) of a list entry (`powder::gpu::records`).
     entry_fields: Vec<(String, u64)>,
     list_entries: u64,
+    /// (particles a window, windows): `powder::gpu::window`.
+    windows: (u64, u64),
     buffers: Vec<(String, u64)>,
     total_bytes: u64,
     bytes_per_particle: f64,
@@ -374,6 +376,7 @@ fn scene_info(
     let total = engine.buffer_bytes();
     let (buffers, particles) = (engine.buffers(), engine.len());
     let (rotation, list_entries) = (engine.rotates(), engine.list_entries());
+    let windows = (engine.windows().len, engine.windows().count);
     let state_fields = engine
         .state_fields()
         .iter()
@@ -404,6 +407,7 @@ fn scene_info(
         storage_bindings,
         entry_fields,
         list_entries,
+        windows,
         buffers,
         total_bytes: total,
         bytes_per_particle: total as f64 / particles.max(1) as f64,
@@ -447,6 +451,10 @@ fn info_cmd(a: &InfoArgs) -> Result<(), PowderError> {
             "list entries     {} ({:.2} a particle, after the first rebuild)",
             info.list_entries,
             info.list_entries as f64 / info.particles as f64
+        );
+        println!(
+            "windows          {} of {} particles (each window's dispatches bind it and its neighbours)",
+            info.windows.1, info.windows.0
         );
         println!("buffers:");
         for (name, bytes) in &info.buffers {

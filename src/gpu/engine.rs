@@ -413,8 +413,8 @@ struct StepBuffers {
     /// The new lists' and the `lower` lists' lengths and first entries (`rows` in
     /// `shaders/step.wgsl`: four regions a window, blocked like the state).
     rows: wgpu::Buffer,
-    /// Each window's push on each servo wall this step.
-    servo_sums: wgpu::Buffer,
+    /// Each servo wall's pushes this step, summed per lane of a workgroup.
+    servo_lanes: wgpu::Buffer,
 }
 
 impl StepBuffers {
@@ -430,7 +430,7 @@ impl StepBuffers {
             ("args", &self.args),
             ("full_args", &self.full_args),
             ("rows", &self.rows),
-            ("servo_sums", &self.servo_sums),
+            ("servo_lanes", &self.servo_lanes),
         ];
         list.extend(
             self.particle_ledger
@@ -453,7 +453,7 @@ fn check_entries(
 ) -> Result<(), PowderError> {
     if entries > windows.max_records() {
         return Err(PowderError::Run(format!(
-            "the neighbour lists need {entries} entries in a window of {} particles, more than the {} a window's entries are numbered with: use smaller windows",
+            "the neighbour lists need {entries} entries in a window of {} particles, more than the {} a window's entries are numbered with (about 2^32 entries in all)",
             windows.len,
             windows.max_records()
         )));
@@ -637,7 +637,8 @@ pub struct GpuOptions {
     /// decision where no rebuild is expected, run again with it where one was needed.
     /// Results are bitwise the same either way. Default [`QuietBatches::Auto`].
     pub quiet: QuietBatches,
-    /// The neighbour lists' first capacity, entries (default: a guess the first rebuild
+    /// The neighbour lists' first capacity, entries a window (all entries with one
+    /// window; default: a guess the first rebuild
     /// grows to 1.25× what it needs). Lists grow whenever a rebuild needs more — the batch
     /// halts at that rebuild and finishes after the growth, bitwise as without it — so
     /// this only saves those halts where the need is known.
@@ -1034,6 +1035,14 @@ impl GpuEngine {
             n as u64,
             (ctx.max_storage_binding(), alloc.max_buffer),
         )?;
+        // (a window's wall contacts are numbered like its entries)
+        if windows.len * n_walls > windows.max_records() {
+            return Err(PowderError::Run(format!(
+                "{n} particles and {n_walls} walls make {} wall contacts a window, more than the {} a window's records are numbered with",
+                windows.len * n_walls,
+                windows.max_records()
+            )));
+        }
         let servo_walls = scene
             .walls
             .iter()
@@ -1179,8 +1188,6 @@ impl GpuEngine {
             ("rows", 4 * 4 * windows.len * windows.count),
             4 * 4 * windows.len,
         );
-        // each window's push on each servo wall (`wall_servo`)
-        let servo_sums = alloc.buffer("servo_sums", 4 * (windows.count * n_walls).max(1));
         let control = alloc.buffer("control", CONTROL_BYTES);
         // moved beyond skin/2 (flag set): the first step builds the lists
         let skin_init = [1u32, 0, 0, 0];
@@ -1268,6 +1275,8 @@ impl GpuEngine {
             .workgroup_size
             .iter()
             .product::<u32>();
+        // the servo walls' pushes summed per lane of a workgroup (`wall_servo`)
+        let servo_lanes = alloc.buffer("servo_lanes", 4 * (n_walls * per_group as u64).max(1));
         // (a window's particles: every window's dispatch the same)
         let per_window = (n as u64).min(windows.len) as u32;
         let particle_args = split_workgroups(per_window.div_ceil(per_group), max_per_dim);
@@ -1362,7 +1371,7 @@ impl GpuEngine {
             full_args,
             particle_ledger,
             rows,
-            servo_sums,
+            servo_lanes,
         };
         let bound = bind_all(
             device,
@@ -2061,7 +2070,7 @@ impl GpuEngine {
         }
         let w = self.state.layout.windows();
         Err(PowderError::Run(format!(
-            "step {}: a particle's neighbours lie more than one window of {} particles away in the sorted order (a window's dispatches bind it and its neighbours only): the packing's layers of cells hold more particles than a window; run with larger windows (GpuOptions::window_particles) where the adapter's binding limit allows",
+            "step {}: a particle's neighbours lie more than one window of {} particles away in the sorted order (a window's dispatches bind it and its neighbours only): the packing's layers of cells hold more particles than a window; run with larger windows where the adapter's binding limit allows (GpuOptions::window_particles, from the library; no command-line flag sets it yet)",
             self.steps, w.len
         )))
     }

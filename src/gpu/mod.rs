@@ -10,9 +10,11 @@
 //! * **Portability**: kernels are core WGSL — f32 arithmetic, u32/i32 atomics, no f64,
 //!   no float atomics, no subgroups — so the same code runs on Vulkan, Metal, DX12 and
 //!   GL, on any GPU and on the CPU rasterisers used in CI. Storage bindings may be
-//!   capped (128 MiB on lavapipe): every buffer is checked against the device's limit
-//!   at construction with an error naming the size, and dispatches larger than
-//!   `max_compute_workgroups_per_dimension` are split over y/z.
+//!   capped (128 MiB on lavapipe): where the arrays do not fit one binding the particles
+//!   are cut into windows ([`window`]) whose dispatches bind a window and its neighbours
+//!   only; what still does not fit is refused at construction with an error naming the
+//!   array, and dispatches larger than `max_compute_workgroups_per_dimension` are split
+//!   over y/z.
 //! * **Positions** ([`layout`]): an integer cell (`vec4<i32>`, w = material) plus an f32
 //!   offset inside the cell (`vec4<f32>`, w = radius). Separations are formed as
 //!   `(cell_i - cell_j) h + (off_i - off_j)`, so the overlaps that drive the contact
