@@ -391,6 +391,8 @@ pub struct BenchOptions {
     pub quiet: crate::gpu::QuietBatches,
     /// The software adapter's paths (`GpuOptions::software_paths`; `None`: by the adapter).
     pub software_paths: Option<bool>,
+    /// Particles a GPU window holds (`GpuOptions::window_particles`; `None`: chosen).
+    pub window_particles: Option<u64>,
     /// Runs per (case, backend, size), each with a fresh engine; the row keeps the fastest
     /// and lists every run's rate (shared machines vary from run to run).
     pub repeats: u32,
@@ -414,6 +416,7 @@ impl Default for BenchOptions {
             profile: false,
             quiet: crate::gpu::QuietBatches::Auto,
             software_paths: None,
+            window_particles: None,
             repeats: 1,
             threads: vec![0],
         }
@@ -651,6 +654,7 @@ fn run_gpu(
             ledger: opts.ledger,
             quiet: opts.quiet,
             software_paths: opts.software_paths,
+            window_particles: opts.window_particles,
             ..Default::default()
         },
     )?;

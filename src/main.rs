@@ -117,6 +117,10 @@ struct BenchArgs {
     /// `auto`): `on`, `off`, or `auto` by the adapter kind (results are bitwise the same).
     #[arg(long = "software-paths", value_enum, default_value = "auto")]
     software_paths: SoftwarePaths,
+    /// GPU: particles a window holds (a power of two ≥ 64; default: one window where the
+    /// arrays fit a binding, else the largest windows that fit). Bitwise the same results.
+    #[arg(long = "window-particles")]
+    window_particles: Option<u64>,
     /// Runs per case, backend and size (fresh engines); the table shows the fastest, the
     /// JSON every run's rate.
     #[arg(long, default_value_t = 1)]
@@ -263,6 +267,7 @@ fn bench_cmd(a: &BenchArgs) -> Result<(), PowderError> {
         ledger: a.ledger,
         quiet: a.quiet_batches.into(),
         software_paths: a.software_paths.choice(),
+        window_particles: a.window_particles,
         profile: a.profile,
         repeats: a.repeats,
         threads: parse_threads(&a.threads)?,
@@ -570,6 +575,10 @@ struct RunArgs {
     /// materials; a pair below the JKR range (lambda_T <= 3) is warned about on stderr.
     #[arg(long = "tabor-dmin")]
     tabor_dmin: Option<f64>,
+    /// GPU: particles a window holds (a power of two ≥ 64; default: one window where the
+    /// arrays fit a binding, else the largest windows that fit). Bitwise the same results.
+    #[arg(long = "window-particles")]
+    window_particles: Option<u64>,
 }
 
 #[derive(Args)]
@@ -1193,6 +1202,7 @@ fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
         gpu: powder::gpu::GpuOptions {
             ledger: !a.no_ledger,
             quiet: a.quiet_batches.into(),
+            window_particles: a.window_particles,
             ..Default::default()
         },
         tabor_dmin: a.tabor_dmin,

@@ -2070,7 +2070,7 @@ impl GpuEngine {
         }
         let w = self.state.layout.windows();
         Err(PowderError::Run(format!(
-            "step {}: a particle's neighbours lie more than one window of {} particles away in the sorted order (a window's dispatches bind it and its neighbours only): the packing's layers of cells hold more particles than a window; run with larger windows where the adapter's binding limit allows (GpuOptions::window_particles, from the library; no command-line flag sets it yet)",
+            "step {}: a particle's neighbours lie more than one window of {} particles away in the sorted order (a window's dispatches bind it and its neighbours only): the packing's layers of cells hold more particles than a window; run with larger windows where the adapter's binding limit allows (`--window-particles`, GpuOptions::window_particles)",
             self.steps, w.len
         )))
     }
