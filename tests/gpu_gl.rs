@@ -99,3 +99,26 @@ fn both_state_paths_give_the_same_bits_on_gl() {
     };
     common::assert_same_bits(&a, &b);
 }
+
+/// Windows (`gpu::window`: each window's dispatches binding parts of the buffers at
+/// offsets) give the bits of one window on GL too: the compression in windows of 64.
+#[test]
+fn windows_give_the_same_bits_on_gl() {
+    let scene = common::example("compression.toml");
+    let run = |window: Option<u64>| {
+        let ctx = gl()?;
+        let options = GpuOptions {
+            software_paths: Some(false),
+            window_particles: window,
+            ..Default::default()
+        };
+        let mut e = GpuEngine::with_options(&scene, ctx, options).unwrap();
+        assert_eq!(e.windows().count > 1, window.is_some());
+        e.run_steps(1500).unwrap();
+        Some(e.state().unwrap())
+    };
+    let (Some(a), Some(b)) = (run(None), run(Some(64))) else {
+        return;
+    };
+    common::assert_same_bits(&a, &b);
+}
