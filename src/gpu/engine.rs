@@ -243,8 +243,8 @@ impl StateSet {
         vec![
             ("state", layout.count(Buffer::State) * len * field),
             ("motion", layout.count(Buffer::Motion) * len * field),
-            ("entries", 4 * entries * entry_layout.words()),
-            ("wall_contacts", 4 * len * walls * wall_layout.words()),
+            ("entries", entry_layout.block_bytes(entries)),
+            ("wall_contacts", wall_layout.block_bytes(len * walls)),
         ]
     }
 
@@ -255,7 +255,7 @@ impl StateSet {
             (&self.entry_layout, entries),
             (&self.wall_layout, walls),
         );
-        v.push(("new_entries", 4 * entries * new.layout.words()));
+        v.push(("new_entries", new.layout.block_bytes(entries)));
         v.push(("rows", 4 * 4 * self.layout.stride()));
         v
     }
@@ -377,7 +377,7 @@ impl NewLists {
     ) -> Self {
         let [_, layout, _] = kind.records(keeps);
         let bytes = layout.windowed_bytes(entries, windows, &[]);
-        let block = 4 * entries * layout.words();
+        let block = layout.block_bytes(entries);
         Self {
             new_entries: blocked_buffer(alloc, windows, ("B.new_entries", bytes), block),
             layout,
@@ -1389,17 +1389,7 @@ impl GpuEngine {
         let state_block = state_fields * windows.len * crate::gpu::state::FIELD_BYTES;
         let grid_keys = (0..windows.count)
             .map(|w| {
-                let cells = match windows.count {
-                    1 => Part::whole(&state.state),
-                    _ => {
-                        let (offset, size) = windows.part(state_block, w);
-                        Part {
-                            buffer: &state.state,
-                            offset,
-                            size: Some(size),
-                        }
-                    }
-                };
+                let cells = windowing.part(&state.state, state_block, w);
                 grid.keys_bind_group_part(cells, &windowing.uniforms[w as usize])
             })
             .collect::<Result<Vec<_>, _>>()?;
@@ -1855,11 +1845,11 @@ impl GpuEngine {
         let mut encoder = device.create_command_encoder(&Default::default());
         let old = (self.state.entries.clone(), self.entries);
         let bytes = layout.windowed_bytes(entries, &windows, &[]);
-        let block = 4 * entries * layout.words();
+        let block = layout.block_bytes(entries);
         let new = blocked_buffer(&mut alloc, &windows, ("A.entries", bytes), block);
         let b = &self._new_lists;
         let bytes = b.layout.windowed_bytes(entries, &windows, &[]);
-        let block = 4 * entries * b.layout.words();
+        let block = b.layout.block_bytes(entries);
         let new_entries = blocked_buffer(&mut alloc, &windows, ("B.new_entries", bytes), block);
         alloc.check(self.n as usize)?;
         if keep {

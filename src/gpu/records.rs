@@ -207,13 +207,18 @@ impl RecordLayout {
         }
     }
 
+    /// Bytes of one window's block of `capacity` records (all fields).
+    pub fn block_bytes(&self, capacity: u64) -> u64 {
+        4 * capacity * self.words()
+    }
+
     /// Bytes of a buffer of `capacity` records a window over `windows` (without the
     /// trailing fields in `leave_out` where there is one window: see [`Self::bytes`]).
     pub fn windowed_bytes(&self, capacity: u64, windows: &Windows, leave_out: &[&str]) -> u64 {
         if windows.count == 1 {
             self.bytes(capacity, leave_out)
         } else {
-            (4 * self.words() * capacity * windows.count).max(4)
+            (self.block_bytes(capacity) * windows.count).max(4)
         }
     }
 

@@ -185,6 +185,20 @@ impl WindowBindings {
         Self { windows, uniforms }
     }
 
+    /// What window w's dispatches bind of a blocked `buffer` of `block` bytes a window:
+    /// the window and its neighbours, or the whole buffer with one window.
+    pub fn part<'a>(&self, buffer: &'a wgpu::Buffer, block: u64, w: u64) -> Part<'a> {
+        if self.windows.count == 1 {
+            return Part::whole(buffer);
+        }
+        let (offset, size) = self.windows.part(block, w);
+        Part {
+            buffer,
+            offset,
+            size: Some(size),
+        }
+    }
+
     /// The bind groups of `kernel`: one a window where it binds `win` (each blocked
     /// buffer, named in `blocks` with its bytes a window, bound over the window and its
     /// neighbours; with one window, whole), else one binding everything whole.
@@ -203,17 +217,9 @@ impl WindowBindings {
                 let mut parts: Vec<(&str, Part)> = buffers
                     .iter()
                     .map(|&(name, buffer)| {
-                        let block = blocks.iter().find(|(n, _)| *n == name);
-                        let part = match block {
-                            Some(&(_, block)) if self.windows.count > 1 => {
-                                let (offset, size) = self.windows.part(block, w);
-                                Part {
-                                    buffer,
-                                    offset,
-                                    size: Some(size),
-                                }
-                            }
-                            _ => Part::whole(buffer),
+                        let part = match blocks.iter().find(|(n, _)| *n == name) {
+                            Some(&(_, block)) => self.part(buffer, block, w),
+                            None => Part::whole(buffer),
                         };
                         (name, part)
                     })
