@@ -137,8 +137,8 @@ fn ledger_store(pid: u32, acc: LedgerAcc) {
     }
 }
 
-// remap on a rebuild: an engaged contact of the old list whose pair is in no new list
-// moved out of reach + skin within one step (only a violent step does that). It is
+// remap on a rebuild: an engaged contact of the old list (a pair's or a wall's) in no new
+// list moved out of reach + skin within one step (only a violent step does that). It is
 // booked as having left at its last overlap (U0 − ½·dt·P0; the CPU also adds the normal
 // work 0.5·f0·(delta − delta0) at its current overlap, which is not at hand here) and
 // counted in monitor[3], so the host can say so.

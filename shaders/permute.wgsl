@@ -5,8 +5,8 @@
 // the particle that sorts to k into the scratch. Invocation k touches only scratch row k
 // and sorted place k, so one dispatch does both without a race.
 
-// Where a field lies in its buffer: `blocks` blocks (one per wall for the wall-major
-// contact arrays, else 1) of `words` u32 per particle, block b at word base + b·stride
+// Where a field lies in its buffer: `blocks` blocks (state fields moved together, else 1)
+// of `words` u32 per particle, block b at word base + b·stride
 // of the particle's window's block (`window` words a window, `gpu::window`).
 struct Field {
     words: u32,
@@ -30,7 +30,7 @@ struct Move {
 @group(0) @binding(1) var<uniform> mv: Move;
 @group(0) @binding(2) var<storage, read> sorted_index: array<u32>;
 @group(0) @binding(3) var<storage, read_write> scratch: array<u32>;
-// (both read_write: consecutive wall blocks are one buffer, bound twice)
+// (both read_write: the stored and the loaded field may lie in one buffer, bound twice)
 @group(0) @binding(4) var<storage, read_write> stored: array<u32>;
 @group(0) @binding(5) var<storage, read_write> loaded: array<u32>;
 

@@ -26,18 +26,18 @@
 //   decide       one invocation          rebuild this step when max |disp| > skin/2 (or a
 //                                        moving wall moved > skin/2 along its normal)
 // only on a rebuild (indirect dispatches: zero workgroups on the other steps):
-//   <grid sort of A's cells>             sorted_index, cell_start, cell_count
+//   <grid sort of A's cells>             sorted_index, cell_start
 //   gather       per particle            the cell and offset mirrors in sorted order
 //   count_neighbours  per particle       the new lists' lengths (the 27 cells, cut-off
-//                                        r_i + r_j + reach + skin)
+//                                        r_i + r_j + reach + skin; the walls within
+//                                        reach + skin)
 //   <two exclusive scans (grid.wgsl)>    b_row, lower_row: where each list goes
 //   neighbours   per particle            the half lists into B (the same search)
 //   commit       one invocation          halts the batch when they did not fit
 //   <permute.wgsl, a dispatch a field>   A[k] = A[sorted_index[k]] field by field
 //   remap        per particle            resolves `lower`; each new entry finds its
 //                                        history in A's old lists by the persistent ids
-//   copy_back_history                    the B lists into A; disp = 0; the wall candidates
-//                                        (ids.w)
+//   copy_back_history                    the B lists into A; disp = 0
 // every step:
 //   <mirror copies>                      A's cell, offset, vpred (wpred) into the read-only
 //                                        textures m_* (`gpu::mirror`)
@@ -87,7 +87,8 @@ struct StepParams {
     reach: f32,
     // The domain box's extent in cells (the run monitor: a centre beyond it has left).
     extent_cells: vec3<f32>,
-    // 1 when some wall is servo-controlled: the force kernel then writes wall_push.
+    // 1 when some wall is servo-controlled: the force kernel then writes each wall
+    // entry's push (`store_wall_push`).
     servo_walls: u32,
     // 1 on periodic axes: cells wrap around (the axis holds a whole number >= 3 of cells,
     // so dims·cell_width is the period) and separations take the nearest image.
@@ -235,7 +236,8 @@ fn is_active(pid: u32) -> bool {
 
 // The lists are compressed rows: particle k's entries are ids.y .. ids.y + ids.z of the
 // per-entry arrays (nbr, a_hist, a_hist_pid, the pair forces and torques, the ledger), in
-// sorted order, so consecutive particles' rows are consecutive within a window. `rows`
+// sorted order, so consecutive particles' rows are consecutive within a window; its wall
+// contacts follow, ids.w of them (`WALL_ENTRY`). `rows`
 // holds four per-particle regions (blocked by window like the state's): the lengths and
 // first entries of the lists a rebuild builds (B) and of the `lower` lists; the scans of
 // `gpu::grid` turn each window's count region into its row region.
@@ -269,10 +271,21 @@ fn lower_len(k: u32) -> u32 {
     return rows[row_at(ROWS_LOWER_COUNT, k)];
 }
 
-// The contact of particle k with wall w: wall-major within k's window, for the same
-// reason.
-fn wall_slot(k: u32, w: u32) -> u32 {
-    return record_index(win_of(k), w * grid.window.y + win_local(k));
+// A list entry whose partner (`nbr`, and `hist_pid`) is WALL_ENTRY | w holds the
+// particle's contact with wall w: the walls within reach + skin at the rebuild, after the
+// pairs of its row (particle indices and ids stay below 2^31). So a wall contact takes
+// room only where a particle is near a wall, and its history survives the re-sort as a
+// pair's does (`remap`, by this id).
+const WALL_ENTRY: u32 = 0x80000000u;
+
+// A servo wall's push on a wall entry this step (the normal force; 0 until the force
+// pass writes it): kept in the entry's pair force, which a wall contact has no other use for.
+fn store_wall_push(e: u32, push: f32) {
+    store_pair_force(e, vec3<f32>(push, 0.0, 0.0));
+}
+
+fn load_wall_push(e: u32) -> f32 {
+    return load_pair_force(e).x;
 }
 
 // The particle whose new list (ROWS_B_ROW, ROWS_B_COUNT) holds entry e: the last of e's
@@ -305,14 +318,19 @@ fn entry_owner(e: u32) -> u32 {
 // From the grid sort.
 @group(0) @binding(43) var<storage, read> sorted_index: array<u32>;
 @group(0) @binding(44) var<storage, read> cell_start: array<u32>;
-@group(0) @binding(45) var<storage, read> cell_count: array<u32>;
+
+// The end of cell `key`'s range of the sorted order: the next cell's start (`cell_start`
+// is an exclusive scan over every cell, `grid.wgsl`).
+fn cell_end(key: u32) -> u32 {
+    if (key + 1u < grid.n_cells) {
+        return cell_start[key + 1u];
+    }
+    return grid.n_particles;
+}
 
 // Pair models: materials x materials, then walls x materials.
 @group(0) @binding(46) var<storage, read> pairs: array<PairRow>;
 @group(0) @binding(47) var<storage, read_write> walls: array<Wall>;
-// (`wall_push`, a field of the wall contacts: the normal force of each (particle, wall)
-// contact this step, at wall_slot(k, w), only written when some wall is servo-controlled;
-// summed by wall_servo.)
 
 // Each wall's point at the last rebuild (`decide`): a moving wall that has since moved more
 // than skin/2 along its normal triggers the next one.
@@ -323,17 +341,15 @@ struct WallRef {
 
 @group(0) @binding(74) var<storage, read_write> wall_ref: array<WallRef>;
 
-// Per particle (ids.w), the walls among the first 32 it may touch before the next
-// rebuild, one bit each: those within reach + skin at the rebuild (or whose contact the
-// ledger holds engaged). Between rebuilds a particle moves less than skin/2 and a wall
-// less than skin/2 along its normal, so any other wall stays out of range: `force`
-// evaluates only these (and every wall from the 33rd on), and their history (zeroed at
-// the rebuild) is all a far wall needs.
+// Between rebuilds a particle moves less than skin/2 and a wall less than skin/2 along its
+// normal, so a wall beyond reach + skin at the rebuild stays out of range: `force`
+// evaluates only the wall entries (and a far wall's contact has no history).
 
 // The control words: [0, 12) the monitor, zeroed per batch of steps and read back after
 // it (no per-step read-back):
-// [0] = largest neighbour count seen (atomicMax), [1] = 1 when a rebuild found a
-// particle's neighbours beyond its window's bindings (`search`), [2] = non-finite
+// [0] = largest list length seen (atomicMax; a particle's list, walls included, or its
+// `lower` list), [1] = 1 when a rebuild found a particle's neighbours beyond its window's
+// bindings (`search`), [2] = non-finite
 // acceleration count, [3] = engaged
 // contacts dropped by a rebuild (ledger.wgsl), [4] = largest overlap/a12 of any contact
 // (f32 bits, atomicMax; non-negative f32 bits order as the values), [5] = persistent id
@@ -551,9 +567,10 @@ fn evaluates(d: vec3<f32>, k: u32, j: u32) -> bool {
 }
 
 // The neighbour search of particle k (in the new order, before the state is re-sorted):
-// the partners within r_i + r_j + reach + skin from the 27 cells, in a fixed order, as
-// (evaluated by k, evaluated by the partner) counts; `fill`: also written to the new
-// lists at b_row[k] and lower_row[k], which the counts' scans placed.
+// the partners within r_i + r_j + reach + skin from the 27 cells, in a fixed order, and
+// then the walls within r_k + reach + skin (`WALL_ENTRY`), as (evaluated by k, evaluated
+// by the partner) counts; `fill`: also written to the new lists at b_row[k] and
+// lower_row[k], which the counts' scans placed.
 fn search(k: u32, fill: bool) -> vec2<u32> {
     // (a particle whose data lies beyond this window's bindings stops the run: monitor[1])
     if (!in_bindings(sorted_index[k])) {
@@ -597,12 +614,11 @@ fn search(k: u32, fill: bool) -> vec2<u32> {
                     let first = vec3<i32>(max(c.x - 1, 0), c.y, c.z);
                     let last = vec3<i32>(min(c.x + 1, hi.x), c.y, c.z);
                     start = cell_start[cell_key(first, grid.dims)];
-                    let key = cell_key(last, grid.dims);
-                    end = cell_start[key] + cell_count[key];
+                    end = cell_end(cell_key(last, grid.dims));
                 } else {
                     let key = cell_key(c, grid.dims);
                     start = cell_start[key];
-                    end = start + cell_count[key];
+                    end = cell_end(key);
                 }
                 for (var j = start; j < end; j++) {
                     if (j == k || !here) {
@@ -633,6 +649,18 @@ fn search(k: u32, fill: bool) -> vec2<u32> {
                     }
                 }
             }
+        }
+    }
+    // the walls (also of a particle that has not appeared: it may appear before the next
+    // rebuild; `force` skips them until then)
+    for (var w = 0u; w < wall_count(); w++) {
+        let wall = walls[w];
+        let delta = ok.w - dot(separation(ck, ok, wall.cell, wall.offset), wall.normal.xyz);
+        if (!(delta < -margin)) {
+            if (fill && rows[row_at(ROWS_B_ROW, k)] + up < cap) {
+                store_nbr(b_first(k) + up, WALL_ENTRY | w);
+            }
+            up += 1u;
         }
     }
     return vec2<u32>(up, down);
@@ -710,15 +738,20 @@ fn remap(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
     // each new slot's history: from k's old list, or (when the pair's evaluator changed
     // with the new order) from the partner's, seen from the other side
     // (the re-sort carried each particle's old list row and length with it in `ids`)
+    // (a wall entry's id is its `nbr`; pairs and walls never share an id)
     let ids = load_ids(k);
     let me = ids.x;
     let old_row = ids.y;
-    let old_n = ids.z;
+    let old_n = ids.z + ids.w;
     let row = b_first(k);
     for (var s = 0u; s < b_len(k); s++) {
         let e = row + s;
         let j = load_nbr(e);
-        let partner = load_ids(j).x;
+        let wall = (j & WALL_ENTRY) != 0u;
+        var partner = j;
+        if (!wall) {
+            partner = load_ids(j).x;
+        }
         var h = hist_zero();
         store_new_prior(e, vec4<f32>(0.0));
         var found = false;
@@ -730,7 +763,7 @@ fn remap(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
                 break;
             }
         }
-        if (!found) {
+        if (!found && !wall) {
             let mj = load_ids(j);
             let row_j = mj.y;
             for (var m = 0u; m < mj.z; m++) {
@@ -748,7 +781,7 @@ fn remap(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
 }
 
 // On a rebuild, last: the new lists' history returns to A, the displacements start
-// afresh, and the wall candidates are found from the re-sorted positions.
+// afresh, and the row's wall entries (its last) are counted into ids.w.
 @compute @workgroup_size(WG_SIZE)
 fn copy_back_history(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let k = particle_index(wid, nwg, lid);
@@ -757,36 +790,23 @@ fn copy_back_history(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgro
     }
     let n = b_len(k);
     let row = b_first(k);
+    var n_walls = 0u;
     for (var e = row; e < row + n; e++) {
+        let id = load_new_hist_pid(e);
         store_hist(e, load_new_hist(e));
-        store_hist_pid(e, load_new_hist_pid(e));
+        store_hist_pid(e, id);
         store_prior(e, load_new_prior(e));
+        if ((id & WALL_ENTRY) != 0u) {
+            n_walls += 1u;
+            if (step.servo_walls != 0u) {
+                // (a particle that has not appeared pushes no wall: force skips it)
+                store_wall_push(e, 0.0);
+            }
+        }
     }
     // (w: the batch's largest overlap so far, which the re-sort carried)
     store_disp(k, vec4<f32>(0.0, 0.0, 0.0, load_disp(k).w));
-    // a wall out of reach + skin starts with the history of a contact out of range
-    let ck = load_cell(k);
-    let ok = load_off(k);
-    let margin = step.reach + skin_width();
-    var near = 0u;
-    for (var w = 0u; w < wall_count(); w++) {
-        let wall = walls[w];
-        let slot = wall_slot(k, w);
-        let delta = ok.w - dot(separation(ck, ok, wall.cell, wall.offset), wall.normal.xyz);
-        let candidate = !(delta < -margin) || load_wall_prior(slot).w > 0.0;
-        if (candidate && w < 32u) {
-            near |= 1u << w;
-        }
-        if (!candidate && w < 32u) {
-            store_wall_hist(slot, hist_zero());
-            store_wall_prior(slot, vec4<f32>(0.0));
-        }
-        if (step.servo_walls != 0u) {
-            // a far wall's push stays 0 until the next rebuild (force writes candidates')
-            store_wall_push(slot, 0.0);
-        }
-    }
-    store_ids(k, vec4<u32>(load_ids(k).x, row, n, near));
+    store_ids(k, vec4<u32>(load_ids(k).x, row, n - n_walls, n_walls));
 }
 
 // The relative motion of one contact, as the model sees it (`model::Kinematics` plus the
@@ -1042,25 +1062,13 @@ fn particle_forces(k: u32, row0: PairRow) {
     }
     // a particle that has not appeared meets no wall
     let present = WALLS && is_active(load_ids(k).x);
-    let n_walls = select(0u, step.n_walls, present);
-    // Only the wall candidates of the last rebuild are evaluated (ids.w), and every
-    // wall from the 33rd on. On a SIMD adapter (lavapipe) a loop iteration costs as much for
-    // a lane that skips it as for one that works, so the loop below runs as often as the
-    // most candidates a lane of the group has, mostly 0 in a packing, rather than n_walls
-    // times; the other walls' history stays as the rebuild left it, zero.
-    var near = select(0u, load_ids(k).w, present);
-    let masked = min(n_walls, 32u);
-    var rest = masked;
-    loop {
-        var w = rest;
-        if (near != 0u) {
-            w = firstTrailingBit(near);
-            near &= near - 1u;
-        } else if (rest < n_walls) {
-            rest += 1u;
-        } else {
-            break;
-        }
+    // only the walls near at the last rebuild: k's wall entries (a SIMD group loops as
+    // often as its lane with the most, mostly 0 in a packing, rather than n_walls times)
+    let ids_k = load_ids(k);
+    let walls_first = ids_k.y + ids_k.z;
+    let walls_end = walls_first + select(0u, ids_k.w, present);
+    for (var slot = walls_first; slot < walls_end; slot++) {
+        let w = load_nbr(slot) & ~WALL_ENTRY;
         let wall = walls[w];
         let n = wall.normal.xyz;
         let dcw_raw = ck.xyz - wall.cell.xyz;
@@ -1074,12 +1082,11 @@ fn particle_forces(k: u32, row0: PairRow) {
         // eq. 20 with r_j -> inf: (r_i - r_j)/(r_i + r_j) -> -1
         let inv_a12 = 0.5 / rk;
         let kin = Kin(delta, -dot(v_rel, n), rk, mk, step.dt, n, v_t, rk * cross(wk, n) - 0.5 * v_t, inv_a12, wk);
-        let slot = wall_slot(k, w);
-        var h = load_wall_hist(slot);
-        let old = load_wall_prior(slot);
+        var h = load_hist(slot);
+        let old = load_prior(slot);
         let row = pairs[step.n_materials * step.n_materials + w * step.n_materials + mat_k];
         let c = pair_contact(row, kin, &h);
-        store_wall_hist(slot, h);
+        store_hist(slot, h);
         peak = max(peak, delta * inv_a12);
         let is_in = contact_is_in(c);
         let power = dot(c.tangential, v_t) + dot(c.rolling, wk);
@@ -1091,7 +1098,7 @@ fn particle_forces(k: u32, row0: PairRow) {
         let jump = contact_jump(old, kin, c, is_in, edges, touch);
         impulse += jump * n;
         ledger_wall(&ledger_acc, old, kin, c, power, is_in, edges, touch, dot(n, wall.velocity.xyz), jump);
-        store_wall_prior(slot, prior_of(kin, c, power, is_in));
+        store_prior(slot, prior_of(kin, c, power, is_in));
         if (step.servo_walls != 0u) {
             store_wall_push(slot, c.normal);
         }
@@ -1232,6 +1239,17 @@ var<workgroup> wg_push: array<f32, WG_SIZE>;
 // Per wall and lane, the pushes summed so far this step (zeroed by wall_servo_apply).
 @group(0) @binding(76) var<storage, read_write> servo_lanes: array<f32>;
 
+// Particle k's push on wall w this step (0 without a wall entry: not near at the rebuild).
+fn wall_push_of(k: u32, w: u32) -> f32 {
+    let ids = load_ids(k);
+    for (var e = ids.y + ids.z; e < ids.y + ids.z + ids.w; e++) {
+        if (load_nbr(e) == (WALL_ENTRY | w)) {
+            return load_wall_push(e);
+        }
+    }
+    return 0.0;
+}
+
 @compute @workgroup_size(WG_SIZE)
 fn wall_servo(@builtin(local_invocation_index) lid: u32) {
     let first = win.first + lid;
@@ -1245,7 +1263,7 @@ fn wall_servo(@builtin(local_invocation_index) lid: u32) {
         }
         var sum = servo_lanes[w * WG_SIZE + lane];
         for (var k = first; k < particle_end(); k += WG_SIZE) {
-            sum += load_wall_push(wall_slot(k, w));
+            sum += wall_push_of(k, w);
         }
         servo_lanes[w * WG_SIZE + lane] = sum;
     }

@@ -520,6 +520,8 @@ pub struct BenchRow {
     pub gpu_bytes: Option<u64>,
     /// `gpu_bytes / particles`.
     pub gpu_bytes_per_particle: Option<f64>,
+    /// GPU: the device buffers by name, bytes (`GpuEngine::buffers`: where the bytes go).
+    pub gpu_buffers: Option<Vec<(String, u64)>>,
     /// Entries the GPU engine's neighbour lists had room for at the end (grown to 1.25×
     /// what a rebuild needs).
     pub list_entries: Option<u64>,
@@ -560,6 +562,7 @@ impl BenchRow {
             seconds_per_step: None,
             particle_steps_per_second: None,
             gpu_bytes: None,
+            gpu_buffers: None,
             gpu_bytes_per_particle: None,
             list_entries: None,
             windows: None,
@@ -627,6 +630,7 @@ fn run_cpu(
         seconds_per_step: Some(wall / opts.steps as f64),
         particle_steps_per_second: Some(n as f64 * opts.steps as f64 / wall.max(1e-12)),
         gpu_bytes: None,
+        gpu_buffers: None,
         gpu_bytes_per_particle: None,
         list_entries: None,
         windows: None,
@@ -672,6 +676,7 @@ fn run_gpu(
     let state = engine.state()?;
     let z = coordination(scene, &state.positions, engine.radii());
     let bytes = engine.buffer_bytes();
+    let buffers = engine.buffers();
     let traffic = crate::gpu::TrafficEstimate::new(engine.traffic(), n, rebuilds, opts.steps);
     let (dt, entries) = (engine.dt(), engine.list_entries());
     let windows = engine.windows();
@@ -708,6 +713,7 @@ fn run_gpu(
         seconds_per_step: Some(wall / opts.steps as f64),
         particle_steps_per_second: Some(n as f64 * opts.steps as f64 / wall.max(1e-12)),
         gpu_bytes: Some(bytes),
+        gpu_buffers: Some(buffers),
         gpu_bytes_per_particle: Some(bytes as f64 / n as f64),
         list_entries: Some(entries),
         windows: Some((windows.len, windows.count)),

@@ -36,8 +36,9 @@ fn codec(limit: u64) -> impl bincode::Options {
 /// places them too (each list entry's `prior` and the jumps' fields), the JKR zone rule
 /// stops at the adhesion speed, the hysteretic edges and touch jumps changed; 12: the GPU's
 /// arrays are blocked by windows (the wall contacts by window; the state uploaded in the
-/// grid's order) and a prior without the ledger is three words).
-const FORMAT: u32 = 12;
+/// grid's order) and a prior without the ledger is three words; 13: the GPU's wall contacts
+/// are list entries of the particles near a wall).
+const FORMAT: u32 = 13;
 
 #[derive(Serialize, Deserialize)]
 struct Header {

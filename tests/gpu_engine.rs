@@ -194,6 +194,50 @@ fn compression_lid_from_the_start() -> String {
     early
 }
 
+/// A wall contact takes room only where a particle is near the wall (a list entry, after
+/// its pairs): 34 walls below the floor, never near a particle, add no bytes a particle
+/// and change no bit of the compression with its moving lid — whose six walls now have the
+/// indices 34 to 39, beyond the 32 the rebuild's candidate bits once covered.
+#[test]
+fn far_walls_take_no_room_and_change_no_bit() {
+    use common::assert_same_bits;
+    let text = compression_lid_from_the_start();
+    let far: String = (0..34)
+        .map(|i| {
+            let z = -0.002 - 0.001 * i as f64;
+            format!("[[wall]]\npoint = [0.0, 0.0, {z}]\nnormal = [0.0, 0.0, 1.0]\n\n")
+        })
+        .collect();
+    let first_wall = text.find("[[wall]]").unwrap();
+    let many = format!("{}{far}{}", &text[..first_wall], &text[first_wall..]);
+    let scene = |t: &str| powder::scene::Scene::from_toml_str(t, "c").unwrap();
+    let (six, forty) = (scene(&text), scene(&many));
+    assert_eq!(forty.walls.len(), six.walls.len() + 34);
+    let Some(ctx) = context() else { return };
+    let mut a = GpuEngine::new(&six, ctx).unwrap();
+    let mut b = GpuEngine::new(&forty, context().unwrap()).unwrap();
+    a.run_steps(3000).unwrap();
+    b.run_steps(3000).unwrap();
+    assert_same_bits(&a.state().unwrap(), &b.state().unwrap());
+    let (fa, fb) = (a.wall_forces().unwrap(), b.wall_forces().unwrap());
+    assert!(
+        fa.iter().any(|f| f.length() > 0.0),
+        "no wall pressed: {fa:?}"
+    );
+    assert_eq!(fb[34..], fa[..], "the six walls' forces");
+    assert!(fb[..34].iter().all(|f| *f == glam::DVec3::ZERO));
+    // the same lists; only the walls' own parameters grow (pair rows, servo lanes: bytes
+    // a wall, not a particle)
+    assert_eq!(a.list_entries(), b.list_entries());
+    let n = six.particles.len() as u64;
+    let extra = b.buffer_bytes() - a.buffer_bytes();
+    eprintln!("{extra} bytes more for 34 far walls ({n} particles)");
+    assert!(
+        extra < 34 * 256,
+        "{extra} bytes more for 34 far walls ({n} particles)"
+    );
+}
+
 /// The lists grow when a rebuild needs more room: the batch halts at that rebuild and
 /// finishes after the growth. Runs that grow mid-run are bitwise the runs whose lists were
 /// large from the start — the collapsing cohesive cluster, and the compression with its

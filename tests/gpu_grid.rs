@@ -262,8 +262,9 @@ fn gpu_info_cli_prints_the_adapter() {
     assert!(v["features"].is_array());
 }
 
-/// The rebuild's in-place re-sort (`gpu::permute`) moves every field, per-particle and
-/// wall-major, to the sorted order, whatever its size, through a scratch one field wide.
+/// The rebuild's in-place re-sort (`gpu::permute`) moves every field, per particle and
+/// regions moved together, to the sorted order, whatever its size, through a scratch one
+/// field wide.
 #[test]
 fn gpu_permute_resorts_every_field_in_place() {
     use powder::gpu::kernel::{storage_buffer, submit_and_read, uniform_buffer};
@@ -272,7 +273,7 @@ fn gpu_permute_resorts_every_field_in_place() {
     use rand::seq::SliceRandom;
     let Some((_guard, ctx)) = gpu() else { return };
     let n = 1000u32;
-    let walls = 3u32;
+    let regions = 3u32;
     let mut rng = Pcg64::seed_from_u64(11);
     let mut order: Vec<u32> = (0..n).collect();
     order.shuffle(&mut rng);
@@ -287,9 +288,9 @@ fn gpu_permute_resorts_every_field_in_place() {
     let sorted = storage_buffer(&ctx.device, "sorted", 4 * n as u64);
     ctx.queue
         .write_buffer(&sorted, 0, bytemuck::cast_slice(&order));
-    // (bytes per particle or wall contact, wall blocks or 0 for a per-particle field): a
-    // vec4, a word, a 28-byte contact (a dispatch per wall), a 4-byte one (walls grouped)
-    let specs = [(16u64, 0u32), (4, 0), (28, walls), (4, walls)];
+    // (bytes per particle and region, regions moved together or 0 for a per-particle
+    // field): a vec4, a word, a 28-byte record, three 4-byte regions in one dispatch
+    let specs = [(16u64, 0u32), (4, 0), (28, 0), (4, regions)];
     let mut fields = Vec::new();
     let mut before = Vec::new();
     let mut buffers = Vec::new();
@@ -301,13 +302,12 @@ fn gpu_permute_resorts_every_field_in_place() {
         if blocks == 0 {
             fields.push(Field::per_particle(&format!("f{i}"), &buf, bytes));
         } else {
-            fields.extend(Field::wall_major(
+            let words = (bytes / 4) as u32;
+            fields.push(Field::regions(
                 &format!("f{i}"),
                 &buf,
-                0,
-                bytes,
-                blocks,
-                n,
+                words,
+                (0, n * words, blocks),
             ));
         }
         before.push(data);
@@ -318,9 +318,9 @@ fn gpu_permute_resorts_every_field_in_place() {
         powder::gpu::window::Windows::one(n as u64),
     );
     let perm = Permutation::new(ctx, (&grid, &sorted), n, &fields, &one).unwrap();
-    // 1 + 1 + 3 + 1 fields, one dispatch more; the scratch as wide as the 28-byte contact
-    assert_eq!(fields.len(), 6);
-    assert_eq!(perm.dispatches(), 7);
+    // four fields, one dispatch more; the scratch as wide as the 28-byte record
+    assert_eq!(fields.len(), 4);
+    assert_eq!(perm.dispatches(), 5);
     assert_eq!(perm.scratch_bytes(), 28 * n as u64);
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
     {

@@ -698,14 +698,13 @@ impl Composition {
             .collect()
     }
 
-    /// The records of the lists' entries, a rebuild's new lists and the wall contacts
-    /// (`gpu::records`) for this composition, with what the variant keeps.
-    pub fn records(&self, keeps: Keeps) -> [RecordLayout; 3] {
+    /// The records of the lists' entries and a rebuild's new lists (`gpu::records`) for
+    /// this composition, with what the variant keeps.
+    pub fn records(&self, keeps: Keeps) -> [RecordLayout; 2] {
         let hist = self.hist_members();
         [
             RecordLayout::entries(&hist, self.rotation(), keeps),
             RecordLayout::new_entries(&hist, keeps),
-            RecordLayout::wall_contacts(&hist, keeps),
         ]
     }
 

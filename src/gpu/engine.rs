@@ -50,7 +50,7 @@ use crate::gpu::layout::{encode3, gpu_cell_width, HystereticPair, JkrPair, StepP
 use crate::gpu::mirror::Mirrors;
 use crate::gpu::permute::{Field, Permutation, ROW_WORDS};
 use crate::gpu::quiet::{Forecast, QuietBatches};
-use crate::gpu::records::RecordLayout;
+use crate::gpu::records::{RecordLayout, WALL_ENTRY};
 use crate::gpu::state::{Buffer, StateLayout};
 use crate::gpu::traffic::{PassTraffic, When};
 use crate::gpu::window::{Blocks, WindowBindings, Windows, MIN_WINDOW};
@@ -181,35 +181,29 @@ impl<'a> Allocator<'a> {
 }
 
 /// The particle state (A): per particle, in the order of the last rebuild (`gpu::state`),
-/// with the neighbour lists' entries and the wall contacts (`gpu::records`).
+/// with the neighbour lists' entries, its pairs' and its wall contacts (`gpu::records`).
 struct StateSet {
     /// Every per-particle field ([`StateLayout`]): `state` (what pairs read of a partner)
     /// and `motion`.
     state: wgpu::Buffer,
     motion: wgpu::Buffer,
     layout: StateLayout,
-    /// The lists' entries (partner, `lower`, partner id, history, pair force and torque,
-    /// the contact's prior, a force jump's impulse) and their layout.
+    /// The lists' entries (partner or wall, `lower`, partner id, history, pair force and
+    /// torque, the contact's prior, a force jump's impulse) and their layout.
     entries: wgpu::Buffer,
     entry_layout: RecordLayout,
-    /// The particle–wall contacts (history, prior, servo push), wall-major.
-    wall_contacts: wgpu::Buffer,
-    wall_layout: RecordLayout,
 }
 
 impl StateSet {
     fn new(
         alloc: &mut Allocator,
-        (n, entries, walls, windows): (u64, u64, u64, Windows),
+        (n, entries, windows): (u64, u64, Windows),
         kind: &Composition,
-        (keeps, servo): (Keeps, bool),
+        keeps: Keeps,
     ) -> Self {
         let layout = StateLayout::windowed(n, kind.rotation(), windows);
-        let [entry_layout, _, wall_layout] = kind.records(keeps);
-        // the servo's pushes only where a wall is servo-controlled (the last field)
-        let leave_out: &[&str] = if servo { &[] } else { &["wall_push"] };
-        let wall_capacity = windows.len * walls;
-        let blocks = Self::blocks_of(&layout, (&entry_layout, entries), (&wall_layout, walls));
+        let [entry_layout, _] = kind.records(keeps);
+        let blocks = Self::blocks_of(&layout, (&entry_layout, entries));
         let mut b = |name: &'static str, bytes: u64| {
             let block = blocks.iter().find(|(n, _)| *n == name).map_or(0, |b| b.1);
             blocked_buffer(alloc, &windows, (&format!("A.{name}"), bytes), block)
@@ -217,17 +211,9 @@ impl StateSet {
         Self {
             state: b("state", layout.bytes(Buffer::State)),
             motion: b("motion", layout.bytes(Buffer::Motion)),
-            entries: b(
-                "entries",
-                entry_layout.windowed_bytes(entries, &windows, &[]),
-            ),
-            wall_contacts: b(
-                "wall_contacts",
-                wall_layout.windowed_bytes(wall_capacity, &windows, leave_out),
-            ),
+            entries: b("entries", entry_layout.windowed_bytes(entries, &windows)),
             layout,
             entry_layout,
-            wall_layout,
         }
     }
 
@@ -236,7 +222,6 @@ impl StateSet {
     fn blocks_of(
         layout: &StateLayout,
         (entry_layout, entries): (&RecordLayout, u64),
-        (wall_layout, walls): (&RecordLayout, u64),
     ) -> Vec<(&'static str, u64)> {
         let len = layout.stride();
         let field = crate::gpu::state::FIELD_BYTES;
@@ -244,17 +229,12 @@ impl StateSet {
             ("state", layout.count(Buffer::State) * len * field),
             ("motion", layout.count(Buffer::Motion) * len * field),
             ("entries", entry_layout.block_bytes(entries)),
-            ("wall_contacts", wall_layout.block_bytes(len * walls)),
         ]
     }
 
     /// [`Self::blocks_of`] this set, with the new lists' and `rows`.
-    fn blocks(&self, new: &NewLists, entries: u64, walls: u64) -> Vec<(&'static str, u64)> {
-        let mut v = Self::blocks_of(
-            &self.layout,
-            (&self.entry_layout, entries),
-            (&self.wall_layout, walls),
-        );
+    fn blocks(&self, new: &NewLists, entries: u64) -> Vec<(&'static str, u64)> {
+        let mut v = Self::blocks_of(&self.layout, (&self.entry_layout, entries));
         v.push(("new_entries", new.layout.block_bytes(entries)));
         v.push(("rows", 4 * 4 * self.layout.stride()));
         v
@@ -262,34 +242,21 @@ impl StateSet {
 
     /// The buffers under the names the kernels bind them by.
     fn named(&self) -> Vec<(String, &wgpu::Buffer)> {
-        let mut v = vec![
+        vec![
             ("state".to_string(), &self.state),
             ("motion".to_string(), &self.motion),
-        ];
-        v.push(("entries".to_string(), &self.entries));
-        v.push(("wall_contacts".to_string(), &self.wall_contacts));
-        v
+            ("entries".to_string(), &self.entries),
+        ]
     }
 
     /// The record layouts with their records (all windows'): the entries', the new
-    /// lists', the wall contacts'.
-    fn records<'a>(
-        &'a self,
-        new: &'a NewLists,
-        entries: u64,
-        walls: u64,
-    ) -> [(&'a RecordLayout, u64); 3] {
+    /// lists'.
+    fn records<'a>(&'a self, new: &'a NewLists, entries: u64) -> [(&'a RecordLayout, u64); 2] {
         let w = self.layout.windows();
         [
             (&self.entry_layout, entries * w.count),
             (&new.layout, entries * w.count),
-            (&self.wall_layout, w.len * walls * w.count),
         ]
-    }
-
-    /// Records a window's block of wall contacts holds.
-    fn wall_capacity(&self, walls: u64) -> u64 {
-        self.layout.windows().len * walls
     }
 
     /// The buffer holding state buffer `b`.
@@ -302,7 +269,7 @@ impl StateSet {
 
     /// The fields a rebuild re-sorts (`gpu::permute`): every per-particle field (two
     /// state fields a dispatch) but the lists (rebuilt).
-    fn permuted(&self, walls: u32) -> Vec<Field> {
+    fn permuted(&self) -> Vec<Field> {
         let stride = 4 * self.layout.stride() as u32;
         let per_move = (ROW_WORDS / 4).max(1) as usize;
         let mut f = Vec::new();
@@ -319,26 +286,6 @@ impl StateSet {
                         (first * stride, stride, group.len() as u32),
                     )
                     .windowed(block),
-                );
-            }
-        }
-        // the wall contacts' history and priors (not the servo's pushes, which the rebuild
-        // zeroes)
-        let capacity = self.wall_capacity(walls as u64);
-        let block = (capacity * self.wall_layout.words()) as u32;
-        for name in ["wall_hist", "wall_prior"] {
-            if let Some((before, words)) = self.wall_layout.place(name) {
-                f.extend(
-                    Field::wall_major(
-                        name,
-                        &self.wall_contacts,
-                        (before * capacity) as u32,
-                        4 * words,
-                        walls,
-                        self.layout.stride() as u32,
-                    )
-                    .into_iter()
-                    .map(|f| f.windowed(block)),
                 );
             }
         }
@@ -375,8 +322,8 @@ impl NewLists {
         kind: &Composition,
         keeps: Keeps,
     ) -> Self {
-        let [_, layout, _] = kind.records(keeps);
-        let bytes = layout.windowed_bytes(entries, windows, &[]);
+        let [_, layout] = kind.records(keeps);
+        let bytes = layout.windowed_bytes(entries, windows);
         let block = layout.block_bytes(entries);
         Self {
             new_entries: blocked_buffer(alloc, windows, ("B.new_entries", bytes), block),
@@ -505,7 +452,6 @@ fn bind_all(
     list.push(("grid".into(), grid.params()));
     list.push(("sorted_index".into(), grid.sorted_index()));
     list.push(("cell_start".into(), grid.cell_start()));
-    list.push(("cell_count".into(), grid.cell_count()));
     let refs: Vec<(&str, &wgpu::Buffer)> = list.iter().map(|(n, b)| (n.as_str(), *b)).collect();
     let textures = mirrors.view_bytes();
     let pass = |name: &str| -> Result<Pass, PowderError> {
@@ -985,11 +931,10 @@ impl GpuEngine {
                 // one window where the per-particle arrays and the lists' first guess fit
                 // a binding each (the lists grow to the limit), else windows with room
                 // for WINDOW_ENTRIES_PER_PARTICLE entries a particle
-                let [entry, new, wall] = kind.records(keeps);
+                let [entry, new] = kind.records(keeps);
                 let per_particle = [
                     layout0.count(Buffer::State) * crate::gpu::state::FIELD_BYTES,
                     layout0.count(Buffer::Motion) * crate::gpu::state::FIELD_BYTES,
-                    4 * n_walls * wall.words(),
                     4 * ROW_WORDS as u64,
                 ]
                 .into_iter()
@@ -1035,20 +980,11 @@ impl GpuEngine {
             n as u64,
             (ctx.max_storage_binding(), alloc.max_buffer),
         )?;
-        // (a window's wall contacts are numbered like its entries)
-        if windows.len * n_walls > windows.max_records() {
-            return Err(PowderError::Run(format!(
-                "{n} particles and {n_walls} walls make {} wall contacts a window, more than the {} a window's records are numbered with",
-                windows.len * n_walls,
-                windows.max_records()
-            )));
-        }
         let servo_walls = scene
             .walls
             .iter()
             .any(|w| matches!(w.motion, crate::scene::WallMotion::Servo { .. }));
-        let sizes = (n as u64, entries, n_walls, windows);
-        let state = StateSet::new(&mut alloc, sizes, &kind, (keeps, servo_walls));
+        let state = StateSet::new(&mut alloc, (n as u64, entries, windows), &kind, keeps);
         let new_lists = NewLists::new(&mut alloc, (entries, &windows), &kind, keeps);
         let dt32 = r.dt as f32;
         let particle_ledger = ledger.then(|| alloc.buffer("particle_ledger", 64 * n as u64));
@@ -1275,8 +1211,14 @@ impl GpuEngine {
             .workgroup_size
             .iter()
             .product::<u32>();
-        // the servo walls' pushes summed per lane of a workgroup (`wall_servo`)
-        let servo_lanes = alloc.buffer("servo_lanes", 4 * (n_walls * per_group as u64).max(1));
+        // the servo walls' pushes summed per lane of a workgroup (`wall_servo`; only read
+        // where some wall is servo-controlled)
+        let lanes = if servo_walls {
+            n_walls * per_group as u64
+        } else {
+            0
+        };
+        let servo_lanes = alloc.buffer("servo_lanes", 4 * lanes.max(1));
         // (a window's particles: every window's dispatch the same)
         let per_window = (n as u64).min(windows.len) as u32;
         let particle_args = split_workgroups(per_window.div_ceil(per_group), max_per_dim);
@@ -1353,7 +1295,7 @@ impl GpuEngine {
             &ctx,
             (grid.params(), grid.sorted_index()),
             n as u32,
-            &state.permuted(n_walls as u32),
+            &state.permuted(),
             &windowing,
         )?;
         alloc
@@ -1378,8 +1320,8 @@ impl GpuEngine {
             &program,
             (
                 &state.layout,
-                &state.records(&new_lists, entries, n_walls),
-                &state.blocks(&new_lists, entries, n_walls),
+                &state.records(&new_lists, entries),
+                &state.blocks(&new_lists, entries),
             ),
             (&mirrors, &windowing),
             &grid,
@@ -1407,7 +1349,6 @@ impl GpuEngine {
             let own = [
                 ("state", Some(&a.state)),
                 ("motion", Some(&a.motion)),
-                ("wall_contacts", Some(&a.wall_contacts)),
                 ("particle_ledger", b.particle_ledger.as_ref()),
             ];
             for (name, b) in own {
@@ -1844,11 +1785,11 @@ impl GpuEngine {
         let mut alloc = Allocator::new(device, self.ctx.max_storage_binding());
         let mut encoder = device.create_command_encoder(&Default::default());
         let old = (self.state.entries.clone(), self.entries);
-        let bytes = layout.windowed_bytes(entries, &windows, &[]);
+        let bytes = layout.windowed_bytes(entries, &windows);
         let block = layout.block_bytes(entries);
         let new = blocked_buffer(&mut alloc, &windows, ("A.entries", bytes), block);
         let b = &self._new_lists;
-        let bytes = b.layout.windowed_bytes(entries, &windows, &[]);
+        let bytes = b.layout.windowed_bytes(entries, &windows);
         let block = b.layout.block_bytes(entries);
         let new_entries = blocked_buffer(&mut alloc, &windows, ("B.new_entries", bytes), block);
         alloc.check(self.n as usize)?;
@@ -1881,14 +1822,13 @@ impl GpuEngine {
             std::mem::offset_of!(StepParams, list_capacity) as u64,
             bytemuck::bytes_of(&(entries as u32)),
         );
-        let walls = self.n_walls as u64;
         self.bound = bind_all(
             &self.ctx.device,
             &self.program,
             (
                 &self.state.layout,
-                &self.state.records(&self._new_lists, entries, walls),
-                &self.state.blocks(&self._new_lists, entries, walls),
+                &self.state.records(&self._new_lists, entries),
+                &self.state.blocks(&self._new_lists, entries),
             ),
             (&self.mirrors, &self.windowing),
             &self.grid,
@@ -2512,21 +2452,6 @@ impl GpuEngine {
         for ((_, buf), (_, bytes)) in self.state_buffers().iter().zip(&saved.buffers) {
             self.ctx.queue.write_buffer(buf, 0, bytes);
         }
-        // the servo's pushes of walls that are no candidates must read 0 (a rebuild zeroes
-        // them; this state's candidates may differ from the ones last written)
-        let walls = &self.state.wall_contacts;
-        let capacity = self.state.wall_capacity(self.n_walls as u64);
-        let layout = &self.state.wall_layout;
-        let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
-        for w in 0..windows.count {
-            if let Some(at) = layout.byte_of("wall_push", capacity, &windows, windows.record(w, 0))
-            {
-                if at < walls.size() {
-                    encoder.clear_buffer(walls, at, Some(4 * capacity));
-                }
-            }
-        }
-        self.ctx.queue.submit([encoder.finish()]);
         if saved.wall_points.len() == self.wall_points.len() {
             self.wall_points = saved.wall_points;
         }
@@ -2656,30 +2581,55 @@ impl GpuEngine {
             return Ok(f);
         }
         let s = &self.state;
-        let capacity = s.wall_capacity(walls as u64);
-        if s.wall_layout.place("wall_prior").is_none() {
+        if s.entry_layout.place("prior").is_none() {
             return Err(PowderError::Run(
                 "this GPU run keeps neither the energy ledger (GpuOptions { ledger: false }) nor force jumps, whose per-contact records hold the wall forces".into(),
             ));
         }
-        let buf = &s.wall_contacts;
-        let encoder = self.ctx.device.create_command_encoder(&Default::default());
-        let out = submit_and_read(&self.ctx, encoder, &[(buf, buf.size())])?;
+        let (_, entries, found) = self.read_wall_entries()?;
         let windows = s.layout.windows();
-        // (overlap, normal force, .., 1 while engaged) at `wall_slot`
-        for (w, (f, normal)) in f.iter_mut().zip(&self.wall_normals).enumerate() {
-            for k in 0..self.n as u64 {
-                let r = windows.wall_record(k, w as u64);
-                let read = s
-                    .wall_layout
-                    .read_vec4(&out[0], "wall_prior", (capacity, windows), r);
-                let row = read.unwrap_or_default();
-                if row[3] > 0.0 {
-                    *f -= row[1] as f64 * *normal;
-                }
+        // (overlap, normal force, .., 1 while engaged), each wall's particles in order
+        for (_, w, e) in found {
+            let read = s
+                .entry_layout
+                .read_vec4(&entries, "prior", (self.entries, windows), e);
+            let row = read.unwrap_or_default();
+            if row[3] > 0.0 {
+                f[w] -= row[1] as f64 * self.wall_normals[w];
             }
         }
         Ok(f)
+    }
+
+    /// The wall entries of the lists (`WALL_ENTRY` in `shaders/step.wgsl`: particle k's
+    /// contacts with the walls near it, after its pairs), read back with the particles'
+    /// `ids` and the entries' bytes: (ids, entries, [(k, wall, record)] in k's order).
+    #[allow(clippy::type_complexity)]
+    fn read_wall_entries(
+        &self,
+    ) -> Result<(Vec<[u32; 4]>, Vec<u8>, Vec<(usize, usize, u64)>), PowderError> {
+        let s = &self.state;
+        let encoder = self.ctx.device.create_command_encoder(&Default::default());
+        let mut out = submit_and_read(
+            &self.ctx,
+            encoder,
+            &[(&s.state, s.state.size()), (&s.entries, s.entries.size())],
+        )?;
+        let entries = out.pop().unwrap_or_default();
+        let ids: Vec<[u32; 4]> = s.layout.unpack(&out[0], "ids");
+        let windows = s.layout.windows();
+        let mut found = Vec::new();
+        for (k, &[_, row, pairs, walls]) in ids.iter().enumerate() {
+            for e in (row + pairs) as u64..(row + pairs + walls) as u64 {
+                let at = s.entry_layout.byte_of("nbr", self.entries, windows, e);
+                let nbr = at.and_then(|at| entries.get(at as usize..at as usize + 4));
+                if let Some(&[a, b, c, d]) = nbr {
+                    let w = u32::from_le_bytes([a, b, c, d]) & !WALL_ENTRY;
+                    found.push((k, w as usize, e));
+                }
+            }
+        }
+        Ok((ids, entries, found))
     }
 
     /// The contact force on each particle after the last step, m·(a − g) from the device's
@@ -2804,7 +2754,6 @@ impl GpuEngine {
     /// The history of particle `i`'s contact with wall `w` after the last step (zero when
     /// they are apart). For tests and diagnostics: reads buffers back.
     pub fn wall_contact_history(&self, w: usize, i: usize) -> Result<ContactHistory, PowderError> {
-        let s = &self.state;
         let walls = self.n_walls as usize;
         if w >= walls {
             return Err(PowderError::Run(format!(
@@ -2812,29 +2761,24 @@ impl GpuEngine {
             )));
         }
         let hb = self.kind.history_bytes() as usize;
-        let encoder = self.ctx.device.create_command_encoder(&Default::default());
-        let out = submit_and_read(
-            &self.ctx,
-            encoder,
-            &[
-                (&s.state, s.state.size()),
-                (&s.wall_contacts, s.wall_contacts.size()),
-            ],
-        )?;
-        let ids: Vec<[u32; 4]> = s.layout.unpack(&out[0], "ids");
+        let (ids, entries, found) = self.read_wall_entries()?;
         let k = ids
             .iter()
             .position(|p| p[0] as usize == i)
             .ok_or_else(|| PowderError::Run(format!("particle {i} does not exist")))?;
-        // as `wall_slot` in shaders/step.wgsl
-        let windows = s.layout.windows();
-        let slot = windows.wall_record(k as u64, w as u64);
-        let capacity = s.wall_capacity(walls as u64);
-        let at = s
-            .wall_layout
-            .byte_of("wall_hist", capacity, windows, slot)
-            .unwrap_or(0) as usize;
-        Ok(self.decode_history(&out[1][at..at + hb]))
+        let s = &self.state;
+        let at = found
+            .into_iter()
+            .find(|&(kk, ww, _)| kk == k && ww == w)
+            .and_then(|(_, _, e)| {
+                s.entry_layout
+                    .byte_of("hist", self.entries, s.layout.windows(), e)
+            });
+        // no entry: the wall was beyond reach + skin at the last rebuild, no history
+        Ok(match at {
+            Some(at) => self.decode_history(&entries[at as usize..at as usize + hb]),
+            None => self.decode_history(&vec![0u8; hb]),
+        })
     }
 }
 
@@ -2858,5 +2802,6 @@ mod tests {
             SKIN_OFFSET
         );
         assert_eq!(wgsl_u32_const(&module, "SKIN_REBUILDS"), 14);
+        assert_eq!(wgsl_u32_const(&module, "WALL_ENTRY"), WALL_ENTRY);
     }
 }

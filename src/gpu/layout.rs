@@ -997,8 +997,7 @@ mod tests {
 
     /// The stored history of each composition is as large as the host allocates
     /// (`Composition::history_bytes`): `struct Hist` in naga's layout, and the history
-    /// fields of the entries, the new lists and the wall contacts (the re-sort moves
-    /// `history_bytes` per wall contact).
+    /// fields of the entries (pairs' and walls') and the new lists.
     #[test]
     fn gpu_layout_history_strides_match_wgsl() {
         for kind in crate::gpu::composition::Composition::all() {
@@ -1016,7 +1015,7 @@ mod tests {
                 kind.name()
             );
             let records = kind.records(Keeps::ALL[3]);
-            for (r, name) in records.iter().zip(["hist", "new_hist", "wall_hist"]) {
+            for (r, name) in records.iter().zip(["hist", "new_hist"]) {
                 let (_, words) = r.place(name).expect("a history field");
                 assert_eq!(4 * words, kind.history_bytes(), "{}: {name}", kind.name());
             }

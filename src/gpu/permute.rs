@@ -9,8 +9,8 @@ use crate::gpu::kernel::{storage_buffer, uniform_buffer, Kernel, Program};
 use crate::gpu::shaders;
 use crate::gpu::window::WindowBindings;
 
-/// Words of a scratch row the wall-major arrays are grouped into (a particle's field is
-/// never split, so a wall contact larger than this takes a row of its own).
+/// Words of a scratch row: the fields moved in one dispatch (a particle's field is never
+/// split, so a wider one takes a row of its own).
 pub const ROW_WORDS: u32 = 8;
 
 /// Where a field lies in its buffer (`Field` in `shaders/permute.wgsl`).
@@ -19,7 +19,7 @@ pub const ROW_WORDS: u32 = 8;
 pub struct FieldPlace {
     /// u32 words per particle and block.
     pub words: u32,
-    /// Blocks (walls of a wall-major array; 1 otherwise).
+    /// Blocks (fields of the state moved together; 1 otherwise).
     pub blocks: u32,
     /// First word of block 0.
     pub base: u32,
@@ -99,35 +99,6 @@ impl Field {
             },
             window: 0,
         }
-    }
-
-    /// A wall-major contact array from word `base` of `buffer` (contact of particle k with
-    /// wall w at element w·n + k) of `bytes` per contact: one field per group of walls
-    /// that fits [`ROW_WORDS`].
-    pub fn wall_major(
-        name: &str,
-        buffer: &wgpu::Buffer,
-        base: u32,
-        bytes: u64,
-        walls: u32,
-        n: u32,
-    ) -> Vec<Self> {
-        let words = (bytes / 4) as u32;
-        let group = (ROW_WORDS / words.max(1)).max(1);
-        (0..walls)
-            .step_by(group as usize)
-            .map(|first| Self {
-                name: format!("{name}[{first}..]"),
-                buffer: buffer.clone(),
-                place: FieldPlace {
-                    words,
-                    blocks: group.min(walls - first),
-                    base: base + first * n * words,
-                    stride: n * words,
-                },
-                window: 0,
-            })
-            .collect()
     }
 
     /// Words one particle has in this field.

@@ -1,6 +1,6 @@
 //! Arrays of records packed into one `array<u32>` buffer each, declared once here: the
-//! neighbour lists' entries (`entries`, and a rebuild's new lists, `new_entries`) and the
-//! particle–wall contacts (`wall_contacts`). Each window (`gpu::window`) has a block of
+//! neighbour lists' entries (`entries`: pairs and, after each particle's pairs, its
+//! contacts with the walls near it) and a rebuild's new lists (`new_entries`). Each window (`gpu::window`) has a block of
 //! `capacity` records; in it a record's fields lie in regions, one after the other, each
 //! `capacity × width` words, a record's words consecutive within its region (local record
 //! i's field at `before · capacity + i · width` of its window's block). So a kernel binds one
@@ -12,6 +12,10 @@ use std::fmt::Write;
 
 use crate::gpu::composition::Keeps;
 use crate::gpu::window::Windows;
+
+/// A list entry whose `nbr` (and partner id) is `WALL_ENTRY | w` is its particle's contact
+/// with wall w (`WALL_ENTRY` in `shaders/step.wgsl`).
+pub const WALL_ENTRY: u32 = 0x8000_0000;
 
 /// What one field of a record holds.
 #[derive(Clone, Debug, PartialEq)]
@@ -80,10 +84,11 @@ pub struct RecordLayout {
 }
 
 impl RecordLayout {
-    /// The neighbour lists' entries: each entry's partner (`nbr`), the slot of its pair in
+    /// The neighbour lists' entries: each entry's partner (`nbr`; a wall's `WALL_ENTRY | w`
+    /// in `shaders/step.wgsl`), the slot of its pair in
     /// the partner's list for the `lower` list at the same index, the partner's persistent
-    /// id and the contact's history, this step's pair force (and torque on the partner
-    /// where particles rotate), the contact at the end of the last step (`prior`: with the
+    /// id and the contact's history, this step's pair force (a servo wall's push on a wall
+    /// entry) and torque on the partner where particles rotate, the contact at the end of the last step (`prior`: with the
     /// ledger or the force jumps) and with the force jumps this step's impulse of the
     /// pair's force jump along n on the evaluator (`jump`, 0 without one; the partner
     /// subtracts it) and n (`jump_normal`, written only where `jump` is not 0).
@@ -125,23 +130,6 @@ impl RecordLayout {
             absent: Vec::new(),
         }
         .optional(field("new_prior", prior_kind(keeps)), keeps.prior())
-    }
-
-    /// The particle–wall contacts, wall-major within each window (particle i of a window
-    /// and wall w at its local record `w·len + i`, [`Windows::wall_record`]): history, the contact at the end of the last step (with the ledger or
-    /// the force jumps), and last the normal force servo walls sum (allocated only where a
-    /// wall is servo-controlled).
-    pub fn wall_contacts(hist: &[String], keeps: Keeps) -> Self {
-        let mut layout = Self {
-            global: "wall_contacts",
-            binding: 29,
-            capacity_wgsl: "(grid.window.y * step.n_walls)",
-            fields: vec![field("wall_hist", Kind::Hist(hist.to_vec()))],
-            absent: Vec::new(),
-        }
-        .optional(field("wall_prior", prior_kind(keeps)), keeps.prior());
-        layout.fields.push(field("wall_push", Kind::F32));
-        layout
     }
 
     /// `f` appended to the fields when `present`, else to the absent ones.
@@ -212,26 +200,9 @@ impl RecordLayout {
         4 * capacity * self.words()
     }
 
-    /// Bytes of a buffer of `capacity` records a window over `windows` (without the
-    /// trailing fields in `leave_out` where there is one window: see [`Self::bytes`]).
-    pub fn windowed_bytes(&self, capacity: u64, windows: &Windows, leave_out: &[&str]) -> u64 {
-        if windows.count == 1 {
-            self.bytes(capacity, leave_out)
-        } else {
-            (self.block_bytes(capacity) * windows.count).max(4)
-        }
-    }
-
-    /// Bytes of a buffer of `capacity` records, without the fields in `leave_out` (which
-    /// must come last; at least 4).
-    pub fn bytes(&self, capacity: u64, leave_out: &[&str]) -> u64 {
-        let words: u64 = self
-            .fields
-            .iter()
-            .filter(|f| !leave_out.contains(&f.name))
-            .map(|f| f.kind.words())
-            .sum();
-        (4 * words * capacity).max(4)
+    /// Bytes of a buffer of `capacity` records a window over `windows` (at least 4).
+    pub fn windowed_bytes(&self, capacity: u64, windows: &Windows) -> u64 {
+        (self.block_bytes(capacity) * windows.count).max(4)
     }
 
     /// Bytes of the fields a kernel calling `calls` touches, for `capacity` records (the
@@ -380,9 +351,7 @@ mod tests {
         assert_eq!(e.place("hist"), Some((3, 2)));
         assert_eq!(e.offset("pair_force", 10), Some(4 * 5 * 10));
         assert_eq!(e.place("missing"), None);
-        let w = RecordLayout::wall_contacts(&hist, Keeps::default());
-        assert_eq!(w.bytes(7, &["wall_push"]), 4 * 2 * 7);
-        assert_eq!(w.bytes(7, &[]), 4 * 3 * 7);
+        assert_eq!(e.windowed_bytes(7, &Windows::one(7)), 4 * e.words() * 7);
         let calls: BTreeSet<String> = ["load_hist".to_string(), "store_nbr".to_string()].into();
         assert_eq!(e.touched_bytes(&calls, 10), 4 * (2 + 1) * 10);
         // without the ledger the prior keeps (δ, F, state): three words, z reads 0
@@ -395,7 +364,7 @@ mod tests {
         assert_eq!(j.words(), 8 + 3 + 1 + 3);
         assert!(j.wgsl().contains("0.0, bitcast<f32>(entries[at + 2u]))"));
         let windows = Windows::one(4);
-        let mut bytes = vec![0u8; j.bytes(4, &[]) as usize];
+        let mut bytes = vec![0u8; j.block_bytes(4) as usize];
         let at = j.byte_of("prior", 4, &windows, 1).unwrap() as usize;
         bytes[at..at + 12].copy_from_slice(bytemuck::cast_slice(&[1.0f32, 2.0, 3.0]));
         let read = j.read_vec4(&bytes, "prior", (4, &windows), 1);

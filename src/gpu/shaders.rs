@@ -345,7 +345,7 @@ mod tests {
             // the contacts' priors with the ledger or the force jumps, the impulses for
             // the partners with the force jumps: each field of the entries only where kept
             let kept = |name: &str| kind.records(keeps).iter().any(|r| r.place(name).is_some());
-            for name in ["prior", "new_prior", "wall_prior"] {
+            for name in ["prior", "new_prior"] {
                 assert_eq!(kept(name), keeps.prior(), "{}: {name}", v.name);
             }
             for name in ["jump", "jump_normal"] {

@@ -3,7 +3,7 @@
 //! data (and its neighbours') is one contiguous range of each buffer — what a binding
 //! over part of a buffer needs (issue 15, increment 5c; docs/gpu_rebuild.md). A record
 //! index carries its window in the high bits (`(w << rec_shift) | local`), so a list
-//! entry or wall contact is found without a division. One window (the default wherever
+//! entry is found without a division. One window (the default wherever
 //! the arrays fit one binding) lays everything out as before windows existed.
 
 use crate::error::PowderError;
@@ -121,13 +121,6 @@ impl Windows {
         (r >> self.rec_shift, r & (self.max_records() - 1))
     }
 
-    /// The record of particle k's contact with wall `wall` (per window wall-major: the
-    /// window's particles for wall 0, then wall 1, ...; `wall_slot` in step.wgsl).
-    pub fn wall_record(&self, k: u64, wall: u64) -> u64 {
-        let (w, i) = self.split(k);
-        self.record(w, wall * self.len + i)
-    }
-
     /// The first window the bindings of window w's dispatches start at: they cover it
     /// and the next two (or all windows where there are fewer), so w and its neighbours.
     pub fn bound(&self, w: u64) -> u64 {
@@ -241,7 +234,6 @@ mod tests {
         assert_eq!((w.len, w.count), (1008, 1));
         for k in [0, 1, 999] {
             assert_eq!(w.element(5, 3, k), 3 * 1008 + k);
-            assert_eq!(w.wall_record(k, 2), 2 * 1008 + k);
         }
         assert_eq!(Windows::of(1000, 1024).unwrap(), w);
     }
@@ -254,7 +246,6 @@ mod tests {
         // field 1 of particle 130 in a 3-field array: window 2's block, field 1
         assert_eq!(w.element(3, 1, 130), (2 * 3 + 1) * 64 + 2);
         assert_eq!(w.split_record(w.record(15, 77)), (15, 77));
-        assert_eq!(w.wall_record(130, 1), (2 << 28) | 66);
         assert!(Windows::of(1000, 48).is_err());
         assert!(Windows::of(1000, 32).is_err());
         // 2^k windows need k bits
