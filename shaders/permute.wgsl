@@ -17,14 +17,15 @@ struct Field {
 
 // One dispatch: the field it stores (words 0: none), the one it loads (words 0: none) and
 // the scratch's words per particle, and the words of a window's block of the stored and
-// the loaded field's buffer. Layout: mirrored by `permute::MoveParams`.
+// the loaded field's buffer and of the scratch (a lent buffer's block may be larger).
+// Layout: mirrored by `permute::MoveParams`.
 struct Move {
     store: Field,
     load: Field,
     row: u32,
     store_window: u32,
     load_window: u32,
-    _pad: u32,
+    scratch_window: u32,
 }
 
 @group(0) @binding(1) var<uniform> mv: Move;
@@ -40,8 +41,9 @@ fn permute(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: 
     if (k >= particle_end()) {
         return;
     }
-    // (the scratch is blocked by window like the state: `gpu::window`)
-    let row = ((win_of(k) - win.bound) * grid.window.y + win_local(k)) * mv.row;
+    // (the scratch is blocked by window like the state, `scratch_window` words a window:
+    // `gpu::window`)
+    let row = (win_of(k) - win.bound) * mv.scratch_window + win_local(k) * mv.row;
     var s = row;
     for (var b = 0u; b < mv.store.blocks; b++) {
         let at = (win_of(k) - win.bound) * mv.store_window + mv.store.base + b * mv.store.stride + win_local(k) * mv.store.words;

@@ -43,7 +43,7 @@
 //                                        textures m_* (`gpu::mirror`)
 //   force        per particle (A)        evaluates the pairs of its list in slot order
 //                                        (candidates beyond reach skipped) and its wall
-//                                        candidates;
+//                                        entries;
 //                                        leaves each pair's force in its slot; with the
 //                                        force jumps (jump.wgsl) the impulse of a jump
 //                                        inside the step: k's into its velocity, the
@@ -191,7 +191,7 @@ override ONE_MATERIAL: bool = false;
 // increments of a few ulps whose rounding would otherwise accumulate; true = stored − c),
 // disp (the displacement since the last rebuild, w: the batch's largest overlap/a12 so
 // far, folded in by the drift and reduced into the monitor by the batch-end collect),
-// ids (persistent id, first list entry, list length, wall candidates) and, where
+// ids (persistent id, first list entry, pairs in the list, wall entries) and, where
 // particles rotate, omega, alpha, wpred.
 // (own_cell, own_off, own_vpred, sorted_cell, sorted_off, mirror_sorted: the state's
 // reads, from state_mirrors.wgsl or state_buffers.wgsl)
@@ -503,7 +503,7 @@ fn decide() {
     atomicAdd(&control[10], 1u);
     var rebuild = atomicLoad(&control[SKIN_MOVED]) != 0u;
     // A moving wall that has moved more than skin/2 along its normal since the last rebuild
-    // invalidates the particles' wall candidates as a particle's move does.
+    // invalidates the particles' wall entries as a particle's move does.
     for (var w = 0u; w < wall_count(); w++) {
         let wall = walls[w];
         if (wall.motion.x != 0.0) {

@@ -317,34 +317,48 @@ fn gpu_permute_resorts_every_field_in_place() {
         &ctx.device,
         powder::gpu::window::Windows::one(n as u64),
     );
-    let perm = Permutation::new(ctx, (&grid, &sorted), n, &fields, &one).unwrap();
-    // four fields, one dispatch more; the scratch as wide as the 28-byte record
-    assert_eq!(fields.len(), 4);
-    assert_eq!(perm.dispatches(), 5);
-    assert_eq!(perm.scratch_bytes(), 28 * n as u64);
-    let mut encoder = ctx.device.create_command_encoder(&Default::default());
-    {
-        let mut pass = encoder.begin_compute_pass(&Default::default());
-        perm.encode(
-            &mut pass,
-            n,
-            ctx.limits().max_compute_workgroups_per_dimension,
-        );
-    }
-    let sources: Vec<(&wgpu::Buffer, u64)> = buffers.iter().map(|b| (b, b.size())).collect();
-    let out = submit_and_read(ctx, encoder, &sources).unwrap();
-    for (i, &(bytes, blocks)) in specs.iter().enumerate() {
-        let after: Vec<u32> = bytemuck::pod_collect_to_vec(&out[i]);
-        let w = (bytes / 4) as usize;
-        for b in 0..blocks.max(1) as usize {
-            for k in 0..n as usize {
-                let o = order[k] as usize;
-                let block = b * n as usize * w;
-                assert_eq!(
-                    after[block + k * w..block + (k + 1) * w],
-                    before[i][block + o * w..block + (o + 1) * w],
-                    "field {i}, block {b}, particle {k}"
-                );
+    // the scratch its own, lent (a block a row a particle or more), or its own again where
+    // the lent block is too small (a row of 7 words for 1008 particles a window)
+    let large = storage_buffer(&ctx.device, "lent", 40_000);
+    let small = storage_buffer(&ctx.device, "lent", 28_000);
+    let choices = [
+        (None, 28 * n as u64),
+        (Some((&large, 40_000)), 0),
+        (Some((&small, 28_000)), 28 * n as u64),
+    ];
+    for (lent, own) in choices {
+        for (buf, data) in buffers.iter().zip(&before) {
+            ctx.queue.write_buffer(buf, 0, bytemuck::cast_slice(data));
+        }
+        let perm = Permutation::new(ctx, (&grid, &sorted), n, &fields, (&one, lent)).unwrap();
+        // four fields, one dispatch more; the scratch as wide as the 28-byte record
+        assert_eq!(fields.len(), 4);
+        assert_eq!(perm.dispatches(), 5);
+        assert_eq!(perm.scratch_bytes(), own);
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            perm.encode(
+                &mut pass,
+                n,
+                ctx.limits().max_compute_workgroups_per_dimension,
+            );
+        }
+        let sources: Vec<(&wgpu::Buffer, u64)> = buffers.iter().map(|b| (b, b.size())).collect();
+        let out = submit_and_read(ctx, encoder, &sources).unwrap();
+        for (i, &(bytes, blocks)) in specs.iter().enumerate() {
+            let after: Vec<u32> = bytemuck::pod_collect_to_vec(&out[i]);
+            let w = (bytes / 4) as usize;
+            for b in 0..blocks.max(1) as usize {
+                for k in 0..n as usize {
+                    let o = order[k] as usize;
+                    let block = b * n as usize * w;
+                    assert_eq!(
+                        after[block + k * w..block + (k + 1) * w],
+                        before[i][block + o * w..block + (o + 1) * w],
+                        "field {i}, block {b}, particle {k}, own scratch {own}"
+                    );
+                }
             }
         }
     }

@@ -48,7 +48,7 @@ use crate::gpu::kernel::{
 };
 use crate::gpu::layout::{encode3, gpu_cell_width, HystereticPair, JkrPair, StepParams, WallGpu};
 use crate::gpu::mirror::Mirrors;
-use crate::gpu::permute::{Field, Permutation, ROW_WORDS};
+use crate::gpu::permute::{self, Field, Permutation, ROW_WORDS};
 use crate::gpu::quiet::{Forecast, QuietBatches};
 use crate::gpu::records::{RecordLayout, WALL_ENTRY};
 use crate::gpu::state::{Buffer, StateLayout};
@@ -334,6 +334,13 @@ impl NewLists {
     fn named(&self) -> Vec<(String, &wgpu::Buffer)> {
         vec![("new_entries".to_string(), &self.new_entries)]
     }
+
+    /// The buffer and a window's block of it, for `entries` list entries a window: lent to
+    /// the re-sort as its scratch (nothing reads the new lists from one rebuild's
+    /// `copy_back_history` to the next's `remap`, which runs after the re-sort).
+    fn lent(&self, entries: u64) -> permute::Lent<'_> {
+        (&self.new_entries, self.layout.block_bytes(entries))
+    }
 }
 
 /// The step's buffers besides the particle state and the new lists, and the per-entry
@@ -433,8 +440,9 @@ fn window_entries(windows: &Windows, entries: u64) -> u64 {
     }
 }
 
-/// List entries a particle the automatic windows leave room for (the lists hold 3.3–3.7 a
-/// particle with their headroom on the dense bench packings, `powder bench`).
+/// List entries a particle the automatic windows leave room for (the lists hold 3.7–3.8 a
+/// particle with their headroom and wall entries on the dense bench packings, `powder
+/// bench`).
 const WINDOW_ENTRIES_PER_PARTICLE: u64 = 6;
 
 /// Binds every kernel of the step to the run's buffers and the mirrors' textures, window
@@ -873,6 +881,13 @@ impl GpuEngine {
         let ledger = options.ledger;
         let r = Resolved::new(scene)?;
         let n = scene.particles.len();
+        // (a list entry's partner has bit 31 free: `WALL_ENTRY`)
+        if n as u64 >= WALL_ENTRY as u64 {
+            return Err(PowderError::Run(format!(
+                "{n} particles: the GPU engine numbers at most {} (2^31 − 1)",
+                WALL_ENTRY - 1
+            )));
+        }
         let all_models: Vec<ContactModel> =
             r.models.iter().chain(&r.wall_models).copied().collect();
         let keeps = Keeps {
@@ -1043,7 +1058,7 @@ impl GpuEngine {
                 "vpred" => Some(words(&vpred0)),
                 "kahan_v" => Some(words(&kahan_v)),
                 "kahan_o" => Some(words(&kahan_o)),
-                // persistent id; the lists and wall candidates come with the first rebuild
+                // persistent id; the lists and wall entries come with the first rebuild
                 "ids" => Some(order.iter().map(|&i| [i as u32, 0, 0, 0]).collect()),
                 // ω as the scene gives it, w = I = 2/5·m·r²
                 "omega" => {
@@ -1291,12 +1306,14 @@ impl GpuEngine {
         alloc.list.extend(mirrors.sizes());
         // (before anything binds them)
         alloc.check(n)?;
+        // (the re-sort's scratch in the new lists' buffer, idle until `remap`, where a
+        // window's block holds it)
         let permutation = Permutation::new(
             &ctx,
             (grid.params(), grid.sorted_index()),
             n as u32,
             &state.permuted(),
-            &windowing,
+            (&windowing, Some(new_lists.lent(entries))),
         )?;
         alloc
             .list
@@ -1811,6 +1828,18 @@ impl GpuEngine {
         self.state.entries = new;
         self._new_lists.new_entries = new_entries;
         self.ctx.queue.submit([encoder.finish()]);
+        // the re-sort's scratch: the new lists' buffer again, or its own where a window's
+        // block of them no longer holds it
+        self.permutation.bind(
+            &self.ctx,
+            (self.grid.params(), self.grid.sorted_index()),
+            self.n,
+            &self.state.permuted(),
+            (&self.windowing, Some(self._new_lists.lent(entries))),
+        )?;
+        alloc
+            .list
+            .push(("permute.scratch".into(), self.permutation.scratch_bytes()));
         for (name, bytes) in alloc.list {
             if let Some(entry) = self.buffers.iter_mut().find(|(n, _)| *n == name) {
                 entry.1 = bytes;
@@ -2621,11 +2650,16 @@ impl GpuEngine {
         let mut found = Vec::new();
         for (k, &[_, row, pairs, walls]) in ids.iter().enumerate() {
             for e in (row + pairs) as u64..(row + pairs + walls) as u64 {
-                let at = s.entry_layout.byte_of("nbr", self.entries, windows, e);
-                let nbr = at.and_then(|at| entries.get(at as usize..at as usize + 4));
-                if let Some(&[a, b, c, d]) = nbr {
-                    let w = u32::from_le_bytes([a, b, c, d]) & !WALL_ENTRY;
-                    found.push((k, w as usize, e));
+                // (the id, not `nbr`: a halted rebuild has refilled `nbr` but left the
+                // old rows' ids, which `ids` still describe)
+                let at = s.entry_layout.byte_of("hist_pid", self.entries, windows, e);
+                let id = at.and_then(|at| entries.get(at as usize..at as usize + 4));
+                if let Some(&[a, b, c, d]) = id {
+                    let id = u32::from_le_bytes([a, b, c, d]);
+                    if id & WALL_ENTRY != 0 && ((id & !WALL_ENTRY) as usize) < self.n_walls as usize
+                    {
+                        found.push((k, (id & !WALL_ENTRY) as usize, e));
+                    }
                 }
             }
         }

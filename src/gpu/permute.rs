@@ -1,7 +1,8 @@
 //! A rebuild's re-sort of the particle state, in place, one field at a time through one
 //! scratch buffer (`shaders/permute.wgsl`): the scratch holds one field's words per
 //! particle instead of a second copy of the whole state. `n` fields take `n + 1`
-//! dispatches (each stores the previous field and loads the next).
+//! dispatches (each stores the previous field and loads the next). The scratch may be
+//! lent: a buffer idle while the re-sort runs (the new lists', written only after it).
 
 use crate::error::PowderError;
 use crate::gpu::context::GpuContext;
@@ -41,7 +42,8 @@ pub struct MoveParams {
     pub store_window: u32,
     /// Words of a window's block of the loaded field's buffer.
     pub load_window: u32,
-    _pad: u32,
+    /// Words of a window's block of the scratch.
+    pub scratch_window: u32,
 }
 
 /// One field of the particle state to re-sort.
@@ -120,23 +122,29 @@ struct Move {
 /// The re-sort of one run's state: the kernel, the scratch and a bind group per dispatch.
 pub struct Permutation {
     kernel: Kernel,
-    scratch: wgpu::Buffer,
+    /// Scratch words a particle: the widest field's.
+    row: u32,
+    /// The scratch where it is the re-sort's own (none where it is lent).
+    own: Option<wgpu::Buffer>,
     moves: Vec<Move>,
 }
+
+/// A buffer the re-sort may use as its scratch, and the bytes of a window's block of it.
+pub type Lent<'a> = (&'a wgpu::Buffer, u64);
 
 impl Permutation {
     /// The re-sort of `fields` for `n` particles by the grid sort's `sorted_index` (the
     /// k-th particle of the new order was `sorted_index[k]`), with `grid` its parameters.
     /// Dispatched once a window of `windowing` (the fields' buffers and the scratch bound
-    /// a window and its neighbours at a time where there are several).
+    /// a window and its neighbours at a time where there are several). The scratch is
+    /// `lent` where a window's block of it holds a row a particle, else its own.
     pub fn new(
         ctx: &GpuContext,
         (grid, sorted_index): (&wgpu::Buffer, &wgpu::Buffer),
         n: u32,
         fields: &[Field],
-        windowing: &WindowBindings,
+        (windowing, lent): (&WindowBindings, Option<Lent>),
     ) -> Result<Self, PowderError> {
-        let windows = &windowing.windows;
         let variant = shaders::stage("permute").expect("permute is a stage");
         let program = Program::new(ctx, &variant)?;
         let kernel = program.kernel("permute")?.clone();
@@ -146,21 +154,54 @@ impl Permutation {
             .max()
             .unwrap_or(1)
             .max(1);
-        // (blocked by window like the state where there are several)
-        let (scratch_bytes, bound_bytes) = match windows.count {
-            1 => (4 * row as u64 * n as u64, 4 * row as u64 * n as u64),
-            count => {
-                let block = 4 * row as u64 * windows.len;
-                (count * block, windows.covered() * block)
-            }
+        let mut p = Self {
+            kernel,
+            row,
+            own: None,
+            moves: Vec::new(),
         };
-        if bound_bytes > ctx.max_storage_binding() {
-            return Err(PowderError::Run(format!(
-                "the re-sort's scratch needs {bound_bytes} bytes for {n} particles bound at a time, over the adapter's storage binding limit of {} bytes",
-                ctx.max_storage_binding()
-            )));
+        p.bind(ctx, (grid, sorted_index), n, fields, (windowing, lent))?;
+        Ok(p)
+    }
+
+    /// Binds the re-sort anew (the fields, the scratch lent or its own): after the lent
+    /// buffer was replaced.
+    pub fn bind(
+        &mut self,
+        ctx: &GpuContext,
+        (grid, sorted_index): (&wgpu::Buffer, &wgpu::Buffer),
+        n: u32,
+        fields: &[Field],
+        (windowing, lent): (&WindowBindings, Option<Lent>),
+    ) -> Result<(), PowderError> {
+        let windows = &windowing.windows;
+        let row = self.row;
+        // a row a particle, blocked by window like the state where there are several
+        let block = 4 * row as u64 * windows.len;
+        let lent = lent.filter(|&(_, bytes)| bytes >= block);
+        self.own = None;
+        if lent.is_none() {
+            let (scratch_bytes, bound_bytes) = match windows.count {
+                1 => (4 * row as u64 * n as u64, 4 * row as u64 * n as u64),
+                count => (count * block, windows.covered() * block),
+            };
+            if bound_bytes > ctx.max_storage_binding() {
+                return Err(PowderError::Run(format!(
+                    "the re-sort's scratch needs {bound_bytes} bytes for {n} particles bound at a time, over the adapter's storage binding limit of {} bytes",
+                    ctx.max_storage_binding()
+                )));
+            }
+            self.own = Some(storage_buffer(
+                &ctx.device,
+                "permute.scratch",
+                scratch_bytes,
+            ));
         }
-        let scratch = storage_buffer(&ctx.device, "permute.scratch", scratch_bytes);
+        let (scratch, scratch_block) = match (lent, &self.own) {
+            (Some(l), _) => l,
+            (None, Some(own)) => (own, block),
+            (None, None) => unreachable!("the scratch is lent or the re-sort's own"),
+        };
         let none = FieldPlace::default();
         let mut moves = Vec::with_capacity(fields.len() + 1);
         for i in 0..=fields.len() {
@@ -175,24 +216,24 @@ impl Permutation {
                 row,
                 store_window: store.map_or(0, |f| f.window),
                 load_window: load.map_or(0, |f| f.window),
-                _pad: 0,
+                scratch_window: (scratch_block / 4) as u32,
             };
             let uniform = uniform_buffer(&ctx.device, "permute.move", bytemuck::bytes_of(&params));
             let (stored, loaded) = (store.unwrap_or(any), load.unwrap_or(any));
             let blocks = [
-                ("scratch", 4 * row as u64 * windows.len),
+                ("scratch", scratch_block),
                 ("stored", 4 * stored.window as u64),
                 ("loaded", 4 * loaded.window as u64),
             ];
             let groups = windowing.groups(
                 &ctx.device,
-                &kernel,
+                &self.kernel,
                 (
                     &[
                         ("grid", grid),
                         ("mv", &uniform),
                         ("sorted_index", sorted_index),
-                        ("scratch", &scratch),
+                        ("scratch", scratch),
                         ("stored", &stored.buffer),
                         ("loaded", &loaded.buffer),
                     ],
@@ -219,16 +260,13 @@ impl Permutation {
                 touched,
             });
         }
-        Ok(Self {
-            kernel,
-            scratch,
-            moves,
-        })
+        self.moves = moves;
+        Ok(())
     }
 
-    /// The scratch buffer's bytes.
+    /// The bytes of the re-sort's own scratch buffer (0 where it is lent).
     pub fn scratch_bytes(&self) -> u64 {
-        self.scratch.size()
+        self.own.as_ref().map_or(0, wgpu::Buffer::size)
     }
 
     /// Dispatches of one re-sort.

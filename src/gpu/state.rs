@@ -159,7 +159,7 @@ pub const FIELDS: &[StateField] = &[
         Buffer::State,
         Scalar::U32,
         false,
-        "persistent id, first list entry, list length, wall candidates (a bit per wall)",
+        "persistent id, first list entry, pairs in the list, wall entries after them",
     ),
     field(
         "omega",
