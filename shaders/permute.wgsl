@@ -17,7 +17,8 @@ struct Field {
 
 // One dispatch: the field it stores (words 0: none), the one it loads (words 0: none) and
 // the scratch's words per particle, and the words of a window's block of the stored and
-// the loaded field's buffer and of the scratch (a lent buffer's block may be larger).
+// the loaded field's buffer and of the scratch, and the scratch's first word in a block
+// (a lent buffer's part).
 // Layout: mirrored by `permute::MoveParams`.
 struct Move {
     store: Field,
@@ -26,6 +27,7 @@ struct Move {
     store_window: u32,
     load_window: u32,
     scratch_window: u32,
+    scratch_base: u32,
 }
 
 @group(0) @binding(1) var<uniform> mv: Move;
@@ -43,7 +45,7 @@ fn permute(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: 
     }
     // (the scratch is blocked by window like the state, `scratch_window` words a window:
     // `gpu::window`)
-    let row = (win_of(k) - win.bound) * mv.scratch_window + win_local(k) * mv.row;
+    let row = (win_of(k) - win.bound) * mv.scratch_window + mv.scratch_base + win_local(k) * mv.row;
     var s = row;
     for (var b = 0u; b < mv.store.blocks; b++) {
         let at = (win_of(k) - win.bound) * mv.store_window + mv.store.base + b * mv.store.stride + win_local(k) * mv.store.words;

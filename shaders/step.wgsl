@@ -278,8 +278,8 @@ fn lower_len(k: u32) -> u32 {
 // pair's does (`remap`, by this id).
 const WALL_ENTRY: u32 = 0x80000000u;
 
-// A servo wall's push on a wall entry this step (the normal force; 0 until the force
-// pass writes it): kept in the entry's pair force, which a wall contact has no other use for.
+// A servo wall's push on a wall entry this step (the normal force, written by every force
+// pass): kept in the entry's pair force, which a wall contact has no other use for.
 fn store_wall_push(e: u32, push: f32) {
     store_pair_force(e, vec3<f32>(push, 0.0, 0.0));
 }
@@ -798,10 +798,6 @@ fn copy_back_history(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgro
         store_prior(e, load_new_prior(e));
         if ((id & WALL_ENTRY) != 0u) {
             n_walls += 1u;
-            if (step.servo_walls != 0u) {
-                // (a particle that has not appeared pushes no wall: force skips it)
-                store_wall_push(e, 0.0);
-            }
         }
     }
     // (w: the batch's largest overlap so far, which the re-sort carried)
@@ -1239,9 +1235,13 @@ var<workgroup> wg_push: array<f32, WG_SIZE>;
 // Per wall and lane, the pushes summed so far this step (zeroed by wall_servo_apply).
 @group(0) @binding(76) var<storage, read_write> servo_lanes: array<f32>;
 
-// Particle k's push on wall w this step (0 without a wall entry: not near at the rebuild).
+// Particle k's push on wall w this step (0 without a wall entry, not near at the rebuild,
+// or before k has appeared: the force pass writes the pushes of the others every step).
 fn wall_push_of(k: u32, w: u32) -> f32 {
     let ids = load_ids(k);
+    if (!is_active(ids.x)) {
+        return 0.0;
+    }
     for (var e = ids.y + ids.z; e < ids.y + ids.z + ids.w; e++) {
         if (load_nbr(e) == (WALL_ENTRY | w)) {
             return load_wall_push(e);

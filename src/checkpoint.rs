@@ -37,8 +37,8 @@ fn codec(limit: u64) -> impl bincode::Options {
 /// stops at the adhesion speed, the hysteretic edges and touch jumps changed; 12: the GPU's
 /// arrays are blocked by windows (the wall contacts by window; the state uploaded in the
 /// grid's order) and a prior without the ledger is three words; 13: the GPU's wall contacts
-/// are list entries of the particles near a wall).
-const FORMAT: u32 = 13;
+/// are list entries of the particles near a wall; 14: the entries' per-step fields last).
+const FORMAT: u32 = 14;
 
 #[derive(Serialize, Deserialize)]
 struct Header {

@@ -269,7 +269,7 @@ fn gpu_info_cli_prints_the_adapter() {
 fn gpu_permute_resorts_every_field_in_place() {
     use powder::gpu::kernel::{storage_buffer, submit_and_read, uniform_buffer};
     use powder::gpu::layout::GridParams;
-    use powder::gpu::permute::{Field, Permutation};
+    use powder::gpu::permute::{Field, Lent, Permutation};
     use rand::seq::SliceRandom;
     let Some((_guard, ctx)) = gpu() else { return };
     let n = 1000u32;
@@ -321,15 +321,32 @@ fn gpu_permute_resorts_every_field_in_place() {
     // the lent block is too small (a row of 7 words for 1008 particles a window)
     let large = storage_buffer(&ctx.device, "lent", 40_000);
     let small = storage_buffer(&ctx.device, "lent", 28_000);
+    let lend = |buffer, bytes| Lent {
+        buffer,
+        block: bytes,
+        base: 0,
+        bytes,
+    };
+    // and a part of a buffer (from byte 4000 of blocks of 40 000)
+    let part = Lent {
+        buffer: &large,
+        block: 40_000,
+        base: 4_000,
+        bytes: 36_000,
+    };
     let choices = [
         (None, 28 * n as u64),
-        (Some((&large, 40_000)), 0),
-        (Some((&small, 28_000)), 28 * n as u64),
+        (Some(lend(&large, 40_000)), 0),
+        (Some(part), 0),
+        (Some(lend(&small, 28_000)), 28 * n as u64),
     ];
     for (lent, own) in choices {
         for (buf, data) in buffers.iter().zip(&before) {
             ctx.queue.write_buffer(buf, 0, bytemuck::cast_slice(data));
         }
+        // (the lent buffer's bytes before a lent part stay as they were)
+        ctx.queue.write_buffer(&large, 0, &[0xab; 4000]);
+        let base = lent.as_ref().map_or(0, |l| l.base);
         let perm = Permutation::new(ctx, (&grid, &sorted), n, &fields, (&one, lent)).unwrap();
         // four fields, one dispatch more; the scratch as wide as the 28-byte record
         assert_eq!(fields.len(), 4);
@@ -346,6 +363,16 @@ fn gpu_permute_resorts_every_field_in_place() {
         }
         let sources: Vec<(&wgpu::Buffer, u64)> = buffers.iter().map(|b| (b, b.size())).collect();
         let out = submit_and_read(ctx, encoder, &sources).unwrap();
+        let kept = submit_and_read(
+            ctx,
+            ctx.device.create_command_encoder(&Default::default()),
+            &[(&large, 4000)],
+        )
+        .unwrap();
+        assert!(
+            base == 0 || kept[0].iter().all(|&b| b == 0xab),
+            "a lent part's base"
+        );
         for (i, &(bytes, blocks)) in specs.iter().enumerate() {
             let after: Vec<u32> = bytemuck::pod_collect_to_vec(&out[i]);
             let w = (bytes / 4) as usize;

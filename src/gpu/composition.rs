@@ -702,10 +702,9 @@ impl Composition {
     /// this composition, with what the variant keeps.
     pub fn records(&self, keeps: Keeps) -> [RecordLayout; 2] {
         let hist = self.hist_members();
-        [
-            RecordLayout::entries(&hist, self.rotation(), keeps),
-            RecordLayout::new_entries(&hist, keeps),
-        ]
+        let entries = RecordLayout::entries(&hist, self.rotation(), keeps);
+        let new = RecordLayout::new_entries(&hist, keeps, &entries);
+        [entries, new]
     }
 
     /// The step's module: common, the state's accessors (`gpu::state`), the records'

@@ -310,8 +310,10 @@ fn blocked_buffer(
 
 /// The neighbour lists a rebuild builds (B: partner ids, history, priors), copied
 /// back into A's at its end.
+/// A rebuild's new lists: in the entries' per-step fields, or a buffer of their own
+/// (`RecordLayout::new_entries`).
 struct NewLists {
-    new_entries: wgpu::Buffer,
+    new_entries: Option<wgpu::Buffer>,
     layout: RecordLayout,
 }
 
@@ -323,23 +325,76 @@ impl NewLists {
         keeps: Keeps,
     ) -> Self {
         let [_, layout] = kind.records(keeps);
-        let bytes = layout.windowed_bytes(entries, windows);
-        let block = layout.block_bytes(entries);
         Self {
-            new_entries: blocked_buffer(alloc, windows, ("B.new_entries", bytes), block),
+            new_entries: Self::allocate(&layout, alloc, (entries, windows)),
             layout,
         }
     }
 
-    fn named(&self) -> Vec<(String, &wgpu::Buffer)> {
-        vec![("new_entries".to_string(), &self.new_entries)]
+    /// Their own buffer for `entries` list entries a window (none where they live in the
+    /// entries).
+    fn allocate(
+        layout: &RecordLayout,
+        alloc: &mut Allocator,
+        (entries, windows): (u64, &Windows),
+    ) -> Option<wgpu::Buffer> {
+        layout.host.is_none().then(|| {
+            let bytes = layout.windowed_bytes(entries, windows);
+            let block = layout.block_bytes(entries);
+            blocked_buffer(alloc, windows, ("B.new_entries", bytes), block)
+        })
     }
 
-    /// The buffer and a window's block of it, for `entries` list entries a window: lent to
-    /// the re-sort as its scratch (nothing reads the new lists from one rebuild's
-    /// `copy_back_history` to the next's `remap`, which runs after the re-sort).
-    fn lent(&self, entries: u64) -> permute::Lent<'_> {
-        (&self.new_entries, self.layout.block_bytes(entries))
+    /// The layout of a copy of their fields in a buffer of its own.
+    fn standalone(&self) -> RecordLayout {
+        RecordLayout {
+            host: None,
+            ..self.layout.clone()
+        }
+    }
+
+    /// Where they live in the entries: a buffer for quiet batches' copy of the lists'
+    /// history (`Quiet::lists`), for `entries` list entries a window.
+    fn quiet_lists(
+        &self,
+        alloc: &mut Allocator,
+        (entries, windows): (u64, &Windows),
+    ) -> Option<wgpu::Buffer> {
+        self.new_entries.is_none().then(|| {
+            let bytes = self.standalone().windowed_bytes(entries, windows);
+            alloc.buffer("quiet.lists", bytes)
+        })
+    }
+
+    fn named(&self) -> Vec<(String, &wgpu::Buffer)> {
+        self.new_entries
+            .iter()
+            .map(|b| ("new_entries".to_string(), b))
+            .collect()
+    }
+
+    /// Where they lie, lent to the re-sort as its scratch (nothing reads the new lists
+    /// from one rebuild's `copy_back_history` to the next's `remap`, which runs after the
+    /// re-sort), for `entries` list entries a window: their buffer, or the entries' with
+    /// their per-step fields.
+    fn lent<'a>(&'a self, a: &'a StateSet, entries: u64) -> permute::Lent<'a> {
+        match &self.new_entries {
+            Some(b) => permute::Lent {
+                buffer: b,
+                block: self.layout.block_bytes(entries),
+                base: 0,
+                bytes: self.layout.block_bytes(entries),
+            },
+            None => {
+                let (base, words) = a.entry_layout.per_step();
+                permute::Lent {
+                    buffer: &a.entries,
+                    block: a.entry_layout.block_bytes(entries),
+                    base: 4 * base * entries,
+                    bytes: 4 * words * entries,
+                }
+            }
+        }
     }
 }
 
@@ -471,9 +526,12 @@ fn bind_all(
             if let Some(b) = Buffer::ALL.into_iter().find(|b| b.name() == name) {
                 *bytes = layout.touched_bytes(b, &kernel.calls);
             }
-            // and the records: the fields it touches
-            if let Some((r, capacity)) = records.iter().find(|(r, _)| r.global == name) {
-                *bytes = r.touched_bytes(&kernel.calls, *capacity);
+            // and the records: the fields it touches (of every layout living in the buffer)
+            let mut living = records.iter().filter(|(r, _)| r.array() == name).peekable();
+            if living.peek().is_some() {
+                *bytes = living
+                    .map(|(r, capacity)| r.touched_bytes(&kernel.calls, *capacity))
+                    .sum();
             }
         }
         Ok(Pass {
@@ -625,6 +683,9 @@ impl Default for GpuOptions {
 struct Quiet {
     mode: QuietBatches,
     copies: Vec<Saved>,
+    /// The lists' history and priors at a batch's start, where the new lists live in the
+    /// entries' per-step fields (which the batch writes); else the new lists hold them.
+    lists: Option<wgpu::Buffer>,
     forecast: Forecast,
     /// The device's rebuild count at the end of the last batch (u64::MAX: unknown).
     rebuilds: u64,
@@ -1313,7 +1374,7 @@ impl GpuEngine {
             (grid.params(), grid.sorted_index()),
             n as u32,
             &state.permuted(),
-            (&windowing, Some(new_lists.lent(entries))),
+            (&windowing, Some(new_lists.lent(&state, entries))),
         )?;
         alloc
             .list
@@ -1374,9 +1435,11 @@ impl GpuEngine {
                     copies.push(Saved::whole(b, copy));
                 }
             }
+            let lists = new_lists.quiet_lists(&mut alloc, (entries, &windows));
             let q = Quiet {
                 mode,
                 copies,
+                lists,
                 forecast: Forecast::new(skin),
                 // the initial forces build the lists once
                 rebuilds: 1,
@@ -1805,10 +1868,8 @@ impl GpuEngine {
         let bytes = layout.windowed_bytes(entries, &windows);
         let block = layout.block_bytes(entries);
         let new = blocked_buffer(&mut alloc, &windows, ("A.entries", bytes), block);
-        let b = &self._new_lists;
-        let bytes = b.layout.windowed_bytes(entries, &windows);
-        let block = b.layout.block_bytes(entries);
-        let new_entries = blocked_buffer(&mut alloc, &windows, ("B.new_entries", bytes), block);
+        let new_entries =
+            NewLists::allocate(&self._new_lists.layout, &mut alloc, (entries, &windows));
         alloc.check(self.n as usize)?;
         if keep {
             // window by window, region by region: each region's start moves with the
@@ -1827,6 +1888,16 @@ impl GpuEngine {
         }
         self.state.entries = new;
         self._new_lists.new_entries = new_entries;
+        if let Some(q) = &mut self.quiet {
+            if q.lists.is_some() {
+                // (a copy, never bound: no binding limit, as at the start)
+                let mut copies = Allocator::new(device, u64::MAX);
+                q.lists = self
+                    ._new_lists
+                    .quiet_lists(&mut copies, (entries, &windows));
+                alloc.list.extend(copies.list);
+            }
+        }
         self.ctx.queue.submit([encoder.finish()]);
         // the re-sort's scratch: the new lists' buffer again, or its own where a window's
         // block of them no longer holds it
@@ -1835,7 +1906,10 @@ impl GpuEngine {
             (self.grid.params(), self.grid.sorted_index()),
             self.n,
             &self.state.permuted(),
-            (&self.windowing, Some(self._new_lists.lent(entries))),
+            (
+                &self.windowing,
+                Some(self._new_lists.lent(&self.state, entries)),
+            ),
         )?;
         alloc
             .list
@@ -2280,19 +2354,26 @@ impl GpuEngine {
         let (a, b) = (&self.state, &self._new_lists);
         let mut v = q.copies.clone();
         let windows = a.layout.windows();
+        // into the new lists, or the quiet batches' own copy where those live in the entries
+        let standalone = b.standalone();
+        let (target, layout) = match (&b.new_entries, &q.lists) {
+            (Some(buffer), _) => (buffer, &b.layout),
+            (None, Some(lists)) => (lists, &standalone),
+            (None, None) => return v,
+        };
         for w in 0..windows.count {
             let first = windows.record(w, 0);
             for (from, to) in [("hist", "new_hist"), ("prior", "new_prior")] {
                 let cap = self.entries;
                 if let (Some(at), Some(to_at), Some((_, words))) = (
                     a.entry_layout.byte_of(from, cap, windows, first),
-                    b.layout.byte_of(to, cap, windows, first),
+                    layout.byte_of(to, cap, windows, first),
                     a.entry_layout.place(from),
                 ) {
                     v.push(Saved {
                         from: a.entries.clone(),
                         from_at: at,
-                        to: b.new_entries.clone(),
+                        to: target.clone(),
                         to_at,
                         bytes: 4 * words * cap,
                     });

@@ -44,6 +44,8 @@ pub struct MoveParams {
     pub load_window: u32,
     /// Words of a window's block of the scratch.
     pub scratch_window: u32,
+    /// The scratch's first word in a window's block.
+    pub scratch_base: u32,
 }
 
 /// One field of the particle state to re-sort.
@@ -129,8 +131,18 @@ pub struct Permutation {
     moves: Vec<Move>,
 }
 
-/// A buffer the re-sort may use as its scratch, and the bytes of a window's block of it.
-pub type Lent<'a> = (&'a wgpu::Buffer, u64);
+/// Part of a buffer the re-sort may use as its scratch: in each window's `block` bytes,
+/// `bytes` from byte `base`.
+pub struct Lent<'a> {
+    /// The buffer.
+    pub buffer: &'a wgpu::Buffer,
+    /// Bytes of a window's block of it.
+    pub block: u64,
+    /// Where the lent part starts in a block, bytes.
+    pub base: u64,
+    /// Bytes of the lent part of a block.
+    pub bytes: u64,
+}
 
 impl Permutation {
     /// The re-sort of `fields` for `n` particles by the grid sort's `sorted_index` (the
@@ -178,7 +190,7 @@ impl Permutation {
         let row = self.row;
         // a row a particle, blocked by window like the state where there are several
         let block = 4 * row as u64 * windows.len;
-        let lent = lent.filter(|&(_, bytes)| bytes >= block);
+        let lent = lent.filter(|l| l.bytes >= block);
         self.own = None;
         if lent.is_none() {
             let (scratch_bytes, bound_bytes) = match windows.count {
@@ -197,9 +209,9 @@ impl Permutation {
                 scratch_bytes,
             ));
         }
-        let (scratch, scratch_block) = match (lent, &self.own) {
-            (Some(l), _) => l,
-            (None, Some(own)) => (own, block),
+        let (scratch, scratch_block, scratch_base) = match (lent, &self.own) {
+            (Some(l), _) => (l.buffer, l.block, l.base),
+            (None, Some(own)) => (own, block, 0),
             (None, None) => unreachable!("the scratch is lent or the re-sort's own"),
         };
         let none = FieldPlace::default();
@@ -217,6 +229,7 @@ impl Permutation {
                 store_window: store.map_or(0, |f| f.window),
                 load_window: load.map_or(0, |f| f.window),
                 scratch_window: (scratch_block / 4) as u32,
+                scratch_base: (scratch_base / 4) as u32,
             };
             let uniform = uniform_buffer(&ctx.device, "permute.move", bytemuck::bytes_of(&params));
             let (stored, loaded) = (store.unwrap_or(any), load.unwrap_or(any));

@@ -69,8 +69,11 @@ pub struct Field {
 /// The records of one buffer.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RecordLayout {
-    /// The WGSL global (and host buffer) name.
+    /// The WGSL global (and host buffer) name; the accessors' prefix.
     pub global: &'static str,
+    /// Where the records share another layout's buffer instead (`new_entries` in the
+    /// entries' per-step fields).
+    pub host: Option<Host>,
     /// Its binding.
     pub binding: u32,
     /// The WGSL expression for the records a window's block holds (the regions'
@@ -83,6 +86,18 @@ pub struct RecordLayout {
     pub absent: Vec<Field>,
 }
 
+/// A region of another layout's records a layout lives in.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Host {
+    /// The host's WGSL global (and buffer).
+    pub global: &'static str,
+    /// Words of one host record (the stride of a window's block: capacity × this).
+    pub words: u64,
+    /// The host's words a record before the region (its first field's offset: capacity ×
+    /// this).
+    pub base: u64,
+}
+
 impl RecordLayout {
     /// The neighbour lists' entries: each entry's partner (`nbr`; a wall's `WALL_ENTRY | w`
     /// in `shaders/step.wgsl`), the slot of its pair in
@@ -91,36 +106,50 @@ impl RecordLayout {
     /// entry) and torque on the partner where particles rotate, the contact at the end of the last step (`prior`: with the
     /// ledger or the force jumps) and with the force jumps this step's impulse of the
     /// pair's force jump along n on the evaluator (`jump`, 0 without one; the partner
-    /// subtracts it) and n (`jump_normal`, written only where `jump` is not 0).
+    /// subtracts it) and n (`jump_normal`, written only where `jump` is not 0). The
+    /// per-step fields come last ([`Self::per_step`]).
     pub fn entries(hist: &[String], rotation: bool, keeps: Keeps) -> Self {
-        let mut fields = vec![
-            field("nbr", Kind::U32),
-            field("lower", Kind::U32),
-            field("hist_pid", Kind::U32),
-            field("hist", Kind::Hist(hist.to_vec())),
-            field("pair_force", Kind::Vec3),
-        ];
-        if rotation {
-            fields.push(field("pair_torque", Kind::Vec3));
-        }
-        Self {
+        let mut layout = Self {
             global: "entries",
+            host: None,
             binding: 27,
             capacity_wgsl: "step.list_capacity",
-            fields,
+            fields: vec![
+                field("nbr", Kind::U32),
+                field("lower", Kind::U32),
+                field("hist_pid", Kind::U32),
+                field("hist", Kind::Hist(hist.to_vec())),
+            ],
             absent: Vec::new(),
         }
-        .optional(field("prior", prior_kind(keeps)), keeps.prior())
-        .optional(field("jump", Kind::F32), keeps.jumps)
-        .optional(field("jump_normal", Kind::Vec3), keeps.jumps)
+        .optional(field("prior", prior_kind(keeps)), keeps.prior());
+        layout.fields.push(field("pair_force", Kind::Vec3));
+        if rotation {
+            layout.fields.push(field("pair_torque", Kind::Vec3));
+        }
+        layout
+            .optional(field("jump", Kind::F32), keeps.jumps)
+            .optional(field("jump_normal", Kind::Vec3), keeps.jumps)
+    }
+
+    /// The entries' fields of one step (from `pair_force` on: what the force pass leaves
+    /// for the batch's next collect), as (words a record before them, their words a
+    /// record): nothing reads them between that collect and the next force pass, in which
+    /// a rebuild runs.
+    pub fn per_step(&self) -> (u64, u64) {
+        let (before, _) = self.place("pair_force").unwrap_or((self.words(), 0));
+        (before, self.words() - before)
     }
 
     /// The lists a rebuild builds: each entry's partner id and history (and the contact
     /// at the end of the last step), remapped from the old lists and copied back into
-    /// [`Self::entries`].
-    pub fn new_entries(hist: &[String], keeps: Keeps) -> Self {
-        Self {
+    /// [`Self::entries`]. They live in the entries' per-step fields where those are wide
+    /// enough (written by `remap`, read by `copy_back_history`: within a rebuild), else in
+    /// a buffer of their own.
+    pub fn new_entries(hist: &[String], keeps: Keeps, entries: &RecordLayout) -> Self {
+        let mut layout = Self {
             global: "new_entries",
+            host: None,
             binding: 37,
             capacity_wgsl: "step.list_capacity",
             fields: vec![
@@ -129,7 +158,31 @@ impl RecordLayout {
             ],
             absent: Vec::new(),
         }
-        .optional(field("new_prior", prior_kind(keeps)), keeps.prior())
+        .optional(field("new_prior", prior_kind(keeps)), keeps.prior());
+        let (base, words) = entries.per_step();
+        if layout.words() <= words {
+            layout.host = Some(Host {
+                global: entries.global,
+                words: entries.words(),
+                base,
+            });
+        }
+        layout
+    }
+
+    /// The buffer (and WGSL global) the records live in.
+    pub fn array(&self) -> &'static str {
+        self.host.as_ref().map_or(self.global, |h| h.global)
+    }
+
+    /// Words a record of a window's block takes (the host's where the records have one).
+    fn stride(&self) -> u64 {
+        self.host.as_ref().map_or(self.words(), |h| h.words)
+    }
+
+    /// Words a record before the first region (in the host's block).
+    fn base(&self) -> u64 {
+        self.host.as_ref().map_or(0, |h| h.base)
     }
 
     /// `f` appended to the fields when `present`, else to the absent ones.
@@ -161,7 +214,8 @@ impl RecordLayout {
 
     /// Byte offset of field `name`'s region in window 0's block of `capacity` records.
     pub fn offset(&self, name: &str, capacity: u64) -> Option<u64> {
-        self.place(name).map(|(before, _)| 4 * before * capacity)
+        self.place(name)
+            .map(|(before, _)| 4 * (self.base() + before) * capacity)
     }
 
     /// Byte offset of field `name` of record `r` (a [`Windows::record`] index) in a
@@ -169,7 +223,7 @@ impl RecordLayout {
     pub fn byte_of(&self, name: &str, capacity: u64, windows: &Windows, r: u64) -> Option<u64> {
         let (before, width) = self.place(name)?;
         let (w, i) = windows.split_record(r);
-        Some(4 * (w * capacity * self.words() + before * capacity + i * width))
+        Some(4 * (w * capacity * self.stride() + (self.base() + before) * capacity + i * width))
     }
 
     /// Field `name` (a `Vec4` or `Vec4Xyw`) of record `r` from a buffer's `bytes` of
@@ -195,9 +249,10 @@ impl RecordLayout {
         }
     }
 
-    /// Bytes of one window's block of `capacity` records (all fields).
+    /// Bytes of one window's block of `capacity` records (all fields; the host's block
+    /// where the records have one).
     pub fn block_bytes(&self, capacity: u64) -> u64 {
-        4 * capacity * self.words()
+        4 * capacity * self.stride()
     }
 
     /// Bytes of a buffer of `capacity` records a window over `windows` (at least 4).
@@ -220,30 +275,43 @@ impl RecordLayout {
 
     /// The binding and every field's accessors.
     pub fn wgsl(&self) -> String {
-        let g = self.global;
+        let (g, a) = (self.global, self.array());
         let mut w = String::new();
+        let declare = match &self.host {
+            None => format!(
+                "@group(0) @binding({}) var<storage, read_write> {g}: array<u32>;\n",
+                self.binding
+            ),
+            Some(h) => format!(
+                "// (in `{a}`'s records, {} words each, from their word {})\n",
+                h.words, h.base
+            ),
+        };
+        let base = match self.base() {
+            0 => String::new(),
+            b => format!(" + {b}u"),
+        };
         let _ = writeln!(
             w,
             "// `{g}` (`src/gpu/records.rs`, generated): {} words a record.\n\
-             @group(0) @binding({}) var<storage, read_write> {g}: array<u32>;\n\n\
+             {declare}\n\
              fn {g}_at(before: u32, width: u32, r: u32) -> u32 {{\n    \
              let capacity = {};\n    \
-             return (rec_window(r) - win.bound) * (capacity * {}u) + before * capacity + rec_local(r) * width;\n}}\n",
+             return (rec_window(r) - win.bound) * (capacity * {}u) + (before{base}) * capacity + rec_local(r) * width;\n}}\n",
             self.words(),
-            self.binding,
             self.capacity_wgsl,
-            self.words(),
+            self.stride(),
         );
         let mut before = 0;
         for f in &self.fields {
             let (n, ty, width) = (f.name, f.kind.wgsl_type(), f.kind.words());
             let at = format!("{g}_at({before}u, {width}u, r)");
-            let word = |i: u64| format!("{g}[at + {i}u]");
+            let word = |i: u64| format!("{a}[at + {i}u]");
             let (load, store) = match &f.kind {
-                Kind::U32 => (format!("{g}[{at}]"), vec![format!("{g}[{at}] = v;")]),
+                Kind::U32 => (format!("{a}[{at}]"), vec![format!("{a}[{at}] = v;")]),
                 Kind::F32 => (
-                    format!("bitcast<f32>({g}[{at}])"),
-                    vec![format!("{g}[{at}] = bitcast<u32>(v);")],
+                    format!("bitcast<f32>({a}[{at}])"),
+                    vec![format!("{a}[{at}] = bitcast<u32>(v);")],
                 ),
                 Kind::Vec3 | Kind::Vec4 => {
                     let parts: Vec<String> = (0..width)
@@ -349,7 +417,7 @@ mod tests {
             .wgsl()
             .contains("fn store_jump_normal(r: u32, v: vec3<f32>) {}"));
         assert_eq!(e.place("hist"), Some((3, 2)));
-        assert_eq!(e.offset("pair_force", 10), Some(4 * 5 * 10));
+        assert_eq!(e.offset("pair_force", 10), Some(4 * 9 * 10));
         assert_eq!(e.place("missing"), None);
         assert_eq!(e.windowed_bytes(7, &Windows::one(7)), 4 * e.words() * 7);
         let calls: BTreeSet<String> = ["load_hist".to_string(), "store_nbr".to_string()].into();
@@ -360,8 +428,25 @@ mod tests {
             jumps: true,
         };
         let j = RecordLayout::entries(&hist, false, jumps);
-        assert_eq!(j.place("prior"), Some((8, 3)));
+        assert_eq!(j.place("prior"), Some((5, 3)));
         assert_eq!(j.words(), 8 + 3 + 1 + 3);
+        // the per-step fields last: a rebuild's new lists live there where they fit
+        assert_eq!(j.per_step(), (8, 7));
+        let new = RecordLayout::new_entries(&hist, jumps, &j);
+        assert_eq!(new.words(), 6);
+        assert_eq!(new.array(), "entries");
+        assert_eq!(new.block_bytes(4), j.block_bytes(4));
+        // record 1's `new_prior`: after the 8 words of the entries and the new ones' 3
+        assert_eq!(
+            new.byte_of("new_prior", 4, &Windows::one(4), 1),
+            Some(4 * ((8 + 3) * 4 + 3))
+        );
+        let source = new.wgsl();
+        assert!(!source.contains("var<storage, read_write> new_entries"));
+        assert!(source.contains("entries[at + 2u]"));
+        assert_eq!(e.per_step(), (9, 6));
+        let apart = RecordLayout::new_entries(&hist, keeps, &e);
+        assert_eq!((apart.words(), apart.array()), (7, "new_entries"));
         assert!(j.wgsl().contains("0.0, bitcast<f32>(entries[at + 2u]))"));
         let windows = Windows::one(4);
         let mut bytes = vec![0u8; j.block_bytes(4) as usize];
