@@ -14,8 +14,9 @@
 // rot_store_partial, rot_pair_store, rot_pair_load, rot_kick.
 //
 // The particle state lives in one buffer set, A, in the order of the last neighbour-list
-// rebuild; a rebuild re-sorts it in place (`permute.wgsl`) and builds the new lists in
-// the B lists before copying them back. Pass order, recorded by
+// rebuild; a rebuild re-sorts it in place (`permute.wgsl`) and builds the new lists (B:
+// `new_entries`, in the entries' per-step fields where those are wide enough) before
+// copying them back. Pass order, recorded by
 // `gpu::engine` into one encoder per batch of steps:
 //   kick_drift   per particle (A)        v += dt/2·a (omega += dt/2·alpha); offset +=
 //   (collect_kick_drift after a step of the same batch: its collect and kick first, in
@@ -196,9 +197,9 @@ override ONE_MATERIAL: bool = false;
 // (own_cell, own_off, own_vpred, sorted_cell, sorted_off, mirror_sorted: the state's
 // reads, from state_mirrors.wgsl or state_buffers.wgsl)
 
-// The neighbour lists' entries (`entries`: partner, `lower`, partner id, history, pair
-// force and torque, ledger value), a rebuild's new lists (`new_entries`) and the wall
-// contacts (`wall_contacts`): the generated load_<field>/store_<field> of `gpu::records`.
+// The neighbour lists' entries (`entries`: partner or wall, `lower`, partner id, history,
+// prior; then this step's pair force and torque and force jump) and a rebuild's new lists
+// (`new_entries`): the generated load_<field>/store_<field> of `gpu::records`.
 
 // x + dx with Kahan compensation c (x_true = x − c): returns (x', c').
 struct Compensated {
@@ -235,7 +236,7 @@ fn is_active(pid: u32) -> bool {
 }
 
 // The lists are compressed rows: particle k's entries are ids.y .. ids.y + ids.z of the
-// per-entry arrays (nbr, a_hist, a_hist_pid, the pair forces and torques, the ledger), in
+// entries' fields (nbr, hist_pid, hist, prior, the pair force and torque, ...), in
 // sorted order, so consecutive particles' rows are consecutive within a window; its wall
 // contacts follow, ids.w of them (`WALL_ENTRY`). `rows`
 // holds four per-particle regions (blocked by window like the state's): the lengths and

@@ -308,9 +308,8 @@ fn blocked_buffer(
     }
 }
 
-/// The neighbour lists a rebuild builds (B: partner ids, history, priors), copied
-/// back into A's at its end.
-/// A rebuild's new lists: in the entries' per-step fields, or a buffer of their own
+/// The neighbour lists a rebuild builds (B: partner ids, history, priors), copied back
+/// into A's at its end: in the entries' per-step fields, or a buffer of their own
 /// (`RecordLayout::new_entries`).
 struct NewLists {
     new_entries: Option<wgpu::Buffer>,
@@ -1420,8 +1419,8 @@ impl GpuEngine {
         let quiet = (mode != QuietBatches::Off && !moving_walls && !pouring).then(|| {
             // copies of buffers that fit
             let mut alloc = Allocator::new(device, u64::MAX);
-            // the state into copies of its own (the lists' history goes into the new lists':
-            // `quiet_copies`)
+            // the state into copies of its own (the lists' history into the new lists', or
+            // `quiet.lists` where those live in the entries: `quiet_copies`)
             let mut copies = Vec::new();
             let a = &state;
             let own = [
@@ -2348,8 +2347,9 @@ impl GpuEngine {
     }
 
     /// (buffer a quiet batch changes, where its batch-start copy goes): the state into the
-    /// quiet batches' own copies, the lists' history and ledger into the new lists' (a
-    /// quiet batch does not rebuild).
+    /// quiet batches' own copies, the lists' history and priors into the new lists' (a
+    /// quiet batch does not rebuild), or into `quiet.lists` where the new lists live in
+    /// the entries' per-step fields (which the batch writes).
     fn quiet_copies(&self, q: &Quiet) -> Vec<Saved> {
         let (a, b) = (&self.state, &self._new_lists);
         let mut v = q.copies.clone();

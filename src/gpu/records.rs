@@ -102,9 +102,10 @@ impl RecordLayout {
     /// The neighbour lists' entries: each entry's partner (`nbr`; a wall's `WALL_ENTRY | w`
     /// in `shaders/step.wgsl`), the slot of its pair in
     /// the partner's list for the `lower` list at the same index, the partner's persistent
-    /// id and the contact's history, this step's pair force (a servo wall's push on a wall
-    /// entry) and torque on the partner where particles rotate, the contact at the end of the last step (`prior`: with the
-    /// ledger or the force jumps) and with the force jumps this step's impulse of the
+    /// id and the contact's history, the contact at the end of the last step (`prior`:
+    /// with the ledger or the force jumps), this step's pair force (a servo wall's push on
+    /// a wall entry) and torque on the partner where particles rotate, and with the force
+    /// jumps this step's impulse of the
     /// pair's force jump along n on the evaluator (`jump`, 0 without one; the partner
     /// subtracts it) and n (`jump_normal`, written only where `jump` is not 0). The
     /// per-step fields come last ([`Self::per_step`]).
