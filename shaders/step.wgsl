@@ -933,7 +933,9 @@ fn force(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
 // overlap/a12 (0 without overlap) in w, for the run monitor (see disp).
 // `row0`: pair row 0, the only one of a scene with ONE_MATERIAL.
 fn particle_forces(k: u32, row0: PairRow) {
-    let first = load_ids(k).y;
+    // (id, first entry, pairs, wall entries: loaded once)
+    let ids_k = load_ids(k);
+    let first = ids_k.y;
     // (own and partners' state: `own_cell`, from the mirrors on a software adapter)
     let ck = own_cell(k);
     let ok = own_off(k);
@@ -953,7 +955,7 @@ fn particle_forces(k: u32, row0: PairRow) {
     var peak = 0.0;
     // the force jumps' impulses on k (placed at the end of the step)
     var impulse = vec3<f32>(0.0);
-    for (var slot = first; slot < first + load_ids(k).z; slot++) {
+    for (var slot = first; slot < first + ids_k.z; slot++) {
         let j = load_nbr(slot);
         let cj = own_cell(j);
         let oj = own_off(j);
@@ -1058,10 +1060,9 @@ fn particle_forces(k: u32, row0: PairRow) {
         store_jump(slot, jump);
     }
     // a particle that has not appeared meets no wall
-    let present = WALLS && is_active(load_ids(k).x);
+    let present = WALLS && is_active(ids_k.x);
     // only the walls near at the last rebuild: k's wall entries (a SIMD group loops as
     // often as its lane with the most, mostly 0 in a packing, rather than n_walls times)
-    let ids_k = load_ids(k);
     let walls_first = ids_k.y + ids_k.z;
     let walls_end = walls_first + select(0u, ids_k.w, present);
     for (var slot = walls_first; slot < walls_end; slot++) {
@@ -1107,7 +1108,7 @@ fn particle_forces(k: u32, row0: PairRow) {
     // the sums over k's own list and walls; collect adds the pairs evaluated by partners
     store_acc(k, vec4<f32>(f, peak));
     rot_store_partial(k, torque);
-    ledger_store(load_ids(k).x, ledger_acc);
+    ledger_store(ids_k.x, ledger_acc);
     // k's share of the force jumps, into its velocity now (the kicks around the end of
     // the step add to it; nothing reads it before): the partners' comes through collect
     jump_kick(k, impulse / mk);

@@ -232,10 +232,13 @@ impl StateSet {
         ]
     }
 
-    /// [`Self::blocks_of`] this set, with the new lists' and `rows`.
+    /// [`Self::blocks_of`] this set, with the new lists' (where they have a buffer) and
+    /// `rows`.
     fn blocks(&self, new: &NewLists, entries: u64) -> Vec<(&'static str, u64)> {
         let mut v = Self::blocks_of(&self.layout, (&self.entry_layout, entries));
-        v.push(("new_entries", new.layout.block_bytes(entries)));
+        if new.new_entries.is_some() {
+            v.push(("new_entries", new.layout.block_bytes(entries)));
+        }
         v.push(("rows", 4 * 4 * self.layout.stride()));
         v
     }
@@ -692,7 +695,6 @@ struct Quiet {
     rolled_back: u64,
 }
 
-/// What the host reads after a batch: the monitor and the skin state.
 /// A range of a buffer a quiet batch may change, and where its batch-start copy goes.
 #[derive(Clone)]
 struct Saved {
@@ -724,6 +726,17 @@ impl Saved {
     }
 }
 
+/// The lists' wall entries read back (`GpuEngine::read_wall_entries`).
+struct WallEntries {
+    /// Each particle's `ids` (state order).
+    ids: Vec<[u32; 4]>,
+    /// The entries buffer's bytes.
+    entries: Vec<u8>,
+    /// (particle k in state order, wall, record index), in k's order.
+    found: Vec<(usize, usize, u64)>,
+}
+
+/// What the host reads after a batch: the monitor and the skin state.
 struct BatchReport {
     monitor: Vec<u32>,
     skin: Vec<u32>,
@@ -2696,7 +2709,7 @@ impl GpuEngine {
                 "this GPU run keeps neither the energy ledger (GpuOptions { ledger: false }) nor force jumps, whose per-contact records hold the wall forces".into(),
             ));
         }
-        let (_, entries, found) = self.read_wall_entries()?;
+        let WallEntries { entries, found, .. } = self.read_wall_entries()?;
         let windows = s.layout.windows();
         // (overlap, normal force, .., 1 while engaged), each wall's particles in order
         for (_, w, e) in found {
@@ -2712,12 +2725,8 @@ impl GpuEngine {
     }
 
     /// The wall entries of the lists (`WALL_ENTRY` in `shaders/step.wgsl`: particle k's
-    /// contacts with the walls near it, after its pairs), read back with the particles'
-    /// `ids` and the entries' bytes: (ids, entries, [(k, wall, record)] in k's order).
-    #[allow(clippy::type_complexity)]
-    fn read_wall_entries(
-        &self,
-    ) -> Result<(Vec<[u32; 4]>, Vec<u8>, Vec<(usize, usize, u64)>), PowderError> {
+    /// contacts with the walls near it, after its pairs), read back.
+    fn read_wall_entries(&self) -> Result<WallEntries, PowderError> {
         let s = &self.state;
         let encoder = self.ctx.device.create_command_encoder(&Default::default());
         let mut out = submit_and_read(
@@ -2744,7 +2753,11 @@ impl GpuEngine {
                 }
             }
         }
-        Ok((ids, entries, found))
+        Ok(WallEntries {
+            ids,
+            entries,
+            found,
+        })
     }
 
     /// The contact force on each particle after the last step, m·(a − g) from the device's
@@ -2876,7 +2889,11 @@ impl GpuEngine {
             )));
         }
         let hb = self.kind.history_bytes() as usize;
-        let (ids, entries, found) = self.read_wall_entries()?;
+        let WallEntries {
+            ids,
+            entries,
+            found,
+        } = self.read_wall_entries()?;
         let k = ids
             .iter()
             .position(|p| p[0] as usize == i)
