@@ -37,8 +37,9 @@ fn codec(limit: u64) -> impl bincode::Options {
 /// stops at the adhesion speed, the hysteretic edges and touch jumps changed; 12: the GPU's
 /// arrays are blocked by windows (the wall contacts by window; the state uploaded in the
 /// grid's order) and a prior without the ledger is three words; 13: the GPU's wall contacts
-/// are list entries of the particles near a wall; 14: the entries' per-step fields last).
-const FORMAT: u32 = 14;
+/// are list entries of the particles near a wall; 14: the entries' per-step fields last;
+/// 15: a CPU contact keeps its friction and couple powers instead of their vectors).
+const FORMAT: u32 = 15;
 
 #[derive(Serialize, Deserialize)]
 struct Header {

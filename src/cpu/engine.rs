@@ -137,15 +137,14 @@ struct ContactRecord {
     /// integral of the energy ledger.
     delta: f64,
     force: f64,
+    /// The tangential force on i (a wall's reaction reads it).
     tangential: DVec3,
-    /// The antisymmetric couple on i (rolling and twisting resistance; −it on j).
-    couple: DVec3,
     potential: f64,
-    /// Tangential contact velocity and relative angular velocity the forces were
-    /// evaluated with (the power of friction and of the couple is integrated
-    /// trapezoidally).
-    v_t: DVec3,
-    omega_rel: DVec3,
+    /// The power of friction (F_t · v_t) and of the couple on i (rolling and twisting
+    /// resistance, M · (ω_i − ω_j)) at the forces' evaluation: the ledger integrates
+    /// them trapezoidally.
+    friction_power: f64,
+    couple_power: f64,
 }
 
 impl ContactRecord {
@@ -167,10 +166,9 @@ impl ContactRecord {
             delta,
             force: r.normal.force,
             tangential: r.tangential,
-            couple: r.couple,
             potential: r.potential,
-            v_t: m.v_t,
-            omega_rel: m.omega_rel,
+            friction_power: r.tangential.dot(m.v_t),
+            couple_power: r.couple.dot(m.omega_rel),
         }
     }
 }
@@ -242,9 +240,9 @@ impl StepLog {
 
     /// The work of one contact over the step, the same for pairs and walls: the model's
     /// response (from the prior record's history), its energy booked, the peak overlap,
-    /// and its new record (with the forces and torque on i).
+    /// and its new record (with the forces on i) and the couple on i.
     #[inline(always)]
-    fn contact(&mut self, c: Contact, prior: Option<&ContactRecord>) -> ContactRecord {
+    fn contact(&mut self, c: Contact, prior: Option<&ContactRecord>) -> (ContactRecord, DVec3) {
         let (kin, geom) = (&c.kin, &c.geom);
         let mut history = prior.map(|p| p.history).unwrap_or_default();
         let r = c.model.respond(kin, geom, self.dt, &mut history);
@@ -305,7 +303,7 @@ impl StepLog {
             }
         }
         self.note_peak(kin.delta / geom.a12, c.i, c.partner);
-        record
+        (record, r.couple)
     }
 
     /// A contact that crossed δ = 0 within the step, engaged on the contact side, where a
@@ -606,14 +604,14 @@ impl PairInputs<'_> {
                     i,
                     partner: Partner::Particle(j),
                 };
-                let r = log.contact(contact, prior);
+                let (r, couple) = log.contact(contact, prior);
                 let f = r.force * n + r.tangential;
                 fi += f;
                 c.entry_force[x] = f;
                 if ROT {
                     let t = n.cross(r.tangential);
-                    ti += -ri * t + r.couple;
-                    c.entry_torque[x] = -radius[j] * t - r.couple;
+                    ti += -ri * t + couple;
+                    c.entry_torque[x] = -radius[j] * t - couple;
                 }
                 let keep = r.stays(range);
                 if keep {
@@ -742,9 +740,9 @@ impl WallInputs<'_> {
                 i,
                 partner: Partner::Wall(w),
             };
-            let r = out.log.contact(contact, prior);
+            let (r, couple) = out.log.contact(contact, prior);
             let torque = if rotation {
-                -self.radius[i] * n.cross(r.tangential) + r.couple
+                -self.radius[i] * n.cross(r.tangential) + couple
             } else {
                 DVec3::ZERO
             };
@@ -1585,8 +1583,8 @@ impl CpuEngine {
             0.0
         };
         normal
-            - 0.5 * (o.tangential.dot(o.v_t) + new.tangential.dot(m.v_t)) * dt
-            - 0.5 * (o.couple.dot(o.omega_rel) + new.couple.dot(m.omega_rel)) * dt
+            - 0.5 * (o.friction_power + new.friction_power) * dt
+            - 0.5 * (o.couple_power + new.couple_power) * dt
             - (new.potential - o.potential)
     }
 
