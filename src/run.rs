@@ -10,6 +10,7 @@ use crate::error::PowderError;
 use crate::gpu::{GpuContext, GpuEngine, GpuOptions};
 use crate::observed::ObservedEnergies;
 use crate::output::atomic::write_atomic;
+use crate::output::series_csv::{self, SeriesCsv};
 use crate::output::vtk;
 use crate::scene::Scene;
 use crate::simulation::{Observation, Simulation};
@@ -412,24 +413,6 @@ fn outside_domain(scene: &Scene, positions: &[glam::DVec3]) -> usize {
         .count()
 }
 
-/// The CSV rows of an earlier run up to `step` (on resume), header excluded.
-fn earlier_rows(path: &Path, step: u64) -> Vec<String> {
-    std::fs::read_to_string(path)
-        .map(|text| {
-            text.lines()
-                .skip(1)
-                .filter(|l| {
-                    l.split(',')
-                        .next()
-                        .and_then(|s| s.parse::<u64>().ok())
-                        .is_some_and(|s| s <= step)
-                })
-                .map(str::to_string)
-                .collect()
-        })
-        .unwrap_or_default()
-}
-
 /// The snapshots of an earlier run up to `step` (on resume), with their times.
 fn earlier_snapshots(dir: &Path, name: &str, step: u64, dt: f64) -> Vec<(f64, String)> {
     let prefix = format!("{name}_");
@@ -509,22 +492,29 @@ pub fn run_with<S: Simulation>(
         Some(d) => Some(vtk::Series::new(d, &scene.name)?),
         None => None,
     };
-    let mut rows = match (&csv_path, resumed_from) {
-        (Some(p), Some(step)) => earlier_rows(p, step),
-        _ => Vec::new(),
-    };
     if let (Some(s), Some(d), Some(step)) = (series.as_mut(), out, resumed_from) {
         s.keep_until(earlier_snapshots(d, &scene.name, step, engine.dt()));
     }
-    let header = csv_header(&scene.walls);
+    // the rows up to the checkpoint's step on resume (a killed run may have written more)
+    let mut csv = match &csv_path {
+        Some(p) => {
+            let kept = match resumed_from {
+                Some(step) => series_csv::rows_until(p, step),
+                None => Vec::new(),
+            };
+            Some(SeriesCsv::start(p, &csv_header(&scene.walls), &kept)?)
+        }
+        None => None,
+    };
     let radii = engine.radii().to_vec();
     let write_outputs = |obs: &Observation,
                          snap: &Snapshot,
-                         rows: &mut Vec<String>,
+                         csv: &mut Option<SeriesCsv>,
                          series: &mut Option<vtk::Series>|
      -> Result<(), PowderError> {
-        rows.retain(|r| !r.starts_with(&format!("{},", snap.step)));
-        rows.push(csv_row(snap, obs, &scene.walls));
+        if let Some(c) = csv.as_mut() {
+            c.append(snap.step, &csv_row(snap, obs, &scene.walls))?;
+        }
         if let Some(s) = series.as_mut() {
             s.write(
                 snap.step,
@@ -539,15 +529,10 @@ pub fn run_with<S: Simulation>(
         }
         Ok(())
     };
-    let save = |engine: &S, rows: &[String]| -> Result<(), PowderError> {
-        if let (Some(c), Some(p)) = (&ckpt_path, &csv_path) {
-            let mut text = header.clone();
-            text.push('\n');
-            for r in rows {
-                text.push_str(r);
-                text.push('\n');
-            }
-            write_atomic(p, text.as_bytes())?;
+    // the series on disk before the checkpoint that its rows lead up to
+    let save = |engine: &S, csv: &mut Option<SeriesCsv>| -> Result<(), PowderError> {
+        if let (Some(c), Some(rows)) = (&ckpt_path, csv.as_mut()) {
+            rows.sync()?;
             engine.write_checkpoint(c, scene)?;
         }
         Ok(())
@@ -576,7 +561,7 @@ pub fn run_with<S: Simulation>(
         say(&initial);
     }
     if resumed_from.is_none() {
-        write_outputs(&obs, &initial, &mut rows, &mut series)?;
+        write_outputs(&obs, &initial, &mut csv, &mut series)?;
     }
     let started = std::time::Instant::now();
     let start_steps = engine.steps();
@@ -609,7 +594,7 @@ pub fn run_with<S: Simulation>(
                 }
                 let failed_at = engine.steps();
                 engine.restore(before)?;
-                save(&engine, &rows)?;
+                save(&engine, &mut csv)?;
                 let note = match &ckpt_path {
                     Some(c) => format!(
                         "; the state at step {} (before the failure, at most 1000 steps earlier than step {failed_at}) is in {}",
@@ -632,11 +617,11 @@ pub fn run_with<S: Simulation>(
             if opts.verbose {
                 say(&snap);
             }
-            write_outputs(&obs, &snap, &mut rows, &mut series)?;
+            write_outputs(&obs, &snap, &mut csv, &mut series)?;
         }
         last_obs = obs;
         if steps.is_multiple_of(scene.checkpoint_every) {
-            save(&engine, &rows)?;
+            save(&engine, &mut csv)?;
         }
         if opts
             .interrupt
@@ -652,9 +637,9 @@ pub fn run_with<S: Simulation>(
     }
     let last = snapshot(&engine, &last_obs);
     if interrupted && !engine.steps().is_multiple_of(scene.output_every) {
-        write_outputs(&last_obs, &last, &mut rows, &mut series)?;
+        write_outputs(&last_obs, &last, &mut csv, &mut series)?;
     }
-    save(&engine, &rows)?;
+    save(&engine, &mut csv)?;
     let wall = started.elapsed().as_secs_f64();
     let drift = last
         .energies

@@ -238,3 +238,103 @@ fn ctrl_c_writes_a_checkpoint_and_exits_130() {
     assert_eq!(summary["interrupted"], true);
     assert!(dir.path().join("checkpoint.bin").exists());
 }
+
+/// `powder run` with rows every 100 steps and checkpoints every 1000 on `backend`, into
+/// `out`, for `steps` steps (from `resume`).
+fn cluster_command(
+    backend: &str,
+    out: &Path,
+    steps: u64,
+    resume: Option<&Path>,
+) -> std::process::Command {
+    let scene = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/examples/cohesive_cluster.toml"
+    );
+    let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_powder"));
+    cmd.args(["run", scene, "--backend", backend, "--steps"])
+        .arg(steps.to_string())
+        .args([
+            "--set",
+            "simulation.output_every=100",
+            "--set",
+            "simulation.checkpoint_every=1000",
+            "--out",
+        ])
+        .arg(out)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null());
+    if let Some(r) = resume {
+        cmd.arg("--resume").arg(r);
+    }
+    cmd
+}
+
+/// A run killed with SIGKILL keeps every row it wrote (whole rows, the same as a straight
+/// run's), and resumed from its checkpoint it ends with the straight run's series and
+/// checkpoint, byte for byte.
+fn killed_run_keeps_its_rows_and_resumes_bitwise(backend: &str) {
+    let straight = tempfile::tempdir().unwrap();
+    let killed = tempfile::tempdir().unwrap();
+    let done = cluster_command(backend, straight.path(), 4000, None)
+        .status()
+        .unwrap();
+    assert!(done.success());
+    let expected = std::fs::read_to_string(straight.path().join("series.csv")).unwrap();
+    let mut child = cluster_command(backend, killed.path(), 1_000_000, None)
+        .spawn()
+        .unwrap();
+    let csv = killed.path().join("series.csv");
+    // killed past step 2500 while the rows run ahead of the last checkpoint (rows every
+    // 100 steps from step 0, checkpoints every 1000: the header and rows up to step 1000·k
+    // are 2 + 10·k lines; a series written only with the checkpoints shows nothing else)
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(300);
+    let ahead = |lines: usize| lines >= 27 && !(lines - 2).is_multiple_of(10);
+    while !ahead(std::fs::read_to_string(&csv).map_or(0, |t| t.lines().count())) {
+        assert!(
+            std::time::Instant::now() < deadline,
+            "no row past the last checkpoint after 300 s"
+        );
+        assert!(child.try_wait().unwrap().is_none(), "the run ended early");
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+    assert!(
+        child.try_wait().unwrap().is_none(),
+        "the run ended before the kill"
+    );
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let left = std::fs::read_to_string(&csv).unwrap();
+    assert!(left.lines().count() >= 27 && left.ends_with('\n'), "{left}");
+    let n = left.lines().count().min(expected.lines().count());
+    assert_eq!(
+        left.lines().take(n).collect::<Vec<_>>(),
+        expected.lines().take(n).collect::<Vec<_>>(),
+        "the killed run's rows are the straight run's"
+    );
+    let ckpt = killed.path().join("checkpoint.bin");
+    let resumed = cluster_command(backend, killed.path(), 4000, Some(&ckpt))
+        .status()
+        .unwrap();
+    assert!(resumed.success());
+    let csv_after = std::fs::read_to_string(&csv).unwrap();
+    assert_eq!(csv_after, expected);
+    let a = std::fs::read(straight.path().join("checkpoint.bin")).unwrap();
+    let b = std::fs::read(&ckpt).unwrap();
+    assert!(
+        a == b,
+        "the resumed run's checkpoint differs from the straight run's"
+    );
+}
+
+#[test]
+fn killed_cpu_run_keeps_its_rows_and_resumes_bitwise() {
+    killed_run_keeps_its_rows_and_resumes_bitwise("cpu");
+}
+
+#[test]
+fn killed_gpu_run_keeps_its_rows_and_resumes_bitwise() {
+    if gpu().is_some() {
+        killed_run_keeps_its_rows_and_resumes_bitwise("gpu");
+    }
+}
