@@ -2,7 +2,8 @@
 //! buffers of [`GpuSavedState`]), so a run resumes bitwise identically on the same backend
 //! (and, for the GPU, the same adapter). A checkpoint names the powder version, the
 //! backend and a digest of the scene, and is refused for another version, backend or
-//! scene. Written atomically.
+//! scene; it ends with a CRC-32 of its bytes, so a damaged or cut file is refused too.
+//! Written atomically.
 
 use crate::cpu::{CpuEngine, CpuState};
 use crate::error::PowderError;
@@ -38,8 +39,9 @@ fn codec(limit: u64) -> impl bincode::Options {
 /// arrays are blocked by windows (the wall contacts by window; the state uploaded in the
 /// grid's order) and a prior without the ledger is three words; 13: the GPU's wall contacts
 /// are list entries of the particles near a wall; 14: the entries' per-step fields last;
-/// 15: a CPU contact keeps its friction and couple powers instead of their vectors).
-const FORMAT: u32 = 15;
+/// 15: a CPU contact keeps its friction and couple powers instead of their vectors; 16: a
+/// CRC-32 of the file's bytes ends it).
+const FORMAT: u32 = 16;
 
 #[derive(Serialize, Deserialize)]
 struct Header {
@@ -109,12 +111,21 @@ fn save_state<T: Serialize>(
     let mut bytes = PREFIX.to_vec();
     bytes.extend(codec(u64::MAX).serialize(&header).map_err(encode)?);
     bytes.extend(codec(u64::MAX).serialize(state).map_err(encode)?);
+    let crc = crc32fast::hash(&bytes);
+    bytes.extend(crc.to_le_bytes());
     write_atomic(path, &bytes)
 }
 
 fn not_a_checkpoint(path: &Path) -> PowderError {
     PowderError::Run(format!(
         "`{}` is not a powder checkpoint (or is truncated)",
+        path.display()
+    ))
+}
+
+fn damaged(path: &Path) -> PowderError {
+    PowderError::Run(format!(
+        "checkpoint `{}` is damaged or truncated: its checksum does not match its contents",
         path.display()
     ))
 }
@@ -152,7 +163,7 @@ fn load_state<T: DeserializeOwned>(
 ) -> Result<T, PowderError> {
     let bytes = std::fs::read(path)
         .map_err(|e| PowderError::io(format!("cannot read checkpoint `{}`", path.display()), e))?;
-    let (header, mut cursor) = read_header(&bytes, path)?;
+    let (header, cursor) = read_header(&bytes, path)?;
     let not_ours = || not_a_checkpoint(path);
     let limit = bytes.len() as u64;
     use bincode::Options;
@@ -165,6 +176,17 @@ fn load_state<T: DeserializeOwned>(
             env!("CARGO_PKG_VERSION")
         )));
     }
+    // the CRC-32 of everything before it, last: a flipped bit or a cut is refused here
+    let state_start = PREFIX.len() + cursor.position() as usize;
+    let body = match bytes.len().checked_sub(4) {
+        Some(end) if end >= state_start => &bytes[..end],
+        _ => return Err(damaged(path)),
+    };
+    let crc = u32::from_le_bytes(bytes[body.len()..].try_into().map_err(|_| damaged(path))?);
+    if crc32fast::hash(body) != crc {
+        return Err(damaged(path));
+    }
+    let mut cursor = std::io::Cursor::new(&body[state_start..]);
     if header.backend != backend {
         return Err(PowderError::Run(format!(
             "checkpoint `{}` comes from the {} backend; resume it with --backend {}",

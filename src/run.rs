@@ -9,7 +9,7 @@ use crate::cpu::{ContactStats, CpuEngine, Threads};
 use crate::error::PowderError;
 use crate::gpu::{GpuContext, GpuEngine, GpuOptions};
 use crate::observed::ObservedEnergies;
-use crate::output::atomic::write_atomic;
+use crate::output::atomic::{remove_stale_temps, write_atomic};
 use crate::output::series_csv::{self, SeriesCsv};
 use crate::output::vtk;
 use crate::scene::Scene;
@@ -492,6 +492,16 @@ pub fn run_with<S: Simulation>(
         Some(d) => Some(vtk::Series::new(d, &scene.name)?),
         None => None,
     };
+    // what writes killed before their rename left (the files they replace are intact)
+    if let Some(d) = out {
+        let stale = remove_stale_temps(d)? + remove_stale_temps(&d.join("snapshots"))?;
+        if stale > 0 && opts.verbose {
+            eprintln!(
+                "removed {stale} temporary files that interrupted writes left in {}",
+                d.display()
+            );
+        }
+    }
     if let (Some(s), Some(d), Some(step)) = (series.as_mut(), out, resumed_from) {
         s.keep_until(earlier_snapshots(d, &scene.name, step, engine.dt()));
     }

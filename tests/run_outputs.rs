@@ -4,7 +4,8 @@
 mod common;
 use common::gpu;
 
-use powder::run::{run_cpu_with, run_gpu_with, RunOptions};
+use powder::error::PowderError;
+use powder::run::{run_cpu_with, run_gpu_with, RunOptions, RunSummary, Snapshot};
 use powder::scene::Scene;
 use std::path::Path;
 
@@ -179,17 +180,35 @@ fn foreign_or_broken_checkpoints_are_refused() {
         "{err}"
     );
     let bytes = std::fs::read(&ckpt).unwrap();
-    for cut in [4, 12, bytes.len() / 2, bytes.len() - 1] {
-        let truncated = dir.path().join("truncated.bin");
-        std::fs::write(&truncated, &bytes[..cut]).unwrap();
+    let refusal = |file: &[u8]| {
+        let broken = dir.path().join("broken.bin");
+        std::fs::write(&broken, file).unwrap();
         let opts = RunOptions {
-            resume: Some(truncated),
+            resume: Some(broken),
             ..Default::default()
         };
-        let err = run_cpu_with(&scene, &opts, |_| {}).unwrap_err().to_string();
+        run_cpu_with(&scene, &opts, |_| {}).unwrap_err().to_string()
+    };
+    // cut within the opening bytes and the header, then after it
+    for cut in [4, 12] {
+        let err = refusal(&bytes[..cut]);
         assert!(
             err.contains("not a powder checkpoint"),
             "cut at {cut}: {err}"
+        );
+    }
+    for cut in [bytes.len() / 2, bytes.len() - 1] {
+        let err = refusal(&bytes[..cut]);
+        assert!(err.contains("damaged or truncated"), "cut at {cut}: {err}");
+    }
+    // one flipped bit in the state (a position, a history, the checksum itself)
+    for at in [bytes.len() / 3, bytes.len() / 2, bytes.len() - 2] {
+        let mut flipped = bytes.clone();
+        flipped[at] ^= 0x10;
+        let err = refusal(&flipped);
+        assert!(
+            err.contains("damaged or truncated"),
+            "bit flipped at {at}: {err}"
         );
     }
     let broken = dir.path().join("broken.bin");
@@ -239,12 +258,12 @@ fn ctrl_c_writes_a_checkpoint_and_exits_130() {
     assert!(dir.path().join("checkpoint.bin").exists());
 }
 
-/// `powder run` with rows every 100 steps and checkpoints every 1000 on `backend`, into
-/// `out`, for `steps` steps (from `resume`).
+/// `powder run` of the cohesive cluster with rows every 100 steps and checkpoints every
+/// `checkpoint_every` on `backend`, into `out`, for `steps` steps (from `resume`).
 fn cluster_command(
     backend: &str,
     out: &Path,
-    steps: u64,
+    (steps, checkpoint_every): (u64, u64),
     resume: Option<&Path>,
 ) -> std::process::Command {
     let scene = concat!(
@@ -254,13 +273,9 @@ fn cluster_command(
     let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_powder"));
     cmd.args(["run", scene, "--backend", backend, "--steps"])
         .arg(steps.to_string())
-        .args([
-            "--set",
-            "simulation.output_every=100",
-            "--set",
-            "simulation.checkpoint_every=1000",
-            "--out",
-        ])
+        .args(["--set", "simulation.output_every=100", "--set"])
+        .arg(format!("simulation.checkpoint_every={checkpoint_every}"))
+        .arg("--out")
         .arg(out)
         .stdout(std::process::Stdio::null())
         .stderr(std::process::Stdio::null());
@@ -276,12 +291,12 @@ fn cluster_command(
 fn killed_run_keeps_its_rows_and_resumes_bitwise(backend: &str) {
     let straight = tempfile::tempdir().unwrap();
     let killed = tempfile::tempdir().unwrap();
-    let done = cluster_command(backend, straight.path(), 4000, None)
+    let done = cluster_command(backend, straight.path(), (4000, 1000), None)
         .status()
         .unwrap();
     assert!(done.success());
     let expected = std::fs::read_to_string(straight.path().join("series.csv")).unwrap();
-    let mut child = cluster_command(backend, killed.path(), 1_000_000, None)
+    let mut child = cluster_command(backend, killed.path(), (1_000_000, 1000), None)
         .spawn()
         .unwrap();
     let csv = killed.path().join("series.csv");
@@ -313,7 +328,7 @@ fn killed_run_keeps_its_rows_and_resumes_bitwise(backend: &str) {
         "the killed run's rows are the straight run's"
     );
     let ckpt = killed.path().join("checkpoint.bin");
-    let resumed = cluster_command(backend, killed.path(), 4000, Some(&ckpt))
+    let resumed = cluster_command(backend, killed.path(), (4000, 1000), Some(&ckpt))
         .status()
         .unwrap();
     assert!(resumed.success());
@@ -336,5 +351,154 @@ fn killed_cpu_run_keeps_its_rows_and_resumes_bitwise() {
 fn killed_gpu_run_keeps_its_rows_and_resumes_bitwise() {
     if gpu().is_some() {
         killed_run_keeps_its_rows_and_resumes_bitwise("gpu");
+    }
+}
+
+/// `scene` run on `backend` ("cpu", or "gpu" where an adapter exists: else `None`).
+fn run_on(
+    backend: &str,
+    scene: &Scene,
+    opts: &RunOptions,
+    progress: impl FnMut(&Snapshot),
+) -> Option<Result<RunSummary, PowderError>> {
+    match backend {
+        "cpu" => Some(run_cpu_with(scene, opts, progress)),
+        _ => gpu().map(|ctx| run_gpu_with(scene, ctx, opts, progress)),
+    }
+}
+
+/// An output directory that breaks mid-run (its snapshots folder replaced by a file at step
+/// 1500) stops the run with an error naming the file it could not write; the rows and the
+/// checkpoint of step 1000 are intact, and resumed from it the run ends with the straight
+/// run's checkpoint and series, byte for byte.
+fn broken_output_directory_keeps_the_last_checkpoint(backend: &str) {
+    let scene = cluster();
+    let (straight, dir) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    let Some(done) = run_on(
+        backend,
+        &scene,
+        &options(straight.path(), 3000, None),
+        |_| {},
+    ) else {
+        return;
+    };
+    done.unwrap();
+    let snaps = dir.path().join("snapshots");
+    let sabotage = |s: &Snapshot| {
+        if s.step == 1500 {
+            std::fs::remove_dir_all(&snaps).unwrap();
+            std::fs::write(&snaps, b"in the way").unwrap();
+        }
+    };
+    let opts = options(dir.path(), 3000, None);
+    let err = run_on(backend, &scene, &opts, sabotage)
+        .unwrap()
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("cohesive_cluster_0000001500.vtp"), "{err}");
+    let csv = |d: &Path| std::fs::read_to_string(d.join("series.csv")).unwrap();
+    let expected = csv(straight.path());
+    let rows: Vec<&str> = expected.lines().take(1 + 4).collect();
+    assert_eq!(
+        csv(dir.path()).lines().collect::<Vec<_>>(),
+        rows,
+        "header + steps 0..=1500"
+    );
+    std::fs::remove_file(&snaps).unwrap();
+    let ckpt = dir.path().join("checkpoint.bin");
+    let opts = options(dir.path(), 3000, Some(&ckpt));
+    let resumed = run_on(backend, &scene, &opts, |_| {}).unwrap().unwrap();
+    assert_eq!(resumed.resumed_from, Some(1000));
+    assert_eq!(csv(dir.path()), expected);
+    let bytes = |d: &Path| std::fs::read(d.join("checkpoint.bin")).unwrap();
+    assert!(
+        bytes(straight.path()) == bytes(dir.path()),
+        "the resumed run differs"
+    );
+}
+
+#[test]
+fn broken_output_directory_keeps_the_last_cpu_checkpoint() {
+    broken_output_directory_keeps_the_last_checkpoint("cpu");
+}
+
+#[test]
+fn broken_output_directory_keeps_the_last_gpu_checkpoint() {
+    broken_output_directory_keeps_the_last_checkpoint("gpu");
+}
+
+/// The number of lines of `path` (0 when it cannot be read).
+fn lines_of(path: &Path) -> usize {
+    std::fs::read_to_string(path).map_or(0, |t| t.lines().count())
+}
+
+/// Killed again and again, each time within a few milliseconds of a new row — inside the
+/// snapshot, collection or checkpoint writes that follow it (a checkpoint every 100 steps
+/// here) — and resumed each time, a run ends with the straight run's series and checkpoint,
+/// byte for byte; no checkpoint left behind is refused, and no temporary file is left.
+fn killed_again_and_again_ends_as_a_straight_run(backend: &str) {
+    let (straight, dir) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    let every = (3000, 100);
+    let done = cluster_command(backend, straight.path(), every, None).status();
+    assert!(done.unwrap().success());
+    let (csv, ckpt) = (
+        dir.path().join("series.csv"),
+        dir.path().join("checkpoint.bin"),
+    );
+    let mut kills = 0;
+    for round in 0..100 {
+        let resume = ckpt.exists().then_some(ckpt.as_path());
+        let target = lines_of(&csv) + 2 + round % 3;
+        let mut child = cluster_command(backend, dir.path(), every, resume)
+            .spawn()
+            .unwrap();
+        let ended = loop {
+            if let Some(status) = child.try_wait().unwrap() {
+                break Some(status);
+            }
+            if lines_of(&csv) >= target {
+                break None;
+            }
+            std::thread::sleep(std::time::Duration::from_micros(200));
+        };
+        match ended {
+            Some(status) => {
+                assert!(status.success(), "round {round}: the run (resumed) failed");
+                break;
+            }
+            None => {
+                std::thread::sleep(std::time::Duration::from_micros(700 * (round as u64 % 5)));
+                child.kill().unwrap();
+                child.wait().unwrap();
+                kills += 1;
+            }
+        }
+    }
+    assert!(kills >= 5, "only {kills} kills");
+    let text = |d: &Path| std::fs::read_to_string(d.join("series.csv")).unwrap();
+    assert_eq!(text(dir.path()), text(straight.path()));
+    let bytes = |d: &Path| std::fs::read(d.join("checkpoint.bin")).unwrap();
+    assert!(
+        bytes(straight.path()) == bytes(dir.path()),
+        "{kills} kills: checkpoints differ"
+    );
+    let temps: Vec<String> = ["", "snapshots"]
+        .iter()
+        .flat_map(|sub| std::fs::read_dir(dir.path().join(sub)).unwrap())
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|f| f.ends_with(".tmp"))
+        .collect();
+    assert!(temps.is_empty(), "left behind: {temps:?}");
+}
+
+#[test]
+fn killed_cpu_run_again_and_again_ends_as_a_straight_run() {
+    killed_again_and_again_ends_as_a_straight_run("cpu");
+}
+
+#[test]
+fn killed_gpu_run_again_and_again_ends_as_a_straight_run() {
+    if gpu().is_some() {
+        killed_again_and_again_ends_as_a_straight_run("gpu");
     }
 }

@@ -77,6 +77,38 @@ fn create_temp(dir: &Path, file_name: &std::ffi::OsStr) -> io::Result<(PathBuf, 
     Err(last_err.unwrap_or_else(|| io::Error::other("cannot create a temporary file")))
 }
 
+/// Removes the temporary files that writes into `dir` left when their process was killed
+/// before the rename (`.<file>.<pid>.<n>.tmp`); returns how many. Nothing else is touched,
+/// and a directory that cannot be read has none to remove.
+pub fn remove_stale_temps(dir: &Path) -> Result<usize, PowderError> {
+    let Ok(entries) = fs::read_dir(dir) else {
+        return Ok(0);
+    };
+    let mut removed = 0;
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        if !is_temp_name(&name.to_string_lossy()) || !entry.path().is_file() {
+            continue;
+        }
+        fs::remove_file(entry.path()).map_err(|e| {
+            PowderError::io(format!("cannot remove `{}`", entry.path().display()), e)
+        })?;
+        removed += 1;
+    }
+    Ok(removed)
+}
+
+/// Whether `name` is one of [`create_temp`]'s: `.<file>.<pid>.<n>.tmp`.
+fn is_temp_name(name: &str) -> bool {
+    let Some(stem) = name.strip_prefix('.').and_then(|n| n.strip_suffix(".tmp")) else {
+        return false;
+    };
+    let mut parts = stem.rsplitn(3, '.');
+    let digits =
+        |p: Option<&str>| p.is_some_and(|p| !p.is_empty() && p.bytes().all(|b| b.is_ascii_digit()));
+    digits(parts.next()) && digits(parts.next()) && parts.next().is_some_and(|f| !f.is_empty())
+}
+
 /// Makes the rename durable where the platform allows syncing a directory (best effort).
 fn sync_dir(dir: &Path) {
     #[cfg(unix)]
@@ -98,6 +130,30 @@ mod tests {
             .collect();
         names.sort();
         names
+    }
+
+    #[test]
+    fn stale_temporary_files_are_removed_and_nothing_else() {
+        let dir = tempfile::tempdir().unwrap();
+        let keep = [
+            "a.csv",
+            ".hidden",
+            ".x.tmp",
+            ".x.1.tmp",
+            ".x.1.y.tmp",
+            "..1.2.tmp",
+        ];
+        let stale = [".checkpoint.bin.2752.9.tmp", ".run_0000000300.vtp.1.0.tmp"];
+        for f in keep.iter().chain(&stale) {
+            fs::write(dir.path().join(f), b"x").unwrap();
+        }
+        fs::create_dir(dir.path().join(".d.1.2.tmp")).unwrap();
+        assert_eq!(remove_stale_temps(dir.path()).unwrap(), 2);
+        let mut left: Vec<&str> = keep.to_vec();
+        left.push(".d.1.2.tmp");
+        left.sort();
+        assert_eq!(entries(dir.path()), left);
+        assert_eq!(remove_stale_temps(&dir.path().join("none")).unwrap(), 0);
     }
 
     #[test]
