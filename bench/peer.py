@@ -13,7 +13,8 @@ contacts) is written as
 with the same positions (the same decimal strings), radii, density, time step, neighbour skin
 (0.1 r_min, rebuild on half-skin displacement) and box (no walls, no gravity, a box two radii
 larger than the packing on every side). Then each code steps it and the throughput in
-particle-steps/s is compared (best of --repeats):
+particle-steps/s is compared (best of --repeats; the codes of one size and case take turns,
+one run each per round, so a drift of the machine's speed slows them alike):
 
   python3 bench/peer.py                 # N = 1e4 and 1e5, 2000 steps, best of 3
   python3 bench/peer.py --quick         # N = 1000, 500 steps, once
@@ -475,8 +476,8 @@ def run_peer(args, exe, deck, ranks):
                 ranks=int(m.group(2)))
 
 
-def best_of(fn, repeats):
-    runs = [fn() for _ in range(repeats)]
+def best_of(runs):
+    """The fastest of one code's runs, with all their times."""
     best = min(runs, key=lambda r: r["seconds"])
     best = dict(best)
     best["all_seconds"] = [r["seconds"] for r in runs]
@@ -535,7 +536,7 @@ def bench(args):
     if args.sizes:
         sizes = [int(float(s)) for s in args.sizes.split(",")]
     steps = args.steps or steps
-    repeats = args.repeats or repeats
+    repeats = max(1, args.repeats or repeats)
     only = set(args.only.split(",")) if args.only else None
     workdir = args.workdir or tempfile.mkdtemp(prefix="powder-peer-")
     os.makedirs(workdir, exist_ok=True)
@@ -587,18 +588,34 @@ def bench(args):
                 plan.append((n, case, f"{peer} {ranks} rank{'s' if ranks > 1 else ''}",
                              lambda d=files[case][deck_key], x=peer_exe, k=ranks:
                              run_peer(args, x, d, k)))
+    # the codes of one (N, case) take turns, one run each per round: a VM whose speed
+    # drifts over minutes then slows every code alike, and the ratios stay comparable
+    groups = {}
     for n, case, label, fn in plan:
-        print(f"running {label:<16} {case:<10} N = {n} ...", file=sys.stderr, flush=True)
-        try:
-            r = best_of(fn, repeats)
-        except Exception as e:  # noqa: BLE001 - one failing code should not lose the others
-            print(f"  failed: {e}", file=sys.stderr)
-            results["runs"].append(dict(n=n, case=case, code=label, error=str(e)[:2000]))
-            continue
-        r.update(n=n, case=case, code=label)
-        print(f"  {r['particle_steps_per_second']:.3e} particle-steps/s "
-              f"(best of {r['all_seconds']})", file=sys.stderr, flush=True)
-        results["runs"].append(r)
+        groups.setdefault((n, case), []).append((label, fn))
+    for (n, case), codes in groups.items():
+        done = {label: [] for label, _ in codes}
+        failed = {}
+        for round_ in range(repeats):
+            for label, fn in codes:
+                if label in failed:
+                    continue
+                print(f"running {label:<16} {case:<10} N = {n} (round {round_ + 1}/{repeats}) ...",
+                      file=sys.stderr, flush=True)
+                try:
+                    done[label].append(fn())
+                except Exception as e:  # noqa: BLE001 - one failing code should not lose the others
+                    print(f"  failed: {e}", file=sys.stderr)
+                    failed[label] = str(e)[:2000]
+        for label, _ in codes:
+            if label in failed:
+                results["runs"].append(dict(n=n, case=case, code=label, error=failed[label]))
+                continue
+            r = best_of(done[label])
+            r.update(n=n, case=case, code=label)
+            print(f"  {label}: {r['particle_steps_per_second']:.3e} particle-steps/s "
+                  f"(best of {r['all_seconds']})", file=sys.stderr, flush=True)
+            results["runs"].append(r)
 
     table = ratio_table(results["runs"])
     results["ratios"] = table

@@ -2,7 +2,8 @@
 //! buffers of [`GpuSavedState`]), so a run resumes bitwise identically on the same backend
 //! (and, for the GPU, the same adapter). A checkpoint names the powder version, the
 //! backend and a digest of the scene, and is refused for another version, backend or
-//! scene; it ends with a CRC-32 of its bytes, so a damaged or cut file is refused too.
+//! scene; it ends with a CRC-32 of the bytes before it, so a damaged or cut file is refused
+//! too (a flip in the header's format or version reads as another version's checkpoint).
 //! Written atomically.
 
 use crate::cpu::{CpuEngine, CpuState};

@@ -494,7 +494,7 @@ pub fn run_with<S: Simulation>(
     };
     // what writes killed before their rename left (the files they replace are intact)
     if let Some(d) = out {
-        let stale = remove_stale_temps(d)? + remove_stale_temps(&d.join("snapshots"))?;
+        let stale = remove_stale_temps(d) + remove_stale_temps(&d.join("snapshots"));
         if stale > 0 && opts.verbose {
             eprintln!(
                 "removed {stale} temporary files that interrupted writes left in {}",
@@ -505,11 +505,28 @@ pub fn run_with<S: Simulation>(
     if let (Some(s), Some(d), Some(step)) = (series.as_mut(), out, resumed_from) {
         s.keep_until(earlier_snapshots(d, &scene.name, step, engine.dt()));
     }
-    // the rows up to the checkpoint's step on resume (a killed run may have written more)
+    // the rows up to the checkpoint's step on resume (a killed run may have written more);
+    // a fresh run replaces the series, and the checkpoint of the run it replaces goes with
+    // it (resumed, it would continue a series that is no longer there)
+    if let (Some(c), None) = (&ckpt_path, resumed_from) {
+        match std::fs::remove_file(c) {
+            Ok(()) if opts.verbose => {
+                eprintln!("removed the earlier run's checkpoint {}", c.display())
+            }
+            Ok(()) => {}
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+            Err(e) => {
+                return Err(PowderError::io(
+                    format!("cannot remove `{}`", c.display()),
+                    e,
+                ))
+            }
+        }
+    }
     let mut csv = match &csv_path {
         Some(p) => {
             let kept = match resumed_from {
-                Some(step) => series_csv::rows_until(p, step),
+                Some(step) => series_csv::rows_until(p, step)?,
                 None => Vec::new(),
             };
             Some(SeriesCsv::start(p, &csv_header(&scene.walls), &kept)?)
@@ -539,7 +556,7 @@ pub fn run_with<S: Simulation>(
         }
         Ok(())
     };
-    // the series on disk before the checkpoint that its rows lead up to
+    // the rows synced, then the checkpoint they lead up to
     let save = |engine: &S, csv: &mut Option<SeriesCsv>| -> Result<(), PowderError> {
         if let (Some(c), Some(rows)) = (&ckpt_path, csv.as_mut()) {
             rows.sync()?;

@@ -201,6 +201,15 @@ fn foreign_or_broken_checkpoints_are_refused() {
         let err = refusal(&bytes[..cut]);
         assert!(err.contains("damaged or truncated"), "cut at {cut}: {err}");
     }
+    // an older format is named (its header's format field, the checksum made again)
+    let at = 8 + 8 + "powder-checkpoint".len();
+    let mut older = bytes.clone();
+    older[at..at + 4].copy_from_slice(&15u32.to_le_bytes());
+    let end = older.len() - 4;
+    let crc = crc32fast::hash(&older[..end]);
+    older[end..].copy_from_slice(&crc.to_le_bytes());
+    let err = refusal(&older);
+    assert!(err.contains("(format 15)"), "{err}");
     // one flipped bit in the state (a position, a history, the checksum itself)
     for at in [bytes.len() / 3, bytes.len() / 2, bytes.len() - 2] {
         let mut flipped = bytes.clone();
@@ -285,20 +294,41 @@ fn cluster_command(
     cmd
 }
 
-/// A run killed with SIGKILL keeps every row it wrote (whole rows, the same as a straight
-/// run's), and resumed from its checkpoint it ends with the straight run's series and
-/// checkpoint, byte for byte.
+/// A child process killed (and waited for) when dropped, so a failing test leaves no run
+/// behind.
+struct Running(std::process::Child);
+
+impl Drop for Running {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// The whole lines of `text` (a line cut by a kill has no end).
+fn whole_lines(text: &str) -> Vec<&str> {
+    text.split_inclusive('\n')
+        .filter_map(|l| l.strip_suffix('\n'))
+        .collect()
+}
+
+/// A run killed with SIGKILL keeps every row it wrote (the same as a straight run's), and
+/// resumed from its checkpoint it ends with the straight run's series and checkpoint, byte
+/// for byte.
 fn killed_run_keeps_its_rows_and_resumes_bitwise(backend: &str) {
     let straight = tempfile::tempdir().unwrap();
     let killed = tempfile::tempdir().unwrap();
-    let done = cluster_command(backend, straight.path(), (4000, 1000), None)
+    let steps = (10_000, 1000);
+    let done = cluster_command(backend, straight.path(), steps, None)
         .status()
         .unwrap();
     assert!(done.success());
     let expected = std::fs::read_to_string(straight.path().join("series.csv")).unwrap();
-    let mut child = cluster_command(backend, killed.path(), (1_000_000, 1000), None)
-        .spawn()
-        .unwrap();
+    let mut child = Running(
+        cluster_command(backend, killed.path(), (1_000_000, 1000), None)
+            .spawn()
+            .unwrap(),
+    );
     let csv = killed.path().join("series.csv");
     // killed past step 2500 while the rows run ahead of the last checkpoint (rows every
     // 100 steps from step 0, checkpoints every 1000: the header and rows up to step 1000·k
@@ -310,25 +340,28 @@ fn killed_run_keeps_its_rows_and_resumes_bitwise(backend: &str) {
             std::time::Instant::now() < deadline,
             "no row past the last checkpoint after 300 s"
         );
-        assert!(child.try_wait().unwrap().is_none(), "the run ended early");
+        assert!(child.0.try_wait().unwrap().is_none(), "the run ended early");
         std::thread::sleep(std::time::Duration::from_millis(2));
     }
     assert!(
-        child.try_wait().unwrap().is_none(),
+        child.0.try_wait().unwrap().is_none(),
         "the run ended before the kill"
     );
-    child.kill().unwrap();
-    child.wait().unwrap();
+    drop(child);
     let left = std::fs::read_to_string(&csv).unwrap();
-    assert!(left.lines().count() >= 27 && left.ends_with('\n'), "{left}");
-    let n = left.lines().count().min(expected.lines().count());
+    let rows = whole_lines(&left);
+    assert!(rows.len() >= 27, "{left}");
+    assert!(
+        rows.len() <= 1 + 101,
+        "killed after step 10 000, past the straight run"
+    );
     assert_eq!(
-        left.lines().take(n).collect::<Vec<_>>(),
-        expected.lines().take(n).collect::<Vec<_>>(),
+        rows,
+        whole_lines(&expected)[..rows.len()],
         "the killed run's rows are the straight run's"
     );
     let ckpt = killed.path().join("checkpoint.bin");
-    let resumed = cluster_command(backend, killed.path(), (4000, 1000), Some(&ckpt))
+    let resumed = cluster_command(backend, killed.path(), steps, Some(&ckpt))
         .status()
         .unwrap();
     assert!(resumed.success());
@@ -445,15 +478,35 @@ fn killed_again_and_again_ends_as_a_straight_run(backend: &str) {
         dir.path().join("series.csv"),
         dir.path().join("checkpoint.bin"),
     );
-    let mut kills = 0;
+    let temps = |d: &Path| -> Vec<String> {
+        ["", "snapshots"]
+            .iter()
+            .filter_map(|sub| std::fs::read_dir(d.join(sub)).ok())
+            .flatten()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|f| f.ends_with(".tmp"))
+            .collect()
+    };
+    // one as a killed write of a process long gone leaves it
+    std::fs::write(
+        dir.path()
+            .join(format!(".checkpoint.bin.{}.0.tmp", u32::MAX - 1)),
+        b"x",
+    )
+    .unwrap();
+    let (mut kills, mut interrupted_writes) = (0, 0);
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(600);
     for round in 0..100 {
         let resume = ckpt.exists().then_some(ckpt.as_path());
         let target = lines_of(&csv) + 2 + round % 3;
-        let mut child = cluster_command(backend, dir.path(), every, resume)
-            .spawn()
-            .unwrap();
+        let mut child = Running(
+            cluster_command(backend, dir.path(), every, resume)
+                .spawn()
+                .unwrap(),
+        );
         let ended = loop {
-            if let Some(status) = child.try_wait().unwrap() {
+            assert!(std::time::Instant::now() < deadline, "round {round}: stuck");
+            if let Some(status) = child.0.try_wait().unwrap() {
                 break Some(status);
             }
             if lines_of(&csv) >= target {
@@ -461,19 +514,16 @@ fn killed_again_and_again_ends_as_a_straight_run(backend: &str) {
             }
             std::thread::sleep(std::time::Duration::from_micros(200));
         };
-        match ended {
-            Some(status) => {
-                assert!(status.success(), "round {round}: the run (resumed) failed");
-                break;
-            }
-            None => {
-                std::thread::sleep(std::time::Duration::from_micros(700 * (round as u64 % 5)));
-                child.kill().unwrap();
-                child.wait().unwrap();
-                kills += 1;
-            }
+        if let Some(status) = ended {
+            assert!(status.success(), "round {round}: the run (resumed) failed");
+            break;
         }
+        std::thread::sleep(std::time::Duration::from_micros(700 * (round as u64 % 5)));
+        drop(child);
+        kills += 1;
+        interrupted_writes += temps(dir.path()).len();
     }
+    eprintln!("{backend}: {kills} kills, {interrupted_writes} writes left unfinished");
     assert!(kills >= 5, "only {kills} kills");
     let text = |d: &Path| std::fs::read_to_string(d.join("series.csv")).unwrap();
     assert_eq!(text(dir.path()), text(straight.path()));
@@ -482,13 +532,8 @@ fn killed_again_and_again_ends_as_a_straight_run(backend: &str) {
         bytes(straight.path()) == bytes(dir.path()),
         "{kills} kills: checkpoints differ"
     );
-    let temps: Vec<String> = ["", "snapshots"]
-        .iter()
-        .flat_map(|sub| std::fs::read_dir(dir.path().join(sub)).unwrap())
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .filter(|f| f.ends_with(".tmp"))
-        .collect();
-    assert!(temps.is_empty(), "left behind: {temps:?}");
+    let left = temps(dir.path());
+    assert!(left.is_empty(), "left behind: {left:?}");
 }
 
 #[test]

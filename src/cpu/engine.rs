@@ -12,7 +12,9 @@ use crate::cpu::cells::CellGrid;
 use crate::cpu::jump::Crossing;
 use crate::cpu::threads::{chunks, Threads};
 use crate::error::PowderError;
-use crate::model::{ContactHistory, ContactModel, Kinematics, PairGeometry, Response, TimeStep};
+use crate::model::{
+    ContactHistory, ContactModel, Kinematics, PairConstants, PairGeometry, Response, TimeStep,
+};
 use crate::scene::Scene;
 use crate::setup::Resolved;
 use glam::DVec3;
@@ -186,6 +188,8 @@ struct Motion {
 struct Contact<'a> {
     model: &'a ContactModel,
     geom: PairGeometry,
+    /// The model's constants of this pair ([`ContactModel::pair_constants`]).
+    pair: PairConstants,
     kin: Kinematics,
     /// The particle and its partner, for the peak overlap and the error message.
     i: usize,
@@ -245,7 +249,9 @@ impl StepLog {
     fn contact(&mut self, c: Contact, prior: Option<&ContactRecord>) -> (ContactRecord, DVec3) {
         let (kin, geom) = (&c.kin, &c.geom);
         let mut history = prior.map(|p| p.history).unwrap_or_default();
-        let r = c.model.respond(kin, geom, self.dt, &mut history);
+        let r = c
+            .model
+            .respond_with(&c.pair, kin, geom, self.dt, &mut history);
         if !(r.normal.force.is_finite() && r.tangential.is_finite()) && self.failure.is_none() {
             self.failure = Some(non_finite(c.i, c.partner, kin.delta));
         }
@@ -486,6 +492,16 @@ struct PairInputs<'a> {
     dt: f64,
 }
 
+/// What the pair loop derives from a partner's radius, mass and model (the key): the pair
+/// geometry, the rolling factor ½(r_i − r_j)/(r_i + r_j) and the model's pair constants.
+#[derive(Clone, Copy)]
+struct PairShape {
+    key: (u64, u64, usize),
+    geom: PairGeometry,
+    roll: f64,
+    pair: PairConstants,
+}
+
 /// One chunk of particles of the pair forces, with what it writes: its entries' records,
 /// whether they stay, their forces on i and torques on j, and its particles' own sums.
 struct PairChunk<'a> {
@@ -519,9 +535,8 @@ impl PairInputs<'_> {
             let (vi, wi) = (self.v_pred[i], omega_of(i));
             // i's own sums
             let (mut fi, mut ti) = (DVec3::ZERO, DVec3::ZERO);
-            // the pair geometry and rolling factor of the last partner's radius and
-            // mass (the same values: partners of a packing share them)
-            let mut shape: Option<(u64, u64, PairGeometry, f64)> = None;
+            // the last partner's shape (partners of a packing share them)
+            let mut shape: Option<PairShape> = None;
             for k in s..e {
                 let x = k - base;
                 let j = self.partner[k] as usize;
@@ -548,10 +563,8 @@ impl PairInputs<'_> {
                 }
                 let dist = dist2.sqrt();
                 let delta = ri + radius[j] - dist;
-                let (model, range) = (
-                    &self.models[mi + material[j]],
-                    self.ranges[mi + material[j]],
-                );
+                let m = mi + material[j];
+                let (model, range) = (&self.models[m], self.ranges[m]);
                 if delta <= -range && !live {
                     c.entry_force[x] = DVec3::ZERO;
                     if ROT {
@@ -565,15 +578,21 @@ impl PairInputs<'_> {
                 } else {
                     DVec3::Z
                 };
-                let (geom, roll) = match shape {
-                    Some((r, m, g, roll)) if r == radius[j].to_bits() && m == mass[j].to_bits() => {
-                        (g, roll)
-                    }
+                let key = (radius[j].to_bits(), mass[j].to_bits(), m);
+                let PairShape {
+                    geom, roll, pair, ..
+                } = match shape {
+                    Some(known) if known.key == key => known,
                     _ => {
-                        let g = PairGeometry::spheres(ri, radius[j], mass[i], mass[j]);
-                        let roll = 0.5 * (ri - radius[j]) / (ri + radius[j]);
-                        shape = Some((radius[j].to_bits(), mass[j].to_bits(), g, roll));
-                        (g, roll)
+                        let geom = PairGeometry::spheres(ri, radius[j], mass[i], mass[j]);
+                        let known = PairShape {
+                            key,
+                            geom,
+                            roll: 0.5 * (ri - radius[j]) / (ri + radius[j]),
+                            pair: model.pair_constants(&geom),
+                        };
+                        shape = Some(known);
+                        known
                     }
                 };
                 let wj = omega_of(j);
@@ -593,6 +612,7 @@ impl PairInputs<'_> {
                 let contact = Contact {
                     model,
                     geom,
+                    pair,
                     kin: Kinematics {
                         delta,
                         delta_dot: -v_rel.dot(n),
@@ -728,6 +748,7 @@ impl WallInputs<'_> {
             let contact = Contact {
                 model,
                 geom,
+                pair: model.pair_constants(&geom),
                 kin: Kinematics {
                     delta,
                     delta_dot: -v.dot(n),

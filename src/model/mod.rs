@@ -121,6 +121,16 @@ pub enum ContactModel {
     Jkr(JkrParams),
 }
 
+/// What a model derives once per pair of materials and radii, for a force loop that meets
+/// the same pair contact after contact ([`ContactModel::pair_constants`]).
+#[derive(Clone, Copy, Debug)]
+pub enum PairConstants {
+    /// JKR's moduli, pull-off force, length scales and damping ratio.
+    Jkr(jkr::JkrPair),
+    /// Nothing to derive (the piece-wise linear models).
+    None,
+}
+
 /// Relative motion at one contact, as the engine measures it.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Kinematics {
@@ -185,16 +195,48 @@ impl ContactModel {
         dt: f64,
         history: &mut ContactHistory,
     ) -> Response {
+        self.respond_with(&self.pair_constants(geom), k, geom, dt, history)
+    }
+
+    /// The constants of a pair of geometry `geom` that [`Self::respond_with`] takes.
+    pub fn pair_constants(&self, geom: &PairGeometry) -> PairConstants {
+        match self {
+            Self::Jkr(p) => PairConstants::Jkr(p.pair(0.5 * geom.a12)),
+            Self::Hysteretic(_) | Self::Lsd(_) => PairConstants::None,
+        }
+    }
+
+    /// [`Self::respond`] with the pair's constants, which must be [`Self::pair_constants`]
+    /// of this model and `geom` (a force loop keeps them for partners of the same shape).
+    pub fn respond_with(
+        &self,
+        pair: &PairConstants,
+        k: &Kinematics,
+        geom: &PairGeometry,
+        dt: f64,
+        history: &mut ContactHistory,
+    ) -> Response {
         match self {
             Self::Jkr(p) => {
-                let normal = p.normal_force_step(k.delta, k.delta_dot, geom, dt, history);
+                let pair = match pair {
+                    PairConstants::Jkr(c) => *c,
+                    PairConstants::None => p.pair(0.5 * geom.a12),
+                };
+                let normal =
+                    p.normal_force_of_pair(&pair, (k.delta, k.delta_dot), geom, dt, history);
                 let mut r = Response {
                     normal,
                     potential: normal.potential,
                     ..Default::default()
                 };
                 if normal.in_contact && p.friction > 0.0 {
-                    let t = p.tangential_force(k, &normal, geom, dt, &mut history.tangential);
+                    let t = p.tangential_force_of_pair(
+                        &pair,
+                        (k, &normal),
+                        geom,
+                        dt,
+                        &mut history.tangential,
+                    );
                     r.tangential = t.force;
                     r.potential += 0.5 * t.stiffness * history.tangential.length_squared();
                 }

@@ -78,35 +78,37 @@ fn create_temp(dir: &Path, file_name: &std::ffi::OsStr) -> io::Result<(PathBuf, 
 }
 
 /// Removes the temporary files that writes into `dir` left when their process was killed
-/// before the rename (`.<file>.<pid>.<n>.tmp`); returns how many. Nothing else is touched,
-/// and a directory that cannot be read has none to remove.
-pub fn remove_stale_temps(dir: &Path) -> Result<usize, PowderError> {
+/// before the rename (`.<file>.<pid>.<n>.tmp` of a process that is gone: not this one, not
+/// one still running where `/proc` tells); returns how many. Best effort: a file that
+/// cannot be removed stays, and nothing else is touched.
+pub fn remove_stale_temps(dir: &Path) -> usize {
     let Ok(entries) = fs::read_dir(dir) else {
-        return Ok(0);
+        return 0;
     };
+    let proc = Path::new("/proc/self").exists();
     let mut removed = 0;
     for entry in entries.flatten() {
-        let name = entry.file_name();
-        if !is_temp_name(&name.to_string_lossy()) || !entry.path().is_file() {
+        let Some(pid) = temp_pid(&entry.file_name().to_string_lossy()) else {
             continue;
+        };
+        let alive =
+            pid == std::process::id() || (proc && Path::new(&format!("/proc/{pid}")).exists());
+        if !alive && entry.path().is_file() && fs::remove_file(entry.path()).is_ok() {
+            removed += 1;
         }
-        fs::remove_file(entry.path()).map_err(|e| {
-            PowderError::io(format!("cannot remove `{}`", entry.path().display()), e)
-        })?;
-        removed += 1;
     }
-    Ok(removed)
+    removed
 }
 
-/// Whether `name` is one of [`create_temp`]'s: `.<file>.<pid>.<n>.tmp`.
-fn is_temp_name(name: &str) -> bool {
-    let Some(stem) = name.strip_prefix('.').and_then(|n| n.strip_suffix(".tmp")) else {
-        return false;
-    };
+/// The process id in one of [`create_temp`]'s names, `.<file>.<pid>.<n>.tmp`.
+fn temp_pid(name: &str) -> Option<u32> {
+    let stem = name.strip_prefix('.')?.strip_suffix(".tmp")?;
+    let digits = |p: &&str| !p.is_empty() && p.bytes().all(|b| b.is_ascii_digit());
     let mut parts = stem.rsplitn(3, '.');
-    let digits =
-        |p: Option<&str>| p.is_some_and(|p| !p.is_empty() && p.bytes().all(|b| b.is_ascii_digit()));
-    digits(parts.next()) && digits(parts.next()) && parts.next().is_some_and(|f| !f.is_empty())
+    parts.next().filter(digits)?;
+    let pid = parts.next().filter(digits)?;
+    parts.next().filter(|file| !file.is_empty())?;
+    pid.parse().ok()
 }
 
 /// Makes the rename durable where the platform allows syncing a directory (best effort).
@@ -135,25 +137,34 @@ mod tests {
     #[test]
     fn stale_temporary_files_are_removed_and_nothing_else() {
         let dir = tempfile::tempdir().unwrap();
-        let keep = [
+        // besides names of other shapes: this process's own temporary file and a live
+        // process's (pid 1) stay
+        let own = format!(".series.csv.{}.3.tmp", std::process::id());
+        let mut keep = vec![
             "a.csv",
             ".hidden",
             ".x.tmp",
             ".x.1.tmp",
             ".x.1.y.tmp",
             "..1.2.tmp",
+            own.as_str(),
+            ".w.pvd.1.0.tmp",
         ];
-        let stale = [".checkpoint.bin.2752.9.tmp", ".run_0000000300.vtp.1.0.tmp"];
-        for f in keep.iter().chain(&stale) {
+        let gone = u32::MAX - 1;
+        let stale = [
+            format!(".checkpoint.bin.{gone}.9.tmp"),
+            format!(".run_0000000300.vtp.{gone}.0.tmp"),
+        ];
+        for f in keep.iter().copied().chain(stale.iter().map(String::as_str)) {
             fs::write(dir.path().join(f), b"x").unwrap();
         }
-        fs::create_dir(dir.path().join(".d.1.2.tmp")).unwrap();
-        assert_eq!(remove_stale_temps(dir.path()).unwrap(), 2);
-        let mut left: Vec<&str> = keep.to_vec();
-        left.push(".d.1.2.tmp");
-        left.sort();
-        assert_eq!(entries(dir.path()), left);
-        assert_eq!(remove_stale_temps(&dir.path().join("none")).unwrap(), 0);
+        let folder = format!(".d.{gone}.2.tmp");
+        fs::create_dir(dir.path().join(&folder)).unwrap();
+        assert_eq!(remove_stale_temps(dir.path()), 2);
+        keep.push(&folder);
+        keep.sort();
+        assert_eq!(entries(dir.path()), keep);
+        assert_eq!(remove_stale_temps(&dir.path().join("none")), 0);
     }
 
     #[test]

@@ -38,8 +38,8 @@ impl SeriesCsv {
         })
     }
 
-    /// Appends the row of `step` (one write of the whole line, so a kill never leaves half
-    /// a row); a step already written is skipped.
+    /// Appends the row of `step` in one write (a torn last line, from a kill or a full
+    /// disk, is dropped by [`rows_until`] on resume); a step already written is skipped.
     pub fn append(&mut self, step: u64, row: &str) -> Result<(), PowderError> {
         if self.last.is_some_and(|last| step <= last) {
             return Ok(());
@@ -60,18 +60,27 @@ impl SeriesCsv {
     }
 }
 
-/// The rows of an earlier series up to `step` (a resume from a checkpoint of that step);
-/// none when there is no readable file.
-pub fn rows_until(path: &Path, step: u64) -> Vec<String> {
-    std::fs::read_to_string(path)
-        .map(|text| {
-            text.lines()
-                .skip(1)
-                .filter(|l| row_step(l).is_some_and(|s| s <= step))
-                .map(str::to_string)
-                .collect()
-        })
-        .unwrap_or_default()
+/// The whole rows of an earlier series up to `step` (a resume from a checkpoint of that
+/// step), in order; none when there is no file. A line without its end (a write cut by a
+/// kill) ends them.
+pub fn rows_until(path: &Path, step: u64) -> Result<Vec<String>, PowderError> {
+    let text = match std::fs::read_to_string(path) {
+        Ok(t) => t,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
+        Err(e) => {
+            return Err(PowderError::io(
+                format!("cannot read the series `{}` to resume it", path.display()),
+                e,
+            ))
+        }
+    };
+    Ok(text
+        .split_inclusive('\n')
+        .skip(1)
+        .map_while(|l| l.strip_suffix('\n'))
+        .take_while(|l| row_step(l).is_some_and(|s| s <= step))
+        .map(str::to_string)
+        .collect())
 }
 
 /// The step a row starts with.
@@ -104,7 +113,7 @@ mod tests {
             std::fs::read_to_string(&p).unwrap(),
             "step,x\n0,a\n10,b\n20,d\n"
         );
-        let kept = rows_until(&p, 10);
+        let kept = rows_until(&p, 10).unwrap();
         assert_eq!(kept, ["0,a", "10,b"]);
         let mut s = SeriesCsv::start(&p, "step,x", &kept).unwrap();
         s.append(10, "10,z").unwrap();
@@ -114,6 +123,15 @@ mod tests {
             std::fs::read_to_string(&p).unwrap(),
             "step,x\n0,a\n10,b\n30,e\n"
         );
-        assert!(rows_until(&dir.path().join("none.csv"), 5).is_empty());
+        assert!(rows_until(&dir.path().join("none.csv"), 5)
+            .unwrap()
+            .is_empty());
+        // a row cut by a kill (here inside its step) is not kept
+        std::fs::write(&p, "step,x\n0,a\n10,b\n2").unwrap();
+        assert_eq!(rows_until(&p, 30).unwrap(), ["0,a", "10,b"]);
+        std::fs::write(&p, "step,x\n0,a\n10,b\n20,d").unwrap();
+        assert_eq!(rows_until(&p, 30).unwrap(), ["0,a", "10,b"]);
+        std::fs::write(&p, [b's', 0xff, b'\n']).unwrap();
+        assert!(rows_until(&p, 30).is_err());
     }
 }

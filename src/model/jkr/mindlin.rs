@@ -1,7 +1,7 @@
 //! The tangential spring of the JKR family (Mindlin with Thornton's adhesive Coulomb limit,
 //! paper 002 eqs. 14–17): the f64 reference of `shaders/contact/mindlin.wgsl`.
 
-use super::{tsuji_beta, Dissipation, JkrParams, TSUJI_PREFACTOR};
+use super::{Dissipation, JkrPair, JkrParams, TSUJI_PREFACTOR};
 use crate::model::friction::rotate_into_plane;
 use crate::model::history::{HistoryField, TANGENTIAL_SPRING};
 use crate::model::{Kinematics, NormalForce, PairGeometry};
@@ -44,6 +44,20 @@ impl JkrParams {
         dt: f64,
         spring: &mut DVec3,
     ) -> Tangential {
+        let pair = self.pair(0.5 * geom.a12);
+        self.tangential_force_of_pair(&pair, (k, normal), geom, dt, spring)
+    }
+
+    /// [`Self::tangential_force`] with the pair's constants ([`JkrParams::pair`] of
+    /// R* = a12/2).
+    pub fn tangential_force_of_pair(
+        &self,
+        pair: &JkrPair,
+        (k, normal): (&Kinematics, &NormalForce),
+        geom: &PairGeometry,
+        dt: f64,
+        spring: &mut DVec3,
+    ) -> Tangential {
         if self.friction == 0.0 || !normal.in_contact {
             *spring = DVec3::ZERO;
             return Tangential::default();
@@ -51,21 +65,18 @@ impl JkrParams {
         let (n, v_t, delta) = (k.n, k.v_t, k.delta);
         let r = 0.5 * geom.a12;
         let mut s = rotate_into_plane(*spring, n) + v_t * dt;
-        let gs8 = 8.0 * self.g_star();
+        let gs8 = 8.0 * pair.gs;
         let st = gs8 * normal.contact_radius;
         let ct = match self.dissipation {
-            Dissipation::Tsuji {
-                restitution,
-                stiffness,
-            } => {
+            Dissipation::Tsuji { stiffness, .. } => {
                 // the dashpot's St: the spring's 8G*·a, or paper 002's 8G*·√(R*δ)
                 let st_damp = gs8 * stiffness.radius(normal.contact_radius, delta, r);
-                -TSUJI_PREFACTOR * tsuji_beta(restitution) * (st_damp * geom.reduced_mass).sqrt()
+                -TSUJI_PREFACTOR * pair.beta * (st_damp * geom.reduced_mass).sqrt()
             }
             _ => 0.0,
         };
         let mut force = -st * s - ct * v_t;
-        let limit = self.friction * (normal.conservative + 2.0 * self.fc(r)).abs();
+        let limit = self.friction * (normal.conservative + 2.0 * pair.fc).abs();
         let magnitude2 = force.length_squared();
         let mut sliding = false;
         if magnitude2 > limit * limit {

@@ -25,6 +25,7 @@
 use crate::error::ParamError;
 
 pub mod mindlin;
+mod pair;
 mod radius;
 pub mod rolling;
 mod twisting;
@@ -34,6 +35,7 @@ use crate::model::history::{HistoryField, HostField, Mirror, Shape};
 use crate::model::krijt::{self, KrijtLaw, Relaxation};
 use crate::model::{ContactHistory, NormalForce, PairGeometry};
 pub use mindlin::Tangential;
+pub use pair::JkrPair;
 pub use radius::contact_radius_f32;
 use radius::solve_t_f64;
 pub use rolling::Rolling;
@@ -340,7 +342,7 @@ impl fmt::Display for StiffnessScaling {
 
 /// The Tsuji damping ratio β = ln e/√(ln²e + π²) (paper 002 eq. 12), ≤ 0.
 pub fn tsuji_beta(restitution: f64) -> f64 {
-    // the last value, per thread: the force loops ask for the same restitution each pair
+    // the last value, per thread: asked for once per pair shape, with the same restitution
     thread_local!(static LAST: std::cell::Cell<(u64, f64)> = const { std::cell::Cell::new((u64::MAX, 0.0)) });
     LAST.with(|last| {
         let (bits, beta) = last.get();
@@ -669,20 +671,17 @@ impl JkrParams {
         delta: f64,
         delta_dot: f64,
         geom: &PairGeometry,
-        es: f64,
+        pair: &JkrPair,
     ) -> f64 {
-        let m = geom.reduced_mass;
+        let (m, es) = (geom.reduced_mass, pair.es);
         match self.dissipation {
             Dissipation::None => 0.0,
-            Dissipation::Tsuji {
-                restitution,
-                stiffness,
-            } => {
+            Dissipation::Tsuji { stiffness, .. } => {
                 // Sn = 2E*·a by default (paper 002 eq. 13 writes 2E*√(Rδ), which is 2E*·a
                 // for Hertz; the contact radius also exists at negative overlap in JKR), or
                 // paper 002's 2E*·√(R*δ) (zero at δ ≤ 0)
                 let sn = 2.0 * es * stiffness.radius(a, delta, geom.r_eff());
-                -TSUJI_PREFACTOR * tsuji_beta(restitution) * (sn * m).sqrt() * delta_dot
+                -TSUJI_PREFACTOR * pair.beta * (sn * m).sqrt() * delta_dot
             }
             Dissipation::PowerLaw { d, alpha, beta } => {
                 if delta_dot == 0.0 {
@@ -708,10 +707,10 @@ impl JkrParams {
     /// the work of a step that crosses an edge from there rather than from zero.
     pub fn edge_forces(&self, geom: &PairGeometry, delta_dot: f64) -> [(f64, f64); 2] {
         let r = 0.5 * geom.a12;
+        let pair = self.pair(r);
         let at = |delta: f64| {
             let a = self.contact_radius(delta, r);
-            self.elastic_force(a, r)
-                + self.normal_dissipation(a, delta, delta_dot, geom, self.e_star())
+            self.elastic_force(a, r) + self.normal_dissipation(a, delta, delta_dot, geom, &pair)
         };
         let exit = self.pulloff_overlap(r);
         [(0.0, at(0.0)), (exit, at(exit))]
@@ -764,9 +763,21 @@ impl JkrParams {
         dt: f64,
         history: &mut ContactHistory,
     ) -> NormalForce {
+        let pair = self.pair(0.5 * geom.a12);
+        self.normal_force_of_pair(&pair, (delta, delta_dot), geom, dt, history)
+    }
+
+    /// [`Self::normal_force_step`] with the pair's constants ([`Self::pair`] of R* = a12/2).
+    pub fn normal_force_of_pair(
+        &self,
+        pair: &JkrPair,
+        (delta, delta_dot): (f64, f64),
+        geom: &PairGeometry,
+        dt: f64,
+        history: &mut ContactHistory,
+    ) -> NormalForce {
         let r = 0.5 * geom.a12;
-        let gamma = self.gamma();
-        let es = self.e_star();
+        let (gamma, es) = (pair.gamma, pair.es);
         let (a, conservative, potential) = if gamma == 0.0 {
             if delta <= 0.0 {
                 *history = ContactHistory::default();
@@ -781,7 +792,7 @@ impl JkrParams {
                 *history = ContactHistory::default();
                 return NormalForce::default();
             }
-            let sc = Scales::new(r, es, gamma);
+            let sc = pair.scales;
             let (a0, d0) = (sc.a0, sc.d0);
             if delta <= self.pulloff.break_overlap_ratio() * d0 {
                 *history = ContactHistory::default();
@@ -810,7 +821,7 @@ impl JkrParams {
                 (a, krijt::elastic_force(a, delta, r, es), potential)
             } else {
                 // in s = √(a/a0): F = Fc·4(s⁶ − s³), the stored energy Fc·δ0·(P(s²) − P_break)
-                let fc = 3.0 * PI * gamma * r;
+                let fc = pair.fc;
                 let s3 = s * s * s;
                 let conservative = 4.0 * fc * s3 * (s3 - 1.0);
                 let potential =
@@ -821,7 +832,7 @@ impl JkrParams {
         history.touched = true;
         history.delta_max = history.delta_max.max(delta);
         NormalForce {
-            force: conservative + self.normal_dissipation(a, delta, delta_dot, geom, es),
+            force: conservative + self.normal_dissipation(a, delta, delta_dot, geom, pair),
             conservative,
             potential,
             in_contact: true,
