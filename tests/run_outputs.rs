@@ -547,3 +547,76 @@ fn killed_gpu_run_again_and_again_ends_as_a_straight_run() {
         killed_again_and_again_ends_as_a_straight_run("gpu");
     }
 }
+
+/// A disk that fills mid-run (a 512 KiB tmpfs, mounted in a mount namespace of its own
+/// with `unshare`) stops the run with the system's message and a non-zero exit, and leaves
+/// its series and last good checkpoint intact: copied off the full disk and resumed, the
+/// run ends with the straight run's series and checkpoint, byte for byte.
+#[test]
+fn a_full_disk_stops_the_run_and_keeps_the_last_checkpoint() {
+    let (straight, full, keep) = (
+        tempfile::tempdir().unwrap(),
+        tempfile::tempdir().unwrap(),
+        tempfile::tempdir().unwrap(),
+    );
+    let every = (3000, 500);
+    let done = cluster_command("cpu", straight.path(), every, None).status();
+    assert!(done.unwrap().success());
+    let scene = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/examples/cohesive_cluster.toml"
+    );
+    // the tmpfs lives as long as the shell: what the test reads is copied off it first
+    let script = r#"
+        mount -t tmpfs -o size=512k none "$FULL" || exit 97
+        touch "$KEEP/mounted"
+        "$POWDER" run "$SCENE" --backend cpu --steps 100000 --set simulation.output_every=100 \
+            --set simulation.checkpoint_every=500 --out "$FULL/out" 2> "$KEEP/stderr"
+        echo $? > "$KEEP/status"
+        cp "$FULL/out/checkpoint.bin" "$FULL/out/series.csv" "$KEEP/"
+    "#;
+    // `mounted` appears once the tmpfs is there (unshare itself may be refused)
+    let ran = ["-m", "-rm"].iter().find_map(|flags| {
+        let status = std::process::Command::new("unshare")
+            .args([flags, "sh", "-c", script])
+            .env("FULL", full.path())
+            .env("KEEP", keep.path())
+            .env("POWDER", env!("CARGO_BIN_EXE_powder"))
+            .env("SCENE", scene)
+            .status()
+            .ok()?;
+        keep.path().join("mounted").exists().then_some(status)
+    });
+    let Some(status) = ran else {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI needs `unshare -m` and tmpfs mounts for the full-disk test"
+        );
+        eprintln!("skipping the full-disk test: no private tmpfs mount here");
+        return;
+    };
+    assert!(
+        status.success(),
+        "the outputs could not be copied off the full disk"
+    );
+    let read = |f: &str| std::fs::read_to_string(keep.path().join(f)).unwrap();
+    assert_ne!(read("status").trim(), "0", "the run did not fail");
+    let stderr = read("stderr");
+    assert!(
+        stderr.contains("No space left on device")
+            && stderr.contains(full.path().to_str().unwrap()),
+        "{stderr}"
+    );
+    let ckpt = keep.path().join("checkpoint.bin");
+    let resumed = cluster_command("cpu", keep.path(), every, Some(&ckpt))
+        .status()
+        .unwrap();
+    assert!(resumed.success());
+    let text = |d: &Path| std::fs::read_to_string(d.join("series.csv")).unwrap();
+    assert_eq!(text(keep.path()), text(straight.path()));
+    let bytes = |d: &Path| std::fs::read(d.join("checkpoint.bin")).unwrap();
+    assert!(
+        bytes(straight.path()) == bytes(keep.path()),
+        "the resumed run differs"
+    );
+}
