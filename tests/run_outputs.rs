@@ -294,6 +294,17 @@ fn cluster_command(
     cmd
 }
 
+/// `series.csv` and `checkpoint.bin` of `run` are byte for byte those of `straight`.
+fn assert_same_outputs(straight: &Path, run: &Path, what: &str) {
+    let text = |d: &Path| std::fs::read_to_string(d.join("series.csv")).unwrap();
+    assert_eq!(text(run), text(straight), "{what}: the series differs");
+    let bytes = |d: &Path| std::fs::read(d.join("checkpoint.bin")).unwrap();
+    assert!(
+        bytes(straight) == bytes(run),
+        "{what}: the checkpoint differs from the straight run's"
+    );
+}
+
 /// A child process killed (and waited for) when dropped, so a failing test leaves no run
 /// behind.
 struct Running(std::process::Child);
@@ -365,14 +376,7 @@ fn killed_run_keeps_its_rows_and_resumes_bitwise(backend: &str) {
         .status()
         .unwrap();
     assert!(resumed.success());
-    let csv_after = std::fs::read_to_string(&csv).unwrap();
-    assert_eq!(csv_after, expected);
-    let a = std::fs::read(straight.path().join("checkpoint.bin")).unwrap();
-    let b = std::fs::read(&ckpt).unwrap();
-    assert!(
-        a == b,
-        "the resumed run's checkpoint differs from the straight run's"
-    );
+    assert_same_outputs(straight.path(), killed.path(), "the killed and resumed run");
 }
 
 #[test]
@@ -442,11 +446,10 @@ fn broken_output_directory_keeps_the_last_checkpoint(backend: &str) {
     let opts = options(dir.path(), 3000, Some(&ckpt));
     let resumed = run_on(backend, &scene, &opts, |_| {}).unwrap().unwrap();
     assert_eq!(resumed.resumed_from, Some(1000));
-    assert_eq!(csv(dir.path()), expected);
-    let bytes = |d: &Path| std::fs::read(d.join("checkpoint.bin")).unwrap();
-    assert!(
-        bytes(straight.path()) == bytes(dir.path()),
-        "the resumed run differs"
+    assert_same_outputs(
+        straight.path(),
+        dir.path(),
+        "the run resumed after the break",
     );
 }
 
@@ -525,13 +528,7 @@ fn killed_again_and_again_ends_as_a_straight_run(backend: &str) {
     }
     eprintln!("{backend}: {kills} kills, {interrupted_writes} writes left unfinished");
     assert!(kills >= 5, "only {kills} kills");
-    let text = |d: &Path| std::fs::read_to_string(d.join("series.csv")).unwrap();
-    assert_eq!(text(dir.path()), text(straight.path()));
-    let bytes = |d: &Path| std::fs::read(d.join("checkpoint.bin")).unwrap();
-    assert!(
-        bytes(straight.path()) == bytes(dir.path()),
-        "{kills} kills: checkpoints differ"
-    );
+    assert_same_outputs(straight.path(), dir.path(), &format!("{kills} kills"));
     let left = temps(dir.path());
     assert!(left.is_empty(), "left behind: {left:?}");
 }
@@ -612,11 +609,9 @@ fn a_full_disk_stops_the_run_and_keeps_the_last_checkpoint() {
         .status()
         .unwrap();
     assert!(resumed.success());
-    let text = |d: &Path| std::fs::read_to_string(d.join("series.csv")).unwrap();
-    assert_eq!(text(keep.path()), text(straight.path()));
-    let bytes = |d: &Path| std::fs::read(d.join("checkpoint.bin")).unwrap();
-    assert!(
-        bytes(straight.path()) == bytes(keep.path()),
-        "the resumed run differs"
+    assert_same_outputs(
+        straight.path(),
+        keep.path(),
+        "the run resumed off the full disk",
     );
 }
