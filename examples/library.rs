@@ -51,6 +51,7 @@ fn scene() -> Scene {
         output_every: 1000,
         impact_velocity: 1.0,
         checkpoint_every: 10_000,
+        contact_output: None,
         materials: vec![Material {
             name: "powder".into(),
             density: 2000.0,

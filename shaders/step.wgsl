@@ -877,6 +877,8 @@ struct Contact {
     potential: f32,
     // The history's touched flag (energy ledger: the contact is engaged).
     engaged: bool,
+    // Whether the tangential force slid at the Coulomb limit (`Response::sliding`).
+    sliding: bool,
 }
 
 // Whether a contact is engaged after the step (the ledger's and the force jumps' "in"):
@@ -885,12 +887,12 @@ fn contact_is_in(c: Contact) -> bool {
     return c.engaged || c.potential != 0.0 || c.normal != 0.0;
 }
 
-// What the next step needs of a contact (the entries' `prior`, with the ledger or the
-// force jumps): (δ, normal force, U − ½·dt·P, 1) while it is engaged, (δ, 0, 0, −1) while
-// it is not; a slot a rebuild just made holds zeros (nothing known).
+// What the next step needs of a contact (the entries' `prior`, with the ledger, the force
+// jumps or the contact output): (δ, normal force, U − ½·dt·P, 1, or 2 where it slid) while
+// it is engaged, (δ, 0, 0, −1) while it is not; a slot a rebuild just made holds zeros.
 fn prior_of(k: Kin, c: Contact, power: f32, is_in: bool) -> vec4<f32> {
     if (is_in) {
-        return vec4<f32>(k.delta, c.normal, c.potential - 0.5 * k.dt * power, 1.0);
+        return vec4<f32>(k.delta, c.normal, c.potential - 0.5 * k.dt * power, select(1.0, 2.0, c.sliding));
     }
     return vec4<f32>(k.delta, 0.0, 0.0, -1.0);
 }
@@ -1100,6 +1102,8 @@ fn particle_forces(k: u32, row0: PairRow) {
         if (step.servo_walls != 0u) {
             store_wall_push(slot, c.normal);
         }
+        // (a wall takes no torque: its entry's keeps the tangential force, for the output)
+        rot_pair_store(slot, c.tangential);
         f += c.normal * n + c.tangential;
         if (ROTATION) {
             torque += -rk * cross(n, c.tangential) + c.rolling;

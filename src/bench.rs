@@ -166,6 +166,7 @@ pub fn packing(case: Case, n: usize, velocity_scale: f64, seed: u64) -> Result<S
         jump_impulses: None,
         duration: 1.0,
         output_every: 1000,
+        contact_output: None,
         impact_velocity,
         checkpoint_every: 10_000,
         materials: vec![Material {

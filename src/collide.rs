@@ -306,6 +306,7 @@ impl CollideSpec {
             jump_impulses: self.jump_impulses,
             duration: f64::INFINITY,
             output_every: u64::MAX,
+            contact_output: None,
             impact_velocity: vn,
             checkpoint_every: u64::MAX,
             materials: vec![Material {

@@ -11,11 +11,11 @@ use crate::gpu::{GpuContext, GpuEngine, GpuOptions};
 use crate::observed::ObservedEnergies;
 use crate::output::atomic::{remove_stale_temps, write_atomic};
 use crate::output::series_csv::{self, SeriesCsv};
-use crate::output::vtk;
+use crate::output::{contacts, vtk};
 use crate::scene::Scene;
 use crate::simulation::{Observation, Simulation};
 use serde::Serialize;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
@@ -413,28 +413,6 @@ fn outside_domain(scene: &Scene, positions: &[glam::DVec3]) -> usize {
         .count()
 }
 
-/// The snapshots of an earlier run up to `step` (on resume), with their times.
-fn earlier_snapshots(dir: &Path, name: &str, step: u64, dt: f64) -> Vec<(f64, String)> {
-    let prefix = format!("{name}_");
-    let mut found: Vec<(u64, String)> = std::fs::read_dir(dir.join("snapshots"))
-        .map(|rd| {
-            rd.filter_map(|e| e.ok())
-                .filter_map(|e| {
-                    let f = e.file_name().to_string_lossy().into_owned();
-                    let s = f
-                        .strip_prefix(&prefix)?
-                        .strip_suffix(".vtp")?
-                        .parse::<u64>()
-                        .ok()?;
-                    (s <= step).then(|| (s, format!("snapshots/{f}")))
-                })
-                .collect()
-        })
-        .unwrap_or_default();
-    found.sort();
-    found.into_iter().map(|(s, f)| (s as f64 * dt, f)).collect()
-}
-
 /// Runs `scene` on the CPU reference backend to its duration (or `opts.max_steps`),
 /// writing outputs to `opts.out_dir` and calling `progress` at every output.
 pub fn run_cpu_with(
@@ -456,7 +434,11 @@ pub fn run_gpu_with(
     progress: impl FnMut(&Snapshot),
 ) -> Result<RunSummary, PowderError> {
     let rule = crate::setup::Resolved::new(scene)?.time_step.reason;
-    let engine = GpuEngine::with_options(scene, ctx, opts.gpu)?;
+    let options = GpuOptions {
+        contacts: opts.out_dir.is_some() && scene.writes_contacts(),
+        ..opts.gpu
+    };
+    let engine = GpuEngine::with_options(scene, ctx, options)?;
     run_with(scene, engine, &rule, opts, progress)
 }
 
@@ -492,9 +474,20 @@ pub fn run_with<S: Simulation>(
         Some(d) => Some(vtk::Series::new(d, &scene.name)?),
         None => None,
     };
+    let mut network = match out {
+        Some(d) if scene.writes_contacts() => Some(vtk::Series::in_folder(
+            d,
+            "contacts",
+            &scene.name,
+            &format!("{}_contacts.pvd", scene.name),
+        )?),
+        _ => None,
+    };
     // what writes killed before their rename left (the files they replace are intact)
     if let Some(d) = out {
-        let stale = remove_stale_temps(d) + remove_stale_temps(&d.join("snapshots"));
+        let stale = remove_stale_temps(d)
+            + remove_stale_temps(&d.join("snapshots"))
+            + remove_stale_temps(&d.join("contacts"));
         if stale > 0 && opts.verbose {
             eprintln!(
                 "removed {stale} temporary files that interrupted writes left in {}",
@@ -502,8 +495,10 @@ pub fn run_with<S: Simulation>(
             );
         }
     }
-    if let (Some(s), Some(d), Some(step)) = (series.as_mut(), out, resumed_from) {
-        s.keep_until(earlier_snapshots(d, &scene.name, step, engine.dt()));
+    if let Some(step) = resumed_from {
+        for s in series.iter_mut().chain(network.iter_mut()) {
+            s.keep_until(step, engine.dt());
+        }
     }
     // the rows up to the checkpoint's step on resume (a killed run may have written more);
     // a fresh run replaces the series, and the checkpoint of the run it replaces goes with
@@ -534,10 +529,16 @@ pub fn run_with<S: Simulation>(
         None => None,
     };
     let radii = engine.radii().to_vec();
-    let write_outputs = |obs: &Observation,
-                         snap: &Snapshot,
-                         csv: &mut Option<SeriesCsv>,
-                         series: &mut Option<vtk::Series>|
+    let wall_normals: Vec<glam::DVec3> = scene
+        .walls
+        .iter()
+        .map(|w| glam::DVec3::from_array(w.normal))
+        .collect();
+    let mut write_outputs = |engine: &S,
+                             obs: &Observation,
+                             snap: &Snapshot,
+                             csv: &mut Option<SeriesCsv>,
+                             series: &mut Option<vtk::Series>|
      -> Result<(), PowderError> {
         if let Some(c) = csv.as_mut() {
             c.append(snap.step, &csv_row(snap, obs, &scene.walls))?;
@@ -553,6 +554,20 @@ pub fn run_with<S: Simulation>(
                     angular_velocities: &obs.angular_velocities,
                 },
             )?;
+        }
+        if let Some(n) = network.as_mut() {
+            let ends = contacts::Ends {
+                positions: &obs.positions,
+                radii: &radii,
+                wall_normals: &wall_normals,
+                periodic: scene.domain.periodic,
+                domain: (
+                    glam::DVec3::from_array(scene.domain.min),
+                    glam::DVec3::from_array(scene.domain.max),
+                ),
+            };
+            let doc = contacts::vtp(&engine.contact_network()?, &ends);
+            n.write_vtp(snap.step, snap.time, &doc)?;
         }
         Ok(())
     };
@@ -588,7 +603,7 @@ pub fn run_with<S: Simulation>(
         say(&initial);
     }
     if resumed_from.is_none() {
-        write_outputs(&obs, &initial, &mut csv, &mut series)?;
+        write_outputs(&engine, &obs, &initial, &mut csv, &mut series)?;
     }
     let started = std::time::Instant::now();
     let start_steps = engine.steps();
@@ -644,7 +659,7 @@ pub fn run_with<S: Simulation>(
             if opts.verbose {
                 say(&snap);
             }
-            write_outputs(&obs, &snap, &mut csv, &mut series)?;
+            write_outputs(&engine, &obs, &snap, &mut csv, &mut series)?;
         }
         last_obs = obs;
         if steps.is_multiple_of(scene.checkpoint_every) {
@@ -664,7 +679,7 @@ pub fn run_with<S: Simulation>(
     }
     let last = snapshot(&engine, &last_obs);
     if interrupted && !engine.steps().is_multiple_of(scene.output_every) {
-        write_outputs(&last_obs, &last, &mut csv, &mut series)?;
+        write_outputs(&engine, &last_obs, &last, &mut csv, &mut series)?;
     }
     save(&engine, &mut csv)?;
     let wall = started.elapsed().as_secs_f64();

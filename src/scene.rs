@@ -31,6 +31,9 @@
 //! impact_velocity = 1.0         # m/s, > 0, default 1: largest expected impact speed; sets the
 //!                               # Hertz/JKR contact time of the automatic time step
 //! checkpoint_every = 10000      # default 10 * output_every, >= 1: steps between checkpoints
+//! contact_output = true         # default: true under 100000 particles; with each VTK snapshot,
+//!                               # the contact network (`contacts/<name>_<step>.vtp`: one line
+//!                               # per contact with its forces, overlap, history, sliding)
 //!
 //! [[material]]                  # at least one; referred to by name
 //! name = "powder"               # required, unique
@@ -357,6 +360,9 @@ pub struct Scene {
     pub impact_velocity: f64,
     /// Steps between checkpoints of `powder run` (default 10 × output_every).
     pub checkpoint_every: u64,
+    /// Write the contact network with each snapshot of `powder run`; `None`: under
+    /// [`CONTACT_OUTPUT_BELOW`] particles ([`Scene::writes_contacts`]).
+    pub contact_output: Option<bool>,
     /// Materials, by index.
     pub materials: Vec<Material>,
     /// Pair models; they take precedence over the materials' own models.
@@ -391,6 +397,12 @@ impl Scene {
             .unwrap_or_default();
         let text = crate::overrides::apply(&text, sets)?;
         Self::from_toml_str(&text, &name)
+    }
+
+    /// Whether `powder run` writes the contact network with each snapshot.
+    pub fn writes_contacts(&self) -> bool {
+        self.contact_output
+            .unwrap_or(self.particles.len() < CONTACT_OUTPUT_BELOW)
     }
 
     /// The contact model for a pair of material indices: an `[[interaction]]` for the pair
@@ -438,6 +450,10 @@ const TOP_KEYS: &[&str] = &[
     "wall",
     "particles",
 ];
+/// Particles below which `contact_output` defaults to on (the contact network files of a
+/// larger scene get large: a dense packing has about three contacts per particle).
+pub const CONTACT_OUTPUT_BELOW: usize = 100_000;
+
 const DOMAIN_KEYS: &[&str] = &["min", "max", "periodic"];
 const SIMULATION_KEYS: &[&str] = &[
     "duration",
@@ -448,6 +464,7 @@ const SIMULATION_KEYS: &[&str] = &[
     "gravity",
     "impact_velocity",
     "checkpoint_every",
+    "contact_output",
 ];
 const MATERIAL_KEYS: &[&str] = &["name", "density", "model"];
 const INTERACTION_KEYS: &[&str] = &["materials", "model"];
@@ -1017,6 +1034,7 @@ fn parse_scene(src: &Src) -> Res<Scene> {
         jump_impulses: sim.jump_impulses,
         impact_velocity: sim.impact_velocity,
         checkpoint_every: sim.checkpoint_every,
+        contact_output: sim.contact_output,
         duration: sim.duration,
         output_every: sim.output_every,
         materials,
@@ -1080,6 +1098,7 @@ struct SimSettings {
     output_every: u64,
     impact_velocity: f64,
     checkpoint_every: u64,
+    contact_output: Option<bool>,
     gravity: [f64; 3],
 }
 
@@ -1137,6 +1156,7 @@ fn parse_simulation(root: &Tbl) -> Res<SimSettings> {
     }
     Ok(SimSettings {
         checkpoint_every,
+        contact_output: t.bool("contact_output")?,
         impact_velocity,
         duration,
         dt,
@@ -2379,6 +2399,24 @@ positions = [[0.005, 0.005, 0.005]]
 radius = 1e-3
 {extra}"#
         )
+    }
+
+    #[test]
+    fn contact_output_is_on_below_the_size_limit_unless_set() {
+        let small = parse(&minimal("", "")).unwrap();
+        assert_eq!(small.contact_output, None);
+        assert!(small.writes_contacts());
+        let off =
+            minimal("", "").replace("duration = 0.1", "duration = 0.1\ncontact_output = false");
+        assert!(!parse(&off).unwrap().writes_contacts());
+        let mut large = small.clone();
+        large.particles = vec![small.particles[0].clone(); CONTACT_OUTPUT_BELOW];
+        assert!(!large.writes_contacts());
+        large.contact_output = Some(true);
+        assert!(large.writes_contacts());
+        let bad = minimal("", "").replace("duration = 0.1", "duration = 0.1\ncontact_output = 1");
+        let err = parse(&bad).unwrap_err().to_string();
+        assert!(err.contains("contact_output"), "{err}");
     }
 
     #[test]

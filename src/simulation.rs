@@ -7,6 +7,7 @@ use crate::cpu::{ContactStats, CpuEngine, CpuState, Partner};
 use crate::error::PowderError;
 use crate::gpu::{GpuEngine, GpuSavedState};
 use crate::observed::ObservedEnergies;
+use crate::output::contacts::ContactNetwork;
 use crate::scene::Scene;
 use glam::DVec3;
 use std::path::Path;
@@ -24,7 +25,7 @@ pub struct Observation {
     pub energies: ObservedEnergies,
     /// Contact statistics; `None` when the run keeps no ledger (they are counted there).
     pub contacts: Option<ContactStats>,
-    /// Force of the particles on each wall, N (GPU: the normal part only); `None` when the
+    /// Force of the particles on each wall, N (normal and tangential parts); `None` when the
     /// run keeps no ledger (the device keeps the wall contacts' forces there).
     pub wall_forces: Option<Vec<DVec3>>,
     /// Where each wall's plane passes now (its scene point, moved with the wall), m.
@@ -96,6 +97,8 @@ pub trait Simulation {
     fn rebuilds(&self) -> Result<u64, PowderError>;
     /// Quiet batches kept and rolled back (GPU, `gpu::quiet`); `None` on the CPU.
     fn quiet_batches(&self) -> Option<(u64, u64)>;
+    /// The engaged contacts now, for the contact network output.
+    fn contact_network(&self) -> Result<ContactNetwork, PowderError>;
 }
 
 impl Simulation for CpuEngine {
@@ -176,6 +179,9 @@ impl Simulation for CpuEngine {
     }
     fn quiet_batches(&self) -> Option<(u64, u64)> {
         None
+    }
+    fn contact_network(&self) -> Result<ContactNetwork, PowderError> {
+        Ok(CpuEngine::contact_network(self))
     }
 }
 
@@ -307,5 +313,8 @@ impl Simulation for GpuEngine {
     }
     fn quiet_batches(&self) -> Option<(u64, u64)> {
         Some(GpuEngine::quiet_batches(self))
+    }
+    fn contact_network(&self) -> Result<ContactNetwork, PowderError> {
+        GpuEngine::contact_network(self)
     }
 }

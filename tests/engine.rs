@@ -23,6 +23,7 @@ fn scene(
         jump_impulses: None,
         duration: 1.0,
         output_every: 1000,
+        contact_output: None,
         impact_velocity: 1.0,
         checkpoint_every: 10_000,
         materials: vec![Material {

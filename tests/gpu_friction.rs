@@ -4,13 +4,12 @@
 //! with twisting friction), and a sphere spinning and rolling on a floor.
 
 mod common;
-use common::{floor_scene, gpu, law};
+use common::{floor_scene, gpu, law, packing, ROUGH};
 
 use powder::collide::{collide_on, Backend, CollideSpec};
 use powder::compare::{compare, Tolerances};
 use powder::gpu::GpuEngine;
 use powder::model::analytic;
-use powder::scene::Scene;
 use std::f64::consts::PI;
 
 const R: f64 = 1e-3;
@@ -54,68 +53,6 @@ fn oblique_impacts_on_the_gpu_follow_the_closed_form() {
         assert!((g.e - 1.0).abs() < 3e-3, "elastic normal: {}", g.e);
     }
 }
-
-/// A box of jittered 1 mm spheres thrown onto a floor: `materials` as scene lines, every
-/// sphere of the first material, the upper half of `upper`.
-fn packing(materials: &str, upper: &str) -> Scene {
-    let text = format!(
-        r#"
-[domain]
-min = [0.0, 0.0, 0.0]
-max = [0.012, 0.012, 0.02]
-[simulation]
-duration = 0.05
-gravity = [0.0, 0.0, -9.81]
-impact_velocity = 0.5
-{materials}
-[[wall]]
-point = [0.0, 0.0, 0.0]
-normal = [0.0, 0.0, 1.0]
-material = "rough"
-[[particles]]
-kind = "lattice"
-material = "rough"
-min = [0.0011, 0.0011, 0.0011]
-max = [0.0109, 0.0109, 0.0062]
-radius = 1.0e-3
-spacing = 2.1e-3
-jitter = 0.5
-seed = 7
-[[particles]]
-kind = "lattice"
-material = "{upper}"
-min = [0.0011, 0.0011, 0.0066]
-max = [0.0109, 0.0109, 0.0118]
-radius = 1.0e-3
-spacing = 2.1e-3
-jitter = 0.5
-velocity = [0.1, 0.05, -0.3]
-seed = 8
-"#
-    );
-    Scene::from_toml_str(&text, "packing").unwrap()
-}
-
-/// Adhesive elasto-plastic spheres with Luding's sliding (μs > μd), rolling and twisting
-/// friction: one pair law and its three sub-models, against the CPU. The thrown spheres'
-/// sideways speed makes this box chaotic: f32 and f64 separate by a factor ~2 per 250 steps
-/// after the first impacts, with or without friction (3e-5 radii at step 2000, 1e-2 at
-/// 4000), so the comparison covers the first 2400 steps (~60 contacts).
-const ROUGH: &str = r#"
-[[material]]
-name = "rough"
-density = 2000.0
-model = "hysteretic"
-k1 = 100.0
-kp = 500.0
-kc = 100.0
-phi_f = 0.05
-gamma0 = 1e-3
-friction = 0.5
-friction_dynamic = 0.4
-rolling_friction = 0.1
-twisting_friction = 0.1
-"#;
 
 fn report(c: &powder::compare::Comparison) {
     for s in &c.samples {

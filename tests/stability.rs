@@ -180,6 +180,7 @@ fn sticking_oscillations_keep_their_amplitude_or_settle() {
         output_every: 1000,
         impact_velocity: 1.0,
         checkpoint_every: 10_000,
+        contact_output: None,
         materials: vec![Material {
             name: "m".into(),
             density: 2000.0,
@@ -259,6 +260,7 @@ fn pair_scene(dt: DtSetting, force_dt: bool, v: f64, domain: f64) -> Scene {
         output_every: 100,
         impact_velocity: 1.0,
         checkpoint_every: 100,
+        contact_output: None,
         materials: vec![Material {
             name: "m".into(),
             density: 2000.0,

@@ -17,6 +17,7 @@ struct Coulomb3 {
     force: vec3<f32>,
     spring: vec3<f32>,
     stored: vec3<f32>,
+    sliding: bool,
 }
 
 // Test force f0 = −k·ξ − γ·v with ξ = stored + ½·v·dt; stick while |f0| <= mu_s·load,
@@ -27,11 +28,11 @@ fn coulomb3(s: CoulombSpring, k: f32, stored: vec3<f32>, v: vec3<f32>, load: f32
     let f0 = -k * spring - s.gamma * v;
     let magnitude = length(f0);
     if (magnitude <= s.mu_s * load) {
-        return Coulomb3(f0, spring, spring + half);
+        return Coulomb3(f0, spring, spring + half, false);
     }
     let force = f0 * (s.mu_d * load / magnitude);
     let reset = -(force + s.gamma * v) / k;
-    return Coulomb3(force, reset, reset + half);
+    return Coulomb3(force, reset, reset + half, true);
 }
 
 // The scalar spring (twisting): as `coulomb3`.

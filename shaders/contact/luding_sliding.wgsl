@@ -12,5 +12,6 @@ fn luding_sliding_apply(row: PairRow, k: Kin, nf: Normal, h: ptr<function, Histo
     let st = coulomb3(s, s.k, rotate_into_plane((*h).spring, k.n), k.v_t, nf.coulomb, k.dt);
     (*h).spring = st.stored;
     (*c).tangential = st.force;
+    (*c).sliding = st.sliding;
     (*c).potential += 0.5 * s.k * dot(st.spring, st.spring);
 }

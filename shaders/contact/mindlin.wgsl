@@ -24,6 +24,7 @@ fn mindlin_apply(row: PairRow, k: Kin, nf: Normal, h: ptr<function, History>, c:
     let limit = p.friction * nf.coulomb;
     let magnitude = length(force);
     if (magnitude > limit) {
+        (*c).sliding = true;
         force = force * (limit / magnitude);
         if (st > 0.0) {
             s = -(force + ct * k.v_t) / st;

@@ -12,9 +12,11 @@ use crate::cpu::cells::CellGrid;
 use crate::cpu::jump::Crossing;
 use crate::cpu::threads::{chunks, Threads};
 use crate::error::PowderError;
+use crate::gpu::composition::Composition;
 use crate::model::{
     ContactHistory, ContactModel, Kinematics, PairConstants, PairGeometry, Response, TimeStep,
 };
+use crate::output::contacts::{ContactLine, ContactNetwork};
 use crate::scene::Scene;
 use crate::setup::Resolved;
 use glam::DVec3;
@@ -147,6 +149,8 @@ struct ContactRecord {
     /// them trapezoidally.
     friction_power: f64,
     couple_power: f64,
+    /// Whether the tangential force slid at the Coulomb limit (the contact network output).
+    sliding: bool,
 }
 
 impl ContactRecord {
@@ -171,6 +175,7 @@ impl ContactRecord {
             potential: r.potential,
             friction_power: r.tangential.dot(m.v_t),
             couple_power: r.couple.dot(m.omega_rel),
+            sliding: r.sliding,
         }
     }
 }
@@ -2038,6 +2043,47 @@ impl CpuEngine {
             .contacts()
             .map(|(k, c)| (k, c.delta, c.history))
             .collect()
+    }
+
+    /// The engaged contacts now (touching, exerting a force or storing energy): pairs by
+    /// (i, j), then wall contacts by (wall, particle), with the scene's history fields.
+    pub fn contact_network(&self) -> ContactNetwork {
+        let mut lines = Vec::new();
+        for ((i, j), c) in self.pairs.contacts().filter(|(_, c)| c.engaged()) {
+            let (i, j) = (i as usize, j as usize);
+            let n = self.separation(i, j).normalize_or_zero();
+            lines.push(ContactLine {
+                i,
+                partner: Partner::Particle(j),
+                normal_force: c.force,
+                force: c.force * n + c.tangential,
+                overlap: c.delta,
+                history: c.history,
+                sliding: c.sliding,
+            });
+        }
+        for ((w, i), c) in self.wall_contacts.contacts().filter(|(_, c)| c.engaged()) {
+            let w = w as usize;
+            lines.push(ContactLine {
+                i: i as usize,
+                partner: Partner::Wall(w),
+                normal_force: c.force,
+                force: c.force * self.walls[w].normal + c.tangential,
+                overlap: c.delta,
+                history: c.history,
+                sliding: c.sliding,
+            });
+        }
+        let models: Vec<ContactModel> = self
+            .models
+            .iter()
+            .chain(&self.wall_models)
+            .copied()
+            .collect();
+        ContactNetwork {
+            lines,
+            fields: Composition::of(&models).history(),
+        }
     }
 
     /// Contact counts and overlap statistics now.

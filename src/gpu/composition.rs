@@ -19,41 +19,42 @@ use crate::model::friction::{rolling, sliding, twisting};
 use crate::model::history::{HistoryField, Mirror, Shape};
 use crate::model::{hysteretic, jkr, krijt, ContactHistory, ContactModel, CoulombSpring};
 
-/// What a step variant keeps beyond the forces: the energy ledger (`shaders/ledger.wgsl`)
-/// and the impulses of force jumps inside the step (`shaders/jump.wgsl`). Both need each
-/// contact as the last step left it (the entries' `prior`).
+/// What a step variant keeps beyond the forces: the energy ledger (`shaders/ledger.wgsl`),
+/// the impulses of force jumps inside the step (`shaders/jump.wgsl`) and the contact
+/// network output. Each needs each contact as the last step left it (the entries' `prior`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct Keeps {
     /// The energy ledger and contact statistics.
     pub ledger: bool,
     /// The force jumps' impulses (the scene's `jump_impulses`).
     pub jumps: bool,
+    /// The priors for the contact network output where neither of the others keeps them
+    /// ([`Self::new`] sets it only then, so equal layouts have one name).
+    pub contacts: bool,
 }
 
 impl Keeps {
-    /// Every combination, for the tests that compile each variant.
-    pub const ALL: [Keeps; 4] = [
-        Keeps {
-            ledger: false,
-            jumps: false,
-        },
-        Keeps {
-            ledger: true,
-            jumps: false,
-        },
-        Keeps {
-            ledger: false,
-            jumps: true,
-        },
-        Keeps {
-            ledger: true,
-            jumps: true,
-        },
+    /// Every distinct combination, for the tests that compile each variant.
+    pub const ALL: [Keeps; 5] = [
+        Keeps::new(false, false, false),
+        Keeps::new(true, false, false),
+        Keeps::new(false, true, false),
+        Keeps::new(true, true, false),
+        Keeps::new(false, false, true),
     ];
+
+    /// What a run keeps: the ledger, the force jumps, the contact network output.
+    pub const fn new(ledger: bool, jumps: bool, contacts: bool) -> Self {
+        Self {
+            ledger,
+            jumps,
+            contacts: contacts && !ledger && !jumps,
+        }
+    }
 
     /// Whether each contact's state at the end of the last step is kept.
     pub fn prior(&self) -> bool {
-        self.ledger || self.jumps
+        self.ledger || self.jumps || self.contacts
     }
 }
 
@@ -382,8 +383,9 @@ impl Composition {
     pub fn variant_name(&self, keeps: Keeps, mirrors: bool) -> String {
         let ledger = if keeps.ledger { "_ledger" } else { "" };
         let jumps = if keeps.jumps { "_jumps" } else { "" };
+        let contacts = if keeps.contacts { "_contacts" } else { "" };
         let mirrors = if mirrors { "_mirrors" } else { "" };
-        format!("{}{ledger}{jumps}{mirrors}", self.name())
+        format!("{}{ledger}{jumps}{contacts}{mirrors}", self.name())
     }
 
     /// Whether particles carry angular velocity: some sub-model exerts tangential forces
@@ -613,7 +615,7 @@ impl Composition {
         for l in self.laws() {
             let own: Vec<&str> = l.history.iter().map(|f| f.name).collect();
             w.push_str(&format!(
-                "fn contact_{0}(p: PairRow, k: Kin, h: ptr<function, History>) -> Contact {{\n    let nf = {1}(p.{0}, k, h);\n    var c = Contact(nf.force, vec3<f32>(0.0), vec3<f32>(0.0), nf.potential, nf.engaged);\n",
+                "fn contact_{0}(p: PairRow, k: Kin, h: ptr<function, History>) -> Contact {{\n    let nf = {1}(p.{0}, k, h);\n    var c = Contact(nf.force, vec3<f32>(0.0), vec3<f32>(0.0), nf.potential, nf.engaged, false);\n",
                 l.row.member, l.normal
             ));
             let applies: Vec<&str> = self

@@ -38,7 +38,7 @@
 //! over the first 20 000 steps).
 //! Every run stays bitwise deterministic (the decision is a pure function of the state).
 
-use crate::cpu::{ContactStats, Energies};
+use crate::cpu::{ContactStats, Energies, Partner};
 use crate::error::PowderError;
 use crate::gpu::composition::{Composition, Keeps};
 use crate::gpu::context::GpuContext;
@@ -55,6 +55,7 @@ use crate::gpu::state::{Buffer, StateLayout};
 use crate::gpu::traffic::{PassTraffic, When};
 use crate::gpu::window::{Blocks, WindowBindings, Windows, MIN_WINDOW};
 use crate::model::{ContactHistory, ContactModel, PairGeometry};
+use crate::output::contacts::{ContactLine, ContactNetwork};
 use crate::scene::Scene;
 use crate::setup::Resolved;
 use glam::DVec3;
@@ -666,6 +667,10 @@ pub struct GpuOptions {
     /// way; more windows take more list entries (each window's block is sized for the
     /// fullest).
     pub window_particles: Option<u64>,
+    /// Keep what [`GpuEngine::contact_network`] reads (each contact's prior: 12 bytes a
+    /// list entry) where neither the ledger nor the force jumps keep it. Default off;
+    /// `powder run` turns it on for the scene's `contact_output`.
+    pub contacts: bool,
 }
 
 impl Default for GpuOptions {
@@ -676,6 +681,7 @@ impl Default for GpuOptions {
             list_entries: None,
             software_paths: None,
             window_particles: None,
+            contacts: false,
         }
     }
 }
@@ -963,10 +969,11 @@ impl GpuEngine {
         }
         let all_models: Vec<ContactModel> =
             r.models.iter().chain(&r.wall_models).copied().collect();
-        let keeps = Keeps {
+        let keeps = Keeps::new(
             ledger,
-            jumps: places_jumps(scene, &all_models, r.r_max),
-        };
+            places_jumps(scene, &all_models, r.r_max),
+            options.contacts,
+        );
         let (kind, pairs) = pair_table(&all_models);
         debug_assert_eq!(kind.rotation(), r.rotation);
         let r_min = scene
@@ -2695,8 +2702,9 @@ impl GpuEngine {
         s
     }
 
-    /// Force of the particles on each wall after the last step, N: the normal part, from the
-    /// ledger's per-contact normal force (the tangential part is not kept on the device).
+    /// Force of the particles on each wall after the last step, N: each wall contact's normal
+    /// force (its prior) and tangential force (kept in its entry's pair torque where
+    /// particles rotate; there is none otherwise).
     pub fn wall_forces(&self) -> Result<Vec<DVec3>, PowderError> {
         let walls = self.wall_normals.len();
         let mut f = vec![DVec3::ZERO; walls];
@@ -2718,7 +2726,13 @@ impl GpuEngine {
                 .read_vec4(&entries, "prior", (self.entries, windows), e);
             let row = read.unwrap_or_default();
             if row[3] > 0.0 {
-                f[w] -= row[1] as f64 * self.wall_normals[w];
+                let t = s
+                    .entry_layout
+                    .read_vec3(&entries, "pair_torque", (self.entries, windows), e)
+                    .map_or(DVec3::ZERO, |t| {
+                        DVec3::new(t[0] as f64, t[1] as f64, t[2] as f64)
+                    });
+                f[w] -= row[1] as f64 * self.wall_normals[w] + t;
             }
         }
         Ok(f)
@@ -2877,6 +2891,103 @@ impl GpuEngine {
         }
         list.sort_by_key(|c| c.0);
         Ok(list)
+    }
+
+    /// The engaged contacts after the last step (touching, exerting a force or storing
+    /// energy), as [`CpuEngine::contact_network`](crate::cpu::CpuEngine::contact_network)
+    /// gives them: each pair from its lower id's side, pairs by (i, j), then wall contacts
+    /// by (wall, particle). Reads the lists back; needs the contacts' priors (the ledger,
+    /// the force jumps or [`GpuOptions::contacts`]). Right after a restore the forces are
+    /// those of the next step's first evaluation: zero until a step has run.
+    pub fn contact_network(&self) -> Result<ContactNetwork, PowderError> {
+        let s = &self.state;
+        if !self.keeps.prior() {
+            return Err(PowderError::Run(
+                "this GPU run keeps no per-contact state to output (it has no energy ledger and no force jumps): run it with GpuOptions { contacts: true } (`powder run` does where the scene's contact_output is on)".into(),
+            ));
+        }
+        let hb = self.kind.history_bytes() as usize;
+        let encoder = self.ctx.device.create_command_encoder(&Default::default());
+        let out = submit_and_read(
+            &self.ctx,
+            encoder,
+            &[(&s.state, s.state.size()), (&s.entries, s.entries.size())],
+        )?;
+        let ids: Vec<[u32; 4]> = s.layout.unpack(&out[0], "ids");
+        let entries = &out[1];
+        let (cap, windows) = (self.entries, s.layout.windows());
+        let layout = &s.entry_layout;
+        let id_of = |e: u64| {
+            let at = layout.byte_of("hist_pid", cap, windows, e)? as usize;
+            entries
+                .get(at..at + 4)
+                .map(bytemuck::pod_read_unaligned::<u32>)
+        };
+        let vec3 = |name: &str, e: u64| {
+            let v = layout.read_vec3(entries, name, (cap, windows), e);
+            v.map_or(DVec3::ZERO, |v| {
+                DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64)
+            })
+        };
+        let history = |e: u64| -> Option<ContactHistory> {
+            let at = layout.byte_of("hist", cap, windows, e)? as usize;
+            Some(self.decode_history(entries.get(at..at + hb)?))
+        };
+        let mut pairs = Vec::new();
+        let mut walls = Vec::new();
+        for &[pid, row, count, near_walls] in &ids {
+            for e in row as u64..(row + count + near_walls) as u64 {
+                let (Some(partner), Some(prior), Some(h)) = (
+                    id_of(e),
+                    layout.read_vec4(entries, "prior", (cap, windows), e),
+                    history(e),
+                ) else {
+                    continue;
+                };
+                if prior[3] <= 0.0 {
+                    continue;
+                }
+                let mut line = ContactLine {
+                    i: pid as usize,
+                    partner: Partner::Particle(partner as usize),
+                    normal_force: prior[1] as f64,
+                    force: vec3("pair_force", e),
+                    overlap: prior[0] as f64,
+                    history: h,
+                    sliding: prior[3] > 1.5,
+                };
+                if partner & WALL_ENTRY != 0 {
+                    let w = (partner & !WALL_ENTRY) as usize;
+                    if w >= self.wall_normals.len() {
+                        continue;
+                    }
+                    // the normal force from the prior, the tangential one kept in the
+                    // entry's pair torque (a wall takes none)
+                    line.partner = Partner::Wall(w);
+                    line.force = line.normal_force * self.wall_normals[w] + vec3("pair_torque", e);
+                    walls.push(((w, pid), line));
+                } else {
+                    if partner < pid {
+                        // the pair from its lower id's side: the force on it, its view
+                        line.i = partner as usize;
+                        line.partner = Partner::Particle(pid as usize);
+                        line.force = -line.force;
+                        line.history = self.kind.mirror_history(h);
+                    }
+                    pairs.push(line);
+                }
+            }
+        }
+        pairs.sort_by_key(|c| match c.partner {
+            Partner::Particle(j) => (c.i, j),
+            Partner::Wall(w) => (c.i, w),
+        });
+        walls.sort_by_key(|(k, _)| *k);
+        pairs.extend(walls.into_iter().map(|(_, c)| c));
+        Ok(ContactNetwork {
+            lines: pairs,
+            fields: self.kind.history(),
+        })
     }
 
     /// The history of particle `i`'s contact with wall `w` after the last step (zero when

@@ -250,6 +250,23 @@ impl RecordLayout {
         }
     }
 
+    /// Record `r`'s `vec3<f32>` field `name` from the read-back bytes of its buffer.
+    pub fn read_vec3(
+        &self,
+        bytes: &[u8],
+        name: &str,
+        (capacity, windows): (u64, &Windows),
+        r: u64,
+    ) -> Option<[f32; 3]> {
+        let kind = &self.fields.iter().find(|f| f.name == name)?.kind;
+        let at = self.byte_of(name, capacity, windows, r)? as usize;
+        let words: &[u8] = bytes.get(at..at + 12)?;
+        match kind {
+            Kind::Vec3 => Some(bytemuck::pod_read_unaligned(words)),
+            _ => None,
+        }
+    }
+
     /// Bytes of one window's block of `capacity` records (all fields; the host's block
     /// where the records have one).
     pub fn block_bytes(&self, capacity: u64) -> u64 {
@@ -406,10 +423,7 @@ mod tests {
     #[test]
     fn records_place_fields_one_region_after_another() {
         let hist = vec!["a".to_string(), "b".to_string()];
-        let keeps = Keeps {
-            ledger: true,
-            jumps: false,
-        };
+        let keeps = Keeps::new(true, false, false);
         let e = RecordLayout::entries(&hist, true, keeps);
         assert_eq!(e.words(), 1 + 1 + 1 + 2 + 3 + 3 + 4);
         // the force jumps' impulses left out: no-op accessors, no words
@@ -424,10 +438,7 @@ mod tests {
         let calls: BTreeSet<String> = ["load_hist".to_string(), "store_nbr".to_string()].into();
         assert_eq!(e.touched_bytes(&calls, 10), 4 * (2 + 1) * 10);
         // without the ledger the prior keeps (δ, F, state): three words, z reads 0
-        let jumps = Keeps {
-            ledger: false,
-            jumps: true,
-        };
+        let jumps = Keeps::new(false, true, false);
         let j = RecordLayout::entries(&hist, false, jumps);
         assert_eq!(j.place("prior"), Some((5, 3)));
         assert_eq!(j.words(), 8 + 3 + 1 + 3);

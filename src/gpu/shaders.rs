@@ -56,13 +56,7 @@ pub fn step_variant() -> ShaderVariant {
         gamma0: 0.0,
         luding: Default::default(),
     });
-    Composition::of(&[lsd]).variant(
-        Keeps {
-            ledger: true,
-            jumps: false,
-        },
-        false,
-    )
+    Composition::of(&[lsd]).variant(Keeps::new(true, false, false), false)
 }
 
 /// A shader stage: one file of `shaders/`.

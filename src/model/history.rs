@@ -79,6 +79,34 @@ pub const ROLLING_DISPLACEMENT: HistoryField = HistoryField {
     doc: "the rolling displacement, m",
 };
 
+impl HostField {
+    /// The name of the field's values in the contact network output and how many
+    /// components they have (the touched flag of `DeltaMaxTouched` is output as `touched`).
+    pub fn output(self) -> (&'static str, usize) {
+        match self {
+            HostField::DeltaMaxTouched => ("delta_max", 1),
+            HostField::Touched => ("touched", 1),
+            HostField::Tangential => ("tangential_spring", 3),
+            HostField::Rolling => ("rolling_displacement", 3),
+            HostField::ContactRadius => ("contact_radius", 1),
+            HostField::Twist => ("twist", 1),
+        }
+    }
+
+    /// The field's value in `h` (the first [`Self::output`] components are meaningful).
+    pub fn value(self, h: &ContactHistory) -> [f64; 3] {
+        let v = |d: DVec3| d.to_array();
+        match self {
+            HostField::DeltaMaxTouched => [h.delta_max, 0.0, 0.0],
+            HostField::Touched => [f64::from(u8::from(h.touched)), 0.0, 0.0],
+            HostField::Tangential => v(h.tangential),
+            HostField::Rolling => v(h.rolling),
+            HostField::ContactRadius => [h.contact_radius, 0.0, 0.0],
+            HostField::Twist => [h.twist, 0.0, 0.0],
+        }
+    }
+}
+
 impl HistoryField {
     /// Stored f32 words.
     pub fn words(&self) -> usize {

@@ -163,6 +163,9 @@ pub struct Response {
     pub couple: DVec3,
     /// Stored energy of the contact: normal + the springs (tangential, rolling, twisting), J.
     pub potential: f64,
+    /// Whether the tangential force slipped at the Coulomb limit (sticking otherwise, or no
+    /// friction).
+    pub sliding: bool,
 }
 
 impl ContactModel {
@@ -238,6 +241,7 @@ impl ContactModel {
                         &mut history.tangential,
                     );
                     r.tangential = t.force;
+                    r.sliding = t.sliding;
                     r.potential += 0.5 * t.stiffness * history.tangential.length_squared();
                 }
                 if normal.in_contact && p.rolling_hysteresis > 0.0 {
@@ -300,6 +304,7 @@ impl ContactModel {
             let f = luding.respond(k, geom, k.delta > 0.0, load, dt, history);
             r.tangential = f.tangential;
             r.couple = f.couple;
+            r.sliding = f.sliding;
             r.potential += f.potential;
         }
         r

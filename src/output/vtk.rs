@@ -79,14 +79,28 @@ pub fn vtp(p: &Particles) -> String {
 /// A series of snapshots in a directory plus their `.pvd` collection.
 pub struct Series {
     dir: PathBuf,
+    /// The snapshots' folder in `dir`, and their names' prefix.
+    folder: String,
     name: String,
+    /// The collection's file name in `dir`.
+    collection: String,
     entries: Vec<(f64, String)>,
 }
 
 impl Series {
-    /// Snapshots go to `dir/snapshots/`, the collection to `dir/<name>.pvd`.
+    /// Particle snapshots: `dir/snapshots/<name>_<step>.vtp`, collected in `dir/<name>.pvd`.
     pub fn new(dir: &Path, name: &str) -> Result<Self, PowderError> {
-        let snaps = dir.join("snapshots");
+        Self::in_folder(dir, "snapshots", name, &format!("{name}.pvd"))
+    }
+
+    /// Snapshots `dir/<folder>/<name>_<step>.vtp`, collected in `dir/<collection>`.
+    pub fn in_folder(
+        dir: &Path,
+        folder: &str,
+        name: &str,
+        collection: &str,
+    ) -> Result<Self, PowderError> {
+        let snaps = dir.join(folder);
         std::fs::create_dir_all(&snaps).map_err(|e| {
             PowderError::io(
                 format!("cannot create the output directory `{}`", snaps.display()),
@@ -95,14 +109,51 @@ impl Series {
         })?;
         Ok(Self {
             dir: dir.to_path_buf(),
+            folder: folder.to_string(),
             name: name.to_string(),
+            collection: collection.to_string(),
             entries: Vec::new(),
         })
     }
 
-    /// Re-opens a series (on resume): keeps the snapshots up to `step`.
-    pub fn keep_until(&mut self, existing: Vec<(f64, String)>) {
-        self.entries = existing;
+    /// Re-opens a series (on resume): keeps the snapshots an earlier run wrote up to `step`,
+    /// with the times its collection gives them (`step · dt` where it gives none); the
+    /// collection is rewritten with the next snapshot.
+    pub fn keep_until(&mut self, step: u64, dt: f64) {
+        let listed = std::fs::read_to_string(self.dir.join(&self.collection)).unwrap_or_default();
+        let time_of = |file: &str| -> Option<f64> {
+            let line = listed
+                .lines()
+                .find(|l| l.contains(&format!(r#"file="{file}""#)))?;
+            let t = line.split(r#"timestep=""#).nth(1)?.split('"').next()?;
+            t.parse().ok()
+        };
+        let prefix = format!("{}_", self.name);
+        let mut found: Vec<(u64, String)> = std::fs::read_dir(self.dir.join(&self.folder))
+            .map(|rd| {
+                rd.filter_map(|e| e.ok())
+                    .filter_map(|e| {
+                        let f = e.file_name().to_string_lossy().into_owned();
+                        let s = f
+                            .strip_prefix(&prefix)?
+                            .strip_suffix(".vtp")?
+                            .parse::<u64>()
+                            .ok()?;
+                        (s <= step).then(|| (s, format!("{}/{f}", self.folder)))
+                    })
+                    .collect()
+            })
+            .unwrap_or_default();
+        found.sort();
+        self.entries = found
+            .into_iter()
+            .map(|(s, f)| (time_of(&f).unwrap_or(s as f64 * dt), f))
+            .collect();
+    }
+
+    /// The folder the snapshots go to.
+    pub fn folder(&self) -> PathBuf {
+        self.dir.join(&self.folder)
     }
 
     /// The snapshots written so far: (time s, `.vtp` path relative to the output directory).
@@ -110,10 +161,16 @@ impl Series {
         &self.entries
     }
 
-    /// Writes the snapshot of `step` and rewrites the collection.
+    /// Writes the particle snapshot of `step` and rewrites the collection.
     pub fn write(&mut self, step: u64, time: f64, p: &Particles) -> Result<(), PowderError> {
-        let file = format!("snapshots/{}_{step:010}.vtp", self.name);
-        write_atomic(&self.dir.join(&file), vtp(p).as_bytes())?;
+        self.write_vtp(step, time, vtp(p).as_bytes())
+    }
+
+    /// Writes `doc` (a `.vtp` document) as the snapshot of `step` and rewrites the
+    /// collection.
+    pub fn write_vtp(&mut self, step: u64, time: f64, doc: &[u8]) -> Result<(), PowderError> {
+        let file = format!("{}/{}_{step:010}.vtp", self.folder, self.name);
+        write_atomic(&self.dir.join(&file), doc)?;
         self.entries.retain(|(_, f)| f != &file);
         self.entries.push((time, file));
         let mut pvd = String::from(
@@ -126,7 +183,7 @@ impl Series {
             );
         }
         pvd.push_str("  </Collection>\n</VTKFile>\n");
-        write_atomic(&self.dir.join(format!("{}.pvd", self.name)), pvd.as_bytes())
+        write_atomic(&self.dir.join(&self.collection), pvd.as_bytes())
     }
 }
 

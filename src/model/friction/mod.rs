@@ -56,6 +56,8 @@ pub struct FrictionResponse {
     pub couple: DVec3,
     /// The springs' energy ½k_t|ξ_t|² + ½k_r|ξ_r|² + ½k_o·ξ_o², J.
     pub potential: f64,
+    /// Whether the sliding law slipped (the Coulomb limit truncated the tangential force).
+    pub sliding: bool,
 }
 
 /// The oscillator of one sub-model for the time-step rule: stiffness, effective mass,
@@ -143,6 +145,7 @@ impl LudingFriction {
         if self.sliding.is_on() {
             let st = sliding::step(&self.sliding, k.n, k.v_t, load, dt, &mut history.tangential);
             r.tangential = st.force;
+            r.sliding = st.sliding;
             r.potential += 0.5 * self.sliding.k * st.spring.length_squared();
         }
         if self.rolling.is_on() {

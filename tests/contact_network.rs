@@ -1,0 +1,209 @@
+//! The contact network output: each engaged contact with its forces, overlap, history and
+//! sliding state, the same from the GPU engine as from the f64 CPU reference, and written
+//! by `powder run` with each snapshot (`contacts/<scene>_<step>.vtp` and its `.pvd`).
+
+mod common;
+use common::{gpu, packing, ROUGH};
+
+use powder::cpu::{CpuEngine, Partner};
+use powder::gpu::{GpuEngine, GpuOptions};
+use powder::output::appended::read_array;
+use powder::output::contacts::ContactNetwork;
+
+fn key(c: &powder::output::contacts::ContactLine) -> (usize, i64) {
+    match c.partner {
+        Partner::Particle(j) => (c.i, j as i64),
+        Partner::Wall(w) => (c.i, -1 - w as i64),
+    }
+}
+
+/// (contacts, wall contacts, sliding, sliding on a wall)
+fn summary(n: &ContactNetwork) -> [usize; 4] {
+    let wall = |c: &&powder::output::contacts::ContactLine| matches!(c.partner, Partner::Wall(_));
+    let walls = n.lines.iter().filter(wall).count();
+    let sliding = n.lines.iter().filter(|c| c.sliding).count();
+    let sliding_walls = n.lines.iter().filter(wall).filter(|c| c.sliding).count();
+    [n.lines.len(), walls, sliding, sliding_walls]
+}
+
+/// Runs `scene` on both engines and compares their networks after each of `chunks` steps:
+/// the same contacts (pairs by (i, j), then walls), touched and sliding flags, and forces,
+/// overlaps and springs to f32 accuracy. Returns the last sample's [`summary`].
+fn same_networks(scene: &powder::scene::Scene, chunks: &[u64]) -> Option<[usize; 4]> {
+    let ctx = gpu()?;
+    let options = GpuOptions {
+        ledger: false,
+        contacts: true,
+        ..Default::default()
+    };
+    let mut g = GpuEngine::with_options(scene, ctx, options).unwrap();
+    let mut c = CpuEngine::new(scene).unwrap();
+    let mut last = [0; 4];
+    let mut sideways = 0.0f64;
+    for &steps in chunks {
+        g.run_steps(steps).unwrap();
+        c.run_steps(steps).unwrap();
+        let (gn, cn) = (g.contact_network().unwrap(), c.contact_network());
+        eprintln!("cpu {:?} gpu {:?}", summary(&cn), summary(&gn));
+        assert_eq!(gn.fields, cn.fields);
+        let keys = |n: &ContactNetwork| n.lines.iter().map(key).collect::<Vec<_>>();
+        assert_eq!(keys(&gn), keys(&cn));
+        let scale = cn
+            .lines
+            .iter()
+            .map(|l| l.force.length())
+            .fold(0.0, f64::max);
+        let mut worst = [0.0f64; 5];
+        for (a, b) in gn.lines.iter().zip(&cn.lines) {
+            worst[0] = worst[0].max((a.normal_force - b.normal_force).abs() / scale);
+            worst[1] = worst[1].max((a.force - b.force).length() / scale);
+            worst[2] = worst[2].max((a.overlap - b.overlap).abs());
+            worst[3] = worst[3].max((a.history.tangential - b.history.tangential).length());
+            worst[4] = worst[4]
+                .max((a.history.rolling - b.history.rolling).length())
+                .max((a.history.twist - b.history.twist).abs());
+            assert_eq!(a.sliding, b.sliding, "{a:?} vs {b:?}");
+            assert_eq!(a.history.touched, b.history.touched, "{a:?} vs {b:?}");
+        }
+        eprintln!("force scale {scale:e}: worst {worst:?}");
+        // measured (1 mm spheres): up to 1.2e-4 of the largest force, 1.8e-9 m overlap,
+        // 8.4e-9 m springs
+        assert!(worst[0] < 1e-3 && worst[1] < 1e-3, "{worst:?}");
+        assert!(
+            worst[2] < 1e-8 && worst[3] < 3e-8 && worst[4] < 3e-8,
+            "{worst:?}"
+        );
+        last = summary(&cn);
+        // the wall forces sum the same contacts, tangential parts included
+        let (gw, cw) = (g.wall_forces().unwrap(), c.wall_forces());
+        let off = (gw[0] - cw[0]).length() / cw[0].length().max(1e-300);
+        eprintln!("floor force cpu {} gpu {} ({off:.1e})", cw[0], gw[0]);
+        assert!(off < 1e-3, "{} vs {}", gw[0], cw[0]);
+        sideways = sideways.max(cw[0].truncate().length());
+    }
+    // (friction pushes the floor sideways: the part only the tangential forces give)
+    assert!(sideways > 1e-6, "{sideways}");
+    Some(last)
+}
+
+/// Rough adhesive elasto-plastic spheres (Luding's sliding with μs > μd, rolling and
+/// twisting friction) thrown onto a floor, with a low sliding coefficient so that some
+/// contacts slide: pairs and wall contacts, sliding and sticking, in the compared networks.
+#[test]
+fn the_gpu_network_is_the_cpu_network_with_luding_friction() {
+    let slippery = ROUGH.replace(
+        "friction = 0.5\nfriction_dynamic = 0.4",
+        "friction = 0.05\nfriction_dynamic = 0.04",
+    );
+    assert_ne!(slippery, ROUGH);
+    let Some(last) = same_networks(&packing(&slippery, "rough"), &[1500, 500, 400]) else {
+        return;
+    };
+    assert!(
+        last[0] > 50 && last[1] > 5 && last[2] > 10 && last[2] < last[0] && last[3] > 0,
+        "{last:?}"
+    );
+}
+
+/// The same with JKR spheres, Mindlin friction (its own Coulomb limit) and rolling
+/// resistance.
+#[test]
+fn the_gpu_network_is_the_cpu_network_with_jkr_friction() {
+    let jkr = r#"
+[[material]]
+name = "rough"
+density = 2000.0
+model = "jkr"
+youngs = 1e5
+poisson = 0.3
+surface_energy = 0.05
+restitution = 0.5
+friction = 0.05
+rolling_hysteresis = 0.5
+"#;
+    let Some(last) = same_networks(&packing(jkr, "rough"), &[1500, 500, 400]) else {
+        return;
+    };
+    assert!(
+        last[0] > 50 && last[1] > 5 && last[2] > 5 && last[2] < last[0],
+        "{last:?}"
+    );
+}
+
+/// One data array of a contact network file, as f64.
+fn array(doc: &[u8], name: &str) -> Vec<f64> {
+    read_array(doc, name).unwrap_or_else(|| panic!("no array {name}"))
+}
+
+/// `powder run` writes the network with each snapshot and its collection; its contacts
+/// in touch are the series' counts, the forces the engine's; `contact_output = false`
+/// writes none.
+#[test]
+fn a_run_writes_the_network_with_each_snapshot() {
+    use powder::run::{run_cpu_with, RunOptions};
+    let mut scene = packing(ROUGH, "rough");
+    scene.output_every = 500;
+    let dir = tempfile::tempdir().unwrap();
+    let opts = RunOptions {
+        out_dir: Some(dir.path().to_path_buf()),
+        max_steps: Some(2000),
+        ..Default::default()
+    };
+    run_cpu_with(&scene, &opts, |_| {}).unwrap();
+    let pvd = std::fs::read_to_string(dir.path().join("packing_contacts.pvd")).unwrap();
+    assert_eq!(pvd.matches("<DataSet").count(), 5, "{pvd}");
+    assert!(pvd.contains(r#"file="contacts/packing_0000002000.vtp""#));
+    let doc = std::fs::read(dir.path().join("contacts/packing_0000002000.vtp")).unwrap();
+    let csv = std::fs::read_to_string(dir.path().join("series.csv")).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let last: Vec<&str> = csv.lines().last().unwrap().split(',').collect();
+    let col = |name: &str| {
+        last[header.iter().position(|h| *h == name).unwrap()]
+            .parse::<usize>()
+            .unwrap()
+    };
+    let (overlap, partner) = (array(&doc, "overlap"), array(&doc, "partner"));
+    let touching = |wall: bool| {
+        overlap
+            .iter()
+            .zip(&partner)
+            .filter(|(d, p)| **d > 0.0 && (**p < 0.0) == wall)
+            .count()
+    };
+    assert!(col("contacts") > 20, "{csv}");
+    assert_eq!(touching(false), col("contacts"));
+    assert_eq!(touching(true), col("wall_contacts"));
+    // the lines are the engine's contacts, each force the one on particle i
+    let mut engine = CpuEngine::new(&scene).unwrap();
+    engine.run_steps(2000).unwrap();
+    let net = engine.contact_network();
+    let force = array(&doc, "force");
+    assert_eq!(force.len(), 3 * net.lines.len());
+    for (k, c) in net.lines.iter().enumerate() {
+        assert_eq!(force[3 * k..3 * k + 3], c.force.to_array());
+    }
+    for name in [
+        "normal_force",
+        "sliding",
+        "touched",
+        "i",
+        "delta_max",
+        "tangential_spring",
+        "rolling_displacement",
+        "twist",
+    ] {
+        array(&doc, name);
+    }
+    // off: no folder, no collection
+    scene.contact_output = Some(false);
+    let off = tempfile::tempdir().unwrap();
+    let opts = RunOptions {
+        out_dir: Some(off.path().to_path_buf()),
+        max_steps: Some(500),
+        ..Default::default()
+    };
+    run_cpu_with(&scene, &opts, |_| {}).unwrap();
+    assert!(!off.path().join("contacts").exists());
+    assert!(!off.path().join("packing_contacts.pvd").exists());
+    assert!(off.path().join("packing.pvd").exists());
+}
