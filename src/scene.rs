@@ -2410,7 +2410,7 @@ radius = 1e-3
             minimal("", "").replace("duration = 0.1", "duration = 0.1\ncontact_output = false");
         assert!(!parse(&off).unwrap().writes_contacts());
         let mut large = small.clone();
-        large.particles = vec![small.particles[0].clone(); CONTACT_OUTPUT_BELOW];
+        large.particles = vec![small.particles[0]; CONTACT_OUTPUT_BELOW];
         assert!(!large.writes_contacts());
         large.contact_output = Some(true);
         assert!(large.writes_contacts());
