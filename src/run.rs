@@ -435,7 +435,7 @@ pub fn run_gpu_with(
 ) -> Result<RunSummary, PowderError> {
     let rule = crate::setup::Resolved::new(scene)?.time_step.reason;
     let options = GpuOptions {
-        contacts: opts.out_dir.is_some() && scene.writes_contacts(),
+        contacts: opts.gpu.contacts || (opts.out_dir.is_some() && scene.writes_contacts()),
         ..opts.gpu
     };
     let engine = GpuEngine::with_options(scene, ctx, options)?;

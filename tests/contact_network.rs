@@ -30,31 +30,46 @@ fn summary(n: &ContactNetwork) -> [usize; 4] {
 /// the same contacts (pairs by (i, j), then walls), touched and sliding flags, and forces,
 /// overlaps and springs to f32 accuracy. Returns the last sample's [`summary`].
 fn same_networks(scene: &powder::scene::Scene, chunks: &[u64]) -> Option<[usize; 4]> {
-    let ctx = gpu()?;
     let options = GpuOptions {
         ledger: false,
         contacts: true,
         ..Default::default()
     };
-    let mut g = GpuEngine::with_options(scene, ctx, options).unwrap();
+    let mut g = GpuEngine::with_options(scene, gpu()?, options).unwrap();
+    // (with the ledger: the same trajectory, and the priors the ledger keeps)
+    let mut ledger = GpuEngine::new(scene, gpu()?).unwrap();
     let mut c = CpuEngine::new(scene).unwrap();
     let mut last = [0; 4];
     let mut sideways = 0.0f64;
     for &steps in chunks {
         g.run_steps(steps).unwrap();
+        ledger.run_steps(steps).unwrap();
         c.run_steps(steps).unwrap();
         let (gn, cn) = (g.contact_network().unwrap(), c.contact_network());
+        assert_eq!(ledger.contact_network().unwrap(), gn);
         eprintln!("cpu {:?} gpu {:?}", summary(&cn), summary(&gn));
         assert_eq!(gn.fields, cn.fields);
+        // f32 and f64 may disagree on a contact at the edge of a threshold (in range or
+        // not, sliding or not): a few are allowed (none seen on lavapipe)
         let keys = |n: &ContactNetwork| n.lines.iter().map(key).collect::<Vec<_>>();
-        assert_eq!(keys(&gn), keys(&cn));
+        let (gk, ck) = (keys(&gn), keys(&cn));
+        let odd = gk.iter().filter(|k| !ck.contains(k)).count()
+            + ck.iter().filter(|k| !gk.contains(k)).count();
+        assert!(
+            odd <= cn.lines.len() / 50,
+            "{odd} contacts on one side only: {gk:?} vs {ck:?}"
+        );
         let scale = cn
             .lines
             .iter()
             .map(|l| l.force.length())
             .fold(0.0, f64::max);
         let mut worst = [0.0f64; 5];
-        for (a, b) in gn.lines.iter().zip(&cn.lines) {
+        let mut flags_differ = 0;
+        for b in &cn.lines {
+            let Some(a) = gn.lines.iter().find(|a| key(a) == key(b)) else {
+                continue;
+            };
             worst[0] = worst[0].max((a.normal_force - b.normal_force).abs() / scale);
             worst[1] = worst[1].max((a.force - b.force).length() / scale);
             worst[2] = worst[2].max((a.overlap - b.overlap).abs());
@@ -62,10 +77,15 @@ fn same_networks(scene: &powder::scene::Scene, chunks: &[u64]) -> Option<[usize;
             worst[4] = worst[4]
                 .max((a.history.rolling - b.history.rolling).length())
                 .max((a.history.twist - b.history.twist).abs());
-            assert_eq!(a.sliding, b.sliding, "{a:?} vs {b:?}");
-            assert_eq!(a.history.touched, b.history.touched, "{a:?} vs {b:?}");
+            if a.sliding != b.sliding || a.history.touched != b.history.touched {
+                flags_differ += 1;
+            }
         }
-        eprintln!("force scale {scale:e}: worst {worst:?}");
+        eprintln!("force scale {scale:e}: worst {worst:?}, {odd} odd contacts, {flags_differ} flags differ");
+        assert!(
+            flags_differ <= cn.lines.len() / 50,
+            "{flags_differ} flags differ"
+        );
         // measured (1 mm spheres): up to 1.2e-4 of the largest force, 1.8e-9 m overlap,
         // 8.4e-9 m springs
         assert!(worst[0] < 1e-3 && worst[1] < 1e-3, "{worst:?}");

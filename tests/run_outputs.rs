@@ -4,6 +4,7 @@
 mod common;
 use common::gpu;
 
+use powder::checkpoint::npz;
 use powder::error::PowderError;
 use powder::run::{run_cpu_with, run_gpu_with, RunOptions, RunSummary, Snapshot};
 use powder::scene::Scene;
@@ -203,15 +204,25 @@ fn foreign_or_broken_checkpoints_are_refused() {
         let err = refusal(&bytes[..cut]);
         assert!(err.contains("damaged or truncated"), "cut at {cut}: {err}");
     }
-    // an older format is named (its header's format field, the checksum made again)
-    let at = 8 + 8 + "powder-checkpoint".len();
-    let mut older = bytes.clone();
-    older[at..at + 4].copy_from_slice(&15u32.to_le_bytes());
-    let end = older.len() - 4;
-    let crc = crc32fast::hash(&older[..end]);
-    older[end..].copy_from_slice(&crc.to_le_bytes());
-    let err = refusal(&older);
-    assert!(err.contains("(format 15)"), "{err}");
+    // another format is named: the archive written again with another header
+    let archive = npz::Archive::read(&bytes).unwrap();
+    let mut members: Vec<(String, npz::Member)> = Vec::new();
+    for name in archive.names() {
+        let raw = archive.raw(name).unwrap().to_vec();
+        let raw = match name {
+            "powder.json" => String::from_utf8(raw)
+                .unwrap()
+                .replace("\"format\": 17", "\"format\": 18")
+                .into_bytes(),
+            _ => raw,
+        };
+        members.push((name.to_string(), npz::Member::Raw(raw)));
+    }
+    let err = refusal(&npz::write(&members));
+    assert!(err.contains("(format 18)"), "{err}");
+    // the bincode checkpoints of formats up to 16 are named as such
+    let err = refusal(b"POWDERCK\x11\x00\x00\x00 and the rest");
+    assert!(err.contains("format 16 or earlier"), "{err}");
     // one flipped bit in the state (a position, a history, the checksum itself)
     for at in [bytes.len() / 3, bytes.len() / 2, bytes.len() - 2] {
         let mut flipped = bytes.clone();
@@ -574,15 +585,14 @@ fn killed_gpu_run_again_and_again_ends_as_a_straight_run() {
 /// with `unshare`) stops the run with the system's message and a non-zero exit, and leaves
 /// its outputs and last good checkpoint intact: copied off the full disk and resumed, the
 /// run ends with the straight run's outputs, byte for byte.
-#[test]
-fn a_full_disk_stops_the_run_and_keeps_the_last_checkpoint() {
+fn a_full_disk_stops_the_run_and_keeps_the_last_checkpoint(backend: &str) {
     let (straight, full, keep) = (
         tempfile::tempdir().unwrap(),
         tempfile::tempdir().unwrap(),
         tempfile::tempdir().unwrap(),
     );
     let every = (3000, 500);
-    let done = cluster_command("cpu", straight.path(), every, None).status();
+    let done = cluster_command(backend, straight.path(), every, None).status();
     assert!(done.unwrap().success());
     let scene = concat!(
         env!("CARGO_MANIFEST_DIR"),
@@ -592,7 +602,7 @@ fn a_full_disk_stops_the_run_and_keeps_the_last_checkpoint() {
     let script = r#"
         mount -t tmpfs -o size=512k none "$FULL" || exit 97
         touch "$KEEP/mounted"
-        "$POWDER" run "$SCENE" --backend cpu --steps 100000 --set simulation.output_every=100 \
+        "$POWDER" run "$SCENE" --backend "$BACKEND" --steps 100000 --set simulation.output_every=100 \
             --set simulation.checkpoint_every=500 --out "$FULL/out" 2> "$KEEP/stderr"
         echo $? > "$KEEP/status"
         cp -r "$FULL/out/." "$KEEP/"
@@ -605,6 +615,7 @@ fn a_full_disk_stops_the_run_and_keeps_the_last_checkpoint() {
             .env("KEEP", keep.path())
             .env("POWDER", env!("CARGO_BIN_EXE_powder"))
             .env("SCENE", scene)
+            .env("BACKEND", backend)
             .status()
             .ok()?;
         keep.path().join("mounted").exists().then_some(status)
@@ -630,7 +641,7 @@ fn a_full_disk_stops_the_run_and_keeps_the_last_checkpoint() {
         "{stderr}"
     );
     let ckpt = keep.path().join("checkpoint.bin");
-    let resumed = cluster_command("cpu", keep.path(), every, Some(&ckpt))
+    let resumed = cluster_command(backend, keep.path(), every, Some(&ckpt))
         .status()
         .unwrap();
     assert!(resumed.success());
@@ -639,4 +650,156 @@ fn a_full_disk_stops_the_run_and_keeps_the_last_checkpoint() {
         keep.path(),
         "the run resumed off the full disk",
     );
+}
+
+/// Whether `python3` with NumPy is here (CI installs it: there the test must run).
+fn python_with_numpy() -> bool {
+    let ok = std::process::Command::new("python3")
+        .args(["-c", "import numpy"])
+        .status()
+        .is_ok_and(|s| s.success());
+    assert!(
+        ok || std::env::var_os("CI").is_none(),
+        "CI needs python3 with NumPy (python3-numpy) for the checkpoint reader's test"
+    );
+    ok
+}
+
+/// A checkpoint is a NumPy archive: `tools/read_checkpoint.py` reads the engine's state from
+/// it to the bit (positions, the contacts' structured rows), and refuses another format by
+/// name.
+#[test]
+fn a_checkpoint_reads_in_python_to_the_bit() {
+    if !python_with_numpy() {
+        eprintln!("skipping: no python3 with NumPy here");
+        return;
+    }
+    let scene = common::packing(common::ROUGH, "rough");
+    let dir = tempfile::tempdir().unwrap();
+    let opts = RunOptions {
+        out_dir: Some(dir.path().to_path_buf()),
+        max_steps: Some(2000),
+        ..Default::default()
+    };
+    run_cpu_with(&scene, &opts, |_| {}).unwrap();
+    let ckpt = dir.path().join("checkpoint.bin");
+    let script = r#"
+import json, sys
+sys.path.insert(0, "tools")
+import read_checkpoint
+header, ck = read_checkpoint.load(sys.argv[1])
+c = ck["contacts"]
+print(json.dumps({
+    "steps": header["steps"],
+    "position": ck["position"][7].view("<u8").tolist(),
+    "keys": [[int(r["i"]), int(r["j"])] for r in c],
+    "normal_force": c["normal_force"].view("<u8").tolist(),
+    "sliding": int(c["sliding"].sum()),
+}))
+"#;
+    let python = |path: &Path| {
+        std::process::Command::new("python3")
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .args(["-c", script])
+            .arg(path)
+            .output()
+            .unwrap()
+    };
+    let out = python(&ckpt);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let mut engine = powder::cpu::CpuEngine::new(&scene).unwrap();
+    engine.run_steps(2000).unwrap();
+    let net = engine.contact_network();
+    let pairs: Vec<_> = net
+        .lines
+        .iter()
+        .filter(|c| matches!(c.partner, powder::cpu::Partner::Particle(_)))
+        .collect();
+    assert_eq!(v["steps"], 2000);
+    // (the bits, as integers: JSON's decimal floats need not round-trip)
+    let f = |x: &serde_json::Value| f64::from_bits(x.as_u64().unwrap());
+    let p: Vec<f64> = v["position"].as_array().unwrap().iter().map(f).collect();
+    assert_eq!(p, engine.positions()[7].to_array());
+    // the checkpoint keeps every listed contact; the engaged ones carry the same values
+    let keys = v["keys"].as_array().unwrap();
+    let forces = v["normal_force"].as_array().unwrap();
+    assert!(pairs.len() > 20 && keys.len() >= pairs.len());
+    for c in &pairs {
+        let powder::cpu::Partner::Particle(j) = c.partner else {
+            unreachable!()
+        };
+        let k = keys
+            .iter()
+            .position(|k| k[0] == c.i && k[1] == j)
+            .unwrap_or_else(|| panic!("contact ({}, {j}) missing", c.i));
+        assert_eq!(f(&forces[k]), c.normal_force);
+    }
+    // another format, named by the reader
+    let bytes = std::fs::read(&ckpt).unwrap();
+    let archive = npz::Archive::read(&bytes).unwrap();
+    let members: Vec<(String, npz::Member)> = archive
+        .names()
+        .map(|name| {
+            let raw = archive.raw(name).unwrap().to_vec();
+            let raw = match name {
+                "powder.json" => String::from_utf8(raw)
+                    .unwrap()
+                    .replace("\"format\": 17", "\"format\": 18")
+                    .into_bytes(),
+                _ => raw,
+            };
+            (name.to_string(), npz::Member::Raw(raw))
+        })
+        .collect();
+    let other = dir.path().join("other.bin");
+    std::fs::write(&other, npz::write(&members)).unwrap();
+    let out = python(&other);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("format 18"), "{err}");
+}
+
+#[test]
+fn a_full_disk_stops_the_cpu_run_and_keeps_the_last_checkpoint() {
+    a_full_disk_stops_the_run_and_keeps_the_last_checkpoint("cpu");
+}
+
+#[test]
+fn a_full_disk_stops_the_gpu_run_and_keeps_the_last_checkpoint() {
+    if gpu().is_some() {
+        a_full_disk_stops_the_run_and_keeps_the_last_checkpoint("gpu");
+    }
+}
+
+/// A GPU checkpoint cut short or with a flipped bit is refused as damaged (the same reader
+/// as the CPU's: `foreign_or_broken_checkpoints_are_refused`).
+#[test]
+fn damaged_gpu_checkpoints_are_refused() {
+    let scene = cluster();
+    let dir = tempfile::tempdir().unwrap();
+    let Some(ctx) = gpu() else { return };
+    run_gpu_with(&scene, ctx, &options(dir.path(), 200, None), |_| {}).unwrap();
+    let bytes = std::fs::read(dir.path().join("checkpoint.bin")).unwrap();
+    let mut flipped = bytes.clone();
+    flipped[bytes.len() / 2] ^= 0x10;
+    for (what, file) in [
+        ("cut", &bytes[..bytes.len() / 2]),
+        ("flipped", &flipped[..]),
+    ] {
+        let broken = dir.path().join("broken.bin");
+        std::fs::write(&broken, file).unwrap();
+        let Some(ctx) = gpu() else { return };
+        let opts = RunOptions {
+            resume: Some(broken),
+            ..Default::default()
+        };
+        let err = run_gpu_with(&scene, ctx, &opts, |_| {})
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("damaged or truncated"), "{what}: {err}");
+    }
 }

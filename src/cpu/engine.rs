@@ -134,23 +134,23 @@ impl WallList {
 }
 
 /// What a contact remembers between steps.
-#[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize)]
-struct ContactRecord {
-    history: ContactHistory,
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct ContactRecord {
+    pub(crate) history: ContactHistory,
     /// Overlap, forces and stored energy at the end of the last step, for the work
     /// integral of the energy ledger.
-    delta: f64,
-    force: f64,
+    pub(crate) delta: f64,
+    pub(crate) force: f64,
     /// The tangential force on i (a wall's reaction reads it).
-    tangential: DVec3,
-    potential: f64,
+    pub(crate) tangential: DVec3,
+    pub(crate) potential: f64,
     /// The power of friction (F_t · v_t) and of the couple on i (rolling and twisting
     /// resistance, M · (ω_i − ω_j)) at the forces' evaluation: the ledger integrates
     /// them trapezoidally.
-    friction_power: f64,
-    couple_power: f64,
+    pub(crate) friction_power: f64,
+    pub(crate) couple_power: f64,
     /// Whether the tangential force slid at the Coulomb limit (the contact network output).
-    sliding: bool,
+    pub(crate) sliding: bool,
 }
 
 impl ContactRecord {
@@ -851,30 +851,30 @@ pub struct ContactStats {
 }
 
 /// Everything that evolves in a CPU run: what a checkpoint stores to resume bitwise.
-#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Debug)]
 pub struct CpuState {
     /// Simulated time, s.
     pub time: f64,
     /// Steps taken.
     pub steps: u64,
-    dt: f64,
-    pos: Vec<DVec3>,
-    vel: Vec<DVec3>,
-    acc: Vec<DVec3>,
-    force: Vec<DVec3>,
-    omega: Vec<DVec3>,
-    torque: Vec<DVec3>,
+    pub(crate) dt: f64,
+    pub(crate) pos: Vec<DVec3>,
+    pub(crate) vel: Vec<DVec3>,
+    pub(crate) acc: Vec<DVec3>,
+    pub(crate) force: Vec<DVec3>,
+    pub(crate) omega: Vec<DVec3>,
+    pub(crate) torque: Vec<DVec3>,
     /// Contacts in key order (particle pairs, then particle–wall contacts by (wall, particle)).
-    contacts: Vec<((u32, u32), ContactRecord)>,
-    wall_contacts: Vec<((u32, u32), ContactRecord)>,
-    dissipated: f64,
+    pub(crate) contacts: Vec<((u32, u32), ContactRecord)>,
+    pub(crate) wall_contacts: Vec<((u32, u32), ContactRecord)>,
+    pub(crate) dissipated: f64,
     /// Wall points and velocities (moving walls) and the work they did.
-    wall_points: Vec<DVec3>,
-    wall_velocities: Vec<DVec3>,
-    wall_work: f64,
+    pub(crate) wall_points: Vec<DVec3>,
+    pub(crate) wall_velocities: Vec<DVec3>,
+    pub(crate) wall_work: f64,
     /// Which particles have appeared, and the energy they brought.
-    active: Vec<bool>,
-    inserted: f64,
+    pub(crate) active: Vec<bool>,
+    pub(crate) inserted: f64,
 }
 
 /// The CPU reference simulation.

@@ -667,8 +667,9 @@ pub struct GpuOptions {
     /// way; more windows take more list entries (each window's block is sized for the
     /// fullest).
     pub window_particles: Option<u64>,
-    /// Keep what [`GpuEngine::contact_network`] reads (each contact's prior: 12 bytes a
-    /// list entry) where neither the ledger nor the force jumps keep it. Default off;
+    /// Keep what [`GpuEngine::contact_network`] reads (each contact's prior) where neither
+    /// the ledger nor the force jumps keep it: 12 bytes a list entry, and as much or more
+    /// in the rebuild's new lists (about 24–32 bytes a list entry in all). Default off;
     /// `powder run` turns it on for the scene's `contact_output`.
     pub contacts: bool,
 }
@@ -850,25 +851,25 @@ pub struct GpuEngine {
 /// stops a run. The buffers are the current state set (the other set is rewritten by every
 /// step before it is read), the neighbour lists, the Verlet-skin state and the
 /// per-particle ledger.
-#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Debug)]
 pub struct GpuSavedState {
     /// Simulated time, s.
     pub time: f64,
     /// Steps taken.
     pub steps: u64,
-    dropped: u64,
+    pub(crate) dropped: u64,
     /// The adapter it ran on (a resume elsewhere continues, but not bitwise).
     pub adapter: String,
     /// (name, bytes), in a fixed order.
-    buffers: Vec<(String, Vec<u8>)>,
+    pub(crate) buffers: Vec<(String, Vec<u8>)>,
     /// The host's f64 points of the walls.
-    wall_points: Vec<DVec3>,
+    pub(crate) wall_points: Vec<DVec3>,
     /// Which particles have appeared, and the energy they brought.
-    active: Vec<bool>,
-    inserted: f64,
+    pub(crate) active: Vec<bool>,
+    pub(crate) inserted: f64,
     /// The composed contact law's layout (`Composition::layout`): the history words in the
     /// buffers mean what it says.
-    layout: String,
+    pub(crate) layout: String,
 }
 
 impl GpuSavedState {
@@ -2510,13 +2511,22 @@ impl GpuEngine {
         })
     }
 
-    /// What a saved state's words mean: the contact law's layout (`Composition::layout`)
-    /// and the windows where there are several.
+    /// What a saved state's words mean: the contact law's layout (`Composition::layout`),
+    /// the list entries' fields (which the options change: the priors) and the windows
+    /// where there are several.
     fn saved_layout(&self) -> String {
         let w = self.state.layout.windows();
+        let fields: Vec<&str> = self
+            .state
+            .entry_layout
+            .fields
+            .iter()
+            .map(|f| f.name)
+            .collect();
+        let law = format!("{}, entries [{}]", self.kind.layout(), fields.join(", "));
         match w.count {
-            1 => self.kind.layout(),
-            _ => format!("{} in windows of {} particles", self.kind.layout(), w.len),
+            1 => law,
+            _ => format!("{law} in windows of {} particles", w.len),
         }
     }
 
@@ -2540,7 +2550,7 @@ impl GpuEngine {
         }
         if saved.layout != self.saved_layout() {
             return Err(PowderError::Run(format!(
-                "the saved GPU state's contact law is laid out as `{}`, this run's as `{}` (another scene, window size or powder version): rerun the scene from the start",
+                "the saved GPU state's contact law is laid out as `{}`, this run's as `{}` (another scene, window size, contact output option or powder version): rerun the scene from the start, or resume it with the options it was taken with",
                 saved.layout,
                 self.saved_layout()
             )));
@@ -2704,7 +2714,8 @@ impl GpuEngine {
 
     /// Force of the particles on each wall after the last step, N: each wall contact's normal
     /// force (its prior) and tangential force (kept in its entry's pair torque where
-    /// particles rotate; there is none otherwise).
+    /// particles rotate; there is none otherwise). Right after a restore, until a step has
+    /// run, the tangential part is missing (a saved state leaves the per-step fields out).
     pub fn wall_forces(&self) -> Result<Vec<DVec3>, PowderError> {
         let walls = self.wall_normals.len();
         let mut f = vec![DVec3::ZERO; walls];

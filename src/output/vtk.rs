@@ -116,39 +116,45 @@ impl Series {
         })
     }
 
-    /// Re-opens a series (on resume): keeps the snapshots an earlier run wrote up to `step`,
-    /// with the times its collection gives them (`step · dt` where it gives none); the
-    /// collection is rewritten with the next snapshot.
+    /// Re-opens a series (on resume): keeps the snapshots up to `step` that the earlier
+    /// run's collection lists, with its times (a file it does not list is not this run's);
+    /// without a collection, those in the folder (times `step · dt`). The collection is
+    /// rewritten with the next snapshot.
     pub fn keep_until(&mut self, step: u64, dt: f64) {
-        let listed = std::fs::read_to_string(self.dir.join(&self.collection)).unwrap_or_default();
-        let time_of = |file: &str| -> Option<f64> {
-            let line = listed
-                .lines()
-                .find(|l| l.contains(&format!(r#"file="{file}""#)))?;
-            let t = line.split(r#"timestep=""#).nth(1)?.split('"').next()?;
-            t.parse().ok()
+        let prefix = format!("{}/{}_", self.folder, self.name);
+        let step_of = |file: &str| -> Option<u64> {
+            file.strip_prefix(&prefix)?
+                .strip_suffix(".vtp")?
+                .parse()
+                .ok()
         };
-        let prefix = format!("{}_", self.name);
-        let mut found: Vec<(u64, String)> = std::fs::read_dir(self.dir.join(&self.folder))
-            .map(|rd| {
-                rd.filter_map(|e| e.ok())
-                    .filter_map(|e| {
-                        let f = e.file_name().to_string_lossy().into_owned();
-                        let s = f
-                            .strip_prefix(&prefix)?
-                            .strip_suffix(".vtp")?
-                            .parse::<u64>()
-                            .ok()?;
-                        (s <= step).then(|| (s, format!("{}/{f}", self.folder)))
-                    })
-                    .collect()
+        let listed = std::fs::read_to_string(self.dir.join(&self.collection)).unwrap_or_default();
+        let mut found: Vec<(u64, f64, String)> = listed
+            .lines()
+            .filter_map(|l| {
+                let attr = |a: &str| l.split(&format!(r#"{a}=""#)).nth(1)?.split('"').next();
+                let file = attr("file")?.to_string();
+                let time: f64 = attr("timestep")?.parse().ok()?;
+                let s = step_of(&file)?;
+                (s <= step && self.dir.join(&file).exists()).then_some((s, time, file))
             })
-            .unwrap_or_default();
-        found.sort();
-        self.entries = found
-            .into_iter()
-            .map(|(s, f)| (time_of(&f).unwrap_or(s as f64 * dt), f))
             .collect();
+        if listed.is_empty() {
+            found = std::fs::read_dir(self.dir.join(&self.folder))
+                .map(|rd| {
+                    rd.filter_map(|e| e.ok())
+                        .filter_map(|e| {
+                            let f = format!("{}/{}", self.folder, e.file_name().to_string_lossy());
+                            let s = step_of(&f)?;
+                            (s <= step).then_some((s, s as f64 * dt, f))
+                        })
+                        .collect()
+                })
+                .unwrap_or_default();
+        }
+        found.sort_by_key(|(s, ..)| *s);
+        found.dedup_by_key(|(s, ..)| *s);
+        self.entries = found.into_iter().map(|(_, t, f)| (t, f)).collect();
     }
 
     /// The folder the snapshots go to.
@@ -206,6 +212,41 @@ mod tests {
         assert!(text.contains(r#"Name="radius""#) && text.contains(r#"Name="velocity""#));
         assert!(!text.contains("angular_velocity"));
         assert!(text.contains(r#"Name="offsets""#));
+    }
+
+    #[test]
+    fn a_resumed_series_keeps_what_its_collection_lists() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut s = Series::new(dir.path(), "demo").unwrap();
+        let pos = [DVec3::ZERO];
+        let p = Particles {
+            positions: &pos,
+            velocities: &pos,
+            radii: &[1.0],
+            angular_velocities: &[],
+        };
+        for step in [0, 10, 20] {
+            s.write(step, step as f64 * 0.1 + 1e-17, &p).unwrap();
+        }
+        // a file the collection does not list (another run's) is left out
+        std::fs::write(dir.path().join("snapshots/demo_0000000015.vtp"), "x").unwrap();
+        let mut again = Series::new(dir.path(), "demo").unwrap();
+        again.keep_until(15, 0.1);
+        let files: Vec<&str> = again.entries().iter().map(|(_, f)| f.as_str()).collect();
+        assert_eq!(
+            files,
+            [
+                "snapshots/demo_0000000000.vtp",
+                "snapshots/demo_0000000010.vtp"
+            ]
+        );
+        // the collection's times, to the bit
+        assert_eq!(again.entries()[1].0, 10.0 * 0.1 + 1e-17);
+        // without a collection: the folder, times step · dt
+        std::fs::remove_file(dir.path().join("demo.pvd")).unwrap();
+        again.keep_until(15, 0.5);
+        assert_eq!(again.entries().len(), 3);
+        assert_eq!(again.entries()[2].0, 7.5);
     }
 
     #[test]

@@ -1,0 +1,250 @@
+//! The CPU engine's state ([`CpuState`]) as named arrays of a checkpoint: one array per
+//! state vector, the contacts as structured arrays whose columns are declared once here.
+
+use super::npz::{Array, Member};
+use super::StateError;
+use crate::cpu::engine::ContactRecord;
+use crate::cpu::CpuState;
+use crate::model::ContactHistory;
+use glam::DVec3;
+
+/// A contact and its key, as the CPU state lists them.
+type Keyed = ((u32, u32), ContactRecord);
+
+/// One column of a contact's row: its name and NumPy type.
+struct Column {
+    name: &'static str,
+    descr: &'static str,
+    /// f64 words (a vector: 3), or bytes of an integer or flag.
+    bytes: usize,
+}
+
+const fn column(name: &'static str, descr: &'static str, bytes: usize) -> Column {
+    Column { name, descr, bytes }
+}
+
+/// A contact's row: the key (i, j) — (wall, particle) for a wall contact — then the record.
+const CONTACT: &[Column] = &[
+    column("i", "'<u4'", 4),
+    column("j", "'<u4'", 4),
+    column("delta_max", "'<f8'", 8),
+    column("touched", "'|b1'", 1),
+    column("tangential_spring", "'<f8', (3,)", 24),
+    column("rolling_displacement", "'<f8', (3,)", 24),
+    column("contact_radius", "'<f8'", 8),
+    column("twist", "'<f8'", 8),
+    column("overlap", "'<f8'", 8),
+    column("normal_force", "'<f8'", 8),
+    column("tangential_force", "'<f8', (3,)", 24),
+    column("potential", "'<f8'", 8),
+    column("friction_power", "'<f8'", 8),
+    column("couple_power", "'<f8'", 8),
+    column("sliding", "'|b1'", 1),
+];
+
+/// The structured dtype of a contact row, as `.npy` writes it.
+fn contact_descr() -> String {
+    let fields: Vec<String> = CONTACT
+        .iter()
+        .map(|c| format!("('{}', {})", c.name, c.descr))
+        .collect();
+    format!("[{}]", fields.join(", "))
+}
+
+fn row_bytes() -> usize {
+    CONTACT.iter().map(|c| c.bytes).sum()
+}
+
+fn contacts_array(list: &[Keyed]) -> Array {
+    let mut data = Vec::with_capacity(list.len() * row_bytes());
+    let f = |data: &mut Vec<u8>, v: f64| data.extend(v.to_le_bytes());
+    let v3 = |data: &mut Vec<u8>, v: DVec3| {
+        v.to_array()
+            .iter()
+            .for_each(|x| data.extend(x.to_le_bytes()))
+    };
+    for ((i, j), r) in list {
+        let h = &r.history;
+        data.extend(i.to_le_bytes());
+        data.extend(j.to_le_bytes());
+        f(&mut data, h.delta_max);
+        data.push(u8::from(h.touched));
+        v3(&mut data, h.tangential);
+        v3(&mut data, h.rolling);
+        f(&mut data, h.contact_radius);
+        f(&mut data, h.twist);
+        f(&mut data, r.delta);
+        f(&mut data, r.force);
+        v3(&mut data, r.tangential);
+        f(&mut data, r.potential);
+        f(&mut data, r.friction_power);
+        f(&mut data, r.couple_power);
+        data.push(u8::from(r.sliding));
+    }
+    Array {
+        descr: contact_descr(),
+        shape: vec![list.len()],
+        data,
+    }
+}
+
+/// Reads values off a row in column order.
+struct Row<'a>(&'a [u8]);
+
+impl Row<'_> {
+    fn take<const N: usize>(&mut self) -> [u8; N] {
+        let (head, rest) = self.0.split_at(N);
+        self.0 = rest;
+        head.try_into().unwrap_or([0; N])
+    }
+    fn u32(&mut self) -> u32 {
+        u32::from_le_bytes(self.take())
+    }
+    fn f64(&mut self) -> f64 {
+        f64::from_le_bytes(self.take())
+    }
+    fn vec3(&mut self) -> DVec3 {
+        DVec3::new(self.f64(), self.f64(), self.f64())
+    }
+    fn flag(&mut self) -> Result<bool, StateError> {
+        match self.take::<1>() {
+            [0] => Ok(false),
+            [1] => Ok(true),
+            _ => Err(StateError("a contact flag is neither 0 nor 1".into())),
+        }
+    }
+}
+
+fn contacts_of(a: &Array, name: &str) -> Result<Vec<Keyed>, StateError> {
+    let width = row_bytes();
+    if a.descr != contact_descr() || a.shape.len() != 1 || a.data.len() != a.shape[0] * width {
+        return Err(StateError(format!("`{name}` is not a table of contacts")));
+    }
+    let mut out = Vec::with_capacity(a.shape[0]);
+    for row in a.data.chunks_exact(width) {
+        let mut r = Row(row);
+        let key = (r.u32(), r.u32());
+        let history = ContactHistory {
+            delta_max: r.f64(),
+            touched: r.flag()?,
+            tangential: r.vec3(),
+            rolling: r.vec3(),
+            contact_radius: r.f64(),
+            twist: r.f64(),
+        };
+        let record = ContactRecord {
+            history,
+            delta: r.f64(),
+            force: r.f64(),
+            tangential: r.vec3(),
+            potential: r.f64(),
+            friction_power: r.f64(),
+            couple_power: r.f64(),
+            sliding: r.flag()?,
+        };
+        out.push((key, record));
+    }
+    Ok(out)
+}
+
+fn vectors(v: &[DVec3]) -> Array {
+    let flat: Vec<f64> = v.iter().flat_map(|x| x.to_array()).collect();
+    Array {
+        descr: "<f8".into(),
+        shape: vec![v.len(), 3],
+        data: bytemuck::cast_slice(&flat).to_vec(),
+    }
+}
+
+fn flags(v: &[bool]) -> Array {
+    Array::of("|b1", &v.iter().map(|&b| u8::from(b)).collect::<Vec<u8>>())
+}
+
+/// The state's arrays, in a fixed order.
+pub fn arrays(s: &CpuState) -> Vec<(String, Member)> {
+    let a = |name: &str, array: Array| (name.to_string(), Member::Array(array));
+    vec![
+        a("time", Array::scalar_f64(s.time)),
+        a("steps", Array::scalar_u64(s.steps)),
+        a("dt", Array::scalar_f64(s.dt)),
+        a("position", vectors(&s.pos)),
+        a("velocity", vectors(&s.vel)),
+        a("acceleration", vectors(&s.acc)),
+        a("force", vectors(&s.force)),
+        a("angular_velocity", vectors(&s.omega)),
+        a("torque", vectors(&s.torque)),
+        a("contacts", contacts_array(&s.contacts)),
+        a("wall_contacts", contacts_array(&s.wall_contacts)),
+        a("dissipated", Array::scalar_f64(s.dissipated)),
+        a("wall_point", vectors(&s.wall_points)),
+        a("wall_velocity", vectors(&s.wall_velocities)),
+        a("wall_work", Array::scalar_f64(s.wall_work)),
+        a("active", flags(&s.active)),
+        a("inserted", Array::scalar_f64(s.inserted)),
+    ]
+}
+
+/// The state from its arrays (`get` gives each by name).
+pub fn state(get: &dyn Fn(&str) -> Result<Array, StateError>) -> Result<CpuState, StateError> {
+    let vec3s = |name: &str| -> Result<Vec<DVec3>, StateError> {
+        let a = get(name)?;
+        let v = f64s(&a, name, 2)?;
+        Ok(v.chunks_exact(3)
+            .map(|c| DVec3::new(c[0], c[1], c[2]))
+            .collect())
+    };
+    let scalar = |name: &str| -> Result<f64, StateError> { Ok(f64s(&get(name)?, name, 0)?[0]) };
+    let active = get("active")?;
+    if active.descr != "|b1" || active.shape.len() != 1 || active.data.iter().any(|&b| b > 1) {
+        return Err(StateError("`active` is not a list of flags".into()));
+    }
+    Ok(CpuState {
+        time: scalar("time")?,
+        steps: u64s(&get("steps")?, "steps")?,
+        dt: scalar("dt")?,
+        pos: vec3s("position")?,
+        vel: vec3s("velocity")?,
+        acc: vec3s("acceleration")?,
+        force: vec3s("force")?,
+        omega: vec3s("angular_velocity")?,
+        torque: vec3s("torque")?,
+        contacts: contacts_of(&get("contacts")?, "contacts")?,
+        wall_contacts: contacts_of(&get("wall_contacts")?, "wall_contacts")?,
+        dissipated: scalar("dissipated")?,
+        wall_points: vec3s("wall_point")?,
+        wall_velocities: vec3s("wall_velocity")?,
+        wall_work: scalar("wall_work")?,
+        active: active.data.iter().map(|&b| b == 1).collect(),
+        inserted: scalar("inserted")?,
+    })
+}
+
+/// The f64 values of `a`: a scalar (`dims` 0) or an (n, 3) array (`dims` 2).
+pub(super) fn f64s(a: &Array, name: &str, dims: usize) -> Result<Vec<f64>, StateError> {
+    let shape_ok = match dims {
+        0 => a.shape.is_empty(),
+        _ => a.shape.len() == 2 && a.shape[1] == 3,
+    };
+    let count: usize = a.shape.iter().product();
+    if a.descr != "<f8" || !shape_ok || a.data.len() != 8 * count {
+        return Err(StateError(format!(
+            "`{name}` is not the array it should be"
+        )));
+    }
+    Ok(a.data
+        .chunks_exact(8)
+        .map(|b| f64::from_le_bytes(b.try_into().unwrap_or([0; 8])))
+        .collect())
+}
+
+/// The u64 scalar `a`.
+pub(super) fn u64s(a: &Array, name: &str) -> Result<u64, StateError> {
+    match (
+        a.descr.as_str(),
+        a.shape.as_slice(),
+        a.data.as_slice().try_into(),
+    ) {
+        ("<u8", [], Ok(b)) => Ok(u64::from_le_bytes(b)),
+        _ => Err(StateError(format!("`{name}` is not a count"))),
+    }
+}

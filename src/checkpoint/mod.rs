@@ -1,0 +1,243 @@
+//! Checkpoints: the complete evolving state of a run (CPU: [`CpuState`]; GPU: the device
+//! buffers of [`GpuSavedState`]), so a run resumes bitwise identically on the same backend
+//! (and, for the GPU, the same adapter).
+//!
+//! A checkpoint is a NumPy `.npz` archive ([`npz`]): a JSON header `powder.json` (format,
+//! powder version, backend, scene and its digest, step and time), then the state as named
+//! little-endian arrays ([`cpu`], [`gpu`]). `numpy.load` reads it as it is
+//! (`tools/read_checkpoint.py`). It is refused for another format, version, backend or
+//! scene; each member's zip CRC-32 is checked, so a damaged or cut file is refused too.
+//! Written atomically.
+
+pub mod cpu;
+pub mod gpu;
+pub mod npz;
+
+use crate::cpu::{CpuEngine, CpuState};
+use crate::error::PowderError;
+use crate::gpu::GpuSavedState;
+use crate::output::atomic::write_atomic;
+use crate::scene::Scene;
+use npz::{Archive, Array, Member, NpzError};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+const MAGIC: &str = "powder-checkpoint";
+/// The header's member, first in the archive.
+const HEADER: &str = "powder.json";
+/// What checkpoints of formats up to 16 (bincode) open with.
+const BINCODE_PREFIX: &[u8; 8] = b"POWDERCK";
+/// Bumped whenever the state's arrays change, or the GPU step's arithmetic does (a resume
+/// continues bitwise only with the same arithmetic). The history of earlier formats is in
+/// `docs/checkpoints.md`; 17: a `.npz` archive of named arrays (16 and before: bincode).
+pub const FORMAT: u32 = 17;
+
+/// The checkpoint's header (`powder.json`).
+#[derive(Debug, Serialize, Deserialize)]
+pub struct Header {
+    /// `powder-checkpoint`.
+    pub magic: String,
+    /// [`FORMAT`] of the powder that wrote it.
+    pub format: u32,
+    /// The powder version that wrote it.
+    pub version: String,
+    /// `cpu` or `gpu`.
+    pub backend: String,
+    /// The scene's name and [`scene_digest`].
+    pub scene: String,
+    /// [`scene_digest`] of the scene it ran.
+    pub scene_digest: u64,
+    /// Steps taken and simulated time, s (also in the state's arrays, bitwise).
+    pub steps: u64,
+    /// Simulated time, s.
+    pub time: f64,
+}
+
+/// Why a checkpoint's state arrays could not be taken (a member missing or not the array
+/// it should be): the checkpoint is damaged.
+#[derive(Clone, Debug)]
+pub struct StateError(pub String);
+
+/// FNV-1a over the scene's full description (every value, exactly): two scenes share a
+/// digest only if they describe the same run.
+pub fn scene_digest(scene: &Scene) -> u64 {
+    let text = format!("{scene:?}");
+    let mut h: u64 = 0xcbf29ce484222325;
+    for b in text.bytes() {
+        h ^= b as u64;
+        h = h.wrapping_mul(0x100000001b3);
+    }
+    h
+}
+
+/// Writes the CPU engine's state to `path` (atomically).
+pub fn save(path: &Path, scene: &Scene, engine: &CpuEngine) -> Result<(), PowderError> {
+    let state = engine.state();
+    save_state(
+        path,
+        scene,
+        "cpu",
+        (state.steps, state.time),
+        cpu::arrays(&state),
+    )
+}
+
+/// Reads a CPU checkpoint of `scene` from `path`.
+pub fn load(path: &Path, scene: &Scene) -> Result<CpuState, PowderError> {
+    let bytes = read(path)?;
+    let archive = open(&bytes, path, scene, "cpu")?;
+    cpu::state(&|name| array(&archive, name)).map_err(|e| damaged(path, &e.0))
+}
+
+/// Writes a saved GPU state to `path` (atomically).
+pub fn save_gpu(path: &Path, scene: &Scene, state: &GpuSavedState) -> Result<(), PowderError> {
+    let arrays = gpu::arrays(state)
+        .map_err(|e| PowderError::Run(format!("cannot encode the checkpoint: {}", e.0)))?;
+    save_state(path, scene, "gpu", (state.steps, state.time), arrays)
+}
+
+/// Reads a GPU checkpoint of `scene` from `path`.
+pub fn load_gpu(path: &Path, scene: &Scene) -> Result<GpuSavedState, PowderError> {
+    let bytes = read(path)?;
+    let archive = open(&bytes, path, scene, "gpu")?;
+    let about = archive
+        .raw("gpu.json")
+        .ok_or_else(|| damaged(path, "`gpu.json` is missing"))?;
+    gpu::state(about, &|name| array(&archive, name)).map_err(|e| damaged(path, &e.0))
+}
+
+/// The backend (`"cpu"` or `"gpu"`) that wrote the checkpoint at `path`.
+pub fn backend_of(path: &Path) -> Result<String, PowderError> {
+    let bytes = read(path)?;
+    Ok(header(&bytes, path)?.0.backend)
+}
+
+fn save_state(
+    path: &Path,
+    scene: &Scene,
+    backend: &str,
+    (steps, time): (u64, f64),
+    arrays: Vec<(String, Member)>,
+) -> Result<(), PowderError> {
+    let header = Header {
+        magic: MAGIC.into(),
+        format: FORMAT,
+        version: env!("CARGO_PKG_VERSION").into(),
+        backend: backend.into(),
+        scene: scene.name.clone(),
+        scene_digest: scene_digest(scene),
+        steps,
+        time,
+    };
+    let json = serde_json::to_vec_pretty(&header)
+        .map_err(|e| PowderError::Run(format!("cannot encode the checkpoint: {e}")))?;
+    let mut members = vec![(HEADER.to_string(), Member::Raw(json))];
+    members.extend(arrays);
+    write_atomic(path, &npz::write(&members))
+}
+
+fn read(path: &Path) -> Result<Vec<u8>, PowderError> {
+    std::fs::read(path)
+        .map_err(|e| PowderError::io(format!("cannot read checkpoint `{}`", path.display()), e))
+}
+
+fn not_a_checkpoint(path: &Path) -> PowderError {
+    PowderError::Run(format!(
+        "`{}` is not a powder checkpoint (or is truncated)",
+        path.display()
+    ))
+}
+
+fn damaged(path: &Path, what: &str) -> PowderError {
+    PowderError::Run(format!(
+        "checkpoint `{}` is damaged or truncated ({what}): resume from an earlier copy or rerun the scene",
+        path.display()
+    ))
+}
+
+/// Whether `bytes` open as a powder checkpoint archive: a zip whose first member is the
+/// header (so a cut or damaged one is told apart from another file).
+fn opens_as_ours(bytes: &[u8]) -> bool {
+    let name = HEADER.as_bytes();
+    bytes.starts_with(b"PK\x03\x04") && bytes.get(30..30 + name.len()) == Some(name)
+}
+
+/// The archive of `bytes` and its header.
+fn header<'a>(bytes: &'a [u8], path: &Path) -> Result<(Header, Archive<'a>), PowderError> {
+    if bytes.starts_with(BINCODE_PREFIX) {
+        return Err(PowderError::Run(format!(
+            "checkpoint `{}` was written by an older powder (format 16 or earlier, bincode); this is powder {} (format {FORMAT}): rerun the scene from the start",
+            path.display(),
+            env!("CARGO_PKG_VERSION")
+        )));
+    }
+    let archive = match Archive::read(bytes) {
+        Ok(a) => a,
+        Err(NpzError::Damaged(member)) => {
+            return Err(damaged(
+                path,
+                &format!("`{member}` does not match its checksum"),
+            ))
+        }
+        Err(_) if opens_as_ours(bytes) => {
+            return Err(damaged(path, "its zip directory is missing or broken"))
+        }
+        Err(_) => return Err(not_a_checkpoint(path)),
+    };
+    let header: Header = archive
+        .raw(HEADER)
+        .and_then(|b| serde_json::from_slice(b).ok())
+        .ok_or_else(|| not_a_checkpoint(path))?;
+    if header.magic != MAGIC {
+        return Err(not_a_checkpoint(path));
+    }
+    Ok((header, archive))
+}
+
+/// The archive of `bytes`, refused unless it is this format and version's checkpoint of
+/// `scene` from `backend`.
+fn open<'a>(
+    bytes: &'a [u8],
+    path: &Path,
+    scene: &Scene,
+    backend: &str,
+) -> Result<Archive<'a>, PowderError> {
+    let (header, archive) = header(bytes, path)?;
+    if header.format != FORMAT || header.version != env!("CARGO_PKG_VERSION") {
+        return Err(PowderError::Run(format!(
+            "checkpoint `{}` was written by powder {} (format {}); this is powder {} (format {FORMAT}): rerun the scene from the start",
+            path.display(),
+            header.version,
+            header.format,
+            env!("CARGO_PKG_VERSION")
+        )));
+    }
+    if header.backend != backend {
+        return Err(PowderError::Run(format!(
+            "checkpoint `{}` comes from the {} backend; resume it with --backend {}",
+            path.display(),
+            header.backend,
+            header.backend
+        )));
+    }
+    if header.scene_digest != scene_digest(scene) {
+        return Err(PowderError::Run(format!(
+            "checkpoint `{}` belongs to scene `{}` (digest {:016x}), not to this scene `{}` (digest {:016x}): a resumed run must use the very scene it started with",
+            path.display(),
+            header.scene,
+            header.scene_digest,
+            scene.name,
+            scene_digest(scene)
+        )));
+    }
+    Ok(archive)
+}
+
+/// The array `name` of a checkpoint (missing or malformed: a [`StateError`]).
+fn array(archive: &Archive, name: &str) -> Result<Array, StateError> {
+    match archive.array(name) {
+        Ok(Some(a)) => Ok(a),
+        Ok(None) => Err(StateError(format!("the array `{name}` is missing"))),
+        Err(_) => Err(StateError(format!("`{name}` is not an array"))),
+    }
+}
