@@ -150,7 +150,8 @@ fn chunk_and_piece_boundaries_change_no_trajectory_bit() {
             e
         };
         let (a, b) = (run(512), run(7));
-        // (JSON writes each f64 as its shortest round-trip decimal: equal text, equal bits)
+        // (JSON writes each finite f64 as its shortest round-trip decimal: equal text, equal
+        // bits; a non-finite value would show as null, and fail the run first)
         let bits = |e: &CpuEngine| {
             serde_json::to_vec(&(
                 e.positions(),

@@ -223,7 +223,7 @@ fn foreign_or_broken_checkpoints_are_refused() {
     // the bincode checkpoints of formats up to 16 are named as such
     let err = refusal(b"POWDERCK\x11\x00\x00\x00 and the rest");
     assert!(err.contains("format 16 or earlier"), "{err}");
-    // one flipped bit in the state (a position, a history, the checksum itself)
+    // one flipped bit in the state (in the arrays; near the end, in the zip directory)
     for at in [bytes.len() / 3, bytes.len() / 2, bytes.len() - 2] {
         let mut flipped = bytes.clone();
         flipped[at] ^= 0x10;

@@ -44,15 +44,20 @@ def main():
     a = ap.parse_args()
     header, archive = load(a.checkpoint)
     print(json.dumps(header))
-    for name in archive.files:
-        if name.endswith(".json"):
-            continue
-        v = archive[name]
-        print(f"{name}: {v.dtype.descr if v.dtype.names else v.dtype.str} shape {v.shape}")
-    if a.array:
-        v = archive[a.array]
-        np.set_printoptions(precision=17, threshold=sys.maxsize)
-        print(v if v.dtype.names is None else "\n".join(str(r) for r in v))
+    try:
+        for name in archive.files:
+            if name.endswith(".json"):
+                continue
+            v = archive[name]
+            print(f"{name}: {v.dtype.descr if v.dtype.names else v.dtype.str} shape {v.shape}")
+        if a.array:
+            if a.array not in archive.files:
+                sys.exit(f"no array {a.array!r}; the checkpoint holds {', '.join(archive.files)}")
+            v = archive[a.array]
+            np.set_printoptions(precision=17, threshold=sys.maxsize)
+            print(v if v.dtype.names is None else "\n".join(str(r) for r in v))
+    except (ValueError, OSError, EOFError) as e:  # zipfile.BadZipFile is an OSError
+        sys.exit(f"{a.checkpoint} is damaged: {e}")
 
 
 if __name__ == "__main__":

@@ -117,10 +117,11 @@ impl Row<'_> {
 
 fn contacts_of(a: &Array, name: &str) -> Result<Vec<Keyed>, StateError> {
     let width = row_bytes();
-    if a.descr != contact_descr() || a.shape.len() != 1 || a.data.len() != a.shape[0] * width {
+    let rows_fit = a.shape.len() == 1 && a.shape[0].checked_mul(width) == Some(a.data.len());
+    if a.descr != contact_descr() || !rows_fit {
         return Err(StateError(format!("`{name}` is not a table of contacts")));
     }
-    let mut out = Vec::with_capacity(a.shape[0]);
+    let mut out = Vec::with_capacity(a.data.len() / width);
     for row in a.data.chunks_exact(width) {
         let mut r = Row(row);
         let key = (r.u32(), r.u32());
@@ -225,8 +226,8 @@ pub(super) fn f64s(a: &Array, name: &str, dims: usize) -> Result<Vec<f64>, State
         0 => a.shape.is_empty(),
         _ => a.shape.len() == 2 && a.shape[1] == 3,
     };
-    let count: usize = a.shape.iter().product();
-    if a.descr != "<f8" || !shape_ok || a.data.len() != 8 * count {
+    let count = a.shape.iter().try_fold(8usize, |c, &d| c.checked_mul(d));
+    if a.descr != "<f8" || !shape_ok || count != Some(a.data.len()) {
         return Err(StateError(format!(
             "`{name}` is not the array it should be"
         )));
@@ -246,5 +247,35 @@ pub(super) fn u64s(a: &Array, name: &str) -> Result<u64, StateError> {
     ) {
         ("<u8", [], Ok(b)) => Ok(u64::from_le_bytes(b)),
         _ => Err(StateError(format!("`{name}` is not a count"))),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn crafted_shapes_are_refused_not_overflowed() {
+        let huge = Array {
+            descr: contact_descr(),
+            shape: vec![(1usize << 63) + 1],
+            data: vec![0; row_bytes()],
+        };
+        assert!(contacts_of(&huge, "contacts").is_err());
+        let wide = Array {
+            descr: "<f8".into(),
+            shape: vec![usize::MAX / 2, 3],
+            data: Vec::new(),
+        };
+        assert!(f64s(&wide, "position", 2).is_err());
+        let short = Array {
+            descr: contact_descr(),
+            shape: vec![2],
+            data: vec![0; row_bytes()],
+        };
+        assert!(contacts_of(&short, "contacts").is_err());
+        let mut flag = contacts_array(&[((0, 1), ContactRecord::default())]);
+        flag.data[16] = 2; // the touched flag
+        assert!(contacts_of(&flag, "contacts").is_err());
     }
 }

@@ -148,6 +148,15 @@ fn not_a_checkpoint(path: &Path) -> PowderError {
     ))
 }
 
+fn other_format(path: &Path, version: &str, format: Option<u64>) -> PowderError {
+    let format = format.map_or("an unknown format".to_string(), |f| format!("format {f}"));
+    PowderError::Run(format!(
+        "checkpoint `{}` was written by powder {version} ({format}); this is powder {} (format {FORMAT}): rerun the scene from the start",
+        path.display(),
+        env!("CARGO_PKG_VERSION")
+    ))
+}
+
 fn damaged(path: &Path, what: &str) -> PowderError {
     PowderError::Run(format!(
         "checkpoint `{}` is damaged or truncated ({what}): resume from an earlier copy or rerun the scene",
@@ -184,13 +193,19 @@ fn header<'a>(bytes: &'a [u8], path: &Path) -> Result<(Header, Archive<'a>), Pow
         }
         Err(_) => return Err(not_a_checkpoint(path)),
     };
-    let header: Header = archive
+    // magic, format and version first, leniently: a later format's header may differ
+    let json: serde_json::Value = archive
         .raw(HEADER)
         .and_then(|b| serde_json::from_slice(b).ok())
         .ok_or_else(|| not_a_checkpoint(path))?;
-    if header.magic != MAGIC {
+    if json["magic"] != MAGIC {
         return Err(not_a_checkpoint(path));
     }
+    let (format, version) = (json["format"].as_u64(), json["version"].as_str());
+    if format != Some(FORMAT as u64) || version != Some(env!("CARGO_PKG_VERSION")) {
+        return Err(other_format(path, version.unwrap_or("?"), format));
+    }
+    let header: Header = serde_json::from_value(json).map_err(|_| not_a_checkpoint(path))?;
     Ok((header, archive))
 }
 
@@ -203,15 +218,6 @@ fn open<'a>(
     backend: &str,
 ) -> Result<Archive<'a>, PowderError> {
     let (header, archive) = header(bytes, path)?;
-    if header.format != FORMAT || header.version != env!("CARGO_PKG_VERSION") {
-        return Err(PowderError::Run(format!(
-            "checkpoint `{}` was written by powder {} (format {}); this is powder {} (format {FORMAT}): rerun the scene from the start",
-            path.display(),
-            header.version,
-            header.format,
-            env!("CARGO_PKG_VERSION")
-        )));
-    }
     if header.backend != backend {
         return Err(PowderError::Run(format!(
             "checkpoint `{}` comes from the {} backend; resume it with --backend {}",

@@ -216,16 +216,21 @@ fn write_with(members: &[(String, Member)], limit: u64) -> Vec<u8> {
     out
 }
 
+/// The `N` bytes at `at` (none past the end, or where `at + N` overflows).
+fn bytes_at<const N: usize>(b: &[u8], at: usize) -> Option<[u8; N]> {
+    b.get(at..at.checked_add(N)?)?.try_into().ok()
+}
+
 fn u16_at(b: &[u8], at: usize) -> Option<u16> {
-    Some(u16::from_le_bytes(b.get(at..at + 2)?.try_into().ok()?))
+    bytes_at(b, at).map(u16::from_le_bytes)
 }
 
 fn u32_at(b: &[u8], at: usize) -> Option<u32> {
-    Some(u32::from_le_bytes(b.get(at..at + 4)?.try_into().ok()?))
+    bytes_at(b, at).map(u32::from_le_bytes)
 }
 
 fn u64_at(b: &[u8], at: usize) -> Option<u64> {
-    Some(u64::from_le_bytes(b.get(at..at + 8)?.try_into().ok()?))
+    bytes_at(b, at).map(u64::from_le_bytes)
 }
 
 /// An archive read back: each member's bytes by name, CRCs checked.
@@ -256,6 +261,9 @@ impl<'a> Archive<'a> {
                 return None;
             }
             let record = usize::try_from(u64_at(b, locator + 8)?).ok()?;
+            if record > locator {
+                return None;
+            }
             if u32_at(b, record)? != 0x0606_4b50 {
                 return None;
             }
@@ -263,11 +271,14 @@ impl<'a> Archive<'a> {
             cd_size = u64_at(b, record + 40)?;
             cd_offset = u64_at(b, record + 48)?;
         }
-        let mut at = usize::try_from(cd_offset).ok()?;
+        let cd_start = usize::try_from(cd_offset).ok()?;
+        let mut at = cd_start;
         let cd_end = at.checked_add(usize::try_from(cd_size).ok()?)?;
         if cd_end > end {
             return None;
         }
+        // members one after the other, as written (so no byte is checked twice)
+        let mut free = 0usize;
         let mut members = BTreeMap::new();
         for _ in 0..count {
             if u32_at(b, at)? != 0x0201_4b50 || u16_at(b, at + 10)? != 0 {
@@ -296,12 +307,17 @@ impl<'a> Archive<'a> {
                 }
             }
             let local = usize::try_from(offset).ok()?;
-            if u32_at(b, local)? != 0x0403_4b50 {
+            if local < free || local >= cd_start || u32_at(b, local)? != 0x0403_4b50 {
                 return None;
             }
             let start =
                 local + 30 + u16_at(b, local + 26)? as usize + u16_at(b, local + 28)? as usize;
-            let data = b.get(start..start.checked_add(usize::try_from(size).ok()?)?)?;
+            let data_end = start.checked_add(usize::try_from(size).ok()?)?;
+            if data_end > cd_start {
+                return None;
+            }
+            let data = b.get(start..data_end)?;
+            free = data_end;
             if crc32fast::hash(data) != crc {
                 return Some(Err(NpzError::Damaged(name.to_string())));
             }

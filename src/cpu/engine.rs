@@ -1178,14 +1178,18 @@ impl CpuEngine {
     }
 
     /// Continues from a checkpointed state of the same scene. The state must come from
-    /// this scene (same particle count, time step and rotation); the checkpoint file
-    /// checks the scene's identity before this is called.
+    /// this scene (same particle count, time step, rotation and walls, every array its
+    /// length); the checkpoint file checks the scene's identity before this is called. A
+    /// refused state leaves the engine as it was.
     pub fn restore(&mut self, s: CpuState) -> Result<(), PowderError> {
         let n = self.pos.len();
         if s.pos.len() != n
             || s.vel.len() != n
             || s.acc.len() != n
+            || s.force.len() != n
+            || s.active.len() != n
             || s.omega.len() != self.omega.len()
+            || s.torque.len() != self.omega.len()
         {
             return Err(PowderError::Run(format!(
                 "the checkpoint holds {} particles{} but the scene has {n}{}",
@@ -1200,6 +1204,13 @@ impl CpuEngine {
                 } else {
                     " with rotation"
                 }
+            )));
+        }
+        if s.wall_points.len() != self.walls.len() || s.wall_velocities.len() != self.walls.len() {
+            return Err(PowderError::Run(format!(
+                "the checkpoint holds {} walls but the scene has {}",
+                s.wall_points.len(),
+                self.walls.len()
             )));
         }
         if s.dt.to_bits() != self.dt.to_bits() {
@@ -1246,13 +1257,6 @@ impl CpuEngine {
             record: walls.into_iter().map(|(_, r)| r).collect(),
         };
         self.dissipated = s.dissipated;
-        if s.wall_points.len() != self.walls.len() {
-            return Err(PowderError::Run(format!(
-                "the checkpoint holds {} walls but the scene has {}",
-                s.wall_points.len(),
-                self.walls.len()
-            )));
-        }
         for (w, (p, v)) in self
             .walls
             .iter_mut()
@@ -1262,9 +1266,7 @@ impl CpuEngine {
             w.velocity = v;
         }
         self.wall_work = s.wall_work;
-        if s.active.len() == self.active.len() {
-            self.active = s.active;
-        }
+        self.active = s.active;
         self.inserted = s.inserted;
         Ok(())
     }
@@ -2276,5 +2278,18 @@ positions = [[0.0, 0.0, 0.995e-3]]
         let mut bad = a.state();
         bad.wall_contacts[0].0 = (99, 0);
         assert!(b.restore(bad).is_err());
+        // every array its length, and a refused state leaves the engine as it was
+        let before = b.state();
+        for cut in [
+            |s: &mut CpuState| s.force.truncate(1),
+            |s: &mut CpuState| s.torque.clear(),
+            |s: &mut CpuState| s.active.truncate(2),
+            |s: &mut CpuState| s.wall_velocities.clear(),
+        ] {
+            let mut bad = a.state();
+            cut(&mut bad);
+            assert!(b.restore(bad).is_err());
+            assert_eq!(b.positions(), before.pos.as_slice());
+        }
     }
 }

@@ -1,0 +1,122 @@
+#!/usr/bin/env python3
+"""Paper 002, section 5.2: head-on collisions of equal adhesive JKR spheres, the effective
+restitution e_eff/e against the elasticity parameter lambda at several adhesiveness values
+Ad (fig. 7), and the same with the stiffness reduced from lambda0 = 1e6 by the paper's rule
+(24), gamma_mod = gamma (E_mod/E)^(2/5) (fig. 8). Paper 002's own JKR: the contact breaks
+at zero overlap, Tsuji damping on Sn = 2E* sqrt(R* delta) calibrated to e = 0.3.
+
+    python3 examples/studies/paper002_binary.py [--backend cpu|gpu] [--powder PATH] [--out docs]
+
+Writes OUT/paper002_binary.svg, OUT/paper002_binary.csv and prints the table of the
+critical elasticity parameters. Each point is one `powder collide --json` run.
+
+Definitions (paper 002, section 5.1, with beta = r_j/r_i = 1): lambda = E*/(rho v^2) with E*
+the effective modulus E/(2(1 - nu^2)), Ad = 3 gamma/(rho v^2 r) with gamma the surface energy
+of Fc = 3 pi gamma R*. (The caption of fig. 7 writes Ad = gamma/(rho v^2 R); the text's
+definition is used here.) The outcome depends on (lambda, Ad, e) only: the scale is fixed at
+r = 1 um, rho = 1000 kg/m^3, v = 1 m/s, nu = 0.3, and E and gamma follow from lambda and Ad.
+"""
+
+import argparse
+import csv
+import json
+import math
+import os
+import subprocess
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import svgplot  # noqa: E402
+
+R, RHO, V, NU, E_REST = 1e-6, 1000.0, 1.0, 0.3, 0.3
+ADS = [1.0, 3.0, 10.0, 30.0, 100.0]
+LAMBDA0 = 1e6
+
+
+def youngs(lam):
+    """E of a material whose pair has lambda = E*/(rho v^2)."""
+    return lam * RHO * V * V * 2.0 * (1.0 - NU * NU)
+
+
+def surface_energy(ad):
+    return ad * RHO * V * V * R / 3.0
+
+
+def collide(powder, backend, lam, ad, scale=1.0):
+    """e_eff/e of one head-on collision (0 when the pair sticks)."""
+    cmd = [powder, "collide", "--model", "jkr", "--youngs", repr(youngs(lam)), "--poisson", repr(NU),
+           "--surface-energy", repr(surface_energy(ad)), "--restitution", repr(E_REST),
+           "--tsuji-stiffness", "hertz", "--pulloff", "zero", "--stiffness-scale", repr(scale),
+           "--radius", repr(R), "--density", repr(RHO), "--velocity", repr(V),
+           "--backend", backend, "--json"]
+    out = subprocess.run(cmd, capture_output=True, text=True)
+    if out.returncode != 0:
+        sys.exit(f"{' '.join(cmd)}\n{out.stderr}")
+    r = json.loads(out.stdout)
+    return 0.0 if r["stuck"] else r["e"] / E_REST
+
+
+def critical(powder, backend, ad, lo, hi, iterations=14):
+    """The lambda between `lo` (sticks) and `hi` (rebounds) where sticking ends, by
+    bisection in log lambda."""
+    for _ in range(iterations):
+        mid = math.sqrt(lo * hi)
+        if collide(powder, backend, mid, ad) == 0.0:
+            lo = mid
+        else:
+            hi = mid
+    return math.sqrt(lo * hi)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--backend", default="cpu", choices=["cpu", "gpu"])
+    ap.add_argument("--powder", default=os.path.join("target", "release", "powder"))
+    ap.add_argument("--out", default="docs")
+    a = ap.parse_args()
+    lambdas = [10 ** (k / 4) for k in range(4, 37)]  # 1e1 .. 1e9
+    rows, fig7, fig8 = [], [], []
+    crit = []
+    for ad in ADS:
+        curve = [(lam, collide(a.powder, a.backend, lam, ad)) for lam in lambdas]
+        fig7.append((f"Ad = {ad:g}", curve, "line"))
+        rows += [("fig7", ad, lam, 1.0, e) for lam, e in curve]
+        stuck = [lam for lam, e in curve if e == 0.0]
+        free = [lam for lam, e in curve if e > 0.0]
+        if stuck and free and max(stuck) < min(free):
+            crit.append((ad, critical(a.powder, a.backend, ad, max(stuck), min(free))))
+        base = collide(a.powder, a.backend, LAMBDA0, ad)
+        scaled = []
+        for k in range(-20, 9):  # S = 1e-5 .. 1e2
+            s = 10 ** (k / 4)
+            scaled.append((LAMBDA0 * s, collide(a.powder, a.backend, LAMBDA0, ad, s)))
+        fig8.append((f"Ad = {ad:g} at 1e6", scaled, "line"))
+        rows += [("fig8", ad, lam, lam / LAMBDA0, e) for lam, e in scaled]
+        spread = max(abs(e - base) for _, e in scaled)
+        print(f"Ad {ad:6g}: e_eff/e at lambda0 = 1e6: {base:.4f}; with rule (24) from S = 1e-5 to 1e2 it stays within {spread:.1e}")
+    os.makedirs(a.out, exist_ok=True)
+    with open(os.path.join(a.out, "paper002_binary.csv"), "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["figure", "Ad", "lambda", "stiffness_scale", "e_eff_over_e"])
+        w.writerows(rows)
+    print("critical elasticity parameter (sticking below it):")
+    for ad, lc in crit:
+        print(f"  Ad {ad:6g}: lambda_crit = {lc:.4e}")
+    if len(crit) > 1:
+        xs = [math.log10(ad) for ad, _ in crit]
+        ys = [math.log10(lc) for _, lc in crit]
+        mx, my = sum(xs) / len(xs), sum(ys) / len(ys)
+        slope = sum((x - mx) * (y - my) for x, y in zip(xs, ys)) / sum((x - mx) ** 2 for x in xs)
+        c = 10 ** (my - slope * mx)
+        print(f"  fit lambda_crit = {c:.3g} Ad^{slope:.3f} (the paper's wall deposition: Ad^2.5)")
+    svgplot.figure([
+        svgplot.panel("head-on JKR collisions, e = 0.3 (paper 002 fig. 7)", "elasticity parameter \u03bb = E*/(\u03c1v\u00b2)",
+                      "e_eff / e", fig7, (10, 1e9), (0, 1.05)),
+        svgplot.panel("stiffness reduced from \u03bb = 1e6 by rule (24) (fig. 8)", "elasticity parameter \u03bb = S\u00b71e6",
+                      "e_eff / e", fig8, (10, 1e9), (0, 1.05)),
+    ], os.path.join(a.out, "paper002_binary.svg"))
+    print(f"wrote {a.out}/paper002_binary.svg and .csv ({a.backend} backend)")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,66 @@
+"""A small SVG line plot with a logarithmic x axis (the studies' figures, standard library
+only): `panel(...)` draws one set of axes, `figure(...)` puts panels side by side."""
+
+import math
+
+COLOURS = ["#1b9e77", "#d95f02", "#7570b3", "#e7298a", "#66a61e", "#e6ab02", "#a6761d"]
+
+
+def _esc(text):
+    return text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
+
+
+def panel(title, xlabel, ylabel, series, xlim, ylim, width=520, height=380):
+    """One panel's SVG elements (a string) and its size. `series`: [(label, [(x, y)], style)]
+    with style "line" or "points"; x is drawn on a log scale."""
+    left, right, top, bottom = 62, 12, 30, 48
+    w, h = width - left - right, height - top - bottom
+    lx0, lx1 = math.log10(xlim[0]), math.log10(xlim[1])
+
+    def sx(x):
+        return left + (math.log10(x) - lx0) / (lx1 - lx0) * w
+
+    def sy(y):
+        return top + (1 - (y - ylim[0]) / (ylim[1] - ylim[0])) * h
+
+    out = [f'<rect x="{left}" y="{top}" width="{w}" height="{h}" fill="none" stroke="#444"/>']
+    out.append(f'<text x="{left + w / 2}" y="18" text-anchor="middle" font-size="14">{_esc(title)}</text>')
+    for d in range(math.ceil(lx0), math.floor(lx1) + 1):
+        x = sx(10 ** d)
+        out.append(f'<line x1="{x:.1f}" y1="{top}" x2="{x:.1f}" y2="{top + h}" stroke="#ddd"/>')
+        out.append(f'<text x="{x:.1f}" y="{top + h + 16}" text-anchor="middle" font-size="11">10<tspan dy="-5" font-size="8">{d}</tspan></text>')
+    steps = 5
+    for k in range(steps + 1):
+        yv = ylim[0] + k * (ylim[1] - ylim[0]) / steps
+        y = sy(yv)
+        out.append(f'<line x1="{left}" y1="{y:.1f}" x2="{left + w}" y2="{y:.1f}" stroke="#eee"/>')
+        out.append(f'<text x="{left - 6}" y="{y + 4:.1f}" text-anchor="end" font-size="11">{yv:.2g}</text>')
+    out.append(f'<text x="{left + w / 2}" y="{height - 8}" text-anchor="middle" font-size="12">{_esc(xlabel)}</text>')
+    out.append(f'<text transform="translate(14,{top + h / 2}) rotate(-90)" text-anchor="middle" font-size="12">{_esc(ylabel)}</text>')
+    for k, (label, points, style) in enumerate(series):
+        colour = COLOURS[k % len(COLOURS)]
+        pts = [(sx(x), sy(y)) for x, y in points if xlim[0] <= x <= xlim[1]]
+        if style == "line" and len(pts) > 1:
+            path = " ".join(f"{x:.1f},{y:.1f}" for x, y in pts)
+            out.append(f'<polyline points="{path}" fill="none" stroke="{colour}" stroke-width="1.6"/>')
+        for x, y in pts:
+            out.append(f'<circle cx="{x:.1f}" cy="{y:.1f}" r="2.4" fill="{colour}"/>')
+        ly = top + 14 + 15 * k
+        out.append(f'<line x1="{left + w - 120}" y1="{ly - 4}" x2="{left + w - 100}" y2="{ly - 4}" stroke="{colour}" stroke-width="2"/>')
+        out.append(f'<text x="{left + w - 95}" y="{ly}" font-size="11">{_esc(label)}</text>')
+    return "\n".join(out), (width, height)
+
+
+def figure(panels, path):
+    """Writes the panels side by side to `path`."""
+    width = sum(size[0] for _, size in panels)
+    height = max(size[1] for _, size in panels)
+    parts = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{height}" font-family="sans-serif">',
+             f'<rect width="{width}" height="{height}" fill="white"/>']
+    x = 0
+    for body, size in panels:
+        parts.append(f'<g transform="translate({x},0)">{body}</g>')
+        x += size[0]
+    parts.append("</svg>")
+    with open(path, "w") as f:
+        f.write("\n".join(parts) + "\n")
