@@ -10,9 +10,10 @@ def _esc(text):
     return text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
 
 
-def panel(title, xlabel, ylabel, series, xlim, ylim, width=520, height=380):
+def panel(title, xlabel, ylabel, series, xlim, ylim, width=520, height=380, ystep=0.2, legend=(0.03, 0.45)):
     """One panel's SVG elements (a string) and its size. `series`: [(label, [(x, y)], style)]
-    with style "line" or "points"; x is drawn on a log scale."""
+    with style "line" or "points"; x is drawn on a log scale, y ticks every `ystep`; the
+    legend's top left corner at `legend`, fractions of the axes from the lower left."""
     left, right, top, bottom = 62, 12, 30, 48
     w, h = width - left - right, height - top - bottom
     lx0, lx1 = math.log10(xlim[0]), math.log10(xlim[1])
@@ -29,9 +30,8 @@ def panel(title, xlabel, ylabel, series, xlim, ylim, width=520, height=380):
         x = sx(10 ** d)
         out.append(f'<line x1="{x:.1f}" y1="{top}" x2="{x:.1f}" y2="{top + h}" stroke="#ddd"/>')
         out.append(f'<text x="{x:.1f}" y="{top + h + 16}" text-anchor="middle" font-size="11">10<tspan dy="-5" font-size="8">{d}</tspan></text>')
-    steps = 5
-    for k in range(steps + 1):
-        yv = ylim[0] + k * (ylim[1] - ylim[0]) / steps
+    for k in range(int(round((ylim[1] - ylim[0]) / ystep)) + 1):
+        yv = ylim[0] + k * ystep
         y = sy(yv)
         out.append(f'<line x1="{left}" y1="{y:.1f}" x2="{left + w}" y2="{y:.1f}" stroke="#eee"/>')
         out.append(f'<text x="{left - 6}" y="{y + 4:.1f}" text-anchor="end" font-size="11">{yv:.2g}</text>')
@@ -45,9 +45,10 @@ def panel(title, xlabel, ylabel, series, xlim, ylim, width=520, height=380):
             out.append(f'<polyline points="{path}" fill="none" stroke="{colour}" stroke-width="1.6"/>')
         for x, y in pts:
             out.append(f'<circle cx="{x:.1f}" cy="{y:.1f}" r="2.4" fill="{colour}"/>')
-        ly = top + 14 + 15 * k
-        out.append(f'<line x1="{left + w - 120}" y1="{ly - 4}" x2="{left + w - 100}" y2="{ly - 4}" stroke="{colour}" stroke-width="2"/>')
-        out.append(f'<text x="{left + w - 95}" y="{ly}" font-size="11">{_esc(label)}</text>')
+        lx = left + legend[0] * w
+        ly = top + (1 - legend[1]) * h + 15 * k
+        out.append(f'<line x1="{lx:.1f}" y1="{ly - 4:.1f}" x2="{lx + 20:.1f}" y2="{ly - 4:.1f}" stroke="{colour}" stroke-width="2"/>')
+        out.append(f'<text x="{lx + 25:.1f}" y="{ly:.1f}" font-size="11">{_esc(label)}</text>')
     return "\n".join(out), (width, height)
 
 
