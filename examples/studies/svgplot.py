@@ -12,7 +12,7 @@ def _esc(text):
 
 def panel(title, xlabel, ylabel, series, xlim, ylim, width=520, height=380, ystep=0.2, legend=(0.03, 0.45)):
     """One panel's SVG elements (a string) and its size. `series`: [(label, [(x, y)], style)]
-    with style "line" or "points"; x is drawn on a log scale, y ticks every `ystep`; the
+    with style "line" (with markers), "curve" (without) or "points"; x is drawn on a log scale, y ticks every `ystep`; the
     legend's top left corner at `legend`, fractions of the axes from the lower left."""
     left, right, top, bottom = 62, 12, 30, 48
     w, h = width - left - right, height - top - bottom
@@ -40,10 +40,10 @@ def panel(title, xlabel, ylabel, series, xlim, ylim, width=520, height=380, yste
     for k, (label, points, style) in enumerate(series):
         colour = COLOURS[k % len(COLOURS)]
         pts = [(sx(x), sy(y)) for x, y in points if xlim[0] <= x <= xlim[1]]
-        if style == "line" and len(pts) > 1:
+        if style in ("line", "curve") and len(pts) > 1:
             path = " ".join(f"{x:.1f},{y:.1f}" for x, y in pts)
             out.append(f'<polyline points="{path}" fill="none" stroke="{colour}" stroke-width="1.6"/>')
-        for x, y in pts:
+        for x, y in pts if style != "curve" else []:
             out.append(f'<circle cx="{x:.1f}" cy="{y:.1f}" r="2.4" fill="{colour}"/>')
         lx = left + legend[0] * w
         ly = top + (1 - legend[1]) * h + 15 * k
