@@ -26,7 +26,6 @@ import csv
 import json
 import math
 import os
-import subprocess
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -53,7 +52,7 @@ REFINE = 8
 
 
 def run(cmd):
-    out = subprocess.run(cmd, capture_output=True, text=True)
+    out = svgplot.run_powder(cmd)
     if out.returncode != 0:
         sys.exit(f"{' '.join(cmd)}\n{out.stderr}")
     return json.loads(out.stdout)
@@ -88,7 +87,7 @@ def critical(powder, backend, ad, lo, hi, iterations):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--backend", default="cpu", choices=["cpu", "gpu"])
-    ap.add_argument("--powder", default=os.path.join("target", "release", "powder"))
+    ap.add_argument("--powder", default=svgplot.POWDER, help="the powder binary (default: the repository's release build)")
     ap.add_argument("--out", default="docs")
     ap.add_argument("--per-decade", type=int, default=4, help="lambda points per decade (4)")
     ap.add_argument("--bisections", type=int, default=14, help="bisection steps for lambda_crit (14)")

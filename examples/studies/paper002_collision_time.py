@@ -18,8 +18,8 @@ import argparse
 import csv
 import json
 import os
-import subprocess
 import sys
+import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import svgplot  # noqa: E402
@@ -31,7 +31,7 @@ REFINE = 8  # the time step: powder's default / 8 (as in paper002_binary.py)
 
 
 def run(cmd):
-    out = subprocess.run(cmd, capture_output=True, text=True)
+    out = svgplot.run_powder(cmd)
     if out.returncode != 0:
         sys.exit(f"{' '.join(cmd)}\n{out.stderr}")
     return json.loads(out.stdout)
@@ -50,17 +50,17 @@ def collide(powder, backend, scale, trace=None):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--backend", default="cpu", choices=["cpu", "gpu"])
-    ap.add_argument("--powder", default=os.path.join("target", "release", "powder"))
+    ap.add_argument("--powder", default=svgplot.POWDER, help="the powder binary (default: the repository's release build)")
     ap.add_argument("--out", default="docs")
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
     series, table = [], []
     for s in SCALES:
-        trace = os.path.join(a.out, f".trace_{s:g}.csv")
-        collide(a.powder, "cpu", s, trace)
-        with open(trace) as f:
-            rows = [(float(r["t"]), float(r["delta"]), -float(r["delta_dot"])) for r in csv.DictReader(f)]
-        os.remove(trace)
+        with tempfile.TemporaryDirectory() as tmp:
+            trace = os.path.join(tmp, "trace.csv")
+            collide(a.powder, "cpu", s, trace)
+            with open(trace) as f:
+                rows = [(float(r["t"]), float(r["delta"]), -float(r["delta_dot"])) for r in csv.DictReader(f)]
         touch = next(t for t, d, _ in rows if d > 0)
         series.append((f"E_mod/E = {s:g}", [(t - touch, v) for t, d, v in rows if t > touch], "curve"))
         r = collide(a.powder, a.backend, s)

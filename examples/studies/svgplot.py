@@ -1,7 +1,22 @@
-"""A small SVG line plot with a logarithmic x axis (the studies' figures, standard library
-only): `panel(...)` draws one set of axes, `figure(...)` puts panels side by side."""
+"""What the studies share (standard library only): a small SVG line plot with a
+logarithmic x axis (`panel(...)` draws one set of axes, `figure(...)` puts panels side by
+side) and `run_powder`, which runs the powder binary."""
 
 import math
+import os
+import subprocess
+import sys
+
+# the repository's release build, wherever the study is run from
+POWDER = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "target", "release", "powder")
+
+
+def run_powder(cmd):
+    """Runs `cmd` (the powder binary first); a missing binary is said plainly."""
+    try:
+        return subprocess.run(cmd, capture_output=True, text=True)
+    except FileNotFoundError:
+        sys.exit(f"no powder binary at {cmd[0]}: build it with `cargo build --release` or pass --powder PATH")
 
 COLOURS = ["#1b9e77", "#d95f02", "#7570b3", "#e7298a", "#66a61e", "#e6ab02", "#a6761d"]
 
