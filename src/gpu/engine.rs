@@ -2749,9 +2749,9 @@ impl GpuEngine {
         Ok(f)
     }
 
-    /// The wall entries of the lists (`WALL_ENTRY` in `shaders/step.wgsl`: particle k's
-    /// contacts with the walls near it, after its pairs), read back.
-    fn read_wall_entries(&self) -> Result<WallEntries, PowderError> {
+    /// The lists read back: each particle's ids (persistent id, row, pairs, walls; in the
+    /// device's order) and the entries' bytes.
+    fn read_lists(&self) -> Result<(Vec<[u32; 4]>, Vec<u8>), PowderError> {
         let s = &self.state;
         let encoder = self.ctx.device.create_command_encoder(&Default::default());
         let mut out = submit_and_read(
@@ -2760,7 +2760,14 @@ impl GpuEngine {
             &[(&s.state, s.state.size()), (&s.entries, s.entries.size())],
         )?;
         let entries = out.pop().unwrap_or_default();
-        let ids: Vec<[u32; 4]> = s.layout.unpack(&out[0], "ids");
+        Ok((s.layout.unpack(&out[0], "ids"), entries))
+    }
+
+    /// The wall entries of the lists (`WALL_ENTRY` in `shaders/step.wgsl`: particle k's
+    /// contacts with the walls near it, after its pairs), read back.
+    fn read_wall_entries(&self) -> Result<WallEntries, PowderError> {
+        let s = &self.state;
+        let (ids, entries) = self.read_lists()?;
         let windows = s.layout.windows();
         let mut found = Vec::new();
         for (k, &[_, row, pairs, walls]) in ids.iter().enumerate() {
@@ -2875,13 +2882,7 @@ impl GpuEngine {
     pub fn contact_histories(&self) -> Result<Vec<KeyedHistory>, PowderError> {
         let s = &self.state;
         let hb = self.kind.history_bytes();
-        let encoder = self.ctx.device.create_command_encoder(&Default::default());
-        let out = submit_and_read(
-            &self.ctx,
-            encoder,
-            &[(&s.state, s.state.size()), (&s.entries, s.entries.size())],
-        )?;
-        let ids: Vec<[u32; 4]> = s.layout.unpack(&out[0], "ids");
+        let (ids, entries) = self.read_lists()?;
         let cap = self.entries;
         let windows = s.layout.windows();
         let at = |name: &str, e: u64| s.entry_layout.byte_of(name, cap, windows, e).unwrap_or(0);
@@ -2890,11 +2891,11 @@ impl GpuEngine {
         for &[pid, row, count, _] in &ids {
             // a particle's entries (ids.y, ids.z as in shaders/step.wgsl)
             for e in row as u64..(row + count) as u64 {
-                let partner = u32s(&out[1][at("hist_pid", e) as usize..][..4])[0];
+                let partner = u32s(&entries[at("hist_pid", e) as usize..][..4])[0];
                 let h = at("hist", e) as usize;
                 // one stored history per pair, in its evaluator's frame; the partner sees
                 // it mirrored (the tangential spring negated)
-                let h = self.decode_history(&out[1][h..h + hb]);
+                let h = self.decode_history(&entries[h..h + hb]);
                 let seen_by_partner = self.kind.mirror_history(h);
                 list.push(((pid, partner), h));
                 list.push(((partner, pid), seen_by_partner));
@@ -2918,14 +2919,8 @@ impl GpuEngine {
             ));
         }
         let hb = self.kind.history_bytes() as usize;
-        let encoder = self.ctx.device.create_command_encoder(&Default::default());
-        let out = submit_and_read(
-            &self.ctx,
-            encoder,
-            &[(&s.state, s.state.size()), (&s.entries, s.entries.size())],
-        )?;
-        let ids: Vec<[u32; 4]> = s.layout.unpack(&out[0], "ids");
-        let entries = &out[1];
+        let (ids, entries) = self.read_lists()?;
+        let entries = &entries;
         let (cap, windows) = (self.entries, s.layout.windows());
         let layout = &s.entry_layout;
         let id_of = |e: u64| {
