@@ -538,8 +538,8 @@ struct RunArgs {
     /// CPU engine threads (0: every core); the results are bitwise the same on any count.
     #[arg(long, default_value_t = 0)]
     threads: usize,
-    /// Output directory: VTK snapshots and a .pvd collection for ParaView, series.csv,
-    /// checkpoint.bin, summary.json (default: out/<scene name>).
+    /// Output directory: VTK snapshots (and the contact network) with .pvd collections for
+    /// ParaView, series.csv, checkpoint.bin, summary.json (default: out/<scene name>).
     #[arg(long)]
     out: Option<PathBuf>,
     /// Write no output files.
@@ -1314,8 +1314,13 @@ fn print_summary(summary: &powder::run::RunSummary) {
         None => println!("wall forces      {NO_LEDGER}"),
     }
     if let Some(d) = &summary.out_dir {
+        let contacts = if summary.contact_network {
+            format!(" and {}_contacts.pvd", summary.scene)
+        } else {
+            String::new()
+        };
         println!(
-            "outputs          {d}/ ({}.pvd for ParaView, series.csv, checkpoint.bin, summary.json)",
+            "outputs          {d}/ ({}.pvd{contacts} for ParaView, series.csv, checkpoint.bin, summary.json)",
             summary.scene
         );
     }

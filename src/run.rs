@@ -86,6 +86,8 @@ pub struct RunSummary {
     pub interrupted: bool,
     /// The output directory, if outputs were written.
     pub out_dir: Option<String>,
+    /// Whether the contact network was written with the snapshots (`contacts/`).
+    pub contact_network: bool,
     /// Neighbour-list rebuilds so far, as the backend counts them (the GPU's initial
     /// build included; the CPU's since this run's engine was built).
     pub rebuilds: u64,
@@ -718,6 +720,7 @@ pub fn run_with<S: Simulation>(
         resumed_from,
         interrupted,
         out_dir: out.map(|d| d.display().to_string()),
+        contact_network: network.is_some(),
         rebuilds: engine.rebuilds()?,
         quiet_batches: engine.quiet_batches().map(|(kept, back)| [kept, back]),
         notes: engine.notes()?,

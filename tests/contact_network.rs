@@ -169,7 +169,7 @@ fn a_run_writes_the_network_with_each_snapshot() {
         max_steps: Some(2000),
         ..Default::default()
     };
-    run_cpu_with(&scene, &opts, |_| {}).unwrap();
+    assert!(run_cpu_with(&scene, &opts, |_| {}).unwrap().contact_network);
     let pvd = std::fs::read_to_string(dir.path().join("packing_contacts.pvd")).unwrap();
     assert_eq!(pvd.matches("<DataSet").count(), 5, "{pvd}");
     assert!(pvd.contains(r#"file="contacts/packing_0000002000.vtp""#));
@@ -222,7 +222,7 @@ fn a_run_writes_the_network_with_each_snapshot() {
         max_steps: Some(500),
         ..Default::default()
     };
-    run_cpu_with(&scene, &opts, |_| {}).unwrap();
+    assert!(!run_cpu_with(&scene, &opts, |_| {}).unwrap().contact_network);
     assert!(!off.path().join("contacts").exists());
     assert!(!off.path().join("packing_contacts.pvd").exists());
     assert!(off.path().join("packing.pvd").exists());

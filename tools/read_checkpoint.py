@@ -11,6 +11,7 @@ other formats by name, as powder does. Needs NumPy (`apt-get install python3-num
 import argparse
 import json
 import sys
+import zipfile
 
 import numpy as np
 
@@ -56,7 +57,7 @@ def main():
             v = archive[a.array]
             np.set_printoptions(precision=17, threshold=sys.maxsize)
             print(v if v.dtype.names is None else "\n".join(str(r) for r in v))
-    except (ValueError, OSError, EOFError) as e:  # zipfile.BadZipFile is an OSError
+    except (zipfile.BadZipFile, ValueError, EOFError) as e:
         sys.exit(f"{a.checkpoint} is damaged: {e}")
 
 
