@@ -2,59 +2,11 @@
 //! spheres with friction and rolling resistance in one box, against the CPU reference.
 
 mod common;
-use common::gpu;
+use common::{gpu, two_lattices};
 
 use powder::compare::{compare, Tolerances};
 use powder::gpu::GpuEngine;
 use powder::scene::Scene;
-
-/// Two jittered lattices of 1 mm spheres in a box over a floor: `lower` below, `upper`
-/// above thrown down at `speed`, with the `materials` blocks (materials and interactions)
-/// and the floor of material `wall`; `spacing` sets the gaps between lattice neighbours.
-fn two_lattices(
-    materials: &str,
-    [lower, upper, wall]: [&str; 3],
-    spacing: f64,
-    speed: f64,
-) -> Scene {
-    let text = format!(
-        r#"
-[domain]
-min = [0.0, 0.0, 0.0]
-max = [0.012, 0.012, 0.02]
-[simulation]
-duration = 0.05
-gravity = [0.0, 0.0, -9.81]
-impact_velocity = 0.5
-{materials}
-[[wall]]
-point = [0.0, 0.0, 0.0]
-normal = [0.0, 0.0, 1.0]
-material = "{wall}"
-[[particles]]
-kind = "lattice"
-material = "{lower}"
-min = [0.0011, 0.0011, 0.0011]
-max = [0.0109, 0.0109, 0.0062]
-radius = 1.0e-3
-spacing = {spacing:e}
-jitter = 0.5
-seed = 7
-[[particles]]
-kind = "lattice"
-material = "{upper}"
-min = [0.0011, 0.0011, 0.0066]
-max = [0.0109, 0.0109, 0.0118]
-radius = 1.0e-3
-spacing = {spacing:e}
-jitter = 0.5
-velocity = [0.0, 0.0, {vz:e}]
-seed = 8
-"#,
-        vz = -speed
-    );
-    Scene::from_toml_str(&text, "lattices").unwrap()
-}
 
 /// Hysteretic spheres below and JKR (friction, rolling resistance, Tsuji damping) above,
 /// thrown down onto them; hysteretic–JKR pairs and the floor use the hysteretic model.
@@ -91,7 +43,7 @@ gamma0 = 1e-3
 "#,
         ["plastic", "sticky", "plastic"],
         2.1e-3,
-        0.3,
+        [0.0, 0.0, -0.3],
     )
 }
 
@@ -166,7 +118,7 @@ rolling_hysteresis = 0.5
 "#,
         ["smooth", "sticky", "sticky"],
         2.02e-3,
-        0.5,
+        [0.0, 0.0, -0.5],
     );
     let Some(ctx) = gpu() else { return };
     let c = compare(&scene, ctx, 12000, 2000, Tolerances::default()).unwrap();
@@ -212,7 +164,7 @@ gamma0 = 1e-3
 "#,
         ["plastic", "sticky", "plastic"],
         2.1e-3,
-        0.3,
+        [0.0, 0.0, -0.3],
     );
     let Some(ctx) = gpu() else { return };
     let g = GpuEngine::new(&scene, ctx).unwrap();

@@ -165,6 +165,27 @@ fn outputs_are_written_and_a_resumed_run_is_bitwise_identical() {
     assert!(summary["solid_fraction_bounding_box"].as_f64().unwrap() > 0.0);
 }
 
+/// The checkpoint `bytes` with its header saying format 18 (the members otherwise as they
+/// are).
+fn as_format_18(bytes: &[u8]) -> Vec<u8> {
+    let archive = npz::Archive::read(bytes).unwrap();
+    let members: Vec<(String, npz::Member)> = archive
+        .names()
+        .map(|name| {
+            let raw = archive.raw(name).unwrap().to_vec();
+            let raw = match name {
+                "powder.json" => String::from_utf8(raw)
+                    .unwrap()
+                    .replace("\"format\": 17", "\"format\": 18")
+                    .into_bytes(),
+                _ => raw,
+            };
+            (name.to_string(), npz::Member::Raw(raw))
+        })
+        .collect();
+    npz::write(&members)
+}
+
 #[test]
 fn foreign_or_broken_checkpoints_are_refused() {
     let scene = cluster();
@@ -205,20 +226,7 @@ fn foreign_or_broken_checkpoints_are_refused() {
         assert!(err.contains("damaged or truncated"), "cut at {cut}: {err}");
     }
     // another format is named: the archive written again with another header
-    let archive = npz::Archive::read(&bytes).unwrap();
-    let mut members: Vec<(String, npz::Member)> = Vec::new();
-    for name in archive.names() {
-        let raw = archive.raw(name).unwrap().to_vec();
-        let raw = match name {
-            "powder.json" => String::from_utf8(raw)
-                .unwrap()
-                .replace("\"format\": 17", "\"format\": 18")
-                .into_bytes(),
-            _ => raw,
-        };
-        members.push((name.to_string(), npz::Member::Raw(raw)));
-    }
-    let err = refusal(&npz::write(&members));
+    let err = refusal(&as_format_18(&bytes));
     assert!(err.contains("(format 18)"), "{err}");
     // the bincode checkpoints of formats up to 16 are named as such
     let err = refusal(b"POWDERCK\x11\x00\x00\x00 and the rest");
@@ -740,24 +748,8 @@ print(json.dumps({
         assert_eq!(f(&forces[k]), c.normal_force);
     }
     // another format, named by the reader
-    let bytes = std::fs::read(&ckpt).unwrap();
-    let archive = npz::Archive::read(&bytes).unwrap();
-    let members: Vec<(String, npz::Member)> = archive
-        .names()
-        .map(|name| {
-            let raw = archive.raw(name).unwrap().to_vec();
-            let raw = match name {
-                "powder.json" => String::from_utf8(raw)
-                    .unwrap()
-                    .replace("\"format\": 17", "\"format\": 18")
-                    .into_bytes(),
-                _ => raw,
-            };
-            (name.to_string(), npz::Member::Raw(raw))
-        })
-        .collect();
     let other = dir.path().join("other.bin");
-    std::fs::write(&other, npz::write(&members)).unwrap();
+    std::fs::write(&other, as_format_18(&std::fs::read(&ckpt).unwrap())).unwrap();
     let out = python(&other);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success() && err.contains("format 18"), "{err}");

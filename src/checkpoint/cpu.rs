@@ -5,6 +5,7 @@ use super::npz::{Array, Member};
 use super::StateError;
 use crate::cpu::engine::ContactRecord;
 use crate::cpu::CpuState;
+use crate::model::history::HostField;
 use crate::model::ContactHistory;
 use glam::DVec3;
 
@@ -23,16 +24,17 @@ const fn column(name: &'static str, descr: &'static str, bytes: usize) -> Column
     Column { name, descr, bytes }
 }
 
-/// A contact's row: the key (i, j) — (wall, particle) for a wall contact — then the record.
+/// A contact's row: the key (i, j) — (wall, particle) for a wall contact — then the record
+/// (the history's columns named as the contact network output names them).
 const CONTACT: &[Column] = &[
     column("i", "'<u4'", 4),
     column("j", "'<u4'", 4),
-    column("delta_max", "'<f8'", 8),
-    column("touched", "'|b1'", 1),
-    column("tangential_spring", "'<f8', (3,)", 24),
-    column("rolling_displacement", "'<f8', (3,)", 24),
-    column("contact_radius", "'<f8'", 8),
-    column("twist", "'<f8'", 8),
+    column(HostField::DeltaMaxTouched.output().0, "'<f8'", 8),
+    column(HostField::Touched.output().0, "'|b1'", 1),
+    column(HostField::Tangential.output().0, "'<f8', (3,)", 24),
+    column(HostField::Rolling.output().0, "'<f8', (3,)", 24),
+    column(HostField::ContactRadius.output().0, "'<f8'", 8),
+    column(HostField::Twist.output().0, "'<f8'", 8),
     column("overlap", "'<f8'", 8),
     column("normal_force", "'<f8'", 8),
     column("tangential_force", "'<f8', (3,)", 24),

@@ -82,7 +82,7 @@ pub const ROLLING_DISPLACEMENT: HistoryField = HistoryField {
 impl HostField {
     /// The name of the field's values in the contact network output and how many
     /// components they have (the touched flag of `DeltaMaxTouched` is output as `touched`).
-    pub fn output(self) -> (&'static str, usize) {
+    pub const fn output(self) -> (&'static str, usize) {
         match self {
             HostField::DeltaMaxTouched => ("delta_max", 1),
             HostField::Touched => ("touched", 1),

@@ -169,10 +169,17 @@ pub fn jkr_collisions(
     out
 }
 
-/// A box of jittered 1 mm spheres thrown onto a floor: `materials` as scene lines, every
-/// sphere of the first material, the upper half of `upper`.
+/// Two jittered lattices of 1 mm spheres in a box over a floor: `lower` below, `upper`
+/// above thrown at `velocity`, with the `materials` blocks (materials and interactions) and
+/// the floor of material `wall`; `spacing` sets the gaps between lattice neighbours.
 #[allow(dead_code)]
-pub fn packing(materials: &str, upper: &str) -> Scene {
+pub fn two_lattices(
+    materials: &str,
+    [lower, upper, wall]: [&str; 3],
+    spacing: f64,
+    velocity: [f64; 3],
+) -> Scene {
+    let [vx, vy, vz] = velocity;
     let text = format!(
         r#"
 [domain]
@@ -186,14 +193,14 @@ impact_velocity = 0.5
 [[wall]]
 point = [0.0, 0.0, 0.0]
 normal = [0.0, 0.0, 1.0]
-material = "rough"
+material = "{wall}"
 [[particles]]
 kind = "lattice"
-material = "rough"
+material = "{lower}"
 min = [0.0011, 0.0011, 0.0011]
 max = [0.0109, 0.0109, 0.0062]
 radius = 1.0e-3
-spacing = 2.1e-3
+spacing = {spacing:e}
 jitter = 0.5
 seed = 7
 [[particles]]
@@ -202,13 +209,25 @@ material = "{upper}"
 min = [0.0011, 0.0011, 0.0066]
 max = [0.0109, 0.0109, 0.0118]
 radius = 1.0e-3
-spacing = 2.1e-3
+spacing = {spacing:e}
 jitter = 0.5
-velocity = [0.1, 0.05, -0.3]
+velocity = [{vx:e}, {vy:e}, {vz:e}]
 seed = 8
 "#
     );
     Scene::from_toml_str(&text, "packing").unwrap()
+}
+
+/// A box of jittered 1 mm spheres thrown onto a floor: `materials` as scene lines, every
+/// sphere of the first material, the upper half of `upper`.
+#[allow(dead_code)]
+pub fn packing(materials: &str, upper: &str) -> Scene {
+    two_lattices(
+        materials,
+        ["rough", upper, "rough"],
+        2.1e-3,
+        [0.1, 0.05, -0.3],
+    )
 }
 
 /// Adhesive elasto-plastic spheres with Luding's sliding (μs > μd), rolling and twisting
