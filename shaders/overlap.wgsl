@@ -126,7 +126,7 @@ fn carry_cells(o: vec3<f32>, h: vec3<f32>) -> Carried {
     var out = Carried(vec3<f32>(0.0), vec3<i32>(0), vec3<f32>(0.0));
     for (var a = 0u; a < 3u; a++) {
         var shift = floor(o[a] / h[a]);
-        var r = two_sum(o[a], -shift * h[a]);
+        var r = two_sum(o[a], -opaque1(shift * h[a]));
         // the division may round across an integer: one more or one fewer cell
         if (r.hi >= h[a]) {
             let back = two_sum(r.hi, -h[a]);

@@ -29,7 +29,7 @@ fn rot_load(k: u32) -> RotState {
 // share)/I, stored.
 fn rot_collect(k: u32, torque: vec3<f32>) -> RotState {
     let omega = load_omega(k);
-    let alpha = (load_alpha(k).xyz + torque) / omega.w;
+    let alpha = opaque((load_alpha(k).xyz + torque) / omega.w);
     store_alpha(k, vec4<f32>(alpha, 0.0));
     return RotState(omega, alpha);
 }
@@ -41,13 +41,15 @@ fn rot_finite(r: RotState) -> bool {
 // kick_drift: omega += dt/2·alpha (first the previous step's closing kick when it is
 // pending: two roundings, as two kernels give), and the prediction the forces see.
 fn rot_drift(k: u32, r: RotState, pending_kick: bool) {
+    // (the product through `opaque`, as the velocity's in drift_particle)
+    let half = opaque(0.5 * step.dt * r.alpha);
     var w = r.omega.xyz;
     if (pending_kick) {
-        w = w + 0.5 * step.dt * r.alpha;
+        w = w + half;
     }
-    w = w + 0.5 * step.dt * r.alpha;
+    w = w + half;
     store_omega(k, vec4<f32>(w, r.omega.w));
-    store_wpred(k, vec4<f32>(w + 0.5 * step.dt * r.alpha, 0.0));
+    store_wpred(k, vec4<f32>(w + half, 0.0));
 }
 
 // (rot_wpred: the predicted angular velocity, from rotation_mirrors.wgsl or
@@ -71,5 +73,5 @@ fn rot_pair_load(slot: u32) -> vec3<f32> {
 
 // kick: omega += dt/2·alpha.
 fn rot_kick(k: u32) {
-    store_omega(k, vec4<f32>(load_omega(k).xyz + 0.5 * step.dt * load_alpha(k).xyz, load_omega(k).w));
+    store_omega(k, vec4<f32>(load_omega(k).xyz + opaque(0.5 * step.dt * load_alpha(k).xyz), load_omega(k).w));
 }

@@ -426,7 +426,9 @@ fn drift(i: u32) {
 // `jump_dv`: with the pending kick, the partners' force jumps at the end of that step.
 fn drift_particle(i: u32, vel: vec4<f32>, acc: vec3<f32>, rot: RotState, pending_kick: bool, peak: f32, jump_dv: vec3<f32>) {
     let h = grid.cell_width;
-    let half_dv = 0.5 * step.dt * acc;
+    // (products through `opaque`: fused into the adds or not, as this kernel and `kick`
+    // may differ, they would round differently; batches of any length give the same bits)
+    let half_dv = opaque(0.5 * step.dt * acc);
     var v0 = vel.xyz;
     var c0 = load_kahan_v(i).xyz;
     if (pending_kick) {
@@ -444,7 +446,8 @@ fn drift_particle(i: u32, vel: vec4<f32>, acc: vec3<f32>, rot: RotState, pending
     store_vpred(i, vec4<f32>(v + half_dv, vel.w));
     rot_drift(i, rot, pending_kick);
     let disp0 = load_disp(i);
-    let disp = disp0.xyz + step.dt * v;
+    let dx = opaque(step.dt * v);
+    let disp = disp0.xyz + dx;
     store_disp(i, vec4<f32>(disp, max(disp0.w, peak)));
     // (NaN forces a rebuild too)
     if (!(length(disp) <= 0.5 * skin_width())) {
@@ -463,7 +466,7 @@ fn drift_particle(i: u32, vel: vec4<f32>, acc: vec3<f32>, rot: RotState, pending
     // the true step dt·(v − c_v): the velocity's compensation joins the offset's (v − c_v
     // itself rounds back to v); w: the radius's rounding residual, kept
     let c_off = load_kahan_o(i);
-    let ko = kahan_add(off.xyz, c_off.xyz + step.dt * kv.c, step.dt * v);
+    let ko = kahan_add(off.xyz, c_off.xyz + opaque(step.dt * kv.c), dx);
     // whole cells carried exactly, their rounding booked into the compensation
     let carried = carry_cells(ko.x, h);
     store_kahan_o(i, vec4<f32>(ko.c - carried.lo, c_off.w));
@@ -1175,10 +1178,11 @@ fn collect_particle(k: u32, mass: f32, store: bool) -> Collected {
         // a force jump's impulse (0 without the force jumps: no field, no load)
         let jump = load_jump(slot);
         if (jump != 0.0) {
-            impulse -= jump * load_jump_normal(slot);
+            impulse -= opaque(jump * load_jump_normal(slot));
         }
     }
-    let acc = f / mass + step.gravity;
+    // (`opaque`: as in drift_particle, rounded the same in every kernel that collects)
+    let acc = opaque(opaque(f / mass) + step.gravity);
     let rot = rot_collect(k, torque);
     if (any(acc != acc) || any(abs(acc) > vec3<f32>(3.0e38)) || !rot_finite(rot)) {
         atomicAdd(&control[2], 1u);
@@ -1186,7 +1190,7 @@ fn collect_particle(k: u32, mass: f32, store: bool) -> Collected {
     if (store) {
         store_acc(k, vec4<f32>(acc, 0.0));
     }
-    return Collected(acc, rot, partial.w, impulse / mass);
+    return Collected(acc, rot, partial.w, opaque(impulse / mass));
 }
 
 @compute @workgroup_size(WG_SIZE)
@@ -1198,7 +1202,7 @@ fn kick(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     if (!is_active(load_ids(k).x)) {
         return;
     }
-    let kv = kahan_add(load_vel(k).xyz, load_kahan_v(k).xyz, 0.5 * step.dt * load_acc(k).xyz);
+    let kv = kahan_add(load_vel(k).xyz, load_kahan_v(k).xyz, opaque(0.5 * step.dt * load_acc(k).xyz));
     store_vel(k, vec4<f32>(kv.x, load_vel(k).w));
     store_kahan_v(k, vec4<f32>(kv.c, 0.0));
     rot_kick(k);

@@ -94,7 +94,10 @@ fn a_packing_with_luding_friction_matches_the_cpu() {
 
 /// JKR spheres with Mindlin friction, rolling resistance and Luding's twisting friction
 /// (its stiffness following the contact radius) above the rough hysteretic ones: both laws
-/// and five sub-models in one step, against the CPU.
+/// and five sub-models in one step, against the CPU. The packing is chaotic: the f32
+/// rounding's trace grows about tenfold every 1500 steps (position 1.5e-6 at step 2000,
+/// 9e-5 at 6000, 3e-4 at 8000 on lavapipe; 1.2e-4 at 6000, 1.3e-3 at 8000 on an H200,
+/// whose compiler fuses multiply-adds), so it is compared over 6000 steps.
 #[test]
 fn jkr_twisting_beside_luding_friction_matches_the_cpu() {
     let materials = format!(
@@ -130,7 +133,7 @@ friction = 0.3
     );
     drop(g);
     let Some(ctx) = gpu() else { return };
-    let c = compare(&scene, ctx, 8000, 2000, Tolerances::default()).unwrap();
+    let c = compare(&scene, ctx, 6000, 2000, Tolerances::default()).unwrap();
     report(&c);
     let last = c.samples.last().unwrap();
     assert!(last.contacts_cpu > 5 && last.history_pairs > 0, "{last:?}");

@@ -291,34 +291,63 @@ pub fn choose_adapter(
     adapters: Vec<wgpu::Adapter>,
     pref: &AdapterPreference,
 ) -> Result<wgpu::Adapter, PowderError> {
+    let found: Vec<(wgpu::AdapterInfo, bool)> = adapters
+        .iter()
+        .map(|a| {
+            let compute = a
+                .get_downlevel_capabilities()
+                .flags
+                .contains(wgpu::DownlevelFlags::COMPUTE_SHADERS);
+            (a.get_info(), compute)
+        })
+        .collect();
+    let i = pick_adapter(&found, pref)?;
+    Ok(adapters.into_iter().nth(i).expect("an index of the list"))
+}
+
+/// The index of the best adapter allowed by `pref` among `(info, has compute shaders)`;
+/// adapters without compute shaders (a desktop GL context below 4.3, as NVIDIA's EGL
+/// gives wgpu) are never chosen, and the error says so when only they match.
+pub fn pick_adapter(
+    found: &[(wgpu::AdapterInfo, bool)],
+    pref: &AdapterPreference,
+) -> Result<usize, PowderError> {
     let tried = "Vulkan, Metal, DX12, GL";
-    if adapters.is_empty() {
+    if found.is_empty() {
         return Err(PowderError::Run(format!(
             "no GPU adapter found (tried {tried}); {INSTALL_HINT}"
         )));
     }
-    let all: Vec<String> = adapters.iter().map(|a| describe(&a.get_info())).collect();
-    let mut allowed: Vec<(wgpu::Adapter, (u8, u8))> = adapters
-        .into_iter()
-        .filter_map(|a| {
-            let info = a.get_info();
-            pref.accepts(&info).then(|| (a, adapter_rank(&info)))
-        })
+    let all: Vec<String> = found.iter().map(|(info, _)| describe(info)).collect();
+    let matching: Vec<usize> = (0..found.len())
+        .filter(|&i| pref.accepts(&found[i].0))
         .collect();
     // Stable sort: enumeration order breaks ties.
-    allowed.sort_by_key(|(_, rank)| *rank);
-    match allowed.into_iter().next() {
-        Some((a, _)) => Ok(a),
-        None => Err(PowderError::Run(format!(
-            "no GPU adapter matches {ADAPTER_ENV}={} (tried {tried}); adapters found: {}; \
-             set {ADAPTER_ENV} to auto, software, hardware or part of one of these names",
-            match pref {
-                AdapterPreference::Name(s) => s.clone(),
-                other => format!("{other:?}").to_lowercase(),
-            },
-            all.join("; ")
-        ))),
+    let mut usable: Vec<usize> = matching.iter().copied().filter(|&i| found[i].1).collect();
+    usable.sort_by_key(|&i| adapter_rank(&found[i].0));
+    if let Some(&i) = usable.first() {
+        return Ok(i);
     }
+    let wanted = match pref {
+        AdapterPreference::Name(s) => s.clone(),
+        other => format!("{other:?}").to_lowercase(),
+    };
+    if let Some(&i) = matching.first() {
+        let info = &found[i].0;
+        return Err(PowderError::Run(format!(
+            "the adapter {ADAPTER_ENV}={wanted} matches, {} (driver {}), has no compute \
+             shaders (wgpu needs OpenGL 4.3 or OpenGL ES 3.1 on GL); adapters found: {}; \
+             choose another with {ADAPTER_ENV}",
+            describe(info),
+            info.driver_info,
+            all.join("; ")
+        )));
+    }
+    Err(PowderError::Run(format!(
+        "no GPU adapter matches {ADAPTER_ENV}={wanted} (tried {tried}); adapters found: {}; \
+         set {ADAPTER_ENV} to auto, software, hardware or part of one of these names",
+        all.join("; ")
+    )))
 }
 
 impl GpuContext {
@@ -409,6 +438,43 @@ mod tests {
             name: name.into(),
             ..wgpu::AdapterInfo::new(device_type, backend)
         }
+    }
+
+    /// An adapter without compute shaders (NVIDIA's GL through EGL: a GL 3.3 context) is
+    /// passed over where another matches, and refused by name where it alone does.
+    #[test]
+    fn adapters_without_compute_shaders_are_never_chosen() {
+        let gl = wgpu::AdapterInfo {
+            driver_info: "3.3.0 NVIDIA 580.159.04".into(),
+            ..info(
+                "NVIDIA H200/PCIe/SSE2",
+                wgpu::Backend::Gl,
+                wgpu::DeviceType::Other,
+            )
+        };
+        let vk = info(
+            "NVIDIA H200",
+            wgpu::Backend::Vulkan,
+            wgpu::DeviceType::DiscreteGpu,
+        );
+        let lavapipe = info("llvmpipe", wgpu::Backend::Vulkan, wgpu::DeviceType::Cpu);
+        let found = [(gl.clone(), false), (lavapipe, true), (vk, true)];
+        assert_eq!(pick_adapter(&found, &AdapterPreference::Auto).unwrap(), 2);
+        assert_eq!(
+            pick_adapter(&found, &AdapterPreference::Software).unwrap(),
+            1
+        );
+        let err = pick_adapter(&found, &AdapterPreference::parse(Some("gl")))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("no compute shaders"), "{err}");
+        assert!(err.contains("3.3.0 NVIDIA"), "{err}");
+        // alone: even auto does not take it
+        let err = pick_adapter(&[(gl, false)], &AdapterPreference::Auto)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("no compute shaders"), "{err}");
+        assert!(pick_adapter(&[], &AdapterPreference::Auto).is_err());
     }
 
     #[test]
