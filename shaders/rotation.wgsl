@@ -45,9 +45,9 @@ fn rot_drift(k: u32, r: RotState, pending_kick: bool) {
     let half = opaque(0.5 * step.dt * r.alpha);
     var w = r.omega.xyz;
     if (pending_kick) {
-        w = w + half;
+        w = opaque(w + half);
     }
-    w = w + half;
+    w = opaque(w + half);
     store_omega(k, vec4<f32>(w, r.omega.w));
     store_wpred(k, vec4<f32>(w + half, 0.0));
 }

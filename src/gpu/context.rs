@@ -294,15 +294,39 @@ pub fn choose_adapter(
     let found: Vec<(wgpu::AdapterInfo, bool)> = adapters
         .iter()
         .map(|a| {
+            let info = a.get_info();
             let compute = a
                 .get_downlevel_capabilities()
                 .flags
-                .contains(wgpu::DownlevelFlags::COMPUTE_SHADERS);
-            (a.get_info(), compute)
+                .contains(wgpu::DownlevelFlags::COMPUTE_SHADERS)
+                && gl_runs_compute(&info);
+            (info, compute)
         })
         .collect();
     let i = pick_adapter(&found, pref)?;
     Ok(adapters.into_iter().nth(i).expect("an index of the list"))
+}
+
+/// Whether a GL adapter's context runs compute shaders: OpenGL 4.3 or OpenGL ES 3.1, read
+/// from its version string (`driver_info`). wgpu reports compute on a 3.3 context that has
+/// the ARB extension (NVIDIA's through EGL), but naga writes GLSL 3.30 for it, which has
+/// none. Other backends, and versions it cannot read, pass.
+pub fn gl_runs_compute(info: &wgpu::AdapterInfo) -> bool {
+    if info.backend != wgpu::Backend::Gl {
+        return true;
+    }
+    let text = info.driver_info.trim();
+    let (es, rest) = match text.strip_prefix("OpenGL ES") {
+        Some(rest) => (true, rest.trim_start()),
+        None => (false, text),
+    };
+    let mut parts = rest
+        .split(|c: char| !c.is_ascii_digit())
+        .map(|p| p.parse::<u32>());
+    match (parts.next(), parts.next()) {
+        (Some(Ok(major)), Some(Ok(minor))) => (major, minor) >= if es { (3, 1) } else { (4, 3) },
+        _ => true,
+    }
 }
 
 /// The index of the best adapter allowed by `pref` among `(info, has compute shaders)`;
@@ -475,6 +499,26 @@ mod tests {
             .to_string();
         assert!(err.contains("no compute shaders"), "{err}");
         assert!(pick_adapter(&[], &AdapterPreference::Auto).is_err());
+    }
+
+    #[test]
+    fn gl_versions_with_compute_shaders() {
+        let gl = |v: &str| wgpu::AdapterInfo {
+            driver_info: v.into(),
+            ..info("x", wgpu::Backend::Gl, wgpu::DeviceType::Other)
+        };
+        assert!(gl_runs_compute(&gl("4.5 (Core Profile) Mesa 22.3.6")));
+        assert!(gl_runs_compute(&gl("4.3.0 NVIDIA 580.159.04")));
+        assert!(!gl_runs_compute(&gl("3.3.0 NVIDIA 580.159.04")));
+        assert!(!gl_runs_compute(&gl("4.1 Metal - 88")));
+        assert!(gl_runs_compute(&gl("OpenGL ES 3.2 NVIDIA 580.159.04")));
+        assert!(!gl_runs_compute(&gl("OpenGL ES 3.0 Mesa 22.3.6")));
+        assert!(gl_runs_compute(&gl("")));
+        let vk = info("x", wgpu::Backend::Vulkan, wgpu::DeviceType::Cpu);
+        assert!(gl_runs_compute(&wgpu::AdapterInfo {
+            driver_info: "3.3".into(),
+            ..vk
+        }));
     }
 
     #[test]
