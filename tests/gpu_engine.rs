@@ -1454,6 +1454,56 @@ fn arrays_over_the_binding_limit_are_split_over_windows() {
     assert!(split.buffers().iter().any(|(_, bytes)| *bytes > 75_000));
 }
 
+/// Lists that outgrow one binding at the first build (the first guess, two entries a
+/// particle, fits; the JKR packing needs more) are windowed then: the engine builds again
+/// in windows sized for what it measured, and runs bitwise as in one window. (The H200's
+/// first run: JKR at 10⁷ needed 2.8 GB of lists in one 2 GiB binding and stopped.)
+#[test]
+fn lists_outgrowing_one_binding_at_the_start_are_windowed() {
+    use powder::bench::{packing, Case};
+    use powder::gpu::{GpuContext, GpuOptions};
+    if context().is_none() {
+        return;
+    }
+    let scene = packing(Case::Jkr, 8000, 1.0, 3).unwrap();
+    let options = GpuOptions {
+        software_paths: Some(false),
+        ..Default::default()
+    };
+    let mut whole = GpuEngine::with_options(&scene, context().unwrap(), options).unwrap();
+    assert_eq!(whole.windows().count, 1);
+    let entry_bytes = whole
+        .buffers()
+        .into_iter()
+        .find(|(name, _)| name == "A.entries")
+        .map(|(_, bytes)| bytes / whole.list_entries())
+        .unwrap();
+    let first_guess = entry_bytes * (2 * 8000 + 256);
+    let needed = entry_bytes * whole.list_entries();
+    let limit = 2_000_000;
+    assert!(
+        first_guess < limit && limit < needed,
+        "{first_guess} {needed}"
+    );
+    let small = GpuContext::with_storage_binding_limit(limit).unwrap();
+    let mut split = GpuEngine::with_options(&scene, small, options).unwrap();
+    assert!(split.windows().count > 1, "{:?}", split.windows());
+    split.run_steps(400).unwrap();
+    whole.run_steps(400).unwrap();
+    common::assert_same_bits(&split.state().unwrap(), &whole.state().unwrap());
+    // asked-for windows are kept as asked: one window stops with a message saying so
+    let one = GpuOptions {
+        window_particles: Some(16384),
+        ..options
+    };
+    let small = GpuContext::with_storage_binding_limit(limit).unwrap();
+    let msg = GpuEngine::with_options(&scene, small, one)
+        .err()
+        .expect("one window of lists over the binding")
+        .to_string();
+    assert!(msg.contains("--window-particles"), "{msg}");
+}
+
 /// The force pass reads the particles' state from texture mirrors, `MIRROR_WIDTH` (4096)
 /// particles a row: packings of two rows, the second partial, for both mirrored layouts
 /// (the JKR case also mirrors the predicted angular velocity) follow the CPU reference.

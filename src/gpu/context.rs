@@ -34,7 +34,8 @@ pub const ADAPTER_ENV: &str = "POWDER_ADAPTER";
 pub const INSTALL_HINT: &str = "on Debian/Ubuntu install the software Vulkan driver: \
      apt-get install -y mesa-vulkan-drivers libvulkan1";
 
-/// An open wgpu device, its queue, and the adapter it came from.
+/// An open wgpu device, its queue, and the adapter it came from (a clone shares them).
+#[derive(Clone)]
 pub struct GpuContext {
     /// The logical device, created with the adapter's own limits.
     pub device: wgpu::Device,

@@ -477,8 +477,13 @@ fn check_entries(
     let what = format!("{total} entries ({per_particle:.1} a particle) of {bytes} bytes each (partner, history, pair force, ...)");
     if bound * bytes > limit || total * words > u32::MAX as u64 {
         return Err(PowderError::Run(format!(
-            "the neighbour lists need {what}, {} bytes bound at a time, over the adapter's storage binding limit of {limit} bytes",
-            bound * bytes
+            "the neighbour lists need {what}, {} bytes bound at a time, over the adapter's storage binding limit of {limit} bytes{}",
+            bound * bytes,
+            if windows.count == 1 {
+                "; windows hold them (`--window-particles N`, a power of two, GpuOptions::window_particles)"
+            } else {
+                "; smaller windows hold fewer (`--window-particles N`)"
+            }
         )));
     }
     if total * bytes > max_buffer {
@@ -496,6 +501,42 @@ fn window_entries(windows: &Windows, entries: u64) -> u64 {
         1 => entries,
         _ => entries.div_ceil(MIN_WINDOW) * MIN_WINDOW,
     }
+}
+
+/// The windows chosen where none are asked for: one where the per-particle arrays and the
+/// lists fit a binding each — the lists' first guess (INITIAL_ENTRIES_PER_PARTICLE a
+/// particle), or the `measured` entries of a first build that outgrew it — else windows
+/// with room for WINDOW_ENTRIES_PER_PARTICLE entries a particle (or the measured ones and
+/// their headroom, where more).
+fn automatic_windows(
+    layout: &StateLayout,
+    [entry, new]: [RecordLayout; 2],
+    n: u64,
+    limit: u64,
+    measured: Option<u64>,
+) -> Windows {
+    let per_particle = [
+        layout.count(Buffer::State) * crate::gpu::state::FIELD_BYTES,
+        layout.count(Buffer::Motion) * crate::gpu::state::FIELD_BYTES,
+        4 * ROW_WORDS as u64,
+    ]
+    .into_iter()
+    .max()
+    .unwrap_or(1);
+    let words = entry.words().max(new.words());
+    let first = match measured {
+        Some(m) => (m as f64 * LIST_HEADROOM).ceil() as u64,
+        None => INITIAL_ENTRIES_PER_PARTICLE * n + 256,
+    };
+    if n * per_particle <= limit && 4 * words * first <= limit {
+        return Windows::one(n);
+    }
+    let a_particle = match measured {
+        Some(m) => ((m as f64 * LIST_HEADROOM) / n.max(1) as f64).ceil() as u64,
+        None => 0,
+    };
+    let lists = 4 * WINDOW_ENTRIES_PER_PARTICLE.max(a_particle) * words;
+    Windows::choose(n, per_particle.max(lists), limit)
 }
 
 /// List entries a particle the automatic windows leave room for (the lists hold 3.7–3.8 a
@@ -958,6 +999,17 @@ impl GpuEngine {
         ctx: GpuContext,
         options: GpuOptions,
     ) -> Result<Self, PowderError> {
+        Self::build(scene, ctx, options, None)
+    }
+
+    /// `with_options`; `measured`: the list entries a first build in one automatic window
+    /// needed, over one binding (the windows are then chosen for them).
+    fn build(
+        scene: &Scene,
+        ctx: GpuContext,
+        options: GpuOptions,
+        measured: Option<u64>,
+    ) -> Result<Self, PowderError> {
         let ledger = options.ledger;
         let r = Resolved::new(scene)?;
         let n = scene.particles.len();
@@ -1023,29 +1075,13 @@ impl GpuEngine {
         let state_fields = layout0.count(Buffer::State);
         let windows = match options.window_particles {
             Some(len) => Windows::of(n as u64, len)?,
-            None => {
-                // one window where the per-particle arrays and the lists' first guess fit
-                // a binding each (the lists grow to the limit), else windows with room
-                // for WINDOW_ENTRIES_PER_PARTICLE entries a particle
-                let [entry, new] = kind.records(keeps);
-                let per_particle = [
-                    layout0.count(Buffer::State) * crate::gpu::state::FIELD_BYTES,
-                    layout0.count(Buffer::Motion) * crate::gpu::state::FIELD_BYTES,
-                    4 * ROW_WORDS as u64,
-                ]
-                .into_iter()
-                .max()
-                .unwrap_or(1);
-                let limit = ctx.max_storage_binding();
-                let words = entry.words().max(new.words());
-                let first = 4 * words * (INITIAL_ENTRIES_PER_PARTICLE * n as u64 + 256);
-                if n as u64 * per_particle <= limit && first <= limit {
-                    Windows::one(n as u64)
-                } else {
-                    let lists = 4 * WINDOW_ENTRIES_PER_PARTICLE * words;
-                    Windows::choose(n as u64, per_particle.max(lists), limit)
-                }
-            }
+            None => automatic_windows(
+                &layout0,
+                kind.records(keeps),
+                n as u64,
+                ctx.max_storage_binding(),
+                measured,
+            ),
         };
         grid.set_windows(&ctx.queue, &windows, state_fields as u32);
         let windowing = WindowBindings::new(&ctx.device, windows);
@@ -1539,8 +1575,16 @@ impl GpuEngine {
             inserted: 0.0,
             ctx,
         };
-        engine.initial_forces()?;
-        Ok(engine)
+        // automatic windows: a second build where the first lists outgrew one binding
+        let rewindow = options.window_particles.is_none() && measured.is_none();
+        match engine.initial_forces(rewindow)? {
+            None => Ok(engine),
+            Some(need) => {
+                let ctx = engine.ctx.clone();
+                drop(engine);
+                Self::build(scene, ctx, options, Some(need))
+            }
+        }
     }
 
     /// The time step, s.
@@ -2063,7 +2107,10 @@ impl GpuEngine {
     /// The forces of the initial state (no drift, no kick), so the first step kicks with them.
     /// Contacts present at the start carry stored energy, not dissipation: the ledger's
     /// dissipation (booked from the contacts' entry edges) is zeroed afterwards, as on the CPU.
-    fn initial_forces(&mut self) -> Result<(), PowderError> {
+    /// `rewindow`: where the lists outgrow one automatic window's binding (but not the
+    /// largest buffer), the entries they need (`Some`) instead of an error: the caller
+    /// builds again in windows.
+    fn initial_forces(&mut self, rewindow: bool) -> Result<Option<u64>, PowderError> {
         // the initial contacts crossed nothing: no force jump placed
         self.set_jumps(false);
         loop {
@@ -2076,6 +2123,9 @@ impl GpuEngine {
             match report.halted() {
                 Some(need) => {
                     self.check_windows(&report.monitor)?;
+                    if rewindow && self.outgrows_one_window(need) {
+                        return Ok(Some(need));
+                    }
                     self.grow_lists(need)?
                 }
                 None => break self.apply_monitor(&report.monitor)?,
@@ -2092,7 +2142,19 @@ impl GpuEngine {
                 .write_buffer(buf, 0, bytemuck::cast_slice(&rows));
         }
         self.set_jumps(self.keeps.jumps);
-        Ok(())
+        Ok(None)
+    }
+
+    /// Whether `need` list entries overflow the one window's binding while their buffer
+    /// would still fit the largest (what windows fix).
+    fn outgrows_one_window(&self, need: u64) -> bool {
+        let windows = *self.state.layout.windows();
+        let words = self.state.entry_layout.words();
+        let max_buffer = self.ctx.limits().max_buffer_size;
+        windows.count == 1
+            && 4 * words * need > self.ctx.max_storage_binding()
+            && 4 * words * need <= max_buffer
+            && need * words <= u32::MAX as u64
     }
 
     /// Whether the steps recorded from now on place the force jumps (`StepParams::jumps`).
