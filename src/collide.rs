@@ -44,7 +44,17 @@ pub struct CollideSpec {
     /// Place the impulses of force jumps inside the step (the scene's `jump_impulses`);
     /// `None`: the engine's default (yes, where the law's force can jump).
     pub jump_impulses: Option<bool>,
+    /// A constant force on the sphere along the wall, N, in the direction of its tangential
+    /// approach (+y), from the start (paper 002 §5.3's F_ext); wall impacts only.
+    pub tangential_force: f64,
+    /// Seconds to go on after the sphere stuck before telling whether it rests or rolls
+    /// ([`CollideResult::outcome`]); 0: the run ends when it sticks.
+    pub settle: f64,
 }
+
+/// A settled sphere whose centre moved along the wall more than this many radii over the
+/// last quarter of the settle time rolls; one that moved less rests.
+pub const ROLLING_TRAVEL: f64 = 1e-3;
 
 impl CollideSpec {
     /// A head-on sphere–sphere collision.
@@ -60,6 +70,8 @@ impl CollideSpec {
             wall: false,
             impact_angle: 90.0,
             jump_impulses: None,
+            tangential_force: 0.0,
+            settle: 0.0,
         }
     }
 }
@@ -104,6 +116,14 @@ pub struct CollideResult {
     /// Whether the pair stuck (e = 0): the relative normal velocity turned back to approaching
     /// inside the interaction range.
     pub stuck: bool,
+    /// `"rebound"`, `"stuck"`, or after a settle time (`CollideSpec::settle`) `"resting"`
+    /// (the centre moved less than [`ROLLING_TRAVEL`] radii along the wall over its last
+    /// quarter),
+    /// `"rolling"` (more) or `"detached"` (out of contact at its end).
+    pub outcome: &'static str,
+    /// The sphere's mean speed along the wall over the last quarter of the settle time (its
+    /// centre's displacement over that time), m/s: a resting sphere may still vibrate.
+    pub settled_speed: Option<f64>,
     /// Closed-form restitution where one applies: head-on impacts only (every `*_analytic`
     /// is `None` for an oblique one), no viscosity for the hysteretic model, no dissipation,
     /// friction or rolling resistance for JKR.
@@ -214,6 +234,20 @@ impl CollideSpec {
         }
         require_positive("density", self.density, "the density")?;
         require_positive("velocity", self.velocity, "the impact velocity")?;
+        if !self.tangential_force.is_finite() || (self.tangential_force != 0.0 && !self.wall) {
+            return Err(ParamError::new(
+                "tangential-force",
+                format!(
+                    "the tangential force acts on a sphere colliding with a wall (--wall) and must be finite, got {}",
+                    self.tangential_force
+                ),
+            )
+            .into());
+        }
+        crate::error::require_non_negative("settle", self.settle, "the settle time")?;
+        if !self.settle.is_finite() {
+            return Err(ParamError::new("settle", "the settle time must be finite").into());
+        }
         if !(self.impact_angle > 0.0 && self.impact_angle <= 90.0) {
             return Err(ParamError::new(
                 "impact-angle",
@@ -259,6 +293,12 @@ impl CollideSpec {
         let r = self.radius1.max(if self.wall { 0.0 } else { self.radius2 });
         // room for the tangential travel during the collision
         let side = 4.0 * r + 10.0 * reach;
+        // the tangential force as a uniform acceleration of the one sphere (walls do not move)
+        let accel = self.tangential_force / m1;
+        // and room along y for what it and vt carry the sphere over the approach (a hundred
+        // gap crossings), the contact and the settle time
+        let span = self.settle + 100.0 * (gap + reach) / vn + 1e4 * dt;
+        let travel = vt.abs() * span + 0.5 * accel.abs() * span * span;
         let mut particles = vec![ParticleInit {
             position: [0.0; 3],
             velocity: [0.0; 3],
@@ -296,11 +336,11 @@ impl CollideSpec {
         Scene {
             name: "collide".into(),
             domain: Domain {
-                min: [-side, -side, -side],
-                max: [x2 + side, side, side],
+                min: [-side, -side - travel, -side],
+                max: [x2 + side, side + travel, side],
                 periodic: [false; 3],
             },
-            gravity: [0.0; 3],
+            gravity: [0.0, accel, 0.0],
             dt: DtSetting::Fixed(dt),
             force_dt: true,
             jump_impulses: self.jump_impulses,
@@ -378,6 +418,13 @@ impl TraceRow {
 /// What the collision loop needs of an engine.
 trait CollisionRun {
     fn step(&mut self) -> Result<(), PowderError>;
+    /// `n` steps with nothing read between them (the GPU batches them).
+    fn advance(&mut self, n: u64) -> Result<(), PowderError> {
+        for _ in 0..n {
+            self.step()?;
+        }
+        Ok(())
+    }
     fn view(&self) -> Result<PairView, PowderError>;
     fn time(&self) -> f64;
     fn steps(&self) -> u64;
@@ -448,6 +495,9 @@ struct GpuRun {
 impl CollisionRun for GpuRun {
     fn step(&mut self) -> Result<(), PowderError> {
         self.engine.run_steps(1)
+    }
+    fn advance(&mut self, n: u64) -> Result<(), PowderError> {
+        self.engine.run_steps(n)
     }
     fn view(&self) -> Result<PairView, PowderError> {
         let s = self.engine.state()?;
@@ -680,6 +730,35 @@ fn run_collision(
         }
     }
     let stuck = delta_c.is_some();
+    let mut outcome = if stuck { "stuck" } else { "rebound" };
+    let mut settled_speed = None;
+    if stuck && spec.settle > 0.0 {
+        // (in two runs of steps: to three quarters of the settle time, and the rest)
+        let total = (spec.settle / dt).ceil() as u64;
+        if run.steps() + total > MAX_STEPS {
+            return Err(PowderError::Run(format!(
+                "the settle time {} s needs {total} steps of {dt:e} s, over the {MAX_STEPS} a collision may take",
+                spec.settle
+            )));
+        }
+        let first = total - total / 4;
+        run.advance(first)?;
+        let quarter = run.view()?.pos[0];
+        let quarter_time = run.time();
+        run.advance(total - first)?;
+        last = run.view()?;
+        let (delta, ..) = spec.pair_state(&last, wall_x);
+        // along the wall only (the plane faces −x): a normal vibration is no roll
+        let moved = (last.pos[0] - quarter).y.hypot((last.pos[0] - quarter).z);
+        outcome = if !(delta > 0.0 || last.in_contact.unwrap_or(false)) {
+            "detached"
+        } else if moved > ROLLING_TRAVEL * spec.radius1 {
+            "rolling"
+        } else {
+            "resting"
+        };
+        settled_speed = Some(moved / (run.time() - quarter_time));
+    }
     let (ke1, total1, dissipated) = run.energy(&last);
     let rotates = run.rotates();
     let mut result = CollideResult {
@@ -687,6 +766,8 @@ fn run_collision(
         velocity: spec.velocity,
         e,
         stuck,
+        outcome,
+        settled_speed,
         e_analytic: None,
         stuck_analytic: None,
         e_tangential: (rotates && !stuck && !spec.is_head_on())

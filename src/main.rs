@@ -615,6 +615,14 @@ struct CollideArgs {
     /// Collide one sphere with a plane of the same material.
     #[arg(long)]
     wall: bool,
+    /// A constant force on the sphere along the wall, N, in the direction of its
+    /// tangential approach (paper 002 §5.3's F_ext; with --wall).
+    #[arg(long = "tangential-force", default_value_t = 0.0)]
+    tangential_force: f64,
+    /// Seconds to go on after the sphere sticks, then tell whether it rests or rolls
+    /// (`outcome` in --json).
+    #[arg(long, default_value_t = 0.0)]
+    settle: f64,
     /// Place the impulse of a force jump (JKR touch and pull-off) inside the step: true or
     /// false (plain velocity Verlet); default true, on both backends.
     #[arg(long = "jump-impulses", value_name = "BOOL")]
@@ -798,6 +806,7 @@ fn print_table(results: &[CollideResult], report: &CollideReport) {
             6,
             (|r| r.stuck.to_string()) as fn(&CollideResult) -> String,
         ),
+        ("outcome", 9, |r| r.outcome.to_string()),
         ("delta_max", 12, |r| format!("{:.5e}", r.delta_max)),
         ("delta_c", 12, |r| {
             r.delta_c.map_or_else(|| "-".into(), |d| format!("{d:.5e}"))
@@ -859,6 +868,8 @@ fn collide_cmd(a: &CollideArgs) -> Result<(), PowderError> {
         wall: a.wall,
         impact_angle: a.impact_angle,
         jump_impulses: a.jump_impulses,
+        tangential_force: a.tangential_force,
+        settle: a.settle,
     };
     let report = collide_report(a, &spec)?;
     if let ContactModel::Jkr(p) = &spec.model {

@@ -42,6 +42,7 @@ fn assert_collide_keys(v: &serde_json::Value, out: &str) {
     for key in [
         "e",
         "stuck",
+        "outcome",
         "e_analytic",
         "delta_max",
         "contact_duration",

@@ -17,16 +17,8 @@ fn params(kc: f64) -> HystereticParams {
 
 fn spec(p: HystereticParams, r2: f64, v: f64) -> CollideSpec {
     CollideSpec {
-        model: ContactModel::Hysteretic(p),
-        radius1: RADIUS,
         radius2: r2,
-        density: DENSITY,
-        velocity: v,
-        dt: None,
-        force: false,
-        wall: false,
-        impact_angle: 90.0,
-        jump_impulses: None,
+        ..CollideSpec::head_on(ContactModel::Hysteretic(p), RADIUS, DENSITY, v)
     }
 }
 

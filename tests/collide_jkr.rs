@@ -539,3 +539,61 @@ fn paper_002_collisions_depend_on_lambda_over_ad_to_the_five_halves() {
     let other = run(paper002(1e9 * 4.0, 0.02), 1.0);
     assert!((other.e - base.e).abs() > 1e-3, "{}", other.e);
 }
+
+/// Paper 002 §5.3: a sphere deposited on a wall under a constant force along it rests
+/// where the force is below the yield force of the rolling resistance,
+/// F_yield = M_r,crit/r = 4·Fc·ξ_crit/r with ξ_crit = a0·(Δγ/γ)/12 (eqs. 18–22), and
+/// keeps rolling above it; friction (μ·2Fc) holds the contact from sliding in both.
+#[test]
+fn a_deposited_sphere_rests_below_the_rolling_yield_force_and_rolls_above() {
+    let p = JkrParams {
+        friction: 0.3,
+        rolling_hysteresis: 0.5,
+        dissipation: tsuji(0.3, TsujiStiffness::Hertz),
+        pulloff: Pulloff::Zero,
+        ..jkr()
+    };
+    let m = RHO * 4.0 / 3.0 * std::f64::consts::PI * R.powi(3);
+    let wall = PairGeometry::wall(R, m);
+    let (fc, a0) = (p.fc(wall.r_eff()), p.a0_unscaled(wall.r_eff()));
+    let f_yield = 4.0 * fc * (a0 * 0.5 / 12.0) / R;
+    let base = CollideSpec {
+        wall: true,
+        impact_angle: 45.0,
+        ..spec(p, 0.05)
+    };
+    let first = collide(&base).unwrap();
+    assert!(first.stuck && first.outcome == "stuck", "{}", first.outcome);
+    assert_eq!(first.settled_speed, None);
+    // a contact time: the period of the normal spring at the JKR equilibrium, about
+    let settle = 400.0 * first.dt * 50.0;
+    let outcome = |fraction: f64| {
+        collide(&CollideSpec {
+            tangential_force: fraction * f_yield,
+            settle,
+            ..base.clone()
+        })
+        .unwrap()
+    };
+    let rest = outcome(0.8);
+    let roll = outcome(1.25);
+    let (still, moving) = (rest.settled_speed.unwrap(), roll.settled_speed.unwrap());
+    eprintln!("mean speed over the last quarter: {still:e} m/s at 0.8 F_yield, {moving:e} at 1.25");
+    assert_eq!(rest.outcome, "resting", "{rest:?}");
+    assert_eq!(roll.outcome, "rolling", "{roll:?}");
+    assert!(still < 1e-3 * moving, "{still} {moving}");
+    // rolling, not sliding: the contact point moves much slower than the centre
+    assert!(
+        roll.omega_final.unwrap() * R > 0.9 * roll.settled_speed.unwrap(),
+        "{roll:?}"
+    );
+    // a wall is needed to push along
+    let err = powder::collide::collide(&CollideSpec {
+        tangential_force: 1e-9,
+        wall: false,
+        ..base.clone()
+    })
+    .unwrap_err()
+    .to_string();
+    assert!(err.contains("--wall"), "{err}");
+}

@@ -5,16 +5,13 @@ use powder::model::{ContactModel, LsdParams};
 
 fn spec(k: f64, gamma0: f64, r2: f64) -> CollideSpec {
     CollideSpec {
-        model: ContactModel::Lsd(LsdParams::new(k, gamma0)),
-        radius1: 1e-3,
         radius2: r2,
-        density: 2500.0,
-        velocity: 0.1,
-        dt: None,
-        force: false,
-        wall: false,
-        impact_angle: 90.0,
-        jump_impulses: None,
+        ..CollideSpec::head_on(
+            ContactModel::Lsd(LsdParams::new(k, gamma0)),
+            1e-3,
+            2500.0,
+            0.1,
+        )
     }
 }
 

@@ -240,3 +240,53 @@ fn a_saved_state_restores_only_into_the_same_contact_layout() {
     };
     again.restore_state(saved).unwrap();
 }
+
+/// Paper 002 §5.3 on the GPU: a JKR sphere deposited on a wall under a constant force along
+/// it rests below the rolling yield force and rolls above it, as on the CPU
+/// (`tests/collide_jkr.rs`), the tangential force a uniform acceleration on both engines.
+#[test]
+fn a_deposited_sphere_rests_or_rolls_on_the_gpu_as_on_the_cpu() {
+    use powder::model::{
+        ContactModel, Dissipation, JkrParams, PairGeometry, Pulloff, TsujiStiffness,
+    };
+    if gpu().is_none() {
+        return;
+    }
+    let (r, rho): (f64, f64) = (1e-6, 2000.0);
+    let p = JkrParams {
+        friction: 0.3,
+        rolling_hysteresis: 0.5,
+        dissipation: Dissipation::Tsuji {
+            restitution: 0.3,
+            stiffness: TsujiStiffness::Hertz,
+        },
+        pulloff: Pulloff::Zero,
+        ..JkrParams::jkr(1e9, 0.3, 0.05)
+    };
+    let m = rho * 4.0 / 3.0 * PI * r.powi(3);
+    let wall = PairGeometry::wall(r, m);
+    let f_yield = 4.0 * p.fc(wall.r_eff()) * (p.a0_unscaled(wall.r_eff()) * 0.5 / 12.0) / r;
+    let base = CollideSpec {
+        wall: true,
+        impact_angle: 45.0,
+        ..CollideSpec::head_on(ContactModel::Jkr(p), r, rho, 0.05)
+    };
+    let dt = collide_on(&base, Backend::Cpu).unwrap().dt;
+    for (fraction, expect) in [(0.8, "resting"), (1.25, "rolling")] {
+        let spec = CollideSpec {
+            tangential_force: fraction * f_yield,
+            settle: 400.0 * 50.0 * dt,
+            ..base.clone()
+        };
+        let (g, c) = (
+            collide_on(&spec, Backend::Gpu).unwrap(),
+            collide_on(&spec, Backend::Cpu).unwrap(),
+        );
+        assert_eq!((g.outcome, c.outcome), (expect, expect), "{fraction}");
+        let (sg, sc) = (g.settled_speed.unwrap(), c.settled_speed.unwrap());
+        eprintln!("F/F_yield = {fraction}: mean speed gpu {sg:e}, cpu {sc:e} m/s");
+        if expect == "rolling" {
+            assert!((sg - sc).abs() < 1e-3 * sc, "{sg} {sc}");
+        }
+    }
+}
