@@ -449,8 +449,11 @@ fn drift_particle(i: u32, vel: vec4<f32>, acc: vec3<f32>, rot: RotState, pending
     let dx = opaque(step.dt * v);
     let disp = disp0.xyz + dx;
     store_disp(i, vec4<f32>(disp, max(disp0.w, peak)));
-    // (NaN forces a rebuild too)
-    if (!(length(disp) <= 0.5 * skin_width())) {
+    // (NaN forces a rebuild too; the squares and sums through `opaque`, as the products
+    // above: a tie at the threshold must go the same way in both drift kernels)
+    let sq = opaque(disp * disp);
+    let half_skin = 0.5 * skin_width();
+    if (!(opaque1(sq.x + sq.y) + sq.z <= half_skin * half_skin)) {
         atomicStore(&control[SKIN_MOVED], 1u);
     }
     // the move with the compensated velocity, carried into whole cells (below)
@@ -1218,7 +1221,8 @@ fn wall_move() {
             continue;
         }
         let o0 = walls[w].offset;
-        let dx = step.dt * walls[w].velocity.xyz;
+        // (`opaque`: two_sum needs the rounded product, not one fused into its add)
+        let dx = opaque(step.dt * walls[w].velocity.xyz);
         var sum = vec3<f32>(0.0);
         var lo = vec3<f32>(0.0);
         for (var a = 0u; a < 3u; a++) {

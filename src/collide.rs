@@ -234,11 +234,18 @@ impl CollideSpec {
         }
         require_positive("density", self.density, "the density")?;
         require_positive("velocity", self.velocity, "the impact velocity")?;
-        if !self.tangential_force.is_finite() || (self.tangential_force != 0.0 && !self.wall) {
+        if (self.tangential_force != 0.0 || self.settle != 0.0) && !self.wall {
+            return Err(ParamError::new(
+                if self.settle != 0.0 { "settle" } else { "tangential-force" },
+                "the tangential force and the settle time are for a sphere on a wall (--wall): a pair that stuck spins about its centre of mass",
+            )
+            .into());
+        }
+        if !self.tangential_force.is_finite() {
             return Err(ParamError::new(
                 "tangential-force",
                 format!(
-                    "the tangential force acts on a sphere colliding with a wall (--wall) and must be finite, got {}",
+                    "the tangential force must be finite, got {}",
                     self.tangential_force
                 ),
             )
@@ -298,7 +305,11 @@ impl CollideSpec {
         // and room along y for what it and vt carry the sphere over the approach (a hundred
         // gap crossings), the contact and the settle time
         let span = self.settle + 100.0 * (gap + reach) / vn + 1e4 * dt;
-        let travel = vt.abs() * span + 0.5 * accel.abs() * span * span;
+        let travel = if self.settle > 0.0 || accel != 0.0 {
+            vt.abs() * span + 0.5 * accel.abs() * span * span
+        } else {
+            0.0
+        };
         let mut particles = vec![ParticleInit {
             position: [0.0; 3],
             velocity: [0.0; 3],
@@ -651,6 +662,11 @@ pub fn collide_on(spec: &CollideSpec, backend: Backend) -> Result<CollideResult,
     }
 }
 
+/// The settle time in steps of `dt` (at least 4: its last quarter is one step or more).
+fn settle_steps(spec: &CollideSpec, dt: f64) -> u64 {
+    ((spec.settle / dt).ceil() as u64).max(4)
+}
+
 fn run_collision(
     spec: &CollideSpec,
     mut run: impl CollisionRun,
@@ -660,6 +676,13 @@ fn run_collision(
     adapter: Option<String>,
     mut trace: Option<&mut Vec<TraceRow>>,
 ) -> Result<CollideResult, PowderError> {
+    if spec.settle > 0.0 && settle_steps(spec, dt) >= MAX_STEPS {
+        return Err(PowderError::Run(format!(
+            "the settle time {} s needs {} steps of {dt:e} s, over the {MAX_STEPS} a collision may take: shorten --settle or raise --dt",
+            spec.settle,
+            settle_steps(spec, dt)
+        )));
+    }
     let geom = spec.geometry();
     let reach = spec.model.reach(geom.r_eff());
     let vn0 = spec.normal_speed();
@@ -734,13 +757,7 @@ fn run_collision(
     let mut settled_speed = None;
     if stuck && spec.settle > 0.0 {
         // (in two runs of steps: to three quarters of the settle time, and the rest)
-        let total = (spec.settle / dt).ceil() as u64;
-        if run.steps() + total > MAX_STEPS {
-            return Err(PowderError::Run(format!(
-                "the settle time {} s needs {total} steps of {dt:e} s, over the {MAX_STEPS} a collision may take",
-                spec.settle
-            )));
-        }
+        let total = settle_steps(spec, dt);
         let first = total - total / 4;
         run.advance(first)?;
         let quarter = run.view()?.pos[0];

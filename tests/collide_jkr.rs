@@ -565,7 +565,7 @@ fn a_deposited_sphere_rests_below_the_rolling_yield_force_and_rolls_above() {
     let first = collide(&base).unwrap();
     assert!(first.stuck && first.outcome == "stuck", "{}", first.outcome);
     assert_eq!(first.settled_speed, None);
-    // a contact time: the period of the normal spring at the JKR equilibrium, about
+    // 400 collision times of 50 default steps
     let settle = 400.0 * first.dt * 50.0;
     let outcome = |fraction: f64| {
         collide(&CollideSpec {

@@ -1481,8 +1481,9 @@ fn lists_outgrowing_one_binding_at_the_start_are_windowed() {
     let first_guess = entry_bytes * (2 * 8000 + 256);
     let needed = entry_bytes * whole.list_entries();
     let limit = 2_000_000;
+    // (`needed` holds the growth's headroom, 1.25: the raw need is over the limit too)
     assert!(
-        first_guess < limit && limit < needed,
+        first_guess < limit && limit * 5 / 4 < needed,
         "{first_guess} {needed}"
     );
     let small = GpuContext::with_storage_binding_limit(limit).unwrap();

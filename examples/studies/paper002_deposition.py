@@ -8,7 +8,7 @@ three outcomes, rebound / rolling / resting, over lambda and F^ = F_ext/F_yield 
     python3 examples/studies/paper002_deposition.py [--backend cpu|gpu] [--powder PATH]
         [--out docs] [--bisections 20] [--quick]
 
-(about 2 minutes on the CPU here; `--quick`: fewer restitutions and a coarser map, for a
+(about 2.5 minutes on the CPU here; `--quick`: fewer restitutions and a coarser map, for a
 GPU run on the software adapter, where each collision costs a second or more).
 
 Writes OUT/paper002_deposition.svg and OUT/paper002_deposition.csv and prints the tables.
@@ -82,6 +82,7 @@ class Deposition:
         p = self.probe(lam, ad, e)
         cmd = self.cmd(lam, ad, e, self.backend) + ["--dt", repr(p["dt"] / REFINE)]
         if f_hat > 0.0:
+            # (a0 of the stiffness as given: no reduced-stiffness rule in this study)
             jkr = p["jkr"]
             f_yield = 4.0 * jkr["fc"] * jkr["a0"] * HYSTERESIS / 12.0 / R
             # time to roll to a halt from the tangential approach speed at the deceleration
