@@ -122,11 +122,7 @@ def main():
     for ad, lc in crit:
         print(f"  Ad {ad:6g}: lambda_crit = {lc:.4e}")
     if len(crit) > 1:
-        xs = [math.log10(ad) for ad, _ in crit]
-        ys = [math.log10(lc) for _, lc in crit]
-        mx, my = sum(xs) / len(xs), sum(ys) / len(ys)
-        slope = sum((x - mx) * (y - my) for x, y in zip(xs, ys)) / sum((x - mx) ** 2 for x in xs)
-        c = 10 ** (my - slope * mx)
+        c, slope = svgplot.power_law_fit(crit)
         print(f"  fit lambda_crit = {c:.3g} Ad^{slope:.3f} (the paper's wall deposition: Ad^2.5)")
     svgplot.figure([
         svgplot.panel("head-on JKR collisions, e = 0.3 (paper 002 fig. 7)", "elasticity parameter \u03bb = E*/(\u03c1v\u00b2)",

@@ -118,15 +118,6 @@ class Deposition:
         return math.sqrt(lo * hi)
 
 
-def fit(points):
-    """Least squares of log y against log x: (c, slope) of y = c x^slope."""
-    xs = [math.log10(x) for x, _ in points]
-    ys = [math.log10(y) for _, y in points]
-    mx, my = sum(xs) / len(xs), sum(ys) / len(ys)
-    slope = sum((x - mx) * (y - my) for x, y in zip(xs, ys)) / sum((x - mx) ** 2 for x in xs)
-    return 10 ** (my - slope * mx), slope
-
-
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--backend", default="cpu", choices=["cpu", "gpu"])
@@ -145,7 +136,7 @@ def main():
     print("critical elasticity parameter (sticking below it), lambda_crit = c Ad^slope:")
     for e in fig11_e:
         crit = [(ad, d.critical(ad, e, a.bisections)) for ad in ads]
-        c, slope = fit(crit)
+        c, slope = svgplot.power_law_fit(crit)
         spread = max(abs(lc / ad ** 2.5 / c - 1) for ad, lc in crit)
         print(f"  e = {e:.2f}: " + ", ".join(f"Ad {ad:g}: {lc:.4e}" for ad, lc in crit)
               + f"; fit c = {c:.4g}, slope {slope:.4f}; lambda_crit/Ad^2.5 within {spread:.1e} of c")

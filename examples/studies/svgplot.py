@@ -1,6 +1,6 @@
 """What the studies share (standard library only): a small SVG line plot with a
 logarithmic x axis (`panel(...)` draws one set of axes, `figure(...)` puts panels side by
-side) and `run_powder`, which runs the powder binary."""
+side), `run_powder`, which runs the powder binary, and `power_law_fit`."""
 
 import math
 import os
@@ -17,6 +17,15 @@ def run_powder(cmd):
         return subprocess.run(cmd, capture_output=True, text=True)
     except FileNotFoundError:
         sys.exit(f"no powder binary at {cmd[0]}: build it with `cargo build --release` or pass --powder PATH")
+
+def power_law_fit(points):
+    """Least squares of log y against log x over [(x, y)]: (c, exponent) of y = c x^exponent."""
+    xs = [math.log10(x) for x, _ in points]
+    ys = [math.log10(y) for _, y in points]
+    mx, my = sum(xs) / len(xs), sum(ys) / len(ys)
+    slope = sum((x - mx) * (y - my) for x, y in zip(xs, ys)) / sum((x - mx) ** 2 for x in xs)
+    return 10 ** (my - slope * mx), slope
+
 
 COLOURS = ["#1b9e77", "#d95f02", "#7570b3", "#e7298a", "#66a61e", "#e6ab02", "#a6761d"]
 
