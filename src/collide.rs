@@ -118,8 +118,7 @@ pub struct CollideResult {
     pub stuck: bool,
     /// `"rebound"`, `"stuck"`, or after a settle time (`CollideSpec::settle`) `"resting"`
     /// (the centre moved less than [`ROLLING_TRAVEL`] radii along the wall over its last
-    /// quarter),
-    /// `"rolling"` (more) or `"detached"` (out of contact at its end).
+    /// quarter), `"rolling"` (more) or `"detached"` (out of contact at its end).
     pub outcome: &'static str,
     /// The sphere's mean speed along the wall over the last quarter of the settle time (its
     /// centre's displacement over that time), m/s: a resting sphere may still vibrate.
