@@ -75,13 +75,7 @@ def collide(powder, backend, lam, ad, scale=1.0):
 def critical(powder, backend, ad, lo, hi, iterations):
     """The lambda between `lo` (sticks) and `hi` (rebounds) where sticking ends, by
     bisection in log lambda."""
-    for _ in range(iterations):
-        mid = math.sqrt(lo * hi)
-        if collide(powder, backend, mid, ad) == 0.0:
-            lo = mid
-        else:
-            hi = mid
-    return math.sqrt(lo * hi)
+    return svgplot.log_bisect(lambda lam: collide(powder, backend, lam, ad) == 0.0, lo, hi, iterations)
 
 
 def main():

@@ -109,13 +109,7 @@ class Deposition:
             lo /= 100.0
         while self.sticks(hi, ad, e):
             hi *= 100.0
-        for _ in range(iterations):
-            mid = math.sqrt(lo * hi)
-            if self.sticks(mid, ad, e):
-                lo = mid
-            else:
-                hi = mid
-        return math.sqrt(lo * hi)
+        return svgplot.log_bisect(lambda lam: self.sticks(lam, ad, e), lo, hi, iterations)
 
 
 def main():

@@ -1,6 +1,6 @@
 """What the studies share (standard library only): a small SVG line plot with a
 logarithmic x axis (`panel(...)` draws one set of axes, `figure(...)` puts panels side by
-side), `run_powder`, which runs the powder binary, and `power_law_fit`."""
+side), `run_powder`, which runs the powder binary, `power_law_fit` and `log_bisect`."""
 
 import math
 import os
@@ -25,6 +25,18 @@ def power_law_fit(points):
     mx, my = sum(xs) / len(xs), sum(ys) / len(ys)
     slope = sum((x - mx) * (y - my) for x, y in zip(xs, ys)) / sum((x - mx) ** 2 for x in xs)
     return 10 ** (my - slope * mx), slope
+
+
+def log_bisect(holds, lo, hi, iterations):
+    """The x between `lo` (where `holds(x)`) and `hi` (where not) at which it stops holding,
+    by `iterations` bisections in log x."""
+    for _ in range(iterations):
+        mid = math.sqrt(lo * hi)
+        if holds(mid):
+            lo = mid
+        else:
+            hi = mid
+    return math.sqrt(lo * hi)
 
 
 COLOURS = ["#1b9e77", "#d95f02", "#7570b3", "#e7298a", "#66a61e", "#e6ab02", "#a6761d"]
