@@ -24,7 +24,6 @@ r = 1 um, rho = 1000 kg/m^3, v = 1 m/s, nu = 0.3, and E and gamma follow from la
 import argparse
 import csv
 import json
-import math
 import os
 import sys
 
