@@ -233,13 +233,9 @@ impl StateSet {
         ]
     }
 
-    /// [`Self::blocks_of`] this set, with the new lists' (where they have a buffer) and
-    /// `rows`.
-    fn blocks(&self, new: &NewLists, entries: u64) -> Vec<(&'static str, u64)> {
+    /// [`Self::blocks_of`] this set, with `rows`.
+    fn blocks(&self, entries: u64) -> Vec<(&'static str, u64)> {
         let mut v = Self::blocks_of(&self.layout, (&self.entry_layout, entries));
-        if new.new_entries.is_some() {
-            v.push(("new_entries", new.layout.block_bytes(entries)));
-        }
         v.push(("rows", 4 * 4 * self.layout.stride()));
         v
     }
@@ -313,39 +309,15 @@ fn blocked_buffer(
 }
 
 /// The neighbour lists a rebuild builds (B: partner ids, history, priors), copied back
-/// into A's at its end: in the entries' per-step fields, or a buffer of their own
-/// (`RecordLayout::new_entries`).
+/// into A's at its end: in the entries' per-step fields (`RecordLayout::new_entries`).
 struct NewLists {
-    new_entries: Option<wgpu::Buffer>,
     layout: RecordLayout,
 }
 
 impl NewLists {
-    fn new(
-        alloc: &mut Allocator,
-        (entries, windows): (u64, &Windows),
-        kind: &Composition,
-        keeps: Keeps,
-    ) -> Self {
+    fn new(kind: &Composition, keeps: Keeps) -> Self {
         let [_, layout] = kind.records(keeps);
-        Self {
-            new_entries: Self::allocate(&layout, alloc, (entries, windows)),
-            layout,
-        }
-    }
-
-    /// Their own buffer for `entries` list entries a window (none where they live in the
-    /// entries).
-    fn allocate(
-        layout: &RecordLayout,
-        alloc: &mut Allocator,
-        (entries, windows): (u64, &Windows),
-    ) -> Option<wgpu::Buffer> {
-        layout.host.is_none().then(|| {
-            let bytes = layout.windowed_bytes(entries, windows);
-            let block = layout.block_bytes(entries);
-            blocked_buffer(alloc, windows, ("B.new_entries", bytes), block)
-        })
+        Self { layout }
     }
 
     /// The layout of a copy of their fields in a buffer of its own.
@@ -356,47 +328,28 @@ impl NewLists {
         }
     }
 
-    /// Where they live in the entries: a buffer for quiet batches' copy of the lists'
-    /// history (`Quiet::lists`), for `entries` list entries a window.
+    /// A buffer for quiet batches' copy of the lists' history (`Quiet::lists`; the
+    /// batch writes the per-step fields the new lists live in), for `entries` list
+    /// entries a window.
     fn quiet_lists(
         &self,
         alloc: &mut Allocator,
         (entries, windows): (u64, &Windows),
-    ) -> Option<wgpu::Buffer> {
-        self.new_entries.is_none().then(|| {
-            let bytes = self.standalone().windowed_bytes(entries, windows);
-            alloc.buffer("quiet.lists", bytes)
-        })
-    }
-
-    fn named(&self) -> Vec<(String, &wgpu::Buffer)> {
-        self.new_entries
-            .iter()
-            .map(|b| ("new_entries".to_string(), b))
-            .collect()
+    ) -> wgpu::Buffer {
+        let bytes = self.standalone().windowed_bytes(entries, windows);
+        alloc.buffer("quiet.lists", bytes)
     }
 
     /// Where they lie, lent to the re-sort as its scratch (nothing reads the new lists
     /// from one rebuild's `copy_back_history` to the next's `remap`, which runs after the
-    /// re-sort), for `entries` list entries a window: their buffer, or the entries' with
-    /// their per-step fields.
-    fn lent<'a>(&'a self, a: &'a StateSet, entries: u64) -> permute::Lent<'a> {
-        match &self.new_entries {
-            Some(b) => permute::Lent {
-                buffer: b,
-                block: self.layout.block_bytes(entries),
-                base: 0,
-                bytes: self.layout.block_bytes(entries),
-            },
-            None => {
-                let (base, words) = a.entry_layout.per_step();
-                permute::Lent {
-                    buffer: &a.entries,
-                    block: a.entry_layout.block_bytes(entries),
-                    base: 4 * base * entries,
-                    bytes: 4 * words * entries,
-                }
-            }
+    /// re-sort), for `entries` list entries a window: the entries' per-step fields.
+    fn lent<'a>(a: &'a StateSet, entries: u64) -> permute::Lent<'a> {
+        let (base, words) = a.entry_layout.per_step();
+        permute::Lent {
+            buffer: &a.entries,
+            block: a.entry_layout.block_bytes(entries),
+            base: 4 * base * entries,
+            bytes: 4 * words * entries,
         }
     }
 }
@@ -558,7 +511,7 @@ fn bind_all(
     (layout, records, blocks): (&StateLayout, &[(&RecordLayout, u64)], &Blocks),
     (mirrors, windows): (&Mirrors, &WindowBindings),
     grid: &GridSort,
-    buffers: [Vec<(String, &wgpu::Buffer)>; 3],
+    buffers: [Vec<(String, &wgpu::Buffer)>; 2],
 ) -> Result<Bound, PowderError> {
     let mut list: Vec<(String, &wgpu::Buffer)> = buffers.into_iter().flatten().collect();
     list.push(("grid".into(), grid.params()));
@@ -738,9 +691,9 @@ impl Default for GpuOptions {
 struct Quiet {
     mode: QuietBatches,
     copies: Vec<Saved>,
-    /// The lists' history and priors at a batch's start, where the new lists live in the
-    /// entries' per-step fields (which the batch writes); else the new lists hold them.
-    lists: Option<wgpu::Buffer>,
+    /// The lists' history and priors at a batch's start (the new lists live in the
+    /// entries' per-step fields, which the batch writes).
+    lists: wgpu::Buffer,
     forecast: Forecast,
     /// The device's rebuild count at the end of the last batch (u64::MAX: unknown).
     rebuilds: u64,
@@ -984,6 +937,11 @@ fn pipeline_constants(
     constants
 }
 
+/// The device's flags of which particles have appeared (1) or not yet (0).
+fn appeared_flags(active: &[bool]) -> Vec<u32> {
+    active.iter().map(|&a| u32::from(a)).collect()
+}
+
 /// The step a scene's pair models need and their pair table as bytes.
 fn pair_table(models: &[ContactModel]) -> (Composition, Vec<u8>) {
     let kind = Composition::of(models);
@@ -1121,7 +1079,7 @@ impl GpuEngine {
             .iter()
             .any(|w| matches!(w.motion, crate::scene::WallMotion::Servo { .. }));
         let state = StateSet::new(&mut alloc, (n as u64, entries, windows), &kind, keeps);
-        let new_lists = NewLists::new(&mut alloc, (entries, &windows), &kind, keeps);
+        let new_lists = NewLists::new(&kind, keeps);
         let dt32 = r.dt as f32;
         let particle_ledger = ledger.then(|| alloc.buffer("particle_ledger", 64 * n as u64));
         // the per-particle buffers fit before the initial state is written into them
@@ -1248,11 +1206,18 @@ impl GpuEngine {
         }
         // each wall's point at the last rebuild (decide); 32 bytes a wall
         let wall_ref = alloc.buffer("wall_ref", 32 * walls.len().max(1) as u64);
-        // which particles have appeared (pouring), by persistent id
+        // which particles have appeared, by persistent id: a word each where the scene
+        // pours (`POURING`), else one word nothing reads
         let active: Vec<bool> = scene.particles.iter().map(|p| p.insert_at <= 0.0).collect();
-        let active_buf = alloc.buffer("active", 4 * n as u64);
-        let flags: Vec<u32> = active.iter().map(|&a| a as u32).collect();
-        q0.write_buffer(&active_buf, 0, bytemuck::cast_slice(&flags));
+        let pouring = active.iter().any(|&a| !a);
+        let active_buf = alloc.buffer("active", 4 * if pouring { n as u64 } else { 1 });
+        if pouring {
+            q0.write_buffer(
+                &active_buf,
+                0,
+                bytemuck::cast_slice(&appeared_flags(&active)),
+            );
+        }
         // the new lists' and the `lower` lists' rows (four regions a window)
         let rows = blocked_buffer(
             &mut alloc,
@@ -1434,7 +1399,7 @@ impl GpuEngine {
             (grid.params(), grid.sorted_index()),
             n as u32,
             &state.permuted(),
-            (&windowing, Some(new_lists.lent(&state, entries))),
+            (&windowing, Some(NewLists::lent(&state, entries))),
         )?;
         alloc
             .list
@@ -1459,11 +1424,11 @@ impl GpuEngine {
             (
                 &state.layout,
                 &state.records(&new_lists, entries),
-                &state.blocks(&new_lists, entries),
+                &state.blocks(entries),
             ),
             (&mirrors, &windowing),
             &grid,
-            [state.named(), new_lists.named(), b.named()],
+            [state.named(), b.named()],
         )?;
         // the grid sort's keys, a window at a time
         let state_block = state_fields * windows.len * crate::gpu::state::FIELD_BYTES;
@@ -1938,8 +1903,6 @@ impl GpuEngine {
         let bytes = layout.windowed_bytes(entries, &windows);
         let block = layout.block_bytes(entries);
         let new = blocked_buffer(&mut alloc, &windows, ("A.entries", bytes), block);
-        let new_entries =
-            NewLists::allocate(&self._new_lists.layout, &mut alloc, (entries, &windows));
         alloc.check(self.n as usize)?;
         if keep {
             // window by window, region by region: each region's start moves with the
@@ -1957,29 +1920,23 @@ impl GpuEngine {
             }
         }
         self.state.entries = new;
-        self._new_lists.new_entries = new_entries;
         if let Some(q) = &mut self.quiet {
-            if q.lists.is_some() {
-                // (a copy, never bound: no binding limit, as at the start)
-                let mut copies = Allocator::new(device, u64::MAX);
-                q.lists = self
-                    ._new_lists
-                    .quiet_lists(&mut copies, (entries, &windows));
-                alloc.list.extend(copies.list);
-            }
+            // (a copy, never bound: no binding limit, as at the start)
+            let mut copies = Allocator::new(device, u64::MAX);
+            q.lists = self
+                ._new_lists
+                .quiet_lists(&mut copies, (entries, &windows));
+            alloc.list.extend(copies.list);
         }
         self.ctx.queue.submit([encoder.finish()]);
-        // the re-sort's scratch: the new lists' buffer again, or its own where a window's
-        // block of them no longer holds it
+        // the re-sort's scratch: the new lists' room again, or its own where a window's
+        // block of it no longer holds it
         self.permutation.bind(
             &self.ctx,
             (self.grid.params(), self.grid.sorted_index()),
             self.n,
             &self.state.permuted(),
-            (
-                &self.windowing,
-                Some(self._new_lists.lent(&self.state, entries)),
-            ),
+            (&self.windowing, Some(NewLists::lent(&self.state, entries))),
         )?;
         alloc
             .list
@@ -2001,11 +1958,11 @@ impl GpuEngine {
             (
                 &self.state.layout,
                 &self.state.records(&self._new_lists, entries),
-                &self.state.blocks(&self._new_lists, entries),
+                &self.state.blocks(entries),
             ),
             (&self.mirrors, &self.windowing),
             &self.grid,
-            [self.state.named(), self._new_lists.named(), self.b.named()],
+            [self.state.named(), self.b.named()],
         )?;
         Ok(())
     }
@@ -2260,6 +2217,18 @@ impl GpuEngine {
         valid
     }
 
+    /// Writes which particles have appeared to the device (where the scene pours: else
+    /// all have, and the kernels do not ask).
+    fn write_appeared(&self) {
+        if self.b.appeared.size() >= 4 * self.active.len() as u64 {
+            self.ctx.queue.write_buffer(
+                &self.b.appeared,
+                0,
+                bytemuck::cast_slice(&appeared_flags(&self.active)),
+            );
+        }
+    }
+
     /// Activates the particles whose insertion time has come (at the start of a step whose
     /// time has reached it, as on the CPU), writing the device's flags when they change;
     /// returns how many steps until the next insertion (at least 1).
@@ -2280,10 +2249,7 @@ impl GpuEngine {
             }
         }
         if changed {
-            let flags: Vec<u32> = self.active.iter().map(|&a| a as u32).collect();
-            self.ctx
-                .queue
-                .write_buffer(&self.b.appeared, 0, bytemuck::cast_slice(&flags));
+            self.write_appeared();
         }
         next
     }
@@ -2459,12 +2425,7 @@ impl GpuEngine {
         let mut v = q.copies.clone();
         let windows = a.layout.windows();
         // into the new lists, or the quiet batches' own copy where those live in the entries
-        let standalone = b.standalone();
-        let (target, layout) = match (&b.new_entries, &q.lists) {
-            (Some(buffer), _) => (buffer, &b.layout),
-            (None, Some(lists)) => (lists, &standalone),
-            (None, None) => return v,
-        };
+        let (target, layout) = (&q.lists, &b.standalone());
         for w in 0..windows.count {
             let first = windows.record(w, 0);
             for (from, to) in [("hist", "new_hist"), ("prior", "new_prior")] {
@@ -2680,10 +2641,7 @@ impl GpuEngine {
         }
         if saved.active.len() == self.active.len() {
             self.active = saved.active;
-            let flags: Vec<u32> = self.active.iter().map(|&a| a as u32).collect();
-            self.ctx
-                .queue
-                .write_buffer(&self.b.appeared, 0, bytemuck::cast_slice(&flags));
+            self.write_appeared();
         }
         if let Some(q) = &mut self.quiet {
             q.forecast.forget();

@@ -33,6 +33,8 @@ pub enum Kind {
     /// A contact's stored history, `struct Hist` of the composition: its f32 members, in
     /// order.
     Hist(Vec<String>),
+    /// Words kept free for another layout living in the buffer (no accessors).
+    Spare(u64),
 }
 
 impl Kind {
@@ -43,6 +45,7 @@ impl Kind {
             Kind::Vec3 | Kind::Vec4Xyw => 3,
             Kind::Vec4 => 4,
             Kind::Hist(members) => members.len().max(1) as u64,
+            Kind::Spare(words) => *words,
         }
     }
 
@@ -53,6 +56,7 @@ impl Kind {
             Kind::Vec3 => "vec3<f32>",
             Kind::Vec4 | Kind::Vec4Xyw => "vec4<f32>",
             Kind::Hist(_) => "Hist",
+            Kind::Spare(_) => "u32",
         }
     }
 }
@@ -108,7 +112,8 @@ impl RecordLayout {
     /// jumps this step's impulse of the
     /// pair's force jump along n on the evaluator (`jump`, 0 without one; the partner
     /// subtracts it) and n (`jump_normal`, written only where `jump` is not 0). The
-    /// per-step fields come last ([`Self::per_step`]).
+    /// per-step fields come last ([`Self::per_step`]), widened by spare words where a
+    /// rebuild's new lists ([`Self::new_entries`]) need more room than they have.
     pub fn entries(hist: &[String], rotation: bool, keeps: Keeps) -> Self {
         let mut layout = Self {
             global: "entries",
@@ -128,9 +133,33 @@ impl RecordLayout {
         if rotation {
             layout.fields.push(field("pair_torque", Kind::Vec3));
         }
-        layout
+        let mut layout = layout
             .optional(field("jump", Kind::F32), keeps.jumps)
-            .optional(field("jump_normal", Kind::Vec3), keeps.jumps)
+            .optional(field("jump_normal", Kind::Vec3), keeps.jumps);
+        let (_, per_step) = layout.per_step();
+        let new = Self::new_fields(hist, keeps)
+            .iter()
+            .map(|f| f.kind.words())
+            .sum::<u64>();
+        if new > per_step {
+            layout
+                .fields
+                .push(field("spare", Kind::Spare(new - per_step)));
+        }
+        layout
+    }
+
+    /// The fields of a rebuild's new lists: partner id, history, and the prior where the
+    /// composition keeps one.
+    fn new_fields(hist: &[String], keeps: Keeps) -> Vec<Field> {
+        let mut fields = vec![
+            field("new_hist_pid", Kind::U32),
+            field("new_hist", Kind::Hist(hist.to_vec())),
+        ];
+        if keeps.prior() {
+            fields.push(field("new_prior", prior_kind(keeps)));
+        }
+        fields
     }
 
     /// The entries' fields of one step (from `pair_force` on: what the force pass leaves
@@ -144,30 +173,32 @@ impl RecordLayout {
 
     /// The lists a rebuild builds: each entry's partner id and history (and the contact
     /// at the end of the last step), remapped from the old lists and copied back into
-    /// [`Self::entries`]. They live in the entries' per-step fields where those are wide
-    /// enough (written by `remap`, read by `copy_back_history`: within a rebuild), else in
-    /// a buffer of their own.
+    /// [`Self::entries`]. They live in the entries' per-step fields (written by `remap`,
+    /// read by `copy_back_history`: within a rebuild, when nothing reads those), which
+    /// [`Self::entries`] made wide enough.
     pub fn new_entries(hist: &[String], keeps: Keeps, entries: &RecordLayout) -> Self {
-        let mut layout = Self {
-            global: "new_entries",
-            host: None,
-            binding: 37,
-            capacity_wgsl: "step.list_capacity",
-            fields: vec![
-                field("new_hist_pid", Kind::U32),
-                field("new_hist", Kind::Hist(hist.to_vec())),
-            ],
-            absent: Vec::new(),
-        }
-        .optional(field("new_prior", prior_kind(keeps)), keeps.prior());
         let (base, words) = entries.per_step();
-        if layout.words() <= words {
-            layout.host = Some(Host {
+        // (without a prior, its accessors are no-ops)
+        let absent = match keeps.prior() {
+            true => Vec::new(),
+            false => vec![field("new_prior", prior_kind(keeps))],
+        };
+        let layout = Self {
+            global: "new_entries",
+            host: Some(Host {
                 global: entries.global,
                 words: entries.words(),
                 base,
-            });
-        }
+            }),
+            binding: 37,
+            capacity_wgsl: "step.list_capacity",
+            fields: Self::new_fields(hist, keeps),
+            absent,
+        };
+        debug_assert!(
+            layout.words() <= words,
+            "the entries leave the new lists room"
+        );
         layout
     }
 
@@ -323,6 +354,10 @@ impl RecordLayout {
         let mut before = 0;
         for f in &self.fields {
             let (n, ty, width) = (f.name, f.kind.wgsl_type(), f.kind.words());
+            if let Kind::Spare(words) = f.kind {
+                before += words;
+                continue;
+            }
             let at = format!("{g}_at({before}u, {width}u, r)");
             let word = |i: u64| format!("{a}[at + {i}u]");
             let (load, store) = match &f.kind {
@@ -371,6 +406,7 @@ impl RecordLayout {
                             .collect(),
                     )
                 }
+                Kind::Spare(_) => unreachable!("spare words have no accessors"),
             };
             let bind_at = if matches!(f.kind, Kind::U32 | Kind::F32) {
                 String::new()
@@ -425,7 +461,8 @@ mod tests {
         let hist = vec!["a".to_string(), "b".to_string()];
         let keeps = Keeps::new(true, false, false);
         let e = RecordLayout::entries(&hist, true, keeps);
-        assert_eq!(e.words(), 1 + 1 + 1 + 2 + 3 + 3 + 4);
+        // (one spare word: the new lists' 1 + 2 + 4 in the per-step fields' 3 + 3)
+        assert_eq!(e.words(), 1 + 1 + 1 + 2 + 4 + 3 + 3 + 1);
         // the force jumps' impulses left out: no-op accessors, no words
         assert_eq!(e.place("jump_normal"), None);
         assert!(e
@@ -456,9 +493,14 @@ mod tests {
         let source = new.wgsl();
         assert!(!source.contains("var<storage, read_write> new_entries"));
         assert!(source.contains("entries[at + 2u]"));
-        assert_eq!(e.per_step(), (9, 6));
-        let apart = RecordLayout::new_entries(&hist, keeps, &e);
-        assert_eq!((apart.words(), apart.array()), (7, "new_entries"));
+        assert_eq!(e.per_step(), (9, 7));
+        let wide = RecordLayout::new_entries(&hist, keeps, &e);
+        assert_eq!((wide.words(), wide.array()), (7, "entries"));
+        assert_eq!(
+            wide.byte_of("new_prior", 4, &Windows::one(4), 0),
+            Some(4 * (9 + 3) * 4)
+        );
+        assert!(!e.wgsl().contains("spare"));
         assert!(j.wgsl().contains("0.0, bitcast<f32>(entries[at + 2u]))"));
         let windows = Windows::one(4);
         let mut bytes = vec![0u8; j.block_bytes(4) as usize];
