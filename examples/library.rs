@@ -66,7 +66,7 @@ fn scene() -> Scene {
         walls: vec![Wall {
             point: [0.0; 3],
             normal: [0.0, 0.0, 1.0],
-            motion: WallMotion::Fixed,
+            motion: WallMotion::fixed(),
             material: 0,
         }],
         particles,

@@ -53,7 +53,7 @@
 //! gamma0 = 0.0                  # kg/s, >= 0, default 0: viscous damping in contact
 //! k2_rule = "linear"            # "linear" (default) or "sqrt": how k2 grows with delta_max
 //! # Luding's friction (hysteretic and lsd; README "Luding's sliding, rolling and twisting
-//! # friction"); > 0 makes particles rotate; CPU only so far. Lever a12 = 2R* (2r at a wall),
+//! # friction"); > 0 makes particles rotate (both backends). Lever a12 = 2R* (2r at a wall),
 //! # Coulomb load max(0, f_n + kc delta + fa) (lsd: max(0, f_n)):
 //! friction = 0.0                # >= 0, default 0 (off): static sliding coefficient mu_s
 //! friction_dynamic = 0.0        # 0 <= mu_d <= mu_s, default friction
@@ -81,7 +81,7 @@
 //!                               # "powerlaw" (paper 001 eq. 19, needs D, alpha, beta),
 //!                               # "krijt" (jkr only, paper 001 eqs. 10-12, B1-B2, needs tvis)
 //!                               # or "stress" (jkr only, paper 001 eqs. 17-18, needs
-//!                               # tvis0_per_radius, B, zeta); krijt/stress: CPU only so far
+//!                               # tvis0_per_radius, B, zeta); krijt/stress: both backends
 //! restitution = 0.9             # target restitution e in (0, 1] of "tsuji"
 //! tsuji_stiffness = "contact-radius" # "tsuji" only: the stiffness of its dashpots,
 //!                               # "contact-radius" (default: Sn = 2E* a, St = 8G* a) or
@@ -104,7 +104,7 @@
 //! pulloff = "displacement"      # jkr only: "displacement" (default, breaks at
 //!                               # -(3/4)^(2/3) delta0) or "force" (breaks at F = -Fc)
 //! stiffness_scale = 1.0         # > 0, default 1: E -> S E and gamma -> gamma S^(2/5)
-//! twisting_friction = 0.0       # >= 0, default 0 (off): Luding's twisting, mu_o (CPU only)
+//! twisting_friction = 0.0       # >= 0, default 0 (off): Luding's twisting, mu_o
 //! ko = 1e3                      # N/m, > 0, default 2/5 * 8 G* a at the current contact radius
 //! gamma_o = 0.0                 # kg/s, >= 0, default 0
 //!
@@ -124,6 +124,14 @@
 //! # servo_force = 0.5            # N > 0: move along the normal to hold this normal force,
 //! # servo_gain = 1e-3            #   m/s per N > 0: speed = clamp(gain·(servo_force − F), ±max)
 //! # servo_max_speed = 0.01       #   m/s > 0 (stable while gain·k_bed·dt < 1)
+//! # [[wall.phase]]              # or a program: phases, each one kind of motion as above
+//! # from = 0.0                   #   (`velocity` or `servo_*`; neither: at rest) from `from`
+//! # servo_force = 0.5            #   s on (>= 0, increasing; at rest before the first); a
+//! # servo_gain = 1e-3            #   servo phase entered during the run starts at rest
+//! # servo_max_speed = 0.01
+//! # [[wall.phase]]
+//! # from = 0.02
+//! # velocity = [0.0, 0.0, 0.01]
 //!
 //! [[particles]]                 # one or more blocks, expanded in file order; particle ids
 //!                               # (0-based) follow the order of expansion
@@ -251,18 +259,18 @@ pub struct Interaction {
     pub model: ContactModel,
 }
 
-/// How a wall moves (it is never pushed by the particles: an infinite mass).
-#[derive(Clone, Debug, Default, PartialEq)]
-pub enum WallMotion {
+/// What a wall does during one phase of its motion.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum WallPhase {
     /// At rest.
     #[default]
-    Fixed,
-    /// Piecewise-constant prescribed velocity: (from time s, velocity m/s), by increasing
-    /// time; at rest before the first time.
-    Prescribed(Vec<(f64, [f64; 3])>),
+    Rest,
+    /// A prescribed velocity, m/s.
+    Velocity([f64; 3]),
     /// Servo control along the normal: each step the wall moves with speed
     /// clamp(gain·(force − F), ±max_speed) along its normal, F being the normal force the
-    /// particles exerted on it the step before; it holds `force` (N).
+    /// particles exerted on it the step before (at rest in the first step of a servo phase
+    /// entered during the run); it holds `force` (N).
     Servo {
         /// Target normal force on the wall, N.
         force: f64,
@@ -273,32 +281,65 @@ pub enum WallMotion {
     },
 }
 
+/// How a wall moves (it is never pushed by the particles: an infinite mass): phases, each
+/// from its start time on (s, strictly increasing), at rest before the first. A step
+/// follows the phase its start time falls in.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct WallMotion {
+    /// (from time s, what the wall does), by increasing time.
+    pub phases: Vec<(f64, WallPhase)>,
+}
+
 impl WallMotion {
-    /// The prescribed velocity at time `t` (zero for fixed and servo walls).
+    /// At rest throughout.
+    pub fn fixed() -> Self {
+        Self::default()
+    }
+
+    /// One phase from t = 0 on.
+    pub fn always(phase: WallPhase) -> Self {
+        Self {
+            phases: vec![(0.0, phase)],
+        }
+    }
+
+    /// The index of the phase at time `t` (None: before the first).
+    pub fn index_at(&self, t: f64) -> Option<usize> {
+        self.phases.iter().rposition(|(from, _)| t >= *from)
+    }
+
+    /// The phase at time `t`.
+    pub fn at(&self, t: f64) -> WallPhase {
+        self.index_at(t)
+            .map_or(WallPhase::Rest, |i| self.phases[i].1)
+    }
+
+    /// The prescribed velocity at time `t` (zero at rest and under servo control).
     pub fn prescribed_velocity(&self, t: f64) -> [f64; 3] {
-        match self {
-            WallMotion::Prescribed(phases) => phases
-                .iter()
-                .rev()
-                .find(|(from, _)| t >= *from)
-                .map_or([0.0; 3], |(_, v)| *v),
+        match self.at(t) {
+            WallPhase::Velocity(v) => v,
             _ => [0.0; 3],
         }
     }
 
-    /// The next time after `t` at which the prescribed velocity changes.
+    /// The next time after `t` at which a phase starts.
     pub fn next_switch(&self, t: f64) -> Option<f64> {
-        match self {
-            WallMotion::Prescribed(phases) => {
-                phases.iter().map(|(from, _)| *from).find(|&from| from > t)
-            }
-            _ => None,
-        }
+        self.phases
+            .iter()
+            .map(|(from, _)| *from)
+            .find(|&from| from > t)
     }
 
-    /// Whether the wall is not fixed.
+    /// Whether the wall ever moves.
     pub fn moves(&self) -> bool {
-        !matches!(self, WallMotion::Fixed)
+        self.phases.iter().any(|(_, p)| *p != WallPhase::Rest)
+    }
+
+    /// Whether some phase is under servo control.
+    pub fn servo(&self) -> bool {
+        self.phases
+            .iter()
+            .any(|(_, p)| matches!(p, WallPhase::Servo { .. }))
     }
 }
 
@@ -475,6 +516,15 @@ const WALL_KEYS: &[&str] = &[
     "velocity",
     "velocities",
     "times",
+    "servo_force",
+    "servo_gain",
+    "servo_max_speed",
+    "phase",
+];
+const SERVO_KEYS: &[&str] = &["servo_force", "servo_gain", "servo_max_speed"];
+const PHASE_KEYS: &[&str] = &[
+    "from",
+    "velocity",
     "servo_force",
     "servo_gain",
     "servo_max_speed",
@@ -1387,22 +1437,20 @@ fn parse_interactions(root: &Tbl, names: &[&str]) -> Res<Vec<Interaction>> {
     Ok(out)
 }
 
-/// `velocity`, or `velocities` with `times`, or `servo_*`: at most one kind of motion.
+/// `velocity`, or `velocities` with `times`, or `servo_*`, or `[[wall.phase]]`: at most
+/// one kind of motion.
 fn parse_wall_motion(t: &Tbl) -> Res<WallMotion> {
-    let servo = ["servo_force", "servo_gain", "servo_max_speed"];
     let kinds = [
         t.has("velocity"),
         t.has("velocities") || t.has("times"),
-        servo.iter().any(|k| t.has(k)),
+        SERVO_KEYS.iter().any(|k| t.has(k)),
+        t.has("phase"),
     ];
     if kinds.iter().filter(|&&k| k).count() > 1 {
         return Err(t.err_table(format!(
-            "{} mixes kinds of motion: give `velocity` (constant), or `velocities` with `times` (a schedule), or `servo_force`, `servo_gain` and `servo_max_speed` (force control)",
+            "{} mixes kinds of motion: give `velocity` (constant), or `velocities` with `times` (a schedule), or `servo_force`, `servo_gain` and `servo_max_speed` (force control), or `[[wall.phase]]` tables (a program)",
             t.ctx
         )));
-    }
-    if let Some(v) = t.vec3("velocity")? {
-        return Ok(WallMotion::Prescribed(vec![(0.0, v)]));
     }
     if kinds[1] {
         let velocities = t.vec3_list("velocities")?.ok_or_else(|| {
@@ -1428,20 +1476,62 @@ fn parse_wall_motion(t: &Tbl) -> Res<WallMotion> {
                 ),
             ));
         }
-        if times[0] < 0.0 || times.windows(2).any(|w| w[1] <= w[0]) {
-            return Err(t.err_key(
-                "times",
-                format!(
-                    "`times` in {} must start at >= 0 s and increase strictly, got {times:?}",
-                    t.ctx
-                ),
-            ));
+        check_increasing(t, "times", &times)?;
+        let phases = times.into_iter().zip(velocities);
+        return Ok(WallMotion {
+            phases: phases.map(|(t, v)| (t, WallPhase::Velocity(v))).collect(),
+        });
+    }
+    if kinds[3] {
+        let mut phases = Vec::new();
+        for (i, (span, entries)) in t.tables("phase")?.into_iter().enumerate() {
+            let p = Tbl::new(
+                t.src,
+                entries,
+                Some(span),
+                format!("{} phase #{}", t.ctx, i + 1),
+            );
+            p.check_keys(PHASE_KEYS, |_| None)?;
+            let from = p.f64_req("from", "the time in s from which the phase applies")?;
+            phases.push((from, parse_wall_phase(&p)?));
         }
-        return Ok(WallMotion::Prescribed(
-            times.into_iter().zip(velocities).collect(),
+        let times: Vec<f64> = phases.iter().map(|(from, _)| *from).collect();
+        check_increasing(t, "phase", &times)?;
+        return Ok(WallMotion { phases });
+    }
+    Ok(match parse_wall_phase(t)? {
+        WallPhase::Rest => WallMotion::fixed(),
+        phase => WallMotion::always(phase),
+    })
+}
+
+/// Phase start times: at least one, from >= 0 s, strictly increasing.
+fn check_increasing(t: &Tbl, key: &str, times: &[f64]) -> Res<()> {
+    if times.is_empty() || times[0] < 0.0 || times.windows(2).any(|w| w[1] <= w[0]) {
+        return Err(t.err_key(
+            key,
+            format!(
+                "the start times of `{key}` in {} must start at >= 0 s and increase strictly, got {times:?}",
+                t.ctx
+            ),
         ));
     }
-    if kinds[2] {
+    Ok(())
+}
+
+/// One phase's motion: `velocity`, or `servo_*`, or neither (at rest).
+fn parse_wall_phase(t: &Tbl) -> Res<WallPhase> {
+    let servo = SERVO_KEYS.iter().any(|k| t.has(k));
+    if t.has("velocity") && servo {
+        return Err(t.err_table(format!(
+            "{} mixes kinds of motion: give `velocity` or `servo_force`, `servo_gain` and `servo_max_speed`",
+            t.ctx
+        )));
+    }
+    if let Some(v) = t.vec3("velocity")? {
+        return Ok(WallPhase::Velocity(v));
+    }
+    if servo {
         let force = t.positive_req(
             "servo_force",
             "the normal force in N the servo-controlled wall holds",
@@ -1454,13 +1544,13 @@ fn parse_wall_motion(t: &Tbl) -> Res<WallMotion> {
             "servo_max_speed",
             "the largest speed in m/s of the servo-controlled wall",
         )?;
-        return Ok(WallMotion::Servo {
+        return Ok(WallPhase::Servo {
             force,
             gain,
             max_speed,
         });
     }
-    Ok(WallMotion::Fixed)
+    Ok(WallPhase::Rest)
 }
 
 fn parse_walls(root: &Tbl, names: &[&str]) -> Res<Vec<Wall>> {

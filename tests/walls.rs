@@ -188,4 +188,112 @@ fn bad_wall_motions_are_refused() {
     assert!(e.contains("servo_max_speed"), "{e}");
     let e = err("servo_force = -1.0\nservo_gain = 0.1\nservo_max_speed = 0.01");
     assert!(e.contains("servo_force"), "{e}");
+    // programs: one kind of motion a phase, increasing start times, no motion beside them
+    let e = err("[[wall.phase]]\nfrom = 0.0\nvelocity = [0.0, 0.0, 0.01]\nservo_force = 1.0");
+    assert!(e.contains("phase #1") && e.contains("mixes kinds"), "{e}");
+    let e = err("[[wall.phase]]\nfrom = 0.1\n[[wall.phase]]\nfrom = 0.05");
+    assert!(e.contains("increase strictly"), "{e}");
+    let e = err("[[wall.phase]]\nvelocity = [0.0, 0.0, 0.01]");
+    assert!(e.contains("`from`"), "{e}");
+    let e = err("[[wall.phase]]\nfrom = 0.0\nservo_forse = 1.0");
+    assert!(e.contains("servo_force"), "{e}");
+    let e = err("velocity = [0.0, 0.0, 0.01]\n[[wall.phase]]\nfrom = 0.0");
+    assert!(e.contains("mixes kinds of motion"), "{e}");
+}
+
+/// A lid run by a program of phases — servo at 0.02 N (sintering), servo at 0.002 N
+/// (release), pulled up at 5 mm/s (the adhesive lid pulls the column), at rest — holds each
+/// force, enters each servo phase at rest, pulls, stops, and the ledger closes; the GPU
+/// follows the CPU, and a GPU run saved where a phase starts and restored elsewhere ends
+/// in the same bits.
+#[test]
+fn a_lid_program_sinters_releases_pulls_and_stops() {
+    let program = "[[wall.phase]]\nfrom = 0.0\nservo_force = 0.02\nservo_gain = 2.0\nservo_max_speed = 0.02\n\
+                   [[wall.phase]]\nfrom = 0.1\nservo_force = 0.002\nservo_gain = 2.0\nservo_max_speed = 0.02\n\
+                   [[wall.phase]]\nfrom = 0.15\nvelocity = [0.0, 0.0, 0.005]\n\
+                   [[wall.phase]]\nfrom = 0.19";
+    let scene = column(program);
+    let mut cpu = CpuEngine::new(&scene).unwrap();
+    let dt = cpu.dt();
+    let total0 = cpu.energies().total();
+    // steps that start before time t
+    let before = |t: f64| (t / dt).ceil() as u64;
+    cpu.run_steps(before(0.1)).unwrap();
+    let sintered = lid_force_z(&cpu.wall_forces());
+    assert!(
+        (sintered - 0.02).abs() < 1e-3 * 0.02,
+        "sintering force {sintered}"
+    );
+    // the release's servo phase starts at rest
+    let z = cpu.walls_now()[1].0.z;
+    cpu.run_steps(1).unwrap();
+    assert_eq!(
+        cpu.walls_now()[1].0.z,
+        z,
+        "the lid moved in a servo phase's first step"
+    );
+    cpu.run_steps(before(0.15) - before(0.1) - 1).unwrap();
+    let released = lid_force_z(&cpu.wall_forces());
+    assert!(
+        (released - 0.002).abs() < 1e-3 * 0.002,
+        "release force {released}"
+    );
+    // pulled up at the prescribed speed: the force turns tensile
+    let z0 = cpu.walls_now()[1].0.z;
+    let mut pull: f64 = 0.0;
+    for _ in 0..8 {
+        cpu.run_steps((before(0.19) - before(0.15)) / 8).unwrap();
+        pull = pull.min(lid_force_z(&cpu.wall_forces()));
+    }
+    cpu.run_steps(before(0.19) - cpu.steps).unwrap();
+    let z1 = cpu.walls_now()[1].0.z;
+    let travel = (before(0.19) - before(0.15)) as f64 * dt * 0.005;
+    assert!(
+        (z1 - z0 - travel).abs() < 1e-12,
+        "pulled {:e}, expected {travel:e}",
+        z1 - z0
+    );
+    assert!(pull < 0.0, "the adhesive lid never pulled: {pull}");
+    eprintln!("lid program (cpu): {sintered:e} N, {released:e} N, pull {pull:e} N");
+    // at rest from 0.19 s on
+    cpu.run_steps(200).unwrap();
+    assert_eq!(cpu.walls_now()[1].0.z, z1, "the lid moved at rest");
+    let e = cpu.energies();
+    assert!(
+        (e.total() - total0).abs() < 1e-3 * e.wall_work.abs().max(e.dissipated),
+        "ledger: {e:?} from {total0:e}"
+    );
+
+    let Some(ctx) = gpu() else { return };
+    let mut c = CpuEngine::new(&scene).unwrap();
+    let mut g = GpuEngine::new(&scene, ctx).unwrap();
+    for t in [0.05, 0.1, 0.125, 0.15, 0.17, 0.19, 0.2] {
+        c.run_steps(before(t) - c.steps).unwrap();
+        g.run_steps(before(t) - g.steps).unwrap();
+        let (wc, wg) = (c.walls_now()[1].0.z, g.walls_now().unwrap()[1].0.z);
+        let (fc, fg) = (
+            lid_force_z(&c.wall_forces()),
+            lid_force_z(&g.wall_forces().unwrap()),
+        );
+        eprintln!("t {t}: lid {wc:.9e} / {wg:.9e}, force {fc:e} / {fg:e}");
+        assert!(
+            (wc - wg).abs() < 1e-8,
+            "t {t}: lid at {wc} (cpu) vs {wg} (gpu)"
+        );
+        assert!(
+            (fc - fg).abs() < 2e-3 * 0.02,
+            "t {t}: lid force {fc} (cpu) vs {fg} (gpu)"
+        );
+    }
+    // saved where the release starts (a batch ends at a switch), restored into another engine
+    let mut a = GpuEngine::new(&scene, gpu().unwrap()).unwrap();
+    a.run_steps(before(0.1)).unwrap();
+    let saved = a.save_state().unwrap();
+    let mut b = GpuEngine::new(&scene, gpu().unwrap()).unwrap();
+    b.restore_state(saved).unwrap();
+    let rest = before(0.17) - before(0.1);
+    a.run_steps(rest).unwrap();
+    b.run_steps(rest).unwrap();
+    common::assert_same_bits(&a.state().unwrap(), &b.state().unwrap());
+    assert_eq!(a.walls_now().unwrap(), b.walls_now().unwrap());
 }

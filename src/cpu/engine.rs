@@ -17,7 +17,7 @@ use crate::model::{
     ContactHistory, ContactModel, Kinematics, PairConstants, PairGeometry, Response, TimeStep,
 };
 use crate::output::contacts::{ContactLine, ContactNetwork};
-use crate::scene::Scene;
+use crate::scene::{Scene, WallPhase};
 use crate::setup::Resolved;
 use glam::DVec3;
 
@@ -1456,25 +1456,28 @@ impl CpuEngine {
         if self.periodic.iter().any(|&p| p) {
             self.wrap_positions();
         }
-        // Moving walls: the velocity over this step (prescribed at its start, or the servo
-        // law from the force of the step before), then the move; the work the walls do
-        // on the particles is integrated with the force before and after the step.
+        // Moving walls: the velocity over this step (the phase at its start: prescribed, or
+        // the servo law from the force of the step before — at rest in the first step of a
+        // servo phase entered during the run), then the move; the work the walls do on the
+        // particles is integrated with the force before and after the step.
         let push_before = self.moving_walls().then(|| self.wall_forces());
         if let Some(before) = &push_before {
+            let (time, steps) = (self.time, self.steps);
             for (w, wall) in self.walls.iter_mut().enumerate() {
-                wall.velocity = match &wall.motion {
-                    crate::scene::WallMotion::Fixed => DVec3::ZERO,
-                    crate::scene::WallMotion::Prescribed(_) => {
-                        DVec3::from_array(wall.motion.prescribed_velocity(self.time))
-                    }
-                    crate::scene::WallMotion::Servo {
+                let entered =
+                    steps > 0 && wall.motion.index_at(time - dt) != wall.motion.index_at(time);
+                wall.velocity = match wall.motion.at(time) {
+                    WallPhase::Rest => DVec3::ZERO,
+                    WallPhase::Velocity(v) => DVec3::from_array(v),
+                    WallPhase::Servo { .. } if entered => DVec3::ZERO,
+                    WallPhase::Servo {
                         force,
                         gain,
                         max_speed,
                     } => {
                         // the normal force the particles exert (they push against −n)
                         let pushed = -before[w].dot(wall.normal);
-                        let speed = (gain * (force - pushed)).clamp(-max_speed, *max_speed);
+                        let speed = (gain * (force - pushed)).clamp(-max_speed, max_speed);
                         speed * wall.normal
                     }
                 };
@@ -2173,10 +2176,12 @@ mod tests {
             .iter_mut()
             .find(|w| w.normal == [1.0, 0.0, 0.0])
             .unwrap();
-        wall.motion = crate::scene::WallMotion::Prescribed(vec![
-            (0.0, [0.05, 0.0, 0.0]),
-            (1500.0 * dt, [-0.1, 0.0, 0.0]),
-        ]);
+        wall.motion = crate::scene::WallMotion {
+            phases: vec![
+                (0.0, WallPhase::Velocity([0.05, 0.0, 0.0])),
+                (1500.0 * dt, WallPhase::Velocity([-0.1, 0.0, 0.0])),
+            ],
+        };
         same_without_skin(&scene, 3000);
     }
 

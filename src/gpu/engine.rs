@@ -56,7 +56,7 @@ use crate::gpu::traffic::{PassTraffic, When};
 use crate::gpu::window::{Blocks, WindowBindings, Windows, MIN_WINDOW};
 use crate::model::{ContactHistory, ContactModel, PairGeometry};
 use crate::output::contacts::{ContactLine, ContactNetwork};
-use crate::scene::Scene;
+use crate::scene::{Scene, WallPhase};
 use crate::setup::Resolved;
 use glam::DVec3;
 
@@ -830,6 +830,8 @@ pub struct GpuEngine {
     wall_normals: Vec<DVec3>,
     /// How each wall moves, and the walls on the device (they move: state).
     wall_motion: Vec<crate::scene::WallMotion>,
+    /// The phase (`WallMotion::index_at`) each wall is in on the device.
+    wall_phase: Vec<Option<usize>>,
     /// The prescribed walls' points in f64, integrated on the host (v·dt per step, as the
     /// CPU does) and written to the device at every batch, so f32 rounding of the device's
     /// per-step moves never accumulates.
@@ -1074,10 +1076,7 @@ impl GpuEngine {
             n as u64,
             (ctx.max_storage_binding(), alloc.max_buffer),
         )?;
-        let servo_walls = scene
-            .walls
-            .iter()
-            .any(|w| matches!(w.motion, crate::scene::WallMotion::Servo { .. }));
+        let servo_walls = scene.walls.iter().any(|w| w.motion.servo());
         let state = StateSet::new(&mut alloc, (n as u64, entries, windows), &kind, keeps);
         let new_lists = NewLists::new(&kind, keeps);
         let dt32 = r.dt as f32;
@@ -1523,6 +1522,7 @@ impl GpuEngine {
                 .map(|w| DVec3::from_array(w.normal).normalize())
                 .collect(),
             wall_motion: scene.walls.iter().map(|w| w.motion.clone()).collect(),
+            wall_phase: scene.walls.iter().map(|w| w.motion.index_at(0.0)).collect(),
             wall_points: scene
                 .walls
                 .iter()
@@ -2193,7 +2193,11 @@ impl GpuEngine {
     fn prescribe_walls(&self) -> u64 {
         let mut valid = u64::MAX;
         for (w, m) in self.wall_motion.iter().enumerate() {
-            if !matches!(m, crate::scene::WallMotion::Prescribed(_)) {
+            if let Some(t) = m.next_switch(self.time) {
+                // steps that start before the switch keep this phase (as on the CPU)
+                valid = valid.min((((t - self.time) / self.dt).ceil() as u64).max(1));
+            }
+            if !matches!(m.at(self.time), WallPhase::Velocity(_)) {
                 continue;
             }
             let v = m.prescribed_velocity(self.time);
@@ -2209,12 +2213,46 @@ impl GpuEngine {
             self.ctx
                 .queue
                 .write_buffer(&self.b.walls, at, bytemuck::bytes_of(&wall));
-            if let Some(t) = m.next_switch(self.time) {
-                // steps that start before the switch keep this velocity (as on the CPU)
-                valid = valid.min((((t - self.time) / self.dt).ceil() as u64).max(1));
-            }
         }
         valid
+    }
+
+    /// Puts each wall whose phase changes at this batch's start into its new phase on the
+    /// device, where it starts at rest: a servo wall's point (kept by the device, not the
+    /// host) is read back first.
+    fn switch_wall_phases(&mut self) -> Result<(), PowderError> {
+        let changed: Vec<usize> = (0..self.wall_motion.len())
+            .filter(|&w| self.wall_motion[w].index_at(self.time) != self.wall_phase[w])
+            .collect();
+        let phase_of = |w: usize, i: Option<usize>| {
+            i.map_or(WallPhase::Rest, |i| self.wall_motion[w].phases[i].1)
+        };
+        let servo_before = changed
+            .iter()
+            .any(|&w| matches!(phase_of(w, self.wall_phase[w]), WallPhase::Servo { .. }));
+        let now = if servo_before {
+            self.walls_now()?
+        } else {
+            Vec::new()
+        };
+        for w in changed {
+            if matches!(phase_of(w, self.wall_phase[w]), WallPhase::Servo { .. }) {
+                self.wall_points[w] = now[w].0;
+            }
+            let mut wall = WallGpu::new(
+                self.wall_points[w],
+                self.wall_normals[w],
+                self.origin,
+                self.h,
+            );
+            wall.motion = WallGpu::motion_code(self.wall_motion[w].at(self.time));
+            let at = (w * std::mem::size_of::<WallGpu>()) as u64;
+            self.ctx
+                .queue
+                .write_buffer(&self.b.walls, at, bytemuck::bytes_of(&wall));
+            self.wall_phase[w] = self.wall_motion[w].index_at(self.time);
+        }
+        Ok(())
     }
 
     /// Writes which particles have appeared to the device (where the scene pours: else
@@ -2257,7 +2295,7 @@ impl GpuEngine {
     /// Advances the host's points of the prescribed walls by `steps` steps.
     fn advance_prescribed_walls(&mut self, steps: u64) {
         for (w, m) in self.wall_motion.iter().enumerate() {
-            if matches!(m, crate::scene::WallMotion::Prescribed(_)) {
+            if matches!(m.at(self.time), WallPhase::Velocity(_)) {
                 let v = DVec3::from_array(m.prescribed_velocity(self.time));
                 for _ in 0..steps {
                     self.wall_points[w] += self.dt * v;
@@ -2302,6 +2340,7 @@ impl GpuEngine {
             let (batch, first) = match self.resume.take() {
                 Some(rest) => (rest.min(left), Drift::None),
                 None => {
+                    self.switch_wall_phases()?;
                     let batch = left
                         .min(STEPS_PER_SUBMIT)
                         .min(self.prescribe_walls())
@@ -2639,6 +2678,9 @@ impl GpuEngine {
         if saved.wall_points.len() == self.wall_points.len() {
             self.wall_points = saved.wall_points;
         }
+        // the device's walls are in the phase of the last step run
+        let last = saved.steps.saturating_sub(1) as f64 * self.dt;
+        self.wall_phase = self.wall_motion.iter().map(|m| m.index_at(last)).collect();
         if saved.active.len() == self.active.len() {
             self.active = saved.active;
             self.write_appeared();

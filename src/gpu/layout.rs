@@ -586,23 +586,28 @@ impl WallGpu {
 
     /// A scene wall at time 0.
     pub fn from_scene(w: &crate::scene::Wall, origin: DVec3, h: DVec3) -> Self {
-        use crate::scene::WallMotion;
         let mut g = Self::new(
             DVec3::from_array(w.point),
             DVec3::from_array(w.normal),
             origin,
             h,
         );
-        g.motion = match w.motion {
-            WallMotion::Fixed => [WALL_FIXED, 0.0, 0.0, 0.0],
-            WallMotion::Prescribed(_) => [WALL_PRESCRIBED, 0.0, 0.0, 0.0],
-            WallMotion::Servo {
+        g.motion = Self::motion_code(w.motion.at(0.0));
+        g
+    }
+
+    /// `motion` for a wall in `phase`: (kind, servo force, gain, largest speed).
+    pub fn motion_code(phase: crate::scene::WallPhase) -> [f32; 4] {
+        use crate::scene::WallPhase;
+        match phase {
+            WallPhase::Rest => [WALL_FIXED, 0.0, 0.0, 0.0],
+            WallPhase::Velocity(_) => [WALL_PRESCRIBED, 0.0, 0.0, 0.0],
+            WallPhase::Servo {
                 force,
                 gain,
                 max_speed,
             } => [WALL_SERVO, force as f32, gain as f32, max_speed as f32],
-        };
-        g
+        }
     }
 }
 
