@@ -545,7 +545,9 @@ struct RunArgs {
     /// Write no output files.
     #[arg(long, conflicts_with_all = ["out", "resume"])]
     no_output: bool,
-    /// Resume from a checkpoint of the same scene (bitwise identical continuation).
+    /// Resume from a checkpoint of the same scene (bitwise identical continuation), or of a
+    /// scene that changes only its duration, outputs or the wall phases from the
+    /// checkpoint's time on (a branch: docs/checkpoints.md).
     #[arg(long)]
     resume: Option<PathBuf>,
     /// Change a scene value, KEY=VALUE with KEY a dotted path (particles[0].count,

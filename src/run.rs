@@ -208,7 +208,8 @@ pub struct RunOptions {
     /// Output directory (VTK snapshots + `.pvd`, `series.csv`, `checkpoint.bin`,
     /// `summary.json`); `None` writes nothing.
     pub out_dir: Option<PathBuf>,
-    /// Continue from this checkpoint (of the same scene and powder version).
+    /// Continue from this checkpoint (of the same powder version, and a scene whose run
+    /// agrees with its own up to its time: `checkpoint::run_digest`).
     pub resume: Option<PathBuf>,
     /// Stop after this many steps in total (default: the scene's duration).
     pub max_steps: Option<u64>,

@@ -165,9 +165,70 @@ fn outputs_are_written_and_a_resumed_run_is_bitwise_identical() {
     assert!(summary["solid_fraction_bounding_box"].as_f64().unwrap() > 0.0);
 }
 
-/// The checkpoint `bytes` with its header saying format 18 (the members otherwise as they
+/// A checkpoint resumes under a scene that changes only what follows it — the wall
+/// phases from its time on, the duration, the outputs, the name — and the run ends bitwise
+/// as that scene's straight run (one prepared sample, tested several ways); a scene that
+/// changes a wall phase before the checkpoint's time is refused.
+#[test]
+fn a_checkpoint_branches_into_wall_phases_that_follow_it() {
+    use powder::scene::{WallMotion, WallPhase};
+    let with_floor = |phases: Vec<(f64, WallPhase)>| {
+        let mut s = cluster();
+        s.walls[0].motion = WallMotion { phases };
+        s
+    };
+    let dt = powder::cpu::CpuEngine::new(&cluster()).unwrap().dt();
+    let (t_switch, ckpt_step) = (2000.5 * dt, 1500);
+    let lift = WallPhase::Velocity([0.0, 0.0, 0.02]);
+    let drop = WallPhase::Velocity([0.0, 0.0, -0.02]);
+    let prepared = with_floor(vec![(t_switch, lift)]);
+    let mut branch = with_floor(vec![(t_switch, drop)]);
+    branch.duration *= 2.0;
+    branch.output_every = 250;
+    let straight = tempfile::tempdir().unwrap();
+    let split = tempfile::tempdir().unwrap();
+    run(&branch, straight.path(), 3000, None);
+    run(&prepared, split.path(), ckpt_step, None);
+    let ckpt = split.path().join("prepared.bin");
+    std::fs::copy(split.path().join("checkpoint.bin"), &ckpt).unwrap();
+    let mut renamed = branch.clone();
+    renamed.name = "another_name".into();
+    let resumed = run_cpu_with(&renamed, &options(split.path(), 3000, Some(&ckpt)), |_| {});
+    assert_eq!(resumed.unwrap().resumed_from, Some(ckpt_step));
+    let state = |dir: &Path| {
+        let bytes = std::fs::read(dir.join("checkpoint.bin")).unwrap();
+        let archive = npz::Archive::read(&bytes).unwrap();
+        let names: Vec<String> = archive.names().map(str::to_string).collect();
+        names
+            .iter()
+            .filter(|n| n.as_str() != "powder.json")
+            .map(|n| archive.raw(n).unwrap().to_vec())
+            .collect::<Vec<_>>()
+    };
+    assert!(
+        state(straight.path()) == state(split.path()),
+        "the branch differs from its straight run"
+    );
+    // (the floor went down in both: the branch's phase, not the prepared one's)
+    let last = |dir: &Path| {
+        let csv = std::fs::read_to_string(dir.join("series.csv")).unwrap();
+        csv.lines().last().unwrap().to_string()
+    };
+    assert_eq!(last(straight.path()), last(split.path()));
+    // a phase before the checkpoint's time is part of the run so far: refused
+    let early = with_floor(vec![(1000.5 * dt, drop)]);
+    let err = run_cpu_with(&early, &options(split.path(), 3000, Some(&ckpt)), |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("wall phases from the checkpoint's time on"),
+        "{err}"
+    );
+}
+
+/// The checkpoint `bytes` with its header saying format 19 (the members otherwise as they
 /// are).
-fn as_format_18(bytes: &[u8]) -> Vec<u8> {
+fn as_format_19(bytes: &[u8]) -> Vec<u8> {
     let archive = npz::Archive::read(bytes).unwrap();
     let members: Vec<(String, npz::Member)> = archive
         .names()
@@ -176,7 +237,7 @@ fn as_format_18(bytes: &[u8]) -> Vec<u8> {
             let raw = match name {
                 "powder.json" => String::from_utf8(raw)
                     .unwrap()
-                    .replace("\"format\": 17", "\"format\": 18")
+                    .replace("\"format\": 18", "\"format\": 19")
                     .into_bytes(),
                 _ => raw,
             };
@@ -226,8 +287,8 @@ fn foreign_or_broken_checkpoints_are_refused() {
         assert!(err.contains("damaged or truncated"), "cut at {cut}: {err}");
     }
     // another format is named: the archive written again with another header
-    let err = refusal(&as_format_18(&bytes));
-    assert!(err.contains("(format 18)"), "{err}");
+    let err = refusal(&as_format_19(&bytes));
+    assert!(err.contains("(format 19)"), "{err}");
     // the bincode checkpoints of formats up to 16 are named as such
     let err = refusal(b"POWDERCK\x11\x00\x00\x00 and the rest");
     assert!(err.contains("format 16 or earlier"), "{err}");
@@ -749,10 +810,10 @@ print(json.dumps({
     }
     // another format, named by the reader
     let other = dir.path().join("other.bin");
-    std::fs::write(&other, as_format_18(&std::fs::read(&ckpt).unwrap())).unwrap();
+    std::fs::write(&other, as_format_19(&std::fs::read(&ckpt).unwrap())).unwrap();
     let out = python(&other);
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success() && err.contains("format 18"), "{err}");
+    assert!(!out.status.success() && err.contains("format 19"), "{err}");
 }
 
 #[test]

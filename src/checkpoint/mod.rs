@@ -29,8 +29,9 @@ const HEADER: &str = "powder.json";
 const BINCODE_PREFIX: &[u8; 8] = b"POWDERCK";
 /// Bumped whenever the state's arrays change, or the GPU step's arithmetic does (a resume
 /// continues bitwise only with the same arithmetic). The history of earlier formats is in
-/// `docs/checkpoints.md`; 17: a `.npz` archive of named arrays (16 and before: bincode).
-pub const FORMAT: u32 = 17;
+/// `docs/checkpoints.md`; 17: a `.npz` archive of named arrays (16 and before: bincode); 18:
+/// the digest covers the run up to the checkpoint ([`run_digest`]).
+pub const FORMAT: u32 = 18;
 
 /// The checkpoint's header (`powder.json`).
 #[derive(Debug, Serialize, Deserialize)]
@@ -43,9 +44,9 @@ pub struct Header {
     pub version: String,
     /// `cpu` or `gpu`.
     pub backend: String,
-    /// The scene's name and [`scene_digest`].
+    /// The scene's name.
     pub scene: String,
-    /// [`scene_digest`] of the scene it ran.
+    /// [`run_digest`] of the scene it ran, at its time.
     pub scene_digest: u64,
     /// Steps taken and simulated time, s (also in the state's arrays, bitwise).
     pub steps: u64,
@@ -58,10 +59,21 @@ pub struct Header {
 #[derive(Clone, Debug)]
 pub struct StateError(pub String);
 
-/// FNV-1a over the scene's full description (every value, exactly): two scenes share a
-/// digest only if they describe the same run.
-pub fn scene_digest(scene: &Scene) -> u64 {
-    let text = format!("{scene:?}");
+/// FNV-1a over what decides a run of `scene` up to time `t` (every value, exactly): the
+/// scene but its name, duration and output cadences, and without the wall phases that
+/// start at `t` or later. Two scenes share it only if their runs agree up to `t`, so a
+/// checkpoint taken at `t` resumes under either: the same run continued or extended, or a
+/// branch that changes what the walls do from `t` on (e.g. tests of one prepared sample).
+pub fn run_digest(scene: &Scene, t: f64) -> u64 {
+    let mut past = scene.clone();
+    past.name.clear();
+    past.duration = 0.0;
+    past.output_every = 0;
+    past.checkpoint_every = 0;
+    for w in &mut past.walls {
+        w.motion.phases.retain(|(from, _)| *from < t);
+    }
+    let text = format!("{past:?}");
     let mut h: u64 = 0xcbf29ce484222325;
     for b in text.bytes() {
         h ^= b as u64;
@@ -125,7 +137,7 @@ fn save_state(
         version: env!("CARGO_PKG_VERSION").into(),
         backend: backend.into(),
         scene: scene.name.clone(),
-        scene_digest: scene_digest(scene),
+        scene_digest: run_digest(scene, time),
         steps,
         time,
     };
@@ -226,14 +238,16 @@ fn open<'a>(
             header.backend
         )));
     }
-    if header.scene_digest != scene_digest(scene) {
+    let digest = run_digest(scene, header.time);
+    if header.scene_digest != digest {
         return Err(PowderError::Run(format!(
-            "checkpoint `{}` belongs to scene `{}` (digest {:016x}), not to this scene `{}` (digest {:016x}): a resumed run must use the very scene it started with",
+            "checkpoint `{}` belongs to scene `{}` (digest {:016x}), not to this scene `{}` (digest {:016x} up to t = {:e} s): a resumed run must use the very scene it started with, but for its duration, its outputs and the wall phases from the checkpoint's time on",
             path.display(),
             header.scene,
             header.scene_digest,
             scene.name,
-            scene_digest(scene)
+            digest,
+            header.time
         )));
     }
     Ok(archive)
