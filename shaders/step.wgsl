@@ -15,7 +15,7 @@
 //
 // The particle state lives in one buffer set, A, in the order of the last neighbour-list
 // rebuild; a rebuild re-sorts it in place (`permute.wgsl`) and builds the new lists (B:
-// `new_entries`, in the entries' per-step fields where those are wide enough) before
+// `new_entries`, in the entries' per-step fields, widened where they need it) before
 // copying them back. Pass order, recorded by
 // `gpu::engine` into one encoder per batch of steps:
 //   kick_drift   per particle (A)        v += dt/2·a (omega += dt/2·alpha); offset +=

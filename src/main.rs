@@ -545,8 +545,12 @@ struct RunArgs {
     /// Write no output files.
     #[arg(long, conflicts_with_all = ["out", "resume"])]
     no_output: bool,
+    /// Write no VTK snapshots (nor the contact network): series.csv, checkpoint.bin and
+    /// summary.json only.
+    #[arg(long, conflicts_with = "no_output")]
+    no_snapshots: bool,
     /// Resume from a checkpoint of the same scene (bitwise identical continuation), or of a
-    /// scene that changes only its duration, outputs or the wall phases from the
+    /// scene that changes only its duration, output cadences or the wall phases from the
     /// checkpoint's time on (a branch: docs/checkpoints.md).
     #[arg(long)]
     resume: Option<PathBuf>,
@@ -1221,6 +1225,7 @@ fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
         tabor_dmin: a.tabor_dmin,
         threads,
         backend_reason: Some(chosen.reason),
+        no_snapshots: a.no_snapshots,
     };
     let summary = match gpu {
         Some(ctx) => powder::run::run_gpu_with(&scene, ctx, &opts, |_| {})?,

@@ -229,6 +229,9 @@ pub struct RunOptions {
     pub threads: Threads,
     /// Why the backend was chosen, for the summary (`powder run --backend auto`).
     pub backend_reason: Option<String>,
+    /// Write no VTK snapshots (nor the contact network): the series, checkpoints and
+    /// summary only.
+    pub no_snapshots: bool,
 }
 
 /// Header of `series.csv`: per wall the force of the particles on it and, for a moving
@@ -473,12 +476,19 @@ pub fn run_with<S: Simulation>(
     let out = opts.out_dir.as_deref();
     let csv_path = out.map(|d| d.join("series.csv"));
     let ckpt_path = out.map(|d| d.join("checkpoint.bin"));
+    // the series' rows up to the checkpoint's step on resume, read (and its columns
+    // checked) before anything in the directory changes
+    let header = csv_header(&scene.walls);
+    let kept = match (&csv_path, resumed_from) {
+        (Some(p), Some(step)) => series_csv::rows_until(p, step, &header)?,
+        _ => Vec::new(),
+    };
     let mut series = match out {
-        Some(d) => Some(vtk::Series::new(d, &scene.name)?),
-        None => None,
+        Some(d) if !opts.no_snapshots => Some(vtk::Series::new(d, &scene.name)?),
+        _ => None,
     };
     let mut network = match out {
-        Some(d) if scene.writes_contacts() => Some(vtk::Series::in_folder(
+        Some(d) if scene.writes_contacts() && !opts.no_snapshots => Some(vtk::Series::in_folder(
             d,
             "contacts",
             &scene.name,
@@ -503,9 +513,9 @@ pub fn run_with<S: Simulation>(
             s.keep_until(step, engine.dt());
         }
     }
-    // the rows up to the checkpoint's step on resume (a killed run may have written more);
-    // a fresh run replaces the series, and the checkpoint of the run it replaces goes with
-    // it (resumed, it would continue a series that is no longer there)
+    // a fresh run replaces the series (a resume keeps its rows up to the checkpoint's step:
+    // a killed run may have written more), and the checkpoint of the run it replaces goes
+    // with it (resumed, it would continue a series that is no longer there)
     if let (Some(c), None) = (&ckpt_path, resumed_from) {
         match std::fs::remove_file(c) {
             Ok(()) if opts.verbose => {
@@ -522,13 +532,7 @@ pub fn run_with<S: Simulation>(
         }
     }
     let mut csv = match &csv_path {
-        Some(p) => {
-            let kept = match resumed_from {
-                Some(step) => series_csv::rows_until(p, step)?,
-                None => Vec::new(),
-            };
-            Some(SeriesCsv::start(p, &csv_header(&scene.walls), &kept)?)
-        }
+        Some(p) => Some(SeriesCsv::start(p, &header, &kept)?),
         None => None,
     };
     let radii = engine.radii().to_vec();

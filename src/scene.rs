@@ -1511,7 +1511,7 @@ fn check_increasing(t: &Tbl, key: &str, times: &[f64]) -> Res<()> {
         return Err(t.err_key(
             key,
             format!(
-                "the start times of `{key}` in {} must start at >= 0 s and increase strictly, got {times:?}",
+                "the start times in {} (`{key}`) must start at >= 0 s and increase strictly, got {times:?}",
                 t.ctx
             ),
         ));

@@ -223,6 +223,26 @@ fn run_prints_a_summary_and_rejects_missing_files() {
     );
     let (ok, _, err) = powder(&["run", "/nonexistent/scene.toml"]);
     assert!(!ok && err.contains("/nonexistent/scene.toml"), "{err}");
+    // without snapshots: the series, the checkpoint and the summary only
+    let dir = tempfile::tempdir().unwrap();
+    let out_dir = dir.path().to_str().unwrap();
+    let args = [
+        "run",
+        scene,
+        "--steps",
+        "200",
+        "--no-snapshots",
+        "--out",
+        out_dir,
+    ];
+    let (ok, _, err) = powder(&args);
+    assert!(ok, "{err}");
+    let mut files: Vec<String> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    files.sort();
+    assert_eq!(files, ["checkpoint.bin", "series.csv", "summary.json"]);
 }
 
 const JKR: [&str; 13] = [

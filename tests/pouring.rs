@@ -87,6 +87,23 @@ fn batches_appear_on_time_and_the_ledger_books_them() {
     let Some(ctx) = gpu() else { return };
     let mut c = powder::cpu::CpuEngine::new(&scene).unwrap();
     let mut g = GpuEngine::new(&scene, ctx).unwrap();
+    // which particles have appeared: a word each where the scene pours, one where none does
+    let active = |g: &GpuEngine| {
+        g.buffers()
+            .into_iter()
+            .find(|(n, _)| n == "active")
+            .unwrap()
+            .1
+    };
+    assert_eq!(active(&g), 4 * scene.particles.len() as u64);
+    let mut at_once = scene.clone();
+    for p in &mut at_once.particles {
+        p.insert_at = 0.0;
+    }
+    assert_eq!(
+        active(&GpuEngine::new(&at_once, gpu().unwrap()).unwrap()),
+        4
+    );
     // (two samples before the second batch lands: once collisions chain up, f32 and f64
     // separate as in every granular flow)
     for _ in 0..2 {

@@ -215,6 +215,32 @@ fn a_checkpoint_branches_into_wall_phases_that_follow_it() {
         csv.lines().last().unwrap().to_string()
     };
     assert_eq!(last(straight.path()), last(split.path()));
+    // a wall that starts moving only after the checkpoint adds columns to the series: not
+    // into the directory whose series lacks them (left as it was), but into another
+    let mut moving_later = branch.clone();
+    moving_later.walls[1].motion = WallMotion {
+        phases: vec![(t_switch, WallPhase::Velocity([0.0, 0.01, 0.0]))],
+    };
+    let series = std::fs::read(split.path().join("series.csv")).unwrap();
+    let err = run_cpu_with(
+        &moving_later,
+        &options(split.path(), 3000, Some(&ckpt)),
+        |_| {},
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(err.contains("other columns"), "{err}");
+    assert_eq!(
+        std::fs::read(split.path().join("series.csv")).unwrap(),
+        series
+    );
+    let elsewhere = tempfile::tempdir().unwrap();
+    run_cpu_with(
+        &moving_later,
+        &options(elsewhere.path(), 3000, Some(&ckpt)),
+        |_| {},
+    )
+    .unwrap();
     // a phase before the checkpoint's time is part of the run so far: refused
     let early = with_floor(vec![(1000.5 * dt, drop)]);
     let err = run_cpu_with(&early, &options(split.path(), 3000, Some(&ckpt)), |_| {})

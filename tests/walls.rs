@@ -297,3 +297,42 @@ fn a_lid_program_sinters_releases_pulls_and_stops() {
     common::assert_same_bits(&a.state().unwrap(), &b.state().unwrap());
     assert_eq!(a.walls_now().unwrap(), b.walls_now().unwrap());
 }
+
+/// A phase starts at the step whose start k·dt first reaches it, on both backends and
+/// wherever the GPU's batches begin: with dt = 1e-5 s and a switch at 0.00442 s (step 442,
+/// where (t − dt)/dt rounds up past 441), a GPU run stepped once and then on switches at
+/// the same step as one stepped at once, and as the CPU.
+#[test]
+fn a_phase_starts_at_the_same_step_wherever_batches_begin() {
+    let text = column_text(
+        "[[wall.phase]]\nfrom = 0.0\nvelocity = [0.0, 0.0, -0.01]\n[[wall.phase]]\nfrom = 0.00442\nvelocity = [0.0, 0.0, 0.01]",
+    )
+    .replace("duration = 0.2", "duration = 0.2\ndt = 1e-5");
+    let scene = Scene::from_toml_str(&text, "column").unwrap();
+    let dt = 1e-5;
+    let down = (0u64..).find(|&k| k as f64 * dt >= 0.00442).unwrap();
+    assert_eq!(down, 442);
+    let steps = 600;
+    let mut cpu = CpuEngine::new(&scene).unwrap();
+    assert_eq!(cpu.dt(), dt);
+    cpu.run_steps(steps).unwrap();
+    let expected = 0.0065 - 0.01 * dt * down as f64 + 0.01 * dt * (steps - down) as f64;
+    let z = cpu.walls_now()[1].0.z;
+    assert!(
+        (z - expected).abs() < 1e-15,
+        "cpu lid at {z}, expected {expected}"
+    );
+    let Some(ctx) = gpu() else { return };
+    let mut once = GpuEngine::new(&scene, ctx).unwrap();
+    once.run_steps(steps).unwrap();
+    let mut split = GpuEngine::new(&scene, gpu().unwrap()).unwrap();
+    split.run_steps(1).unwrap();
+    split.run_steps(steps - 1).unwrap();
+    assert_eq!(once.walls_now().unwrap(), split.walls_now().unwrap());
+    common::assert_same_bits(&once.state().unwrap(), &split.state().unwrap());
+    let zg = once.walls_now().unwrap()[1].0.z;
+    assert!(
+        (zg - expected).abs() < 1e-12,
+        "gpu lid at {zg}, expected {expected}"
+    );
+}

@@ -20,6 +20,7 @@ use crate::output::atomic::write_atomic;
 use crate::scene::Scene;
 use npz::{Archive, Array, Member, NpzError};
 use serde::{Deserialize, Serialize};
+use std::fmt::Write as _;
 use std::path::Path;
 
 const MAGIC: &str = "powder-checkpoint";
@@ -65,21 +66,55 @@ pub struct StateError(pub String);
 /// checkpoint taken at `t` resumes under either: the same run continued or extended, or a
 /// branch that changes what the walls do from `t` on (e.g. tests of one prepared sample).
 pub fn run_digest(scene: &Scene, t: f64) -> u64 {
-    let mut past = scene.clone();
-    past.name.clear();
-    past.duration = 0.0;
-    past.output_every = 0;
-    past.checkpoint_every = 0;
-    for w in &mut past.walls {
-        w.motion.phases.retain(|(from, _)| *from < t);
+    // every field named: a new one must be placed here (hashed, or left out on purpose)
+    let Scene {
+        name: _,
+        domain,
+        gravity,
+        dt,
+        force_dt,
+        jump_impulses,
+        duration: _,
+        output_every: _,
+        impact_velocity,
+        checkpoint_every: _,
+        contact_output,
+        materials,
+        interactions,
+        walls,
+        particles,
+    } = scene;
+    let past: Vec<_> = walls
+        .iter()
+        .map(|w| {
+            let mut w = w.clone();
+            w.motion.phases.retain(|(from, _)| *from < t);
+            w
+        })
+        .collect();
+    let mut h = Fnv(0xcbf29ce484222325);
+    // (streamed: a packing of 10^7 particles never becomes one string)
+    let _ = write!(
+        h,
+        "{domain:?}{gravity:?}{dt:?}{force_dt:?}{jump_impulses:?}{impact_velocity:?}{contact_output:?}{materials:?}{interactions:?}{past:?}"
+    );
+    for p in particles {
+        let _ = write!(h, "{p:?}");
     }
-    let text = format!("{past:?}");
-    let mut h: u64 = 0xcbf29ce484222325;
-    for b in text.bytes() {
-        h ^= b as u64;
-        h = h.wrapping_mul(0x100000001b3);
+    h.0
+}
+
+/// FNV-1a, fed as text.
+struct Fnv(u64);
+
+impl std::fmt::Write for Fnv {
+    fn write_str(&mut self, s: &str) -> std::fmt::Result {
+        for b in s.bytes() {
+            self.0 ^= b as u64;
+            self.0 = self.0.wrapping_mul(0x100000001b3);
+        }
+        Ok(())
     }
-    h
 }
 
 /// Writes the CPU engine's state to `path` (atomically).
@@ -241,7 +276,7 @@ fn open<'a>(
     let digest = run_digest(scene, header.time);
     if header.scene_digest != digest {
         return Err(PowderError::Run(format!(
-            "checkpoint `{}` belongs to scene `{}` (digest {:016x}), not to this scene `{}` (digest {:016x} up to t = {:e} s): a resumed run must use the very scene it started with, but for its duration, its outputs and the wall phases from the checkpoint's time on",
+            "checkpoint `{}` belongs to scene `{}` (digest {:016x}), not to this scene `{}` (digest {:016x} up to t = {:e} s): a resumed run must use the very scene it started with, but for its duration, its output cadences and the wall phases from the checkpoint's time on",
             path.display(),
             header.scene,
             header.scene_digest,

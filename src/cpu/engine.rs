@@ -1462,11 +1462,14 @@ impl CpuEngine {
         // particles is integrated with the force before and after the step.
         let push_before = self.moving_walls().then(|| self.wall_forces());
         if let Some(before) = &push_before {
-            let (time, steps) = (self.time, self.steps);
+            // (the phases by step k's start k·dt, as the GPU decides them, not the summed
+            // time: both switch at the same step)
+            let start = |k: u64| k as f64 * dt;
+            let steps = self.steps;
             for (w, wall) in self.walls.iter_mut().enumerate() {
-                let entered =
-                    steps > 0 && wall.motion.index_at(time - dt) != wall.motion.index_at(time);
-                wall.velocity = match wall.motion.at(time) {
+                let now = wall.motion.index_at(start(steps));
+                let entered = steps > 0 && wall.motion.index_at(start(steps - 1)) != now;
+                wall.velocity = match wall.motion.at(start(steps)) {
                     WallPhase::Rest => DVec3::ZERO,
                     WallPhase::Velocity(v) => DVec3::from_array(v),
                     WallPhase::Servo { .. } if entered => DVec3::ZERO,

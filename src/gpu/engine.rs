@@ -939,6 +939,21 @@ fn pipeline_constants(
     constants
 }
 
+/// How many steps from step `steps` on start before time `t` (step k starts at k·dt, the
+/// time the phases and insertions are decided at), at least 1: a batch of that many ends
+/// where the first step at or after `t` would start, whatever the rounding of the ratio.
+fn steps_before(steps: u64, dt: f64, t: f64) -> u64 {
+    let starts = |k: u64| (steps + k) as f64 * dt;
+    let mut j = (((t - starts(0)) / dt).ceil().max(1.0)) as u64;
+    while j > 1 && starts(j - 1) >= t {
+        j -= 1;
+    }
+    while starts(j) < t {
+        j += 1;
+    }
+    j
+}
+
 /// The device's flags of which particles have appeared (1) or not yet (0).
 fn appeared_flags(active: &[bool]) -> Vec<u32> {
     active.iter().map(|&a| u32::from(a)).collect()
@@ -1444,8 +1459,8 @@ impl GpuEngine {
         let quiet = (mode != QuietBatches::Off && !moving_walls && !pouring).then(|| {
             // copies of buffers that fit
             let mut alloc = Allocator::new(device, u64::MAX);
-            // the state into copies of its own (the lists' history into the new lists', or
-            // `quiet.lists` where those live in the entries: `quiet_copies`)
+            // the state into copies of its own (the lists' history into `quiet.lists`:
+            // `quiet_copies`)
             let mut copies = Vec::new();
             let a = &state;
             let own = [
@@ -2195,7 +2210,7 @@ impl GpuEngine {
         for (w, m) in self.wall_motion.iter().enumerate() {
             if let Some(t) = m.next_switch(self.time) {
                 // steps that start before the switch keep this phase (as on the CPU)
-                valid = valid.min((((t - self.time) / self.dt).ceil() as u64).max(1));
+                valid = valid.min(steps_before(self.steps, self.dt, t));
             }
             if !matches!(m.at(self.time), WallPhase::Velocity(_)) {
                 continue;
@@ -2282,8 +2297,7 @@ impl GpuEngine {
                 self.inserted += self.insert_energy[i];
                 changed = true;
             } else {
-                let steps = ((self.insert_at[i] - self.time) / self.dt).ceil() as u64;
-                next = next.min(steps.max(1));
+                next = next.min(steps_before(self.steps, self.dt, self.insert_at[i]));
             }
         }
         if changed {
@@ -2456,14 +2470,12 @@ impl GpuEngine {
     }
 
     /// (buffer a quiet batch changes, where its batch-start copy goes): the state into the
-    /// quiet batches' own copies, the lists' history and priors into the new lists' (a
-    /// quiet batch does not rebuild), or into `quiet.lists` where the new lists live in
-    /// the entries' per-step fields (which the batch writes).
+    /// quiet batches' own copies, the lists' history and priors into `quiet.lists` (the
+    /// new lists live in the entries' per-step fields, which the batch writes).
     fn quiet_copies(&self, q: &Quiet) -> Vec<Saved> {
         let (a, b) = (&self.state, &self._new_lists);
         let mut v = q.copies.clone();
         let windows = a.layout.windows();
-        // into the new lists, or the quiet batches' own copy where those live in the entries
         let (target, layout) = (&q.lists, &b.standalone());
         for w in 0..windows.count {
             let first = windows.record(w, 0);

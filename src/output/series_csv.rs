@@ -62,8 +62,8 @@ impl SeriesCsv {
 
 /// The whole rows of an earlier series up to `step` (a resume from a checkpoint of that
 /// step), in order; none when there is no file. A line without its end (a write cut by a
-/// kill) ends them.
-pub fn rows_until(path: &Path, step: u64) -> Result<Vec<String>, PowderError> {
+/// kill) ends them. A series with another `header` (other columns) is refused.
+pub fn rows_until(path: &Path, step: u64, header: &str) -> Result<Vec<String>, PowderError> {
     let text = match std::fs::read_to_string(path) {
         Ok(t) => t,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
@@ -74,6 +74,17 @@ pub fn rows_until(path: &Path, step: u64) -> Result<Vec<String>, PowderError> {
             ))
         }
     };
+    // (a header cut by a kill holds no rows either)
+    let first = text
+        .split_inclusive('\n')
+        .next()
+        .and_then(|l| l.strip_suffix('\n'));
+    if first.is_some_and(|first| first != header) {
+        return Err(PowderError::Run(format!(
+            "the series `{}` has other columns than this scene's (a wall that moves only after the checkpoint adds its position): resume into another --out directory",
+            path.display()
+        )));
+    }
     Ok(text
         .split_inclusive('\n')
         .skip(1)
@@ -113,7 +124,7 @@ mod tests {
             std::fs::read_to_string(&p).unwrap(),
             "step,x\n0,a\n10,b\n20,d\n"
         );
-        let kept = rows_until(&p, 10).unwrap();
+        let kept = rows_until(&p, 10, "step,x").unwrap();
         assert_eq!(kept, ["0,a", "10,b"]);
         let mut s = SeriesCsv::start(&p, "step,x", &kept).unwrap();
         s.append(10, "10,z").unwrap();
@@ -123,15 +134,20 @@ mod tests {
             std::fs::read_to_string(&p).unwrap(),
             "step,x\n0,a\n10,b\n30,e\n"
         );
-        assert!(rows_until(&dir.path().join("none.csv"), 5)
+        assert!(rows_until(&dir.path().join("none.csv"), 5, "step,x")
             .unwrap()
             .is_empty());
         // a row cut by a kill (here inside its step) is not kept
         std::fs::write(&p, "step,x\n0,a\n10,b\n2").unwrap();
-        assert_eq!(rows_until(&p, 30).unwrap(), ["0,a", "10,b"]);
+        assert_eq!(rows_until(&p, 30, "step,x").unwrap(), ["0,a", "10,b"]);
+        // other columns (a branch whose wall moves only after the checkpoint): refused
+        let other = rows_until(&p, 30, "step,x,y").unwrap_err().to_string();
+        assert!(other.contains("other columns"), "{other}");
+        std::fs::write(&p, "ste").unwrap();
+        assert!(rows_until(&p, 30, "step,x,y").unwrap().is_empty());
         std::fs::write(&p, "step,x\n0,a\n10,b\n20,d").unwrap();
-        assert_eq!(rows_until(&p, 30).unwrap(), ["0,a", "10,b"]);
+        assert_eq!(rows_until(&p, 30, "step,x").unwrap(), ["0,a", "10,b"]);
         std::fs::write(&p, [b's', 0xff, b'\n']).unwrap();
-        assert!(rows_until(&p, 30).is_err());
+        assert!(rows_until(&p, 30, "step,x").is_err());
     }
 }
