@@ -1,5 +1,5 @@
 """What the studies share (standard library only): a small SVG line plot with a
-logarithmic x axis (`panel(...)` draws one set of axes, `figure(...)` puts panels side by
+logarithmic or linear x axis (`panel(...)` draws one set of axes, `figure(...)` puts panels side by
 side), `run_powder`, which runs the powder binary, `power_law_fit` and `log_bisect`."""
 
 import math
@@ -46,15 +46,22 @@ def _esc(text):
     return text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
 
 
-def panel(title, xlabel, ylabel, series, xlim, ylim, width=520, height=380, ystep=0.2, legend=(0.03, 0.45)):
-    """One panel's SVG elements (a string) and its size. `series`: [(label, [(x, y)], style)]
-    with style "line" (with markers), "curve" (without) or "points"; x is drawn on a log scale, y ticks every `ystep`; the
-    legend's top left corner at `legend`, fractions of the axes from the lower left."""
+def panel(title, xlabel, ylabel, series, xlim, ylim, width=520, height=380, ystep=0.2, legend=(0.03, 0.45),
+          xstep=None):
+    """One panel's SVG elements (a string) and its size. `series`: [(label, [(x, y)], style
+    [, colour index])]
+    with style "line" (with markers), "curve" (without), "thick" (a wide pale curve) or
+    "points"; x is drawn on a log scale, or linear with ticks every `xstep` where given; y
+    ticks every `ystep`; the legend's top left corner at `legend`, fractions of the axes
+    from the lower left."""
     left, right, top, bottom = 62, 12, 30, 48
     w, h = width - left - right, height - top - bottom
-    lx0, lx1 = math.log10(xlim[0]), math.log10(xlim[1])
+    if xstep is None:
+        lx0, lx1 = math.log10(xlim[0]), math.log10(xlim[1])
 
     def sx(x):
+        if xstep is not None:
+            return left + (x - xlim[0]) / (xlim[1] - xlim[0]) * w
         return left + (math.log10(x) - lx0) / (lx1 - lx0) * w
 
     def sy(y):
@@ -62,10 +69,17 @@ def panel(title, xlabel, ylabel, series, xlim, ylim, width=520, height=380, yste
 
     out = [f'<rect x="{left}" y="{top}" width="{w}" height="{h}" fill="none" stroke="#444"/>']
     out.append(f'<text x="{left + w / 2}" y="18" text-anchor="middle" font-size="14">{_esc(title)}</text>')
-    for d in range(math.ceil(lx0), math.floor(lx1) + 1):
-        x = sx(10 ** d)
-        out.append(f'<line x1="{x:.1f}" y1="{top}" x2="{x:.1f}" y2="{top + h}" stroke="#ddd"/>')
-        out.append(f'<text x="{x:.1f}" y="{top + h + 16}" text-anchor="middle" font-size="11">10<tspan dy="-5" font-size="8">{d}</tspan></text>')
+    if xstep is None:
+        for d in range(math.ceil(lx0), math.floor(lx1) + 1):
+            x = sx(10 ** d)
+            out.append(f'<line x1="{x:.1f}" y1="{top}" x2="{x:.1f}" y2="{top + h}" stroke="#ddd"/>')
+            out.append(f'<text x="{x:.1f}" y="{top + h + 16}" text-anchor="middle" font-size="11">10<tspan dy="-5" font-size="8">{d}</tspan></text>')
+    else:
+        for k in range(int(round((xlim[1] - xlim[0]) / xstep)) + 1):
+            xv = xlim[0] + k * xstep
+            x = sx(xv)
+            out.append(f'<line x1="{x:.1f}" y1="{top}" x2="{x:.1f}" y2="{top + h}" stroke="#ddd"/>')
+            out.append(f'<text x="{x:.1f}" y="{top + h + 16}" text-anchor="middle" font-size="11">{xv:.3g}</text>')
     for k in range(int(round((ylim[1] - ylim[0]) / ystep)) + 1):
         yv = ylim[0] + k * ystep
         y = sy(yv)
@@ -73,13 +87,16 @@ def panel(title, xlabel, ylabel, series, xlim, ylim, width=520, height=380, yste
         out.append(f'<text x="{left - 6}" y="{y + 4:.1f}" text-anchor="end" font-size="11">{yv:.2g}</text>')
     out.append(f'<text x="{left + w / 2}" y="{height - 8}" text-anchor="middle" font-size="12">{_esc(xlabel)}</text>')
     out.append(f'<text transform="translate(14,{top + h / 2}) rotate(-90)" text-anchor="middle" font-size="12">{_esc(ylabel)}</text>')
-    for k, (label, points, style) in enumerate(series):
-        colour = COLOURS[k % len(COLOURS)]
+    for k, item in enumerate(series):
+        # (an optional fourth member: the colour's index, else the series')
+        label, points, style = item[:3]
+        colour = COLOURS[(item[3] if len(item) > 3 else k) % len(COLOURS)]
         pts = [(sx(x), sy(y)) for x, y in points if xlim[0] <= x <= xlim[1]]
-        if style in ("line", "curve") and len(pts) > 1:
+        if style in ("line", "curve", "thick") and len(pts) > 1:
             path = " ".join(f"{x:.1f},{y:.1f}" for x, y in pts)
-            out.append(f'<polyline points="{path}" fill="none" stroke="{colour}" stroke-width="1.6"/>')
-        for x, y in pts if style != "curve" else []:
+            stroke = 'stroke-width="5" stroke-opacity="0.35"' if style == "thick" else 'stroke-width="1.6"'
+            out.append(f'<polyline points="{path}" fill="none" stroke="{colour}" {stroke}/>')
+        for x, y in pts if style == "line" or style == "points" else []:
             out.append(f'<circle cx="{x:.1f}" cy="{y:.1f}" r="2.4" fill="{colour}"/>')
         lx = left + legend[0] * w
         ly = top + (1 - legend[1]) * h + 15 * k
