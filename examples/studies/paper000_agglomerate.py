@@ -57,45 +57,36 @@ SERVO_GAIN = 0.02  # m/s per N: gain k_bed dt ~ 0.1 with k_bed ~ 12 kp
 T_SINTER, T_RELEASE, T_FREE, T_AWAY, T_READY = 0.06, 0.2, 0.26, 0.265, 0.28
 GATHER_FORCE = 50.0
 
-MATERIAL = """
+GAMMA = 2.0  # kg/s, normal damping gamma0
+# the primary particles' law: paper 000's kc/kp, mu_r, mu_o, gamma_r/gamma, gamma_o/gamma;
+# the rest as far as Luding 2008's table 2 is known (docs/luding2008_laws.md)
+PRIMARY = {"k1": 0.5 * KP, "kp": KP, "kc": 0.2 * KP, "phi_f": 0.05, "gamma0": GAMMA,
+           "friction": 1.0, "kt": 0.2 * KP, "gamma_t": 0.2 * GAMMA,
+           "rolling_friction": 0.2, "kr": 0.1 * KP, "gamma_r": 0.1 * GAMMA,
+           "twisting_friction": 0.2, "ko": 0.1 * KP, "gamma_o": 0.1 * GAMMA}
+# the side walls' law with the particles: neither adhesive nor frictional
+SIDE = {"k1": 0.5 * KP, "kp": KP, "kc": 0.0, "phi_f": 0.05, "gamma0": GAMMA}
+
+
+def law(params):
+    return "".join(f"{key} = {value!r}\n" for key, value in params.items())
+
+
+MATERIAL = f"""
 [[material]]
 name = "primary"
 density = 2000.0
 model = "hysteretic"
-k1 = 5e4
-kp = 1e5
-kc = 2e4
-phi_f = 0.05
-gamma0 = 2.0
-friction = 1.0
-kt = 2e4
-gamma_t = 0.4
-rolling_friction = 0.2
-kr = 1e4
-gamma_r = 0.2
-twisting_friction = 0.2
-ko = 1e4
-gamma_o = 0.2
-
+{law(PRIMARY)}
 [[material]]
 name = "side"
 density = 2000.0
 model = "hysteretic"
-k1 = 5e4
-kp = 1e5
-kc = 0.0
-phi_f = 0.05
-gamma0 = 2.0
-
+{law(SIDE)}
 [[interaction]]
 materials = ["primary", "side"]
 model = "hysteretic"
-k1 = 5e4
-kp = 1e5
-kc = 0.0
-phi_f = 0.05
-gamma0 = 2.0
-"""
+{law(SIDE)}"""
 
 
 def servo(start, force, speed):
