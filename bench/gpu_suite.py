@@ -936,7 +936,7 @@ def main():
     ap = argparse.ArgumentParser(
         description=__doc__.split("\n\n")[0],
         formatter_class=argparse.RawDescriptionHelpFormatter,
-        epilog="See the module docstring (head -60 bench/gpu_suite.py) and README.md, "
+        epilog="See the module docstring (head -60 bench/gpu_suite.py) and docs/performance.md, "
         "'GPU benchmark suite'.",
     )
     ap.add_argument("--quick", action="store_true", help="tiny sizes on any adapter, to test the suite")

@@ -1,4 +1,4 @@
-//! What one memory access costs on the GPU adapter (the README's *Design* numbers for
+//! What one memory access costs on the GPU adapter (`docs/design_log.md`'s numbers for
 //! lavapipe): 65 536 invocations each make 32 accesses at pseudo-random indices into 1 MiB
 //! of vec4s, per access kind, and the probe prints nanoseconds per access (wall time of 20
 //! dispatches in one submission, over invocations × 32), plus the time of a 1 MiB copy from

@@ -228,7 +228,7 @@ pub struct JkrSweep {
     pub e_closed: Vec<f64>,
 }
 
-/// The JKR material of the pair case (README's e(v) example: sticking below 0.66 m/s).
+/// The JKR material of the pair case (the e(v) example of `docs/models.md`: sticking below 0.66 m/s).
 const JKR_MATERIAL: (f64, f64, f64) = (1e9, 0.3, 0.05);
 const JKR_RADIUS: f64 = 1e-6;
 /// The JKR sweep's range of v/v_stick.

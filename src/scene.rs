@@ -52,7 +52,7 @@
 //! adhesion = "jump-in"          # "jump-in" (default) or "reversible"
 //! gamma0 = 0.0                  # kg/s, >= 0, default 0: viscous damping in contact
 //! k2_rule = "linear"            # "linear" (default) or "sqrt": how k2 grows with delta_max
-//! # Luding's friction (hysteretic and lsd; README "Luding's sliding, rolling and twisting
+//! # Luding's friction (hysteretic and lsd; docs/models.md "Luding's sliding, rolling and twisting
 //! # friction"); > 0 makes particles rotate (both backends). Lever a12 = 2R* (2r at a wall),
 //! # Coulomb load max(0, f_n + kc delta + fa) (lsd: max(0, f_n)):
 //! friction = 0.0                # >= 0, default 0 (off): static sliding coefficient mu_s

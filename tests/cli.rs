@@ -683,7 +683,7 @@ fn krijt_and_stress_collide_and_run_on_the_gpu_backend() {
         let v: serde_json::Value = serde_json::from_str(&out).unwrap();
         assert_collide_keys(&v, &out);
         assert_eq!(v["backend"], "gpu");
-        // the CPU's e (README table) to 2e-4, and the device ledger closes
+        // the CPU's e (`docs/models.md` table) to 2e-4, and the device ledger closes
         let e = v["e"].as_f64().unwrap();
         assert!((e - e_cpu).abs() < 2e-4, "{extra:?}: e {e}");
         assert!(

@@ -438,7 +438,7 @@ mod gpu {
         let mut compared = 0;
         let mut worst: f64 = 0.0;
         // up to t ≈ 860 (2500 steps): later the relative speed of the settling pair falls
-        // below what the f32 cell offsets resolve per step (README, GPU known limit 2),
+        // below what the f32 cell offsets resolve per step (`docs/architecture.md`, known limit 2),
         // the GPU overlap freezes and with it a, while the CPU's creeps on
         for _ in 0..10 {
             cpu.run_steps(250).unwrap();

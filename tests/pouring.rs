@@ -115,7 +115,7 @@ fn batches_appear_on_time_and_the_ledger_books_them() {
         let (ec, eg) = (c.energies(), g.energies(&s).unwrap());
         eprintln!("t {:.3}: worst {worst:e} m; cpu {ec:?}; gpu {eg:?}", c.time);
         // (with the Kahan-compensated updates: 7.2e-10 m after 0.02 s, 3.8e-9 m after the
-        // first collisions at 0.04 s; 1.0e-6 and 4.2e-6 m without them, see the README)
+        // first collisions at 0.04 s; 1.0e-6 and 4.2e-6 m without them, see `docs/architecture.md`)
         assert!(worst < 2e-8, "positions differ by {worst} m");
         assert!((ec.inserted - eg.inserted).abs() <= 1e-9 * ec.inserted.abs());
         assert!((ec.kinetic - eg.kinetic).abs() < 1e-5 * ec.kinetic);

@@ -21,7 +21,7 @@
 //! wall reverses with |e_t| = 1.0503 instead of 1 at dt = tc/50); incrementing *before* the
 //! force (MercuryDPM, powder's JKR spring) leads by half a step and damps by as much. The
 //! staggered spring is second order: |e_t| = 1.00009 in the same impact
-//! (`tests/friction.rs`, README). The stored energy is ½·k·|ξ_n|², the spring the force was
+//! (`tests/friction.rs`, `docs/models.md`). The stored energy is ½·k·|ξ_n|², the spring the force was
 //! computed with: the ledger's trapezoidal work matches it to a telescoping ⅛·k·dt²·Δ|v|².
 
 use glam::DVec3;
