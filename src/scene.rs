@@ -440,6 +440,11 @@ impl Scene {
         Self::from_toml_str(&text, &name)
     }
 
+    /// Whether some particle appears only during the run (pouring).
+    pub fn pours(&self) -> bool {
+        self.particles.iter().any(|p| p.insert_at > 0.0)
+    }
+
     /// Whether `powder run` writes the contact network with each snapshot.
     pub fn writes_contacts(&self) -> bool {
         self.contact_output
@@ -513,22 +518,18 @@ const WALL_KEYS: &[&str] = &[
     "point",
     "normal",
     "material",
-    "velocity",
     "velocities",
     "times",
-    "servo_force",
-    "servo_gain",
-    "servo_max_speed",
     "phase",
 ];
+const PHASE_KEYS: &[&str] = &["from"];
 const SERVO_KEYS: &[&str] = &["servo_force", "servo_gain", "servo_max_speed"];
-const PHASE_KEYS: &[&str] = &[
-    "from",
-    "velocity",
-    "servo_force",
-    "servo_gain",
-    "servo_max_speed",
-];
+
+/// `keys` and those of one kind of motion (a wall's or a phase's).
+fn with_motion_keys(keys: &[&'static str]) -> Vec<&'static str> {
+    let motion = std::iter::once(&"velocity").chain(SERVO_KEYS);
+    keys.iter().chain(motion).copied().collect()
+}
 const PARTICLE_KINDS: &[&str] = &["list", "lattice", "random"];
 const LIST_KEYS: &[&str] = &[
     "kind",
@@ -1491,7 +1492,7 @@ fn parse_wall_motion(t: &Tbl) -> Res<WallMotion> {
                 Some(span),
                 format!("{} phase #{}", t.ctx, i + 1),
             );
-            p.check_keys(PHASE_KEYS, |_| None)?;
+            p.check_keys(&with_motion_keys(PHASE_KEYS), |_| None)?;
             let from = p.f64_req("from", "the time in s from which the phase applies")?;
             phases.push((from, parse_wall_phase(&p)?));
         }
@@ -1562,7 +1563,7 @@ fn parse_walls(root: &Tbl, names: &[&str]) -> Res<Vec<Wall>> {
             Some(span),
             format!("[[wall]] #{}", i + 1),
         );
-        t.check_keys(WALL_KEYS, |_| None)?;
+        t.check_keys(&with_motion_keys(WALL_KEYS), |_| None)?;
         let point = t.vec3_req("point", "a point [x, y, z] on the wall plane in m")?;
         let n = t.vec3_req(
             "normal",

@@ -65,7 +65,7 @@ PRIMARY = {"k1": 0.5 * KP, "kp": KP, "kc": 0.2 * KP, "phi_f": 0.05, "gamma0": GA
            "rolling_friction": 0.2, "kr": 0.1 * KP, "gamma_r": 0.1 * GAMMA,
            "twisting_friction": 0.2, "ko": 0.1 * KP, "gamma_o": 0.1 * GAMMA}
 # the side walls' law with the particles: neither adhesive nor frictional
-SIDE = {"k1": 0.5 * KP, "kp": KP, "kc": 0.0, "phi_f": 0.05, "gamma0": GAMMA}
+SIDE = {**{key: PRIMARY[key] for key in ("k1", "kp", "phi_f", "gamma0")}, "kc": 0.0}
 
 
 def law(params):

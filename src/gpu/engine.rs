@@ -903,10 +903,7 @@ fn pipeline_constants(
     let flag = |b: bool| f64::from(u8::from(b));
     let mut constants = vec![
         ("ONE_MATERIAL", flag(r.n_materials == 1)),
-        (
-            "POURING",
-            flag(scene.particles.iter().any(|p| p.insert_at > 0.0)),
-        ),
+        ("POURING", flag(scene.pours())),
         ("PERIODIC", flag(scene.domain.periodic.iter().any(|&p| p))),
         ("WALLS", flag(!scene.walls.is_empty())),
     ];
@@ -1223,7 +1220,7 @@ impl GpuEngine {
         // which particles have appeared, by persistent id: a word each where the scene
         // pours (`POURING`), else one word nothing reads
         let active: Vec<bool> = scene.particles.iter().map(|p| p.insert_at <= 0.0).collect();
-        let pouring = active.iter().any(|&a| !a);
+        let pouring = scene.pours();
         let active_buf = alloc.buffer("active", 4 * if pouring { n as u64 } else { 1 });
         if pouring {
             q0.write_buffer(
@@ -1454,7 +1451,7 @@ impl GpuEngine {
             .collect::<Result<Vec<_>, _>>()?;
         // quiet batches: not where walls move (their rebuild trigger is decide's) nor where
         // particles appear (an insertion rebuilds)
-        let pouring = scene.particles.iter().any(|p| p.insert_at > 0.0);
+        let pouring = scene.pours();
         let mode = options.quiet.on(software);
         let quiet = (mode != QuietBatches::Off && !moving_walls && !pouring).then(|| {
             // copies of buffers that fit
@@ -2216,20 +2213,26 @@ impl GpuEngine {
                 continue;
             }
             let v = m.prescribed_velocity(self.time);
-            let mut wall = WallGpu::new(
-                self.wall_points[w],
-                self.wall_normals[w],
-                self.origin,
-                self.h,
-            );
-            wall.velocity = [v[0] as f32, v[1] as f32, v[2] as f32, 0.0];
-            wall.motion = [crate::gpu::layout::WALL_PRESCRIBED, 0.0, 0.0, 0.0];
-            let at = (w * std::mem::size_of::<WallGpu>()) as u64;
-            self.ctx
-                .queue
-                .write_buffer(&self.b.walls, at, bytemuck::bytes_of(&wall));
+            self.write_wall(w, [v[0] as f32, v[1] as f32, v[2] as f32, 0.0]);
         }
         valid
+    }
+
+    /// Writes wall `w` to the device at the host's point, with `velocity` and the motion
+    /// of its phase now.
+    fn write_wall(&self, w: usize, velocity: [f32; 4]) {
+        let mut wall = WallGpu::new(
+            self.wall_points[w],
+            self.wall_normals[w],
+            self.origin,
+            self.h,
+        );
+        wall.velocity = velocity;
+        wall.motion = WallGpu::motion_code(self.wall_motion[w].at(self.time));
+        let at = (w * std::mem::size_of::<WallGpu>()) as u64;
+        self.ctx
+            .queue
+            .write_buffer(&self.b.walls, at, bytemuck::bytes_of(&wall));
     }
 
     /// Puts each wall whose phase changes at this batch's start into its new phase on the
@@ -2254,17 +2257,7 @@ impl GpuEngine {
             if matches!(phase_of(w, self.wall_phase[w]), WallPhase::Servo { .. }) {
                 self.wall_points[w] = now[w].0;
             }
-            let mut wall = WallGpu::new(
-                self.wall_points[w],
-                self.wall_normals[w],
-                self.origin,
-                self.h,
-            );
-            wall.motion = WallGpu::motion_code(self.wall_motion[w].at(self.time));
-            let at = (w * std::mem::size_of::<WallGpu>()) as u64;
-            self.ctx
-                .queue
-                .write_buffer(&self.b.walls, at, bytemuck::bytes_of(&wall));
+            self.write_wall(w, [0.0; 4]);
             self.wall_phase[w] = self.wall_motion[w].index_at(self.time);
         }
         Ok(())
