@@ -2064,23 +2064,26 @@ impl GpuEngine {
             }
         };
         let mut out = Vec::new();
-        let mut neighbours = empty;
         for (id, name) in names.iter().enumerate() {
-            // remap turns the lower lists' partners into slots in place: each replay after
-            // a fresh `neighbours`, whose time is taken off (replayed alone, it read slots
-            // as particles and looped over garbage: 1.4 s a dispatch on the H200)
+            // remap turns the lower lists' partners into slots in place, so it is timed
+            // after a fresh count, scans and `neighbours` (the same lists each replay, every
+            // lower entry rewritten), less the time of those alone (replayed by itself it
+            // read earlier replays' slots as particles: 0.56–1.4 s a dispatch on the H200)
             let t = if id == 8 {
-                let t = time(&self, &|e: &mut wgpu::CommandEncoder| {
-                    record(e, 6);
+                let lists = |e: &mut wgpu::CommandEncoder| {
+                    for pass in [4, 5, 6] {
+                        record(e, pass);
+                    }
+                };
+                let with = time(&self, &|e: &mut wgpu::CommandEncoder| {
+                    lists(e);
                     record(e, 8);
                 })?;
-                t.as_secs_f64() - (neighbours - empty)
+                let without = time(&self, &|e: &mut wgpu::CommandEncoder| lists(e))?;
+                empty + with.as_secs_f64() - without.as_secs_f64()
             } else {
                 time(&self, &|e: &mut wgpu::CommandEncoder| record(e, id))?.as_secs_f64()
             };
-            if id == 6 {
-                neighbours = t;
-            }
             out.push((name.to_string(), ((t - empty) / reps as f64).max(0.0)));
         }
         Ok(out)

@@ -1,0 +1,80 @@
+#!/usr/bin/env bash
+# One lease of a lent GPU machine: the benchmark suite, the pass profiles and the GPU tests.
+#
+#   bash bench/gpu_lease.sh prepare    # here: the release binary and the Vulkan loader
+#                                      # (gpu_suite.py --prepare) and the GPU test binaries,
+#                                      # stripped and gzipped into .gputests/ (git-ignored)
+#   bash bench/gpu_lease.sh run        # there, with carry [".gl", ".gpubench", ".gputests"]
+#                                      # and timeout_s 600: suite, profiles, tests into $OUT
+#
+# The run prints a short table last (the device tool returns the end of the output); the
+# suite JSON, the profiles and the whole test log come back under $OUT. Budget: SUITE_BUDGET
+# seconds for the suite (default 200), TEST_SECONDS for each test binary (default 90), and
+# no test binary starts after DEADLINE seconds (default 560).
+set -u
+cd "$(dirname "$0")/.."
+TESTS=(gpu_engine gpu_sticking gpu_jumps gpu_ledger gpu_mixed gpu_friction gpu_default_limits
+       gpu_grid contact_network walls periodic stability pouring run_outputs)
+# (the working tree, .gl, .gpubench and these, gzipped, must stay under the 64 MiB a call
+# carries: about 3 MiB each)
+
+case "${1:-}" in
+prepare)
+    python3 bench/gpu_suite.py --prepare || exit 1
+    cargo test --release --no-run --message-format=json 2>/dev/null >/tmp/gpu_lease_tests.json \
+        || { echo "cargo test --no-run failed"; exit 1; }
+    rm -rf .gputests && mkdir -p .gputests
+    for t in "${TESTS[@]}"; do
+        exe=$(python3 - "$t" <<'EOF'
+import json, sys
+for line in open("/tmp/gpu_lease_tests.json"):
+    m = json.loads(line)
+    if m.get("reason") == "compiler-artifact" and m["target"]["name"] == sys.argv[1] \
+            and "test" in m["target"]["kind"] and m.get("executable"):
+        print(m["executable"])
+EOF
+)
+        [ -n "$exe" ] || { echo "no test binary for $t"; exit 1; }
+        strip -o ".gputests/$t" "$exe" && gzip -9 ".gputests/$t"
+    done
+    du -sh .gl .gpubench .gputests
+    ;;
+run)
+    : "${OUT:?run it on the lent machine, where OUT is set}"
+    [ -e /usr/lib/x86_64-linux-gnu/libvulkan.so.1 ] || { for f in .gl/*.deb; do dpkg -x "$f" /; done; ldconfig; }
+    # The test binaries look for the checkout and the powder binary where they were built.
+    here=$(pwd)
+    [ -e /work/main ] || { mkdir -p /work && ln -s "$here" /work/main; }
+    mkdir -p target/release && cp .gpubench/powder target/release/powder
+    nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader || true
+    PYTHONUNBUFFERED=1 python3 bench/gpu_suite.py --out-dir "$OUT" --budget "${SUITE_BUDGET:-200}" \
+        >"$OUT/suite.log" 2>&1
+    tail -n 25 "$OUT/suite.log"
+    for case in hysteretic jkr; do
+        timeout 60 .gpubench/powder bench --backend gpu --case $case --sizes 1e6 --steps 400 \
+            --warmup 32 --profile --json "$OUT/profile_$case.json" >"$OUT/profile_$case.txt" 2>&1
+        echo "profile $case: rc=$?"
+    done
+    mkdir -p /tmp/gputests
+    : >"$OUT/tests.log"
+    summary=""
+    for t in "${TESTS[@]}"; do
+        left=$(( ${DEADLINE:-560} - SECONDS ))
+        if [ "$left" -lt 20 ]; then summary="$summary$t not run (deadline)"$'\n'; continue; fi
+        [ "$left" -gt "${TEST_SECONDS:-90}" ] && left=${TEST_SECONDS:-90}
+        gunzip -c ".gputests/$t.gz" >"/tmp/gputests/$t" && chmod +x "/tmp/gputests/$t"
+        start=$(date +%s)
+        timeout "$left" "/tmp/gputests/$t" --test-threads 4 >"/tmp/gputests/$t.log" 2>&1
+        rc=$?
+        { echo "=== $t (rc=$rc)"; cat "/tmp/gputests/$t.log"; } >>"$OUT/tests.log"
+        line=$(grep "^test result" "/tmp/gputests/$t.log" | tail -n 1)
+        summary="$summary$t rc=$rc $(( $(date +%s) - start ))s ${line#test result: }"$'\n'
+    done
+    grep -E "^test .* FAILED|^---- |panicked" "$OUT/tests.log" | head -n 30
+    printf '%s' "$summary"
+    ;;
+*)
+    echo "usage: bash bench/gpu_lease.sh prepare|run" >&2
+    exit 2
+    ;;
+esac
