@@ -385,8 +385,8 @@ pub struct BenchOptions {
     /// Keep the GPU energy ledger and contact statistics (`GpuOptions::ledger`) during the
     /// timed steps; off by default, so the rate is the step's own cost.
     pub ledger: bool,
-    /// After the timed steps, time each pass of the GPU step alone
-    /// (`GpuEngine::profile_passes`).
+    /// After the timed steps, as many more with a GPU timestamp after every pass
+    /// (`GpuEngine::profile`).
     pub profile: bool,
     /// Quiet batches of the GPU engine (`GpuOptions::quiet`).
     pub quiet: crate::gpu::QuietBatches,
@@ -538,9 +538,9 @@ pub struct BenchRow {
     pub runs: Vec<f64>,
     /// Particle–particle contacts per particle at the end (shows the packing is dense).
     pub contacts_per_particle: Option<f64>,
-    /// GPU with `--profile`: seconds per dispatch of each pass of the step
-    /// (`GpuEngine::profile_passes`; the sort, `neighbours` and `remap` at a rebuild).
-    pub passes: Option<Vec<(String, f64)>>,
+    /// GPU with `--profile`: the device time of each pass over as many steps again as
+    /// were timed (`GpuEngine::profile`).
+    pub passes: Option<crate::gpu::timestamps::PassProfile>,
     /// GPU: the bytes each pass binds and the estimate of bytes moved per particle-step
     /// with the rebuilds of the timed steps (`gpu::traffic`; an upper bound).
     pub traffic: Option<crate::gpu::TrafficEstimate>,
@@ -681,23 +681,13 @@ fn run_gpu(
     let traffic = crate::gpu::TrafficEstimate::new(engine.traffic(), n, rebuilds, opts.steps);
     let (dt, entries) = (engine.dt(), engine.list_entries());
     let windows = engine.windows();
-    // (the pass profile times one window's dispatches: one window only)
-    let passes = if opts.profile && windows.count == 1 {
-        Some(engine.profile_passes(16)?)
-    } else {
-        None
+    // after the timed steps, as many again with a timestamp after every pass
+    let passes = match opts.profile {
+        true => Some(engine.profile(opts.steps)?),
+        false => None,
     };
-    let note = (windows.count > 1).then(|| {
-        let profile = if opts.profile {
-            "; no pass profile (one window only)"
-        } else {
-            ""
-        };
-        format!(
-            "{} windows of {} particles{profile}",
-            windows.count, windows.len
-        )
-    });
+    let note = (windows.count > 1)
+        .then(|| format!("{} windows of {} particles", windows.count, windows.len));
     Ok(BenchRow {
         passes,
         case: case.name(),
@@ -786,7 +776,13 @@ pub fn bench(
                     let scene = packing(case, n, opts.velocity_scale, opts.seed)?;
                     let result = best_of(opts.repeats, || match threads {
                         Some(threads) => run_cpu(&scene, case, threads, opts),
-                        None => run_gpu(&scene, case, GpuContext::new()?, opts),
+                        None => {
+                            let ctx = match opts.profile {
+                                true => GpuContext::with_timestamps()?,
+                                false => GpuContext::new()?,
+                            };
+                            run_gpu(&scene, case, ctx, opts)
+                        }
                     });
                     match result {
                         Ok(row) => row,
@@ -984,13 +980,10 @@ pub fn table_line(r: &BenchRow) -> String {
                 format!("quiet batches {kept} kept, {back} rolled back"),
             _ => String::new(),
         }
-    ) + &r.passes.as_ref().map_or(String::new(), |p| {
-        let parts: Vec<String> = p
-            .iter()
-            .map(|(name, s)| format!("{name} {:.1}", s * 1e6))
-            .collect();
-        format!("\n    passes (µs per dispatch): {}", parts.join(", "))
-    })
+    ) + &r
+        .passes
+        .as_ref()
+        .map_or(String::new(), |p| format!("\n    {}", p.summary()))
 }
 
 #[cfg(test)]

@@ -107,7 +107,8 @@ struct BenchArgs {
     /// Keep the GPU energy ledger during the timed steps (off: the step's own cost).
     #[arg(long)]
     ledger: bool,
-    /// Time each pass of the GPU step alone after the timed steps (which pass costs what).
+    /// After the timed steps, as many more with a GPU timestamp after every pass (which
+    /// pass costs what on the device; windowed runs too).
     #[arg(long)]
     profile: bool,
     /// GPU quiet batches: batches without the per-step rebuild check where none is expected.
@@ -311,15 +312,18 @@ struct InfoArgs {
     /// Print the adapter summary as JSON on stdout.
     #[arg(long)]
     json: bool,
-    /// With a scene: time every pass of its GPU step (µs per dispatch, each pass recorded
-    /// 16 times alone, the rebuild's passes doing their full work), as `powder bench
-    /// --profile` does for the bench packings.
+    /// With a scene: run its GPU step with a timestamp after every pass and print the
+    /// device time of each (µs a step), as `powder bench --profile` does for the bench
+    /// packings.
     #[arg(long, requires = "scene")]
     profile: bool,
     /// With --profile: run this many steps first (profile a settled state, not the
     /// initial one).
     #[arg(long, default_value_t = 0, requires = "profile")]
     after: u64,
+    /// With --profile: the steps profiled.
+    #[arg(long, default_value_t = 64, requires = "profile")]
+    profile_steps: u64,
     /// Build the GPU engine without its energy ledger (as `powder run --no-ledger`).
     #[arg(long, requires = "scene")]
     no_ledger: bool,
@@ -352,9 +356,9 @@ struct SceneInfo {
     /// What each pass of the step binds and the bytes per particle-step it adds up to
     /// without rebuilds (`powder::gpu::traffic`, an upper bound).
     traffic: powder::gpu::TrafficEstimate,
-    /// With --profile: (pass, µs per dispatch) in step order, after `profile_after` steps.
+    /// With --profile: the device time of each pass, after `profile_after` steps.
     #[serde(skip_serializing_if = "Option::is_none")]
-    profile_us: Option<Vec<(String, f64)>>,
+    profile: Option<powder::gpu::timestamps::PassProfile>,
     #[serde(skip_serializing_if = "Option::is_none")]
     profile_after: Option<u64>,
 }
@@ -394,10 +398,9 @@ fn scene_info(
         .map(|(f, b)| (f.to_string(), b))
         .collect();
     let traffic = powder::gpu::TrafficEstimate::new(engine.traffic(), particles, 0, 0);
-    let profile_us = if a.profile {
+    let profile = if a.profile {
         engine.run_steps(a.after)?;
-        let passes = engine.profile_passes(16)?;
-        Some(passes.into_iter().map(|(p, s)| (p, s * 1e6)).collect())
+        Some(engine.profile(a.profile_steps)?)
     } else {
         None
     };
@@ -418,12 +421,15 @@ fn scene_info(
         bytes_per_particle: total as f64 / particles.max(1) as f64,
         traffic,
         profile_after: a.profile.then_some(a.after),
-        profile_us,
+        profile,
     })
 }
 
 fn info_cmd(a: &InfoArgs) -> Result<(), PowderError> {
-    let ctx = powder::gpu::GpuContext::new()?;
+    let ctx = match a.profile {
+        true => powder::gpu::GpuContext::with_timestamps()?,
+        false => powder::gpu::GpuContext::new()?,
+    };
     if let Some(path) = &a.scene {
         let info = scene_info(path, ctx, a)?;
         if a.json {
@@ -474,13 +480,18 @@ fn info_cmd(a: &InfoArgs) -> Result<(), PowderError> {
             "traffic          {:.0} bytes per particle a step, {:.0} more on a rebuild (bound by its passes: an upper bound)",
             t.step_bytes_per_particle, t.rebuild_bytes_per_particle
         );
-        if let Some(passes) = &info.profile_us {
+        if let Some(p) = &info.profile {
+            let steps = p.steps.max(1) as f64;
             println!(
-                "passes (µs per dispatch, after {} steps):",
-                info.profile_after.unwrap_or(0)
+                "passes (µs a step over {} steps after {}, {} rebuilds; device {:.1} of {:.1} µs a step):",
+                p.steps,
+                info.profile_after.unwrap_or(0),
+                p.rebuilds,
+                p.device_seconds_per_step() * 1e6,
+                p.wall_seconds / steps * 1e6
             );
-            for (name, us) in passes {
-                println!("  {name:<20} {us:>12.1}");
+            for (name, s) in &p.passes {
+                println!("  {name:<20} {:>12.1}", s / steps * 1e6);
             }
         }
         return Ok(());

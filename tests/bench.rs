@@ -248,49 +248,77 @@ fn bad_bench_and_accuracy_input_is_an_error_not_a_panic() {
     }
 }
 
-/// `--profile` times every pass of the GPU step and reports it in the table and the JSON.
+/// `--profile` runs as many steps again with a GPU timestamp after every pass and reports
+/// each pass's device time in the table and the JSON, windowed runs too.
 #[test]
 fn bench_profile_reports_every_pass() {
     if !gpu_available() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
-    let json = dir.path().join("bench.json");
-    let (ok, out, err) = powder(&[
-        "bench",
-        "--sizes",
-        "64",
-        "--steps",
-        "4",
-        "--warmup",
-        "1",
-        "--backend",
-        "gpu",
-        "--case",
-        "hysteretic",
-        "--profile",
-        "--json",
-        json.to_str().unwrap(),
-    ]);
-    assert!(ok, "{err}");
-    assert!(out.contains("passes (µs per dispatch)"), "{out}");
-    let v = read_json(&json);
-    let passes = v["rows"][0]["passes"].as_array().unwrap();
-    let names: Vec<&str> = passes.iter().map(|p| p[0].as_str().unwrap()).collect();
-    for name in [
-        "kick_drift",
-        "grid sort",
-        "neighbours",
-        "permute",
-        "remap",
-        "copy_back_history",
-        "mirror copies",
-        "force",
-        "kick",
-    ] {
-        assert!(names.contains(&name), "{names:?}");
+    for (size, window) in [("64", None), ("512", Some("128"))] {
+        let json = dir.path().join(format!("bench_{size}.json"));
+        let mut args = vec![
+            "bench",
+            "--sizes",
+            size,
+            "--steps",
+            "4",
+            "--warmup",
+            "1",
+            "--backend",
+            "gpu",
+            "--case",
+            "hysteretic",
+            "--quiet-batches",
+            "off",
+            "--profile",
+            "--json",
+            json.to_str().unwrap(),
+        ];
+        if let Some(w) = window {
+            args.extend(["--window-particles", w]);
+        }
+        let (ok, out, err) = powder(&args);
+        assert!(ok, "{err}");
+        assert!(out.contains("passes (µs a step over 4 steps"), "{out}");
+        let v = read_json(&json);
+        let row = &v["rows"][0];
+        if window.is_some() {
+            assert!(row["note"].as_str().unwrap().contains("4 windows"), "{row}");
+        }
+        let profile = &row["passes"];
+        assert_eq!(profile["steps"], 4);
+        let passes = profile["passes"].as_array().unwrap();
+        let names: Vec<&str> = passes.iter().map(|p| p[0].as_str().unwrap()).collect();
+        for name in [
+            "kick_drift",
+            "decide",
+            "grid sort",
+            "count_neighbours",
+            "list scans",
+            "neighbours",
+            "commit",
+            "permute",
+            "remap",
+            "copy_back_history",
+            "force",
+            "collect_kick_drift",
+            "collect",
+            "kick",
+        ] {
+            assert!(names.contains(&name), "{name} missing: {names:?}");
+        }
+        let seconds: Vec<f64> = passes.iter().map(|p| p[1].as_f64().unwrap()).collect();
+        assert!(seconds.iter().all(|&s| s >= 0.0), "{passes:?}");
+        // the device worked: the force pass took time, and the passes fit the wall clock
+        let force = seconds[names.iter().position(|&n| n == "force").unwrap()];
+        let wall = profile["wall_seconds"].as_f64().unwrap();
+        assert!(
+            force > 0.0 && seconds.iter().sum::<f64>() <= wall,
+            "{profile}"
+        );
     }
-    assert!(passes.iter().all(|p| p[1].as_f64().unwrap() >= 0.0));
 }
 
 /// `--repeats N`: every (case, backend, size) runs N times on fresh engines; the row is the

@@ -380,6 +380,35 @@ fn batch_boundaries_change_no_bit() {
     }
 }
 
+/// The pass profile's timestamps change no bit of a run: a run profiled from its middle
+/// ends as one that was not, and the profile names the passes that ran; a context opened
+/// without the timestamps refuses to profile.
+#[test]
+fn a_profiled_run_changes_no_bit() {
+    use common::assert_same_bits;
+    use powder::bench::{packing, Case};
+    let scene = packing(Case::Jkr, 600, 1.0, 3).unwrap();
+    let Some(ctx) = context() else { return };
+    let mut plain = GpuEngine::new(&scene, ctx).unwrap();
+    let ctx = powder::gpu::GpuContext::with_timestamps().unwrap();
+    let mut profiled = GpuEngine::new(&scene, ctx).unwrap();
+    plain.run_steps(300).unwrap();
+    profiled.run_steps(100).unwrap();
+    let profile = profiled.profile(200).unwrap();
+    assert_same_bits(&plain.state().unwrap(), &profiled.state().unwrap());
+    assert_eq!(profile.steps, 200);
+    let names: Vec<&str> = profile.passes.iter().map(|(n, _)| n.as_str()).collect();
+    assert!(
+        names.contains(&"force") && names.contains(&"kick"),
+        "{names:?}"
+    );
+    assert!(profile.passes.iter().all(|(_, s)| *s >= 0.0));
+    assert!(profile.device_seconds_per_step() > 0.0);
+    // a context opened without the timestamps says so
+    let err = plain.profile(1).unwrap_err().to_string();
+    assert!(err.contains("with_timestamps"), "{err}");
+}
+
 /// The software adapter's paths (the state read through texture mirrors, quiet batches)
 /// and the GPU's (the state's own buffers) give bitwise the same runs, with and without
 /// rotation; the GPU path allocates neither mirrors nor quiet copies.

@@ -93,7 +93,8 @@ pub struct AdapterSummary {
     pub driver: String,
     /// Driver version and details (may be empty).
     pub driver_info: String,
-    /// Optional wgpu features the adapter offers (none of them is requested).
+    /// Optional wgpu features the adapter offers (none is requested but, for a pass
+    /// profile, the timestamps of `gpu::timestamps`).
     pub features: Vec<String>,
     /// The limits the GPU engine cares about.
     pub limits: LimitsSummary,
@@ -389,24 +390,38 @@ impl GpuContext {
 
     /// Opens the best adapter allowed by `pref`.
     pub fn with_preference(pref: &AdapterPreference) -> Result<Self, PowderError> {
-        Self::open(pref, Limits::Adapter)
+        Self::open(pref, Limits::Adapter, false)
+    }
+
+    /// Opens the adapter chosen by `POWDER_ADAPTER` with the pass profile's timestamp
+    /// features where it offers them (`gpu::timestamps`); other runs open without them.
+    pub fn with_timestamps() -> Result<Self, PowderError> {
+        Self::open(&AdapterPreference::from_env(), Limits::Adapter, true)
     }
 
     /// Opens the adapter chosen by `POWDER_ADAPTER` with its storage binding limit lowered
     /// to at most `bytes`: what a scene needs and does on a smaller GPU, tried on this one
     /// (the engine splits or refuses per-slot buffers against this limit).
     pub fn with_storage_binding_limit(bytes: u64) -> Result<Self, PowderError> {
-        Self::open(&AdapterPreference::from_env(), Limits::BindingCapped(bytes))
+        Self::open(
+            &AdapterPreference::from_env(),
+            Limits::BindingCapped(bytes),
+            false,
+        )
     }
 
     /// Opens the adapter chosen by `POWDER_ADAPTER` with wgpu's default limits (WebGPU's:
     /// 8 storage buffers a stage, 128 MiB a binding, 256 MiB a buffer), what a browser or
     /// the most modest backend gives.
     pub fn with_default_limits() -> Result<Self, PowderError> {
-        Self::open(&AdapterPreference::from_env(), Limits::WebGpuDefault)
+        Self::open(&AdapterPreference::from_env(), Limits::WebGpuDefault, false)
     }
 
-    fn open(pref: &AdapterPreference, choice: Limits) -> Result<Self, PowderError> {
+    fn open(
+        pref: &AdapterPreference,
+        choice: Limits,
+        timestamps: bool,
+    ) -> Result<Self, PowderError> {
         let adapter = choose_adapter(enumerate_adapters(), pref)?;
         let summary = AdapterSummary::of(&adapter);
         let mut limits = adapter.limits();
@@ -418,9 +433,15 @@ impl GpuContext {
             }
             Limits::WebGpuDefault => limits = wgpu::Limits::default(),
         }
+        // only a profile asks for the timestamps: with them requested on every device, the
+        // GPU tests timed out on an H200 (docs/gpu_rebuild.md, *The second hardware run*)
+        let features = match timestamps {
+            true => adapter.features() & crate::gpu::timestamps::FEATURES,
+            false => wgpu::Features::empty(),
+        };
         let desc = wgpu::DeviceDescriptor {
             label: Some("powder"),
-            required_features: wgpu::Features::empty(),
+            required_features: features,
             required_limits: limits,
             ..Default::default()
         };

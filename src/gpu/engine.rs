@@ -52,6 +52,7 @@ use crate::gpu::permute::{self, Field, Permutation, ROW_WORDS};
 use crate::gpu::quiet::{Forecast, QuietBatches};
 use crate::gpu::records::{RecordLayout, WALL_ENTRY};
 use crate::gpu::state::{Buffer, StateLayout};
+use crate::gpu::timestamps::{PassClock, PassProfile};
 use crate::gpu::traffic::{PassTraffic, When};
 use crate::gpu::window::{Blocks, WindowBindings, Windows, MIN_WINDOW};
 use crate::model::{ContactHistory, ContactModel, PairGeometry};
@@ -591,13 +592,6 @@ struct Pass {
 }
 
 impl Pass {
-    /// One invocation per particle of each window (`per_window`: the window's particles).
-    fn per_particle(&self, pass: &mut wgpu::ComputePass<'_>, per_window: u32, max_per_dim: u32) {
-        for group in &self.groups {
-            self.kernel.dispatch(pass, group, per_window, max_per_dim);
-        }
-    }
-
     /// One workgroup (a window).
     fn once(&self, pass: &mut wgpu::ComputePass<'_>, max_per_dim: u32) {
         for group in &self.groups {
@@ -610,6 +604,25 @@ impl Pass {
         for group in &self.groups {
             self.kernel.dispatch_indirect(pass, group, args, offset);
         }
+    }
+}
+
+/// A compute pass, its start timestamped while the pass profile runs.
+fn begin<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    clock: Option<&PassClock>,
+) -> wgpu::ComputePass<'e> {
+    let mut pass = encoder.begin_compute_pass(&Default::default());
+    if let Some(c) = clock {
+        c.start(&mut pass);
+    }
+    pass
+}
+
+/// The end of `name`'s dispatches, timestamped while the pass profile runs.
+fn mark(pass: &mut wgpu::ComputePass<'_>, clock: Option<&PassClock>, name: &'static str) {
+    if let Some(c) = clock {
+        c.mark(pass, name);
     }
 }
 
@@ -802,6 +815,8 @@ pub struct GpuEngine {
     step_args_full: [[u32; 3]; 2],
     /// A halted batch's remaining steps, the first without its drift (`run_steps`).
     resume: Option<u64>,
+    /// The pass profile's timestamps while it runs ([`Self::time_passes`]).
+    clock: Option<PassClock>,
     /// Times the lists grew (each a halted batch, or the first build).
     growths: u64,
     program: Program,
@@ -1514,6 +1529,7 @@ impl GpuEngine {
             step_args,
             step_args_full: [particle_args, [1, 1, 1]],
             resume: None,
+            clock: None,
             growths: 0,
             program,
             bound,
@@ -1793,53 +1809,69 @@ impl GpuEngine {
     fn record_step(&self, encoder: &mut wgpu::CommandEncoder, drift: Drift, quiet: bool) {
         let bound = &self.bound;
         let max = self.max_per_dim;
+        let clock = self.clock.as_ref();
+        let (args, at, step) = (&self.b.args, self.rebuild_args, self.step_args);
         {
-            let mut pass = encoder.begin_compute_pass(&Default::default());
+            let mut pass = begin(encoder, clock);
             if drift != Drift::None {
-                let first = match drift {
-                    Drift::AfterStep => &bound.collect_kick_drift,
-                    _ => &bound.kick_drift,
+                let (first, name) = match drift {
+                    Drift::AfterStep => (&bound.collect_kick_drift, "collect_kick_drift"),
+                    _ => (&bound.kick_drift, "kick_drift"),
                 };
-                first.indirect(&mut pass, &self.b.args, self.step_args);
+                first.indirect(&mut pass, args, step);
+                mark(&mut pass, clock, name);
                 if let Some(p) = &bound.wall_move {
-                    p.indirect(&mut pass, &self.b.args, self.step_args + 12);
+                    p.indirect(&mut pass, args, step + 12);
+                    mark(&mut pass, clock, "wall_move");
                 }
             }
             if !quiet {
                 bound.decide.once(&mut pass, max);
+                mark(&mut pass, clock, "decide");
             }
         }
         if !quiet {
-            self.grid
-                .encode_indirect(encoder, &self.grid_keys, &self.b.args, 0);
-            let mut pass = encoder.begin_compute_pass(&Default::default());
-            let at = self.rebuild_args;
+            clock.inspect(|c| c.start_between(encoder));
+            self.grid.encode_indirect(encoder, &self.grid_keys, args, 0);
+            clock.inspect(|c| c.mark_between(encoder, "grid sort"));
+            let mut pass = begin(encoder, clock);
             if !self.mirrors.is_empty() {
-                bound.gather.indirect(&mut pass, &self.b.args, at);
+                bound.gather.indirect(&mut pass, args, at);
+                mark(&mut pass, clock, "gather");
             }
-            bound.count_neighbours.indirect(&mut pass, &self.b.args, at);
+            bound.count_neighbours.indirect(&mut pass, args, at);
+            mark(&mut pass, clock, "count_neighbours");
             for (scan, &offset) in self.scans.iter().zip(self.scan_args.iter().cycle()) {
-                scan.record_indirect(&mut pass, &self.b.args, offset);
+                scan.record_indirect(&mut pass, args, offset);
             }
-            bound.neighbours.indirect(&mut pass, &self.b.args, at);
+            mark(&mut pass, clock, "list scans");
+            bound.neighbours.indirect(&mut pass, args, at);
+            mark(&mut pass, clock, "neighbours");
             bound.commit.once(&mut pass, max);
-            self.permutation
-                .encode_indirect(&mut pass, &self.b.args, at);
-            for p in [&bound.remap, &bound.copy_back_history] {
-                p.indirect(&mut pass, &self.b.args, at);
-            }
+            mark(&mut pass, clock, "commit");
+            self.permutation.encode_indirect(&mut pass, args, at);
+            mark(&mut pass, clock, "permute");
+            bound.remap.indirect(&mut pass, args, at);
+            mark(&mut pass, clock, "remap");
+            bound.copy_back_history.indirect(&mut pass, args, at);
+            mark(&mut pass, clock, "copy_back_history");
         }
         // the state the forces see, drifted (and re-sorted on a rebuild)
-        self.mirrors.encode(encoder);
-        let mut pass = encoder.begin_compute_pass(&Default::default());
-        bound
-            .force
-            .indirect(&mut pass, &self.b.args, self.step_args);
+        if !self.mirrors.is_empty() {
+            clock.inspect(|c| c.start_between(encoder));
+            self.mirrors.encode(encoder);
+            clock.inspect(|c| c.mark_between(encoder, "mirror copies"));
+        }
+        let mut pass = begin(encoder, clock);
+        bound.force.indirect(&mut pass, args, step);
+        mark(&mut pass, clock, "force");
         if let Some(p) = &bound.wall_servo {
-            p.indirect(&mut pass, &self.b.args, self.step_args + 12);
+            p.indirect(&mut pass, args, step + 12);
+            mark(&mut pass, clock, "wall_servo");
         }
         if let Some(p) = &bound.wall_servo_apply {
-            p.indirect(&mut pass, &self.b.args, self.step_args + 12);
+            p.indirect(&mut pass, args, step + 12);
+            mark(&mut pass, clock, "wall_servo_apply");
         }
     }
 
@@ -1848,10 +1880,13 @@ impl GpuEngine {
     /// initial forces.
     fn record_finish(&self, encoder: &mut wgpu::CommandEncoder, kick: bool) {
         let (args, at) = (&self.b.args, self.step_args);
-        let mut pass = encoder.begin_compute_pass(&Default::default());
+        let clock = self.clock.as_ref();
+        let mut pass = begin(encoder, clock);
         self.bound.collect.indirect(&mut pass, args, at);
+        mark(&mut pass, clock, "collect");
         if kick {
             self.bound.kick.indirect(&mut pass, args, at);
+            mark(&mut pass, clock, "kick");
         }
     }
 
@@ -1979,114 +2014,35 @@ impl GpuEngine {
         Ok(())
     }
 
-    /// What each pass of the step costs on this adapter: every pass is recorded `reps` times
-    /// alone into one submission and timed (minus an empty submission's cost), with the
-    /// rebuild flag forced on so the sort, `neighbours` and `remap` do their full work.
-    /// Returns (pass, seconds per dispatch), in step order. The repeated passes leave the
-    /// state meaningless, so this consumes the engine (profile a throwaway one).
-    pub fn profile_passes(self, reps: u32) -> Result<Vec<(String, f64)>, PowderError> {
-        let reps = reps.max(1);
-        let (n, max) = (self.n, self.max_per_dim);
-        if self.windows().count > 1 {
-            return Err(PowderError::Run(
-                "the pass profile needs one window (the state fits one binding)".into(),
-            ));
+    /// Runs `steps` steps with a GPU timestamp after every pass (all windows'
+    /// dispatches of it) and returns the device time each pass took: a real run's, its
+    /// rebuilds where they fall. An error where the adapter gives no timestamps inside
+    /// compute passes (`gpu::timestamps::FEATURES`).
+    pub fn profile(&mut self, steps: u64) -> Result<PassProfile, PowderError> {
+        self.clock = Some(PassClock::new(&self.ctx)?);
+        let before = self.rebuilds()?;
+        let t = std::time::Instant::now();
+        let ran = self.run_steps(steps);
+        let wall_seconds = t.elapsed().as_secs_f64();
+        let clock = self.clock.take();
+        ran?;
+        let clock = clock.expect("the clock runs until here");
+        if clock.overflowed() {
+            return Err(PowderError::Run(format!(
+                "a batch of the pass profile wrote more than {} timestamps",
+                wgpu::QUERY_SET_MAX_QUERIES
+            )));
         }
-        // a rebuild every step: the rebuild-only passes do their full work
-        self.ctx
-            .queue
-            .write_buffer(&self.b.control, SKIN_OFFSET + 4, bytemuck::bytes_of(&1u32));
-        let time = |engine: &Self, record: &dyn Fn(&mut wgpu::CommandEncoder)| {
-            let mut encoder = engine
-                .ctx
-                .device
-                .create_command_encoder(&Default::default());
-            for _ in 0..reps {
-                record(&mut encoder);
-            }
-            let t = std::time::Instant::now();
-            submit_and_read(&engine.ctx, encoder, &[(&engine.b.control, 4)]).map(|_| t.elapsed())
-        };
-        let empty = time(&self, &|_| {})?.as_secs_f64();
-        let b = &self.bound;
-        let names = [
-            "kick_drift",
-            "decide",
-            "grid sort",
-            "gather",
-            "count_neighbours",
-            "list scans",
-            "neighbours",
-            "permute",
-            "remap",
-            "copy_back_history",
-            "mirror copies",
-            "force",
-            "collect",
-            "kick",
-        ];
-        let record = |e: &mut wgpu::CommandEncoder, id: usize| {
-            if id == 2 {
-                self.grid.encode(e, &self.state.state);
-                return;
-            }
-            if id == 10 {
-                self.mirrors.encode(e);
-                return;
-            }
-            let mut pass = e.begin_compute_pass(&Default::default());
-            if id == 5 {
-                for scan in &self.scans {
-                    scan.record(&mut pass);
-                }
-                return;
-            }
-            if id == 7 {
-                self.permutation.encode(&mut pass, n, max);
-                return;
-            }
-            let p = match id {
-                0 => &b.kick_drift,
-                1 => &b.decide,
-                3 => &b.gather,
-                4 => &b.count_neighbours,
-                6 => &b.neighbours,
-                8 => &b.remap,
-                9 => &b.copy_back_history,
-                11 => &b.force,
-                12 => &b.collect,
-                _ => &b.kick,
-            };
-            if id == 1 {
-                p.once(&mut pass, max);
-            } else {
-                p.per_particle(&mut pass, n, max);
-            }
-        };
-        let mut out = Vec::new();
-        for (id, name) in names.iter().enumerate() {
-            // remap turns the lower lists' partners into slots in place, so it is timed
-            // after a fresh count, scans and `neighbours` (the same lists each replay, every
-            // lower entry rewritten), less the time of those alone (replayed by itself it
-            // read earlier replays' slots as particles: 0.56–1.4 s a dispatch on the H200)
-            let t = if id == 8 {
-                let lists = |e: &mut wgpu::CommandEncoder| {
-                    for pass in [4, 5, 6] {
-                        record(e, pass);
-                    }
-                };
-                let with = time(&self, &|e: &mut wgpu::CommandEncoder| {
-                    lists(e);
-                    record(e, 8);
-                })?;
-                let without = time(&self, &|e: &mut wgpu::CommandEncoder| lists(e))?;
-                empty + with.as_secs_f64() - without.as_secs_f64()
-            } else {
-                time(&self, &|e: &mut wgpu::CommandEncoder| record(e, id))?.as_secs_f64()
-            };
-            out.push((name.to_string(), ((t - empty) / reps as f64).max(0.0)));
-        }
-        Ok(out)
+        Ok(PassProfile {
+            steps,
+            rebuilds: self.rebuilds()? - before,
+            wall_seconds,
+            passes: clock
+                .totals()
+                .into_iter()
+                .map(|(name, s)| (name.to_string(), s))
+                .collect(),
+        })
     }
 
     /// Neighbour-list rebuilds so far (the first, before the first step, included): reads
@@ -2159,8 +2115,14 @@ impl GpuEngine {
     }
 
     /// Submits a recorded batch and reads the monitor and the skin state back.
-    fn submit_batch(&self, encoder: wgpu::CommandEncoder) -> Result<BatchReport, PowderError> {
-        let out = submit_and_read(&self.ctx, encoder, &[(&self.b.control, CONTROL_BYTES)])?;
+    fn submit_batch(&self, mut encoder: wgpu::CommandEncoder) -> Result<BatchReport, PowderError> {
+        let mut sources = vec![(&self.b.control, CONTROL_BYTES)];
+        let stamps = self.clock.as_ref().and_then(|c| c.resolve(&mut encoder));
+        sources.extend(stamps);
+        let out = submit_and_read(&self.ctx, encoder, &sources)?;
+        if let (Some(clock), Some(stamps)) = (&self.clock, out.get(1)) {
+            clock.take(stamps);
+        }
         let words = u32s(&out[0]);
         let (monitor, skin) = words.split_at(MONITOR_BYTES as usize / 4);
         Ok(BatchReport {

@@ -6,7 +6,8 @@
 //! * **Device** ([`context`]): one [`GpuContext`] per run — the best adapter present
 //!   (discrete > integrated > virtual GPU, else the software adapter: Mesa lavapipe on
 //!   Vulkan or llvmpipe on GL), chosen or overridden with `POWDER_ADAPTER`, opened with
-//!   the adapter's own limits and no optional features. `powder info` prints it.
+//!   the adapter's own limits and no optional features (a pass profile's context adds
+//!   the timestamps of [`timestamps`]). `powder info` prints it.
 //! * **Portability**: kernels are core WGSL — f32 arithmetic, u32/i32 atomics, no f64,
 //!   no float atomics, no subgroups — so the same code runs on Vulkan, Metal, DX12 and
 //!   GL, on any GPU and on the CPU rasterisers used in CI. Storage bindings may be
@@ -53,6 +54,7 @@ pub mod quiet;
 pub mod records;
 pub mod shaders;
 pub mod state;
+pub mod timestamps;
 pub mod traffic;
 pub mod window;
 
