@@ -681,13 +681,21 @@ fn run_gpu(
     let traffic = crate::gpu::TrafficEstimate::new(engine.traffic(), n, rebuilds, opts.steps);
     let (dt, entries) = (engine.dt(), engine.list_entries());
     let windows = engine.windows();
-    // after the timed steps, as many again with a timestamp after every pass
-    let passes = match opts.profile {
-        true => Some(engine.profile(opts.steps)?),
-        false => None,
+    // after the timed steps, as many again with a timestamp after every pass (an adapter
+    // without timestamps keeps the timed row and says why it has no profile)
+    let (passes, no_profile) = match opts.profile {
+        true => match engine.profile(opts.steps) {
+            Ok(p) => (Some(p), None),
+            Err(e) => (None, Some(format!("no pass profile: {e}"))),
+        },
+        false => (None, None),
     };
-    let note = (windows.count > 1)
+    let windowed = (windows.count > 1)
         .then(|| format!("{} windows of {} particles", windows.count, windows.len));
+    let note = match (windowed, no_profile) {
+        (Some(w), Some(p)) => Some(format!("{w}; {p}")),
+        (w, p) => w.or(p),
+    };
     Ok(BenchRow {
         passes,
         case: case.name(),

@@ -118,18 +118,7 @@ impl PassClock {
     pub fn take(&self, bytes: &[u8]) {
         let ticks: Vec<u64> = bytemuck::pod_collect_to_vec(bytes);
         let marks = std::mem::take(&mut *self.marks.borrow_mut());
-        for (i, mark) in marks.iter().enumerate().skip(1) {
-            let Some(name) = mark else { continue };
-            let (Some(&end), Some(&begin)) = (ticks.get(i), ticks.get(i - 1)) else {
-                continue;
-            };
-            let seconds = end.saturating_sub(begin) as f64 * self.period * 1e-9;
-            let mut totals = self.totals.borrow_mut();
-            match totals.iter_mut().find(|(n, _)| n == name) {
-                Some((_, total)) => *total += seconds,
-                None => totals.push((name, seconds)),
-            }
-        }
+        attribute(&marks, &ticks, self.period, &mut self.totals.borrow_mut());
     }
 
     /// Seconds on the device per pass since the clock started, in recording order.
@@ -140,6 +129,29 @@ impl PassClock {
     /// Whether some batch recorded more timestamps than one query set holds.
     pub fn overflowed(&self) -> bool {
         self.overflowed.get()
+    }
+}
+
+/// Adds each interval between consecutive timestamps (`ticks`, `period` ns a tick) to the
+/// pass its closing mark names; an interval that closes on a start (`None`) is nobody's. A
+/// timestamp earlier than the one before (a driver may write them out of order across
+/// passes) counts as no time.
+fn attribute(
+    marks: &[Option<&'static str>],
+    ticks: &[u64],
+    period: f64,
+    totals: &mut Vec<(&'static str, f64)>,
+) {
+    for (i, mark) in marks.iter().enumerate().skip(1) {
+        let Some(name) = mark else { continue };
+        let (Some(&end), Some(&begin)) = (ticks.get(i), ticks.get(i - 1)) else {
+            continue;
+        };
+        let seconds = end.saturating_sub(begin) as f64 * period * 1e-9;
+        match totals.iter_mut().find(|(n, _)| n == name) {
+            Some((_, total)) => *total += seconds,
+            None => totals.push((name, seconds)),
+        }
     }
 }
 
@@ -180,5 +192,34 @@ impl PassProfile {
             self.wall_seconds / steps * 1e6,
             parts.join(", ")
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::attribute;
+
+    /// Each interval goes to the pass whose mark closes it, summed over repeats; gaps
+    /// before a pass's start are nobody's; a reversed pair counts as zero.
+    #[test]
+    fn intervals_go_to_the_mark_that_closes_them() {
+        let marks = [
+            None,
+            Some("force"),
+            Some("collect"),
+            None,
+            Some("force"),
+            Some("kick"),
+        ];
+        let ticks = [100, 130, 150, 1000, 1010, 1005];
+        let mut totals = Vec::new();
+        attribute(&marks, &ticks, 2.0, &mut totals);
+        assert_eq!(
+            totals,
+            vec![("force", 80e-9), ("collect", 40e-9), ("kick", 0.0)]
+        );
+        // a later batch adds to the same passes
+        attribute(&marks[..2], &ticks[..2], 2.0, &mut totals);
+        assert_eq!(totals[0], ("force", 140e-9));
     }
 }

@@ -1,0 +1,262 @@
+//! The GPU engine: the time step of `shaders/step.wgsl` driven from the host, for every
+//! contact law the scene composes (`gpu::composition`), with walls, gravity and pouring.
+//!
+//! The particle state lives in one buffer set, A, in the order of the last neighbour-list
+//! rebuild. Each step drifts A, decides on the device whether to rebuild (some particle
+//! moved more than half the Verlet skin, [`SKIN`]·r_min), and on a rebuild sorts A by
+//! cell, re-sorts it in place, builds the new lists from the grid, remaps every contact's
+//! history by the partner's persistent id and copies it back; then the forces and the
+//! kicks. The rebuild's passes are recorded every step as indirect dispatches whose
+//! workgroup counts `decide` writes (zero without a rebuild), so the decision never leaves
+//! the device. Many steps go into one submission; the host reads back a small monitor per
+//! batch and whatever output needs. Every run is bitwise deterministic.
+//!
+//! The files: `build` (an engine for a scene), `buffers` (the device buffers and the
+//! lists' sizes), `record` (a step's passes, a batch's submission and monitor),
+//! `stepping` (running steps, halts, quiet batches), `walls` (prescribed, servo and
+//! programmed walls, pouring), `readback`, `checkpoint`, `introspection` (sizes, kernels,
+//! traffic, the pass profile). How the step works and why: `docs/architecture.md`.
+
+use crate::cpu::{ContactStats, Energies, Partner};
+use crate::error::PowderError;
+use crate::gpu::composition::{Composition, Keeps};
+use crate::gpu::context::GpuContext;
+use crate::gpu::grid::{ExclusiveScan, GridSort};
+use crate::gpu::kernel::{
+    split_workgroups, storage_buffer, submit_and_read, u32s, uniform_buffer, Kernel, Part, Program,
+};
+use crate::gpu::layout::{encode3, gpu_cell_width, HystereticPair, JkrPair, StepParams, WallGpu};
+use crate::gpu::mirror::Mirrors;
+use crate::gpu::permute::{self, Field, Permutation, ROW_WORDS};
+use crate::gpu::quiet::{Forecast, QuietBatches};
+use crate::gpu::records::{RecordLayout, WALL_ENTRY};
+use crate::gpu::state::{Buffer, StateLayout};
+use crate::gpu::timestamps::{PassClock, PassProfile};
+use crate::gpu::traffic::{PassTraffic, When};
+use crate::gpu::window::{Blocks, WindowBindings, Windows, MIN_WINDOW};
+use crate::model::{ContactHistory, ContactModel, PairGeometry};
+use crate::output::contacts::{ContactLine, ContactNetwork};
+use crate::scene::{Scene, WallPhase};
+use crate::setup::Resolved;
+use glam::DVec3;
+
+mod buffers;
+mod build;
+mod checkpoint;
+mod introspection;
+mod readback;
+mod record;
+mod stepping;
+mod walls;
+
+use buffers::*;
+use build::*;
+use readback::*;
+use record::*;
+use stepping::*;
+use walls::*;
+
+pub use checkpoint::GpuSavedState;
+
+/// The Verlet skin in units of the smallest radius: lists hold the pairs within
+/// r_i + r_j + reach + skin, rebuilt once some particle has moved more than skin/2.
+pub const SKIN: f64 = 0.1;
+
+/// The neighbour lists' first capacity, entries a particle (+256): the first rebuild
+/// grows them to what it needs (`GpuEngine::grow_lists`).
+const INITIAL_ENTRIES_PER_PARTICLE: u64 = 2;
+
+/// Headroom of a grown capacity over what a rebuild needed (less where the entries'
+/// binding limit leaves less).
+const LIST_HEADROOM: f64 = 1.25;
+
+/// Bytes of the device monitor, the first part of `control` in `shaders/step.wgsl`.
+const MONITOR_BYTES: u64 = 48;
+
+/// Where the Verlet skin state follows it in `control` (4 words: moved, rebuild flag,
+/// rebuilds so far, unused).
+const SKIN_OFFSET: u64 = MONITOR_BYTES;
+
+/// Bytes of `control`.
+const CONTROL_BYTES: u64 = SKIN_OFFSET + 16;
+
+/// Steps recorded into one submission.
+pub const STEPS_PER_SUBMIT: u64 = 64;
+
+/// List entries a particle the automatic windows leave room for (the lists hold 3.7–3.8 a
+/// particle with their headroom and wall entries on the dense bench packings, `powder
+/// bench`).
+const WINDOW_ENTRIES_PER_PARTICLE: u64 = 6;
+
+/// A snapshot read back from the device, in the scene's particle order.
+#[derive(Clone, Debug)]
+pub struct GpuState {
+    /// Particle centres, m (f32 on the device, widened to f64).
+    pub positions: Vec<DVec3>,
+    /// Particle velocities, m/s (f32 on the device, widened to f64).
+    pub velocities: Vec<DVec3>,
+    /// Angular velocities; empty when the scene does not rotate (as
+    /// `CpuEngine::angular_velocities`).
+    pub angular_velocities: Vec<DVec3>,
+}
+
+/// One contact's history keyed by (particle, partner) persistent ids.
+pub type KeyedHistory = ((u32, u32), ContactHistory);
+
+/// Choices of a GPU run that are not part of the scene.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GpuOptions {
+    /// Keep the energy ledger and contact statistics on the device
+    /// ([`GpuEngine::energies`], [`GpuEngine::contact_stats`], [`GpuEngine::wall_forces`]):
+    /// 32 bytes per neighbour slot and 64 per particle more, and about 20 % of the step.
+    /// Default on; `powder run --no-ledger` turns it off.
+    pub ledger: bool,
+    /// Quiet batches (`gpu::quiet`): batches recorded without the per-step rebuild
+    /// decision where no rebuild is expected, run again with it where one was needed.
+    /// Results are bitwise the same either way. Default [`QuietBatches::Auto`].
+    pub quiet: QuietBatches,
+    /// The neighbour lists' first capacity, entries a window (all entries with one
+    /// window; default: a guess the first rebuild
+    /// grows to 1.25× what it needs). Lists grow whenever a rebuild needs more — the batch
+    /// halts at that rebuild and finishes after the growth, bitwise as without it — so
+    /// this only saves those halts where the need is known.
+    pub list_entries: Option<u64>,
+    /// The software adapter's paths: the state read through texture mirrors, and quiet
+    /// batches under [`QuietBatches::Auto`] (`None`: by the adapter kind,
+    /// `GpuContext::is_software`). Results are bitwise the same either way.
+    pub software_paths: Option<bool>,
+    /// Particles a window holds (`gpu::window`: a power of two; every array blocked by
+    /// window), `None` for one window holding all. Results are bitwise the same either
+    /// way; more windows take more list entries (each window's block is sized for the
+    /// fullest).
+    pub window_particles: Option<u64>,
+    /// Keep what [`GpuEngine::contact_network`] reads (each contact's prior) where neither
+    /// the ledger nor the force jumps keep it: 12 bytes a list entry, and as much or more
+    /// in the rebuild's new lists (about 24–32 bytes a list entry in all). Default off;
+    /// `powder run` turns it on for the scene's `contact_output`.
+    pub contacts: bool,
+}
+
+impl Default for GpuOptions {
+    fn default() -> Self {
+        Self {
+            ledger: true,
+            quiet: QuietBatches::Auto,
+            list_entries: None,
+            software_paths: None,
+            window_particles: None,
+            contacts: false,
+        }
+    }
+}
+
+/// The GPU simulation of one scene.
+pub struct GpuEngine {
+    ctx: GpuContext,
+    /// Simulated time, s (kept in f64 on the host).
+    pub time: f64,
+    /// Steps taken.
+    pub steps: u64,
+    dt: f64,
+    n: u32,
+    /// Entries the neighbour lists have room for (grown when a rebuild needs more).
+    entries: u64,
+    origin: DVec3,
+    /// Cell width per axis (the f32 values the kernels use), m.
+    h: DVec3,
+    radius: Vec<f64>,
+    mass: Vec<f64>,
+    grid: GridSort,
+    /// The grid sort's key pass bound to A's cells (made once: the buffer never changes).
+    /// The grid sort's `cell_keys` bind groups, one a window.
+    grid_keys: Vec<wgpu::BindGroup>,
+    /// The windows and their uniforms (`gpu::window`).
+    windowing: WindowBindings,
+    /// The state (A).
+    state: StateSet,
+    /// Texture copies of A's cells, offsets and predictions for the force pass.
+    mirrors: Mirrors,
+    /// Quiet batches, where the scene allows them (no moving walls, no pouring).
+    quiet: Option<Quiet>,
+    /// The lists a rebuild builds (B; bound in the kernels, never read by the host).
+    _new_lists: NewLists,
+    /// A rebuild's in-place re-sort of the state.
+    permutation: Permutation,
+    /// The step's other buffers.
+    b: StepBuffers,
+    /// Offsets in `b.args`: the rebuild's per-particle passes', and every step's
+    /// (per particle, then one workgroup), with the values the latter take.
+    rebuild_args: u64,
+    step_args: u64,
+    step_args_full: [[u32; 3]; 2],
+    /// A halted batch's remaining steps, the first without its drift (`run_steps`).
+    resume: Option<u64>,
+    /// The pass profile's timestamps while it runs ([`GpuEngine::profile`]).
+    clock: Option<PassClock>,
+    /// Times the lists grew (each a halted batch, or the first build).
+    growths: u64,
+    program: Program,
+    bound: Bound,
+    max_per_dim: u32,
+    kind: Composition,
+    /// What the step variant keeps beyond the forces (ledger, force jumps).
+    keeps: Keeps,
+    n_walls: u32,
+    /// (name, bytes) of every buffer allocated for the run.
+    buffers: Vec<(String, u64)>,
+    gravity: DVec3,
+    /// Engaged contacts that left the neighbour lists within one step (monitor[3]).
+    dropped: u64,
+    /// Deepest overlap/a12 since the run monitor last looked, and a particle with a
+    /// contact beyond `run::MAX_OVERLAP_RATIO` if any (monitor[4], [5]).
+    peak: Option<(f64, Option<usize>)>,
+    /// A particle whose centre left the domain box (monitor[6]).
+    escaped: Option<usize>,
+    /// A rebuild's scans of the new lists' lengths into their first entries (the pair
+    /// lists', `lower`'s), dispatched indirectly from `args` at `scan_args`.
+    /// Two a window, in window order (`lower`'s after each window's pair lists').
+    scans: Vec<ExclusiveScan>,
+    scan_args: [u64; 2],
+    /// Unit normals of the walls (into the domain).
+    wall_normals: Vec<DVec3>,
+    /// How each wall moves, and the walls on the device (they move: state).
+    wall_motion: Vec<crate::scene::WallMotion>,
+    /// The phase (`WallMotion::index_at`) each wall is in on the device.
+    wall_phase: Vec<Option<usize>>,
+    /// The prescribed walls' points in f64, integrated on the host (v·dt per step, as the
+    /// CPU does) and written to the device at every batch, so f32 rounding of the device's
+    /// per-step moves never accumulates.
+    wall_points: Vec<DVec3>,
+    /// Pouring: when each particle (persistent id) appears, whether it has (mirrored in
+    /// the device's `active` buffer, written at the batch where that changes), the energy
+    /// it brings (½mv² − m·g·x at its insertion, which it keeps until then) and the sum
+    /// brought so far.
+    insert_at: Vec<f64>,
+    active: Vec<bool>,
+    insert_energy: Vec<f64>,
+    inserted: f64,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gpu::shaders::{self, wgsl_u32_const};
+
+    #[test]
+    fn gpu_control_layout_matches_wgsl() {
+        let (module, _) = shaders::validate(&shaders::step_variant().source).unwrap();
+        let (_, control) = module
+            .global_variables
+            .iter()
+            .find(|(_, g)| g.name.as_deref() == Some("control"))
+            .expect("the step declares `control`");
+        let bytes = module.types[control.ty].inner.size(module.to_ctx());
+        assert_eq!(bytes as u64, CONTROL_BYTES);
+        assert_eq!(
+            wgsl_u32_const(&module, "SKIN_MOVED") as u64 * 4,
+            SKIN_OFFSET
+        );
+        assert_eq!(wgsl_u32_const(&module, "SKIN_REBUILDS"), 14);
+        assert_eq!(wgsl_u32_const(&module, "WALL_ENTRY"), WALL_ENTRY);
+    }
+}

@@ -1,0 +1,274 @@
+//! Recording a step's passes into a batch, submitting it and reading its monitor back.
+
+use super::*;
+
+/// The step's kernels, bound to the run's buffers.
+pub(super) struct Bound {
+    pub(super) kick_drift: Pass,
+    pub(super) decide: Pass,
+    pub(super) gather: Pass,
+    pub(super) count_neighbours: Pass,
+    pub(super) neighbours: Pass,
+    pub(super) commit: Pass,
+    pub(super) remap: Pass,
+    pub(super) copy_back_history: Pass,
+    pub(super) force: Pass,
+    pub(super) kick: Pass,
+    pub(super) collect_kick_drift: Pass,
+    pub(super) collect: Pass,
+    /// The moving-wall kernels, only for scenes with moving / servo-controlled walls.
+    pub(super) wall_move: Option<Pass>,
+    pub(super) wall_servo: Option<Pass>,
+    pub(super) wall_servo_apply: Option<Pass>,
+}
+
+/// One kernel with its bind groups: one a window where it works on windows, else one.
+pub(super) struct Pass {
+    pub(super) kernel: Kernel,
+    pub(super) groups: Vec<wgpu::BindGroup>,
+    /// (global name, bytes) of every distinct resource the group binds (`gpu::traffic`).
+    pub(super) bound: Vec<(String, u64)>,
+}
+
+impl Pass {
+    /// One workgroup (a window).
+    pub(super) fn once(&self, pass: &mut wgpu::ComputePass<'_>, max_per_dim: u32) {
+        for group in &self.groups {
+            self.kernel.dispatch_workgroups(pass, group, 1, max_per_dim);
+        }
+    }
+
+    /// Workgroup counts from `args` at byte `offset` (each window's dispatch the same).
+    pub(super) fn indirect(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        args: &wgpu::Buffer,
+        offset: u64,
+    ) {
+        for group in &self.groups {
+            self.kernel.dispatch_indirect(pass, group, args, offset);
+        }
+    }
+}
+
+/// A compute pass, its start timestamped while the pass profile runs.
+pub(super) fn begin<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    clock: Option<&PassClock>,
+) -> wgpu::ComputePass<'e> {
+    let mut pass = encoder.begin_compute_pass(&Default::default());
+    if let Some(c) = clock {
+        c.start(&mut pass);
+    }
+    pass
+}
+
+/// The end of `name`'s dispatches, timestamped while the pass profile runs.
+pub(super) fn mark(
+    pass: &mut wgpu::ComputePass<'_>,
+    clock: Option<&PassClock>,
+    name: &'static str,
+) {
+    if let Some(c) = clock {
+        c.mark(pass, name);
+    }
+}
+
+/// How a recorded step starts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Drift {
+    /// No drift (the initial forces).
+    None,
+    /// `kick_drift`: the first step of a batch.
+    Plain,
+    /// `collect_kick_drift`: the previous step's collect and closing kick, then the drift.
+    AfterStep,
+}
+
+/// What the host reads after a batch: the monitor and the skin state.
+pub(super) struct BatchReport {
+    pub(super) monitor: Vec<u32>,
+    pub(super) skin: Vec<u32>,
+}
+
+impl BatchReport {
+    /// The list entries a rebuild needed when the batch halted for them (`commit`).
+    pub(super) fn halted(&self) -> Option<u64> {
+        (self.monitor[7] != 0).then_some(self.monitor[11] as u64)
+    }
+
+    /// Steps of a halted batch completed before the one that halted (`decide` counts the
+    /// steps begun).
+    pub(super) fn completed(&self) -> u64 {
+        (self.monitor[10] as u64).saturating_sub(1)
+    }
+}
+
+impl GpuEngine {
+    /// Records one step: drift, decide whether to rebuild, on a rebuild (indirect: no
+    /// workgroups otherwise) sort, build the new lists in B (count, place, fill), re-sort
+    /// the state in place, remap the history and copy the lists back; then the forces. Their collect and the closing kick are recorded
+    /// with the next step (`Drift::AfterStep`) or by [`Self::record_finish`]. `quiet`:
+    /// without `decide` and the rebuild chain (a quiet batch, `gpu::quiet`).
+    pub(super) fn record_step(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        drift: Drift,
+        quiet: bool,
+    ) {
+        let bound = &self.bound;
+        let max = self.max_per_dim;
+        let clock = self.clock.as_ref();
+        let (args, at, step) = (&self.b.args, self.rebuild_args, self.step_args);
+        {
+            let mut pass = begin(encoder, clock);
+            if drift != Drift::None {
+                let (first, name) = match drift {
+                    Drift::AfterStep => (&bound.collect_kick_drift, "collect_kick_drift"),
+                    _ => (&bound.kick_drift, "kick_drift"),
+                };
+                first.indirect(&mut pass, args, step);
+                mark(&mut pass, clock, name);
+                if let Some(p) = &bound.wall_move {
+                    p.indirect(&mut pass, args, step + 12);
+                    mark(&mut pass, clock, "wall_move");
+                }
+            }
+            if !quiet {
+                bound.decide.once(&mut pass, max);
+                mark(&mut pass, clock, "decide");
+            }
+        }
+        if !quiet {
+            clock.inspect(|c| c.start_between(encoder));
+            self.grid.encode_indirect(encoder, &self.grid_keys, args, 0);
+            clock.inspect(|c| c.mark_between(encoder, "grid sort"));
+            let mut pass = begin(encoder, clock);
+            if !self.mirrors.is_empty() {
+                bound.gather.indirect(&mut pass, args, at);
+                mark(&mut pass, clock, "gather");
+            }
+            bound.count_neighbours.indirect(&mut pass, args, at);
+            mark(&mut pass, clock, "count_neighbours");
+            for (scan, &offset) in self.scans.iter().zip(self.scan_args.iter().cycle()) {
+                scan.record_indirect(&mut pass, args, offset);
+            }
+            mark(&mut pass, clock, "list scans");
+            bound.neighbours.indirect(&mut pass, args, at);
+            mark(&mut pass, clock, "neighbours");
+            bound.commit.once(&mut pass, max);
+            mark(&mut pass, clock, "commit");
+            self.permutation.encode_indirect(&mut pass, args, at);
+            mark(&mut pass, clock, "permute");
+            bound.remap.indirect(&mut pass, args, at);
+            mark(&mut pass, clock, "remap");
+            bound.copy_back_history.indirect(&mut pass, args, at);
+            mark(&mut pass, clock, "copy_back_history");
+        }
+        // the state the forces see, drifted (and re-sorted on a rebuild)
+        if !self.mirrors.is_empty() {
+            clock.inspect(|c| c.start_between(encoder));
+            self.mirrors.encode(encoder);
+            clock.inspect(|c| c.mark_between(encoder, "mirror copies"));
+        }
+        let mut pass = begin(encoder, clock);
+        bound.force.indirect(&mut pass, args, step);
+        mark(&mut pass, clock, "force");
+        if let Some(p) = &bound.wall_servo {
+            p.indirect(&mut pass, args, step + 12);
+            mark(&mut pass, clock, "wall_servo");
+        }
+        if let Some(p) = &bound.wall_servo_apply {
+            p.indirect(&mut pass, args, step + 12);
+            mark(&mut pass, clock, "wall_servo_apply");
+        }
+    }
+
+    /// Records `collect` (the forces of the step just recorded are then complete) and,
+    /// with `kick`, the closing kick: at the end of a batch, or without the kick after the
+    /// initial forces.
+    pub(super) fn record_finish(&self, encoder: &mut wgpu::CommandEncoder, kick: bool) {
+        let (args, at) = (&self.b.args, self.step_args);
+        let clock = self.clock.as_ref();
+        let mut pass = begin(encoder, clock);
+        self.bound.collect.indirect(&mut pass, args, at);
+        mark(&mut pass, clock, "collect");
+        if kick {
+            self.bound.kick.indirect(&mut pass, args, at);
+            mark(&mut pass, clock, "kick");
+        }
+    }
+
+    /// Before a batch is submitted: the monitor zeroed, every step's dispatch arguments
+    /// set (a halt zeroes them).
+    pub(super) fn start_batch(&self) {
+        let q = &self.ctx.queue;
+        q.write_buffer(&self.b.control, 0, &[0u8; MONITOR_BYTES as usize]);
+        q.write_buffer(
+            &self.b.args,
+            self.step_args,
+            bytemuck::cast_slice(&self.step_args_full),
+        );
+    }
+
+    /// Submits a recorded batch and reads the monitor and the skin state back.
+    pub(super) fn submit_batch(
+        &self,
+        mut encoder: wgpu::CommandEncoder,
+    ) -> Result<BatchReport, PowderError> {
+        let mut sources = vec![(&self.b.control, CONTROL_BYTES)];
+        let stamps = self.clock.as_ref().and_then(|c| c.resolve(&mut encoder));
+        sources.extend(stamps);
+        let out = submit_and_read(&self.ctx, encoder, &sources)?;
+        if let (Some(clock), Some(stamps)) = (&self.clock, out.get(1)) {
+            clock.take(stamps);
+        }
+        let words = u32s(&out[0]);
+        let (monitor, skin) = words.split_at(MONITOR_BYTES as usize / 4);
+        Ok(BatchReport {
+            monitor: monitor.to_vec(),
+            skin: skin.to_vec(),
+        })
+    }
+
+    /// Whether the steps recorded from now on place the force jumps (`StepParams::jumps`).
+    pub(super) fn set_jumps(&self, on: bool) {
+        let at = std::mem::offset_of!(StepParams, jumps) as u64;
+        self.ctx
+            .queue
+            .write_buffer(&self.b.step, at, bytemuck::bytes_of(&u32::from(on)));
+    }
+
+    /// Takes in what a batch's monitor holds: its records, and an error for what stops a run.
+    /// An error where a rebuild found a particle's neighbours beyond its window's
+    /// bindings (monitor[1]): the batch halted before anything read them.
+    pub(super) fn check_windows(&self, m: &[u32]) -> Result<(), PowderError> {
+        if m[1] == 0 {
+            return Ok(());
+        }
+        let w = self.state.layout.windows();
+        Err(PowderError::Run(format!(
+            "step {}: a particle's neighbours lie more than one window of {} particles away in the sorted order (a window's dispatches bind it and its neighbours only): the packing's layers of cells hold more particles than a window; run with larger windows where the adapter's binding limit allows (`--window-particles`, GpuOptions::window_particles)",
+            self.steps, w.len
+        )))
+    }
+
+    pub(super) fn apply_monitor(&mut self, m: &[u32]) -> Result<(), PowderError> {
+        self.dropped += m[3] as u64;
+        let ratio = f32::from_bits(m[4]) as f64;
+        let beyond = (m[5] != 0).then(|| m[5] as usize - 1);
+        if self.peak.is_none_or(|(r, _)| ratio > r) {
+            self.peak = Some((ratio, beyond.or(self.peak.and_then(|p| p.1))));
+        }
+        if m[6] != 0 && self.escaped.is_none() {
+            self.escaped = Some(m[6] as usize - 1);
+        }
+        if m[2] != 0 {
+            return Err(PowderError::Run(format!(
+                "step {}: {} particles got a non-finite acceleration; the time step may be too large",
+                self.steps, m[2]
+            )));
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,163 @@
+//! Checks of a whole parsed scene: periodic axes, particle placement and overlaps, and a
+//! contact model for every pair of materials that can meet.
+
+use super::hash_grid::{dist2, Grid};
+use super::particles::Origin;
+use super::toml_reader::{fmt_vec, Res, Src, AXES};
+use super::{Scene, OVERLAP_TOLERANCE};
+use crate::error::PowderError;
+
+/// Periodic axes: no wall may face one (its normal would have a component along it) and
+/// gravity may not point along one (the potential energy would be unbounded).
+pub(super) fn check_periodic(src: &Src, scene: &Scene) -> Res<()> {
+    let d = &scene.domain;
+    for (a, axis) in AXES.iter().enumerate() {
+        if !d.periodic[a] {
+            continue;
+        }
+        if scene.gravity[a] != 0.0 {
+            return Err(src.err(
+                None,
+                format!(
+                    "gravity {} has a component along the periodic axis {axis}: particles would fall forever and the gravitational energy is unbounded; make the axis non-periodic (with walls) or gravity perpendicular to it",
+                    fmt_vec(scene.gravity)
+                ),
+            ));
+        }
+        for (w, wall) in scene.walls.iter().enumerate() {
+            if wall.normal[a].abs() > 1e-12 {
+                return Err(src.err(
+                    None,
+                    format!(
+                        "[[wall]] #{} (normal {}) faces the periodic axis {axis}: a wall across a periodic axis would cut the periodic images; make the axis non-periodic or remove the wall",
+                        w + 1,
+                        fmt_vec(wall.normal)
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+pub(super) fn check_particles(src: &Src, scene: &Scene, origin: &Origin) -> Res<()> {
+    let ps = &scene.particles;
+    if ps.is_empty() {
+        return Err(src.err(
+            None,
+            "the scene has no particles: the [[particles]] blocks create none (check `count` and `positions`)",
+        ));
+    }
+    let d = &scene.domain;
+    for (i, p) in ps.iter().enumerate() {
+        let tol = OVERLAP_TOLERANCE * p.radius;
+        for (a, axis) in AXES.iter().enumerate() {
+            let x = p.position[a];
+            // on a periodic axis the centre must lie in [min, max); the sphere may cross
+            let inside = if d.periodic[a] {
+                x >= d.min[a] && x < d.max[a]
+            } else {
+                x - p.radius >= d.min[a] - tol && x + p.radius <= d.max[a] + tol
+            };
+            if !inside {
+                return Err(src.err(
+                    None,
+                    format!(
+                        "particle {i} (from [[particles]] #{}) at {} with radius {} is not inside the domain {} to {} on axis {}: move it, or enlarge [domain]",
+                        origin[i],
+                        fmt_vec(p.position),
+                        p.radius,
+                        fmt_vec(d.min),
+                        fmt_vec(d.max),
+                        axis
+                    ),
+                ));
+            }
+        }
+    }
+    let rmax = ps.iter().map(|p| p.radius).fold(0.0, f64::max);
+    let mut grid = Grid::new(2.0 * rmax);
+    for (i, p) in ps.iter().enumerate() {
+        let first = grid
+            .neighbours(p.position, p.radius + rmax)
+            .filter(|&j| {
+                let q = &ps[j];
+                let overlap = p.radius + q.radius - dist2(p.position, q.position).sqrt();
+                // particles that appear at different times may share a place (pouring)
+                q.insert_at == p.insert_at && overlap > OVERLAP_TOLERANCE * p.radius.min(q.radius)
+            })
+            .min();
+        if let Some(j) = first {
+            let q = &ps[j];
+            let overlap = p.radius + q.radius - dist2(p.position, q.position).sqrt();
+            return Err(src.err(
+                None,
+                format!(
+                    "particles {j} (from [[particles]] #{}, at {}) and {i} (from [[particles]] #{}, at {}) overlap by {overlap:.3e} m at the start, more than {}% of the smaller radius: move them apart",
+                    origin[j],
+                    fmt_vec(q.position),
+                    origin[i],
+                    fmt_vec(p.position),
+                    OVERLAP_TOLERANCE * 100.0
+                ),
+            ));
+        }
+        grid.insert(i, p.position);
+    }
+    for (w, wall) in scene.walls.iter().enumerate() {
+        for (i, p) in ps.iter().enumerate() {
+            let rel = [
+                p.position[0] - wall.point[0],
+                p.position[1] - wall.point[1],
+                p.position[2] - wall.point[2],
+            ];
+            let dist = rel[0] * wall.normal[0] + rel[1] * wall.normal[1] + rel[2] * wall.normal[2];
+            let overlap = p.radius - dist;
+            if overlap > OVERLAP_TOLERANCE * p.radius {
+                return Err(src.err(
+                    None,
+                    format!(
+                        "particle {i} (from [[particles]] #{}) at {} with radius {} overlaps [[wall]] #{} (point {}, normal {}) by {overlap:.3e} m at the start, more than {}% of its radius: move it to the side the normal points to",
+                        origin[i],
+                        fmt_vec(p.position),
+                        p.radius,
+                        w + 1,
+                        fmt_vec(wall.point),
+                        fmt_vec(wall.normal),
+                        OVERLAP_TOLERANCE * 100.0
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Every pair of materials that can meet needs a contact model.
+pub(super) fn check_pair_models(src: &Src, scene: &Scene) -> Res<()> {
+    let n = scene.materials.len();
+    let mut used = vec![false; n];
+    for p in &scene.particles {
+        used[p.material] = true;
+    }
+    let mut wall_used = vec![false; n];
+    for w in &scene.walls {
+        wall_used[w.material] = true;
+    }
+    for a in 0..n {
+        for b in a..n {
+            let meets = (used[a] && (used[b] || wall_used[b])) || (wall_used[a] && used[b]);
+            if meets {
+                if let Err(PowderError::Scene(msg)) = scene.pair_model(a, b) {
+                    let what = if used[a] && used[b] {
+                        "particles of both materials"
+                    } else {
+                        "a wall and particles of these materials"
+                    };
+                    return Err(src.err(None, format!("{msg} ({what} can touch)")));
+                }
+            }
+        }
+    }
+    Ok(())
+}

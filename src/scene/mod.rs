@@ -1,0 +1,490 @@
+//! The TOML scene description: domain, run settings, materials and their contact models,
+//! walls and particles, with validation and errors a user can act on.
+//!
+//! Every error is a [`PowderError::Scene`] that starts with the scene's name and, where the
+//! problem sits at a place in the file, its line and column
+//! (``scene `cluster`, line 12, column 11: ...``). Unknown keys are rejected everywhere,
+//! with the nearest valid key suggested.
+//!
+//! # Schema
+//!
+//! Units are SI throughout. "required" keys have no default.
+//!
+//! ```toml
+//! [domain]                      # required: the box the particles live in, m
+//! # periodic = [true, true, false] # optional, default none: periodic axes (minimum image;
+//! #                              #   no wall may face, and no gravity point along, one)
+//! min = [0.0, 0.0, 0.0]         # required, m
+//! max = [0.01, 0.01, 0.02]      # required, m; max > min on every axis
+//!
+//! [simulation]                  # required
+//! duration = 0.05               # required, s, > 0: simulated time
+//! dt = "auto"                   # "auto" (default: from the stiffest contact) or a time step in s, > 0
+//! force_dt = false              # default false; true accepts a dt above the stability limit
+//! jump_impulses = true          # default true (the GPU: where some contact's force can jump):
+//!                               # place the impulse of a contact force's jump (JKR touch and
+//!                               # pull-off, jump-in adhesion, a viscous first touch) inside the
+//!                               # step, second order in dt; false: plain velocity Verlet
+//! output_every = 1000           # default 1000, >= 1: steps between outputs (progress line,
+//!                               # VTK snapshot, CSV row of `powder run`)
+//! gravity = [0.0, 0.0, -9.81]   # m/s^2, default [0, 0, 0]
+//! impact_velocity = 1.0         # m/s, > 0, default 1: largest expected impact speed; sets the
+//!                               # Hertz/JKR contact time of the automatic time step
+//! checkpoint_every = 10000      # default 10 * output_every, >= 1: steps between checkpoints
+//! contact_output = true         # default: true under 100000 particles; with each VTK snapshot,
+//!                               # the contact network (`contacts/<name>_<step>.vtp`: one line
+//!                               # per contact with its forces, overlap, history, sliding)
+//!
+//! [[material]]                  # at least one; referred to by name
+//! name = "powder"               # required, unique
+//! density = 2000.0              # required, kg/m^3, > 0
+//! model = "hysteretic"          # required: "hysteretic", "lsd", "jkr" or "hertz"; the other keys are the
+//!                               # model's parameters (below); no other keys are allowed
+//!
+//! # model = "hysteretic" (piece-wise linear adhesive elasto-plastic model):
+//! k1 = 100.0                    # required, N/m, > 0: plastic loading stiffness
+//! kp = 500.0                    # required, N/m, >= k1: elastic limit (un-/re-loading) stiffness
+//! kc = 100.0                    # required, N/m, >= 0: slope of the tensile (adhesive) branch
+//! phi_f = 0.05                  # required, dimensionless, 0 < phi_f <= 1: plasticity depth
+//! fa = 0.0                      # N, >= 0, default 0: non-contact adhesive force
+//! kca = "inf"                   # N/m, > 0, default kc if kc > 0 else "inf" (zero range):
+//!                               # non-contact adhesive stiffness; a number, inf or "inf"
+//! adhesion = "jump-in"          # "jump-in" (default) or "reversible"
+//! gamma0 = 0.0                  # kg/s, >= 0, default 0: viscous damping in contact
+//! k2_rule = "linear"            # "linear" (default) or "sqrt": how k2 grows with delta_max
+//! # Luding's friction (hysteretic and lsd; docs/models.md "Luding's sliding, rolling and twisting
+//! # friction"); > 0 makes particles rotate (both backends). Lever a12 = 2R* (2r at a wall),
+//! # Coulomb load max(0, f_n + kc delta + fa) (lsd: max(0, f_n)):
+//! friction = 0.0                # >= 0, default 0 (off): static sliding coefficient mu_s
+//! friction_dynamic = 0.0        # 0 <= mu_d <= mu_s, default friction
+//! kt = 28.6                     # N/m, > 0, default 2/7 k1 (lsd: 2/7 k)
+//! gamma_t = 0.0                 # kg/s, >= 0, default 2/7 gamma0
+//! rolling_friction = 0.0        # >= 0, default 0 (off): mu_r, torque <= mu_r a12 f_N*
+//! kr = 40.0                     # N/m, > 0, default 2/5 k1 (lsd: 2/5 k)
+//! gamma_r = 0.0                 # kg/s, >= 0, default 2/5 gamma0
+//! twisting_friction = 0.0       # >= 0, default 0 (off): mu_o, torque <= mu_o a12 f_N*
+//! ko = 40.0                     # N/m, > 0, default 2/5 k1 (lsd: 2/5 k)
+//! gamma_o = 0.0                 # kg/s, >= 0, default 2/5 gamma0
+//! # (a stiffness, damping or friction_dynamic without its coefficient > 0 is refused)
+//!
+//! # model = "lsd" (linear spring-dashpot):
+//! k = 300.0                     # required, N/m, > 0: spring stiffness
+//! gamma0 = 0.0                  # kg/s, >= 0, default 0: viscous damping
+//! # and Luding's friction keys as for "hysteretic"
+//!
+//! # model = "jkr" (JKR adhesive elastic spheres) or "hertz" (the same without adhesion):
+//! youngs = 1e8                  # required, Pa, > 0: Young's modulus E of the material
+//! poisson = 0.3                 # required, -1 < poisson < 0.5
+//! surface_energy = 0.05         # jkr only, required, J/m^2, >= 0: gamma per surface, Fc = 3 pi gamma R*
+//! dissipation = "none"          # "none" (default), "tsuji" (paper 002 eqs. 11-16, needs
+//!                               # restitution; the default when restitution is given) or
+//!                               # "powerlaw" (paper 001 eq. 19, needs D, alpha, beta),
+//!                               # "krijt" (jkr only, paper 001 eqs. 10-12, B1-B2, needs tvis)
+//!                               # or "stress" (jkr only, paper 001 eqs. 17-18, needs
+//!                               # tvis0_per_radius, B, zeta); krijt/stress: both backends
+//! restitution = 0.9             # target restitution e in (0, 1] of "tsuji"
+//! tsuji_stiffness = "contact-radius" # "tsuji" only: the stiffness of its dashpots,
+//!                               # "contact-radius" (default: Sn = 2E* a, St = 8G* a) or
+//!                               # "hertz" (paper 002 eq. 13: 2E* sqrt(R* delta),
+//!                               # 8G* sqrt(R* delta), zero at delta <= 0)
+//! D = 118.0                     # "powerlaw": F = sgn(v) D E* |v|^alpha a^beta
+//! alpha = 3.0
+//! beta = 1.5
+//! tvis = 0.075                  # "krijt": relaxation time T_vis, s, >= 0
+//! tvis0_per_radius = 2.1e-4     # "stress": C, s/m, >= 0: T_vis = C R exp[(B p_c/E*)^zeta]
+//! B = 6.2                       # "stress": >= 0
+//! zeta = 4.0                    # "stress": > 0
+//! sigma0 = 2.9                  # "krijt"/"stress": Pa, >= 0, default 0: crack stress
+//!                               # ~ gamma/(atomic spacing) of the contact-radius dynamics
+//!                               # (eq. B2); 0 = a follows the JKR curve instantly
+//! friction = 0.0                # >= 0, default 0: sliding friction mu_s (adhesive Coulomb
+//!                               # limit |Ft| <= mu_s |F_N + 2 Fc|); > 0 makes particles rotate
+//! rolling_hysteresis = 0.0      # jkr only, >= 0, default 0: Delta gamma / gamma of the
+//!                               # rolling resistance (xi_crit = a0/12 * Delta gamma / gamma)
+//! pulloff = "displacement"      # jkr only: "displacement" (default, breaks at
+//!                               # -(3/4)^(2/3) delta0) or "force" (breaks at F = -Fc)
+//! stiffness_scale = 1.0         # > 0, default 1: E -> S E and gamma -> gamma S^(2/5)
+//! twisting_friction = 0.0       # >= 0, default 0 (off): Luding's twisting, mu_o
+//! ko = 1e3                      # N/m, > 0, default 2/5 * 8 G* a at the current contact radius
+//! gamma_o = 0.0                 # kg/s, >= 0, default 0
+//!
+//! [[interaction]]               # optional: the model for a pair of materials
+//! materials = ["powder", "glass"]  # required: two material names (order does not matter)
+//! model = "lsd"                 # required, with that model's parameters as in [[material]]
+//! k = 300.0
+//!
+//! [[wall]]                      # optional: an infinite plane
+//! point = [0.0, 0.0, 0.0]       # required, m: a point on the plane
+//! normal = [0.0, 0.0, 1.0]      # required: points into the domain; need not be unit, non-zero
+//! material = "powder"           # default: the first [[material]]
+//! # at most one kind of motion (default: fixed); a moving wall has an infinite mass:
+//! # velocity = [0.0, 0.0, -0.01] # m/s, prescribed from t = 0; or a schedule:
+//! # velocities = [[0.0, 0.0, -0.01], [0.0, 0.0, 0.01]]  # m/s, piecewise constant,
+//! # times = [0.0, 0.05]          #   velocities[k] from times[k] s (at rest before times[0]); or
+//! # servo_force = 0.5            # N > 0: move along the normal to hold this normal force,
+//! # servo_gain = 1e-3            #   m/s per N > 0: speed = clamp(gain·(servo_force − F), ±max)
+//! # servo_max_speed = 0.01       #   m/s > 0 (stable while gain·k_bed·dt < 1)
+//! # [[wall.phase]]              # or a program: phases, each one kind of motion as above
+//! # from = 0.0                   #   (`velocity` or `servo_*`; neither: at rest) from `from`
+//! # servo_force = 0.5            #   s on (>= 0, increasing; at rest before the first); a
+//! # servo_gain = 1e-3            #   servo phase entered during the run starts at rest
+//! # servo_max_speed = 0.01
+//! # [[wall.phase]]
+//! # from = 0.02
+//! # velocity = [0.0, 0.0, 0.01]
+//!
+//! [[particles]]                 # one or more blocks, expanded in file order; particle ids
+//!                               # (0-based) follow the order of expansion
+//! kind = "list"                 # required: "list", "lattice" or "random"
+//! material = "powder"           # default: the first [[material]]
+//! insert_at = 0.0               # s, >= 0, default 0: when the block's particles appear
+//!                               # (pouring; before that they neither move nor interact)
+//!
+//! # kind = "list": explicit particles
+//! positions = [[0.005, 0.005, 0.005], [0.005, 0.005, 0.008]]   # required, m
+//! radius = 1.1e-3               # m, > 0, for all; or
+//! # radii = [1.1e-3, 1.0e-3]    # m, > 0, one per position (exactly one of radius / radii)
+//! velocities = [[0.0, 0.0, 0.0], [0.0, 0.0, -0.1]]  # m/s, optional, one per position; or
+//! # velocity = [0.0, 0.0, 0.0] # m/s for all; default zero
+//! # angular_velocity = [0.0, 0.0, 100.0]  # rad/s for all, any kind, default zero: only
+//! #                             # where a contact model makes particles rotate
+//!
+//! # kind = "lattice": simple cubic lattice, x fastest, then y, then z
+//! min = [0.0, 0.0, 0.0]         # required, m: region corner; spheres lie fully inside the region
+//! max = [0.01, 0.01, 0.01]      # required, m
+//! radius = 1e-3                 # required, m, > 0: all particles
+//! spacing = 2.1e-3              # m, >= 2*radius, default 2*radius*(1 + 1e-9)
+//! velocity = [0.0, 0.0, 0.0]    # m/s, default zero
+//! jitter = 0.0                  # default 0, 0..=1: random displacement per axis of up to
+//!                               # jitter*(spacing - 2*radius)/2, never causing overlaps
+//! seed = 1                      # default 1: seed of the jitter
+//!
+//! # kind = "random": random sequential placement without overlaps (with every particle
+//! # placed before, of all blocks, that appears at the same time), spheres fully inside the
+//! # region; up to 1000 attempts per particle. Random sequential addition jams near a solid
+//! # fraction of ~0.38.
+//! # batches = 1                 # default 1: pour `count` in this many batches, each placed
+//! # batch_interval = 0.01       #   afresh in the region (seed + k), batch k appearing at
+//! #                             #   insert_at + k·batch_interval s (> 0 with batches > 1)
+//! count = 500                   # required, >= 0
+//! min = [0.0, 0.0, 0.0]         # required, m
+//! max = [0.01, 0.01, 0.01]      # required, m
+//! seed = 1                      # default 1: seed of radii and positions (Pcg64)
+//! radius = 1e-3                 # m, > 0: a fixed radius; or a size distribution (exactly one):
+//! # size = { distribution = "uniform", min = 0.8e-3, max = 1.2e-3 }   # m, 0 < min <= max
+//! # size = { distribution = "normal", mean = 1e-3, std = 1e-4 }       # m, mean > 0, std >= 0
+//! # size = { distribution = "lognormal", median = 1e-3, sigma = 0.2 } # median m > 0, sigma >= 0
+//! # size = { distribution = "list", radii = [1e-3, 2e-3], weights = [3.0, 1.0] }
+//! #        radii m > 0; weights >= 0 with a positive sum, default all equal
+//! # (normal radii are truncated to (0, inf) by redrawing)
+//! velocity = [0.0, 0.0, 0.0]    # m/s, default zero
+//! ```
+//!
+//! # Checks at load time
+//!
+//! Besides the types and ranges above: material names are unique and every referenced
+//! name exists; there is at least one particle; every sphere lies inside the domain
+//! (within 1% of its radius); no two particles overlap by more than 1% of the smaller
+//! radius, and no particle overlaps a wall by more than 1% of its radius; every pair of
+//! different materials that can meet (particle–particle, particle–wall) has an
+//! `[[interaction]]`.
+
+mod checks;
+mod hash_grid;
+mod keys;
+mod parse;
+mod particles;
+#[cfg(test)]
+mod tests;
+mod toml_reader;
+
+use crate::error::PowderError;
+use crate::model::ContactModel;
+use parse::parse_scene;
+use std::path::Path;
+use toml_reader::Src;
+
+/// Largest accepted overlap at start, as a fraction of the (smaller) radius.
+pub const OVERLAP_TOLERANCE: f64 = 0.01;
+/// Attempts to find a free spot for one particle of a `random` block.
+pub const MAX_PLACEMENT_ATTEMPTS: usize = 1000;
+/// Largest number of particles one `lattice` or `random` block may create (guards typos).
+pub const MAX_BLOCK_PARTICLES: u64 = 100_000_000;
+/// Particles below which `contact_output` defaults to on (the contact network files of a
+/// larger scene get large: a dense packing has about three contacts per particle).
+pub const CONTACT_OUTPUT_BELOW: usize = 100_000;
+
+/// The box the particles live in, m.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Domain {
+    /// Lower corner (x, y, z), m.
+    pub min: [f64; 3],
+    /// Upper corner (x, y, z), m.
+    pub max: [f64; 3],
+    /// Periodic axes: a particle leaving through one face enters through the opposite one,
+    /// and pairs interact across the faces (minimum image).
+    pub periodic: [bool; 3],
+}
+
+impl Domain {
+    /// Whether any axis is periodic.
+    pub fn any_periodic(&self) -> bool {
+        self.periodic.iter().any(|&p| p)
+    }
+}
+
+/// How the time step is chosen.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub enum DtSetting {
+    /// From the stiffest contact of the scene.
+    #[default]
+    Auto,
+    /// A fixed time step, s.
+    Fixed(f64),
+}
+
+/// A named material: density and its own contact model.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    /// Name used in `[[interaction]]` and particle blocks.
+    pub name: String,
+    /// kg/m^3.
+    pub density: f64,
+    /// Contact model between two particles of this material (also between a wall of this
+    /// material and such a particle), unless an [`Interaction`] overrides it.
+    pub model: ContactModel,
+}
+
+/// A contact model for a pair of materials (indices into [`Scene::materials`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Interaction {
+    /// The two material indices (either order).
+    pub materials: [usize; 2],
+    /// Contact model of the pair, overriding the materials' own.
+    pub model: ContactModel,
+}
+
+/// What a wall does during one phase of its motion.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum WallPhase {
+    /// At rest.
+    #[default]
+    Rest,
+    /// A prescribed velocity, m/s.
+    Velocity([f64; 3]),
+    /// Servo control along the normal: each step the wall moves with speed
+    /// clamp(gain·(force − F), ±max_speed) along its normal, F being the normal force the
+    /// particles exerted on it the step before (at rest in the first step of a servo phase
+    /// entered during the run); it holds `force` (N).
+    Servo {
+        /// Target normal force on the wall, N.
+        force: f64,
+        /// Gain, m/s per N of force error.
+        gain: f64,
+        /// Largest wall speed, m/s.
+        max_speed: f64,
+    },
+}
+
+/// How a wall moves (it is never pushed by the particles: an infinite mass): phases, each
+/// from its start time on (s, strictly increasing), at rest before the first. A step
+/// follows the phase its start time falls in.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct WallMotion {
+    /// (from time s, what the wall does), by increasing time.
+    pub phases: Vec<(f64, WallPhase)>,
+}
+
+impl WallMotion {
+    /// At rest throughout.
+    pub fn fixed() -> Self {
+        Self::default()
+    }
+
+    /// One phase from t = 0 on.
+    pub fn always(phase: WallPhase) -> Self {
+        Self {
+            phases: vec![(0.0, phase)],
+        }
+    }
+
+    /// The index of the phase at time `t` (None: before the first).
+    pub fn index_at(&self, t: f64) -> Option<usize> {
+        self.phases.iter().rposition(|(from, _)| t >= *from)
+    }
+
+    /// The phase at time `t`.
+    pub fn at(&self, t: f64) -> WallPhase {
+        self.index_at(t)
+            .map_or(WallPhase::Rest, |i| self.phases[i].1)
+    }
+
+    /// The prescribed velocity at time `t` (zero at rest and under servo control).
+    pub fn prescribed_velocity(&self, t: f64) -> [f64; 3] {
+        match self.at(t) {
+            WallPhase::Velocity(v) => v,
+            _ => [0.0; 3],
+        }
+    }
+
+    /// The next time after `t` at which a phase starts.
+    pub fn next_switch(&self, t: f64) -> Option<f64> {
+        self.phases
+            .iter()
+            .map(|(from, _)| *from)
+            .find(|&from| from > t)
+    }
+
+    /// Whether the wall ever moves.
+    pub fn moves(&self) -> bool {
+        self.phases.iter().any(|(_, p)| *p != WallPhase::Rest)
+    }
+
+    /// Whether some phase is under servo control.
+    pub fn servo(&self) -> bool {
+        self.phases
+            .iter()
+            .any(|(_, p)| matches!(p, WallPhase::Servo { .. }))
+    }
+}
+
+/// An infinite plane wall.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Wall {
+    /// A point on the plane at time 0, m.
+    pub point: [f64; 3],
+    /// Unit normal pointing into the domain.
+    pub normal: [f64; 3],
+    /// How it moves (default: fixed).
+    pub motion: WallMotion,
+    /// Index into [`Scene::materials`].
+    pub material: usize,
+}
+
+/// One particle's initial state.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ParticleInit {
+    /// m.
+    pub position: [f64; 3],
+    /// m/s.
+    pub velocity: [f64; 3],
+    /// rad/s: the spin it starts (or enters) with; only where a contact model makes
+    /// particles rotate.
+    pub angular_velocity: [f64; 3],
+    /// m.
+    pub radius: f64,
+    /// Index into [`Scene::materials`].
+    pub material: usize,
+    /// When the particle appears, s (0: at the start). Before that it neither moves nor
+    /// interacts; it enters with its position and velocity (pouring).
+    pub insert_at: f64,
+}
+
+/// A validated scene (see the module documentation for the file format).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    /// The file stem, or "default".
+    pub name: String,
+    /// The domain box.
+    pub domain: Domain,
+    /// m/s^2.
+    pub gravity: [f64; 3],
+    /// How the time step is chosen.
+    pub dt: DtSetting,
+    /// Accept a dt above the stability limit.
+    pub force_dt: bool,
+    /// Place the impulse of a contact force's jump inside the step ([`crate::cpu::jump`],
+    /// `shaders/jump.wgsl`); `None`: yes (the GPU engine: where some contact law's force
+    /// can jump, [`crate::model::ContactModel::has_force_jumps`]).
+    pub jump_impulses: Option<bool>,
+    /// Simulated time, s.
+    pub duration: f64,
+    /// Steps between progress/summary lines.
+    pub output_every: u64,
+    /// Largest expected impact speed, m/s (default 1): sets the Hertz/JKR contact time
+    /// for the automatic time step.
+    pub impact_velocity: f64,
+    /// Steps between checkpoints of `powder run` (default 10 × output_every).
+    pub checkpoint_every: u64,
+    /// Write the contact network with each snapshot of `powder run`; `None`: under
+    /// [`CONTACT_OUTPUT_BELOW`] particles ([`Scene::writes_contacts`]).
+    pub contact_output: Option<bool>,
+    /// Materials, by index.
+    pub materials: Vec<Material>,
+    /// Pair models; they take precedence over the materials' own models.
+    pub interactions: Vec<Interaction>,
+    /// Plane walls.
+    pub walls: Vec<Wall>,
+    /// Fully expanded, in id order.
+    pub particles: Vec<ParticleInit>,
+}
+
+impl Scene {
+    /// Parses and validates a scene; `name` labels the errors (and becomes [`Scene::name`]).
+    pub fn from_toml_str(text: &str, name: &str) -> Result<Scene, PowderError> {
+        let name = if name.is_empty() { "default" } else { name };
+        let src = Src { name, text };
+        parse_scene(&src)
+    }
+
+    /// Reads and parses a scene file; the scene is named after the file stem.
+    pub fn load(path: &Path) -> Result<Scene, PowderError> {
+        Self::load_with(path, &[])
+    }
+
+    /// Loads a scene file with `--set KEY=VALUE` overrides applied ([`crate::overrides`]).
+    pub fn load_with(path: &Path, sets: &[String]) -> Result<Scene, PowderError> {
+        let text = std::fs::read_to_string(path).map_err(|e| {
+            PowderError::io(format!("cannot read scene file `{}`", path.display()), e)
+        })?;
+        let name = path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let text = crate::overrides::apply(&text, sets)?;
+        Self::from_toml_str(&text, &name)
+    }
+
+    /// Whether some particle appears only during the run (pouring).
+    pub fn pours(&self) -> bool {
+        self.particles.iter().any(|p| p.insert_at > 0.0)
+    }
+
+    /// Whether `powder run` writes the contact network with each snapshot.
+    pub fn writes_contacts(&self) -> bool {
+        self.contact_output
+            .unwrap_or(self.particles.len() < CONTACT_OUTPUT_BELOW)
+    }
+
+    /// The contact model for a pair of material indices: an `[[interaction]]` for the pair
+    /// (either order) if present, else the material's own model when both are the same.
+    pub fn pair_model(&self, a: usize, b: usize) -> Result<ContactModel, PowderError> {
+        let n = self.materials.len();
+        if a >= n || b >= n {
+            return Err(PowderError::Scene(format!(
+                "material index {} is out of range: the scene has {n} material(s)",
+                a.max(b)
+            )));
+        }
+        if let Some(i) = self
+            .interactions
+            .iter()
+            .find(|i| i.materials == [a, b] || i.materials == [b, a])
+        {
+            return Ok(i.model);
+        }
+        if a == b {
+            return Ok(self.materials[a].model);
+        }
+        Err(PowderError::Scene(no_pair_model_message(
+            &self.materials[a].name,
+            &self.materials[b].name,
+        )))
+    }
+}
+
+fn no_pair_model_message(a: &str, b: &str) -> String {
+    format!(
+        "no contact model for materials `{a}` and `{b}`: add an [[interaction]] with materials = [\"{a}\", \"{b}\"]"
+    )
+}

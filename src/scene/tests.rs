@@ -1,0 +1,717 @@
+//! Unit tests of scene parsing and validation.
+
+use super::hash_grid::dist2;
+use super::particles::SizeDist;
+use super::toml_reader::Src;
+use super::*;
+use crate::model::{AdhesionMode, K2Rule, LsdParams};
+use rand::SeedableRng;
+use rand_pcg::Pcg64;
+
+const FULL: &str = r#"
+[domain]
+min = [0.0, 0.0, 0.0]
+max = [0.01, 0.01, 0.02]
+
+[simulation]
+duration = 0.05
+gravity = [0.0, 0.0, -9.81]
+
+[[material]]
+name = "powder"
+density = 2000.0
+model = "hysteretic"
+k1 = 100.0
+kp = 500.0
+kc = 100.0
+phi_f = 0.05
+
+[[material]]
+name = "glass"
+density = 2500
+model = "lsd"
+k = 300.0
+gamma0 = 1e-3
+
+[[interaction]]
+materials = ["glass", "powder"]
+model = "lsd"
+k = 200.0
+
+[[wall]]
+point = [0.0, 0.0, 0.0]
+normal = [0.0, 0.0, 2.0]
+
+[[particles]]
+kind = "list"
+material = "glass"
+positions = [[0.002, 0.002, 0.002], [0.005, 0.005, 0.005]]
+radii = [1e-3, 1.5e-3]
+velocities = [[0.0, 0.0, -0.1], [0.1, 0.0, 0.0]]
+
+[[particles]]
+kind = "lattice"
+min = [0.0, 0.0, 0.01]
+max = [0.01, 0.01, 0.014]
+radius = 1e-3
+"#;
+
+fn parse(text: &str) -> Result<Scene, String> {
+    Scene::from_toml_str(text, "test").map_err(|e| e.to_string())
+}
+
+fn err(text: &str) -> String {
+    match parse(text) {
+        Ok(_) => panic!("expected an error for:\n{text}"),
+        Err(e) => e,
+    }
+}
+
+fn assert_contains(msg: &str, parts: &[&str]) {
+    for p in parts {
+        assert!(msg.contains(p), "message {msg:?} lacks {p:?}");
+    }
+}
+
+/// A minimal valid scene with `extra` appended after one list particle.
+fn minimal(material_extra: &str, extra: &str) -> String {
+    format!(
+        r#"[domain]
+min = [0.0, 0.0, 0.0]
+max = [0.01, 0.01, 0.01]
+
+[simulation]
+duration = 0.1
+
+[[material]]
+name = "powder"
+density = 2000.0
+model = "lsd"
+k = 100.0
+{material_extra}
+[[particles]]
+kind = "list"
+positions = [[0.005, 0.005, 0.005]]
+radius = 1e-3
+{extra}"#
+    )
+}
+
+#[test]
+fn contact_output_is_on_below_the_size_limit_unless_set() {
+    let small = parse(&minimal("", "")).unwrap();
+    assert_eq!(small.contact_output, None);
+    assert!(small.writes_contacts());
+    let off = minimal("", "").replace("duration = 0.1", "duration = 0.1\ncontact_output = false");
+    assert!(!parse(&off).unwrap().writes_contacts());
+    let mut large = small.clone();
+    large.particles = vec![small.particles[0]; CONTACT_OUTPUT_BELOW];
+    assert!(!large.writes_contacts());
+    large.contact_output = Some(true);
+    assert!(large.writes_contacts());
+    let bad = minimal("", "").replace("duration = 0.1", "duration = 0.1\ncontact_output = 1");
+    let err = parse(&bad).unwrap_err().to_string();
+    assert!(err.contains("contact_output"), "{err}");
+}
+
+#[test]
+fn full_scene_values_and_defaults() {
+    let s = parse(FULL).unwrap();
+    assert_eq!(s.name, "test");
+    assert_eq!(s.domain.max, [0.01, 0.01, 0.02]);
+    assert_eq!(s.gravity, [0.0, 0.0, -9.81]);
+    assert_eq!(s.dt, DtSetting::Auto);
+    assert!(!s.force_dt);
+    assert_eq!(s.jump_impulses, None);
+    assert_eq!(s.duration, 0.05);
+    assert_eq!(s.output_every, 1000);
+    assert_eq!(s.materials.len(), 2);
+    assert_eq!(s.materials[1].density, 2500.0);
+    match s.materials[0].model {
+        ContactModel::Hysteretic(p) => {
+            assert_eq!((p.k1, p.kp, p.kc, p.phi_f), (100.0, 500.0, 100.0, 0.05));
+            assert_eq!(p.fa, 0.0);
+            assert_eq!(p.kca, 100.0, "kca defaults to kc");
+            assert_eq!(p.adhesion, AdhesionMode::JumpIn);
+            assert_eq!(p.gamma0, 0.0);
+            assert_eq!(p.k2_rule, K2Rule::Linear);
+        }
+        other => panic!("wrong model {other:?}"),
+    }
+    assert_eq!(
+        s.materials[1].model,
+        ContactModel::Lsd(LsdParams::new(300.0, 1e-3))
+    );
+    assert_eq!(s.interactions.len(), 1);
+    assert_eq!(s.interactions[0].materials, [1, 0]);
+    assert_eq!(s.walls.len(), 1);
+    assert_eq!(s.walls[0].normal, [0.0, 0.0, 1.0]);
+    assert_eq!(s.walls[0].material, 0);
+    // 2 listed + 5 x 5 x 2 lattice
+    assert_eq!(s.particles.len(), 2 + 50);
+    assert_eq!(s.particles[1].radius, 1.5e-3);
+    assert_eq!(s.particles[1].velocity, [0.1, 0.0, 0.0]);
+    assert_eq!(s.particles[1].material, 1);
+    assert_eq!(s.particles[2].material, 0);
+    assert_eq!(s.particles[2].velocity, [0.0; 3]);
+    assert!((s.particles[2].position[0] - 1e-3).abs() < 1e-15);
+    assert!((s.particles[2].position[2] - 0.011).abs() < 1e-15);
+    // pair models: override in either order, own model, missing pair
+    let lsd200 = ContactModel::Lsd(LsdParams::new(200.0, 0.0));
+    assert_eq!(s.pair_model(0, 1).unwrap(), lsd200);
+    assert_eq!(s.pair_model(1, 0).unwrap(), lsd200);
+    assert_eq!(s.pair_model(1, 1).unwrap(), s.materials[1].model);
+    assert!(s.pair_model(0, 2).is_err());
+}
+
+#[test]
+fn simulation_settings_and_hysteretic_options() {
+    let text = minimal(
+        "",
+        r#"
+[[material]]
+name = "h"
+density = 1000
+model = "hysteretic"
+k1 = 1.0
+kp = 2.0
+kc = 0.0
+phi_f = 0.1
+fa = 1e-6
+adhesion = "reversible"
+k2_rule = "sqrt"
+gamma0 = 1e-4
+
+[[material]]
+name = "h2"
+density = 1000
+model = "hysteretic"
+k1 = 1.0
+kp = 2.0
+kc = 1.0
+phi_f = 0.1
+kca = "inf"
+"#,
+    )
+    .replace(
+        "duration = 0.1",
+        "duration = 0.1\ndt = 1e-6\nforce_dt = true\njump_impulses = false\noutput_every = 7",
+    );
+    let s = parse(&text).unwrap();
+    assert_eq!(s.dt, DtSetting::Fixed(1e-6));
+    assert!(s.force_dt);
+    assert_eq!(s.jump_impulses, Some(false));
+    let bad = text.replace("jump_impulses = false", "jump_impulses = 1");
+    let e = parse(&bad).unwrap_err().to_string();
+    assert!(e.contains("jump_impulses"), "{e}");
+    assert_eq!(s.output_every, 7);
+    let ContactModel::Hysteretic(h) = s.materials[1].model else {
+        panic!()
+    };
+    assert_eq!(h.kca, f64::INFINITY, "kc = 0 gives zero range");
+    assert_eq!(h.adhesion, AdhesionMode::Reversible);
+    assert_eq!(h.k2_rule, K2Rule::Sqrt);
+    assert_eq!((h.fa, h.gamma0), (1e-6, 1e-4));
+    let ContactModel::Hysteretic(h2) = s.materials[2].model else {
+        panic!()
+    };
+    assert_eq!(h2.kca, f64::INFINITY);
+}
+
+#[test]
+fn malformed_toml_has_line_and_column() {
+    let text = "[domain]\nmin = [0.0, 0.0, 0.0]\nmax = [0.01, 0.01 0.01]\n";
+    let e = err(text);
+    assert_contains(
+        &e,
+        &["scene `test`", "line 3", "column", "TOML syntax error"],
+    );
+    let e = err("[simulation]\nduration = 0.1\nduration = 0.2\n");
+    assert_contains(&e, &["line 3"]);
+}
+
+#[test]
+fn unknown_keys_are_rejected_with_suggestions() {
+    let e = err(&minimal("dencity = 3.0", ""));
+    assert_contains(
+        &e,
+        &[
+            "line 13",
+            "unknown key `dencity` in [[material]] #1 (`powder`): did you mean `density`?",
+        ],
+    );
+    // a parameter of the other model
+    let e = err(&minimal("kp = 500.0", ""));
+    assert_contains(
+        &e,
+        &[
+            "unknown key `kp`",
+            "parameter of the `hysteretic` model",
+            "line 13",
+        ],
+    );
+    // in a fixed table
+    let e = err(&minimal("", "").replace("duration = 0.1", "duration = 0.1\ngravty = [0, 0, 0]"));
+    assert_contains(
+        &e,
+        &[
+            "unknown key `gravty` in [simulation]",
+            "did you mean `gravity`?",
+            "line 7",
+        ],
+    );
+    // at the top level
+    let e = err(&minimal("", "[[materials]]\nname = \"x\"\n"));
+    assert_contains(
+        &e,
+        &[
+            "unknown key `materials` in the top-level table",
+            "did you mean `material`?",
+        ],
+    );
+    let e = err(&format!("duration = 1.0\n{}", minimal("", "")));
+    assert_contains(
+        &e,
+        &["`duration` belongs in the [simulation] table", "line 1"],
+    );
+    // in particle blocks and size tables
+    let e = err(&minimal("", "").replace("radius = 1e-3", "radius = 1e-3\nvelocty = [0, 0, 0]"));
+    assert_contains(
+        &e,
+        &[
+            "unknown key `velocty` in [[particles]] #1 (kind = \"list\")",
+            "`velocity`",
+        ],
+    );
+    let e = err(&minimal(
+        "",
+        "[[particles]]\nkind = \"random\"\ncount = 1\nmin = [0, 0, 0]\nmax = [0.003, 0.003, 0.003]\nsize = { distribution = \"uniform\", min = 1e-4, maxx = 2e-4 }\n",
+    ));
+    assert_contains(&e, &["unknown key `maxx`", "did you mean `max`?"]);
+    let e = err(&minimal(
+        "",
+        "[[particles]]\nkind = \"random\"\ncount = 1\nmin = [0, 0, 0]\nmax = [0.003, 0.003, 0.003]\nsize = { distrbution = \"uniform\", min = 1e-4, max = 2e-4 }\n",
+    ));
+    assert_contains(
+        &e,
+        &["unknown key `distrbution`", "did you mean `distribution`?"],
+    );
+    // in a wall, an interaction
+    let e = err(&minimal(
+        "",
+        "[[wall]]\npoint = [0, 0, 0]\nnormal = [0, 0, 1]\nmaterial = \"powder\"\ncolour = 1\n",
+    ));
+    assert_contains(&e, &["unknown key `colour` in [[wall]] #1"]);
+    // unknown values of string options are suggested too
+    let e = err(&minimal("", "").replace("model = \"lsd\"", "model = \"hysteresis\""));
+    assert_contains(
+        &e,
+        &[
+            "`model` in [[material]] #1 (`powder`) must be",
+            "did you mean \"hysteretic\"?",
+        ],
+    );
+}
+
+#[test]
+fn missing_keys_and_wrong_types() {
+    let e = err(&minimal("", "").replace("duration = 0.1", ""));
+    assert_contains(
+        &e,
+        &["missing required key `duration` in [simulation]", "line 5"],
+    );
+    let e = err(&minimal("", "").replace("k = 100.0", ""));
+    assert_contains(
+        &e,
+        &["missing required key `k` in [[material]] #1 (`powder`)"],
+    );
+    let e = err("[simulation]\nduration = 1.0\n");
+    assert_contains(&e, &["missing required table [domain]"]);
+    let e = err(&minimal("", "").replace("density = 2000.0", "density = \"2000\""));
+    assert_contains(
+        &e,
+        &[
+            "`density` in [[material]] #1 (`powder`) must be a number",
+            "\"2000\"",
+            "line 10",
+        ],
+    );
+    let e = err(&minimal("", "").replace("duration = 0.1", "duration = 0.1\noutput_every = 1.5"));
+    assert_contains(
+        &e,
+        &["`output_every` in [simulation] must be a non-negative integer"],
+    );
+    let e = err(&minimal("", "").replace("min = [0.0, 0.0, 0.0]", "min = [0.0, 0.0]"));
+    assert_contains(
+        &e,
+        &[
+            "`min` in [domain] must be an array of 3 numbers",
+            "2 element(s)",
+            "line 2",
+        ],
+    );
+    let e = err(&minimal("", "").replace("[domain]", "[[domain]]"));
+    assert_contains(&e, &["`domain` in the top-level table must be a table"]);
+    let e = err(&minimal("", "").replace("kind = \"list\"", ""));
+    assert_contains(&e, &["missing required key `kind` in [[particles]] #1"]);
+}
+
+#[test]
+fn out_of_range_values() {
+    let cases: &[(&str, &str, &[&str])] = &[
+        (
+            "density = 2000.0",
+            "density = 0.0",
+            &["`density`", "must be > 0", "line 10"],
+        ),
+        (
+            "radius = 1e-3",
+            "radius = -1e-3",
+            &["`radius`", "must be > 0"],
+        ),
+        (
+            "duration = 0.1",
+            "duration = 0",
+            &["`duration`", "must be > 0"],
+        ),
+        (
+            "duration = 0.1",
+            "duration = 0.1\ndt = -1e-6",
+            &["`dt`", "\"auto\" or a time step > 0"],
+        ),
+        (
+            "duration = 0.1",
+            "duration = 0.1\ndt = \"fast\"",
+            &["`dt`", "\"auto\""],
+        ),
+        (
+            "max = [0.01, 0.01, 0.01]",
+            "max = [0.01, 0.01, 0.0]",
+            &["max must be > min", "axis z"],
+        ),
+        (
+            "k = 100.0",
+            "k = -1.0",
+            &["material `powder`: invalid parameter `k`", "line 12"],
+        ),
+        (
+            "density = 2000.0",
+            "density = nan",
+            &["`density`", "finite"],
+        ),
+    ];
+    for (from, to, parts) in cases {
+        let e = err(&minimal("", "").replace(from, to));
+        assert_contains(&e, parts);
+    }
+    let hyst = minimal("", "").replace(
+        "model = \"lsd\"\nk = 100.0",
+        "model = \"hysteretic\"\nk1 = 100.0\nkp = 50.0\nkc = 1.0\nphi_f = 0.05",
+    );
+    let e = err(&hyst);
+    assert_contains(
+        &e,
+        &["material `powder`: invalid parameter `kp`", "line 13"],
+    );
+    let e = err(&minimal(
+        "",
+        "[[wall]]\npoint = [0, 0, 0]\nnormal = [0, 0, 0]\n",
+    ));
+    assert_contains(&e, &["`normal` in [[wall]] #1 must be a non-zero vector"]);
+    let e = err(&minimal(
+        "",
+        "[[wall]]\npoint = [0, 0, 0]\nnormal = [0, 0, 1]\nmaterial = \"powdr\"\n",
+    ));
+    assert_contains(
+        &e,
+        &[
+            "unknown material `powdr`",
+            "known materials are `powder`",
+            "did you mean `powder`?",
+        ],
+    );
+    let e = err(&minimal("", "").replace("radius = 1e-3", "radii = [1e-3, 1e-3]"));
+    assert_contains(&e, &["`radii`", "has 2 entries but `positions` has 1"]);
+    let e = err(&minimal(
+        "",
+        "[[material]]\nname = \"powder\"\ndensity = 1.0\nmodel = \"lsd\"\nk = 1.0\n",
+    ));
+    assert_contains(
+        &e,
+        &[
+            "duplicate material name `powder`",
+            "[[material]] #2",
+            "also [[material]] #1",
+        ],
+    );
+    let e = err(&minimal("", "").replace("radius = 1e-3", "radius = 1e-3\nradii = [1e-3]"));
+    assert_contains(&e, &["has both `radius` and `radii`"]);
+}
+
+#[test]
+fn particle_placement_errors() {
+    // outside the domain
+    let e = err(&minimal("", "").replace(
+        "[[0.005, 0.005, 0.005]]",
+        "[[0.005, 0.005, 0.005], [0.0095, 0.005, 0.005]]",
+    ));
+    assert_contains(
+        &e,
+        &[
+            "particle 1",
+            "[0.0095, 0.005, 0.005]",
+            "not inside the domain",
+            "axis x",
+        ],
+    );
+    // overlapping
+    let e = err(&minimal("", "").replace(
+        "[[0.005, 0.005, 0.005]]",
+        "[[0.005, 0.005, 0.005], [0.002, 0.002, 0.002], [0.0065, 0.005, 0.005]]",
+    ));
+    assert_contains(&e, &["particles 0", "and 2", "overlap"]);
+    // touching within 1% is fine
+    parse(&minimal("", "").replace(
+        "[[0.005, 0.005, 0.005]]",
+        "[[0.005, 0.005, 0.005], [0.006995, 0.005, 0.005]]",
+    ))
+    .unwrap();
+    // overlapping a wall
+    let e = err(&minimal(
+        "",
+        "[[wall]]\npoint = [0, 0, 0.0045]\nnormal = [0, 0, 1]\n",
+    ));
+    assert_contains(&e, &["particle 0", "overlaps [[wall]] #1"]);
+    // empty scenes
+    let e = err(&minimal("", "").replace("[[0.005, 0.005, 0.005]]", "[]"));
+    assert_contains(&e, &["no particles"]);
+    let text = minimal("", "");
+    let cut = text.find("[[particles]]").unwrap();
+    let e = err(&text[..cut]);
+    assert_contains(&e, &["no particles", "[[particles]]"]);
+    // different materials without an interaction
+    let e = err(&minimal(
+        "",
+        "[[material]]\nname = \"glass\"\ndensity = 1.0\nmodel = \"lsd\"\nk = 1.0\n[[particles]]\nkind = \"list\"\nmaterial = \"glass\"\npositions = [[0.002, 0.002, 0.002]]\nradius = 1e-3\n",
+    ));
+    assert_contains(
+        &e,
+        &[
+            "no contact model for materials `powder` and `glass`",
+            "materials = [\"powder\", \"glass\"]",
+        ],
+    );
+    // a random block that cannot fit
+    let e = err(&minimal(
+        "",
+        "[[particles]]\nkind = \"random\"\ncount = 100\nmin = [0, 0, 0]\nmax = [0.004, 0.004, 0.004]\nradius = 1e-3\n",
+    ));
+    assert_contains(
+        &e,
+        &[
+            "[[particles]] #2 (kind = \"random\") could place only",
+            "of 100",
+            "larger region",
+        ],
+    );
+}
+
+fn random_scene(seed: u64, count: usize, size: &str) -> String {
+    format!(
+        r#"[domain]
+min = [0.0, 0.0, 0.0]
+max = [0.05, 0.05, 0.05]
+[simulation]
+duration = 1.0
+[[material]]
+name = "p"
+density = 1000.0
+model = "lsd"
+k = 1.0
+[[particles]]
+kind = "lattice"
+min = [0.0, 0.0, 0.0]
+max = [0.05, 0.05, 0.004]
+radius = 1e-3
+[[particles]]
+kind = "random"
+count = {count}
+min = [0.0, 0.0, 0.0]
+max = [0.05, 0.05, 0.05]
+seed = {seed}
+{size}
+"#
+    )
+}
+
+#[test]
+fn random_placement_is_reproducible_and_non_overlapping() {
+    let a = parse(&random_scene(7, 2000, "radius = 1e-3")).unwrap();
+    let b = parse(&random_scene(7, 2000, "radius = 1e-3")).unwrap();
+    let c = parse(&random_scene(8, 2000, "radius = 1e-3")).unwrap();
+    let lattice = 25 * 25 * 2;
+    assert_eq!(a.particles.len(), lattice + 2000);
+    assert_eq!(a, b);
+    assert_ne!(a.particles, c.particles);
+    // brute-force overlap check, including against the lattice block
+    let ps = &a.particles;
+    for i in 0..ps.len() {
+        for j in (i + 1).max(lattice)..ps.len() {
+            let d = dist2(ps[i].position, ps[j].position).sqrt();
+            assert!(
+                d >= ps[i].radius + ps[j].radius - 1e-15,
+                "{i} and {j} overlap"
+            );
+        }
+        for k in 0..3 {
+            assert!(ps[i].position[k] - ps[i].radius >= -1e-15);
+            assert!(ps[i].position[k] + ps[i].radius <= 0.05 + 1e-15);
+        }
+    }
+}
+
+#[test]
+fn lattice_counts_and_jitter() {
+    let scene = |extra: &str| {
+        format!(
+            "[domain]\nmin = [0, 0, 0]\nmax = [1, 1, 1]\n[simulation]\nduration = 1.0\n[[material]]\nname = \"p\"\ndensity = 1.0\nmodel = \"lsd\"\nk = 1.0\n[[particles]]\nkind = \"lattice\"\nmin = [0.0, 0.0, 0.0]\nmax = [0.1, 0.2, 0.3]\nradius = 0.01\n{extra}"
+        )
+    };
+    // 5 x 10 x 15 diameters fit exactly
+    let s = parse(&scene("")).unwrap();
+    assert_eq!(s.particles.len(), 5 * 10 * 15);
+    assert!(s.particles[1].position[0] - s.particles[0].position[0] > 0.02 - 1e-12);
+    let s = parse(&scene("spacing = 0.03")).unwrap();
+    // floor((0.1-0.02)/0.03)+1 = 3, floor(0.18/0.03)+1 = 7, floor(0.28/0.03)+1 = 10
+    assert_eq!(s.particles.len(), 3 * 7 * 10);
+    let j = parse(&scene("spacing = 0.03\njitter = 1.0\nseed = 3")).unwrap();
+    assert_eq!(j.particles.len(), 3 * 7 * 10);
+    let moved = j
+        .particles
+        .iter()
+        .zip(&s.particles)
+        .filter(|(a, b)| a.position != b.position)
+        .count();
+    assert!(moved > 100);
+    for (a, b) in j.particles.iter().zip(&s.particles) {
+        for k in 0..3 {
+            assert!((a.position[k] - b.position[k]).abs() <= 0.005 + 1e-12);
+        }
+    }
+    let e = err(&scene("spacing = 0.015"));
+    assert_contains(&e, &["`spacing`", "must be >= 2*radius"]);
+    let e = err(&scene("jitter = 2.0"));
+    assert_contains(&e, &["`jitter`", "between 0 and 1"]);
+}
+
+#[test]
+fn size_distributions_stay_in_bounds() {
+    let mut rng = Pcg64::seed_from_u64(5);
+    let u = SizeDist::Uniform {
+        min: 0.8e-3,
+        max: 1.2e-3,
+    };
+    let n = SizeDist::Normal {
+        mean: 1e-3,
+        std: 1e-3,
+    };
+    let l = SizeDist::LogNormal {
+        median: 1e-3,
+        sigma: 0.5,
+    };
+    let list = SizeDist::List {
+        radii: vec![1e-3, 2e-3],
+        cumulative: vec![0.75, 1.0],
+    };
+    let mut small = 0;
+    for _ in 0..20000 {
+        let r = u.sample(&mut rng);
+        assert!((0.8e-3..=1.2e-3).contains(&r));
+        assert!(n.sample(&mut rng) > 0.0);
+        assert!(l.sample(&mut rng) > 0.0);
+        let r = list.sample(&mut rng);
+        assert!(r == 1e-3 || r == 2e-3);
+        if r == 1e-3 {
+            small += 1;
+        }
+    }
+    assert!((small as f64 / 20000.0 - 0.75).abs() < 0.02);
+    // through the scene file
+    for size in [
+        "size = { distribution = \"uniform\", min = 0.8e-3, max = 1.2e-3 }",
+        "size = { distribution = \"normal\", mean = 1e-3, std = 2e-4 }",
+        "size = { distribution = \"lognormal\", median = 1e-3, sigma = 0.1 }",
+        "size = { distribution = \"list\", radii = [0.8e-3, 1.2e-3], weights = [1, 3] }",
+    ] {
+        let s = parse(&random_scene(1, 300, size)).unwrap();
+        assert_eq!(s.particles.len(), 625 * 2 + 300);
+        assert!(s
+            .particles
+            .iter()
+            .all(|p| p.radius > 0.0 && p.radius < 3e-3));
+    }
+    let s = parse(&random_scene(
+        1,
+        300,
+        "size = { distribution = \"uniform\", min = 0.8e-3, max = 1.2e-3 }",
+    ))
+    .unwrap();
+    assert!(s.particles[1250..]
+        .iter()
+        .all(|p| (0.8e-3..=1.2e-3).contains(&p.radius)));
+    let e = err(&random_scene(
+        1,
+        3,
+        "size = { distribution = \"uniform\", min = 2e-3, max = 1e-3 }",
+    ));
+    assert_contains(&e, &["`max`", "must be >= `min`"]);
+    let e = err(&random_scene(
+        1,
+        3,
+        "size = { distribution = \"gauss\", mean = 1e-3, std = 1e-4 }",
+    ));
+    assert_contains(&e, &["`distribution`", "\"uniform\""]);
+    let e = err(&random_scene(
+        1,
+        3,
+        "size = { distribution = \"list\", radii = [1e-3], weights = [1, 2] }",
+    ));
+    assert_contains(&e, &["`weights`", "has 2 entries"]);
+}
+
+#[test]
+fn example_files_parse() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
+    let cluster = Scene::load(&dir.join("cohesive_cluster.toml")).unwrap();
+    assert_eq!(cluster.name, "cohesive_cluster");
+    assert_eq!(cluster.particles.len(), 200);
+    assert!(matches!(
+        cluster.materials[0].model,
+        ContactModel::Hysteretic(_)
+    ));
+    assert_eq!(cluster.gravity, [0.0, 0.0, -9.81]);
+    let pair = Scene::load(&dir.join("lsd_pair.toml")).unwrap();
+    assert_eq!(pair.particles.len(), 2);
+    assert!(matches!(pair.materials[0].model, ContactModel::Lsd(_)));
+    assert_eq!(pair.gravity, [0.0; 3]);
+}
+
+#[test]
+fn load_error_names_the_path() {
+    let e = Scene::load(Path::new("/no/such/dir/scene.toml"))
+        .unwrap_err()
+        .to_string();
+    assert_contains(&e, &["/no/such/dir/scene.toml"]);
+}
+
+#[test]
+fn line_col_counts_characters() {
+    let src = Src {
+        name: "x",
+        text: "ab\nçd\n",
+    };
+    assert_eq!(src.line_col(0), (1, 1));
+    assert_eq!(src.line_col(3), (2, 1));
+    assert_eq!(src.line_col(5), (2, 2));
+    assert_eq!(src.line_col(100), (3, 1));
+}
