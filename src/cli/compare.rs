@@ -1,0 +1,115 @@
+//! `powder compare`: one scene on both backends, side by side.
+
+use super::*;
+
+#[derive(Args)]
+pub(crate) struct CompareArgs {
+    /// Scene file (TOML).
+    scene: PathBuf,
+    /// Steps to run (default: the scene's duration, at most 2000).
+    #[arg(long)]
+    steps: Option<u64>,
+    /// Steps between samples (default: steps/10).
+    #[arg(long)]
+    every: Option<u64>,
+    /// A threshold, KEY=VALUE with KEY one of position (over the smallest radius, default
+    /// 1e-3), velocity (over the largest speed, 1e-2), kinetic (relative, 1e-2), contacts
+    /// (relative count difference, 0.05), energy (stored and dissipated energy difference
+    /// over the energy in play, 1e-2), history (δmax, tangential spring, rolling
+    /// displacement of the common contacts, relative, 1e-2); repeatable.
+    #[arg(long = "tolerance", value_name = "KEY=VALUE")]
+    tolerance: Vec<String>,
+    /// Print JSON on stdout.
+    #[arg(long)]
+    json: bool,
+}
+
+/// Runs `compare`; `Ok(false)` when a threshold was exceeded.
+pub(crate) fn compare_cmd(a: &CompareArgs) -> Result<bool, PowderError> {
+    use powder::compare::{compare, Tolerances};
+    let mut tol = Tolerances::default();
+    for t in &a.tolerance {
+        let bad = || {
+            PowderError::from(ParamError::new(
+                "tolerance",
+                format!("`{t}` is not KEY=VALUE with KEY position, velocity, kinetic, contacts, energy or history and VALUE >= 0"),
+            ))
+        };
+        let (key, value) = t.split_once('=').ok_or_else(bad)?;
+        let value: f64 = value.trim().parse().map_err(|_| bad())?;
+        if value.is_nan() || value < 0.0 {
+            return Err(bad());
+        }
+        match key.trim() {
+            "position" => tol.position = value,
+            "velocity" => tol.velocity = value,
+            "kinetic" => tol.kinetic = value,
+            "contacts" => tol.contacts = value,
+            "energy" => tol.energy = value,
+            "history" => tol.history = value,
+            _ => return Err(bad()),
+        }
+    }
+    let scene = Scene::load(&a.scene)?;
+    let ctx = powder::gpu::GpuContext::new()?;
+    let total = powder::setup::Resolved::new(&scene)
+        .map(|r| ((scene.duration / r.dt).ceil() as u64).clamp(1, 2000))?;
+    let steps = a.steps.unwrap_or(total);
+    let every = a.every.unwrap_or((steps / 10).max(1));
+    let c = compare(&scene, ctx, steps, every, tol)?;
+    if a.json {
+        let text = serde_json::to_string_pretty(&c)
+            .map_err(|e| PowderError::Run(format!("cannot encode JSON: {e}")))?;
+        println!("{text}");
+    } else {
+        println!(
+            "compare `{}`: {} particles, dt = {:.4e} s, CPU (f64) against GPU ({})",
+            c.scene, c.particles, c.dt, c.adapter
+        );
+        println!(
+            "{:>7} {:>10} {:>9} {:>9} {:>9} {:>5} {:>5} {:>10} {:>10} {:>9} {:>9} {:>9}  exceeded",
+            "step",
+            "t (s)",
+            "pos/rmin",
+            "vel/vmax",
+            "rel.Ekin",
+            "Zcpu",
+            "Zgpu",
+            "δ cpu",
+            "E_dis cpu",
+            "rel.E",
+            "history",
+            "pairs"
+        );
+        for s in &c.samples {
+            println!(
+                "{:>7} {:>10.3e} {:>9.2e} {:>9.2e} {:>9.2e} {:>5} {:>5} {:>10.3e} {:>10.3e} {:>9.2e} {:>9.2e} {:>9}  {}",
+                s.step,
+                s.time,
+                s.position,
+                s.velocity,
+                s.kinetic,
+                s.contacts_cpu,
+                s.contacts_gpu,
+                s.max_overlap_cpu,
+                s.dissipated_cpu,
+                s.energy,
+                s.history,
+                s.history_pairs,
+                s.exceeded.join(",")
+            );
+        }
+        let t = &c.tolerances;
+        println!(
+            "thresholds: position {:e}, velocity {:e}, kinetic {:e}, contacts {:e}, energy {:e}, history {:e} -> {}",
+            t.position,
+            t.velocity,
+            t.kinetic,
+            t.contacts,
+            t.energy,
+            t.history,
+            if c.passed { "PASS" } else { "FAIL" }
+        );
+    }
+    Ok(c.passed)
+}

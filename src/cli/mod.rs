@@ -1,0 +1,26 @@
+//! The commands of the `powder` binary, one file each, and the choices they share.
+
+use clap::{Args, ValueEnum};
+use powder::collide::{self, CollideResult, CollideSpec};
+use powder::model::flags::LawArgs;
+use powder::model::ContactModel;
+use powder::scene::Scene;
+use powder::{ParamError, PowderError};
+use std::path::PathBuf;
+
+mod accuracy;
+pub(crate) mod analytic;
+mod bench;
+mod choices;
+mod collisions;
+mod compare;
+mod info;
+mod run;
+
+pub(crate) use accuracy::*;
+pub(crate) use bench::*;
+pub(crate) use choices::*;
+pub(crate) use collisions::*;
+pub(crate) use compare::*;
+pub(crate) use info::*;
+pub(crate) use run::*;
