@@ -66,11 +66,7 @@
 // has one history. When a re-sort makes the other particle a pair's evaluator, its history
 // is handed over as the partner sees it (`hist_mirror`: the tangential spring, kept in the
 // evaluator's frame, changes sign; the normal history, the rolling displacement and the
-// contact radius are the same on both sides). An earlier design evaluated every pair from
-// both sides with bitwise mirrored inputs; on lavapipe force + collect measured 12 %
-// (hysteretic) and 22 % (JKR with friction and rolling) cheaper than that force pass at
-// 10⁴ particles (`powder bench --profile`; SIMD lanes loop over the longest list of their
-// group, and the model runs once per pair).
+// contact radius are the same on both sides). (Why not both sides: `docs/design_log.md`.)
 //
 // Member order matters on Mesa lavapipe 22.3: with `gravity` first (offset 0), a non-zero
 // gravity.x (even 1e-30) made the step ~3x slower and the driver's memory grow by ~0.3 MB

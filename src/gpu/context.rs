@@ -282,7 +282,7 @@ fn new_instance() -> wgpu::Instance {
     desc.backends = BACKENDS;
     // wgpu validates every indirect dispatch with an extra dispatch; ours only ever replay
     // sizes the host computed within the device limits, or zeros (the skipped rebuild), so
-    // the check only costs: measured 2.8e5 -> 5.5e5 particle-steps/s on lavapipe.
+    // the check only costs (measured: docs/architecture.md, on the Verlet skin).
     desc.flags
         .remove(wgpu::InstanceFlags::VALIDATION_INDIRECT_CALL);
     wgpu::Instance::new(desc)

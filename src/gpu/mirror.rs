@@ -5,18 +5,11 @@
 //! (`GpuOptions::software_paths`, `shaders/state_mirrors.wgsl`; a GPU reads the buffers,
 //! `shaders/state_buffers.wgsl`).
 //!
-//! Why: on Mesa lavapipe (the software adapter CI and most users without a GPU run on) a
-//! storage-buffer load with a per-invocation index is a scalar loop over the SIMD lanes
-//! with a branch on the lane's mask and on the bounds per component, while a read-only
-//! storage-texture load is one gather. Measured with `cargo run --release --example
-//! lavapipe_probe` (32 random vec4 loads per invocation, 2-core EPYC, lavapipe 22.3):
-//! 1.1–1.8 ns per load from a storage buffer, 0.3 ns from an `rgba32float` read-only storage
-//! texture, 0.7 ns from a sampled texture with `textureLoad`; a copy of 1 MiB from a buffer
-//! into a texture takes 20 µs. The force
-//! pass loads the partner's three vec4s once per pair, so the copies (48 bytes a
-//! particle per step, 64 with rotation) buy back many times their cost. On a real GPU
-//! reading the same data through the texture path is equally fast, and the copies are
-//! bandwidth-bound and small.
+//! Why: on Mesa lavapipe a storage-buffer load with a per-invocation index is a scalar loop
+//! over the SIMD lanes, while a read-only storage-texture load is one gather; the force
+//! pass loads the partner's three vec4s once per pair, so the copies (48 bytes a particle
+//! per step, 64 with rotation) buy back many times their cost there (the measurements:
+//! `docs/design_log.md`, *Measurements moved out of the code*).
 //!
 //! A rebuild re-sorts the state: its `gather` writes the re-sorted cells and offsets into
 //! the cell and offset mirrors itself (texture stores, once per rebuild), so the neighbour

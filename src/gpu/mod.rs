@@ -34,12 +34,11 @@
 //!   scatter, then a per-cell sort by original index that removes the atomics' racy
 //!   order — giving `sorted_index`, `cell_start` and `cell_count`, bit-identical to a
 //!   stable CPU counting sort and from run to run.
-//! * **Stepping** (next bricks): per step, reorder particle state by `sorted_index`,
-//!   build Verlet lists from the 27 neighbouring cells when a particle has moved more
-//!   than half the skin, evaluate the contact models with per-contact history carried
-//!   across rebuilds, integrate, and reduce energies — all as dispatches recorded into
-//!   one command encoder per batch of steps, because a submit-and-wait costs 70–450 µs
-//!   against ~10–15 µs per dispatch on lavapipe. Results are read back only for
+//! * **Stepping** ([`engine`]): drift, a rebuild where some particle moved more than half
+//!   the Verlet skin (sort, re-sort in place, new lists from the 27 neighbouring cells,
+//!   each contact's history carried over by its partner's id), the contact forces, the
+//!   kick — dispatches recorded into one command encoder per batch of steps, because a
+//!   submission and wait costs many dispatches' time. Results are read back only for
 //!   output; the CPU engine stays the reference the GPU one is tested against.
 
 pub mod composition;

@@ -2,10 +2,9 @@
 //!
 //! Every step of a normal batch asks the device whether to rebuild the neighbour lists
 //! (`decide`, one invocation) and records the rebuild's passes as indirect dispatches that
-//! launch nothing when it does not. On lavapipe that costs about 50–60 µs a step whatever
-//! the particle count (a dispatch is a hand-over to the driver's worker threads): `powder
-//! bench --backend gpu --case hysteretic --sizes 200 --steps 2048 --velocity-scale 0
-//! --quiet-batches off` measured 2.0–2.1·10⁻⁴ s/step, `always` 1.5–1.7·10⁻⁴.
+//! launch nothing when it does not: a fixed cost a step, whatever the particle count,
+//! which on a software adapter is large (`docs/design_log.md`, *Measurements moved out of
+//! the code*).
 //!
 //! Most batches rebuild nothing. A quiet batch records only the drift, the mirror copies and
 //! the forces, after copying what the steps change (the contacts' history into the lists
