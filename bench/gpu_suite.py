@@ -849,7 +849,7 @@ class Suite:
             },
             "method": {
                 "bench": "powder bench --backend gpu, one process per case and size, the dense "
-                "lattice packings of src/bench.rs, without the energy ledger unless `ledger`; "
+                "lattice packings of src/measure/bench.rs, without the energy ledger unless `ledger`; "
                 "the timed steps after warm-up steps, the fastest of `repeats` runs",
                 "gpu_bytes_per_particle": "GpuEngine::buffer_bytes() / N: every buffer and "
                 "texture the engine allocates",

@@ -1,6 +1,6 @@
 //! `collide` on the CPU reference path against the closed forms of papers 000 and 003.
 
-use powder::collide::{collide, CollideResult, CollideSpec};
+use powder::measure::collide::{collide, CollideResult, CollideSpec};
 use powder::model::analytic::{self, beta_star, chi_c_b, chi_c_c, en_no_fa};
 use powder::model::{AdhesionMode, ContactModel, HystereticParams, K2Rule};
 

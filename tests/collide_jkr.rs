@@ -2,7 +2,7 @@
 
 mod common;
 
-use powder::collide::{collide, CollideResult, CollideSpec};
+use powder::measure::collide::{collide, CollideResult, CollideSpec};
 use powder::model::{
     analytic, ContactModel, Dissipation, JkrParams, PairGeometry, Pulloff, TsujiStiffness,
 };
@@ -465,7 +465,7 @@ fn closed_forms_head_on_only_and_tangential_restitution_oblique_only() {
         impact_angle: 30.0,
         ..spec(hertz, 2.0)
     };
-    assert_eq!(powder::collide::closed_form_e(&s), None);
+    assert_eq!(powder::measure::collide::closed_form_e(&s), None);
     let r = collide(&s).unwrap();
     assert!(r.e_analytic.is_none() && r.stuck_analytic.is_none());
     assert!(r.delta_max_analytic.is_none() && r.contact_duration_analytic.is_none());
@@ -477,7 +477,7 @@ fn closed_forms_head_on_only_and_tangential_restitution_oblique_only() {
 /// instead of m/2, r/2: v_Y² ∝ R*³/m*); e_TN uses the normal impact speed.
 #[test]
 fn thornton_ning_from_a_yield_stress() {
-    use powder::collide::{add_plastic_restitution, yield_velocity};
+    use powder::measure::collide::{add_plastic_restitution, yield_velocity};
     let y = 5e7;
     let vy = yield_velocity(&spec(jkr(), 1.0), y).unwrap();
     let big = CollideSpec {
@@ -588,7 +588,7 @@ fn a_deposited_sphere_rests_below_the_rolling_yield_force_and_rolls_above() {
         "{roll:?}"
     );
     // a wall is needed to push along
-    let err = powder::collide::collide(&CollideSpec {
+    let err = powder::measure::collide::collide(&CollideSpec {
         tangential_force: 1e-9,
         wall: false,
         ..base.clone()

@@ -4,7 +4,7 @@
 
 mod common;
 
-use powder::collide::{collide, collide_traced, CollideResult, CollideSpec, TraceRow};
+use powder::measure::collide::{collide, collide_traced, CollideResult, CollideSpec, TraceRow};
 use powder::model::{analytic, krijt, ContactModel, Dissipation, JkrParams, PairGeometry};
 
 const GAMMA: f64 = 3.17;
@@ -266,8 +266,8 @@ fn lj_example_restitution_peaks_at_low_speed_then_declines() {
 /// the CPU reference (f64): restitution, the energy ledger, the contact radius as history.
 mod gpu {
     use super::{krijt, params, spec, stress, GAMMA, R, SIGMA0, TVIS};
-    use powder::collide::{collide_on, Backend, CollideResult, CollideSpec};
     use powder::gpu::GpuEngine;
+    use powder::measure::collide::{collide_on, Backend, CollideResult, CollideSpec};
     use powder::model::{Dissipation, JkrParams};
     use powder::scene::Scene;
 
@@ -512,7 +512,7 @@ mod gpu {
         if context().is_none() {
             return;
         }
-        use powder::collide::collide_traced_on;
+        use powder::measure::collide::collide_traced_on;
         let s = spec(krijt(TVIS), 0.1);
         let (_, cpu) = collide_traced_on(&s, Backend::Cpu).unwrap();
         let (_, gpu) = collide_traced_on(&s, Backend::Gpu).unwrap();

@@ -1,6 +1,6 @@
 //! The linear spring–dashpot model against eqs. 3–4 of paper 000: the integrator check.
 
-use powder::collide::{collide, CollideSpec};
+use powder::measure::collide::{collide, CollideSpec};
 use powder::model::{ContactModel, LsdParams};
 
 fn spec(k: f64, gamma0: f64, r2: f64) -> CollideSpec {

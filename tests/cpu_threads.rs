@@ -1,8 +1,8 @@
 //! The CPU engine spread over threads: the same bits on any thread count.
 
-use powder::bench::{packing, Case};
 use powder::cpu::threads::CHUNK;
 use powder::cpu::{CpuEngine, Threads};
+use powder::measure::bench::{packing, Case};
 use powder::scene::Scene;
 use std::process::Command;
 

@@ -9,8 +9,8 @@ mod common;
 use common::{floor_scene, law};
 
 use glam::DVec3;
-use powder::collide::{collide, CollideSpec};
 use powder::cpu::CpuEngine;
+use powder::measure::collide::{collide, CollideSpec};
 use powder::model::{analytic, ContactModel};
 use powder::scene::Scene;
 use std::f64::consts::PI;

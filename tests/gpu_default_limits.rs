@@ -5,8 +5,8 @@
 
 mod common;
 
-use powder::bench::{packing, Case};
 use powder::gpu::{GpuContext, GpuEngine, GpuOptions};
+use powder::measure::bench::{packing, Case};
 use powder::scene::Scene;
 
 /// `scene` for `steps` steps on both devices, with `software_paths` (the texture mirrors

@@ -332,7 +332,7 @@ fn growing_lists_mid_run_change_no_bit() {
 #[test]
 fn batch_boundaries_change_no_bit() {
     use common::assert_same_bits;
-    use powder::bench::{packing, Case};
+    use powder::measure::bench::{packing, Case};
     let early = compression_lid_from_the_start();
     let scenes = [
         (
@@ -386,7 +386,7 @@ fn batch_boundaries_change_no_bit() {
 #[test]
 fn a_profiled_run_changes_no_bit() {
     use common::assert_same_bits;
-    use powder::bench::{packing, Case};
+    use powder::measure::bench::{packing, Case};
     // (fast enough that the profiled steps rebuild the lists: the rebuild chain's passes
     // run with the timestamps between them)
     let scene = packing(Case::Jkr, 600, 30.0, 3).unwrap();
@@ -417,8 +417,8 @@ fn a_profiled_run_changes_no_bit() {
 #[test]
 fn software_and_gpu_paths_give_the_same_bits() {
     use common::assert_same_bits;
-    use powder::bench::{packing, Case};
     use powder::gpu::GpuOptions;
+    use powder::measure::bench::{packing, Case};
     let scenes = [("JKR packing", packing(Case::Jkr, 600, 1.0, 3).unwrap(), 600)];
     for (name, mut scene, steps) in scenes {
         let Some(ctx) = context() else { return };
@@ -469,8 +469,8 @@ fn software_and_gpu_paths_give_the_same_bits() {
 #[test]
 fn windows_change_no_bit() {
     use common::assert_same_bits;
-    use powder::bench::{packing, Case};
     use powder::gpu::GpuOptions;
+    use powder::measure::bench::{packing, Case};
     let text = std::fs::read_to_string(common::example_path("compression.toml")).unwrap();
     let early = compression_lid_from_the_start();
     let servo = text.replace(
@@ -631,7 +631,7 @@ spacing = 2.2e-3
 
 mod collisions {
     use super::context;
-    use powder::collide::{collide_on, Backend, CollideSpec};
+    use powder::measure::collide::{collide_on, Backend, CollideSpec};
     use powder::model::{analytic, ContactModel, HystereticParams, LsdParams};
 
     fn hysteretic(kc: f64, v: f64) -> CollideSpec {
@@ -760,8 +760,8 @@ mod collisions {
 /// The JKR family on the GPU (f32) against the CPU reference (f64).
 mod jkr {
     use super::context;
-    use powder::collide::{collide_on, Backend, CollideResult, CollideSpec};
     use powder::gpu::GpuEngine;
+    use powder::measure::collide::{collide_on, Backend, CollideResult, CollideSpec};
     use powder::model::{
         analytic, ContactModel, Dissipation, JkrParams, PairGeometry, Pulloff, TsujiStiffness,
     };
@@ -1453,8 +1453,8 @@ material = "b"
 /// fit a binding, the run is refused before it starts, naming the array.
 #[test]
 fn arrays_over_the_binding_limit_are_split_over_windows() {
-    use powder::bench::{packing, Case};
     use powder::gpu::{GpuContext, GpuOptions};
+    use powder::measure::bench::{packing, Case};
     if context().is_none() {
         return;
     }
@@ -1491,8 +1491,8 @@ fn arrays_over_the_binding_limit_are_split_over_windows() {
 /// first run: JKR at 10⁷ needed 2.8 GB of lists in one 2 GiB binding and stopped.)
 #[test]
 fn lists_outgrowing_one_binding_at_the_start_are_windowed() {
-    use powder::bench::{packing, Case};
     use powder::gpu::{GpuContext, GpuOptions};
+    use powder::measure::bench::{packing, Case};
     if context().is_none() {
         return;
     }
@@ -1542,7 +1542,7 @@ fn lists_outgrowing_one_binding_at_the_start_are_windowed() {
 /// A particle of the second row read from the wrong texel would feel garbage forces.
 #[test]
 fn state_mirrors_past_one_texture_row_match_the_cpu() {
-    use powder::bench::{packing, Case};
+    use powder::measure::bench::{packing, Case};
     for case in [Case::Hysteretic, Case::Jkr] {
         let Some(ctx) = context() else { return };
         let scene = packing(case, 4500, 1.0, 7).unwrap();
@@ -1589,8 +1589,8 @@ fn state_mirrors_past_one_texture_row_match_the_cpu() {
 /// goes on, bitwise the same.
 #[test]
 fn list_growth_stops_at_the_binding_limit() {
-    use powder::bench::{packing, Case};
     use powder::gpu::{GpuContext, GpuOptions};
+    use powder::measure::bench::{packing, Case};
     let Some(ctx) = context() else { return };
     // (without the ledger and the force jumps: no per-contact prior)
     let scene = powder::scene::Scene {

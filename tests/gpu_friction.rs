@@ -6,9 +6,9 @@
 mod common;
 use common::{floor_scene, gpu, law, packing, ROUGH};
 
-use powder::collide::{collide_on, Backend, CollideSpec};
-use powder::compare::{compare, Tolerances};
 use powder::gpu::GpuEngine;
+use powder::measure::collide::{collide_on, Backend, CollideSpec};
+use powder::measure::compare::{compare, Tolerances};
 use powder::model::analytic;
 use std::f64::consts::PI;
 
@@ -54,7 +54,7 @@ fn oblique_impacts_on_the_gpu_follow_the_closed_form() {
     }
 }
 
-fn report(c: &powder::compare::Comparison) {
+fn report(c: &powder::measure::compare::Comparison) {
     for s in &c.samples {
         eprintln!(
             "step {}: pos {:.2e} vel {:.2e} energy {:.2e} contacts {}/{} history {:.2e} over {}",

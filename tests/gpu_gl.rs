@@ -6,8 +6,8 @@
 mod common;
 use common::gl;
 
-use powder::compare::{compare, Tolerances};
 use powder::gpu::{GpuEngine, GpuOptions};
+use powder::measure::compare::{compare, Tolerances};
 use powder::scene::Scene;
 
 /// Runs `scene` on GL against the CPU reference with the default tolerances.
@@ -37,7 +37,8 @@ fn the_cohesive_cluster_follows_the_cpu_on_gl() {
 /// rotation, the largest history, five walls.
 #[test]
 fn a_jkr_packing_follows_the_cpu_on_gl() {
-    let scene = powder::bench::packing(powder::bench::Case::Jkr, 300, 1.0, 3).unwrap();
+    let scene =
+        powder::measure::bench::packing(powder::measure::bench::Case::Jkr, 300, 1.0, 3).unwrap();
     follows_the_cpu(&scene, 2000);
 }
 

@@ -6,7 +6,7 @@
 mod common;
 use common::gpu;
 
-use powder::collide::{collide_on, Backend, CollideSpec};
+use powder::measure::collide::{collide_on, Backend, CollideSpec};
 use powder::model::{AdhesionMode, ContactModel, HystereticParams, JkrParams, Pulloff};
 
 const R: f64 = 1e-6;

@@ -4,9 +4,9 @@
 mod common;
 use common::{example, gpu as context};
 
-use powder::compare::{compare, Tolerances};
 use powder::cpu::CpuEngine;
 use powder::gpu::{GpuEngine, GpuOptions};
+use powder::measure::compare::{compare, Tolerances};
 use powder::scene::Scene;
 
 /// Adhesive micro-spheres with friction, rolling resistance and Tsuji damping thrown

@@ -4,8 +4,8 @@
 mod common;
 use common::{gpu, two_lattices};
 
-use powder::compare::{compare, Tolerances};
 use powder::gpu::GpuEngine;
+use powder::measure::compare::{compare, Tolerances};
 use powder::scene::Scene;
 
 /// Hysteretic spheres below and JKR (friction, rolling resistance, Tsuji damping) above,

@@ -7,7 +7,7 @@
 mod common;
 use common::gpu;
 
-use powder::collide::{collide_on, Backend, CollideSpec};
+use powder::measure::collide::{collide_on, Backend, CollideSpec};
 use powder::model::analytic::{self, chi_c_b, chi_c_c};
 use powder::model::{ContactModel, HystereticParams, JkrParams, PairGeometry, Pulloff};
 

@@ -4,9 +4,9 @@
 mod common;
 use common::gpu;
 
-use powder::compare::{compare, Tolerances};
 use powder::cpu::CpuEngine;
 use powder::gpu::GpuEngine;
+use powder::measure::compare::{compare, Tolerances};
 use powder::model::analytic;
 use powder::scene::Scene;
 

@@ -5,8 +5,8 @@
 mod common;
 use common::{assert_same_bits, example, example_path, gpu as context};
 
-use powder::bench::{packing, Case};
 use powder::gpu::{GpuEngine, GpuOptions, QuietBatches};
+use powder::measure::bench::{packing, Case};
 
 /// Runs `steps` steps of `case`'s bench packing (velocities scaled by `shake`: more
 /// rebuilds) with the ledger and the given quiet mode; returns the engine.

@@ -4,8 +4,8 @@
 mod common;
 use common::gpu;
 
-use powder::collide::{collide, CollideSpec};
 use powder::cpu::CpuEngine;
+use powder::measure::collide::{collide, CollideSpec};
 use powder::model::analytic::{self, en_no_fa};
 use powder::model::{ContactModel, HystereticParams, JkrParams, LsdParams, PairGeometry};
 use powder::run::{run_cpu_with, RunOptions};
@@ -565,7 +565,7 @@ positions = [[0.0, 0.0, 0.0], [3e-6, 0.0, 0.0]]
 /// pipeline): each within a stated tolerance of the closed forms and of the CPU.
 #[test]
 fn stiff_and_extreme_cases_on_the_gpu() {
-    use powder::collide::{collide_on, Backend};
+    use powder::measure::collide::{collide_on, Backend};
     if gpu().is_none() {
         return;
     }

@@ -239,7 +239,7 @@ pub struct Archive<'a> {
 }
 
 impl<'a> Archive<'a> {
-    /// Reads the archive `bytes` (as [`write`] writes it: stored members, no comment).
+    /// Reads the archive `bytes` (as [`write`](fn@write) writes it: stored members, no comment).
     pub fn read(bytes: &'a [u8]) -> Result<Self, NpzError> {
         Self::members(bytes).ok_or(NpzError::NotAnArchive)?
     }

@@ -49,7 +49,7 @@ pub(crate) struct AccuracyArgs {
 }
 
 pub(crate) fn accuracy_cmd(a: &AccuracyArgs) -> Result<(), PowderError> {
-    use powder::accuracy::{self, AccuracyOptions};
+    use powder::measure::accuracy::{self, AccuracyOptions};
     let opts = AccuracyOptions {
         divisors: accuracy::parse_divisors(&a.divisors)?,
         backends: a.backend.list()?,

@@ -71,7 +71,7 @@ pub(crate) struct BenchArgs {
 }
 
 pub(crate) fn bench_cmd(a: &BenchArgs) -> Result<(), PowderError> {
-    use powder::bench::{self, BenchOptions, Case};
+    use powder::measure::bench::{self, BenchOptions, Case};
     let opts = BenchOptions {
         sizes: bench::parse_sizes(&a.sizes)?,
         cases: match a.case {

@@ -26,7 +26,7 @@ pub(crate) struct CompareArgs {
 
 /// Runs `compare`; `Ok(false)` when a threshold was exceeded.
 pub(crate) fn compare_cmd(a: &CompareArgs) -> Result<bool, PowderError> {
-    use powder::compare::{compare, Tolerances};
+    use powder::measure::compare::{compare, Tolerances};
     let mut tol = Tolerances::default();
     for t in &a.tolerance {
         let bad = || {

@@ -1,7 +1,7 @@
 //! The commands of the `powder` binary, one file each, and the choices they share.
 
 use clap::{Args, ValueEnum};
-use powder::collide::{self, CollideResult, CollideSpec};
+use powder::measure::collide::{self, CollideResult, CollideSpec};
 use powder::model::flags::LawArgs;
 use powder::model::ContactModel;
 use powder::scene::Scene;

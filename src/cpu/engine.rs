@@ -2134,7 +2134,7 @@ impl CpuEngine {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bench::{packing, Case};
+    use crate::measure::bench::{packing, Case};
 
     /// Runs `steps` steps with the default skin and without any (a rebuild every step):
     /// the two runs must agree bitwise (the forces do not depend on the list beyond its

@@ -648,7 +648,7 @@ pub trait ParamSource {
     fn keys(&self) -> Vec<String>;
     /// The value given for `key`.
     fn raw(&self, key: &str) -> Option<Raw>;
-    /// How the front end names a key in a message ("`k1` in [[material]] #1", "--k1").
+    /// How the front end names a key in a message ("`k1` in \[\[material\]\] #1", "--k1").
     fn name(&self, key: &str) -> String;
     /// How the front end writes a setting ("dissipation = \"tsuji\"", "--dissipation tsuji").
     fn setting(&self, key: &str, value: &str) -> String;

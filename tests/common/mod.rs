@@ -141,8 +141,8 @@ pub fn jkr_collisions(
     p: powder::model::JkrParams,
     pairs: &[(f64, bool)],
     jump_impulses: Option<bool>,
-) -> Vec<(powder::collide::CollideSpec, f64)> {
-    use powder::collide::CollideSpec;
+) -> Vec<(powder::measure::collide::CollideSpec, f64)> {
+    use powder::measure::collide::CollideSpec;
     use powder::model::{analytic, ContactModel};
     let mut out = Vec::new();
     for &(radius2, wall) in pairs {

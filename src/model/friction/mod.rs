@@ -1,5 +1,5 @@
 //! Luding's sliding, rolling and twisting friction (S. Luding, "Cohesive, frictional
-//! powders: contact models for tension", Granular Matter 10:235, 2008; ref. [15] of paper
+//! powders: contact models for tension", Granular Matter 10:235, 2008; ref. \[15\] of paper
 //! 000; the laws as MercuryDPM, LAMMPS, WooDEM and AutoPas give them:
 //! `docs/luding2008_laws.md`), one module per sub-model:
 //!

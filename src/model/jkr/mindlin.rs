@@ -31,7 +31,7 @@ impl JkrParams {
     /// `rotate_into_plane`: a rigid rotation of the pair must not change the stored
     /// energy), s += v_t·dt, St = 8G*·a, and
     /// F = −St·s − c_t·v_t with c_t = −2√(5/6)·β·√(St'·m*) ≥ 0 (Tsuji only; β < 0), where
-    /// St' = 8G*·ρ with ρ of [`TsujiStiffness`] (a, or √(R*·δ)).
+    /// St' = 8G*·ρ with ρ of [`TsujiStiffness`](super::TsujiStiffness) (a, or √(R*·δ)).
     /// The force is truncated to |F| ≤ μs·|F_N + 2Fc| (eq. 17) with F_N the conservative
     /// (elastic) normal force; when truncated, F is set to the limit along its direction and
     /// the spring to s = −(F + c_t·v_t)/St, and `sliding` is true.

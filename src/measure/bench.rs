@@ -17,11 +17,11 @@
 //! measured at the previous size predicts more than the per-case time budget; larger sizes
 //! of that case and backend are then skipped too. Timings are measured, never asserted.
 
-use crate::collide::Backend;
 use crate::cpu::cells::CellGrid;
 use crate::cpu::{CpuEngine, Threads};
 use crate::error::{ParamError, PowderError};
 use crate::gpu::{GpuContext, GpuEngine};
+use crate::measure::collide::Backend;
 use crate::model::{
     AdhesionMode, ContactModel, Dissipation, HystereticParams, JkrParams, K2Rule, Pulloff,
 };

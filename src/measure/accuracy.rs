@@ -3,14 +3,14 @@
 //!
 //! * **pair** — the head-on hysteretic collision (paper parameters with β = 0.1, no
 //!   viscosity, so no sticking) over a log-spaced χ sweep through
-//!   [`crate::collide::sweep_on`]; the error is max |e − e_closed| over the sweep against the
+//!   [`crate::measure::collide::sweep_on`]; the error is max |e − e_closed| over the sweep against the
 //!   closed forms of [`crate::model::analytic`], the run time that of the whole sweep
 //!   (each collision builds its engine: on the GPU that includes the pipelines);
 //! * **jkr** — head-on JKR collisions (both pull-off rules, equal spheres) from 1.05 to 5
 //!   times the sticking speed; the error is max |e − e_closed| over the sweep; on the CPU
 //!   also with the force jumps left to plain velocity Verlet (`-verlet` cases), which shows
 //!   what placing them inside the step ([`crate::cpu::jump`]) gains;
-//! * **packing** — a small cohesive packing ([`crate::bench::packing`], hysteretic with
+//! * **packing** — a small cohesive packing ([`crate::measure::bench::packing`], hysteretic with
 //!   kc = 100 N/m and viscous damping, under gravity in a box) against a CPU f64 reference
 //!   at a much finer time step; after a fixed physical time T = K·tc the error is the RMS
 //!   position deviation over the radius, and the relative kinetic-energy deviation is
@@ -22,11 +22,11 @@
 //! Time steps are given as divisors D of the contact time tc on the stiffest branch
 //! (dt = tc/D; the default time step is tc/50).
 
-use crate::bench::{self, Adapter, Provenance};
-use crate::collide::{self, Backend, CollideSpec};
 use crate::cpu::CpuEngine;
 use crate::error::{ParamError, PowderError};
 use crate::gpu::{GpuContext, GpuEngine};
+use crate::measure::bench::{self, Adapter, Provenance};
+use crate::measure::collide::{self, Backend, CollideSpec};
 use crate::model::jkr::Pulloff;
 use crate::model::{analytic, AdhesionMode, ContactModel, HystereticParams, JkrParams, K2Rule};
 use crate::output::plot::{Legend, Plot, Series, Style};

@@ -5,15 +5,18 @@
 //! --no-ledger`) leaves what only the ledger knows absent: empty CSV cells, keys left out
 //! of the JSON, "n/a" in the progress line.
 
+pub mod observed;
+pub mod simulation;
+
 use crate::cpu::{ContactStats, CpuEngine, Threads};
 use crate::error::PowderError;
 use crate::gpu::{GpuContext, GpuEngine, GpuOptions};
-use crate::observed::ObservedEnergies;
 use crate::output::atomic::{remove_stale_temps, write_atomic};
 use crate::output::series_csv::{self, SeriesCsv};
 use crate::output::{contacts, vtk};
+use crate::run::observed::ObservedEnergies;
+use crate::run::simulation::{Observation, Simulation};
 use crate::scene::Scene;
-use crate::simulation::{Observation, Simulation};
 use serde::Serialize;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
