@@ -111,36 +111,7 @@ fn particles_wrap_around() {
 /// follows the CPU while the particles cross the periodic faces and touch across them.
 #[test]
 fn a_periodic_cluster_matches_the_cpu() {
-    let text = r#"
-[domain]
-min = [0.0, 0.0, 0.0]
-max = [0.012, 0.012, 0.02]
-periodic = [true, true, false]
-[simulation]
-duration = 0.05
-gravity = [0.0, 0.0, -9.81]
-[[material]]
-name = "powder"
-density = 2000.0
-model = "hysteretic"
-k1 = 100.0
-kp = 500.0
-kc = 100.0
-phi_f = 0.05
-gamma0 = 1e-3
-[[wall]]
-point = [0.0, 0.0, 0.0]
-normal = [0.0, 0.0, 1.0]
-[[particles]]
-kind = "random"
-count = 60
-min = [0.0, 0.0, 0.0012]
-max = [0.012, 0.012, 0.015]
-radius = 1.0e-3
-velocity = [0.05, 0.03, 0.0]
-seed = 4
-"#;
-    let scene = Scene::from_toml_str(text, "periodic_cluster").unwrap();
+    let scene = common::builder::periodic_cluster();
     let Some(ctx) = gpu() else { return };
     // (trajectories agree to 1e-4 radii for 5000 steps; then granular chaos takes over)
     let c = compare(&scene, ctx, 5000, 1000, Tolerances::default()).unwrap();

@@ -1,5 +1,7 @@
 //! Helpers shared by the integration tests.
 
+pub mod builder;
+
 use powder::gpu::{GpuContext, GpuState};
 use powder::scene::Scene;
 use std::path::Path;
