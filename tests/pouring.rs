@@ -12,40 +12,20 @@ use powder::scene::Scene;
 /// floor: each batch is placed clear of itself only, because the earlier ones have fallen
 /// out of the region by the time it appears (2.8 cm in 40 ms at 0.3 m/s and g).
 fn pour_text(extra: &str) -> String {
-    format!(
-        r#"
-[domain]
-min = [0.0, 0.0, 0.0]
-max = [0.012, 0.012, 0.03]
-periodic = [true, true, false]
-[simulation]
-duration = 0.2
-gravity = [0.0, 0.0, -9.81]
-[[material]]
-name = "powder"
-density = 2000.0
-model = "hysteretic"
-k1 = 100.0
-kp = 500.0
-kc = 100.0
-phi_f = 0.05
-gamma0 = 1e-3
-[[wall]]
-point = [0.0, 0.0, 0.0]
-normal = [0.0, 0.0, 1.0]
-[[particles]]
-kind = "random"
-count = 60
-min = [0.0, 0.0, 0.012]
-max = [0.012, 0.012, 0.028]
-radius = 1.0e-3
-velocity = [0.0, 0.0, -0.3]
-seed = 3
-batches = 4
-batch_interval = 0.04
-{extra}
-"#
-    )
+    common::builder::SceneBuilder::new("pour", [0.0; 3], [0.012, 0.012, 0.03], 0.2)
+        .periodic([true, true, false])
+        .gravity()
+        .material("powder", 2000.0, common::builder::COHESIVE)
+        .floor()
+        .particles(
+            "random",
+            &format!(
+                "count = 60\nmin = [0.0, 0.0, 0.012]\nmax = [0.012, 0.012, 0.028]\n\
+                 radius = 1.0e-3\nvelocity = [0.0, 0.0, -0.3]\nseed = 3\nbatches = 4\n\
+                 batch_interval = 0.04\n{extra}"
+            ),
+        )
+        .toml()
 }
 
 #[test]

@@ -342,54 +342,22 @@ fn the_monitor_stops_runs_that_go_wrong_and_keeps_the_last_good_state() {
 /// than 10⁻⁹ of the gravitational energy released while settling (measured 1.5·10⁻¹³).
 #[test]
 fn a_packing_held_for_a_million_steps_does_not_drift() {
-    let text = r#"
-[domain]
-min = [0.0, 0.0, 0.0]
-max = [0.008, 0.008, 0.012]
-
-[simulation]
-duration = 100.0
-gravity = [0.0, 0.0, -9.81]
-
-[[material]]
-name = "powder"
-density = 2000.0
-model = "hysteretic"
-k1 = 100.0
-kp = 500.0
-kc = 100.0
-phi_f = 0.05
-gamma0 = 2e-3
-
-[[wall]]
-point = [0.0, 0.0, 0.0]
-normal = [0.0, 0.0, 1.0]
-
-[[wall]]
-point = [0.0, 0.0, 0.0]
-normal = [1.0, 0.0, 0.0]
-
-[[wall]]
-point = [0.0, 0.0, 0.0]
-normal = [0.0, 1.0, 0.0]
-
-[[wall]]
-point = [0.0055, 0.0, 0.0]
-normal = [-1.0, 0.0, 0.0]
-
-[[wall]]
-point = [0.0, 0.0055, 0.0]
-normal = [0.0, -1.0, 0.0]
-
-[[particles]]
-kind = "lattice"
-min = [0.001, 0.001, 0.0005]
-max = [0.0075, 0.0075, 0.0072]
-radius = 1.1e-3
-spacing = 2.25e-3
-jitter = 0.3
-"#;
-    let scene = Scene::from_toml_str(text, "held").unwrap();
+    // (the cohesive law, damped twice as much; a floor and four side walls)
+    let law = common::builder::COHESIVE.replace("gamma0 = 1e-3", "gamma0 = 2e-3");
+    let scene = common::builder::SceneBuilder::new("held", [0.0; 3], [0.008, 0.008, 0.012], 100.0)
+        .gravity()
+        .material("powder", 2000.0, &law)
+        .floor()
+        .wall([0.0; 3], [1.0, 0.0, 0.0])
+        .wall([0.0; 3], [0.0, 1.0, 0.0])
+        .wall([0.0055, 0.0, 0.0], [-1.0, 0.0, 0.0])
+        .wall([0.0, 0.0055, 0.0], [0.0, -1.0, 0.0])
+        .particles(
+            "lattice",
+            "min = [0.001, 0.001, 0.0005]\nmax = [0.0075, 0.0075, 0.0072]\nradius = 1.1e-3\n\
+             spacing = 2.25e-3\njitter = 0.3",
+        )
+        .build();
     let mut e = CpuEngine::new(&scene).unwrap();
     assert_eq!(e.len(), 12);
     let start = e.energies();
