@@ -144,6 +144,154 @@ pub(super) fn pair_table(models: &[ContactModel]) -> (Composition, Vec<u8>) {
     (kind, rows)
 }
 
+/// The neighbour grid's cell widths (m) and counts per axis for `n` particles whose pairs
+/// reach at most `cutoff` (skin included): cells at least `cutoff` wide, about four
+/// particles a cell.
+fn cell_grid(scene: &Scene, n: usize, cutoff: f64) -> Result<(DVec3, [u32; 3]), PowderError> {
+    let extent = DVec3::from_array(scene.domain.max) - DVec3::from_array(scene.domain.min);
+    let target_cells = (4 * n).max(64) as f64;
+    let h0 = gpu_cell_width(
+        cutoff.max((extent.x * extent.y * extent.z / target_cells).cbrt()) * (1.0 + 1e-6),
+    );
+    // A periodic axis holds a whole number of cells, at least 3 (so the 27 cells around
+    // a particle are distinct and a pair meets one image): its cells are period/count
+    // wide, rounded to f32, so the device's period is dims·h (within 2^-24 of the
+    // scene's; docs/architecture.md).
+    let periodic = scene.domain.periodic;
+    let mut h = DVec3::splat(h0);
+    let mut dims = [0u32; 3];
+    for a in 0..3 {
+        if periodic[a] {
+            let count = (extent[a] / (cutoff * (1.0 + 1e-6))).floor();
+            if count < 3.0 {
+                return Err(PowderError::Scene(format!(
+                    "the domain is {:.4e} m long along the periodic axis {}, shorter than 3 interaction cut-offs plus the Verlet skin ({:.4e} m): a pair would meet two periodic images; enlarge [domain] or make the axis non-periodic",
+                    extent[a],
+                    ["x", "y", "z"][a],
+                    3.0 * cutoff
+                )));
+            }
+            let count = count.min((extent[a] / h0).ceil()).max(3.0);
+            h[a] = gpu_cell_width(extent[a] / count);
+            dims[a] = count as u32;
+        } else {
+            dims[a] = ((extent[a] / h0).ceil() as u32).clamp(1, 1 << 20);
+        }
+    }
+    Ok((h, dims))
+}
+
+/// A run's initial particle state as the state's fields want it, each particle's values
+/// in the grid's order (the first sort keeps it: every particle starts in its window, and
+/// a window's neighbours hold its partners, `gpu::window`).
+struct InitialState {
+    /// Scene index of each particle, in upload order.
+    order: Vec<usize>,
+    cells: Vec<[i32; 4]>,
+    offs: Vec<[f32; 4]>,
+    vels: Vec<[f32; 4]>,
+    acc0: [f32; 4],
+    /// The prediction `kick_drift` writes each step, for the initial forces.
+    vpred0: Vec<[f32; 4]>,
+    /// The compensations (stored − true) of velocity and position, and the radius's
+    /// rounding residual: the kernels' x − c is the scene's value to ~1e-16 relative.
+    kahan_v: Vec<[f32; 4]>,
+    kahan_o: Vec<[f32; 4]>,
+    /// ω as the scene gives it, w = I = 2/5·m·r².
+    omega: Vec<[f32; 4]>,
+}
+
+impl InitialState {
+    /// The scene's particles in cells of width `h` from `origin` (`dims` per axis).
+    fn new(
+        scene: &Scene,
+        r: &Resolved,
+        (origin, h, dims): (DVec3, DVec3, [u32; 3]),
+        dt32: f32,
+    ) -> Self {
+        let n = scene.particles.len();
+        let mut cells = Vec::with_capacity(n);
+        let mut offs = Vec::with_capacity(n);
+        let mut vels = Vec::with_capacity(n);
+        let mut kahan_v: Vec<[f32; 4]> = Vec::with_capacity(n);
+        let mut kahan_o: Vec<[f32; 4]> = Vec::with_capacity(n);
+        for (p, m) in scene.particles.iter().zip(&r.mass) {
+            let x = DVec3::from_array(p.position);
+            let (mut c, mut o) = encode3(x, origin, h);
+            c[3] = p.material as i32;
+            o[3] = p.radius as f32;
+            let dx = crate::gpu::layout::decode3(c, o, origin, h) - x;
+            let v = p.velocity;
+            let v32 = v.map(|c| c as f32);
+            let cv = [0, 1, 2].map(|a| (v32[a] as f64 - v[a]) as f32);
+            kahan_v.push([cv[0], cv[1], cv[2], 0.0]);
+            kahan_o.push([
+                dx.x as f32,
+                dx.y as f32,
+                dx.z as f32,
+                (o[3] as f64 - p.radius) as f32,
+            ]);
+            cells.push(c);
+            offs.push(o);
+            vels.push([v32[0], v32[1], v32[2], *m as f32]);
+        }
+        let g = scene.gravity;
+        let acc0 = [g[0] as f32, g[1] as f32, g[2] as f32, 0.0];
+        let vpred0: Vec<[f32; 4]> = vels
+            .iter()
+            .map(|v| {
+                let p = |i: usize| v[i] + 0.5 * dt32 * acc0[i];
+                [p(0), p(1), p(2), v[3]]
+            })
+            .collect();
+        let omega = scene
+            .particles
+            .iter()
+            .zip(&r.mass)
+            .map(|(p, m)| {
+                let [x, y, z] = p.angular_velocity.map(|c| c as f32);
+                [x, y, z, (0.4 * m * p.radius * p.radius) as f32]
+            })
+            .collect();
+        Self {
+            order: grid_order(&cells, dims),
+            cells,
+            offs,
+            vels,
+            acc0,
+            vpred0,
+            kahan_v,
+            kahan_o,
+            omega,
+        }
+    }
+
+    /// The state field `name`'s initial words in upload order (`None`: zero).
+    fn field(&self, name: &str) -> Option<Vec<[u32; 4]>> {
+        let words = |v: &[[f32; 4]]| -> Vec<[u32; 4]> {
+            self.order.iter().map(|&i| bytemuck::cast(v[i])).collect()
+        };
+        match name {
+            "cell" => Some(
+                self.order
+                    .iter()
+                    .map(|&i| bytemuck::cast(self.cells[i]))
+                    .collect(),
+            ),
+            "off" => Some(words(&self.offs)),
+            "vel" => Some(words(&self.vels)),
+            "acc" => Some(vec![bytemuck::cast(self.acc0); self.order.len()]),
+            "vpred" => Some(words(&self.vpred0)),
+            "kahan_v" => Some(words(&self.kahan_v)),
+            "kahan_o" => Some(words(&self.kahan_o)),
+            // persistent id; the lists and wall entries come with the first rebuild
+            "ids" => Some(self.order.iter().map(|&i| [i as u32, 0, 0, 0]).collect()),
+            "omega" => Some(words(&self.omega)),
+            _ => None,
+        }
+    }
+}
+
 impl GpuEngine {
     /// Uploads the scene and builds the pipelines, with the energy ledger.
     pub fn new(scene: &Scene, ctx: GpuContext) -> Result<Self, PowderError> {
@@ -195,35 +343,8 @@ impl GpuEngine {
         let origin = DVec3::from_array(scene.domain.min);
         let extent = DVec3::from_array(scene.domain.max) - origin;
         let cutoff = 2.0 * r.r_max + r.max_reach + skin;
-        let target_cells = (4 * n).max(64) as f64;
-        let h0 = gpu_cell_width(
-            cutoff.max((extent.x * extent.y * extent.z / target_cells).cbrt()) * (1.0 + 1e-6),
-        );
-        // A periodic axis holds a whole number of cells, at least 3 (so the 27 cells around
-        // a particle are distinct and a pair meets one image): its cells are period/count
-        // wide, rounded to f32, so the device's period is dims·h (within 2^-24 of the
-        // scene's; see README).
+        let (h, dims) = cell_grid(scene, n, cutoff)?;
         let periodic = scene.domain.periodic;
-        let mut h = DVec3::splat(h0);
-        let mut dims = [0u32; 3];
-        for a in 0..3 {
-            if periodic[a] {
-                let count = (extent[a] / (cutoff * (1.0 + 1e-6))).floor();
-                if count < 3.0 {
-                    return Err(PowderError::Scene(format!(
-                        "the domain is {:.4e} m long along the periodic axis {}, shorter than 3 interaction cut-offs plus the Verlet skin ({:.4e} m): a pair would meet two periodic images; enlarge [domain] or make the axis non-periodic",
-                        extent[a],
-                        ["x", "y", "z"][a],
-                        3.0 * cutoff
-                    )));
-                }
-                let count = count.min((extent[a] / h0).ceil()).max(3.0);
-                h[a] = gpu_cell_width(extent[a] / count);
-                dims[a] = count as u32;
-            } else {
-                dims[a] = ((extent[a] / h0).ceil() as u32).clamp(1, 1 << 20);
-            }
-        }
         let mut grid =
             GridSort::with_cell_widths(&ctx, n as u32, dims, [h.x as f32, h.y as f32, h.z as f32])?;
         // the windows (`gpu::window`): asked for, or one where every array fits a binding
@@ -276,80 +397,15 @@ impl GpuEngine {
         let particle_ledger = ledger.then(|| alloc.buffer("particle_ledger", 64 * n as u64));
         // the per-particle buffers fit before the initial state is written into them
         alloc.check(n)?;
-        // Initial state, in scene order (the first sort orders it).
-        let mut cells = Vec::with_capacity(n);
-        let mut offs = Vec::with_capacity(n);
-        let mut vels = Vec::with_capacity(n);
-        // the compensations (stored − true) of velocity and position, and the radius's
-        // rounding residual: the kernels' x − c is the scene's value to ~1e-16 relative
-        let mut kahan_v: Vec<[f32; 4]> = Vec::with_capacity(n);
-        let mut kahan_o: Vec<[f32; 4]> = Vec::with_capacity(n);
-        for (p, m) in scene.particles.iter().zip(&r.mass) {
-            let x = DVec3::from_array(p.position);
-            let (mut c, mut o) = encode3(x, origin, h);
-            c[3] = p.material as i32;
-            o[3] = p.radius as f32;
-            let dx = crate::gpu::layout::decode3(c, o, origin, h) - x;
-            let v = p.velocity;
-            let v32 = v.map(|c| c as f32);
-            let cv = [0, 1, 2].map(|a| (v32[a] as f64 - v[a]) as f32);
-            kahan_v.push([cv[0], cv[1], cv[2], 0.0]);
-            kahan_o.push([
-                dx.x as f32,
-                dx.y as f32,
-                dx.z as f32,
-                (o[3] as f64 - p.radius) as f32,
-            ]);
-            cells.push(c);
-            offs.push(o);
-            vels.push([v32[0], v32[1], v32[2], *m as f32]);
-        }
+        let initial = InitialState::new(scene, &r, (origin, h, dims), dt32);
         let g = scene.gravity;
-        let acc0 = [g[0] as f32, g[1] as f32, g[2] as f32, 0.0];
-        // the prediction kick_drift writes each step, for the initial forces
-        let vpred0: Vec<[f32; 4]> = vels
-            .iter()
-            .map(|v| {
-                let p = |i: usize| v[i] + 0.5 * dt32 * acc0[i];
-                [p(0), p(1), p(2), v[3]]
-            })
-            .collect();
-        // uploaded in the grid's order (the first sort keeps it): every particle starts in
-        // its window, and a window's neighbours hold its partners (`gpu::window`)
-        let order = grid_order(&cells, dims);
-        let words = |v: &[[f32; 4]]| -> Vec<[u32; 4]> {
-            order.iter().map(|&i| bytemuck::cast(v[i])).collect()
-        };
-        let initial = |name: &str| -> Option<Vec<[u32; 4]>> {
-            match name {
-                "cell" => Some(order.iter().map(|&i| bytemuck::cast(cells[i])).collect()),
-                "off" => Some(words(&offs)),
-                "vel" => Some(words(&vels)),
-                "acc" => Some(words(&vec![acc0; n])),
-                "vpred" => Some(words(&vpred0)),
-                "kahan_v" => Some(words(&kahan_v)),
-                "kahan_o" => Some(words(&kahan_o)),
-                // persistent id; the lists and wall entries come with the first rebuild
-                "ids" => Some(order.iter().map(|&i| [i as u32, 0, 0, 0]).collect()),
-                // ω as the scene gives it, w = I = 2/5·m·r²
-                "omega" => {
-                    let omega: Vec<[f32; 4]> = scene
-                        .particles
-                        .iter()
-                        .zip(&r.mass)
-                        .map(|(p, m)| {
-                            let [x, y, z] = p.angular_velocity.map(|c| c as f32);
-                            [x, y, z, (0.4 * m * p.radius * p.radius) as f32]
-                        })
-                        .collect();
-                    Some(words(&omega))
-                }
-                _ => None,
-            }
-        };
         let q0 = &ctx.queue;
         for b in Buffer::ALL {
-            q0.write_buffer(state.buffer(b), 0, &state.layout.pack(b, &initial));
+            q0.write_buffer(
+                state.buffer(b),
+                0,
+                &state.layout.pack(b, &|f| initial.field(f)),
+            );
         }
         let walls: Vec<WallGpu> = scene
             .walls
