@@ -40,7 +40,13 @@ struct WindowParams {
     first: u32,
     bound: u32,
     index: u32,
-    _pad: u32,
+    // The lists' entries: the first window of their binding and the end of the windows it
+    // holds, and the first window of `entries_x`'s (`gpu::pages`).
+    rec_base: u32,
+    rec_end: u32,
+    rec_other: u32,
+    _pad0: u32,
+    _pad1: u32,
 }
 
 @group(0) @binding(19) var<uniform> win: WindowParams;

@@ -145,12 +145,12 @@ fn ledger_store(pid: u32, acc: LedgerAcc) {
 fn ledger_dropped(pid: u32, old_row: u32, old_n: u32, k: u32) {
     var lost = 0.0;
     for (var m = 0u; m < old_n; m++) {
-        let old = load_prior(old_row + m);
+        let old = load_prior_far(old_row + m);
         if (old.w <= 0.0) {
             continue;
         }
         // the pair is in k's new list, or in a partner's that lists k (`lower`, resolved)
-        let partner = load_hist_pid(old_row + m);
+        let partner = load_hist_pid_far(old_row + m);
         var found = false;
         let row = b_first(k);
         for (var e = row; e < row + b_len(k); e++) {

@@ -68,7 +68,7 @@ fn rot_pair_store(slot: u32, torque: vec3<f32>) {
 }
 
 fn rot_pair_load(slot: u32) -> vec3<f32> {
-    return load_pair_torque(slot);
+    return load_pair_torque_far(slot);
 }
 
 // kick: omega += dt/2·alpha.

@@ -732,7 +732,7 @@ fn remap(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
         let j = load_lower(low + s);
         let row_j = b_first(j);
         for (var m = 0u; m < b_len(j); m++) {
-            if (load_nbr(row_j + m) == k) {
+            if (load_nbr_far(row_j + m) == k) {
                 store_lower(low + s, row_j + m);
                 break;
             }
@@ -759,9 +759,9 @@ fn remap(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
         store_new_prior(e, vec4<f32>(0.0));
         var found = false;
         for (var m = 0u; m < old_n; m++) {
-            if (load_hist_pid(old_row + m) == partner) {
-                h = load_hist(old_row + m);
-                store_new_prior(e, load_prior(old_row + m));
+            if (load_hist_pid_far(old_row + m) == partner) {
+                h = load_hist_far(old_row + m);
+                store_new_prior(e, load_prior_far(old_row + m));
                 found = true;
                 break;
             }
@@ -770,9 +770,9 @@ fn remap(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
             let mj = load_ids(j);
             let row_j = mj.y;
             for (var m = 0u; m < mj.z; m++) {
-                if (load_hist_pid(row_j + m) == me) {
-                    h = hist_mirror(load_hist(row_j + m));
-                    store_new_prior(e, load_prior(row_j + m));
+                if (load_hist_pid_far(row_j + m) == me) {
+                    h = hist_mirror(load_hist_far(row_j + m));
+                    store_new_prior(e, load_prior_far(row_j + m));
                     break;
                 }
             }
@@ -1172,12 +1172,12 @@ fn collect_particle(k: u32, mass: f32, store: bool) -> Collected {
     let low = lower_first(k);
     for (var s = low; s < low + lower_len(k); s++) {
         let slot = load_lower(s);
-        f -= load_pair_force(slot);
+        f -= load_pair_force_far(slot);
         torque += rot_pair_load(slot);
         // a force jump's impulse (0 without the force jumps: no field, no load)
-        let jump = load_jump(slot);
+        let jump = load_jump_far(slot);
         if (jump != 0.0) {
-            impulse -= opaque(jump * load_jump_normal(slot));
+            impulse -= opaque(jump * load_jump_normal_far(slot));
         }
     }
     // (`opaque`: as in drift_particle, rounded the same in every kernel that collects)

@@ -313,9 +313,11 @@ fn gpu_permute_resorts_every_field_in_place() {
         before.push(data);
         buffers.push(buf);
     }
+    let windows = powder::gpu::window::Windows::one(n as u64);
     let one = powder::gpu::window::WindowBindings::new(
         &ctx.device,
-        powder::gpu::window::Windows::one(n as u64),
+        windows,
+        powder::gpu::pages::Pages::one(&windows),
     );
     // the scratch its own, lent (a block a row a particle or more), or its own again where
     // the lent block is too small (a row of 7 words for 1008 particles a window)

@@ -379,13 +379,15 @@ impl Composition {
 
     /// The name of the variant with or without the energy ledger (`_ledger` appended) and
     /// the force jumps (`_jumps`), reading the state from buffers or from texture mirrors
-    /// (`_mirrors` appended).
-    pub fn variant_name(&self, keeps: Keeps, mirrors: bool) -> String {
+    /// (`_mirrors` appended), the lists' entries in one buffer or in pages (`_paged`,
+    /// `gpu::pages`).
+    pub fn variant_name(&self, keeps: Keeps, mirrors: bool, paged: bool) -> String {
         let ledger = if keeps.ledger { "_ledger" } else { "" };
         let jumps = if keeps.jumps { "_jumps" } else { "" };
         let contacts = if keeps.contacts { "_contacts" } else { "" };
         let mirrors = if mirrors { "_mirrors" } else { "" };
-        format!("{}{ledger}{jumps}{contacts}{mirrors}", self.name())
+        let paged = if paged { "_paged" } else { "" };
+        format!("{}{ledger}{jumps}{contacts}{mirrors}{paged}", self.name())
     }
 
     /// Whether particles carry angular velocity: some sub-model exerts tangential forces
@@ -714,10 +716,10 @@ impl Composition {
     /// sub-models' files, the generated interface,
     /// the rotation and ledger hooks, the state's reads (its buffers, or texture mirrors:
     /// the software adapter's path, `gpu::mirror`), the step.
-    pub fn variant(&self, keeps: Keeps, mirrors: bool) -> ShaderVariant {
+    pub fn variant(&self, keeps: Keeps, mirrors: bool, paged: bool) -> ShaderVariant {
         let interface = self.interface();
         let state = StateLayout::wgsl(self.rotation());
-        let records: Vec<String> = self.records(keeps).iter().map(|r| r.wgsl()).collect();
+        let records: Vec<String> = self.records(keeps).iter().map(|r| r.wgsl(paged)).collect();
         let mut parts: Vec<&str> = vec![&state];
         parts.extend(records.iter().map(String::as_str));
         parts.extend(self.laws().map(|l| l.source));
@@ -751,7 +753,7 @@ impl Composition {
             });
         }
         ShaderVariant {
-            name: self.variant_name(keeps, mirrors),
+            name: self.variant_name(keeps, mirrors, paged),
             source: compose("shaders/step.wgsl", STEP, &parts),
         }
     }
@@ -811,7 +813,7 @@ mod tests {
         assert_eq!(c.name(), "step_jkr+krijt+jkr_rolling");
         assert!(!c.interface().contains("mindlin_apply"));
         assert!(!c
-            .variant(Keeps::default(), false)
+            .variant(Keeps::default(), false, false)
             .source
             .contains("fn mindlin_apply"));
     }

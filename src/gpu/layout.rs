@@ -909,7 +909,7 @@ mod tests {
             .into_iter()
             .max_by_key(|c| c.history_bytes())
             .unwrap();
-        let (jkr, _) = shaders::validate(&all.variant(Keeps::ALL[3], true).source).unwrap();
+        let (jkr, _) = shaders::validate(&all.variant(Keeps::ALL[3], true, false).source).unwrap();
         let (wsize, members) = wgsl_struct(&jkr, "PairRow");
         assert_eq!(wsize as usize, all.row_bytes(), "PairRow size");
         let jkr_at = 4 + size_of::<HystereticPair>() as u32;
@@ -1007,7 +1007,7 @@ mod tests {
     fn gpu_layout_history_strides_match_wgsl() {
         for kind in crate::gpu::composition::Composition::all() {
             let (module, _) =
-                shaders::validate(&kind.variant(Keeps::ALL[3], false).source).unwrap();
+                shaders::validate(&kind.variant(Keeps::ALL[3], false, false).source).unwrap();
             let (_, hist) = module
                 .types
                 .iter()

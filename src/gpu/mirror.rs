@@ -213,7 +213,7 @@ mod tests {
         let kind = &crate::gpu::composition::Composition::all()[0];
         let (module, _) = shaders::validate(
             &kind
-                .variant(crate::gpu::composition::Keeps::default(), true)
+                .variant(crate::gpu::composition::Keeps::default(), true, false)
                 .source,
         )
         .unwrap();

@@ -48,6 +48,7 @@ pub mod grid;
 pub mod kernel;
 pub mod layout;
 pub mod mirror;
+pub mod pages;
 pub mod permute;
 pub mod quiet;
 pub mod records;

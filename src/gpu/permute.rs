@@ -253,6 +253,7 @@ impl Permutation {
                     &blocks,
                 ),
                 &[],
+                &[],
             )?;
             let touched = |f: &Field| 4 * f.row_words() as u64 * n as u64;
             let scratch_touched = store.map_or(0, touched) + load.map_or(0, touched);

@@ -315,16 +315,22 @@ impl RecordLayout {
         self.fields
             .iter()
             .filter(|f| {
-                calls.contains(&format!("load_{}", f.name))
-                    || calls.contains(&format!("store_{}", f.name))
+                ["load_", "store_"]
+                    .iter()
+                    .any(|p| calls.contains(&format!("{p}{}", f.name)))
+                    || calls.contains(&format!("load_{}_far", f.name))
             })
             .map(|f| 4 * f.kind.words() * capacity)
             .sum()
     }
 
-    /// The binding and every field's accessors.
-    pub fn wgsl(&self) -> String {
+    /// The binding and every field's accessors; `paged`: the entries in several pages
+    /// (`gpu::pages`), the other page bound as `<global>_x`. `load_<field>_far` reads a
+    /// record that may lie in a neighbouring window (a partner's entries, a particle's old
+    /// row): from the other page where it lies there (layouts of their own buffer only).
+    pub fn wgsl(&self, paged: bool) -> String {
         let (g, a) = (self.global, self.array());
+        let own = self.host.is_none();
         let mut w = String::new();
         let declare = match &self.host {
             None => format!(
@@ -346,11 +352,35 @@ impl RecordLayout {
              {declare}\n\
              fn {g}_at(before: u32, width: u32, r: u32) -> u32 {{\n    \
              let capacity = {};\n    \
-             return (rec_window(r) - win.bound) * (capacity * {}u) + (before{base}) * capacity + rec_local(r) * width;\n}}\n",
+             return (rec_window(r) - win.rec_base) * (capacity * {}u) + (before{base}) * capacity + rec_local(r) * width;\n}}\n",
             self.words(),
             self.capacity_wgsl,
             self.stride(),
         );
+        if own {
+            let far = match paged {
+                false => format!("    return {g}[at];\n"),
+                true => format!(
+                    "    let w = rec_window(r);\n    \
+                     if (w >= win.rec_base && w < win.rec_end) {{\n        return {g}[at];\n    }}\n    \
+                     return {g}_x[at + (win.rec_base - win.rec_other) * ({} * {}u)];\n",
+                    self.capacity_wgsl,
+                    self.stride()
+                ),
+            };
+            if paged {
+                let _ = writeln!(
+                    w,
+                    "@group(0) @binding({}) var<storage, read> {g}_x: array<u32>;\n",
+                    self.binding + 1
+                );
+            }
+            let _ = writeln!(
+                w,
+                "// Word `at` (`{g}_at`) of record r, which may lie in a neighbouring window's page.\n\
+                 fn {g}_far(r: u32, at: u32) -> u32 {{\n{far}}}\n"
+            );
+        }
         let mut before = 0;
         for f in &self.fields {
             let (n, ty, width) = (f.name, f.kind.wgsl_type(), f.kind.words());
@@ -359,66 +389,23 @@ impl RecordLayout {
                 continue;
             }
             let at = format!("{g}_at({before}u, {width}u, r)");
-            let word = |i: u64| format!("{a}[at + {i}u]");
-            let (load, store) = match &f.kind {
-                Kind::U32 => (format!("{a}[{at}]"), vec![format!("{a}[{at}] = v;")]),
-                Kind::F32 => (
-                    format!("bitcast<f32>({a}[{at}])"),
-                    vec![format!("{a}[{at}] = bitcast<u32>(v);")],
-                ),
-                Kind::Vec3 | Kind::Vec4 => {
-                    let parts: Vec<String> = (0..width)
-                        .map(|i| format!("bitcast<f32>({})", word(i)))
-                        .collect();
-                    let comps = ["x", "y", "z", "w"];
-                    (
-                        format!("{ty}({})", parts.join(", ")),
-                        (0..width)
-                            .map(|i| {
-                                format!("{} = bitcast<u32>(v.{});", word(i), comps[i as usize])
-                            })
-                            .collect(),
-                    )
-                }
-                Kind::Vec4Xyw => (
-                    format!(
-                        "vec4<f32>(bitcast<f32>({}), bitcast<f32>({}), 0.0, bitcast<f32>({}))",
-                        word(0),
-                        word(1),
-                        word(2)
-                    ),
-                    vec![
-                        format!("{} = bitcast<u32>(v.x);", word(0)),
-                        format!("{} = bitcast<u32>(v.y);", word(1)),
-                        format!("{} = bitcast<u32>(v.w);", word(2)),
-                    ],
-                ),
-                Kind::Hist(members) => {
-                    let parts: Vec<String> = (0..width)
-                        .map(|i| format!("bitcast<f32>({})", word(i)))
-                        .collect();
-                    (
-                        format!("Hist({})", parts.join(", ")),
-                        members
-                            .iter()
-                            .enumerate()
-                            .map(|(i, m)| format!("{} = bitcast<u32>(v.{m});", word(i as u64)))
-                            .collect(),
-                    )
-                }
-                Kind::Spare(_) => unreachable!("spare words have no accessors"),
-            };
-            let bind_at = if matches!(f.kind, Kind::U32 | Kind::F32) {
-                String::new()
-            } else {
-                format!("    let at = {at};\n")
-            };
+            let bind_at = format!("    let at = {at};\n");
+            let near = |i: u64| format!("{a}[at + {i}u]");
+            let far = |i: u64| format!("{g}_far(r, at + {i}u)");
+            let (load, store) = field_code(&f.kind, &near);
             let _ = writeln!(
                 w,
                 "fn load_{n}(r: u32) -> {ty} {{\n{bind_at}    return {load};\n}}\n\n\
                  fn store_{n}(r: u32, v: {ty}) {{\n{bind_at}    {}\n}}\n",
                 store.join("\n    ")
             );
+            if own {
+                let (load, _) = field_code(&f.kind, &far);
+                let _ = writeln!(
+                    w,
+                    "fn load_{n}_far(r: u32) -> {ty} {{\n{bind_at}    return {load};\n}}\n"
+                );
+            }
             before += width;
         }
         for f in &self.absent {
@@ -434,8 +421,60 @@ impl RecordLayout {
                  fn load_{n}(r: u32) -> {ty} {{\n    return {zero};\n}}\n\n\
                  fn store_{n}(r: u32, v: {ty}) {{}}\n"
             );
+            if own {
+                let _ = writeln!(
+                    w,
+                    "fn load_{n}_far(r: u32) -> {ty} {{\n    return {zero};\n}}\n"
+                );
+            }
         }
         w
+    }
+}
+
+/// A field's load expression and store statements from `word(i)`, the expression of its
+/// i-th word (`at` in scope).
+fn field_code(kind: &Kind, word: &dyn Fn(u64) -> String) -> (String, Vec<String>) {
+    let width = kind.words();
+    let store = |i: u64, v: &str| format!("{} = bitcast<u32>({v});", word(i));
+    match kind {
+        Kind::U32 => (word(0), vec![format!("{} = v;", word(0))]),
+        Kind::F32 => (format!("bitcast<f32>({})", word(0)), vec![store(0, "v")]),
+        Kind::Vec3 | Kind::Vec4 => {
+            let parts: Vec<String> = (0..width)
+                .map(|i| format!("bitcast<f32>({})", word(i)))
+                .collect();
+            let comps = ["x", "y", "z", "w"];
+            (
+                format!("{}({})", kind.wgsl_type(), parts.join(", ")),
+                (0..width)
+                    .map(|i| store(i, &format!("v.{}", comps[i as usize])))
+                    .collect(),
+            )
+        }
+        Kind::Vec4Xyw => (
+            format!(
+                "vec4<f32>(bitcast<f32>({}), bitcast<f32>({}), 0.0, bitcast<f32>({}))",
+                word(0),
+                word(1),
+                word(2)
+            ),
+            vec![store(0, "v.x"), store(1, "v.y"), store(2, "v.w")],
+        ),
+        Kind::Hist(members) => {
+            let parts: Vec<String> = (0..width)
+                .map(|i| format!("bitcast<f32>({})", word(i)))
+                .collect();
+            (
+                format!("Hist({})", parts.join(", ")),
+                members
+                    .iter()
+                    .enumerate()
+                    .map(|(i, m)| store(i as u64, &format!("v.{m}")))
+                    .collect(),
+            )
+        }
+        Kind::Spare(_) => unreachable!("spare words have no accessors"),
     }
 }
 
@@ -466,7 +505,7 @@ mod tests {
         // the force jumps' impulses left out: no-op accessors, no words
         assert_eq!(e.place("jump_normal"), None);
         assert!(e
-            .wgsl()
+            .wgsl(false)
             .contains("fn store_jump_normal(r: u32, v: vec3<f32>) {}"));
         assert_eq!(e.place("hist"), Some((3, 2)));
         assert_eq!(e.offset("pair_force", 10), Some(4 * 9 * 10));
@@ -474,6 +513,8 @@ mod tests {
         assert_eq!(e.windowed_bytes(7, &Windows::one(7)), 4 * e.words() * 7);
         let calls: BTreeSet<String> = ["load_hist".to_string(), "store_nbr".to_string()].into();
         assert_eq!(e.touched_bytes(&calls, 10), 4 * (2 + 1) * 10);
+        let far: BTreeSet<String> = ["load_pair_force_far".to_string()].into();
+        assert_eq!(e.touched_bytes(&far, 10), 4 * 3 * 10);
         // without the ledger the prior keeps (δ, F, state): three words, z reads 0
         let jumps = Keeps::new(false, true, false);
         let j = RecordLayout::entries(&hist, false, jumps);
@@ -490,7 +531,7 @@ mod tests {
             new.byte_of("new_prior", 4, &Windows::one(4), 1),
             Some(4 * ((8 + 3) * 4 + 3))
         );
-        let source = new.wgsl();
+        let source = new.wgsl(false);
         assert!(!source.contains("var<storage, read_write> new_entries"));
         assert!(source.contains("entries[at + 2u]"));
         assert_eq!(e.per_step(), (9, 7));
@@ -500,8 +541,18 @@ mod tests {
             wide.byte_of("new_prior", 4, &Windows::one(4), 0),
             Some(4 * (9 + 3) * 4)
         );
-        assert!(!e.wgsl().contains("spare"));
-        assert!(j.wgsl().contains("0.0, bitcast<f32>(entries[at + 2u]))"));
+        assert!(!e.wgsl(false).contains("spare"));
+        assert!(j
+            .wgsl(false)
+            .contains("0.0, bitcast<f32>(entries[at + 2u]))"));
+        // paged: far loads read the other page where the record lies there; the new lists
+        // (hosted) have none
+        let paged = j.wgsl(true);
+        assert!(paged.contains("var<storage, read> entries_x: array<u32>"));
+        assert!(paged.contains("entries_far(r, at + 2u)"));
+        assert!(paged.contains("fn load_jump_far(r: u32) -> f32"));
+        assert!(!j.wgsl(false).contains("entries_x"));
+        assert!(!new.wgsl(true).contains("_far"));
         let windows = Windows::one(4);
         let mut bytes = vec![0u8; j.block_bytes(4) as usize];
         let at = j.byte_of("prior", 4, &windows, 1).unwrap() as usize;

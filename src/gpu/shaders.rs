@@ -56,7 +56,7 @@ pub fn step_variant() -> ShaderVariant {
         gamma0: 0.0,
         luding: Default::default(),
     });
-    Composition::of(&[lsd]).variant(Keeps::new(true, false, false), false)
+    Composition::of(&[lsd]).variant(Keeps::new(true, false, false), false, false)
 }
 
 /// A shader stage: one file of `shaders/`.
@@ -129,8 +129,8 @@ pub fn all_variants() -> Vec<ShaderVariant> {
         })
         .collect();
     for c in Composition::all() {
-        for mirrors in [false, true] {
-            all.extend(Keeps::ALL.map(|keeps| c.variant(keeps, mirrors)));
+        for (mirrors, paged) in [(false, false), (true, false), (false, true), (true, true)] {
+            all.extend(Keeps::ALL.map(|keeps| c.variant(keeps, mirrors, paged)));
         }
     }
     all
@@ -286,7 +286,7 @@ mod tests {
                 .flat_map(move |keeps| [false, true].map(|mirrors| (keeps, mirrors)))
                 .map(move |(keeps, mirrors)| (k.clone(), keeps, mirrors))
         }) {
-            let v = kind.variant(keeps, mirrors);
+            let v = kind.variant(keeps, mirrors, false);
             let (module, _) = validate(&v.source).unwrap();
             let eps = compute_entry_points(&module);
             for name in [

@@ -8,6 +8,7 @@
 
 use crate::error::PowderError;
 use crate::gpu::kernel::{uniform_buffer, Kernel, Part};
+use crate::gpu::pages::Pages;
 use crate::gpu::state::{particle_stride, STRIDE_ALIGN};
 
 /// A dispatch's window (`WindowParams` in common.wgsl).
@@ -20,7 +21,13 @@ pub struct WindowParams {
     pub bound: u32,
     /// The window.
     pub index: u32,
-    _pad: u32,
+    /// The first window of the lists' entries' binding ([`Pages::params`]).
+    pub rec_base: u32,
+    /// The end of the windows that binding holds.
+    pub rec_end: u32,
+    /// The first window of the other page's binding (`entries_x`; several pages only).
+    pub rec_other: u32,
+    _pad: [u32; 2],
 }
 
 /// The fewest particles a window holds: every window's block of any array (4-byte records
@@ -138,13 +145,18 @@ impl Windows {
         (self.bound(w) * block, self.covered() * block)
     }
 
-    /// The uniform of window w's dispatches (`win` in common.wgsl).
-    pub fn window_params(&self, w: u64) -> WindowParams {
+    /// The uniform of window w's dispatches (`win` in common.wgsl), the lists' entries
+    /// in `pages`.
+    pub fn window_params(&self, w: u64, pages: &Pages) -> WindowParams {
+        let [rec_base, rec_end, rec_other] = pages.params(w, self.bound(w), self.count);
         WindowParams {
             first: (w * self.len) as u32,
             bound: self.bound(w) as u32,
             index: w as u32,
-            _pad: 0,
+            rec_base,
+            rec_end,
+            rec_other,
+            _pad: [0; 2],
         }
     }
 
@@ -162,20 +174,26 @@ pub type Blocks<'a> = [(&'a str, u64)];
 pub struct WindowBindings {
     /// The windows.
     pub windows: Windows,
+    /// The pages of the lists' entries.
+    pub pages: Pages,
     /// Window w's [`WindowParams`].
     pub uniforms: Vec<wgpu::Buffer>,
 }
 
 impl WindowBindings {
-    /// The uniforms of `windows`.
-    pub fn new(device: &wgpu::Device, windows: Windows) -> Self {
+    /// The uniforms of `windows`, the lists' entries in `pages`.
+    pub fn new(device: &wgpu::Device, windows: Windows, pages: Pages) -> Self {
         let uniforms = (0..windows.count)
             .map(|w| {
-                let params = windows.window_params(w);
+                let params = windows.window_params(w, &pages);
                 uniform_buffer(device, "window", bytemuck::bytes_of(&params))
             })
             .collect();
-        Self { windows, uniforms }
+        Self {
+            windows,
+            pages,
+            uniforms,
+        }
     }
 
     /// What window w's dispatches bind of a blocked `buffer` of `block` bytes a window:
@@ -194,15 +212,25 @@ impl WindowBindings {
 
     /// The bind groups of `kernel`: one a window where it binds `win` (each blocked
     /// buffer, named in `blocks` with its bytes a window, bound over the window and its
-    /// neighbours; with one window, whole), else one binding everything whole.
+    /// neighbours; with one window, whole), else one binding everything whole. Where the
+    /// lists' entries are in pages (`entry_pages`, [`Self::pages`]), `entries` is the
+    /// window's page and `entries_x` the other one ([`Pages::other`]), each whole.
     pub fn groups(
         &self,
         device: &wgpu::Device,
         kernel: &Kernel,
         (buffers, blocks): (&[(&str, &wgpu::Buffer)], &Blocks),
         textures: &[(&str, &wgpu::TextureView)],
+        entry_pages: &[wgpu::Buffer],
     ) -> Result<Vec<wgpu::BindGroup>, PowderError> {
+        let paged = self.pages.paged() && kernel.uses("entries");
         if !kernel.uses("win") {
+            if paged {
+                return Err(PowderError::Run(format!(
+                    "kernel `{}` binds the lists' entries whole, which are in {} pages",
+                    kernel.name, self.pages.count
+                )));
+            }
             return Ok(vec![kernel.bind_with_textures(device, buffers, textures)?]);
         }
         (0..self.windows.count)
@@ -217,10 +245,26 @@ impl WindowBindings {
                         (name, part)
                     })
                     .collect();
+                if paged {
+                    let page = |p: u64| Part::whole(&entry_pages[p as usize]);
+                    parts.retain(|(name, _)| *name != "entries");
+                    parts.push(("entries", page(self.pages.page_of(w))));
+                    parts.push(("entries_x", page(self.pages.other(w))));
+                }
                 parts.push(("win", Part::whole(&self.uniforms[w as usize])));
                 kernel.bind_parts(device, &parts, textures)
             })
             .collect()
+    }
+
+    /// Writes the windows' uniforms again for the lists' entries in `pages` (the lists
+    /// grew).
+    pub fn set_pages(&mut self, queue: &wgpu::Queue, pages: Pages) {
+        self.pages = pages;
+        for (w, uniform) in self.uniforms.iter().enumerate() {
+            let params = self.windows.window_params(w as u64, &pages);
+            queue.write_buffer(uniform, 0, bytemuck::bytes_of(&params));
+        }
     }
 }
 

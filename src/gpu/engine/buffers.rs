@@ -85,15 +85,17 @@ pub(super) struct StateSet {
     pub(super) motion: wgpu::Buffer,
     pub(super) layout: StateLayout,
     /// The lists' entries (partner or wall, `lower`, partner id, history, pair force and
-    /// torque, the contact's prior, a force jump's impulse) and their layout.
-    pub(super) entries: wgpu::Buffer,
+    /// torque, the contact's prior, a force jump's impulse) and their layout: one buffer,
+    /// or pages of whole windows where that would exceed the largest (`gpu::pages`).
+    pub(super) entries: Vec<wgpu::Buffer>,
+    pub(super) pages: Pages,
     pub(super) entry_layout: RecordLayout,
 }
 
 impl StateSet {
     pub(super) fn new(
         alloc: &mut Allocator,
-        (n, entries, windows): (u64, u64, Windows),
+        (n, entries, windows, pages): (u64, u64, Windows, Pages),
         kind: &Composition,
         keeps: Keeps,
     ) -> Self {
@@ -104,13 +106,31 @@ impl StateSet {
             let block = blocks.iter().find(|(n, _)| *n == name).map_or(0, |b| b.1);
             blocked_buffer(alloc, &windows, (&format!("A.{name}"), bytes), block)
         };
+        let state = b("state", layout.bytes(Buffer::State));
+        let motion = b("motion", layout.bytes(Buffer::Motion));
+        let entries = entry_buffers(alloc, (&windows, &pages), &entry_layout, entries);
         Self {
-            state: b("state", layout.bytes(Buffer::State)),
-            motion: b("motion", layout.bytes(Buffer::Motion)),
-            entries: b("entries", entry_layout.windowed_bytes(entries, &windows)),
+            state,
+            motion,
+            entries,
+            pages,
             layout,
             entry_layout,
         }
+    }
+
+    /// The entries' buffers read back one after the other: the bytes of one buffer.
+    pub(super) fn entry_sources(&self) -> Vec<(&wgpu::Buffer, u64)> {
+        self.entries.iter().map(|b| (b, b.size())).collect()
+    }
+
+    /// The entries' buffer holding byte `at` of the one they stand for, and where, for
+    /// `entries` entries a window.
+    pub(super) fn entry_at(&self, at: u64, entries: u64) -> (&wgpu::Buffer, u64) {
+        let (page, at) = self
+            .pages
+            .locate(at, self.entry_layout.block_bytes(entries));
+        (&self.entries[page as usize], at)
     }
 
     /// Bytes of a window's block of each blocked buffer of the set (`gpu::window`), by
@@ -135,12 +155,13 @@ impl StateSet {
         v
     }
 
-    /// The buffers under the names the kernels bind them by.
+    /// The buffers under the names the kernels bind them by (the entries' first page:
+    /// [`WindowBindings::groups`] binds each window's).
     pub(super) fn named(&self) -> Vec<(String, &wgpu::Buffer)> {
         vec![
             ("state".to_string(), &self.state),
             ("motion".to_string(), &self.motion),
-            ("entries".to_string(), &self.entries),
+            ("entries".to_string(), &self.entries[0]),
         ]
     }
 
@@ -207,6 +228,27 @@ pub(super) fn blocked_buffer(
     }
 }
 
+/// The buffers of `entries` list entries a window of `layout`: one blocked by window, or
+/// one a page (bound whole).
+pub(super) fn entry_buffers(
+    alloc: &mut Allocator,
+    (windows, pages): (&Windows, &Pages),
+    layout: &RecordLayout,
+    entries: u64,
+) -> Vec<wgpu::Buffer> {
+    let block = layout.block_bytes(entries);
+    if !pages.paged() {
+        let bytes = layout.windowed_bytes(entries, windows);
+        return vec![blocked_buffer(alloc, windows, ("A.entries", bytes), block)];
+    }
+    (0..pages.count)
+        .map(|p| {
+            let (_, len) = pages.range(p, windows.count);
+            alloc.buffer(&format!("A.entries[{p}]"), len * block)
+        })
+        .collect()
+}
+
 /// The neighbour lists a rebuild builds (B: partner ids, history, priors), copied back
 /// into A's at its end: in the entries' per-step fields (`RecordLayout::new_entries`).
 pub(super) struct NewLists {
@@ -242,14 +284,15 @@ impl NewLists {
     /// Where they lie, lent to the re-sort as its scratch (nothing reads the new lists
     /// from one rebuild's `copy_back_history` to the next's `remap`, which runs after the
     /// re-sort), for `entries` list entries a window: the entries' per-step fields.
-    pub(super) fn lent<'a>(a: &'a StateSet, entries: u64) -> permute::Lent<'a> {
+    /// None where the entries are in pages (a window and its neighbours may span two).
+    pub(super) fn lent<'a>(a: &'a StateSet, entries: u64) -> Option<permute::Lent<'a>> {
         let (base, words) = a.entry_layout.per_step();
-        permute::Lent {
-            buffer: &a.entries,
+        (!a.pages.paged()).then(|| permute::Lent {
+            buffer: &a.entries[0],
             block: a.entry_layout.block_bytes(entries),
             base: 4 * base * entries,
             bytes: 4 * words * entries,
-        }
+        })
     }
 }
 
@@ -305,16 +348,17 @@ impl StepBuffers {
     }
 }
 
-/// An error when `entries` list entries a window of `words` words each (the entries'
-/// records) do not fit: a window's numbering, the adapter's storage binding limit (the
-/// whole buffer with one window, a window and its neighbours with several), its largest
-/// buffer, or u32 word indices.
+/// The pages of `entries` list entries a window of `words` words each (the entries'
+/// records), or an error when they do not fit: a window's numbering, the adapter's storage
+/// binding limit (the whole buffer with one window, a window and its neighbours with
+/// several), or a page of `largest` bytes (the largest buffer, [`entry_buffer_limit`])
+/// holding fewer than three windows.
 pub(super) fn check_entries(
     (entries, windows): (u64, &Windows),
     words: u64,
     particles: u64,
-    (limit, max_buffer): (u64, u64),
-) -> Result<(), PowderError> {
+    (limit, largest): (u64, u64),
+) -> Result<Pages, PowderError> {
     if entries > windows.max_records() {
         return Err(PowderError::Run(format!(
             "the neighbour lists need {entries} entries in a window of {} particles, more than the {} a window's entries are numbered with (about 2^32 entries in all)",
@@ -327,11 +371,6 @@ pub(super) fn check_entries(
     let bound = entries * windows.covered();
     let per_particle = total as f64 / particles.max(1) as f64;
     let what = format!("{total} entries ({per_particle:.1} a particle) of {bytes} bytes each (partner, history, pair force, ...)");
-    if total * words > u32::MAX as u64 {
-        return Err(PowderError::Run(format!(
-            "the neighbour lists need {what}: more than 2^32 words, which the kernels' u32 indices cannot reach"
-        )));
-    }
     if bound * bytes > limit {
         return Err(PowderError::Run(format!(
             "the neighbour lists need {what}, {} bytes bound at a time, over the adapter's storage binding limit of {limit} bytes{}",
@@ -343,12 +382,21 @@ pub(super) fn check_entries(
             }
         )));
     }
-    if total * bytes > max_buffer {
-        return Err(PowderError::Run(format!(
-            "the neighbour lists need {what}, over the adapter's largest buffer of {max_buffer} bytes"
-        )));
-    }
-    Ok(())
+    let block = entries * bytes;
+    let page = largest.min(limit);
+    Pages::of(windows, block, (largest, page)).ok_or_else(|| {
+        PowderError::Run(format!(
+            "the neighbour lists need {what}, over the largest buffer of {largest} bytes, and a page of at most {page} bytes holds fewer than {MIN_PAGE_WINDOWS} windows' blocks of {block} bytes; smaller windows hold fewer (`--window-particles N`)"
+        ))
+    })
+}
+
+/// The largest buffer the lists' entries take before they are cut into pages: the
+/// adapter's largest buffer, at most 2^32 words (the kernels' u32 indices), or less where
+/// [`GpuOptions::entry_page_bytes`] asks.
+pub(super) fn entry_buffer_limit(ctx: &GpuContext, asked: Option<u64>) -> u64 {
+    let largest = ctx.limits().max_buffer_size.min(4 * u32::MAX as u64);
+    asked.map_or(largest, |a| a.min(largest))
 }
 
 /// List entries a window rounded up so a window's block of entries is a whole number of
@@ -405,9 +453,12 @@ impl GpuEngine {
         // itself is checked)
         let windows = *self.state.layout.windows();
         let bytes = 4 * self.state.entry_layout.words();
-        let max_buffer = self.ctx.limits().max_buffer_size;
-        let most = (self.ctx.max_storage_binding() / (bytes * windows.covered()))
-            .min(max_buffer / (bytes * windows.count))
+        // (a window and its neighbours within a binding; where the entries outgrow the
+        // largest buffer, pages of at least MIN_PAGE_WINDOWS windows)
+        let binding = self.ctx.max_storage_binding();
+        let page = binding.min(self.largest_entries);
+        let most = (binding / (bytes * windows.covered()))
+            .min(page / (bytes * MIN_PAGE_WINDOWS.min(windows.count)))
             .min(windows.max_records());
         // (a window's block a whole number of 256 bytes where there are several)
         let most = match windows.count {
@@ -429,39 +480,47 @@ impl GpuEngine {
     pub(super) fn resize_lists(&mut self, entries: u64, keep: bool) -> Result<(), PowderError> {
         let layout = self.state.entry_layout.clone();
         let windows = *self.state.layout.windows();
-        check_entries(
+        let pages = check_entries(
             (entries, &windows),
             layout.words(),
             self.n as u64,
-            (
-                self.ctx.max_storage_binding(),
-                self.ctx.limits().max_buffer_size,
-            ),
+            (self.ctx.max_storage_binding(), self.largest_entries),
         )?;
         let device = &self.ctx.device;
         let mut alloc = Allocator::new(device, self.ctx.max_storage_binding());
         let mut encoder = device.create_command_encoder(&Default::default());
-        let old = (self.state.entries.clone(), self.entries);
-        let bytes = layout.windowed_bytes(entries, &windows);
-        let block = layout.block_bytes(entries);
-        let new = blocked_buffer(&mut alloc, &windows, ("A.entries", bytes), block);
+        let new = entry_buffers(&mut alloc, (&windows, &pages), &layout, entries);
         alloc.check(self.n as usize)?;
         if keep {
             // window by window, region by region: each region's start moves with the
-            // capacity
+            // capacity (a window's region lies in one page)
+            let new_block = layout.block_bytes(entries);
             for w in 0..windows.count {
                 for name in ["hist_pid", "hist", "prior"] {
                     if let Some((_, words)) = layout.place(name) {
                         let first = windows.record(w, 0);
-                        let from = layout.byte_of(name, old.1, &windows, first).unwrap_or(0);
-                        let to = layout.byte_of(name, entries, &windows, first).unwrap_or(0);
-                        let bytes = 4 * words * old.1.min(entries);
-                        encoder.copy_buffer_to_buffer(&old.0, from, &new, to, bytes);
+                        let from = layout.byte_of(name, self.entries, &windows, first);
+                        let to = layout.byte_of(name, entries, &windows, first);
+                        let (from, at) = self.state.entry_at(from.unwrap_or(0), self.entries);
+                        let (page, to) = pages.locate(to.unwrap_or(0), new_block);
+                        let bytes = 4 * words * self.entries.min(entries);
+                        encoder.copy_buffer_to_buffer(from, at, &new[page as usize], to, bytes);
                     }
                 }
             }
         }
         self.state.entries = new;
+        if pages != self.state.pages {
+            if pages.paged() != self.state.pages.paged() {
+                // (the far reads of the paged variant)
+                let program = self
+                    .spec
+                    .compile(&self.ctx, (&self.kind, self.keeps), pages.paged());
+                self.program = program?;
+            }
+            self.state.pages = pages;
+            self.windowing.set_pages(&self.ctx.queue, pages);
+        }
         if let Some(q) = &mut self.quiet {
             // (a copy, never bound: no binding limit, as at the start)
             let mut copies = Allocator::new(device, u64::MAX);
@@ -478,14 +537,17 @@ impl GpuEngine {
             (self.grid.params(), self.grid.sorted_index()),
             self.n,
             &self.state.permuted(),
-            (&self.windowing, Some(NewLists::lent(&self.state, entries))),
+            (&self.windowing, NewLists::lent(&self.state, entries)),
         )?;
         alloc
             .list
             .push(("permute.scratch".into(), self.permutation.scratch_bytes()));
+        // (the entries' pages may be more or fewer now)
+        self.buffers.retain(|(n, _)| !n.starts_with("A.entries"));
         for (name, bytes) in alloc.list {
-            if let Some(entry) = self.buffers.iter_mut().find(|(n, _)| *n == name) {
-                entry.1 = bytes;
+            match self.buffers.iter_mut().find(|(n, _)| *n == name) {
+                Some(entry) => entry.1 = bytes,
+                None => self.buffers.push((name, bytes)),
             }
         }
         self.entries = entries;
@@ -504,20 +566,16 @@ impl GpuEngine {
             ),
             (&self.mirrors, &self.windowing),
             &self.grid,
-            [self.state.named(), self.b.named()],
+            ([self.state.named(), self.b.named()], &self.state.entries),
         )?;
         Ok(())
     }
 
-    /// Whether `need` list entries overflow the one window's binding while their buffer
-    /// would still fit the largest (what windows fix).
+    /// Whether `need` list entries overflow the one window's binding (what windows fix;
+    /// pages then hold what outgrows the largest buffer).
     pub(super) fn outgrows_one_window(&self, need: u64) -> bool {
         let windows = *self.state.layout.windows();
         let words = self.state.entry_layout.words();
-        let max_buffer = self.ctx.limits().max_buffer_size;
-        windows.count == 1
-            && 4 * words * need > self.ctx.max_storage_binding()
-            && 4 * words * need <= max_buffer
-            && need * words <= u32::MAX as u64
+        windows.count == 1 && 4 * words * need > self.ctx.max_storage_binding()
     }
 }

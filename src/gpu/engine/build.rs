@@ -24,6 +24,34 @@ pub(super) fn grid_order(cells: &[[i32; 4]], dims: [u32; 3]) -> Vec<usize> {
     order
 }
 
+/// What the step's program is compiled from besides the composition: the kernels a scene
+/// runs, its pipeline constants, the state read through mirrors.
+pub(super) struct StepSpec {
+    pub(super) wanted: Vec<&'static str>,
+    pub(super) constants: Vec<(&'static str, f64)>,
+    pub(super) mirrors: bool,
+}
+
+impl StepSpec {
+    /// The step's program, the lists' entries in one buffer or `paged`.
+    pub(super) fn compile(
+        &self,
+        ctx: &GpuContext,
+        (kind, keeps): (&Composition, Keeps),
+        paged: bool,
+    ) -> Result<Program, PowderError> {
+        Program::specialized(
+            ctx,
+            &kind.variant(keeps, self.mirrors, paged),
+            Some(&self.wanted),
+            &self.constants,
+        )
+    }
+}
+
+/// The buffers the step binds by name: the state set's and the step's others.
+pub(super) type NamedBuffers<'a> = [Vec<(String, &'a wgpu::Buffer)>; 2];
+
 /// Binds every kernel of the step to the run's buffers and the mirrors' textures, window
 /// by window where a kernel works on windows (`blocks`: the blocked buffers' bytes a
 /// window).
@@ -33,7 +61,7 @@ pub(super) fn bind_all(
     (layout, records, blocks): (&StateLayout, &[(&RecordLayout, u64)], &Blocks),
     (mirrors, windows): (&Mirrors, &WindowBindings),
     grid: &GridSort,
-    buffers: [Vec<(String, &wgpu::Buffer)>; 2],
+    (buffers, entry_pages): (NamedBuffers, &[wgpu::Buffer]),
 ) -> Result<Bound, PowderError> {
     let mut list: Vec<(String, &wgpu::Buffer)> = buffers.into_iter().flatten().collect();
     list.push(("grid".into(), grid.params()));
@@ -43,7 +71,13 @@ pub(super) fn bind_all(
     let textures = mirrors.view_bytes();
     let pass = |name: &str| -> Result<Pass, PowderError> {
         let kernel = program.kernel(name)?.clone();
-        let groups = windows.groups(device, &kernel, (&refs, blocks), &mirrors.views())?;
+        let groups = windows.groups(
+            device,
+            &kernel,
+            (&refs, blocks),
+            &mirrors.views(),
+            entry_pages,
+        )?;
         let mut bound = kernel.bound_bytes(&refs, &textures);
         // the state: the fields the kernel's accessors touch, not the whole buffers
         for (name, bytes) in &mut bound {
@@ -362,7 +396,6 @@ impl GpuEngine {
             ),
         };
         grid.set_windows(&ctx.queue, &windows, state_fields as u32);
-        let windowing = WindowBindings::new(&ctx.device, windows);
         let device = &ctx.device;
         let mut alloc = Allocator::new(device, ctx.max_storage_binding());
         alloc.list = vec![
@@ -384,14 +417,21 @@ impl GpuEngine {
             .max(1);
         let entries = window_entries(&windows, entries);
         let [entry_layout, ..] = kind.records(keeps);
-        check_entries(
+        let largest = entry_buffer_limit(&ctx, options.entry_page_bytes);
+        let pages = check_entries(
             (entries, &windows),
             entry_layout.words(),
             n as u64,
-            (ctx.max_storage_binding(), alloc.max_buffer),
+            (ctx.max_storage_binding(), largest),
         )?;
+        let windowing = WindowBindings::new(&ctx.device, windows, pages);
         let servo_walls = scene.walls.iter().any(|w| w.motion.servo());
-        let state = StateSet::new(&mut alloc, (n as u64, entries, windows), &kind, keeps);
+        let state = StateSet::new(
+            &mut alloc,
+            (n as u64, entries, windows, pages),
+            &kind,
+            keeps,
+        );
         let new_lists = NewLists::new(&kind, keeps);
         let dt32 = r.dt as f32;
         let particle_ledger = ledger.then(|| alloc.buffer("particle_ledger", 64 * n as u64));
@@ -510,12 +550,12 @@ impl GpuEngine {
             wanted.extend(["wall_servo", "wall_servo_apply"]);
         }
         let constants = pipeline_constants(scene, &r, &all_models);
-        let program = Program::specialized(
-            &ctx,
-            &kind.variant(keeps, software),
-            Some(&wanted),
-            &constants,
-        )?;
+        let spec = StepSpec {
+            wanted,
+            constants,
+            mirrors: software,
+        };
+        let program = spec.compile(&ctx, (&kind, keeps), pages.paged())?;
         let max_per_dim = ctx.limits().max_compute_workgroups_per_dimension;
         // the scans that place the new lists (counts -> first entries)
         let scan_program = Program::with_entry_points(
@@ -647,7 +687,7 @@ impl GpuEngine {
             (grid.params(), grid.sorted_index()),
             n as u32,
             &state.permuted(),
-            (&windowing, Some(NewLists::lent(&state, entries))),
+            (&windowing, NewLists::lent(&state, entries)),
         )?;
         alloc
             .list
@@ -676,7 +716,7 @@ impl GpuEngine {
             ),
             (&mirrors, &windowing),
             &grid,
-            [state.named(), b.named()],
+            ([state.named(), b.named()], &state.entries),
         )?;
         // the grid sort's keys, a window at a time
         let state_block = state_fields * windows.len * crate::gpu::state::FIELD_BYTES;
@@ -734,6 +774,8 @@ impl GpuEngine {
             dt: r.dt,
             n: n as u32,
             entries,
+            largest_entries: largest,
+            spec,
             origin,
             h,
             radius,

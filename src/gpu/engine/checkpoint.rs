@@ -40,15 +40,24 @@ impl GpuSavedState {
 }
 
 impl GpuEngine {
-    /// The state buffers, named as in [`GpuSavedState`].
-    pub(super) fn state_buffers(&self) -> Vec<(String, &wgpu::Buffer)> {
-        let mut list = self.state.named();
-        list.push(("rows".into(), &self.b.rows));
-        list.push(("control".into(), &self.b.control));
-        list.push(("walls".into(), &self.b.walls));
-        list.push(("wall_ref".into(), &self.b.wall_ref));
+    /// The state buffers, named as in [`GpuSavedState`], each with the buffers its bytes
+    /// lie in one after the other (the entries' pages; one buffer for the others).
+    pub(super) fn state_buffers(&self) -> Vec<(String, Vec<&wgpu::Buffer>)> {
+        let mut list: Vec<(String, Vec<&wgpu::Buffer>)> = self
+            .state
+            .named()
+            .into_iter()
+            .map(|(name, b)| match name.as_str() {
+                "entries" => (name, self.state.entries.iter().collect()),
+                _ => (name, vec![b]),
+            })
+            .collect();
+        list.push(("rows".into(), vec![&self.b.rows]));
+        list.push(("control".into(), vec![&self.b.control]));
+        list.push(("walls".into(), vec![&self.b.walls]));
+        list.push(("wall_ref".into(), vec![&self.b.wall_ref]));
         if let Some(l) = &self.b.particle_ledger {
-            list.push(("particle_ledger".into(), l));
+            list.push(("particle_ledger".into(), vec![l]));
         }
         list
     }
@@ -57,8 +66,15 @@ impl GpuEngine {
     pub fn save_state(&self) -> Result<GpuSavedState, PowderError> {
         let list = self.state_buffers();
         let encoder = self.ctx.device.create_command_encoder(&Default::default());
-        let sources: Vec<(&wgpu::Buffer, u64)> = list.iter().map(|(_, b)| (*b, b.size())).collect();
-        let mut out = submit_and_read(&self.ctx, encoder, &sources)?;
+        let sources: Vec<(&wgpu::Buffer, u64)> = list
+            .iter()
+            .flat_map(|(_, bs)| bs.iter().map(|b| (*b, b.size())))
+            .collect();
+        let mut read = submit_and_read(&self.ctx, encoder, &sources)?.into_iter();
+        let mut out: Vec<Vec<u8>> = list
+            .iter()
+            .map(|(_, bs)| read.by_ref().take(bs.len()).collect::<Vec<_>>().concat())
+            .collect();
         // the monitor words are a batch's scratch (zeroed when one starts): left out, so a
         // state saved after a quiet batch (no `decide` counting steps) and one saved after
         // a normal batch are the same bytes
@@ -161,11 +177,11 @@ impl GpuEngine {
         }
         // every size checked before anything changes (the per-entry arrays at the saved
         // capacity)
-        for ((name, buf), (_, bytes)) in list.iter().zip(&saved.buffers) {
+        for ((name, bufs), (_, bytes)) in list.iter().zip(&saved.buffers) {
             let expected = if name == "entries" {
                 (entry_bytes * entries).max(4)
             } else {
-                buf.size()
+                bufs.iter().map(|b| b.size()).sum()
             };
             if bytes.len() as u64 != expected {
                 return Err(PowderError::Run(format!(
@@ -177,8 +193,13 @@ impl GpuEngine {
         if entries != self.entries {
             self.resize_lists(entries, false)?;
         }
-        for ((_, buf), (_, bytes)) in self.state_buffers().iter().zip(&saved.buffers) {
-            self.ctx.queue.write_buffer(buf, 0, bytes);
+        for ((_, bufs), (_, bytes)) in self.state_buffers().iter().zip(&saved.buffers) {
+            let mut at = 0;
+            for buf in bufs {
+                let end = (at + buf.size() as usize).min(bytes.len());
+                self.ctx.queue.write_buffer(buf, 0, &bytes[at..end]);
+                at = end;
+            }
         }
         if saved.wall_points.len() == self.wall_points.len() {
             self.wall_points = saved.wall_points;

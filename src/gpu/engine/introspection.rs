@@ -76,7 +76,11 @@ impl GpuEngine {
 
     /// The name of the step's shader module (`Composition::variant_name`).
     pub fn variant_name(&self) -> String {
-        self.kind.variant_name(self.keeps, !self.mirrors.is_empty())
+        self.kind.variant_name(
+            self.keeps,
+            !self.mirrors.is_empty(),
+            self.state.pages.paged(),
+        )
     }
 
     /// The step's kernels this engine built pipelines for (entry points of the step

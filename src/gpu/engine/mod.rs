@@ -27,6 +27,7 @@ use crate::gpu::kernel::{
 };
 use crate::gpu::layout::{encode3, gpu_cell_width, HystereticPair, JkrPair, StepParams, WallGpu};
 use crate::gpu::mirror::Mirrors;
+use crate::gpu::pages::{Pages, MIN_PAGE_WINDOWS};
 use crate::gpu::permute::{self, Field, Permutation, ROW_WORDS};
 use crate::gpu::quiet::{Forecast, QuietBatches};
 use crate::gpu::records::{RecordLayout, WALL_ENTRY};
@@ -135,6 +136,10 @@ pub struct GpuOptions {
     /// in the rebuild's new lists (about 24–32 bytes a list entry in all). Default off;
     /// `powder run` turns it on for the scene's `contact_output`.
     pub contacts: bool,
+    /// The largest buffer the lists' entries take (bytes; default: the adapter's largest
+    /// buffer): beyond it they are cut into pages of whole windows, each bound whole
+    /// (`gpu::pages`; windows are then needed). Results are bitwise the same either way.
+    pub entry_page_bytes: Option<u64>,
 }
 
 impl Default for GpuOptions {
@@ -146,6 +151,7 @@ impl Default for GpuOptions {
             software_paths: None,
             window_particles: None,
             contacts: false,
+            entry_page_bytes: None,
         }
     }
 }
@@ -161,6 +167,10 @@ pub struct GpuEngine {
     n: u32,
     /// Entries the neighbour lists have room for (grown when a rebuild needs more).
     entries: u64,
+    /// The largest buffer of entries before pages ([`entry_buffer_limit`]).
+    largest_entries: u64,
+    /// What the step's program is compiled from (again where the entries go into pages).
+    spec: StepSpec,
     origin: DVec3,
     /// Cell width per axis (the f32 values the kernels use), m.
     h: DVec3,

@@ -155,12 +155,10 @@ impl GpuEngine {
     pub(super) fn read_lists(&self) -> Result<(Vec<[u32; 4]>, Vec<u8>), PowderError> {
         let s = &self.state;
         let encoder = self.ctx.device.create_command_encoder(&Default::default());
-        let mut out = submit_and_read(
-            &self.ctx,
-            encoder,
-            &[(&s.state, s.state.size()), (&s.entries, s.entries.size())],
-        )?;
-        let entries = out.pop().unwrap_or_default();
+        let mut sources = vec![(&s.state, s.state.size())];
+        sources.extend(s.entry_sources());
+        let out = submit_and_read(&self.ctx, encoder, &sources)?;
+        let entries = out[1..].concat();
         Ok((s.layout.unpack(&out[0], "ids"), entries))
     }
 

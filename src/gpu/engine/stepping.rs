@@ -52,9 +52,8 @@ impl GpuEngine {
     /// The forces of the initial state (no drift, no kick), so the first step kicks with them.
     /// Contacts present at the start carry stored energy, not dissipation: the ledger's
     /// dissipation (booked from the contacts' entry edges) is zeroed afterwards, as on the CPU.
-    /// `rewindow`: where the lists outgrow one automatic window's binding (but not the
-    /// largest buffer), the entries they need (`Some`) instead of an error: the caller
-    /// builds again in windows.
+    /// `rewindow`: where the lists outgrow one automatic window's binding, the entries
+    /// they need (`Some`) instead of an error: the caller builds again in windows.
     pub(super) fn initial_forces(&mut self, rewindow: bool) -> Result<Option<u64>, PowderError> {
         // the initial contacts crossed nothing: no force jump placed
         self.set_jumps(false);
@@ -231,8 +230,9 @@ impl GpuEngine {
                     layout.byte_of(to, cap, windows, first),
                     a.entry_layout.place(from),
                 ) {
+                    let (from, at) = a.entry_at(at, cap);
                     v.push(Saved {
-                        from: a.entries.clone(),
+                        from: from.clone(),
                         from_at: at,
                         to: target.clone(),
                         to_at,

@@ -1,0 +1,150 @@
+//! The lists' entries in pages of whole windows (`gpu::pages`): what lets them outgrow the
+//! adapter's largest buffer, bitwise the run with them in one buffer.
+
+mod common;
+use common::{assert_same_bits, gpu as context};
+use powder::gpu::{GpuEngine, GpuOptions};
+use powder::measure::bench::{packing, Case};
+
+fn options(window: u64, first_entries: u64, page: Option<u64>) -> GpuOptions {
+    GpuOptions {
+        software_paths: Some(false),
+        window_particles: Some(window),
+        list_entries: Some(first_entries),
+        entry_page_bytes: page,
+        ..Default::default()
+    }
+}
+
+/// Bytes of one window's block of the entries.
+fn block_bytes(engine: &GpuEngine) -> u64 {
+    let record: u64 = engine.entry_fields().iter().map(|(_, b)| b).sum();
+    record * engine.list_entries() / engine.windows().count
+}
+
+fn bits(v: &[glam::DVec3]) -> Vec<[u64; 3]> {
+    v.iter().map(|w| w.to_array().map(f64::to_bits)).collect()
+}
+
+/// A hysteretic packing in a box (walls, the ledger, the force jumps; its lists grow from
+/// one entry a window, so the entries go into pages at the first build and the step is
+/// compiled again) and a JKR
+/// packing with rotation (pages from the start): pages of three windows give the bits of
+/// one buffer, and a paged checkpoint resumes bitwise in one buffer.
+#[test]
+fn entries_in_pages_change_no_bit() {
+    let scenes = [
+        (
+            "hysteretic packing",
+            packing(Case::Hysteretic, 1200, 1.0, 3).unwrap(),
+            600,
+            256,
+            false,
+        ),
+        (
+            "JKR packing",
+            packing(Case::Jkr, 600, 1.0, 3).unwrap(),
+            600,
+            // (its layers of cells hold about 70 particles)
+            128,
+            true,
+        ),
+    ];
+    for (name, mut scene, steps, len, paged_from_the_start) in scenes {
+        let Some(ctx) = context() else { return };
+        // scrambled, so the re-sorts move particles across windows (and pages)
+        let n = scene.particles.len();
+        for i in 0..n {
+            scene.particles.swap(i, (i * 7919 + 13) % n);
+        }
+        let mut one = GpuEngine::with_options(&scene, ctx, options(len, 1, None)).unwrap();
+        let half = steps / 2;
+        one.run_steps(half).unwrap();
+        let mid = one.state().unwrap();
+        one.run_steps(steps - half).unwrap();
+        assert!(!one.variant_name().ends_with("_paged"), "{name}");
+        eprintln!(
+            "{name}: {n} particles, {} windows, {} entries, {} rebuilds",
+            one.windows().count,
+            one.list_entries(),
+            one.rebuilds().unwrap()
+        );
+        // pages of three windows at the final capacity
+        let block = block_bytes(&one);
+        let page = 3 * block + block / 2;
+        let first = match paged_from_the_start {
+            true => one.list_entries() / one.windows().count,
+            false => 1,
+        };
+        let options = options(len, first, Some(page));
+        let mut paged = GpuEngine::with_options(&scene, context().unwrap(), options).unwrap();
+        // (from one entry a window the first build grows the lists into pages: the step
+        // compiled again)
+        assert!(paged.variant_name().ends_with("_paged"), "{name}");
+        assert_eq!(paged.list_growths() > 0, !paged_from_the_start, "{name}");
+        paged.run_steps(half).unwrap();
+        assert_same_bits(&mid, &paged.state().unwrap());
+        let saved = paged.save_state().unwrap();
+        paged.run_steps(steps - half).unwrap();
+        assert!(paged.variant_name().ends_with("_paged"), "{name}");
+        let pages: Vec<String> = paged
+            .buffers()
+            .into_iter()
+            .map(|(n, _)| n)
+            .filter(|n| n.starts_with("A.entries"))
+            .collect();
+        assert!(
+            pages.len() >= 2 && pages[1] == "A.entries[1]",
+            "{name}: {pages:?}"
+        );
+        let (a, b) = (one.state().unwrap(), paged.state().unwrap());
+        assert_same_bits(&a, &b);
+        assert_eq!(
+            bits(&a.angular_velocities),
+            bits(&b.angular_velocities),
+            "{name}"
+        );
+        let (ea, eb) = (one.energies(&a).unwrap(), paged.energies(&b).unwrap());
+        assert_eq!(ea.dissipated.to_bits(), eb.dissipated.to_bits(), "{name}");
+        assert_eq!(ea.wall_work.to_bits(), eb.wall_work.to_bits(), "{name}");
+        assert_eq!(one.rebuilds().unwrap(), paged.rebuilds().unwrap(), "{name}");
+        assert_eq!(
+            one.contact_histories().unwrap(),
+            paged.contact_histories().unwrap(),
+            "{name}"
+        );
+        assert_eq!(
+            bits(&one.wall_forces().unwrap()),
+            bits(&paged.wall_forces().unwrap()),
+            "{name}"
+        );
+        // the paged state resumes in one buffer bitwise (the pages' bytes are its bytes)
+        let mut resumed =
+            GpuEngine::with_options(&scene, context().unwrap(), self::options(len, 1, None))
+                .unwrap();
+        resumed.restore_state(saved).unwrap();
+        resumed.run_steps(steps - half).unwrap();
+        assert_same_bits(&resumed.state().unwrap(), &b);
+        eprintln!(
+            "{name}: {n} particles in {} windows, {} pages of {page} bytes at most, {} list entries",
+            paged.windows().count,
+            pages.len(),
+            paged.list_entries()
+        );
+    }
+}
+
+/// Pages too small for three windows' entries are refused by name, before the run.
+#[test]
+fn pages_of_fewer_than_three_windows_are_refused() {
+    let Some(ctx) = context() else { return };
+    let scene = packing(Case::Jkr, 600, 1.0, 3).unwrap();
+    let err = GpuEngine::with_options(&scene, ctx, options(64, 64, Some(4096)))
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(
+        err.contains("a page of at most 4096 bytes holds fewer than 3 windows"),
+        "{err}"
+    );
+}
