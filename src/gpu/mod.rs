@@ -13,8 +13,9 @@
 //!   GL, on any GPU and on the CPU rasterisers used in CI. Storage bindings may be
 //!   capped (128 MiB on lavapipe): where the arrays do not fit one binding the particles
 //!   are cut into windows ([`window`]) whose dispatches bind a window and its neighbours
-//!   only; what still does not fit is refused at construction with an error naming the
-//!   array, and dispatches larger than `max_compute_workgroups_per_dimension` are split
+//!   only, and the lists' entries beyond the largest buffer go into pages of windows
+//!   ([`pages`]); what still does not fit is refused at construction with an error naming
+//!   the array, and dispatches larger than `max_compute_workgroups_per_dimension` are split
 //!   over y/z.
 //! * **Positions** ([`layout`]): an integer cell (`vec4<i32>`, w = material) plus an f32
 //!   offset inside the cell (`vec4<f32>`, w = radius). Separations are formed as
