@@ -3,7 +3,8 @@
 //! by `powder run` with each snapshot (`contacts/<scene>_<step>.vtp` and its `.pvd`).
 
 mod common;
-use common::{gpu, packing, ROUGH};
+use common::builder::{ROUGH, STICKY};
+use common::{gpu, packing, rough};
 
 use powder::cpu::{CpuEngine, Partner};
 use powder::gpu::{GpuEngine, GpuOptions};
@@ -116,7 +117,8 @@ fn the_gpu_network_is_the_cpu_network_with_luding_friction() {
         "friction = 0.05\nfriction_dynamic = 0.04",
     );
     assert_ne!(slippery, ROUGH);
-    let Some(last) = same_networks(&packing(&slippery, "rough"), &[1500, 500, 400]) else {
+    let materials = |b: common::SceneBuilder| b.material("rough", 2000.0, &slippery);
+    let Some(last) = same_networks(&packing(materials, "rough"), &[1500, 500, 400]) else {
         return;
     };
     assert!(
@@ -129,18 +131,10 @@ fn the_gpu_network_is_the_cpu_network_with_luding_friction() {
 /// resistance.
 #[test]
 fn the_gpu_network_is_the_cpu_network_with_jkr_friction() {
-    let jkr = r#"
-[[material]]
-name = "rough"
-density = 2000.0
-model = "jkr"
-youngs = 1e5
-poisson = 0.3
-surface_energy = 0.05
-restitution = 0.5
-friction = 0.05
-rolling_hysteresis = 0.5
-"#;
+    // (STICKY with a low sliding coefficient)
+    let slippery = STICKY.replace("friction = 0.3", "friction = 0.05");
+    assert_ne!(slippery, STICKY);
+    let jkr = |b: common::SceneBuilder| b.material("rough", 2000.0, &slippery);
     let Some(last) = same_networks(&packing(jkr, "rough"), &[1500, 500, 400]) else {
         return;
     };
@@ -161,7 +155,7 @@ fn array(doc: &[u8], name: &str) -> Vec<f64> {
 #[test]
 fn a_run_writes_the_network_with_each_snapshot() {
     use powder::run::{run_cpu_with, RunOptions};
-    let mut scene = packing(ROUGH, "rough");
+    let mut scene = packing(rough, "rough");
     scene.output_every = 500;
     let dir = tempfile::tempdir().unwrap();
     let opts = RunOptions {

@@ -6,13 +6,12 @@
 //! ledger.
 
 mod common;
-use common::{floor_scene, law};
+use common::{floor_scene, law, SceneBuilder};
 
 use glam::DVec3;
 use powder::cpu::CpuEngine;
 use powder::measure::collide::{collide, CollideSpec};
 use powder::model::{analytic, ContactModel};
-use powder::scene::Scene;
 use std::f64::consts::PI;
 
 const R: f64 = 1e-3;
@@ -116,36 +115,22 @@ fn elastic_oblique_impacts_follow_the_closed_form_on_both_branches() {
 #[test]
 fn a_sticking_elastic_contact_stores_its_spring_energy() {
     let s = oblique(elastic(100.0, 0.3), 60.0, true);
-    let scene_text = format!(
-        r#"
-[domain]
-min = [-0.01, -0.01, -0.01]
-max = [0.01, 0.01, 0.01]
-[simulation]
-duration = 1.0
-dt = {dt:e}
-force_dt = true
-[[material]]
-name = "m"
-density = {RHO}
-model = "hysteretic"
-k1 = 100.0
-kp = 100.0
-kc = 0.0
-phi_f = 0.05
-friction = 0.3
-[[wall]]
-point = [0.0, 0.0, 0.0]
-normal = [0.0, 0.0, 1.0]
-[[particles]]
-kind = "list"
-radius = {R:e}
-positions = [[0.0, 0.0, 1.0001e-3]]
-velocities = [[0.05, 0.0, -0.0866025]]
-"#,
-        dt = s.time_step().default
-    );
-    let scene = Scene::from_toml_str(&scene_text, "stick").unwrap();
+    // elastic (kp = k1, no cohesion, no damping) with Coulomb friction
+    let law = "model = \"hysteretic\"\nk1 = 100.0\nkp = 100.0\nkc = 0.0\nphi_f = 0.05\n\
+               friction = 0.3";
+    let scene = SceneBuilder::new("stick", [-0.01; 3], [0.01; 3], 1.0)
+        .simulation("dt", &format!("{:e}", s.time_step().default))
+        .simulation("force_dt", "true")
+        .material("m", RHO, law)
+        .floor()
+        .particles(
+            "list",
+            &format!(
+                "radius = {R:e}\npositions = [[0.0, 0.0, 1.0001e-3]]\n\
+                 velocities = [[0.05, 0.0, -0.0866025]]"
+            ),
+        )
+        .build();
     let mut e = CpuEngine::new(&scene).unwrap();
     let start = e.energies();
     let mut stored_tangential: f64 = 0.0;

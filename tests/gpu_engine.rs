@@ -1,7 +1,8 @@
 //! The GPU engine against the CPU reference on lavapipe (CI) or any adapter.
 
 mod common;
-use common::{example, gpu as context, max_distance};
+use common::builder::COHESIVE;
+use common::{example, gpu as context, max_distance, SceneBuilder};
 
 use powder::cpu::CpuEngine;
 use powder::gpu::GpuEngine;
@@ -123,32 +124,17 @@ fn crowded_particles_beyond_the_capacity_rule_run_and_match_the_cpu() {
             positions.push(format!("[{:e}, {:e}, 0.05]", at(i), at(j)));
         }
     }
-    let text = format!(
-        r#"
-[domain]
-min = [0.0, 0.0, 0.0]
-max = [0.2, 0.2, 0.1]
-[simulation]
-duration = 1.0
-gravity = [0.0, 0.0, 0.0]
-[[material]]
-name = "m"
-density = 2000.0
-model = "hysteretic"
-k1 = 100.0
-kp = 500.0
-kc = 100.0
-phi_f = 0.05
-fa = 4e-4
-kca = 0.1
-[[particles]]
-kind = "list"
-radius = {r:e}
-positions = [{}]
-"#,
-        positions.join(", ")
-    );
-    let scene = powder::scene::Scene::from_toml_str(&text, "crowded").unwrap();
+    // adhesive with a range beyond the touch (fa, kca), no damping, no gravity
+    let law = "model = \"hysteretic\"\nk1 = 100.0\nkp = 500.0\nkc = 100.0\nphi_f = 0.05\n\
+               fa = 4e-4\nkca = 0.1";
+    let scene = SceneBuilder::new("crowded", [0.0; 3], [0.2, 0.2, 0.1], 1.0)
+        .simulation("gravity", "[0.0, 0.0, 0.0]")
+        .material("m", 2000.0, law)
+        .particles(
+            "list",
+            &format!("radius = {r:e}\npositions = [{}]", positions.join(", ")),
+        )
+        .build();
     let mut cpu = powder::cpu::CpuEngine::new(&scene).unwrap();
     let mut gpu = GpuEngine::new(&scene, ctx).unwrap();
     // the fixed bound of the engine's earlier slot lists, 5·(1 + r_max/r_min)²·(1 + skin/2)³
@@ -590,29 +576,14 @@ fn windows_change_no_bit() {
 fn neighbours_beyond_the_windows_stop_the_run_with_a_message() {
     use powder::gpu::GpuOptions;
     let Some(ctx) = context() else { return };
-    let text = r#"
-[domain]
-min = [0.0, 0.0, 0.0]
-max = [0.04, 0.04, 0.01]
-[simulation]
-duration = 0.01
-[[material]]
-name = "m"
-density = 2000.0
-model = "hysteretic"
-k1 = 100.0
-kp = 500.0
-kc = 100.0
-phi_f = 0.05
-gamma0 = 1e-3
-[[particles]]
-kind = "lattice"
-min = [0.0012, 0.0012, 0.0012]
-max = [0.0388, 0.0388, 0.007]
-radius = 1.0e-3
-spacing = 2.2e-3
-"#;
-    let scene = powder::scene::Scene::from_toml_str(text, "bed").unwrap();
+    let scene = SceneBuilder::new("bed", [0.0; 3], [0.04, 0.04, 0.01], 0.01)
+        .material("m", 2000.0, COHESIVE)
+        .particles(
+            "lattice",
+            "min = [0.0012, 0.0012, 0.0012]\nmax = [0.0388, 0.0388, 0.007]\nradius = 1.0e-3\n\
+             spacing = 2.2e-3",
+        )
+        .build();
     assert_eq!(scene.particles.len(), 578);
     let options = |len| GpuOptions {
         software_paths: Some(false),
@@ -759,7 +730,7 @@ mod collisions {
 
 /// The JKR family on the GPU (f32) against the CPU reference (f64).
 mod jkr {
-    use super::context;
+    use super::{context, SceneBuilder};
     use powder::gpu::GpuEngine;
     use powder::measure::collide::{collide_on, Backend, CollideResult, CollideSpec};
     use powder::model::{
@@ -1039,10 +1010,6 @@ mod jkr {
         }
     }
 
-    fn load(text: &str) -> Scene {
-        Scene::from_toml_str(text, "gpu-jkr").unwrap()
-    }
-
     /// A sphere stuck to a wall by JKR adhesion under a constant force along the wall
     /// (`tests/engine.rs`, paper 002 §5.3) on the GPU: held below the rolling yield force
     /// F_yield = 4·Fc·ξcrit/R, rolling on above it.
@@ -1065,35 +1032,18 @@ mod jkr {
         let m = 2000.0 * 4.0 / 3.0 * std::f64::consts::PI * r * r * r;
         let xi_crit = p.a0(r) / 12.0 * p.rolling_hysteresis;
         let f_yield = 4.0 * p.fc(r) * xi_crit / r;
-        let text = format!(
-            r#"
-[domain]
-min = [-5e-5, -5e-5, -5e-5]
-max = [1e-3, 5e-5, 5e-5]
-[simulation]
-duration = 1.0
-impact_velocity = 0.01
-[[material]]
-name = "m"
-density = 2000.0
-model = "jkr"
-youngs = 1e8
-poisson = 0.3
-surface_energy = 0.01
-restitution = 0.3
-friction = 0.5
-rolling_hysteresis = 0.5
-[[wall]]
-point = [0.0, 0.0, 0.0]
-normal = [0.0, 0.0, 1.0]
-[[particles]]
-kind = "list"
-positions = [[0.0, 0.0, {z:e}]]
-radius = {r:e}
-"#,
-            z = r - 0.5 * p.delta0(r)
-        );
-        let base = load(&text);
+        let law = "model = \"jkr\"\nyoungs = 1e8\npoisson = 0.3\nsurface_energy = 0.01\n\
+                   restitution = 0.3\nfriction = 0.5\nrolling_hysteresis = 0.5";
+        let z = r - 0.5 * p.delta0(r);
+        let base = SceneBuilder::new("gpu-jkr", [-5e-5; 3], [1e-3, 5e-5, 5e-5], 1.0)
+            .simulation("impact_velocity", "0.01")
+            .material("m", 2000.0, law)
+            .floor()
+            .particles(
+                "list",
+                &format!("positions = [[0.0, 0.0, {z:e}]]\nradius = {r:e}"),
+            )
+            .build();
         let mut ctx = Some(ctx);
         // 20 000 steps (0.2 ms, ~16 periods of the rocking about the rest position; the
         // CPU test runs 200 000): largest |x| over the run, distance rolled in the second
@@ -1178,42 +1128,24 @@ radius = {r:e}
                 ));
             }
         }
-        load(&format!(
-            r#"
-[domain]
-min = [0.0, 0.0, 0.0]
-max = [6e-5, 6e-5, 6e-5]
-[simulation]
-duration = 1.0
-impact_velocity = 0.3
-gravity = [0.0, 0.0, -9.81]
-[[material]]
-name = "micro"
-density = 2500.0
-model = "jkr"
-youngs = 1e8
-poisson = 0.3
-surface_energy = 0.01
-restitution = 0.5
-friction = {friction}
-rolling_hysteresis = {rolling}
-[[wall]]
-point = [0.0, 0.0, 0.0]
-normal = [0.0, 0.0, 1.0]
-[[particles]]
-kind = "list"
-positions = [{}]
-radius = {r:e}
-velocity = [0.1, 0.0, -0.1]
-[[particles]]
-kind = "list"
-positions = [{}]
-radius = {r:e}
-velocity = [-0.1, 0.05, -0.3]
-"#,
-            lower.join(", "),
-            upper.join(", ")
-        ))
+        let law = format!(
+            "model = \"jkr\"\nyoungs = 1e8\npoisson = 0.3\nsurface_energy = 0.01\n\
+             restitution = 0.5\nfriction = {friction}\nrolling_hysteresis = {rolling}"
+        );
+        let layer = |positions: &[String], v: &str| {
+            format!(
+                "positions = [{}]\nradius = {r:e}\nvelocity = {v}",
+                positions.join(", ")
+            )
+        };
+        SceneBuilder::new("gpu-jkr", [0.0; 3], [6e-5; 3], 1.0)
+            .simulation("impact_velocity", "0.3")
+            .gravity()
+            .material("micro", 2500.0, &law)
+            .floor()
+            .particles("list", &layer(&lower, "[0.1, 0.0, -0.1]"))
+            .particles("list", &layer(&upper, "[-0.1, 0.05, -0.3]"))
+            .build()
     }
 
     #[test]
@@ -1374,70 +1306,27 @@ velocity = [-0.1, 0.05, -0.3]
     #[test]
     fn gpu_mixes_model_families_krijt_included() {
         let Some(ctx) = context() else { return };
-        let scene = load(
-            r#"
-[domain]
-min = [0.0, 0.0, 0.0]
-max = [1e-2, 1e-2, 1e-2]
-[simulation]
-duration = 1.0
-[[material]]
-name = "a"
-density = 2000.0
-model = "lsd"
-k = 100.0
-[[material]]
-name = "b"
-density = 2000.0
-model = "hertz"
-youngs = 1e8
-poisson = 0.3
-[[interaction]]
-materials = ["a", "b"]
-model = "lsd"
-k = 100.0
-[[particles]]
-kind = "list"
-positions = [[0.005, 0.005, 0.005]]
-radius = 1e-3
-material = "b"
-"#,
-        );
+        // LSD spheres and one sphere of law `b`, LSD between them
+        let families = |b: &str| {
+            let lsd = "model = \"lsd\"\nk = 100.0";
+            SceneBuilder::new("gpu-jkr", [0.0; 3], [1e-2; 3], 1.0)
+                .material("a", 2000.0, lsd)
+                .material("b", 2000.0, b)
+                .interaction(["a", "b"], lsd)
+                .particles(
+                    "list",
+                    "positions = [[0.005, 0.005, 0.005]]\nradius = 1e-3\nmaterial = \"b\"",
+                )
+                .build()
+        };
+        let scene = families("model = \"hertz\"\nyoungs = 1e8\npoisson = 0.3");
         // LSD and Hertz pairs in one scene: the mixed step (tests/gpu_mixed.rs runs one)
         let e = GpuEngine::new(&scene, ctx).unwrap();
         assert_eq!(e.kind().name(), "step_hysteretic+jkr");
         let Some(ctx) = context() else { return };
-        let krijt = load(
-            &r#"
-[domain]
-min = [0.0, 0.0, 0.0]
-max = [1e-2, 1e-2, 1e-2]
-[simulation]
-duration = 1.0
-[[material]]
-name = "a"
-density = 2000.0
-model = "lsd"
-k = 100.0
-[[material]]
-name = "b"
-density = 2000.0
-model = "hertz"
-youngs = 1e8
-poisson = 0.3
-[[interaction]]
-materials = ["a", "b"]
-model = "lsd"
-k = 100.0
-[[particles]]
-kind = "list"
-positions = [[0.005, 0.005, 0.005]]
-radius = 1e-3
-material = "b"
-"#.replace(
-                "model = \"hertz\"\nyoungs = 1e8\npoisson = 0.3",
-                "model = \"jkr\"\nyoungs = 1e8\npoisson = 0.3\nsurface_energy = 0.01\ndissipation = \"krijt\"\ntvis = 1e-6",
-            ),
+        let krijt = families(
+            "model = \"jkr\"\nyoungs = 1e8\npoisson = 0.3\nsurface_energy = 0.01\n\
+             dissipation = \"krijt\"\ntvis = 1e-6",
         );
         // and with a Krijt pair among them the Krijt sub-model is composed in
         let e = GpuEngine::new(&krijt, ctx).unwrap();

@@ -2,7 +2,8 @@
 //! and `compare`'s energy and history checks.
 
 mod common;
-use common::{example, gpu as context};
+use common::builder::MICRO;
+use common::{example, gpu as context, SceneBuilder};
 
 use powder::cpu::CpuEngine;
 use powder::gpu::{GpuEngine, GpuOptions};
@@ -32,41 +33,20 @@ fn jkr_cluster() -> Scene {
             }
         }
     }
-    Scene::from_toml_str(
-        &format!(
-            r#"
-[domain]
-min = [0.0, 0.0, 0.0]
-max = [6e-5, 6e-5, 6e-5]
-[simulation]
-duration = 1e-3
-impact_velocity = 0.2
-gravity = [0.0, 0.0, -9.81]
-[[material]]
-name = "micro"
-density = 2500.0
-model = "jkr"
-youngs = 1e8
-poisson = 0.3
-surface_energy = 0.01
-restitution = 0.5
-friction = 0.3
-rolling_hysteresis = 0.5
-[[wall]]
-point = [0.0, 0.0, 0.0]
-normal = [0.0, 0.0, 1.0]
-[[particles]]
-kind = "list"
-radius = {r:e}
-positions = [{}]
-velocities = [{}]
-"#,
-            pos.join(", "),
-            vel.join(", ")
-        ),
-        "jkr_cluster",
-    )
-    .unwrap()
+    SceneBuilder::new("jkr_cluster", [0.0; 3], [6e-5; 3], 1e-3)
+        .simulation("impact_velocity", "0.2")
+        .gravity()
+        .material("micro", 2500.0, MICRO)
+        .floor()
+        .particles(
+            "list",
+            &format!(
+                "radius = {r:e}\npositions = [{}]\nvelocities = [{}]",
+                pos.join(", "),
+                vel.join(", ")
+            ),
+        )
+        .build()
 }
 
 /// Stored energy, dissipation and the contact statistics of the GPU follow the CPU's

@@ -2,6 +2,7 @@
 //! spheres with friction and rolling resistance in one box, against the CPU reference.
 
 mod common;
+use common::builder::{COHESIVE, HALF_COHESIVE, STICKY};
 use common::{gpu, two_lattices};
 
 use powder::gpu::GpuEngine;
@@ -12,35 +13,11 @@ use powder::scene::Scene;
 /// thrown down onto them; hysteretic–JKR pairs and the floor use the hysteretic model.
 fn mixed_scene() -> Scene {
     two_lattices(
-        r#"
-[[material]]
-name = "plastic"
-density = 2000.0
-model = "hysteretic"
-k1 = 100.0
-kp = 500.0
-kc = 100.0
-phi_f = 0.05
-gamma0 = 1e-3
-[[material]]
-name = "sticky"
-density = 2000.0
-model = "jkr"
-youngs = 1e5
-poisson = 0.3
-surface_energy = 0.05
-restitution = 0.5
-friction = 0.3
-rolling_hysteresis = 0.5
-[[interaction]]
-materials = ["plastic", "sticky"]
-model = "hysteretic"
-k1 = 100.0
-kp = 500.0
-kc = 50.0
-phi_f = 0.05
-gamma0 = 1e-3
-"#,
+        |b| {
+            b.material("plastic", 2000.0, COHESIVE)
+                .material("sticky", 2000.0, STICKY)
+                .interaction(["plastic", "sticky"], HALF_COHESIVE)
+        },
         ["plastic", "sticky", "plastic"],
         2.1e-3,
         [0.0, 0.0, -0.3],
@@ -81,41 +58,26 @@ fn a_mixed_scene_runs_on_the_gpu_and_matches_the_cpu() {
 /// JKR with Tsuji damping, Hertz with power-law damping, adhesive JKR between them): the
 /// pipelines cannot fold either choice (`JKR_ONE_DISSIPATION`, `JKR_ADHESION` stay at
 /// "decide per pair"), so this runs the per-pair branches, against the CPU.
+/// Hertz with power-law damping and Mindlin friction.
+const SMOOTH: &str = "model = \"hertz\"\nyoungs = 1e5\npoisson = 0.3\ndissipation = \"powerlaw\"\n\
+     D = 1e-3\nalpha = 1.0\nbeta = 1.0\nfriction = 0.3";
+
+/// Adhesive JKR between STICKY and SMOOTH, less adhesive and less damped than STICKY.
+const BETWEEN: &str = "model = \"jkr\"\nyoungs = 1e5\npoisson = 0.3\nsurface_energy = 0.02\n\
+     restitution = 0.6\nfriction = 0.3\nrolling_hysteresis = 0.5";
+
+/// Adhesive JKR with Krijt's dissipation (the contact radius as per-contact state).
+const KRIJT: &str = "model = \"jkr\"\nyoungs = 1e5\npoisson = 0.3\nsurface_energy = 0.05\n\
+     dissipation = \"krijt\"\ntvis = 1e-5\nfriction = 0.3";
+
 #[test]
 fn jkr_pairs_with_different_laws_match_the_cpu() {
     let scene = two_lattices(
-        r#"
-[[material]]
-name = "sticky"
-density = 2000.0
-model = "jkr"
-youngs = 1e5
-poisson = 0.3
-surface_energy = 0.05
-restitution = 0.5
-friction = 0.3
-rolling_hysteresis = 0.5
-[[material]]
-name = "smooth"
-density = 2000.0
-model = "hertz"
-youngs = 1e5
-poisson = 0.3
-dissipation = "powerlaw"
-D = 1e-3
-alpha = 1.0
-beta = 1.0
-friction = 0.3
-[[interaction]]
-materials = ["sticky", "smooth"]
-model = "jkr"
-youngs = 1e5
-poisson = 0.3
-surface_energy = 0.02
-restitution = 0.6
-friction = 0.3
-rolling_hysteresis = 0.5
-"#,
+        |b| {
+            b.material("sticky", 2000.0, STICKY)
+                .material("smooth", 2000.0, SMOOTH)
+                .interaction(["sticky", "smooth"], BETWEEN)
+        },
         ["smooth", "sticky", "sticky"],
         2.02e-3,
         [0.0, 0.0, -0.5],
@@ -133,35 +95,11 @@ rolling_hysteresis = 0.5
 #[test]
 fn krijt_pairs_beside_hysteretic_pairs_match_the_cpu() {
     let scene = two_lattices(
-        r#"
-[[material]]
-name = "plastic"
-density = 2000.0
-model = "hysteretic"
-k1 = 100.0
-kp = 500.0
-kc = 100.0
-phi_f = 0.05
-gamma0 = 1e-3
-[[material]]
-name = "sticky"
-density = 2000.0
-model = "jkr"
-youngs = 1e5
-poisson = 0.3
-surface_energy = 0.05
-dissipation = "krijt"
-tvis = 1e-5
-friction = 0.3
-[[interaction]]
-materials = ["plastic", "sticky"]
-model = "hysteretic"
-k1 = 100.0
-kp = 500.0
-kc = 50.0
-phi_f = 0.05
-gamma0 = 1e-3
-"#,
+        |b| {
+            b.material("plastic", 2000.0, COHESIVE)
+                .material("sticky", 2000.0, KRIJT)
+                .interaction(["plastic", "sticky"], HALF_COHESIVE)
+        },
         ["plastic", "sticky", "plastic"],
         2.1e-3,
         [0.0, 0.0, -0.3],

@@ -5,7 +5,8 @@
 //! resolves only 2.3e-10 m.
 
 mod common;
-use common::gpu;
+use common::builder::vec3;
+use common::{gpu, SceneBuilder};
 
 use powder::measure::collide::{collide_on, Backend, CollideSpec};
 use powder::model::analytic::{self, chi_c_b, chi_c_c};
@@ -156,7 +157,6 @@ fn the_gpu_agrees_with_the_cpu_at_the_jkr_sticking_velocity() {
 /// the plane agree to 1.2e-13 m (1e-12 allowed).
 #[test]
 fn a_tilted_wall_holds_the_cpus_overlap_far_from_its_point() {
-    use powder::scene::Scene;
     let Some(ctx) = gpu() else { return };
     let n = glam::DVec3::new(0.0, 1.0, 3.0).normalize();
     let t = glam::DVec3::new(0.0, 3.0, -1.0).normalize();
@@ -165,41 +165,23 @@ fn a_tilted_wall_holds_the_cpus_overlap_far_from_its_point() {
     let delta = m * g / k;
     let centre = 0.05 * t + (RADIUS - delta) * n;
     let gravity = -g * n;
-    let text = format!(
-        r#"
-[domain]
-min = [-0.01, -0.06, -0.06]
-max = [0.01, 0.06, 0.06]
-[simulation]
-duration = 1.0
-gravity = [{:e}, {:e}, {:e}]
-impact_velocity = 0.01
-[[material]]
-name = "m"
-density = {DENSITY}
-model = "lsd"
-k = {k}
-gamma0 = {:e}
-[[wall]]
-point = [0.0, 0.0, 0.0]
-normal = [{:e}, {:e}, {:e}]
-[[particles]]
-kind = "list"
-radius = {RADIUS:e}
-positions = [[{:e}, {:e}, {:e}]]
-"#,
-        gravity.x,
-        gravity.y,
-        gravity.z,
-        0.5 * (k * m).sqrt(),
-        n.x,
-        n.y,
-        n.z,
-        centre.x,
-        centre.y,
-        centre.z
+    let law = format!(
+        "model = \"lsd\"\nk = {k:?}\ngamma0 = {:e}",
+        0.5 * (k * m).sqrt()
     );
-    let scene = Scene::from_toml_str(&text, "tilted").unwrap();
+    let scene = SceneBuilder::new("tilted", [-0.01, -0.06, -0.06], [0.01, 0.06, 0.06], 1.0)
+        .simulation("gravity", &vec3(gravity.to_array()))
+        .simulation("impact_velocity", "0.01")
+        .material("m", DENSITY, &law)
+        .wall([0.0; 3], n.to_array())
+        .particles(
+            "list",
+            &format!(
+                "radius = {RADIUS:e}\npositions = [{}]",
+                vec3(centre.to_array())
+            ),
+        )
+        .build();
     let mut cpu = powder::cpu::CpuEngine::new(&scene).unwrap();
     let mut gpu = powder::gpu::GpuEngine::new(&scene, ctx).unwrap();
     for _ in 0..3000 {
@@ -229,7 +211,6 @@ positions = [[{:e}, {:e}, {:e}]]
 /// across the seam is off by L − dims·h.
 #[test]
 fn a_pair_across_a_periodic_seam_sticks_as_on_the_cpu() {
-    use powder::scene::Scene;
     if gpu().is_none() {
         return;
     }
@@ -245,37 +226,22 @@ fn a_pair_across_a_periodic_seam_sticks_as_on_the_cpu() {
         let v = f * v_c;
         // each 1 nm outside the adhesion range, on either side of the seam x = 0 = L
         let a = RADIUS + 0.5 * range + 1e-9;
-        let text = format!(
-            r#"
-[domain]
-min = [0.0, 0.0, 0.0]
-max = [{l}, 0.01, 0.01]
-periodic = [true, false, false]
-[simulation]
-duration = 1.0
-gravity = [0.0, 0.0, 0.0]
-impact_velocity = {v:e}
-[[material]]
-name = "m"
-density = {DENSITY}
-model = "hysteretic"
-k1 = 100.0
-kp = 500.0
-kc = 100.0
-phi_f = 0.05
-fa = 5e-7
-kca = 100.0
-[[particles]]
-kind = "list"
-radius = {RADIUS:e}
-positions = [[{:e}, 0.005, 0.005], [{a:e}, 0.005, 0.005]]
-velocities = [[{:e}, 0.0, 0.0], [{:e}, 0.0, 0.0]]
-"#,
-            l - a,
-            0.5 * v,
-            -0.5 * v
+        let law = "model = \"hysteretic\"\nk1 = 100.0\nkp = 500.0\nkc = 100.0\nphi_f = 0.05\n\
+                   fa = 5e-7\nkca = 100.0";
+        let pair = format!(
+            "radius = {RADIUS:e}\npositions = [{}, {}]\nvelocities = [{}, {}]",
+            vec3([l - a, 0.005, 0.005]),
+            vec3([a, 0.005, 0.005]),
+            vec3([0.5 * v, 0.0, 0.0]),
+            vec3([-0.5 * v, 0.0, 0.0])
         );
-        let scene = Scene::from_toml_str(&text, "seam").unwrap();
+        let scene = SceneBuilder::new("seam", [0.0; 3], [l, 0.01, 0.01], 1.0)
+            .periodic([true, false, false])
+            .simulation("gravity", "[0.0, 0.0, 0.0]")
+            .simulation("impact_velocity", &format!("{v:e}"))
+            .material("m", DENSITY, law)
+            .particles("list", &pair)
+            .build();
         let mut cpu = powder::cpu::CpuEngine::new(&scene).unwrap();
         let mut gpu = powder::gpu::GpuEngine::new(&scene, gpu().unwrap()).unwrap();
         for _ in 0..3000 {

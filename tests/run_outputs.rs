@@ -769,7 +769,7 @@ fn a_checkpoint_reads_in_python_to_the_bit() {
         eprintln!("skipping: no python3 with NumPy here");
         return;
     }
-    let scene = common::packing(common::ROUGH, "rough");
+    let scene = common::packing(common::rough, "rough");
     let dir = tempfile::tempdir().unwrap();
     let opts = RunOptions {
         out_dir: Some(dir.path().to_path_buf()),

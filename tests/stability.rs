@@ -2,7 +2,7 @@
 //! of the closed forms, or stopped with a message that names the step and the particles.
 
 mod common;
-use common::gpu;
+use common::{gpu, SceneBuilder};
 
 use powder::cpu::CpuEngine;
 use powder::measure::collide::{collide, CollideSpec};
@@ -480,28 +480,21 @@ fn the_gpu_monitor_without_the_ledger_still_stops_runs_that_go_wrong() {
 /// contact time long: silica spheres (r = 1 µm) meeting at 0.1 mm/s.
 #[test]
 fn the_rayleigh_time_bounds_dt_for_slow_hertz_contacts() {
+    // silica spheres 1 µm apart, the time step `dt`
     let text = |dt: &str| {
-        format!(
-            r#"
-[domain]
-min = [-1e-5, -1e-5, -1e-5]
-max = [1e-5, 1e-5, 1e-5]
-[simulation]
-duration = 1e-6
-impact_velocity = 1e-4
-dt = {dt}
-[[material]]
-name = "silica"
-density = 2650.0
-model = "hertz"
-youngs = 7e10
-poisson = 0.17
-[[particles]]
-kind = "list"
-radius = 1e-6
-positions = [[0.0, 0.0, 0.0], [3e-6, 0.0, 0.0]]
-"#
-        )
+        SceneBuilder::new("slow", [-1e-5; 3], [1e-5; 3], 1e-6)
+            .simulation("impact_velocity", "1e-4")
+            .simulation("dt", dt)
+            .material(
+                "silica",
+                2650.0,
+                "model = \"hertz\"\nyoungs = 7e10\npoisson = 0.17",
+            )
+            .particles(
+                "list",
+                "radius = 1e-6\npositions = [[0.0, 0.0, 0.0], [3e-6, 0.0, 0.0]]",
+            )
+            .toml()
     };
     let scene = Scene::from_toml_str(&text("\"auto\""), "slow").unwrap();
     let r = powder::setup::Resolved::new(&scene).unwrap();

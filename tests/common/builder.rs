@@ -9,17 +9,37 @@ use powder::scene::Scene;
 pub const COHESIVE: &str =
     "model = \"hysteretic\"\nk1 = 100.0\nkp = 500.0\nkc = 100.0\nphi_f = 0.05\ngamma0 = 1e-3";
 
+/// The cohesive law at half the cohesion (kc = k1/2): between the families of mixed scenes.
+pub const HALF_COHESIVE: &str =
+    "model = \"hysteretic\"\nk1 = 100.0\nkp = 500.0\nkc = 50.0\nphi_f = 0.05\ngamma0 = 1e-3";
+
+/// The cohesive law with Luding's sliding (μs > μd), rolling and twisting friction.
+pub const ROUGH: &str =
+    "model = \"hysteretic\"\nk1 = 100.0\nkp = 500.0\nkc = 100.0\nphi_f = 0.05\n\
+     gamma0 = 1e-3\nfriction = 0.5\nfriction_dynamic = 0.4\nrolling_friction = 0.1\n\
+     twisting_friction = 0.1";
+
+/// STICKY for micro-spheres: a thousand times stiffer, a fifth of the surface energy.
+pub const MICRO: &str = "model = \"jkr\"\nyoungs = 1e8\npoisson = 0.3\nsurface_energy = 0.01\n\
+     restitution = 0.5\nfriction = 0.3\nrolling_hysteresis = 0.5";
+
+/// Adhesive JKR with Tsuji damping, Mindlin friction and rolling resistance.
+pub const STICKY: &str = "model = \"jkr\"\nyoungs = 1e5\npoisson = 0.3\nsurface_energy = 0.05\n\
+     restitution = 0.5\nfriction = 0.3\nrolling_hysteresis = 0.5";
+
 /// A scene's tables, in the order the file format reads best.
 pub struct SceneBuilder {
     name: String,
     domain: Vec<String>,
     simulation: Vec<String>,
     materials: Vec<String>,
+    interactions: Vec<String>,
     walls: Vec<String>,
     particles: Vec<String>,
 }
 
-fn vec3(v: [f64; 3]) -> String {
+/// A vector as TOML.
+pub fn vec3(v: [f64; 3]) -> String {
     format!("[{:?}, {:?}, {:?}]", v[0], v[1], v[2])
 }
 
@@ -34,6 +54,7 @@ impl SceneBuilder {
             ],
             simulation: vec![format!("duration = {duration:?}")],
             materials: Vec::new(),
+            interactions: Vec::new(),
             walls: Vec::new(),
             particles: Vec::new(),
         }
@@ -67,6 +88,14 @@ impl SceneBuilder {
         self
     }
 
+    /// The law between two materials' particles (`[[interaction]]`).
+    pub fn interaction(mut self, [a, b]: [&str; 2], law: &str) -> Self {
+        self.interactions.push(format!(
+            "[[interaction]]\nmaterials = [\"{a}\", \"{b}\"]\n{law}"
+        ));
+        self
+    }
+
     /// A fixed wall through `point` facing `normal`.
     pub fn wall(mut self, point: [f64; 3], normal: [f64; 3]) -> Self {
         self.walls.push(format!(
@@ -80,6 +109,15 @@ impl SceneBuilder {
     /// The floor: a fixed wall at z = 0 facing up.
     pub fn floor(self) -> Self {
         self.wall([0.0; 3], [0.0, 0.0, 1.0])
+    }
+
+    /// The floor, of `material` (its contacts follow that material's law).
+    pub fn floor_of(mut self, material: &str) -> Self {
+        self = self.floor();
+        if let Some(wall) = self.walls.last_mut() {
+            wall.push_str(&format!("\nmaterial = \"{material}\""));
+        }
+        self
     }
 
     /// A particle block of `kind` ("list", "lattice", "random") with its other keys as TOML.
@@ -99,6 +137,7 @@ impl SceneBuilder {
         for table in self
             .materials
             .iter()
+            .chain(&self.interactions)
             .chain(&self.walls)
             .chain(&self.particles)
         {

@@ -1,6 +1,7 @@
 //! Helpers shared by the integration tests.
 
 pub mod builder;
+pub use builder::SceneBuilder;
 
 use powder::gpu::{GpuContext, GpuState};
 use powder::scene::Scene;
@@ -107,32 +108,22 @@ pub fn floor_scene(
     v: [f64; 3],
     w: [f64; 3],
 ) -> Scene {
-    let text = format!(
-        r#"
-[domain]
-min = [-0.5, -0.05, -0.01]
-max = [0.5, 0.05, 0.05]
-[simulation]
-duration = 1.0
-gravity = [{:e}, {:e}, {:e}]
-impact_velocity = 0.1
-[[material]]
-name = "m"
-density = {density}
-{keys}
-[[wall]]
-point = [0.0, 0.0, 0.0]
-normal = [0.0, 0.0, 1.0]
-[[particles]]
-kind = "list"
-radius = {radius:e}
-positions = [[0.0, 0.0, {z:e}]]
-velocity = [{:e}, {:e}, {:e}]
-angular_velocity = [{:e}, {:e}, {:e}]
-"#,
-        gravity[0], gravity[1], gravity[2], v[0], v[1], v[2], w[0], w[1], w[2]
-    );
-    Scene::from_toml_str(&text, "floor").unwrap()
+    use builder::vec3;
+    SceneBuilder::new("floor", [-0.5, -0.05, -0.01], [0.5, 0.05, 0.05], 1.0)
+        .simulation("gravity", &vec3(gravity))
+        .simulation("impact_velocity", "0.1")
+        .material("m", density, keys)
+        .floor()
+        .particles(
+            "list",
+            &format!(
+                "radius = {radius:e}\npositions = [{}]\nvelocity = {}\nangular_velocity = {}",
+                vec3([0.0, 0.0, z]),
+                vec3(v),
+                vec3(w)
+            ),
+        )
+        .build()
 }
 
 /// Head-on collisions of 1 µm spheres of 2000 kg/m³ with JKR law `p`, one per (partner
@@ -172,58 +163,40 @@ pub fn jkr_collisions(
 }
 
 /// Two jittered lattices of 1 mm spheres in a box over a floor: `lower` below, `upper`
-/// above thrown at `velocity`, with the `materials` blocks (materials and interactions) and
+/// above thrown at `velocity`, with the materials (and interactions) `materials` adds and
 /// the floor of material `wall`; `spacing` sets the gaps between lattice neighbours.
 #[allow(dead_code)]
 pub fn two_lattices(
-    materials: &str,
+    materials: impl FnOnce(SceneBuilder) -> SceneBuilder,
     [lower, upper, wall]: [&str; 3],
     spacing: f64,
     velocity: [f64; 3],
 ) -> Scene {
-    let [vx, vy, vz] = velocity;
-    let text = format!(
-        r#"
-[domain]
-min = [0.0, 0.0, 0.0]
-max = [0.012, 0.012, 0.02]
-[simulation]
-duration = 0.05
-gravity = [0.0, 0.0, -9.81]
-impact_velocity = 0.5
-{materials}
-[[wall]]
-point = [0.0, 0.0, 0.0]
-normal = [0.0, 0.0, 1.0]
-material = "{wall}"
-[[particles]]
-kind = "lattice"
-material = "{lower}"
-min = [0.0011, 0.0011, 0.0011]
-max = [0.0109, 0.0109, 0.0062]
-radius = 1.0e-3
-spacing = {spacing:e}
-jitter = 0.5
-seed = 7
-[[particles]]
-kind = "lattice"
-material = "{upper}"
-min = [0.0011, 0.0011, 0.0066]
-max = [0.0109, 0.0109, 0.0118]
-radius = 1.0e-3
-spacing = {spacing:e}
-jitter = 0.5
-velocity = [{vx:e}, {vy:e}, {vz:e}]
-seed = 8
-"#
-    );
-    Scene::from_toml_str(&text, "packing").unwrap()
+    let lattice = |material: &str, z: [f64; 2], seed: u32, velocity: String| {
+        format!(
+            "material = \"{material}\"\nmin = [0.0011, 0.0011, {:?}]\nmax = [0.0109, 0.0109, {:?}]\n\
+             radius = 1.0e-3\nspacing = {spacing:e}\njitter = 0.5\n{velocity}seed = {seed}",
+            z[0], z[1]
+        )
+    };
+    let thrown = format!("velocity = {}\n", builder::vec3(velocity));
+    let box_ = SceneBuilder::new("packing", [0.0; 3], [0.012, 0.012, 0.02], 0.05)
+        .gravity()
+        .simulation("impact_velocity", "0.5");
+    materials(box_)
+        .floor_of(wall)
+        .particles(
+            "lattice",
+            &lattice(lower, [0.0011, 0.0062], 7, String::new()),
+        )
+        .particles("lattice", &lattice(upper, [0.0066, 0.0118], 8, thrown))
+        .build()
 }
 
-/// A box of jittered 1 mm spheres thrown onto a floor: `materials` as scene lines, every
-/// sphere of the first material, the upper half of `upper`.
+/// A box of jittered 1 mm spheres thrown onto a floor: the materials `materials` adds,
+/// every sphere of `rough` ([`rough`]), the upper half of `upper`.
 #[allow(dead_code)]
-pub fn packing(materials: &str, upper: &str) -> Scene {
+pub fn packing(materials: impl FnOnce(SceneBuilder) -> SceneBuilder, upper: &str) -> Scene {
     two_lattices(
         materials,
         ["rough", upper, "rough"],
@@ -232,24 +205,8 @@ pub fn packing(materials: &str, upper: &str) -> Scene {
     )
 }
 
-/// Adhesive elasto-plastic spheres with Luding's sliding (μs > μd), rolling and twisting
-/// friction: one pair law and its three sub-models, against the CPU. The thrown spheres'
-/// sideways speed makes this box chaotic: f32 and f64 separate by a factor ~2 per 250 steps
-/// after the first impacts, with or without friction (3e-5 radii at step 2000, 1e-2 at
-/// 4000), so the comparison covers the first 2400 steps (~60 contacts).
+/// The material `rough`: [`builder::ROUGH`] at 2000 kg/m³.
 #[allow(dead_code)]
-pub const ROUGH: &str = r#"
-[[material]]
-name = "rough"
-density = 2000.0
-model = "hysteretic"
-k1 = 100.0
-kp = 500.0
-kc = 100.0
-phi_f = 0.05
-gamma0 = 1e-3
-friction = 0.5
-friction_dynamic = 0.4
-rolling_friction = 0.1
-twisting_friction = 0.1
-"#;
+pub fn rough(b: SceneBuilder) -> SceneBuilder {
+    b.material("rough", 2000.0, builder::ROUGH)
+}
