@@ -148,3 +148,27 @@ fn pages_of_fewer_than_three_windows_are_refused() {
         "{err}"
     );
 }
+
+/// Quiet batches (the software path's) stop where the entries go into pages — their copy
+/// of the lists would be one buffer — and the run stays bitwise the run with them.
+#[test]
+fn quiet_batches_stop_where_the_entries_go_into_pages() {
+    use powder::gpu::QuietBatches;
+    let Some(ctx) = context() else { return };
+    let scene = packing(Case::Hysteretic, 1200, 1.0, 3).unwrap();
+    let quiet = |page| GpuOptions {
+        quiet: QuietBatches::Always,
+        ..options(256, 1, page)
+    };
+    let mut one = GpuEngine::with_options(&scene, ctx, quiet(None)).unwrap();
+    one.run_steps(400).unwrap();
+    assert!(one.quiet_batches().0 > 0);
+    let block = block_bytes(&one);
+    let mut paged =
+        GpuEngine::with_options(&scene, context().unwrap(), quiet(Some(3 * block))).unwrap();
+    assert!(paged.variant_name().ends_with("_paged"));
+    assert!(!paged.buffers().iter().any(|(n, _)| n.starts_with("quiet.")));
+    paged.run_steps(400).unwrap();
+    assert_eq!(paged.quiet_batches(), (0, 0));
+    assert_same_bits(&one.state().unwrap(), &paged.state().unwrap());
+}

@@ -521,6 +521,12 @@ impl GpuEngine {
             self.state.pages = pages;
             self.windowing.set_pages(&self.ctx.queue, pages);
         }
+        if pages.paged() && self.quiet.is_some() {
+            // quiet batches stop (bitwise the same run): their copy of the lists would be
+            // one buffer beyond the largest
+            self.quiet = None;
+            self.buffers.retain(|(n, _)| !n.starts_with("quiet."));
+        }
         if let Some(q) = &mut self.quiet {
             // (a copy, never bound: no binding limit, as at the start)
             let mut copies = Allocator::new(device, u64::MAX);

@@ -730,37 +730,39 @@ impl GpuEngine {
         // particles appear (an insertion rebuilds)
         let pouring = scene.pours();
         let mode = options.quiet.on(software);
-        let quiet = (mode != QuietBatches::Off && !moving_walls && !pouring).then(|| {
-            // copies of buffers that fit
-            let mut alloc = Allocator::new(device, u64::MAX);
-            // the state into copies of its own (the lists' history into `quiet.lists`:
-            // `quiet_copies`)
-            let mut copies = Vec::new();
-            let a = &state;
-            let own = [
-                ("state", Some(&a.state)),
-                ("motion", Some(&a.motion)),
-                ("particle_ledger", b.particle_ledger.as_ref()),
-            ];
-            for (name, b) in own {
-                if let Some(b) = b {
-                    let copy = alloc.buffer(&format!("quiet.{name}"), b.size());
-                    copies.push(Saved::whole(b, copy));
+        // (nor where the lists' entries are in pages: the copy of them would be one buffer)
+        let quiet = (mode != QuietBatches::Off && !moving_walls && !pouring && !pages.paged())
+            .then(|| {
+                // copies of buffers that fit
+                let mut alloc = Allocator::new(device, u64::MAX);
+                // the state into copies of its own (the lists' history into `quiet.lists`:
+                // `quiet_copies`)
+                let mut copies = Vec::new();
+                let a = &state;
+                let own = [
+                    ("state", Some(&a.state)),
+                    ("motion", Some(&a.motion)),
+                    ("particle_ledger", b.particle_ledger.as_ref()),
+                ];
+                for (name, b) in own {
+                    if let Some(b) = b {
+                        let copy = alloc.buffer(&format!("quiet.{name}"), b.size());
+                        copies.push(Saved::whole(b, copy));
+                    }
                 }
-            }
-            let lists = new_lists.quiet_lists(&mut alloc, (entries, &windows));
-            let q = Quiet {
-                mode,
-                copies,
-                lists,
-                forecast: Forecast::new(skin),
-                // the initial forces build the lists once
-                rebuilds: 1,
-                kept: 0,
-                rolled_back: 0,
-            };
-            (q, alloc.list)
-        });
+                let lists = new_lists.quiet_lists(&mut alloc, (entries, &windows));
+                let q = Quiet {
+                    mode,
+                    copies,
+                    lists,
+                    forecast: Forecast::new(skin),
+                    // the initial forces build the lists once
+                    rebuilds: 1,
+                    kept: 0,
+                    rolled_back: 0,
+                };
+                (q, alloc.list)
+            });
         let mut buffers = buffers;
         let quiet = quiet.map(|(q, list)| {
             buffers.extend(list);
