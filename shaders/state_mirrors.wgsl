@@ -1,8 +1,8 @@
 // state_mirrors.wgsl — how the step reads the particle state on a software adapter: from
 // read-only texture copies of the state's cell, off and vpred, made right before each force pass
 // (`gpu::mirror`). On lavapipe a read-only storage-texture load is one gather where a
-// storage-buffer load is a loop over the SIMD lanes (0.3 against 1.1–1.8 ns a vec4:
-// examples/lavapipe_probe.rs). The twin for GPUs is state_buffers.wgsl.
+// storage-buffer load is a loop over the SIMD lanes (measured: docs/design_log.md). The
+// twin for GPUs is state_buffers.wgsl.
 const MIRROR_WIDTH: u32 = 4096u;
 @group(0) @binding(80) var m_cell: texture_storage_2d<rgba32sint, read>;
 @group(0) @binding(81) var m_off: texture_storage_2d<rgba32float, read>;

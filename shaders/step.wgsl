@@ -68,11 +68,8 @@
 // evaluator's frame, changes sign; the normal history, the rolling displacement and the
 // contact radius are the same on both sides). (Why not both sides: `docs/design_log.md`.)
 //
-// Member order matters on Mesa lavapipe 22.3: with `gravity` first (offset 0), a non-zero
-// gravity.x (even 1e-30) made the step ~3x slower and the driver's memory grow by ~0.3 MB
-// per step (1.4 GB per 5000 steps of a one-particle scene; heaptrack: allocations inside
-// libvulkan_lvp's worker thread); a non-zero y or z did not. With `dt` first it does not
-// happen.
+// `dt` first: with `gravity` at offset 0 Mesa lavapipe 22.3 ran slower and leaked
+// (docs/design_log.md, *Measurements moved out of the code*).
 struct StepParams {
     dt: f32,
     // Entries the neighbour lists have room for (each of the per-entry arrays).
@@ -924,9 +921,8 @@ fn touch_crossed(p: PairRow, k: Kin, old: vec4<f32>, is_in: bool, edges: vec4<f3
 fn force(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let k = particle_index(wid, nwg, lid);
     // Loaded here, outside any branch: lavapipe loads a uniform address as one scalar only
-    // where invocation 0 is known to be active (no enclosing if or loop); inside the pair
-    // loop each of the row's words was a loop over the SIMD lanes — a fifth of the force
-    // pass (perf on the JIT code). Dead, and dropped, unless ONE_MATERIAL.
+    // where invocation 0 is known to be active; inside the pair loop each word was a loop
+    // over the SIMD lanes (docs/design_log.md). Dead, and dropped, unless ONE_MATERIAL.
     let row0 = pairs[0];
     if (k < particle_end()) {
         particle_forces(k, row0);

@@ -1,5 +1,5 @@
 //! Pages: the lists' entries in several buffers of whole windows where one buffer would
-//! exceed the adapter's largest (4 GiB on an H200: 3·10⁷ hysteretic particles). A window's
+//! exceed the adapter's largest (4 GiB on an H200: about 2·10⁷ hysteretic particles). A window's
 //! dispatches bind its page whole, and the next or previous page (read only) where its
 //! neighbours' entries lie there; the pages' bytes one after the other are the one
 //! buffer's (checkpoints do not change). See `docs/gpu_rebuild.md`, *Pages*.
@@ -60,7 +60,8 @@ impl Pages {
     }
 
     /// The other page window w's dispatches bind (read only): the previous where w opens
-    /// its page, the next where it closes it, else either (never read).
+    /// its page or lies in the last, else the next (never read where w's neighbours are all
+    /// in its page).
     pub fn other(&self, w: u64) -> u64 {
         let p = self.page_of(w);
         if p > 0 && (w.is_multiple_of(self.windows) || p + 1 == self.count) {
@@ -107,13 +108,15 @@ mod tests {
         assert_eq!((p.windows, p.count), (3, 6));
         assert_eq!(p.range(5, 16), (15, 1));
         for w in 0..16u64 {
-            let [first, end, other] = p.params(w, w.saturating_sub(1), 16).map(u64::from);
+            let bound = windows.bound(w);
+            let [first, end, other] = p.params(w, bound, 16).map(u64::from);
             assert!(first <= w && w < end && end - first <= 3);
-            // every neighbour is in the page or the other one
+            // every window the bindings of w's dispatches cover (its neighbours, and what
+            // the search accepts) is in the page or the other one
             let (o_first, o_len) = p.range(p.other(w), 16);
             assert_eq!(other, o_first);
             assert_ne!(p.other(w), p.page_of(w));
-            for v in w.saturating_sub(1)..(w + 2).min(16) {
+            for v in bound..bound + windows.covered() {
                 assert!(
                     (first..end).contains(&v) || (o_first..o_first + o_len).contains(&v),
                     "window {w}: neighbour {v}"

@@ -457,9 +457,14 @@ impl GpuEngine {
         // largest buffer, pages of at least MIN_PAGE_WINDOWS windows)
         let binding = self.ctx.max_storage_binding();
         let page = binding.min(self.largest_entries);
-        let most = (binding / (bytes * windows.covered()))
+        let mut most = (binding / (bytes * windows.covered()))
             .min(page / (bytes * MIN_PAGE_WINDOWS.min(windows.count)))
             .min(windows.max_records());
+        // and no headroom into pages where what is needed fits one buffer
+        let one_buffer = self.largest_entries / (bytes * windows.count);
+        if window_entries(&windows, need) <= one_buffer {
+            most = most.min(one_buffer);
+        }
         // (a window's block a whole number of 256 bytes where there are several)
         let most = match windows.count {
             1 => most,
@@ -486,6 +491,14 @@ impl GpuEngine {
             self.n as u64,
             (self.ctx.max_storage_binding(), self.largest_entries),
         )?;
+        // (the paged variant's far reads: compiled before anything changes)
+        let program = match pages.paged() != self.state.pages.paged() {
+            true => Some(
+                self.spec
+                    .compile(&self.ctx, (&self.kind, self.keeps), pages.paged())?,
+            ),
+            false => None,
+        };
         let device = &self.ctx.device;
         let mut alloc = Allocator::new(device, self.ctx.max_storage_binding());
         let mut encoder = device.create_command_encoder(&Default::default());
@@ -510,14 +523,10 @@ impl GpuEngine {
             }
         }
         self.state.entries = new;
+        if let Some(program) = program {
+            self.program = program;
+        }
         if pages != self.state.pages {
-            if pages.paged() != self.state.pages.paged() {
-                // (the far reads of the paged variant)
-                let program = self
-                    .spec
-                    .compile(&self.ctx, (&self.kind, self.keeps), pages.paged());
-                self.program = program?;
-            }
             self.state.pages = pages;
             self.windowing.set_pages(&self.ctx.queue, pages);
         }

@@ -121,7 +121,8 @@ impl GpuEngine {
     }
 
     /// The fields of a list entry (`gpu::records`) with their bytes, in buffer order: the
-    /// entries buffer (`A.entries`) holds this many bytes per entry of capacity.
+    /// entries buffer (`A.entries`, or its pages `A.entries[p]`) holds this many bytes per
+    /// entry of capacity.
     pub fn entry_fields(&self) -> Vec<(&'static str, u64)> {
         let l = &self.state.entry_layout;
         l.fields
