@@ -85,6 +85,43 @@ pub fn assert_same_bits(a: &GpuState, b: &GpuState) {
     assert_eq!(bits(&a.velocities), bits(&b.velocities));
 }
 
+/// Asserts that two GPU runs of one scene are bitwise the same run: positions, velocities,
+/// spins, the ledger's dissipation and wall work, rebuilds, every contact's history, the
+/// wall forces and sampled wall contacts' histories (`what` names the case).
+#[allow(dead_code)]
+pub fn assert_same_run(a: &powder::gpu::GpuEngine, b: &powder::gpu::GpuEngine, what: &str) {
+    let bits = |v: &[glam::DVec3]| {
+        v.iter()
+            .map(|p| p.to_array().map(f64::to_bits))
+            .collect::<Vec<_>>()
+    };
+    let (sa, sb) = (a.state().unwrap(), b.state().unwrap());
+    assert_same_bits(&sa, &sb);
+    let spins = (bits(&sa.angular_velocities), bits(&sb.angular_velocities));
+    assert_eq!(spins.0, spins.1, "{what}");
+    let (ea, eb) = (a.energies(&sa).unwrap(), b.energies(&sb).unwrap());
+    assert_eq!(ea.dissipated.to_bits(), eb.dissipated.to_bits(), "{what}");
+    assert_eq!(ea.wall_work.to_bits(), eb.wall_work.to_bits(), "{what}");
+    assert_eq!(a.rebuilds().unwrap(), b.rebuilds().unwrap(), "{what}");
+    let histories = (
+        a.contact_histories().unwrap(),
+        b.contact_histories().unwrap(),
+    );
+    assert_eq!(histories.0, histories.1, "{what}");
+    let walls = (a.wall_forces().unwrap(), b.wall_forces().unwrap());
+    assert_eq!(bits(&walls.0), bits(&walls.1), "{what}");
+    let n = sa.positions.len();
+    for w in 0..walls.0.len() {
+        for i in [0, n / 2, n - 1] {
+            assert_eq!(
+                a.wall_contact_history(w, i).unwrap(),
+                b.wall_contact_history(w, i).unwrap(),
+                "{what}: wall {w}, particle {i}"
+            );
+        }
+    }
+}
+
 /// A contact model from its parameters as the command line gives them (the declared
 /// defaults apply).
 #[allow(dead_code)]

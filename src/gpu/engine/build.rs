@@ -24,6 +24,88 @@ pub(super) fn grid_order(cells: &[[i32; 4]], dims: [u32; 3]) -> Vec<usize> {
     order
 }
 
+/// The scans that place a rebuild's new lists (counts into first entries): two a window,
+/// the pair lists' and `lower`'s, over the window's block of `rows`; each window's counts
+/// of its `n` particles (one window) or `len` (several: the last one's counts beyond n
+/// stay 0).
+fn list_scans(
+    ctx: &GpuContext,
+    rows: &wgpu::Buffer,
+    (windows, n): (&Windows, u32),
+) -> Result<Vec<ExclusiveScan>, PowderError> {
+    let scan_program = Program::with_entry_points(
+        ctx,
+        &crate::gpu::shaders::stage("grid").expect("grid is a stage"),
+        Some(&["scan_blocks", "scan_add"]),
+    )?;
+    let scanned = if windows.count == 1 {
+        n
+    } else {
+        windows.len as u32
+    };
+    let region = windows.len as u32;
+    let mut scans = Vec::new();
+    for w in 0..windows.count {
+        // (window w's block of `rows`: B's counts and rows, then `lower`'s)
+        let block = 4 * 4 * windows.len;
+        let part = match windows.count {
+            1 => Part::whole(rows),
+            _ => Part {
+                buffer: rows,
+                offset: w * block,
+                size: Some(block),
+            },
+        };
+        for (count, row) in [(0, 1), (2, 3)] {
+            scans.push(ExclusiveScan::with_parts(
+                ctx,
+                &scan_program,
+                (part, count * region),
+                (part, row * region),
+                scanned,
+            )?);
+        }
+    }
+    Ok(scans)
+}
+
+/// Quiet batches' state (`gpu::quiet`): copies of the state set and the ledger, and of the
+/// lists' history (`quiet.lists`: `quiet_copies`), with the buffers' names and sizes.
+fn quiet_batches(
+    device: &wgpu::Device,
+    mode: QuietBatches,
+    (state, ledger): (&StateSet, Option<&wgpu::Buffer>),
+    (new_lists, entries): (&NewLists, u64),
+    skin: f64,
+) -> (Quiet, Vec<(String, u64)>) {
+    // copies of buffers that fit
+    let mut alloc = Allocator::new(device, u64::MAX);
+    let mut copies = Vec::new();
+    let own = [
+        ("state", Some(&state.state)),
+        ("motion", Some(&state.motion)),
+        ("particle_ledger", ledger),
+    ];
+    for (name, b) in own {
+        if let Some(b) = b {
+            let copy = alloc.buffer(&format!("quiet.{name}"), b.size());
+            copies.push(Saved::whole(b, copy));
+        }
+    }
+    let lists = new_lists.quiet_lists(&mut alloc, (entries, state.layout.windows()));
+    let q = Quiet {
+        mode,
+        copies,
+        lists,
+        forecast: Forecast::new(skin),
+        // the initial forces build the lists once
+        rebuilds: 1,
+        kept: 0,
+        rolled_back: 0,
+    };
+    (q, alloc.list)
+}
+
 /// What the step's program is compiled from besides the composition: the kernels a scene
 /// runs, its pipeline constants, the state read through mirrors.
 pub(super) struct StepSpec {
@@ -558,40 +640,7 @@ impl GpuEngine {
         let program = spec.compile(&ctx, (&kind, keeps), pages.paged())?;
         let max_per_dim = ctx.limits().max_compute_workgroups_per_dimension;
         // the scans that place the new lists (counts -> first entries)
-        let scan_program = Program::with_entry_points(
-            &ctx,
-            &crate::gpu::shaders::stage("grid").expect("grid is a stage"),
-            Some(&["scan_blocks", "scan_add"]),
-        )?;
-        // each window's: a window's n (the last one's counts beyond n stay 0)
-        let scanned = if windows.count == 1 {
-            n as u32
-        } else {
-            windows.len as u32
-        };
-        let region = windows.len as u32;
-        let mut scans = Vec::new();
-        for w in 0..windows.count {
-            // (window w's block of `rows`: B's counts and rows, then `lower`'s)
-            let block = 4 * 4 * windows.len;
-            let part = match windows.count {
-                1 => Part::whole(&rows),
-                _ => Part {
-                    buffer: &rows,
-                    offset: w * block,
-                    size: Some(block),
-                },
-            };
-            for (count, row) in [(0, 1), (2, 3)] {
-                scans.push(ExclusiveScan::with_parts(
-                    &ctx,
-                    &scan_program,
-                    (part, count * region),
-                    (part, row * region),
-                    scanned,
-                )?);
-            }
-        }
+        let scans = list_scans(&ctx, &rows, (&windows, n as u32))?;
         // the indirect arguments of a rebuild (the grid sort's, one per-particle pass's,
         // the scans'), and the ones decide writes each step (those, or zeros)
         let sort_args = grid.indirect_args();
@@ -733,35 +782,13 @@ impl GpuEngine {
         // (nor where the lists' entries are in pages: the copy of them would be one buffer)
         let quiet = (mode != QuietBatches::Off && !moving_walls && !pouring && !pages.paged())
             .then(|| {
-                // copies of buffers that fit
-                let mut alloc = Allocator::new(device, u64::MAX);
-                // the state into copies of its own (the lists' history into `quiet.lists`:
-                // `quiet_copies`)
-                let mut copies = Vec::new();
-                let a = &state;
-                let own = [
-                    ("state", Some(&a.state)),
-                    ("motion", Some(&a.motion)),
-                    ("particle_ledger", b.particle_ledger.as_ref()),
-                ];
-                for (name, b) in own {
-                    if let Some(b) = b {
-                        let copy = alloc.buffer(&format!("quiet.{name}"), b.size());
-                        copies.push(Saved::whole(b, copy));
-                    }
-                }
-                let lists = new_lists.quiet_lists(&mut alloc, (entries, &windows));
-                let q = Quiet {
+                quiet_batches(
+                    device,
                     mode,
-                    copies,
-                    lists,
-                    forecast: Forecast::new(skin),
-                    // the initial forces build the lists once
-                    rebuilds: 1,
-                    kept: 0,
-                    rolled_back: 0,
-                };
-                (q, alloc.list)
+                    (&state, b.particle_ledger.as_ref()),
+                    (&new_lists, entries),
+                    skin,
+                )
             });
         let mut buffers = buffers;
         let quiet = quiet.map(|(q, list)| {
