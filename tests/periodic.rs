@@ -42,26 +42,18 @@ fn a_pair_collides_across_the_periodic_face() {
     let scene = Scene::from_toml_str(&pair_text(""), "pair").unwrap();
     let m = 2000.0 * 4.0 / 3.0 * std::f64::consts::PI * 1e-9;
     let e = analytic::lsd_restitution(100.0, 2e-3, 0.5 * m).unwrap();
-    let mut cpu = powder::cpu::CpuEngine::new(&scene).unwrap();
-    let steps = (0.03 / cpu.dt()) as u64;
-    cpu.run_steps(steps).unwrap();
-    let v = cpu.velocities();
-    let e_cpu = (v[0].x - v[1].x) / 0.2;
-    eprintln!(
-        "cpu: e = {e_cpu} (closed form {e}); x = {} {}",
-        cpu.positions()[0].x,
-        cpu.positions()[1].x
-    );
-    assert!((e_cpu - e).abs() < 2e-3, "cpu e {e_cpu} vs {e}");
-    // they bounced back: each is again inside the box, on its own side
-    assert!(cpu.positions().iter().all(|p| (0.0..0.01).contains(&p.x)));
-    let Some(ctx) = gpu() else { return };
-    let mut g = GpuEngine::new(&scene, ctx).unwrap();
-    g.run_steps(steps).unwrap();
-    let s = g.state().unwrap();
-    let e_gpu = (s.velocities[0].x - s.velocities[1].x) / 0.2;
-    eprintln!("gpu: e = {e_gpu}");
-    assert!((e_gpu - e_cpu).abs() < 1e-3, "gpu e {e_gpu} vs cpu {e_cpu}");
+    // each backend against the closed form
+    for mut b in common::backends::backends(&scene) {
+        b.run_steps((0.03 / b.dt()) as u64);
+        let o = b.observe();
+        let e_run = (o.velocities[0].x - o.velocities[1].x) / 0.2;
+        let name = b.name();
+        let x = [o.positions[0].x, o.positions[1].x];
+        eprintln!("{name}: e = {e_run} (closed form {e}); x = {x:?}");
+        assert!((e_run - e).abs() < 2e-3, "{name}: e {e_run} vs {e}");
+        // they bounced back: each is again inside the box, on its own side
+        assert!(x.iter().all(|x| (0.0..0.01).contains(x)), "{name}: {x:?}");
+    }
 }
 
 /// A particle crossing a periodic face comes back through the opposite one, on both.

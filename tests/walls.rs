@@ -140,28 +140,25 @@ fn a_prescribed_lid_loads_and_unloads_and_the_ledger_closes() {
 #[test]
 fn a_servo_lid_holds_its_force() {
     let scene = column("servo_force = 0.02\nservo_gain = 2.0\nservo_max_speed = 0.02");
-    let mut cpu = CpuEngine::new(&scene).unwrap();
-    let n = (0.2 / cpu.dt()) as u64;
-    cpu.run_steps(n).unwrap();
-    let f = lid_force_z(&cpu.wall_forces());
-    eprintln!(
-        "servo lid (cpu): {f:e} N at z = {:e}",
-        cpu.walls_now()[1].0.z
-    );
-    assert!((f - 0.02).abs() < 1e-3 * 0.02, "cpu servo force {f}");
-    let e = cpu.energies();
-    assert!(e.wall_work > 0.0, "{e:?}");
-    let start = CpuEngine::new(&scene).unwrap().energies().total();
-    assert!((e.total() - start).abs() < 1e-3 * e.wall_work, "{e:?}");
-    let Some(ctx) = gpu() else { return };
-    let mut g = GpuEngine::new(&scene, ctx).unwrap();
-    g.run_steps(n).unwrap();
-    let fg = lid_force_z(&g.wall_forces().unwrap());
-    eprintln!(
-        "servo lid (gpu): {fg:e} N at z = {:e}",
-        g.walls_now().unwrap()[1].0.z
-    );
-    assert!((fg - 0.02).abs() < 1e-3 * 0.02, "gpu servo force {fg}");
+    for mut b in common::backends::backends(&scene) {
+        let start = b.observe().energies.ledger().unwrap().total();
+        b.run_steps((0.2 / b.dt()) as u64);
+        let o = b.observe();
+        let f = lid_force_z(o.wall_forces.as_deref().unwrap());
+        let name = b.name();
+        eprintln!(
+            "servo lid ({name}): {f:e} N at z = {:e}",
+            o.wall_points[1].z
+        );
+        assert!((f - 0.02).abs() < 1e-3 * 0.02, "{name}: servo force {f}");
+        // the ledger closes with the lid's work
+        let e = o.energies.ledger().unwrap();
+        assert!(e.wall_work > 0.0, "{name}: {e:?}");
+        assert!(
+            (e.total() - start).abs() < 1e-3 * e.wall_work,
+            "{name}: {e:?}"
+        );
+    }
 }
 
 /// Bad wall motions are refused with the reason.

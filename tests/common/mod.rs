@@ -1,5 +1,6 @@
 //! Helpers shared by the integration tests.
 
+pub mod backends;
 pub mod builder;
 pub use builder::SceneBuilder;
 

@@ -1,0 +1,62 @@
+//! One feature test on both backends: the f64 CPU reference and the GPU engine (where an
+//! adapter is present; in CI lavapipe), each driven as `powder run` drives it.
+
+#![allow(dead_code)]
+
+use powder::cpu::CpuEngine;
+use powder::gpu::GpuEngine;
+use powder::run::simulation::{Observation, Simulation};
+use powder::scene::Scene;
+
+/// A scene's run on one backend.
+pub enum Backend {
+    /// The CPU reference.
+    Cpu(Box<CpuEngine>),
+    /// The GPU engine.
+    Gpu(Box<GpuEngine>),
+}
+
+impl Backend {
+    /// "cpu" or "gpu", for assertion messages.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Cpu(e) => e.backend(),
+            Self::Gpu(e) => e.backend(),
+        }
+    }
+
+    /// The time step, s.
+    pub fn dt(&self) -> f64 {
+        match self {
+            Self::Cpu(e) => Simulation::dt(e.as_ref()),
+            Self::Gpu(e) => Simulation::dt(e.as_ref()),
+        }
+    }
+
+    /// Advances `n` steps (a failure is the test's).
+    pub fn run_steps(&mut self, n: u64) {
+        let done = match self {
+            Self::Cpu(e) => Simulation::run_steps(e.as_mut(), n),
+            Self::Gpu(e) => Simulation::run_steps(e.as_mut(), n),
+        };
+        done.unwrap_or_else(|err| panic!("{}: {err}", self.name()));
+    }
+
+    /// The state, energies, contact statistics and wall forces now.
+    pub fn observe(&self) -> Observation {
+        match self {
+            Self::Cpu(e) => e.observe(),
+            Self::Gpu(e) => e.observe(),
+        }
+        .unwrap_or_else(|err| panic!("{}: {err}", self.name()))
+    }
+}
+
+/// `scene` on the CPU engine and, where there is an adapter, on the GPU engine.
+pub fn backends(scene: &Scene) -> Vec<Backend> {
+    let mut out = vec![Backend::Cpu(Box::new(CpuEngine::new(scene).unwrap()))];
+    if let Some(ctx) = super::gpu() {
+        out.push(Backend::Gpu(Box::new(GpuEngine::new(scene, ctx).unwrap())));
+    }
+    out
+}
