@@ -94,6 +94,7 @@ fn entries_in_pages_change_no_bit() {
             pages.len() >= 2 && pages[1] == "A.entries[1]",
             "{name}: {pages:?}"
         );
+        assert_eq!(paged.entry_pages().count, pages.len() as u64, "{name}");
         common::assert_same_run(&one, &paged, name);
         let b = paged.state().unwrap();
         // the paged state resumes in one buffer bitwise (the pages' bytes are its bytes)

@@ -47,6 +47,8 @@ pub(crate) struct SceneInfo {
     list_entries: u64,
     /// (particles a window, windows): `powder::gpu::window`.
     windows: (u64, u64),
+    /// Buffers the lists' entries are in (`powder::gpu::pages`; 1 without pages).
+    entry_pages: u64,
     buffers: Vec<(String, u64)>,
     total_bytes: u64,
     bytes_per_particle: f64,
@@ -83,6 +85,7 @@ pub(crate) fn scene_info(
     let (buffers, particles) = (engine.buffers(), engine.len());
     let (rotation, list_entries) = (engine.rotates(), engine.list_entries());
     let windows = (engine.windows().len, engine.windows().count);
+    let entry_pages = engine.entry_pages().count;
     let state_fields = engine
         .state_fields()
         .iter()
@@ -113,6 +116,7 @@ pub(crate) fn scene_info(
         entry_fields,
         list_entries,
         windows,
+        entry_pages,
         buffers,
         total_bytes: total,
         bytes_per_particle: total as f64 / particles.max(1) as f64,
@@ -164,6 +168,12 @@ pub(crate) fn info_cmd(a: &InfoArgs) -> Result<(), PowderError> {
             "windows          {} of {} particles (each window's dispatches bind it and its neighbours)",
             info.windows.1, info.windows.0
         );
+        if info.entry_pages > 1 {
+            println!(
+                "entry pages      {} (the lists' entries beyond the largest buffer)",
+                info.entry_pages
+            );
+        }
         println!("buffers:");
         for (name, bytes) in &info.buffers {
             println!("  {name:<20} {bytes:>14} bytes");

@@ -690,8 +690,17 @@ fn run_gpu(
         },
         false => (None, None),
     };
-    let windowed = (windows.count > 1)
-        .then(|| format!("{} windows of {} particles", windows.count, windows.len));
+    let pages = engine.entry_pages();
+    let paged = match pages.paged() {
+        true => format!(", the list entries in {} pages", pages.count),
+        false => String::new(),
+    };
+    let windowed = (windows.count > 1).then(|| {
+        format!(
+            "{} windows of {} particles{paged}",
+            windows.count, windows.len
+        )
+    });
     let note = match (windowed, no_profile) {
         (Some(w), Some(p)) => Some(format!("{w}; {p}")),
         (w, p) => w.or(p),

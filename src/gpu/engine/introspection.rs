@@ -36,6 +36,11 @@ impl GpuEngine {
         *self.state.layout.windows()
     }
 
+    /// The pages the lists' entries are in (`gpu::pages`; one where they fit one buffer).
+    pub fn entry_pages(&self) -> Pages {
+        self.state.pages
+    }
+
     /// Whether the engine takes the software adapter's paths (texture mirrors, quiet
     /// batches; `GpuOptions::software_paths`).
     pub fn adapter_is_software(&self) -> bool {
