@@ -45,8 +45,13 @@ struct WindowParams {
     rec_base: u32,
     rec_end: u32,
     rec_other: u32,
+    // The particle state likewise (`state`, `motion`; `state_x`).
+    st_base: u32,
+    st_end: u32,
+    st_other: u32,
     _pad0: u32,
     _pad1: u32,
+    _pad2: u32,
 }
 
 @group(0) @binding(19) var<uniform> win: WindowParams;
@@ -79,6 +84,12 @@ fn win_local(k: u32) -> u32 {
 // (region f of window w at (w·fields + f)·len), in this dispatch's binding of it.
 fn blocked(fields: u32, f: u32, k: u32) -> u32 {
     return ((win_of(k) - win.bound) * fields + f) * grid.window.y + win_local(k);
+}
+
+// Element of particle k in a binding of the particle state (`state`, `motion`): like
+// `blocked`, from the first window of the state's binding (its page where it is in pages).
+fn state_blocked(fields: u32, f: u32, k: u32) -> u32 {
+    return ((win_of(k) - win.st_base) * fields + f) * grid.window.y + win_local(k);
 }
 
 // A record index: local record i of window w, and back.

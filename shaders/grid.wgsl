@@ -24,7 +24,7 @@ const SCAN_ITEMS: u32 = 4u;
 const SCAN_BLOCK: u32 = 1024u; // WG_SIZE * SCAN_ITEMS
 
 // Integer cell of each particle (xyz; w = material, unused here): the particle state's
-// first field, blocked by window (`blocked`).
+// first field, blocked by window (`state_blocked`).
 @group(0) @binding(1) var<storage, read> cells: array<vec4<i32>>;
 // Clamped linear cell key of each particle, in original order.
 @group(0) @binding(2) var<storage, read_write> keys: array<u32>;
@@ -94,7 +94,7 @@ fn cell_keys(
 ) {
     let i = particle_index(wid, nwg, lid);
     if (i < particle_end()) {
-        keys[i] = cell_key(cells[blocked(grid.window.w, 0u, i)].xyz, grid.dims);
+        keys[i] = cell_key(cells[state_blocked(grid.window.w, 0u, i)].xyz, grid.dims);
     }
 }
 

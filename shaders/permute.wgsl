@@ -36,6 +36,9 @@ struct Move {
 // (both read_write: the stored and the loaded field may lie in one buffer, bound twice)
 @group(0) @binding(4) var<storage, read_write> stored: array<u32>;
 @group(0) @binding(5) var<storage, read_write> loaded: array<u32>;
+// The loaded field's other page where the state is in pages (`gpu::pages`): the particle
+// that sorts to k may lie in a neighbouring window there.
+@group(0) @binding(6) var<storage, read> loaded_x: array<u32>;
 
 @compute @workgroup_size(WG_SIZE)
 fn permute(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
@@ -48,18 +51,24 @@ fn permute(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: 
     let row = (win_of(k) - win.bound) * mv.scratch_window + mv.scratch_base + win_local(k) * mv.row;
     var s = row;
     for (var b = 0u; b < mv.store.blocks; b++) {
-        let at = (win_of(k) - win.bound) * mv.store_window + mv.store.base + b * mv.store.stride + win_local(k) * mv.store.words;
+        let at = (win_of(k) - win.st_base) * mv.store_window + mv.store.base + b * mv.store.stride + win_local(k) * mv.store.words;
         for (var c = 0u; c < mv.store.words; c++) {
             stored[at + c] = scratch[s];
             s++;
         }
     }
     let o = sorted_index[k];
+    let near = win_of(o) >= win.st_base && win_of(o) < win.st_end;
+    let far = (win.st_base - win.st_other) * mv.load_window;
     s = row;
     for (var b = 0u; b < mv.load.blocks; b++) {
-        let at = (win_of(o) - win.bound) * mv.load_window + mv.load.base + b * mv.load.stride + win_local(o) * mv.load.words;
+        let at = (win_of(o) - win.st_base) * mv.load_window + mv.load.base + b * mv.load.stride + win_local(o) * mv.load.words;
         for (var c = 0u; c < mv.load.words; c++) {
-            scratch[s] = loaded[at + c];
+            if (near) {
+                scratch[s] = loaded[at + c];
+            } else {
+                scratch[s] = loaded_x[at + far + c];
+            }
             s++;
         }
     }

@@ -178,7 +178,7 @@ override ONE_MATERIAL: bool = false;
 
 // The particle state (the buffers `state` and `motion`: the generated
 // load_<field>/store_<field> of `gpu::state`, composed before this file), in the order of
-// the last rebuild; a rebuild re-sorts it in place. Its fields: cell (w: material), off (w: radius), vel (w: mass),
+// the last rebuild; a rebuild re-sorts it in place. Its fields: cell (w: material, with `NOT_APPEARED` until it appears), off (w: radius), vel (w: mass),
 // acc (w: the force pass's largest overlap/a12), vpred = v + dt/2·a (w: mass; the force
 // pass reads one vec4 per partner for both), kahan_v and kahan_o (the Kahan compensations
 // of the velocity and the offset: the f32 updates v += dt/2·a and o += dt·v add
@@ -217,15 +217,34 @@ fn kahan_add_nonzero(x: vec3<f32>, c: vec3<f32>, dx: vec3<f32>) -> Compensated {
 }
 
 // Whether each particle (by persistent id) has appeared (pouring: written by the host at the
-// batch where its insertion time comes); one that has not neither moves nor interacts.
+// batch where its insertion time comes); `appear` copies it into the state (`NOT_APPEARED`
+// in cell.w), where the step reads it. One that has not neither moves nor interacts.
 @group(0) @binding(65) var<storage, read> appeared: array<u32>;
 
 // False for a scene without pouring (set per pipeline): every particle is there from the
 // start, and no kernel reads the flags.
 override POURING: bool = true;
 
-fn is_active(pid: u32) -> bool {
-    return !POURING || appeared[pid] != 0u;
+// Whether the particle whose cell is c has appeared.
+fn has_appeared(c: vec4<i32>) -> bool {
+    return !POURING || (c.w & NOT_APPEARED) == 0;
+}
+
+// The material of the particle whose cell is c.
+fn material_of(c: vec4<i32>) -> u32 {
+    return u32(c.w & ~NOT_APPEARED);
+}
+
+// Where particles appeared (the host wrote `appeared`): each one's flag into its cell.w.
+@compute @workgroup_size(WG_SIZE)
+fn appear(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    let k = particle_index(wid, nwg, lid);
+    if (k >= particle_end()) {
+        return;
+    }
+    let c = load_cell(k);
+    let flag = select(NOT_APPEARED, 0, appeared[load_ids(k).x] != 0u);
+    store_cell(k, vec4<i32>(c.xyz, (c.w & ~NOT_APPEARED) | flag));
 }
 
 // The lists are compressed rows: particle k's entries are ids.y .. ids.y + ids.z of the
@@ -397,14 +416,14 @@ fn collect_kick_drift(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgr
     if (i < particle_end()) {
         let vel = load_vel(i);
         let c = collect_particle(i, vel.w, false);
-        if (is_active(load_ids(i).x)) {
+        if (has_appeared(load_cell(i))) {
             drift_particle(i, vel, c.acc, c.rot, true, c.peak, c.dv);
         }
     }
 }
 
 fn drift(i: u32) {
-    if (i < particle_end() && is_active(load_ids(i).x)) {
+    if (i < particle_end() && has_appeared(load_cell(i))) {
         drift_particle(i, load_vel(i), load_acc(i).xyz, rot_load(i), false, 0.0, vec3<f32>(0.0));
     }
 }
@@ -588,7 +607,7 @@ fn search(k: u32, fill: bool) -> vec2<u32> {
     var up = 0u;
     var down = 0u;
     // a particle that has not appeared lists no neighbours (and is listed by none)
-    let here = is_active(load_ids(sorted_index[k]).x);
+    let here = has_appeared(ck);
     // Without wrapping along x, the three cells x−1, x, x+1 of a row are consecutive keys
     // and their particles one range of the sorted order: 9 ranges instead of 27 cells.
     let row_ranges = !periodic_axes().x;
@@ -628,11 +647,12 @@ fn search(k: u32, fill: bool) -> vec2<u32> {
                         atomicMax(&control[1], 1u);
                         continue;
                     }
-                    if (!is_active(load_ids(sorted_index[j]).x)) {
+                    let cj = sorted_cell(j);
+                    if (!has_appeared(cj)) {
                         continue;
                     }
                     let oj = sorted_off(j);
-                    let d = separation(ck, ok, sorted_cell(j), oj);
+                    let d = separation(ck, ok, cj, oj);
                     let reach = (ok.w + oj.w) + margin;
                     if (dot(d, d) < reach * reach) {
                         if (evaluates(d, k, j)) {
@@ -945,7 +965,7 @@ fn particle_forces(k: u32, row0: PairRow) {
     let mk = pk.w;
     let vk = pk.xyz;
     let wk = rot_wpred(k);
-    let mat_k = u32(ck.w);
+    let mat_k = material_of(ck);
     // the position's compensation (xyz) and the radius's residual (w): the overlaps are
     // taken from them to below f32 rounding (overlap.wgsl)
     let comp_k = load_kahan_o(k);
@@ -1011,7 +1031,7 @@ fn particle_forces(k: u32, row0: PairRow) {
         var h = h0;
         var row = row0;
         if (!ONE_MATERIAL) {
-            row = pairs[mat_k * step.n_materials + u32(cj.w)];
+            row = pairs[mat_k * step.n_materials + material_of(cj)];
         }
         let c = pair_contact(row, kin, &h);
         let is_in = contact_is_in(c);
@@ -1060,7 +1080,7 @@ fn particle_forces(k: u32, row0: PairRow) {
         store_jump(slot, jump);
     }
     // a particle that has not appeared meets no wall
-    let present = WALLS && is_active(ids_k.x);
+    let present = WALLS && has_appeared(ck);
     // only the walls near at the last rebuild: k's wall entries (a SIMD group loops as
     // often as its lane with the most, mostly 0 in a packing, rather than n_walls times)
     let walls_first = ids_k.y + ids_k.z;
@@ -1194,7 +1214,7 @@ fn kick(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     if (k >= particle_end()) {
         return;
     }
-    if (!is_active(load_ids(k).x)) {
+    if (!has_appeared(load_cell(k))) {
         return;
     }
     let kv = kahan_add(load_vel(k).xyz, load_kahan_v(k).xyz, opaque(0.5 * step.dt * load_acc(k).xyz));
@@ -1244,10 +1264,10 @@ var<workgroup> wg_push: array<f32, WG_SIZE>;
 // Particle k's push on wall w this step (0 without a wall entry, not near at the rebuild,
 // or before k has appeared: the force pass writes the pushes of the others every step).
 fn wall_push_of(k: u32, w: u32) -> f32 {
-    let ids = load_ids(k);
-    if (!is_active(ids.x)) {
+    if (!has_appeared(load_cell(k))) {
         return 0.0;
     }
+    let ids = load_ids(k);
     for (var e = ids.y + ids.z; e < ids.y + ids.z + ids.w; e++) {
         if (load_nbr(e) == (WALL_ENTRY | w)) {
             return load_wall_push(e);

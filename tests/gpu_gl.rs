@@ -95,27 +95,31 @@ fn windows_give_the_same_bits_on_gl() {
     common::assert_same_bits(&a, &b);
 }
 
-/// The lists' entries in pages (`gpu::pages`: a window's page and the other one bound
-/// whole) give the bits of one buffer on GL too: a JKR packing in windows of 128, pages of
-/// three windows.
+/// The lists' entries and the particle state in pages (`gpu::pages`: a window's page and
+/// the other one bound whole) give the bits of one buffer on GL too: a JKR packing in
+/// windows of 128, pages of three windows.
 #[test]
 fn pages_give_the_same_bits_on_gl() {
     let scene =
         powder::measure::bench::packing(powder::measure::bench::Case::Jkr, 600, 1.0, 3).unwrap();
     let run = |paged: bool| {
-        let options = |page: Option<u64>| GpuOptions {
+        let options = |page: Option<u64>, state_page: Option<u64>| GpuOptions {
             software_paths: Some(false),
             window_particles: Some(128),
             list_entries: Some(640),
             entry_page_bytes: page,
+            state_page_bytes: state_page,
             ..Default::default()
         };
-        let mut e = GpuEngine::with_options(&scene, gl()?, options(None)).unwrap();
+        let mut e = GpuEngine::with_options(&scene, gl()?, options(None, None)).unwrap();
         if paged {
-            // pages of three windows' blocks of 640 entries
+            // pages of three windows' blocks of 640 entries, and of the state (6 fields
+            // of 16 bytes a particle in each buffer, with rotation)
             let record: u64 = e.entry_fields().iter().map(|(_, b)| b).sum();
             let page = Some(3 * 640 * record + 100);
-            e = GpuEngine::with_options(&scene, gl()?, options(page)).unwrap();
+            let state_page = Some(3 * 6 * 16 * 128 + 100);
+            e = GpuEngine::with_options(&scene, gl()?, options(page, state_page)).unwrap();
+            assert_eq!(e.state_pages().count, 2);
         }
         assert_eq!(e.list_growths(), 0);
         assert_eq!(e.variant_name().ends_with("_paged"), paged);

@@ -318,6 +318,7 @@ fn gpu_permute_resorts_every_field_in_place() {
         &ctx.device,
         windows,
         powder::gpu::pages::Pages::one(&windows),
+        powder::gpu::pages::Pages::one(&windows),
     );
     // the scratch its own, lent (a block a row a particle or more), or its own again where
     // the lent block is too small (a row of 7 words for 1008 particles a window)

@@ -1,5 +1,5 @@
-//! The lists' entries in pages of whole windows (`gpu::pages`): what lets them outgrow the
-//! adapter's largest buffer, bitwise the run with them in one buffer.
+//! The lists' entries and the particle state in pages of whole windows (`gpu::pages`):
+//! what lets them outgrow the adapter's largest buffer, bitwise the run in one buffer.
 
 mod common;
 use common::{assert_same_bits, gpu as context};
@@ -113,6 +113,130 @@ fn entries_in_pages_change_no_bit() {
     }
 }
 
+/// The particle state in pages of whole windows (`state` and `motion`,
+/// `GpuOptions::state_page_bytes`), alone (hysteretic) and with the entries in pages too
+/// (JKR with rotation: 7 windows, a middle page and a last page of one window), gives the
+/// bits of one buffer; a checkpoint taken paged resumes bitwise in one buffer.
+#[test]
+fn state_in_pages_changes_no_bit() {
+    let scenes = [
+        // (10× the bench's velocities: the re-sorts move particles across pages)
+        (
+            "hysteretic packing",
+            packing(Case::Hysteretic, 1200, 10.0, 3).unwrap(),
+            256,
+            false,
+        ),
+        (
+            "JKR packing",
+            packing(Case::Jkr, 850, 10.0, 3).unwrap(),
+            128,
+            true,
+        ),
+    ];
+    let (steps, half) = (600, 300);
+    for (name, mut scene, len, entries_too) in scenes {
+        let Some(ctx) = context() else { return };
+        // scrambled, so the re-sorts move particles across windows (and pages)
+        let n = scene.particles.len();
+        for i in 0..n {
+            scene.particles.swap(i, (i * 7919 + 13) % n);
+        }
+        let mut one = GpuEngine::with_options(&scene, ctx, options(len, 1, None)).unwrap();
+        one.run_steps(half).unwrap();
+        let mid = one.state().unwrap();
+        one.run_steps(steps - half).unwrap();
+        // a window's block of the larger state buffer
+        let windows = one.windows().count;
+        let block = one
+            .buffers()
+            .iter()
+            .filter(|(n, _)| n == "A.state" || n == "A.motion")
+            .map(|(_, b)| *b)
+            .max()
+            .unwrap()
+            / windows;
+        let entry_page = entries_too.then(|| 3 * block_bytes(&one) + block_bytes(&one) / 2);
+        let first = one.list_entries() / windows;
+        let options = GpuOptions {
+            state_page_bytes: Some(3 * block + block / 2),
+            ..options(len, first, entry_page)
+        };
+        let mut paged = GpuEngine::with_options(&scene, context().unwrap(), options).unwrap();
+        assert!(paged.variant_name().ends_with("_paged"), "{name}");
+        let pages = paged.state_pages();
+        assert_eq!(
+            (pages.windows, pages.count),
+            (3, windows.div_ceil(3)),
+            "{name}"
+        );
+        assert_eq!(paged.entry_pages().paged(), entries_too, "{name}");
+        let names: Vec<String> = paged.buffers().into_iter().map(|(n, _)| n).collect();
+        for b in ["A.state[1]", "A.motion[1]"] {
+            assert!(names.iter().any(|n| n == b), "{name}: {names:?}");
+        }
+        paged.run_steps(half).unwrap();
+        assert_same_bits(&mid, &paged.state().unwrap());
+        let saved = paged.save_state().unwrap();
+        paged.run_steps(steps - half).unwrap();
+        common::assert_same_run(&one, &paged, name);
+        let mut resumed =
+            GpuEngine::with_options(&scene, context().unwrap(), self::options(len, 1, None))
+                .unwrap();
+        resumed.restore_state(saved).unwrap();
+        resumed.run_steps(steps - half).unwrap();
+        assert_same_bits(&resumed.state().unwrap(), &paged.state().unwrap());
+        eprintln!(
+            "{name}: {n} particles in {windows} windows, the state in {} pages",
+            pages.count
+        );
+    }
+}
+
+/// Particles poured in batches appear in a paged state (`appear` writes each window's
+/// page) bitwise as in one buffer: 400 cohesive spheres, a quarter each at 0, 1, 2 and
+/// 3 ms, in 4 windows of 128, the state in pages of three.
+#[test]
+fn poured_particles_appear_in_pages() {
+    use common::builder::{SceneBuilder, COHESIVE};
+    let text = SceneBuilder::new("pour", [0.0; 3], [0.012, 0.012, 0.03], 0.2)
+        .periodic([true, true, false])
+        .gravity()
+        .material("powder", 2000.0, COHESIVE)
+        .floor()
+        .particles(
+            "random",
+            "count = 400\nmin = [0.0, 0.0, 0.012]\nmax = [0.012, 0.012, 0.028]\n\
+             radius = 0.5e-3\nvelocity = [0.0, 0.0, -0.3]\nseed = 3",
+        )
+        .toml();
+    let mut scene = powder::scene::Scene::from_toml_str(&text, "pour").unwrap();
+    // (placed clear of each other at once, so the batches need not fall apart first)
+    for (i, p) in scene.particles.iter_mut().enumerate() {
+        p.insert_at = 1e-3 * (i % 4) as f64;
+    }
+    let run = |state_page: Option<u64>| {
+        let options = GpuOptions {
+            state_page_bytes: state_page,
+            ..options(128, 512, None)
+        };
+        let mut e = GpuEngine::with_options(&scene, context()?, options).unwrap();
+        assert_eq!(
+            e.state_pages().count,
+            if state_page.is_some() { 2 } else { 1 }
+        );
+        // past the last batch's appearance
+        let steps = (4e-3 / e.dt()).round() as u64;
+        e.run_steps(steps).unwrap();
+        Some(e)
+    };
+    // (5 state fields of 16 bytes a particle, 128 particles a window)
+    let (Some(one), Some(paged)) = (run(None), run(Some(3 * 5 * 16 * 128 + 100))) else {
+        return;
+    };
+    common::assert_same_run(&one, &paged, "pour");
+}
+
 /// Pages too small for three windows' entries are refused by name, before the run.
 #[test]
 fn pages_of_fewer_than_three_windows_are_refused() {
@@ -124,6 +248,20 @@ fn pages_of_fewer_than_three_windows_are_refused() {
         .to_string();
     assert!(
         err.contains("a page of at most 4096 bytes holds fewer than 3 windows"),
+        "{err}"
+    );
+    // and the state's likewise
+    let small_state = GpuOptions {
+        state_page_bytes: Some(4096),
+        ..options(64, 64, None)
+    };
+    let err = GpuEngine::with_options(&scene, context().unwrap(), small_state)
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(
+        err.contains("the particle state needs")
+            && err.contains("a page of at most 4096 bytes holds fewer than 3 windows"),
         "{err}"
     );
 }

@@ -67,6 +67,7 @@ fn batches_appear_on_time_and_the_ledger_books_them() {
     let Some(ctx) = gpu() else { return };
     let mut c = powder::cpu::CpuEngine::new(&scene).unwrap();
     let mut g = GpuEngine::new(&scene, ctx).unwrap();
+    let s0 = g.state().unwrap();
     // which particles have appeared: a word each where the scene pours, one where none does
     let active = |g: &GpuEngine| {
         g.buffers()
@@ -99,6 +100,26 @@ fn batches_appear_on_time_and_the_ledger_books_them() {
         assert!(worst < 2e-8, "positions differ by {worst} m");
         assert!((ec.inserted - eg.inserted).abs() <= 1e-9 * ec.inserted.abs());
         assert!((ec.kinetic - eg.kinetic).abs() < 1e-5 * ec.kinetic);
+    }
+    // the second batch appears during the run (`appear` flags it in the device's state):
+    // on both backends exactly those particles move, and the new batch falls alike
+    let n = (0.01 / dt).round() as u64;
+    c.run_steps(n).unwrap();
+    g.run_steps(n).unwrap();
+    let s = g.state().unwrap();
+    assert_eq!((0..c.len()).filter(|&i| c.is_active(i)).count(), 30);
+    for (i, p) in scene.particles.iter().enumerate() {
+        let moved = s.positions[i] != s0.positions[i];
+        assert_eq!(
+            moved,
+            c.is_active(i),
+            "particle {i} (insert_at {})",
+            p.insert_at
+        );
+        if p.insert_at == 0.04 {
+            let d = (s.positions[i] - c.positions()[i]).length();
+            assert!(d < 1e-8, "particle {i} of the second batch: {d:e} m apart");
+        }
     }
 }
 

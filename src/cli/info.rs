@@ -49,6 +49,8 @@ pub(crate) struct SceneInfo {
     windows: (u64, u64),
     /// Buffers the lists' entries are in (`powder::gpu::pages`; 1 without pages).
     entry_pages: u64,
+    /// Buffers each of the particle state's two is in (1 without pages).
+    state_pages: u64,
     buffers: Vec<(String, u64)>,
     total_bytes: u64,
     bytes_per_particle: f64,
@@ -86,6 +88,7 @@ pub(crate) fn scene_info(
     let (rotation, list_entries) = (engine.rotates(), engine.list_entries());
     let windows = (engine.windows().len, engine.windows().count);
     let entry_pages = engine.entry_pages().count;
+    let state_pages = engine.state_pages().count;
     let state_fields = engine
         .state_fields()
         .iter()
@@ -117,6 +120,7 @@ pub(crate) fn scene_info(
         list_entries,
         windows,
         entry_pages,
+        state_pages,
         buffers,
         total_bytes: total,
         bytes_per_particle: total as f64 / particles.max(1) as f64,
@@ -172,6 +176,12 @@ pub(crate) fn info_cmd(a: &InfoArgs) -> Result<(), PowderError> {
             println!(
                 "entry pages      {} (the lists' entries beyond the largest buffer)",
                 info.entry_pages
+            );
+        }
+        if info.state_pages > 1 {
+            println!(
+                "state pages      {} each of `state` and `motion` (beyond the largest buffer)",
+                info.state_pages
             );
         }
         println!("buffers:");

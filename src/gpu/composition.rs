@@ -718,7 +718,7 @@ impl Composition {
     /// the software adapter's path, `gpu::mirror`), the step.
     pub fn variant(&self, keeps: Keeps, mirrors: bool, paged: bool) -> ShaderVariant {
         let interface = self.interface();
-        let state = StateLayout::wgsl(self.rotation());
+        let state = StateLayout::wgsl(self.rotation(), paged);
         let records: Vec<String> = self.records(keeps).iter().map(|r| r.wgsl(paged)).collect();
         let mut parts: Vec<&str> = vec![&state];
         parts.extend(records.iter().map(String::as_str));

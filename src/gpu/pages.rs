@@ -1,12 +1,13 @@
-//! Pages: the lists' entries in several buffers of whole windows where one buffer would
-//! exceed the adapter's largest (4 GiB on an H200: about 2·10⁷ hysteretic particles). A window's
+//! Pages: the lists' entries, and the particle state's two buffers, in several buffers of
+//! whole windows where one buffer would exceed the adapter's largest (4 GiB on an H200:
+//! the entries of about 2·10⁷ hysteretic particles, the state of about 5·10⁷). A window's
 //! dispatches bind its page whole, and the next or previous page (read only) where its
-//! neighbours' entries lie there; the pages' bytes one after the other are the one
-//! buffer's (checkpoints do not change). See `docs/gpu_rebuild.md`, *Pages*.
+//! neighbours' data lie there; the pages' bytes one after the other are the one buffer's
+//! (checkpoints do not change). See `docs/gpu_rebuild.md`, *Pages*.
 
 use crate::gpu::window::Windows;
 
-/// How a record buffer blocked by window is cut into pages.
+/// How a buffer blocked by window is cut into pages.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Pages {
     /// Windows a page holds (all of them with one page).

@@ -7,8 +7,9 @@
 use crate::error::PowderError;
 use crate::gpu::context::GpuContext;
 use crate::gpu::kernel::{storage_buffer, uniform_buffer, Kernel, Program};
+use crate::gpu::pages::Pages;
 use crate::gpu::shaders;
-use crate::gpu::window::WindowBindings;
+use crate::gpu::window::{Paged, WindowBindings};
 
 /// Words of a scratch row: the fields moved in one dispatch (a particle's field is never
 /// split, so a wider one takes a row of its own).
@@ -54,6 +55,8 @@ pub struct Field {
     /// Name, for traffic reports (`permute <name>`).
     pub name: String,
     buffer: wgpu::Buffer,
+    /// The buffer's pages where the state is in pages (`gpu::pages`; empty: one buffer).
+    pages: Vec<wgpu::Buffer>,
     place: FieldPlace,
     /// Words of a window's block of the buffer (0 with one window).
     window: u32,
@@ -65,6 +68,7 @@ impl Field {
         Self {
             name: name.to_string(),
             buffer: buffer.clone(),
+            pages: Vec::new(),
             place: FieldPlace {
                 words: (bytes / 4) as u32,
                 blocks: 1,
@@ -95,6 +99,7 @@ impl Field {
         Self {
             name: name.to_string(),
             buffer: buffer.clone(),
+            pages: Vec::new(),
             place: FieldPlace {
                 words,
                 blocks,
@@ -102,6 +107,34 @@ impl Field {
                 stride,
             },
             window: 0,
+        }
+    }
+
+    /// The field in a buffer cut into `pages` as the state is ([`WindowBindings::state_pages`]).
+    pub fn in_pages(mut self, pages: &[wgpu::Buffer]) -> Self {
+        self.pages = pages.to_vec();
+        self
+    }
+
+    /// The field's buffer as bound page by page under `name` (`other`: the other page's
+    /// binding), cut as `state_pages` where it has pages.
+    fn paged<'a>(&'a self, name: &'a str, other: Option<&'a str>, state_pages: Pages) -> Paged<'a> {
+        match self.pages.is_empty() {
+            true => Paged {
+                name,
+                pages: std::slice::from_ref(&self.buffer),
+                layout: Pages {
+                    windows: 1,
+                    count: 1,
+                },
+                other,
+            },
+            false => Paged {
+                name,
+                pages: &self.pages,
+                layout: state_pages,
+                other,
+            },
         }
     }
 
@@ -253,7 +286,10 @@ impl Permutation {
                     &blocks,
                 ),
                 &[],
-                &[],
+                &[
+                    stored.paged("stored", None, windowing.state_pages),
+                    loaded.paged("loaded", Some("loaded_x"), windowing.state_pages),
+                ],
             )?;
             let touched = |f: &Field| 4 * f.row_words() as u64 * n as u64;
             let scratch_touched = store.map_or(0, touched) + load.map_or(0, touched);

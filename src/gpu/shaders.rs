@@ -300,6 +300,7 @@ mod tests {
                 "copy_back_history",
                 "force",
                 "kick",
+                "appear",
             ] {
                 assert!(
                     eps.iter().any(|e| e == name),

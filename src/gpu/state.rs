@@ -103,7 +103,7 @@ pub const FIELDS: &[StateField] = &[
         Buffer::State,
         Scalar::I32,
         false,
-        "integer cell (xyz), material (w)",
+        "integer cell (xyz), material (w; with NOT_APPEARED until the particle appears)",
     ),
     field(
         "off",
@@ -183,6 +183,10 @@ pub const FIELDS: &[StateField] = &[
         "predicted angular velocity ω + dt/2·α (xyz)",
     ),
 ];
+
+/// The bit of `cell.w` (above the material) set while a particle has not appeared yet
+/// (pouring): the step reads it there, not from the flags by persistent id.
+pub const NOT_APPEARED: i32 = 1 << 30;
 
 /// Bytes of one field of one particle.
 pub const FIELD_BYTES: u64 = 16;
@@ -320,12 +324,17 @@ impl StateLayout {
         out
     }
 
-    /// The WGSL of the state: the two bindings and each field's accessors.
-    pub fn wgsl(rotation: bool) -> String {
+    /// The WGSL of the state: the two bindings and each field's accessors; `paged`: the
+    /// state in pages of whole windows (`gpu::pages`), each dispatch binding its window's
+    /// page and the other page as `state_x`, from which the loads of `state` read a
+    /// particle of a neighbouring window that lies there (`motion` is read and written
+    /// for the dispatch's own particles only).
+    pub fn wgsl(rotation: bool, paged: bool) -> String {
         let mut w = String::from(
             "// The particle state (`src/gpu/state.rs`, generated): one vec4 per particle and\n\
-             // field, field-major within each window (`blocked`) of two buffers.\n",
+             // field, field-major within each window (`state_blocked`) of two buffers.\n",
         );
+        let _ = writeln!(w, "const NOT_APPEARED: i32 = {NOT_APPEARED};");
         for b in Buffer::ALL {
             let _ = writeln!(
                 w,
@@ -335,6 +344,18 @@ impl StateLayout {
             );
         }
         let layout = Self::new(0, rotation);
+        if paged {
+            let fields = layout.count(Buffer::State);
+            let _ = writeln!(
+                w,
+                "@group(0) @binding({STATE_X_BINDING}) var<storage, read> state_x: array<vec4<u32>>;\n\n\
+                 // Element `at` (`state_blocked`) of particle k's `state`, which may lie in the other page.\n\
+                 fn state_far(k: u32, at: u32) -> vec4<u32> {{\n    \
+                 let w = win_of(k);\n    \
+                 if (w >= win.st_base && w < win.st_end) {{\n        return state[at];\n    }}\n    \
+                 return state_x[at + (win.st_base - win.st_other) * ({fields}u * grid.window.y)];\n}}\n"
+            );
+        }
         for field in fields(rotation) {
             let ty = field.scalar.wgsl();
             let buf = field.buffer.name();
@@ -342,22 +363,29 @@ impl StateLayout {
                 .in_buffer(field.buffer)
                 .position(|g| g.name == field.name)
                 .unwrap_or(0);
-            let f = format!("{}u, {f}u", layout.count(field.buffer));
+            let at = format!("state_blocked({}u, {f}u, k)", layout.count(field.buffer));
+            let load = match (paged, field.buffer) {
+                (true, Buffer::State) => format!("state_far(k, {at})"),
+                _ => format!("{buf}[{at}]"),
+            };
             let _ = writeln!(w, "// {}", field.doc);
             let _ = writeln!(
                 w,
-                "fn load_{n}(k: u32) -> {ty} {{\n    return bitcast<{ty}>({buf}[blocked({f}, k)]);\n}}\n",
+                "fn load_{n}(k: u32) -> {ty} {{\n    return bitcast<{ty}>({load});\n}}\n",
                 n = field.name
             );
             let _ = writeln!(
                 w,
-                "fn store_{n}(k: u32, v: {ty}) {{\n    {buf}[blocked({f}, k)] = bitcast<vec4<u32>>(v);\n}}\n",
+                "fn store_{n}(k: u32, v: {ty}) {{\n    {buf}[{at}] = bitcast<vec4<u32>>(v);\n}}\n",
                 n = field.name
             );
         }
         w
     }
 }
+
+/// The binding of `state_x`, the other page of the state (`StateLayout::wgsl`).
+pub const STATE_X_BINDING: u32 = 23;
 
 /// The fields of a scene's state.
 fn fields(rotation: bool) -> impl Iterator<Item = &'static StateField> {

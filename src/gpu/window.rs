@@ -7,7 +7,7 @@
 //! the arrays fit one binding) lays everything out as before windows existed.
 
 use crate::error::PowderError;
-use crate::gpu::kernel::{uniform_buffer, Kernel, Part};
+use crate::gpu::kernel::{storage_buffer, uniform_buffer, Kernel, Part};
 use crate::gpu::pages::Pages;
 use crate::gpu::state::{particle_stride, STRIDE_ALIGN};
 
@@ -27,7 +27,13 @@ pub struct WindowParams {
     pub rec_end: u32,
     /// The first window of the other page's binding (`entries_x`; several pages only).
     pub rec_other: u32,
-    _pad: [u32; 2],
+    /// The particle state's [`Pages::params`] likewise (`state`, `motion`; `state_x`).
+    pub st_base: u32,
+    /// The end of the windows the state's binding holds.
+    pub st_end: u32,
+    /// The first window of `state_x`'s binding.
+    pub st_other: u32,
+    _pad: [u32; 3],
 }
 
 /// The fewest particles a window holds: every window's block of any array (4-byte records
@@ -146,9 +152,10 @@ impl Windows {
     }
 
     /// The uniform of window w's dispatches (`win` in common.wgsl), the lists' entries
-    /// in `pages`.
-    pub fn window_params(&self, w: u64, pages: &Pages) -> WindowParams {
+    /// and the particle state in `pages`.
+    pub fn window_params(&self, w: u64, pages: &Pages, state_pages: &Pages) -> WindowParams {
         let [rec_base, rec_end, rec_other] = pages.params(w, self.bound(w), self.count);
+        let [st_base, st_end, st_other] = state_pages.params(w, self.bound(w), self.count);
         WindowParams {
             first: (w * self.len) as u32,
             bound: self.bound(w) as u32,
@@ -156,7 +163,10 @@ impl Windows {
             rec_base,
             rec_end,
             rec_other,
-            _pad: [0; 2],
+            st_base,
+            st_end,
+            st_other,
+            _pad: [0; 3],
         }
     }
 
@@ -170,29 +180,50 @@ impl Windows {
 /// The blocked buffers' bytes a window, by the name the kernels bind them by.
 pub type Blocks<'a> = [(&'a str, u64)];
 
+/// A buffer bound page by page (`gpu::pages`): each window's dispatches bind its page
+/// whole under `name`, and the other page ([`Pages::other`]) under `other` where the
+/// kernel declares it. With one page the buffer is bound as any other (`other`: a spare).
+pub struct Paged<'a> {
+    /// The name the kernels bind it by.
+    pub name: &'a str,
+    /// Its pages (one buffer with one page).
+    pub pages: &'a [wgpu::Buffer],
+    /// How it is cut.
+    pub layout: Pages,
+    /// The binding of the other page, where the kernels read it.
+    pub other: Option<&'a str>,
+}
+
 /// What binds kernels window by window: the windows and one `win` uniform each.
 pub struct WindowBindings {
     /// The windows.
     pub windows: Windows,
     /// The pages of the lists' entries.
     pub pages: Pages,
+    /// The pages of the particle state (`state`, `motion`).
+    pub state_pages: Pages,
     /// Window w's [`WindowParams`].
     pub uniforms: Vec<wgpu::Buffer>,
+    /// Bound as the other page of a buffer in one page (never read).
+    spare: wgpu::Buffer,
 }
 
 impl WindowBindings {
-    /// The uniforms of `windows`, the lists' entries in `pages`.
-    pub fn new(device: &wgpu::Device, windows: Windows, pages: Pages) -> Self {
+    /// The uniforms of `windows`, the lists' entries in `pages` and the state in
+    /// `state_pages`.
+    pub fn new(device: &wgpu::Device, windows: Windows, pages: Pages, state_pages: Pages) -> Self {
         let uniforms = (0..windows.count)
             .map(|w| {
-                let params = windows.window_params(w, &pages);
+                let params = windows.window_params(w, &pages, &state_pages);
                 uniform_buffer(device, "window", bytemuck::bytes_of(&params))
             })
             .collect();
         Self {
             windows,
             pages,
+            state_pages,
             uniforms,
+            spare: storage_buffer(device, "spare page", 16),
         }
     }
 
@@ -212,23 +243,25 @@ impl WindowBindings {
 
     /// The bind groups of `kernel`: one a window where it binds `win` (each blocked
     /// buffer, named in `blocks` with its bytes a window, bound over the window and its
-    /// neighbours; with one window, whole), else one binding everything whole. Where the
-    /// lists' entries are in pages (`entry_pages`, [`Self::pages`]), `entries` is the
-    /// window's page and `entries_x` the other one ([`Pages::other`]), each whole.
+    /// neighbours; with one window, whole), else one binding everything whole. The
+    /// buffers in `paged` are bound page by page where they are in several ([`Paged`]).
     pub fn groups(
         &self,
         device: &wgpu::Device,
         kernel: &Kernel,
         (buffers, blocks): (&[(&str, &wgpu::Buffer)], &Blocks),
         textures: &[(&str, &wgpu::TextureView)],
-        entry_pages: &[wgpu::Buffer],
+        paged: &[Paged],
     ) -> Result<Vec<wgpu::BindGroup>, PowderError> {
-        let paged = self.pages.paged() && kernel.uses("entries");
+        let in_pages: Vec<&Paged> = paged
+            .iter()
+            .filter(|p| p.layout.paged() && kernel.uses(p.name))
+            .collect();
         if !kernel.uses("win") {
-            if paged {
+            if let Some(p) = in_pages.first() {
                 return Err(PowderError::Run(format!(
-                    "kernel `{}` binds the lists' entries whole, which are in {} pages",
-                    kernel.name, self.pages.count
+                    "kernel `{}` binds `{}` whole, which is in {} pages",
+                    kernel.name, p.name, p.layout.count
                 )));
             }
             return Ok(vec![kernel.bind_with_textures(device, buffers, textures)?]);
@@ -245,11 +278,16 @@ impl WindowBindings {
                         (name, part)
                     })
                     .collect();
-                if paged {
-                    let page = |p: u64| Part::whole(&entry_pages[p as usize]);
-                    parts.retain(|(name, _)| *name != "entries");
-                    parts.push(("entries", page(self.pages.page_of(w))));
-                    parts.push(("entries_x", page(self.pages.other(w))));
+                for p in paged {
+                    let other = p.other.filter(|&x| kernel.uses(x));
+                    if !p.layout.paged() {
+                        parts.extend(other.map(|x| (x, Part::whole(&self.spare))));
+                        continue;
+                    }
+                    let page = |i: u64| Part::whole(&p.pages[i as usize]);
+                    parts.retain(|(name, _)| *name != p.name);
+                    parts.push((p.name, page(p.layout.page_of(w))));
+                    parts.extend(other.map(|x| (x, page(p.layout.other(w)))));
                 }
                 parts.push(("win", Part::whole(&self.uniforms[w as usize])));
                 kernel.bind_parts(device, &parts, textures)
@@ -262,7 +300,9 @@ impl WindowBindings {
     pub fn set_pages(&mut self, queue: &wgpu::Queue, pages: Pages) {
         self.pages = pages;
         for (w, uniform) in self.uniforms.iter().enumerate() {
-            let params = self.windows.window_params(w as u64, &pages);
+            let params = self
+                .windows
+                .window_params(w as u64, &pages, &self.state_pages);
             queue.write_buffer(uniform, 0, bytemuck::bytes_of(&params));
         }
     }

@@ -691,10 +691,14 @@ fn run_gpu(
         false => (None, None),
     };
     let pages = engine.entry_pages();
-    let paged = match pages.paged() {
+    let mut paged = match pages.paged() {
         true => format!(", the list entries in {} pages", pages.count),
         false => String::new(),
     };
+    let state_pages = engine.state_pages();
+    if state_pages.paged() {
+        paged += &format!(", the particle state in {} pages", state_pages.count);
+    }
     let windowed = (windows.count > 1).then(|| {
         format!(
             "{} windows of {} particles{paged}",

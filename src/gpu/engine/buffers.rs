@@ -80,9 +80,11 @@ impl<'a> Allocator<'a> {
 /// with the neighbour lists' entries, its pairs' and its wall contacts (`gpu::records`).
 pub(super) struct StateSet {
     /// Every per-particle field ([`StateLayout`]): `state` (what pairs read of a partner)
-    /// and `motion`.
-    pub(super) state: wgpu::Buffer,
-    pub(super) motion: wgpu::Buffer,
+    /// and `motion`, each one buffer or pages of whole windows where that would exceed
+    /// the largest (`gpu::pages`; both cut alike, `state_pages`).
+    pub(super) state: Vec<wgpu::Buffer>,
+    pub(super) motion: Vec<wgpu::Buffer>,
+    pub(super) state_pages: Pages,
     pub(super) layout: StateLayout,
     /// The lists' entries (partner or wall, `lower`, partner id, history, pair force and
     /// torque, the contact's prior, a force jump's impulse) and their layout: one buffer,
@@ -95,28 +97,101 @@ pub(super) struct StateSet {
 impl StateSet {
     pub(super) fn new(
         alloc: &mut Allocator,
-        (n, entries, windows, pages): (u64, u64, Windows, Pages),
+        (n, entries, windows, [pages, state_pages]): (u64, u64, Windows, [Pages; 2]),
         kind: &Composition,
         keeps: Keeps,
     ) -> Self {
         let layout = StateLayout::windowed(n, kind.rotation(), windows);
         let [entry_layout, _] = kind.records(keeps);
         let blocks = Self::blocks_of(&layout, (&entry_layout, entries));
-        let mut b = |name: &'static str, bytes: u64| {
+        let mut b = |b: Buffer| {
+            let name = b.name();
             let block = blocks.iter().find(|(n, _)| *n == name).map_or(0, |b| b.1);
-            blocked_buffer(alloc, &windows, (&format!("A.{name}"), bytes), block)
+            if !state_pages.paged() {
+                let bytes = layout.bytes(b);
+                return vec![blocked_buffer(
+                    alloc,
+                    &windows,
+                    (&format!("A.{name}"), bytes),
+                    block,
+                )];
+            }
+            (0..state_pages.count)
+                .map(|p| {
+                    let (_, len) = state_pages.range(p, windows.count);
+                    alloc.buffer(&format!("A.{name}[{p}]"), len * block)
+                })
+                .collect()
         };
-        let state = b("state", layout.bytes(Buffer::State));
-        let motion = b("motion", layout.bytes(Buffer::Motion));
+        let state = b(Buffer::State);
+        let motion = b(Buffer::Motion);
         let entries = entry_buffers(alloc, (&windows, &pages), &entry_layout, entries);
         Self {
             state,
             motion,
+            state_pages,
             entries,
             pages,
             layout,
             entry_layout,
         }
+    }
+
+    /// The pages of the particle state for `windows` (one where both buffers fit
+    /// `largest` bytes), or an error when a page of at most a binding (`limit`) and
+    /// `largest` holds fewer than [`MIN_PAGE_WINDOWS`] windows.
+    pub(super) fn pages_of(
+        layout: &StateLayout,
+        windows: &Windows,
+        (limit, largest): (u64, u64),
+    ) -> Result<Pages, PowderError> {
+        let block = Buffer::ALL
+            .iter()
+            .map(|&b| layout.count(b) * windows.len * crate::gpu::state::FIELD_BYTES)
+            .max()
+            .unwrap_or(0);
+        let page = largest.min(limit);
+        Pages::of(windows, block, (largest, page)).ok_or_else(|| {
+            PowderError::Run(format!(
+                "the particle state needs {} bytes a buffer, over the largest buffer of {largest} bytes, and a page of at most {page} bytes holds fewer than {MIN_PAGE_WINDOWS} windows' blocks of {block} bytes; smaller windows hold fewer (`--window-particles N`)",
+                windows.count * block
+            ))
+        })
+    }
+
+    /// Whether the step's variant reads through pages (`_paged`): the entries' or the
+    /// state's.
+    pub(super) fn far(&self) -> bool {
+        self.pages.paged() || self.state_pages.paged()
+    }
+
+    /// Buffer `b`'s pages read back one after the other: the bytes of one buffer.
+    pub(super) fn sources(&self, b: Buffer) -> Vec<(&wgpu::Buffer, u64)> {
+        self.buffer(b).iter().map(|p| (p, p.size())).collect()
+    }
+
+    /// The buffers bound page by page (`WindowBindings::groups`).
+    pub(super) fn paged(&self) -> [Paged<'_>; 3] {
+        [
+            Paged {
+                name: "entries",
+                pages: &self.entries,
+                layout: self.pages,
+                other: Some("entries_x"),
+            },
+            Paged {
+                name: "state",
+                pages: &self.state,
+                layout: self.state_pages,
+                other: Some("state_x"),
+            },
+            Paged {
+                name: "motion",
+                pages: &self.motion,
+                layout: self.state_pages,
+                other: None,
+            },
+        ]
     }
 
     /// The entries' buffers read back one after the other: the bytes of one buffer.
@@ -159,8 +234,8 @@ impl StateSet {
     /// [`WindowBindings::groups`] binds each window's).
     pub(super) fn named(&self) -> Vec<(String, &wgpu::Buffer)> {
         vec![
-            ("state".to_string(), &self.state),
-            ("motion".to_string(), &self.motion),
+            ("state".to_string(), &self.state[0]),
+            ("motion".to_string(), &self.motion[0]),
             ("entries".to_string(), &self.entries[0]),
         ]
     }
@@ -179,8 +254,8 @@ impl StateSet {
         ]
     }
 
-    /// The buffer holding state buffer `b`.
-    pub(super) fn buffer(&self, b: Buffer) -> &wgpu::Buffer {
+    /// The buffers (pages) holding state buffer `b`.
+    pub(super) fn buffer(&self, b: Buffer) -> &[wgpu::Buffer] {
         match b {
             Buffer::State => &self.state,
             Buffer::Motion => &self.motion,
@@ -198,18 +273,31 @@ impl StateSet {
             let block = stride * names.len() as u32;
             for (c, group) in names.chunks(per_move).enumerate() {
                 let first = (c * per_move) as u32;
-                f.push(
-                    Field::regions(
-                        &group.join("+"),
-                        self.buffer(b),
-                        4,
-                        (first * stride, stride, group.len() as u32),
-                    )
-                    .windowed(block),
-                );
+                let field = Field::regions(
+                    &group.join("+"),
+                    &self.buffer(b)[0],
+                    4,
+                    (first * stride, stride, group.len() as u32),
+                )
+                .windowed(block);
+                f.push(match self.state_pages.paged() {
+                    true => field.in_pages(self.buffer(b)),
+                    false => field,
+                });
             }
         }
         f
+    }
+}
+
+/// Writes `bytes` into `pages` one after the other (the bytes of the one buffer they
+/// stand for).
+pub(super) fn write_pages(queue: &wgpu::Queue, pages: &[wgpu::Buffer], bytes: &[u8]) {
+    let mut at = 0;
+    for page in pages {
+        let end = (at + page.size() as usize).min(bytes.len());
+        queue.write_buffer(page, 0, &bytes[at..end]);
+        at = end;
     }
 }
 
@@ -492,10 +580,11 @@ impl GpuEngine {
             (self.ctx.max_storage_binding(), self.largest_entries),
         )?;
         // (the paged variant's far reads: compiled before anything changes)
-        let program = match pages.paged() != self.state.pages.paged() {
+        let far = pages.paged() || self.state.state_pages.paged();
+        let program = match far != self.state.far() {
             true => Some(
                 self.spec
-                    .compile(&self.ctx, (&self.kind, self.keeps), pages.paged())?,
+                    .compile(&self.ctx, (&self.kind, self.keeps), far)?,
             ),
             false => None,
         };
@@ -581,7 +670,7 @@ impl GpuEngine {
             ),
             (&self.mirrors, &self.windowing),
             &self.grid,
-            ([self.state.named(), self.b.named()], &self.state.entries),
+            ([self.state.named(), self.b.named()], &self.state.paged()),
         )?;
         Ok(())
     }

@@ -82,8 +82,8 @@ fn quiet_batches(
     let mut alloc = Allocator::new(device, u64::MAX);
     let mut copies = Vec::new();
     let own = [
-        ("state", Some(&state.state)),
-        ("motion", Some(&state.motion)),
+        ("state", Some(&state.state[0])),
+        ("motion", Some(&state.motion[0])),
         ("particle_ledger", ledger),
     ];
     for (name, b) in own {
@@ -143,7 +143,7 @@ pub(super) fn bind_all(
     (layout, records, blocks): (&StateLayout, &[(&RecordLayout, u64)], &Blocks),
     (mirrors, windows): (&Mirrors, &WindowBindings),
     grid: &GridSort,
-    (buffers, entry_pages): (NamedBuffers, &[wgpu::Buffer]),
+    (buffers, paged): (NamedBuffers, &[Paged]),
 ) -> Result<Bound, PowderError> {
     let mut list: Vec<(String, &wgpu::Buffer)> = buffers.into_iter().flatten().collect();
     list.push(("grid".into(), grid.params()));
@@ -153,13 +153,7 @@ pub(super) fn bind_all(
     let textures = mirrors.view_bytes();
     let pass = |name: &str| -> Result<Pass, PowderError> {
         let kernel = program.kernel(name)?.clone();
-        let groups = windows.groups(
-            device,
-            &kernel,
-            (&refs, blocks),
-            &mirrors.views(),
-            entry_pages,
-        )?;
+        let groups = windows.groups(device, &kernel, (&refs, blocks), &mirrors.views(), paged)?;
         let mut bound = kernel.bound_bytes(&refs, &textures);
         // the state: the fields the kernel's accessors touch, not the whole buffers
         for (name, bytes) in &mut bound {
@@ -197,6 +191,7 @@ pub(super) fn bind_all(
         wall_move: optional("wall_move").transpose()?,
         wall_servo: optional("wall_servo").transpose()?,
         wall_servo_apply: optional("wall_servo_apply").transpose()?,
+        appear: optional("appear").transpose()?,
     })
 }
 
@@ -335,6 +330,9 @@ impl InitialState {
             let x = DVec3::from_array(p.position);
             let (mut c, mut o) = encode3(x, origin, h);
             c[3] = p.material as i32;
+            if p.insert_at > 0.0 {
+                c[3] |= NOT_APPEARED;
+            }
             o[3] = p.radius as f32;
             let dx = crate::gpu::layout::decode3(c, o, origin, h) - x;
             let v = p.velocity;
@@ -506,11 +504,19 @@ impl GpuEngine {
             n as u64,
             (ctx.max_storage_binding(), largest),
         )?;
-        let windowing = WindowBindings::new(&ctx.device, windows, pages);
+        let state_pages = StateSet::pages_of(
+            &StateLayout::windowed(n as u64, kind.rotation(), windows),
+            &windows,
+            (
+                ctx.max_storage_binding(),
+                entry_buffer_limit(&ctx, options.state_page_bytes),
+            ),
+        )?;
+        let windowing = WindowBindings::new(&ctx.device, windows, pages, state_pages);
         let servo_walls = scene.walls.iter().any(|w| w.motion.servo());
         let state = StateSet::new(
             &mut alloc,
-            (n as u64, entries, windows, pages),
+            (n as u64, entries, windows, [pages, state_pages]),
             &kind,
             keeps,
         );
@@ -523,9 +529,9 @@ impl GpuEngine {
         let g = scene.gravity;
         let q0 = &ctx.queue;
         for b in Buffer::ALL {
-            q0.write_buffer(
+            write_pages(
+                q0,
                 state.buffer(b),
-                0,
                 &state.layout.pack(b, &|f| initial.field(f)),
             );
         }
@@ -631,13 +637,17 @@ impl GpuEngine {
         if servo_walls {
             wanted.extend(["wall_servo", "wall_servo_apply"]);
         }
+        // the appeared flags into the state, only where particles appear during the run
+        if scene.pours() {
+            wanted.push("appear");
+        }
         let constants = pipeline_constants(scene, &r, &all_models);
         let spec = StepSpec {
             wanted,
             constants,
             mirrors: software,
         };
-        let program = spec.compile(&ctx, (&kind, keeps), pages.paged())?;
+        let program = spec.compile(&ctx, (&kind, keeps), pages.paged() || state_pages.paged())?;
         let max_per_dim = ctx.limits().max_compute_workgroups_per_dimension;
         // the scans that place the new lists (counts -> first entries)
         let scans = list_scans(&ctx, &rows, (&windows, n as u32))?;
@@ -693,21 +703,21 @@ impl GpuEngine {
             (
                 "m_cell",
                 Some("m_cell_out"),
-                &s0.state,
+                &s0.state[0],
                 at("cell"),
                 wgpu::TextureFormat::Rgba32Sint,
             ),
             (
                 "m_off",
                 Some("m_off_out"),
-                &s0.state,
+                &s0.state[0],
                 at("off"),
                 wgpu::TextureFormat::Rgba32Float,
             ),
             (
                 "m_vpred",
                 None,
-                &s0.state,
+                &s0.state[0],
                 at("vpred"),
                 wgpu::TextureFormat::Rgba32Float,
             ),
@@ -716,7 +726,7 @@ impl GpuEngine {
             mirrored.push((
                 "m_wpred",
                 None,
-                &s0.state,
+                &s0.state[0],
                 w,
                 wgpu::TextureFormat::Rgba32Float,
             ));
@@ -765,13 +775,16 @@ impl GpuEngine {
             ),
             (&mirrors, &windowing),
             &grid,
-            ([state.named(), b.named()], &state.entries),
+            ([state.named(), b.named()], &state.paged()),
         )?;
-        // the grid sort's keys, a window at a time
+        // the grid sort's keys, a window at a time (its page where the state has pages)
         let state_block = state_fields * windows.len * crate::gpu::state::FIELD_BYTES;
         let grid_keys = (0..windows.count)
             .map(|w| {
-                let cells = windowing.part(&state.state, state_block, w);
+                let cells = match state_pages.paged() {
+                    true => Part::whole(&state.state[state_pages.page_of(w) as usize]),
+                    false => windowing.part(&state.state[0], state_block, w),
+                };
                 grid.keys_bind_group_part(cells, &windowing.uniforms[w as usize])
             })
             .collect::<Result<Vec<_>, _>>()?;
@@ -779,17 +792,18 @@ impl GpuEngine {
         // particles appear (an insertion rebuilds)
         let pouring = scene.pours();
         let mode = options.quiet.on(software);
-        // (nor where the lists' entries are in pages: the copy of them would be one buffer)
-        let quiet = (mode != QuietBatches::Off && !moving_walls && !pouring && !pages.paged())
-            .then(|| {
-                quiet_batches(
-                    device,
-                    mode,
-                    (&state, b.particle_ledger.as_ref()),
-                    (&new_lists, entries),
-                    skin,
-                )
-            });
+        // (nor where the lists' entries or the state are in pages: the copies would be one
+        // buffer)
+        let paged = pages.paged() || state_pages.paged();
+        let quiet = (mode != QuietBatches::Off && !moving_walls && !pouring && !paged).then(|| {
+            quiet_batches(
+                device,
+                mode,
+                (&state, b.particle_ledger.as_ref()),
+                (&new_lists, entries),
+                skin,
+            )
+        });
         let mut buffers = buffers;
         let quiet = quiet.map(|(q, list)| {
             buffers.extend(list);

@@ -49,6 +49,8 @@ impl GpuEngine {
             .into_iter()
             .map(|(name, b)| match name.as_str() {
                 "entries" => (name, self.state.entries.iter().collect()),
+                "state" => (name, self.state.state.iter().collect()),
+                "motion" => (name, self.state.motion.iter().collect()),
                 _ => (name, vec![b]),
             })
             .collect();
@@ -194,12 +196,8 @@ impl GpuEngine {
             self.resize_lists(entries, false)?;
         }
         for ((_, bufs), (_, bytes)) in self.state_buffers().iter().zip(&saved.buffers) {
-            let mut at = 0;
-            for buf in bufs {
-                let end = (at + buf.size() as usize).min(bytes.len());
-                self.ctx.queue.write_buffer(buf, 0, &bytes[at..end]);
-                at = end;
-            }
+            let bufs: Vec<wgpu::Buffer> = bufs.iter().map(|&b| b.clone()).collect();
+            write_pages(&self.ctx.queue, &bufs, bytes);
         }
         if saved.wall_points.len() == self.wall_points.len() {
             self.wall_points = saved.wall_points;

@@ -41,6 +41,12 @@ impl GpuEngine {
         self.state.pages
     }
 
+    /// The pages the particle state's two buffers are in (`gpu::pages`; one where they
+    /// fit one buffer each).
+    pub fn state_pages(&self) -> Pages {
+        self.state.state_pages
+    }
+
     /// Whether the engine takes the software adapter's paths (texture mirrors, quiet
     /// batches; `GpuOptions::software_paths`).
     pub fn adapter_is_software(&self) -> bool {
@@ -81,11 +87,8 @@ impl GpuEngine {
 
     /// The name of the step's shader module (`Composition::variant_name`).
     pub fn variant_name(&self) -> String {
-        self.kind.variant_name(
-            self.keeps,
-            !self.mirrors.is_empty(),
-            self.state.pages.paged(),
-        )
+        self.kind
+            .variant_name(self.keeps, !self.mirrors.is_empty(), self.state.far())
     }
 
     /// The step's kernels this engine built pipelines for (entry points of the step
@@ -191,7 +194,7 @@ impl GpuEngine {
         }
         out.push(pass(&b.force, When::Step));
         out.extend(b.wall_servo.as_ref().map(|p| pass(p, When::Step)));
-        for (name, mut bound) in self.grid.traffic(&self.state.state) {
+        for (name, mut bound) in self.grid.traffic(&self.state.state[0]) {
             // the sort reads the state's first field, the cells
             for (global, bytes) in &mut bound {
                 if global == "cells" {

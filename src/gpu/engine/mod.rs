@@ -31,10 +31,10 @@ use crate::gpu::pages::{Pages, MIN_PAGE_WINDOWS};
 use crate::gpu::permute::{self, Field, Permutation, ROW_WORDS};
 use crate::gpu::quiet::{Forecast, QuietBatches};
 use crate::gpu::records::{RecordLayout, WALL_ENTRY};
-use crate::gpu::state::{Buffer, StateLayout};
+use crate::gpu::state::{Buffer, StateLayout, NOT_APPEARED};
 use crate::gpu::timestamps::{PassClock, PassProfile};
 use crate::gpu::traffic::{PassTraffic, When};
-use crate::gpu::window::{Blocks, WindowBindings, Windows, MIN_WINDOW};
+use crate::gpu::window::{Blocks, Paged, WindowBindings, Windows, MIN_WINDOW};
 use crate::model::{ContactHistory, ContactModel, PairGeometry};
 use crate::output::contacts::{ContactLine, ContactNetwork};
 use crate::scene::{Scene, WallPhase};
@@ -140,6 +140,10 @@ pub struct GpuOptions {
     /// buffer): beyond it they are cut into pages of whole windows, each bound whole
     /// (`gpu::pages`; windows are then needed). Results are bitwise the same either way.
     pub entry_page_bytes: Option<u64>,
+    /// The largest buffer each of the particle state's two takes (bytes; default: the
+    /// adapter's largest buffer): beyond it both are cut into pages of whole windows
+    /// likewise. Results are bitwise the same either way.
+    pub state_page_bytes: Option<u64>,
 }
 
 impl Default for GpuOptions {
@@ -152,6 +156,7 @@ impl Default for GpuOptions {
             window_particles: None,
             contacts: false,
             entry_page_bytes: None,
+            state_page_bytes: None,
         }
     }
 }

@@ -17,14 +17,8 @@ impl GpuEngine {
     /// in the scene's particle order.
     pub fn state(&self) -> Result<GpuState, PowderError> {
         let s = &self.state;
-        let encoder = self.ctx.device.create_command_encoder(&Default::default());
-        let out = submit_and_read(
-            &self.ctx,
-            encoder,
-            &[(&s.state, s.state.size()), (&s.motion, s.motion.size())],
-        )?;
+        let (state, motion) = &self.read_state()?;
         let l = &s.layout;
-        let (state, motion) = (&out[0], &out[1]);
         let cells: Vec<[i32; 4]> = l.unpack(state, "cell");
         let offs: Vec<[f32; 4]> = l.unpack(state, "off");
         let vels: Vec<[f32; 4]> = l.unpack(motion, "vel");
@@ -155,11 +149,24 @@ impl GpuEngine {
     pub(super) fn read_lists(&self) -> Result<(Vec<[u32; 4]>, Vec<u8>), PowderError> {
         let s = &self.state;
         let encoder = self.ctx.device.create_command_encoder(&Default::default());
-        let mut sources = vec![(&s.state, s.state.size())];
+        let mut sources = s.sources(Buffer::State);
+        let pages = sources.len();
         sources.extend(s.entry_sources());
         let out = submit_and_read(&self.ctx, encoder, &sources)?;
-        let entries = out[1..].concat();
-        Ok((s.layout.unpack(&out[0], "ids"), entries))
+        let entries = out[pages..].concat();
+        Ok((s.layout.unpack(&out[..pages].concat(), "ids"), entries))
+    }
+
+    /// The particle state's two buffers read back (`state`, `motion`; their pages one
+    /// after the other).
+    pub(super) fn read_state(&self) -> Result<(Vec<u8>, Vec<u8>), PowderError> {
+        let s = &self.state;
+        let encoder = self.ctx.device.create_command_encoder(&Default::default());
+        let mut sources = s.sources(Buffer::State);
+        let pages = sources.len();
+        sources.extend(s.sources(Buffer::Motion));
+        let out = submit_and_read(&self.ctx, encoder, &sources)?;
+        Ok((out[..pages].concat(), out[pages..].concat()))
     }
 
     /// The wall entries of the lists (`WALL_ENTRY` in `shaders/step.wgsl`: particle k's
@@ -195,14 +202,9 @@ impl GpuEngine {
     /// accelerations, in the scene's particle order (N). For traces and diagnostics.
     pub fn contact_forces(&self) -> Result<Vec<DVec3>, PowderError> {
         let s = &self.state;
-        let encoder = self.ctx.device.create_command_encoder(&Default::default());
-        let out = submit_and_read(
-            &self.ctx,
-            encoder,
-            &[(&s.state, s.state.size()), (&s.motion, s.motion.size())],
-        )?;
-        let acc: Vec<[f32; 4]> = s.layout.unpack(&out[1], "acc");
-        let ids: Vec<[u32; 4]> = s.layout.unpack(&out[0], "ids");
+        let (state, motion) = self.read_state()?;
+        let acc: Vec<[f32; 4]> = s.layout.unpack(&motion, "acc");
+        let ids: Vec<[u32; 4]> = s.layout.unpack(&state, "ids");
         let mut f = vec![DVec3::ZERO; self.n as usize];
         for k in 0..self.n as usize {
             let i = ids[k][0] as usize;

@@ -20,6 +20,8 @@ pub(super) struct Bound {
     pub(super) wall_move: Option<Pass>,
     pub(super) wall_servo: Option<Pass>,
     pub(super) wall_servo_apply: Option<Pass>,
+    /// The appeared flags into the state, only for scenes that pour.
+    pub(super) appear: Option<Pass>,
 }
 
 /// One kernel with its bind groups: one a window where it works on windows, else one.

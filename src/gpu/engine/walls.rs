@@ -87,16 +87,29 @@ impl GpuEngine {
         Ok(())
     }
 
-    /// Writes which particles have appeared to the device (where the scene pours: else
-    /// all have, and the kernels do not ask).
+    /// Writes which particles have appeared to the device and into the state (`appear`:
+    /// where the scene pours; else all have, and the kernels do not ask).
     pub(super) fn write_appeared(&self) {
-        if self.b.appeared.size() >= 4 * self.active.len() as u64 {
-            self.ctx.queue.write_buffer(
-                &self.b.appeared,
-                0,
-                bytemuck::cast_slice(&appeared_flags(&self.active)),
-            );
+        let Some(appear) = &self.bound.appear else {
+            return;
+        };
+        self.ctx.queue.write_buffer(
+            &self.b.appeared,
+            0,
+            bytemuck::cast_slice(&appeared_flags(&self.active)),
+        );
+        let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            // (a window's particles: every window's dispatch the same)
+            let per_window = (self.n as u64).min(self.windowing.windows.len) as u32;
+            for group in &appear.groups {
+                appear
+                    .kernel
+                    .dispatch(&mut pass, group, per_window, self.max_per_dim);
+            }
         }
+        self.ctx.queue.submit([encoder.finish()]);
     }
 
     /// Activates the particles whose insertion time has come (at the start of a step whose
