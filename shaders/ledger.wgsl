@@ -14,8 +14,9 @@
 // What the last step left of a contact comes from the entries' `prior` (step.wgsl), kept
 // per slot next to its history and moved with it through re-sorts.
 //
-// Per particle, indexed by its persistent id (each invocation writes only its own
-// particle, so no atomics and bitwise reproducible sums), four vec4:
+// Per particle, four fields of its state (`ledger_counts`, `ledger_overlaps`,
+// `ledger_energy`, `ledger_wall` in `gpu::state`: re-sorted with it; each invocation writes
+// only its own particle, so no atomics and bitwise reproducible sums):
 //   [0] (pairs overlapping, walls overlapping, pairs engaged without overlap, walls
 //        engaged without overlap), the pairs counted twice by their evaluator;
 //   [1] (largest overlap, largest overlap/a12, sum over pairs of overlap/a12 (twice, as
@@ -29,8 +30,6 @@
 // The host reads them back only when asked and sums in f64 in id order.
 
 const LEDGER: bool = true;
-
-@group(0) @binding(64) var<storage, read_write> particle_ledger: array<vec4<f32>>;
 
 // What the force kernel gathers for one particle during a step.
 struct LedgerAcc {
@@ -120,20 +119,20 @@ fn ledger_departed(acc: ptr<function, LedgerAcc>, old: vec4<f32>, delta: f32) {
 
 // Kahan summation of the step's dissipation into the particle's running total: the f32
 // total of a long run would otherwise lose the small per-step increments.
-fn ledger_store(pid: u32, acc: LedgerAcc) {
-    let e = particle_ledger[4u * pid + 2u];
+fn ledger_store(k: u32, acc: LedgerAcc) {
+    let e = load_ledger_energy(k);
     let y = acc.dissipated - e.y;
     // (opaque: see step.wgsl; without it the compiler folds the compensation to 0)
     let t = opaque1(e.x + y);
     let comp = (t - e.x) - y;
-    particle_ledger[4u * pid] = acc.counts;
-    particle_ledger[4u * pid + 1u] = acc.overlaps;
-    particle_ledger[4u * pid + 2u] = vec4<f32>(t, comp, acc.stored, 0.0);
+    store_ledger_counts(k, acc.counts);
+    store_ledger_overlaps(k, acc.overlaps);
+    store_ledger_energy(k, vec4<f32>(t, comp, acc.stored, 0.0));
     if (acc.wall_work != 0.0) {
-        let ew = particle_ledger[4u * pid + 3u];
+        let ew = load_ledger_wall(k);
         let yw = acc.wall_work - ew.y;
         let tw = opaque1(ew.x + yw);
-        particle_ledger[4u * pid + 3u] = vec4<f32>(tw, (tw - ew.x) - yw, 0.0, 0.0);
+        store_ledger_wall(k, vec4<f32>(tw, (tw - ew.x) - yw, 0.0, 0.0));
     }
 }
 
@@ -142,7 +141,7 @@ fn ledger_store(pid: u32, acc: LedgerAcc) {
 // booked as having left at its last overlap (U0 − ½·dt·P0; the CPU also adds the normal
 // work 0.5·f0·(delta − delta0) at its current overlap, which is not at hand here) and
 // counted in monitor[3], so the host can say so.
-fn ledger_dropped(pid: u32, old_row: u32, old_n: u32, k: u32) {
+fn ledger_dropped(old_row: u32, old_n: u32, k: u32) {
     var lost = 0.0;
     for (var m = 0u; m < old_n; m++) {
         let old = load_prior_far(old_row + m);
@@ -171,11 +170,11 @@ fn ledger_dropped(pid: u32, old_row: u32, old_n: u32, k: u32) {
         }
     }
     if (lost != 0.0) {
-        var e = particle_ledger[4u * pid + 2u];
+        var e = load_ledger_energy(k);
         let y = lost - e.y;
         let t = opaque1(e.x + y);
         e.y = (t - e.x) - y;
         e.x = t;
-        particle_ledger[4u * pid + 2u] = e;
+        store_ledger_energy(k, e);
     }
 }

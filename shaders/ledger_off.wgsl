@@ -1,5 +1,6 @@
 // ledger_off.wgsl — the step without the energy ledger and contact statistics: the hooks
-// of ledger.wgsl as no-ops, with no buffers declared, so none is bound or allocated.
+// of ledger.wgsl as no-ops; the state then has no ledger fields (`gpu::state`), so none is
+// allocated.
 
 const LEDGER: bool = false;
 
@@ -17,6 +18,6 @@ fn ledger_wall(acc: ptr<function, LedgerAcc>, old: vec4<f32>, k: Kin, c: Contact
 
 fn ledger_departed(acc: ptr<function, LedgerAcc>, old: vec4<f32>, delta: f32) {}
 
-fn ledger_store(pid: u32, acc: LedgerAcc) {}
+fn ledger_store(k: u32, acc: LedgerAcc) {}
 
-fn ledger_dropped(pid: u32, old_row: u32, old_n: u32, k: u32) {}
+fn ledger_dropped(old_row: u32, old_n: u32, k: u32) {}

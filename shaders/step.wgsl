@@ -797,7 +797,7 @@ fn remap(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
         store_new_hist(e, h);
         store_new_hist_pid(e, partner);
     }
-    ledger_dropped(me, old_row, old_n, k);
+    ledger_dropped(old_row, old_n, k);
 }
 
 // On a rebuild, last: the new lists' history returns to A, the displacements start
@@ -1130,7 +1130,7 @@ fn particle_forces(k: u32, row0: PairRow) {
     // the sums over k's own list and walls; collect adds the pairs evaluated by partners
     store_acc(k, vec4<f32>(f, peak));
     rot_store_partial(k, torque);
-    ledger_store(ids_k.x, ledger_acc);
+    ledger_store(k, ledger_acc);
     // k's share of the force jumps, into its velocity now (the kicks around the end of
     // the step add to it; nothing reads it before): the partners' comes through collect
     jump_kick(k, impulse / mk);

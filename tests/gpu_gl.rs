@@ -113,11 +113,14 @@ fn pages_give_the_same_bits_on_gl() {
         };
         let mut e = GpuEngine::with_options(&scene, gl()?, options(None, None)).unwrap();
         if paged {
-            // pages of three windows' blocks of 640 entries, and of the state (6 fields
-            // of 16 bytes a particle in each buffer, with rotation)
+            // pages of three windows' blocks of 640 entries, and of the state's larger
+            // buffer
             let record: u64 = e.entry_fields().iter().map(|(_, b)| b).sum();
             let page = Some(3 * 640 * record + 100);
-            let state_page = Some(3 * 6 * 16 * 128 + 100);
+            let state = e.buffers().into_iter();
+            let state = state.filter(|(n, _)| n == "A.state" || n == "A.motion");
+            let block = state.map(|(_, b)| b).max().unwrap() / e.windows().count;
+            let state_page = Some(3 * block + 100);
             e = GpuEngine::with_options(&scene, gl()?, options(page, state_page)).unwrap();
             assert_eq!(e.state_pages().count, 2);
         }

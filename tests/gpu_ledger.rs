@@ -151,7 +151,9 @@ fn gpu_without_ledger_allocates_none_and_moves_the_same() {
         format!("step_hysteretic_ledger_jumps{m}")
     );
     assert!(without.buffers().iter().all(|(n, _)| !n.contains("ledger")));
-    assert!(with.buffers().iter().any(|(n, _)| n == "particle_ledger"));
+    // (the ledger's rows: four fields of the particle state)
+    assert!(with.state_fields().contains(&"ledger_energy"));
+    assert!(!without.state_fields().contains(&"ledger_energy"));
     assert!(without.buffer_bytes() < with.buffer_bytes());
     with.run_steps(5000).unwrap();
     without.run_steps(5000).unwrap();

@@ -16,6 +16,18 @@ fn options(window: u64, first_entries: u64, page: Option<u64>) -> GpuOptions {
     }
 }
 
+/// Bytes of one window's block of the larger of the particle state's two buffers.
+fn state_block_bytes(engine: &GpuEngine) -> u64 {
+    let largest = engine
+        .buffers()
+        .into_iter()
+        .filter(|(n, _)| n == "A.state" || n == "A.motion")
+        .map(|(_, b)| b)
+        .max()
+        .unwrap_or(0);
+    largest / engine.windows().count
+}
+
 /// Bytes of one window's block of the entries.
 fn block_bytes(engine: &GpuEngine) -> u64 {
     let record: u64 = engine.entry_fields().iter().map(|(_, b)| b).sum();
@@ -146,16 +158,7 @@ fn state_in_pages_changes_no_bit() {
         one.run_steps(half).unwrap();
         let mid = one.state().unwrap();
         one.run_steps(steps - half).unwrap();
-        // a window's block of the larger state buffer
-        let windows = one.windows().count;
-        let block = one
-            .buffers()
-            .iter()
-            .filter(|(n, _)| n == "A.state" || n == "A.motion")
-            .map(|(_, b)| *b)
-            .max()
-            .unwrap()
-            / windows;
+        let (windows, block) = (one.windows().count, state_block_bytes(&one));
         let entry_page = entries_too.then(|| 3 * block_bytes(&one) + block_bytes(&one) / 2);
         let first = one.list_entries() / windows;
         let options = GpuOptions {
@@ -215,23 +218,23 @@ fn poured_particles_appear_in_pages() {
     for (i, p) in scene.particles.iter_mut().enumerate() {
         p.insert_at = 1e-3 * (i % 4) as f64;
     }
-    let run = |state_page: Option<u64>| {
-        let options = GpuOptions {
+    let run = |paged: bool| {
+        let options = |state_page| GpuOptions {
             state_page_bytes: state_page,
             ..options(128, 512, None)
         };
-        let mut e = GpuEngine::with_options(&scene, context()?, options).unwrap();
-        assert_eq!(
-            e.state_pages().count,
-            if state_page.is_some() { 2 } else { 1 }
-        );
+        let mut e = GpuEngine::with_options(&scene, context()?, options(None)).unwrap();
+        if paged {
+            let page = 3 * state_block_bytes(&e) + 100;
+            e = GpuEngine::with_options(&scene, context()?, options(Some(page))).unwrap();
+            assert_eq!(e.state_pages().count, 2);
+        }
         // past the last batch's appearance
         let steps = (4e-3 / e.dt()).round() as u64;
         e.run_steps(steps).unwrap();
         Some(e)
     };
-    // (5 state fields of 16 bytes a particle, 128 particles a window)
-    let (Some(one), Some(paged)) = (run(None), run(Some(3 * 5 * 16 * 128 + 100))) else {
+    let (Some(one), Some(paged)) = (run(false), run(true)) else {
         return;
     };
     common::assert_same_run(&one, &paged, "pour");

@@ -13,6 +13,10 @@ struct Description {
     adapter: String,
     layout: String,
     buffers: Vec<String>,
+    /// Whether the run kept the energy ledger (absent in checkpoints from before its rows
+    /// joined the particle state: they name a `particle_ledger` buffer).
+    #[serde(default)]
+    ledger: bool,
 }
 
 /// The state's arrays and its description, in a fixed order.
@@ -21,6 +25,7 @@ pub fn arrays(s: &GpuSavedState) -> Result<Vec<(String, Member)>, StateError> {
         adapter: s.adapter.clone(),
         layout: s.layout.clone(),
         buffers: s.buffers.iter().map(|(n, _)| n.clone()).collect(),
+        ledger: s.ledger,
     };
     let json = serde_json::to_vec_pretty(&about).map_err(|e| StateError(e.to_string()))?;
     let a = |name: &str, array: Array| (name.to_string(), Member::Array(array));
@@ -87,5 +92,6 @@ pub fn state(
         active: active.data.iter().map(|&b| b == 1).collect(),
         inserted: f64s(&get("inserted")?, "inserted", 0)?[0],
         layout: about.layout,
+        ledger: about.ledger,
     })
 }

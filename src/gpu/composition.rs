@@ -14,7 +14,7 @@ use super::shaders::{
     compose, ShaderVariant, JUMP, JUMP_OFF, LEDGER, LEDGER_OFF, OVERLAP, ROTATION,
     ROTATION_BUFFERS, ROTATION_MIRRORS, ROTATION_OFF, STATE_BUFFERS, STATE_MIRRORS, STEP,
 };
-use super::state::StateLayout;
+use super::state::{Extras, StateLayout};
 use crate::model::friction::{rolling, sliding, twisting};
 use crate::model::history::{HistoryField, Mirror, Shape};
 use crate::model::{hysteretic, jkr, krijt, ContactHistory, ContactModel, CoulombSpring};
@@ -702,6 +702,15 @@ impl Composition {
             .collect()
     }
 
+    /// What the particle state holds beyond every run's fields (`gpu::state`): the
+    /// angular fields where particles rotate, the ledger's rows where the variant keeps it.
+    pub fn state_extras(&self, keeps: Keeps) -> Extras {
+        Extras {
+            rotation: self.rotation(),
+            ledger: keeps.ledger,
+        }
+    }
+
     /// The records of the lists' entries and a rebuild's new lists (`gpu::records`) for
     /// this composition, with what the variant keeps.
     pub fn records(&self, keeps: Keeps) -> [RecordLayout; 2] {
@@ -718,7 +727,7 @@ impl Composition {
     /// the software adapter's path, `gpu::mirror`), the step.
     pub fn variant(&self, keeps: Keeps, mirrors: bool, paged: bool) -> ShaderVariant {
         let interface = self.interface();
-        let state = StateLayout::wgsl(self.rotation(), paged);
+        let state = StateLayout::wgsl(self.state_extras(keeps), paged);
         let records: Vec<String> = self.records(keeps).iter().map(|r| r.wgsl(paged)).collect();
         let mut parts: Vec<&str> = vec![&state];
         parts.extend(records.iter().map(String::as_str));

@@ -335,8 +335,8 @@ mod tests {
                 "{}: krijt_advance",
                 v.name
             );
-            // and the ledger's only where the run keeps one
-            assert_eq!(declared("particle_ledger"), keeps.ledger, "{}", v.name);
+            // and the ledger's fields of the state only where the run keeps one
+            assert_eq!(declared("load_ledger_energy"), keeps.ledger, "{}", v.name);
             // the contacts' priors with the ledger or the force jumps, the impulses for
             // the partners with the force jumps: each field of the entries only where kept
             let kept = |name: &str| kind.records(keeps).iter().any(|r| r.place(name).is_some());

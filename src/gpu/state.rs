@@ -64,6 +64,36 @@ impl Buffer {
     }
 }
 
+/// Which runs a field of the state exists in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Only {
+    /// Every run.
+    All,
+    /// Where the scene's particles rotate.
+    Rotation,
+    /// Where the run keeps the energy ledger (`GpuOptions::ledger`).
+    Ledger,
+}
+
+/// What a run's state holds beyond the fields every run has.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Extras {
+    /// The angular fields (the scene's particles rotate).
+    pub rotation: bool,
+    /// The energy ledger's per-particle rows.
+    pub ledger: bool,
+}
+
+impl Extras {
+    fn has(self, only: Only) -> bool {
+        match only {
+            Only::All => true,
+            Only::Rotation => self.rotation,
+            Only::Ledger => self.ledger,
+        }
+    }
+}
+
 /// One per-particle field of the state.
 #[derive(Debug)]
 pub struct StateField {
@@ -73,8 +103,8 @@ pub struct StateField {
     pub buffer: Buffer,
     /// Component type.
     pub scalar: Scalar,
-    /// Only where the scene's particles rotate.
-    pub rotation: bool,
+    /// Which runs have it.
+    pub only: Only,
     /// What the four components hold.
     pub doc: &'static str,
 }
@@ -83,14 +113,14 @@ const fn field(
     name: &'static str,
     buffer: Buffer,
     scalar: Scalar,
-    rotation: bool,
+    only: Only,
     doc: &'static str,
 ) -> StateField {
     StateField {
         name,
         buffer,
         scalar,
-        rotation,
+        only,
         doc,
     }
 }
@@ -102,85 +132,113 @@ pub const FIELDS: &[StateField] = &[
         "cell",
         Buffer::State,
         Scalar::I32,
-        false,
+        Only::All,
         "integer cell (xyz), material (w; with NOT_APPEARED until the particle appears)",
     ),
     field(
         "off",
         Buffer::State,
         Scalar::F32,
-        false,
+        Only::All,
         "offset inside the cell (xyz), radius (w)",
     ),
     field(
         "vel",
         Buffer::Motion,
         Scalar::F32,
-        false,
+        Only::All,
         "velocity (xyz), mass (w)",
     ),
     field(
         "acc",
         Buffer::Motion,
         Scalar::F32,
-        false,
+        Only::All,
         "acceleration (xyz), the last force pass's largest overlap/a12 (w)",
     ),
     field(
         "vpred",
         Buffer::State,
         Scalar::F32,
-        false,
+        Only::All,
         "predicted velocity v + dt/2·a (xyz), mass (w)",
     ),
     field(
         "kahan_v",
         Buffer::Motion,
         Scalar::F32,
-        false,
+        Only::All,
         "the velocity's Kahan compensation (xyz; true = stored − c)",
     ),
     field(
         "kahan_o",
         Buffer::State,
         Scalar::F32,
-        false,
+        Only::All,
         "the offset's compensation (xyz), the radius's rounding residual (w)",
     ),
     field(
         "disp",
         Buffer::Motion,
         Scalar::F32,
-        false,
+        Only::All,
         "displacement since the last rebuild (xyz), the batch's largest overlap/a12 (w)",
     ),
     field(
         "ids",
         Buffer::State,
         Scalar::U32,
-        false,
+        Only::All,
         "persistent id, first list entry, pairs in the list, wall entries after them",
     ),
     field(
         "omega",
         Buffer::Motion,
         Scalar::F32,
-        true,
+        Only::Rotation,
         "angular velocity (xyz), moment of inertia (w)",
     ),
     field(
         "alpha",
         Buffer::Motion,
         Scalar::F32,
-        true,
+        Only::Rotation,
         "angular acceleration torque/I (xyz)",
     ),
     field(
         "wpred",
         Buffer::State,
         Scalar::F32,
-        true,
+        Only::Rotation,
         "predicted angular velocity ω + dt/2·α (xyz)",
+    ),
+    field(
+        "ledger_counts",
+        Buffer::Motion,
+        Scalar::F32,
+        Only::Ledger,
+        "the ledger: pairs overlapping, walls overlapping, pairs and walls engaged without overlap",
+    ),
+    field(
+        "ledger_overlaps",
+        Buffer::Motion,
+        Scalar::F32,
+        Only::Ledger,
+        "the ledger: largest overlap, largest overlap/a12, their sums over pairs and walls",
+    ),
+    field(
+        "ledger_energy",
+        Buffer::Motion,
+        Scalar::F32,
+        Only::Ledger,
+        "the ledger: energy dissipated so far (Kahan sum, compensation), stored now",
+    ),
+    field(
+        "ledger_wall",
+        Buffer::Motion,
+        Scalar::F32,
+        Only::Ledger,
+        "the ledger: work moving walls did so far (Kahan sum, compensation)",
     ),
 ];
 
@@ -210,15 +268,15 @@ pub struct StateLayout {
 }
 
 impl StateLayout {
-    /// The layout for `n` particles in one window; `rotation` adds the angular fields.
-    pub fn new(n: u64, rotation: bool) -> Self {
-        Self::windowed(n, rotation, Windows::one(n))
+    /// The layout for `n` particles in one window, with the fields of `extras`.
+    pub fn new(n: u64, extras: Extras) -> Self {
+        Self::windowed(n, extras, Windows::one(n))
     }
 
     /// The layout for `n` particles blocked into `windows`.
-    pub fn windowed(n: u64, rotation: bool, windows: Windows) -> Self {
+    pub fn windowed(n: u64, extras: Extras, windows: Windows) -> Self {
         Self {
-            fields: fields(rotation).collect(),
+            fields: fields(extras).collect(),
             n,
             windows,
         }
@@ -324,12 +382,28 @@ impl StateLayout {
         out
     }
 
+    /// Field `name`'s `n` vectors written into its buffer's bytes (nothing where the
+    /// layout lacks it or the bytes are short).
+    pub fn repack<T: bytemuck::Pod>(&self, bytes: &mut [u8], name: &str, values: &[T]) {
+        let Some((b, at)) = self.position(name) else {
+            return;
+        };
+        let fields = self.count(b);
+        for (k, v) in values.iter().enumerate().take(self.n as usize) {
+            let e = (self.windows.element(fields, at, k as u64) * FIELD_BYTES) as usize;
+            let v = bytemuck::bytes_of(v);
+            if let Some(x) = bytes.get_mut(e..e + v.len()) {
+                x.copy_from_slice(v);
+            }
+        }
+    }
+
     /// The WGSL of the state: the two bindings and each field's accessors; `paged`: the
     /// state in pages of whole windows (`gpu::pages`), each dispatch binding its window's
     /// page and the other page as `state_x`, from which the loads of `state` read a
     /// particle of a neighbouring window that lies there (`motion` is read and written
     /// for the dispatch's own particles only).
-    pub fn wgsl(rotation: bool, paged: bool) -> String {
+    pub fn wgsl(extras: Extras, paged: bool) -> String {
         let mut w = String::from(
             "// The particle state (`src/gpu/state.rs`, generated): one vec4 per particle and\n\
              // field, field-major within each window (`state_blocked`) of two buffers.\n",
@@ -343,7 +417,7 @@ impl StateLayout {
                 b.name()
             );
         }
-        let layout = Self::new(0, rotation);
+        let layout = Self::new(0, extras);
         if paged {
             let fields = layout.count(Buffer::State);
             let _ = writeln!(
@@ -356,7 +430,7 @@ impl StateLayout {
                  return state_x[at + (win.st_base - win.st_other) * ({fields}u * grid.window.y)];\n}}\n"
             );
         }
-        for field in fields(rotation) {
+        for field in fields(extras) {
             let ty = field.scalar.wgsl();
             let buf = field.buffer.name();
             let f = layout
@@ -387,9 +461,17 @@ impl StateLayout {
 /// The binding of `state_x`, the other page of the state (`StateLayout::wgsl`).
 pub const STATE_X_BINDING: u32 = 23;
 
+/// The energy ledger's fields, in the order of its rows (`shaders/ledger.wgsl`).
+pub fn ledger_fields() -> impl Iterator<Item = &'static str> {
+    FIELDS
+        .iter()
+        .filter(|f| f.only == Only::Ledger)
+        .map(|f| f.name)
+}
+
 /// The fields of a scene's state.
-fn fields(rotation: bool) -> impl Iterator<Item = &'static StateField> {
-    FIELDS.iter().filter(move |f| rotation || !f.rotation)
+fn fields(extras: Extras) -> impl Iterator<Item = &'static StateField> {
+    FIELDS.iter().filter(move |f| extras.has(f.only))
 }
 
 #[cfg(test)]
@@ -398,8 +480,13 @@ mod tests {
 
     #[test]
     fn state_layout_regions_are_aligned_and_disjoint() {
-        for (n, rotation) in [(0, false), (1, false), (17, true), (1000, true)] {
-            let l = StateLayout::new(n, rotation);
+        for (n, rotation, ledger) in [
+            (0, false, false),
+            (1, false, true),
+            (17, true, false),
+            (1000, true, true),
+        ] {
+            let l = StateLayout::new(n, Extras { rotation, ledger });
             for b in Buffer::ALL {
                 let mut last_end = 0;
                 for f in l.in_buffer(b) {
@@ -412,6 +499,7 @@ mod tests {
                 assert!(last_end <= l.bytes(b));
             }
             assert_eq!(l.place("omega").is_some(), rotation);
+            assert_eq!(l.place("ledger_energy").is_some(), ledger);
             // the grid sort reads the cells at the start of `state`
             assert_eq!(l.place("cell"), Some((Buffer::State, 0)));
         }
@@ -419,11 +507,16 @@ mod tests {
 
     #[test]
     fn state_pack_and_unpack_round_trip() {
-        let l = StateLayout::new(3, false);
+        let l = StateLayout::new(3, Extras::default());
         let ids = vec![[1u32, 2, 3, 4], [5, 6, 7, 8], [9, 10, 11, 12]];
         let bytes = l.pack(Buffer::State, &|name| (name == "ids").then(|| ids.clone()));
         assert_eq!(l.unpack::<[u32; 4]>(&bytes, "ids"), ids);
         assert_eq!(l.unpack::<[u32; 4]>(&bytes, "cell"), vec![[0; 4]; 3]);
         assert!(l.unpack::<[u32; 4]>(&bytes, "omega").is_empty());
+        let mut bytes = bytes;
+        let cells = vec![[7u32, 8, 9, 10]; 3];
+        l.repack(&mut bytes, "cell", &cells);
+        assert_eq!(l.unpack::<[u32; 4]>(&bytes, "cell"), cells);
+        assert_eq!(l.unpack::<[u32; 4]>(&bytes, "ids"), ids);
     }
 }

@@ -101,7 +101,7 @@ impl StateSet {
         kind: &Composition,
         keeps: Keeps,
     ) -> Self {
-        let layout = StateLayout::windowed(n, kind.rotation(), windows);
+        let layout = StateLayout::windowed(n, kind.state_extras(keeps), windows);
         let [entry_layout, _] = kind.records(keeps);
         let blocks = Self::blocks_of(&layout, (&entry_layout, entries));
         let mut b = |b: Buffer| {
@@ -402,9 +402,6 @@ pub(super) struct StepBuffers {
     /// every step's (written by the host at each batch's start; zeroed by a halt).
     pub(super) args: wgpu::Buffer,
     pub(super) full_args: wgpu::Buffer,
-    /// Per particle (by persistent id): contact counts, overlaps, dissipated and stored
-    /// energy (`particle_ledger` in `shaders/ledger.wgsl`); only with the ledger.
-    pub(super) particle_ledger: Option<wgpu::Buffer>,
     /// The new lists' and the `lower` lists' lengths and first entries (`rows` in
     /// `shaders/step.wgsl`: four regions a window, blocked like the state).
     pub(super) rows: wgpu::Buffer,
@@ -415,7 +412,7 @@ pub(super) struct StepBuffers {
 impl StepBuffers {
     /// Every buffer under the name the kernels bind it by.
     pub(super) fn named(&self) -> Vec<(String, &wgpu::Buffer)> {
-        let mut list: Vec<(&str, &wgpu::Buffer)> = vec![
+        [
             ("step", &self.step),
             ("pairs", &self.pairs),
             ("walls", &self.walls),
@@ -426,13 +423,10 @@ impl StepBuffers {
             ("full_args", &self.full_args),
             ("rows", &self.rows),
             ("servo_lanes", &self.servo_lanes),
-        ];
-        list.extend(
-            self.particle_ledger
-                .as_ref()
-                .map(|l| ("particle_ledger", l)),
-        );
-        list.into_iter().map(|(n, b)| (n.to_string(), b)).collect()
+        ]
+        .into_iter()
+        .map(|(n, b)| (n.to_string(), b))
+        .collect()
     }
 }
 

@@ -69,12 +69,13 @@ fn list_scans(
     Ok(scans)
 }
 
-/// Quiet batches' state (`gpu::quiet`): copies of the state set and the ledger, and of the
-/// lists' history (`quiet.lists`: `quiet_copies`), with the buffers' names and sizes.
+/// Quiet batches' state (`gpu::quiet`): copies of the state set (the ledger's rows with
+/// it), and of the lists' history (`quiet.lists`: `quiet_copies`), with the buffers'
+/// names and sizes.
 fn quiet_batches(
     device: &wgpu::Device,
     mode: QuietBatches,
-    (state, ledger): (&StateSet, Option<&wgpu::Buffer>),
+    state: &StateSet,
     (new_lists, entries): (&NewLists, u64),
     skin: f64,
 ) -> (Quiet, Vec<(String, u64)>) {
@@ -84,7 +85,6 @@ fn quiet_batches(
     let own = [
         ("state", Some(&state.state[0])),
         ("motion", Some(&state.motion[0])),
-        ("particle_ledger", ledger),
     ];
     for (name, b) in own {
         if let Some(b) = b {
@@ -463,7 +463,7 @@ impl GpuEngine {
             GridSort::with_cell_widths(&ctx, n as u32, dims, [h.x as f32, h.y as f32, h.z as f32])?;
         // the windows (`gpu::window`): asked for, or one where every array fits a binding
         let n_walls = scene.walls.len() as u64;
-        let layout0 = StateLayout::new(0, kind.rotation());
+        let layout0 = StateLayout::new(0, kind.state_extras(keeps));
         let state_fields = layout0.count(Buffer::State);
         let windows = match options.window_particles {
             Some(len) => Windows::of(n as u64, len)?,
@@ -505,7 +505,7 @@ impl GpuEngine {
             (ctx.max_storage_binding(), largest),
         )?;
         let state_pages = StateSet::pages_of(
-            &StateLayout::windowed(n as u64, kind.rotation(), windows),
+            &StateLayout::windowed(n as u64, kind.state_extras(keeps), windows),
             &windows,
             (
                 ctx.max_storage_binding(),
@@ -522,7 +522,6 @@ impl GpuEngine {
         );
         let new_lists = NewLists::new(&kind, keeps);
         let dt32 = r.dt as f32;
-        let particle_ledger = ledger.then(|| alloc.buffer("particle_ledger", 64 * n as u64));
         // the per-particle buffers fit before the initial state is written into them
         alloc.check(n)?;
         let initial = InitialState::new(scene, &r, (origin, h, dims), dt32);
@@ -761,7 +760,6 @@ impl GpuEngine {
             control,
             args,
             full_args,
-            particle_ledger,
             rows,
             servo_lanes,
         };
@@ -795,15 +793,8 @@ impl GpuEngine {
         // (nor where the lists' entries or the state are in pages: the copies would be one
         // buffer)
         let paged = pages.paged() || state_pages.paged();
-        let quiet = (mode != QuietBatches::Off && !moving_walls && !pouring && !paged).then(|| {
-            quiet_batches(
-                device,
-                mode,
-                (&state, b.particle_ledger.as_ref()),
-                (&new_lists, entries),
-                skin,
-            )
-        });
+        let quiet = (mode != QuietBatches::Off && !moving_walls && !pouring && !paged)
+            .then(|| quiet_batches(device, mode, &state, (&new_lists, entries), skin));
         let mut buffers = buffers;
         let quiet = quiet.map(|(q, list)| {
             buffers.extend(list);

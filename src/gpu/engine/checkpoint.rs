@@ -26,6 +26,8 @@ pub struct GpuSavedState {
     /// The composed contact law's layout (`Composition::layout`): the history words in the
     /// buffers mean what it says.
     pub(crate) layout: String,
+    /// Whether the run kept the energy ledger (its rows are fields of the state).
+    pub(crate) ledger: bool,
 }
 
 impl GpuSavedState {
@@ -33,9 +35,12 @@ impl GpuSavedState {
     /// ([`GpuOptions::ledger`]): it then holds the per-particle ledger, and restores only
     /// into an engine that keeps it too (and the reverse).
     pub fn has_ledger(&self) -> bool {
-        self.buffers
-            .iter()
-            .any(|(name, _)| name == "particle_ledger")
+        // (before the ledger's rows joined the particle state they were a buffer of their own)
+        self.ledger
+            || self
+                .buffers
+                .iter()
+                .any(|(name, _)| name == "particle_ledger")
     }
 }
 
@@ -58,9 +63,6 @@ impl GpuEngine {
         list.push(("control".into(), vec![&self.b.control]));
         list.push(("walls".into(), vec![&self.b.walls]));
         list.push(("wall_ref".into(), vec![&self.b.wall_ref]));
-        if let Some(l) = &self.b.particle_ledger {
-            list.push(("particle_ledger".into(), vec![l]));
-        }
         list
     }
 
@@ -114,6 +116,7 @@ impl GpuEngine {
             active: self.active.clone(),
             inserted: self.inserted,
             layout: self.saved_layout(),
+            ledger: self.keeps.ledger,
         })
     }
 
@@ -140,6 +143,15 @@ impl GpuEngine {
     /// Refused when it does not fit this engine: taken with the other ledger option (the
     /// message names `--no-ledger`), or naming the buffer (another scene or step variant).
     pub fn restore_state(&mut self, saved: GpuSavedState) -> Result<(), PowderError> {
+        if saved
+            .buffers
+            .iter()
+            .any(|(name, _)| name == "particle_ledger")
+        {
+            return Err(PowderError::Run(
+                "the saved GPU state was written by a powder version that kept the energy ledger in a buffer of its own (`particle_ledger`; its rows are fields of the particle state now): rerun the scene from the start with this version".into(),
+            ));
+        }
         // the ledger cannot be made up for steps already taken, nor dropped silently
         match (saved.has_ledger(), self.has_ledger()) {
             (true, false) => {

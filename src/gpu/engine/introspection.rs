@@ -76,7 +76,7 @@ impl GpuEngine {
 
     /// Whether the run keeps the energy ledger and contact statistics ([`GpuOptions`]).
     pub fn has_ledger(&self) -> bool {
-        self.b.particle_ledger.is_some()
+        self.keeps.ledger
     }
 
     /// Whether the run places the impulses of force jumps inside the step (the scene's

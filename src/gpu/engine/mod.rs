@@ -274,4 +274,30 @@ mod tests {
         assert_eq!(wgsl_u32_const(&module, "SKIN_REBUILDS"), 14);
         assert_eq!(wgsl_u32_const(&module, "WALL_ENTRY"), WALL_ENTRY);
     }
+
+    /// A state saved before the ledger's rows joined the particle state (a
+    /// `particle_ledger` buffer of its own) is refused by name, before anything changes.
+    #[test]
+    fn gpu_a_state_with_the_old_ledger_buffer_is_refused() {
+        let ctx = match GpuContext::new() {
+            Ok(ctx) => ctx,
+            Err(e) if std::env::var_os("CI").is_none() => return eprintln!("skipping: {e}"),
+            Err(e) => panic!("CI needs a GPU adapter (lavapipe): {e}"),
+        };
+        let scene =
+            crate::measure::bench::packing(crate::measure::bench::Case::Hysteretic, 64, 1.0, 1)
+                .unwrap();
+        let mut engine = GpuEngine::new(&scene, ctx).unwrap();
+        let mut saved = engine.save_state().unwrap();
+        assert!(saved.has_ledger());
+        saved.ledger = false;
+        saved
+            .buffers
+            .push(("particle_ledger".into(), vec![0; 64 * 64]));
+        assert!(saved.has_ledger());
+        let err = engine.restore_state(saved).unwrap_err().to_string();
+        assert!(err.contains("`particle_ledger`"), "{err}");
+        let ok = engine.save_state().unwrap();
+        engine.restore_state(ok).unwrap();
+    }
 }

@@ -69,17 +69,25 @@ impl GpuEngine {
         self.dropped
     }
 
-    /// The per-particle ledger rows (4 × vec4 per persistent id), or an error naming why
-    /// there are none.
+    /// The per-particle ledger rows (4 × vec4 per persistent id: the state's
+    /// `gpu::state::ledger_fields`), or an error naming why there are none.
     pub(super) fn read_particle_ledger(&self) -> Result<Vec<[f32; 4]>, PowderError> {
-        let Some(buf) = &self.b.particle_ledger else {
+        if !self.keeps.ledger {
             return Err(PowderError::Run(
                 "this GPU run keeps no energy ledger (GpuOptions { ledger: false })".into(),
             ));
-        };
-        let encoder = self.ctx.device.create_command_encoder(&Default::default());
-        let out = submit_and_read(&self.ctx, encoder, &[(buf, 64 * self.n as u64)])?;
-        Ok(bytemuck::pod_collect_to_vec(&out[0]))
+        }
+        let (state, motion) = self.read_state()?;
+        let l = &self.state.layout;
+        let ids: Vec<[u32; 4]> = l.unpack(&state, "ids");
+        let mut rows = vec![[0.0f32; 4]; 4 * self.n as usize];
+        for (f, name) in crate::gpu::state::ledger_fields().enumerate() {
+            let values: Vec<[f32; 4]> = l.unpack(&motion, name);
+            for (k, v) in values.into_iter().enumerate() {
+                rows[4 * ids[k][0] as usize + f] = v;
+            }
+        }
+        Ok(rows)
     }
 
     /// The energy ledger for a read-back state (kinetic and gravitational from it; stored

@@ -75,15 +75,16 @@ impl GpuEngine {
                 None => break self.apply_monitor(&report.monitor)?,
             }
         }
-        if let Some(buf) = &self.b.particle_ledger {
-            let mut rows = self.read_particle_ledger()?;
-            for p in rows.chunks_mut(4) {
-                p[2][0] = 0.0;
-                p[2][1] = 0.0;
+        if self.keeps.ledger {
+            let (_, mut motion) = self.read_state()?;
+            let l = &self.state.layout;
+            let mut energy: Vec<[f32; 4]> = l.unpack(&motion, "ledger_energy");
+            for e in &mut energy {
+                e[0] = 0.0;
+                e[1] = 0.0;
             }
-            self.ctx
-                .queue
-                .write_buffer(buf, 0, bytemuck::cast_slice(&rows));
+            l.repack(&mut motion, "ledger_energy", &energy);
+            write_pages(&self.ctx.queue, &self.state.motion, &motion);
         }
         self.set_jumps(self.keeps.jumps);
         Ok(None)
