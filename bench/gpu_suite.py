@@ -74,7 +74,7 @@ GL_PACKAGES = ["libvulkan1", "libegl1", "libglvnd0", "libopengl0", "libgl1", "li
 NVIDIA_ICD = "/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json"
 NVIDIA_EGL = "/usr/local/nvidia/share/glvnd/egl_vendor.d/10_nvidia.json"
 PACKING_SCENE = os.path.join(ROOT, "examples", "packing.toml")
-SUITE_VERSION = 2
+SUITE_VERSION = 3
 
 # phase deadlines as fractions of the budget
 PHASES = {"hysteretic": 0.32, "jkr": 0.64, "packing": 0.86, "ledger": 0.97}
@@ -430,7 +430,7 @@ class Suite:
 
     # -- powder bench, one size per process ------------------------------------------------
 
-    def bench_one(self, case, n, steps, warmup, repeats, ledger, phase, quiet=None):
+    def bench_one(self, case, n, steps, warmup, repeats, ledger, phase, quiet=None, chain=None):
         with tempfile.TemporaryDirectory() as tmp:
             out = os.path.join(tmp, "bench.json")
             cmd = [
@@ -442,12 +442,15 @@ class Suite:
                 cmd.append("--ledger")
             if quiet:
                 cmd += ["--quiet-batches", quiet]
+            if chain:
+                cmd += ["--rebuild-chain", chain]
             rc, stdout, stderr, wall = self.runner.run(cmd, self.timeout(phase))
             row = {
                 "case": case,
                 "particles": n,
 "ledger": ledger,
                 "quiet_batches_mode": quiet or "auto",
+                "rebuild_chain_mode": chain or "on-demand",
                 "command": "powder " + " ".join(c if c != out else "FILE" for c in cmd),
                 "process_seconds": round(wall, 2),
             }
@@ -612,11 +615,14 @@ class Suite:
         """The hysteretic case at the largest size up to the ledger size that ran, again with
         quiet batches forced (`--quiet-batches always`; `auto` means off on a GPU): what
         skipping the per-step rebuild decision and the empty rebuild dispatches is worth
-        there, against the memory their copies cost."""
+        there, against the memory their copies cost; and again with the rebuild's passes
+        recorded in every step (`--rebuild-chain every-step`, the default before
+        2026-11-27): what recording them on demand saves."""
         ran = sorted(
             (r for r in self.report["bench"]
              if r["case"] == "hysteretic" and not r["ledger"] and r["status"] == "ran"
              and r.get("quiet_batches_mode") == "auto"
+             and r.get("rebuild_chain_mode", "on-demand") == "on-demand"
              and r["particles"] <= self.cfg["ledger_size"]),
             key=lambda r: -r["particles"],
         )
@@ -631,6 +637,13 @@ class Suite:
         warmup = max(8, min(64, steps // 4))
         log(f"  hysteretic N = {n} with quiet batches forced: {steps} steps")
         row, _ = self.bench_one("hysteretic", n, steps, warmup, 1, False, "ledger", quiet="always")
+        self.report["bench"].append(row)
+        self.save()
+        if 1.5 * base["process_seconds"] / max(base.get("repeats", 1), 1) > self.left("ledger"):
+            self.report["notes"].append("rebuild chain in every step: not run, no time left")
+            return
+        log(f"  hysteretic N = {n} with the rebuild's passes in every step: {steps} steps")
+        row, _ = self.bench_one("hysteretic", n, steps, warmup, 1, False, "ledger", chain="every-step")
         self.report["bench"].append(row)
         self.save()
 
@@ -878,7 +891,7 @@ class Suite:
         self.run_packing()
         log("with the energy ledger:")
         self.run_ledger()
-        log("with quiet batches forced:")
+        log("with quiet batches forced, and with the rebuild's passes in every step:")
         self.run_quiet()
         if self.report.get("machine") is None:
             self.report["machine"] = machine_info()
@@ -905,6 +918,7 @@ class Suite:
         for r in rows:
             t = r.get("traffic") or {}
             case = r["case"] + ("+quiet" if r.get("quiet_batches_mode") == "always" else "")
+            case += "+every" if r.get("rebuild_chain_mode") == "every-step" else ""
             log(f"{case:<11} {('yes' if r.get('ledger') else 'no'):<6} {r['particles']:>9} "
                 f"{str(r.get('status')):<8} {f(r.get('particle_steps_per_second'), '.3e'):>10} "
                 f"{f(r.get('seconds_per_step'), '.2e'):>9} {f(r.get('gpu_bytes_per_particle'), '.0f'):>8} "

@@ -507,19 +507,11 @@ fn drift_particle(i: u32, vel: vec4<f32>, acc: vec3<f32>, rot: RotState, pending
     }
 }
 
-// One invocation, after kick_drift: rebuild unless every particle moved at most half the
-// skin since the last rebuild (then no pair can have closed by more than the skin, so
-// every pair within r_i + r_j + reach is still in the lists built with
-// r_i + r_j + reach + skin). Writes the flag and the indirect arguments of the grid sort
-// and of the rebuild's per-particle passes (zero workgroups without a rebuild), and starts
-// the next maximum afresh. Moving walls count too (their move since the last rebuild).
-@compute @workgroup_size(1)
-fn decide() {
-    // a halted batch runs nothing more (`commit`)
-    if (atomicLoad(&control[7]) != 0u) {
-        return;
-    }
-    atomicAdd(&control[10], 1u);
+// Whether the lists must be rebuilt before this step's forces: unless every particle moved
+// at most half the skin since the last rebuild (then no pair can have closed by more than
+// the skin, so every pair within r_i + r_j + reach is still in the lists built with
+// r_i + r_j + reach + skin). Moving walls count too (their move since the last rebuild).
+fn rebuild_due() -> bool {
     var rebuild = atomicLoad(&control[SKIN_MOVED]) != 0u;
     // A moving wall that has moved more than skin/2 along its normal since the last rebuild
     // invalidates the particles' wall entries as a particle's move does.
@@ -532,6 +524,38 @@ fn decide() {
             }
         }
     }
+    return rebuild;
+}
+
+// Halts the batch (`why`: HALT_GROW or HALT_REBUILD in monitor[7]): every indirect argument
+// zeroed, so every later pass of the batch launches nothing; the host finishes it
+// (`GpuEngine::run_steps`). True where this call halted it.
+fn halt(why: u32) -> bool {
+    // (single-invocation kernels, one dispatch after another: no race)
+    if (atomicLoad(&control[7]) != 0u) {
+        return false;
+    }
+    atomicStore(&control[7], why);
+    for (var i = 0u; i < arrayLength(&args); i++) {
+        args[i] = 0u;
+    }
+    return true;
+}
+
+const HALT_GROW: u32 = 1u;
+const HALT_REBUILD: u32 = 2u;
+
+// One invocation, after kick_drift: whether to rebuild (`rebuild_due`). Writes the flag and
+// the indirect arguments of the grid sort and of the rebuild's per-particle passes (zero
+// workgroups without a rebuild), and starts the next maximum afresh.
+@compute @workgroup_size(1)
+fn decide() {
+    // a halted batch runs nothing more (`commit`)
+    if (atomicLoad(&control[7]) != 0u) {
+        return;
+    }
+    atomicAdd(&control[10], 1u);
+    let rebuild = rebuild_due();
     if (rebuild) {
         for (var w = 0u; w < wall_count(); w++) {
             wall_ref[w] = WallRef(walls[w].cell, walls[w].offset);
@@ -548,6 +572,23 @@ fn decide() {
     for (var i = 0u; i < arrayLength(&full_args); i++) {
         args[i] = select(0u, full_args[i], rebuild);
     }
+}
+
+// `decide` of a step recorded without the rebuild's passes (`RebuildChain::OnDemand`):
+// where a rebuild is due, halt the batch before this step's forces and leave the skin flag
+// raised; the host runs this step again from its rebuild, recorded in full.
+@compute @workgroup_size(1)
+fn decide_lean() {
+    if (atomicLoad(&control[7]) != 0u) {
+        return;
+    }
+    atomicAdd(&control[10], 1u);
+    if (rebuild_due()) {
+        halt(HALT_REBUILD);
+        return;
+    }
+    atomicStore(&control[SKIN_REBUILD], 0u);
+    atomicAdd(&control[9], 1u);
 }
 
 // On a rebuild, before the state is re-sorted: the cell and offset mirrors in the new
@@ -727,12 +768,9 @@ fn commit() {
     let need = max(rows[row_at(ROWS_B_ROW, last)] + b_len(last), rows[row_at(ROWS_LOWER_ROW, last)] + lower_len(last));
     if (need > step.list_capacity || atomicLoad(&control[1]) != 0u) {
         atomicMax(&control[11], need);
-        if (atomicExchange(&control[7], 1u) == 0u) {
+        if (halt(HALT_GROW)) {
             atomicStore(&control[SKIN_MOVED], 1u);
             atomicSub(&control[SKIN_REBUILDS], 1u);
-        }
-        for (var i = 0u; i < arrayLength(&args); i++) {
-            args[i] = 0u;
         }
     }
 }

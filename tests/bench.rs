@@ -272,6 +272,10 @@ fn bench_profile_reports_every_pass() {
             "hysteretic",
             "--quiet-batches",
             "off",
+            // (every pass in every step, so the profile has each: on demand the rebuild's
+            // run only where one is due)
+            "--rebuild-chain",
+            "every-step",
             "--profile",
             "--json",
             json.to_str().unwrap(),
@@ -287,6 +291,7 @@ fn bench_profile_reports_every_pass() {
         if window.is_some() {
             assert!(row["note"].as_str().unwrap().contains("4 windows"), "{row}");
         }
+        assert_eq!(row["rebuild_halts"], 0, "{row}");
         let profile = &row["passes"];
         assert_eq!(profile["steps"], 4);
         let passes = profile["passes"].as_array().unwrap();

@@ -734,6 +734,11 @@ fn info_scene_lists_kernels_buffers_and_leaves_out_rotation() {
     let most = plain["storage_bindings"][0][1].as_u64().unwrap();
     assert!((1..=16).contains(&most), "{most}");
     assert!(plain["bytes_per_particle"].as_f64().unwrap() > 0.0);
+    // a step records the drift (with the last collect), `decide_lean` and the forces; one
+    // that rebuilds the lists the sort, the search, the scans, the re-sort, ... too
+    let dispatches = &plain["dispatches_per_step"];
+    assert_eq!(dispatches[0], 3, "{dispatches}");
+    assert!(dispatches[1].as_u64().unwrap() > 20, "{dispatches}");
     let kernels = plain["kernels"].as_array().unwrap();
     assert!(kernels.iter().any(|k| k == "force"));
     // the kernels built for the scene: the moving-wall kernel only where a wall moves

@@ -49,6 +49,11 @@ pub(crate) struct BenchArgs {
     /// GPU quiet batches: batches without the per-step rebuild check where none is expected.
     #[arg(long = "quiet-batches", value_enum, default_value = "auto")]
     quiet_batches: QuietChoice,
+    /// GPU: how the steps hold a neighbour-list rebuild (`on-demand`: a step records only
+    /// the decision and halts its batch where one is due; `every-step`: every step records
+    /// the rebuild's passes, empty where none is due). Bitwise the same results.
+    #[arg(long = "rebuild-chain", value_enum, default_value = "on-demand")]
+    rebuild_chain: ChainChoice,
     /// GPU: the software adapter's paths (texture mirrors of the state, quiet batches under
     /// `auto`): `on`, `off`, or `auto` by the adapter kind (results are bitwise the same).
     #[arg(long = "software-paths", value_enum, default_value = "auto")]
@@ -87,6 +92,7 @@ pub(crate) fn bench_cmd(a: &BenchArgs) -> Result<(), PowderError> {
         seed: a.seed,
         ledger: a.ledger,
         quiet: a.quiet_batches.into(),
+        rebuild_chain: a.rebuild_chain.into(),
         software_paths: a.software_paths.choice(),
         window_particles: a.window_particles,
         profile: a.profile,

@@ -76,6 +76,25 @@ impl From<QuietChoice> for powder::gpu::QuietBatches {
     }
 }
 
+/// `--rebuild-chain`: how the GPU's steps hold a neighbour-list rebuild
+/// (`powder::gpu::RebuildChain`; results bitwise the same).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub(crate) enum ChainChoice {
+    /// Every step records the rebuild's passes (dispatched empty where none is due).
+    EveryStep,
+    /// Steps record only the decision, which halts the batch where a rebuild is due.
+    OnDemand,
+}
+
+impl From<ChainChoice> for powder::gpu::RebuildChain {
+    fn from(c: ChainChoice) -> Self {
+        match c {
+            ChainChoice::EveryStep => Self::EveryStep,
+            ChainChoice::OnDemand => Self::OnDemand,
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub(crate) enum Backend {
     /// A hardware GPU if there is one, else the CPU engine on every core (the software

@@ -51,6 +51,9 @@ pub(crate) struct SceneInfo {
     entry_pages: u64,
     /// Buffers each of the particle state's two is in (1 without pages).
     state_pages: u64,
+    /// Compute dispatches a step records, without and with a rebuild's passes
+    /// (`GpuEngine::dispatches_per_step`).
+    dispatches_per_step: [usize; 2],
     buffers: Vec<(String, u64)>,
     total_bytes: u64,
     bytes_per_particle: f64,
@@ -89,6 +92,7 @@ pub(crate) fn scene_info(
     let windows = (engine.windows().len, engine.windows().count);
     let entry_pages = engine.entry_pages().count;
     let state_pages = engine.state_pages().count;
+    let dispatches_per_step = engine.dispatches_per_step();
     let state_fields = engine
         .state_fields()
         .iter()
@@ -121,6 +125,7 @@ pub(crate) fn scene_info(
         windows,
         entry_pages,
         state_pages,
+        dispatches_per_step,
         buffers,
         total_bytes: total,
         bytes_per_particle: total as f64 / particles.max(1) as f64,
@@ -178,6 +183,10 @@ pub(crate) fn info_cmd(a: &InfoArgs) -> Result<(), PowderError> {
                 info.entry_pages
             );
         }
+        let [plain, full] = info.dispatches_per_step;
+        println!(
+            "dispatches       {plain} a step, {full} in a step that rebuilds the lists (every window's)"
+        );
         if info.state_pages > 1 {
             println!(
                 "state pages      {} each of `state` and `motion` (beyond the largest buffer)",

@@ -258,16 +258,18 @@ impl ExclusiveScan {
 
     /// Records the scan's dispatches into `pass`, dispatch `i` reading its workgroup
     /// counts from `args` at byte `offset + 12·i` ([`Self::indirect_args`], or zeros to
-    /// skip the scan).
+    /// skip the scan). Returns the dispatches recorded.
     pub fn record_indirect(
         &self,
         pass: &mut wgpu::ComputePass<'_>,
         args: &wgpu::Buffer,
         offset: u64,
-    ) {
-        for (i, (kernel, bind_group, _)) in self.plan().into_iter().enumerate() {
+    ) -> usize {
+        let plan = self.plan();
+        for (i, (kernel, bind_group, _)) in plan.iter().enumerate() {
             kernel.dispatch_indirect(pass, bind_group, args, offset + 12 * i as u64);
         }
+        plan.len()
     }
 
     /// (kernel, global name and bytes of what it binds) of the scan's dispatches in
@@ -725,18 +727,19 @@ impl GridSort {
     /// `i` reads its `[x, y, z]` from `args` at byte `offset + 12·i` (a buffer with
     /// `INDIRECT` usage holding [`Self::indirect_args`] to sort, or zeros to skip the
     /// sort and keep the previous result). `keys`: [`Self::keys_bind_group`] of the cells,
-    /// or one [`Self::keys_bind_group_part`] a window.
+    /// or one [`Self::keys_bind_group_part`] a window. Returns the dispatches recorded.
     pub fn encode_indirect(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         keys: &[wgpu::BindGroup],
         args: &wgpu::Buffer,
         offset: u64,
-    ) {
+    ) -> usize {
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("grid sort (indirect)"),
             timestamp_writes: None,
         });
+        let mut n = 0;
         for (i, (kernel, bind_group, _)) in self.plan().into_iter().enumerate() {
             pass.set_pipeline(&kernel.pipeline);
             // (`cell_keys`: once per window, each with the same workgroup counts)
@@ -744,8 +747,10 @@ impl GridSort {
             for group in groups {
                 pass.set_bind_group(0, group, &[]);
                 pass.dispatch_workgroups_indirect(args, offset + 12 * i as u64);
+                n += 1;
             }
         }
+        n
     }
 
     /// Uploads `cells`, sorts, and reads the result back (one submission): for tests

@@ -60,7 +60,7 @@ pub mod traffic;
 pub mod window;
 
 pub use context::{AdapterPreference, AdapterSummary, GpuContext, LimitsSummary};
-pub use engine::{GpuEngine, GpuOptions, GpuSavedState, GpuState};
+pub use engine::{GpuEngine, GpuOptions, GpuSavedState, GpuState, RebuildChain};
 pub use grid::{ExclusiveScan, GridSort, SortResult};
 pub use layout::{decode, encode, CellCoord, CellOffset, GridParams, PackedPosition};
 pub use quiet::QuietBatches;

@@ -326,17 +326,19 @@ impl Permutation {
 
     /// Records the re-sort's dispatches, each with workgroup counts from `args` at
     /// `offset` (one invocation per particle in workgroups of `WG_SIZE`; zeros: none).
+    /// Returns the dispatches recorded.
     pub fn encode_indirect(
         &self,
         pass: &mut wgpu::ComputePass<'_>,
         args: &wgpu::Buffer,
         offset: u64,
-    ) {
+    ) -> usize {
         for m in &self.moves {
             for group in &m.groups {
                 self.kernel.dispatch_indirect(pass, group, args, offset);
             }
         }
+        self.moves.iter().map(|m| m.groups.len()).sum()
     }
 
     /// Records the re-sort's dispatches for `n` particles a window (`Kernel::dispatch`).

@@ -292,6 +292,7 @@ mod tests {
             for name in [
                 "kick_drift",
                 "decide",
+                "decide_lean",
                 "gather",
                 "count_neighbours",
                 "neighbours",

@@ -390,6 +390,8 @@ pub struct BenchOptions {
     pub profile: bool,
     /// Quiet batches of the GPU engine (`GpuOptions::quiet`).
     pub quiet: crate::gpu::QuietBatches,
+    /// How the GPU's steps hold a rebuild (`GpuOptions::rebuild_chain`).
+    pub rebuild_chain: crate::gpu::RebuildChain,
     /// The software adapter's paths (`GpuOptions::software_paths`; `None`: by the adapter).
     pub software_paths: Option<bool>,
     /// Particles a GPU window holds (`GpuOptions::window_particles`; `None`: chosen).
@@ -416,6 +418,7 @@ impl Default for BenchOptions {
             ledger: false,
             profile: false,
             quiet: crate::gpu::QuietBatches::Auto,
+            rebuild_chain: crate::gpu::RebuildChain::OnDemand,
             software_paths: None,
             window_particles: None,
             repeats: 1,
@@ -534,6 +537,12 @@ pub struct BenchRow {
     pub rebuilds: Option<u64>,
     /// GPU: quiet batches kept and rolled back during the timed steps (`gpu::quiet`).
     pub quiet_batches: Option<(u64, u64)>,
+    /// GPU: batches halted for a rebuild due in a step recorded without one during the
+    /// timed steps (`RebuildChain::OnDemand`).
+    pub rebuild_halts: Option<u64>,
+    /// GPU: compute dispatches a step records, without and with a rebuild's passes
+    /// (`GpuEngine::dispatches_per_step`).
+    pub dispatches_per_step: Option<[usize; 2]>,
     /// The particle-steps per second of every run (`--repeats`); the row is the fastest.
     pub runs: Vec<f64>,
     /// Particle–particle contacts per particle at the end (shows the packing is dense).
@@ -569,6 +578,8 @@ impl BenchRow {
             windows: None,
             rebuilds: None,
             quiet_batches: None,
+            rebuild_halts: None,
+            dispatches_per_step: None,
             runs: Vec::new(),
             contacts_per_particle: None,
             passes: None,
@@ -637,6 +648,8 @@ fn run_cpu(
         windows: None,
         rebuilds: Some(rebuilds),
         quiet_batches: None,
+        rebuild_halts: None,
+        dispatches_per_step: None,
         runs: Vec::new(),
         contacts_per_particle: Some(z),
         passes: None,
@@ -658,6 +671,7 @@ fn run_gpu(
         crate::gpu::GpuOptions {
             ledger: opts.ledger,
             quiet: opts.quiet,
+            rebuild_chain: opts.rebuild_chain,
             software_paths: opts.software_paths,
             window_particles: opts.window_particles,
             ..Default::default()
@@ -667,12 +681,14 @@ fn run_gpu(
     engine.run_steps(opts.warmup)?;
     let before = engine.rebuilds()?;
     let quiet_before = engine.quiet_batches();
+    let halts_before = engine.rebuild_halts();
     let t1 = Instant::now();
     // run_steps waits for the device after every batch, so the clock sees the work done
     engine.run_steps(opts.steps)?;
     let wall = t1.elapsed().as_secs_f64();
     let rebuilds = engine.rebuilds()? - before;
     let quiet = engine.quiet_batches();
+    let halts = engine.rebuild_halts() - halts_before;
     let quiet = (quiet.0 - quiet_before.0, quiet.1 - quiet_before.1);
     let state = engine.state()?;
     let z = coordination(scene, &state.positions, engine.radii());
@@ -731,6 +747,8 @@ fn run_gpu(
         windows: Some((windows.len, windows.count)),
         rebuilds: Some(rebuilds),
         quiet_batches: Some(quiet),
+        rebuild_halts: Some(halts),
+        dispatches_per_step: Some(engine.dispatches_per_step()),
         runs: Vec::new(),
         contacts_per_particle: Some(z),
         traffic: Some(traffic),

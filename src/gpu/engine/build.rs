@@ -178,6 +178,7 @@ pub(super) fn bind_all(
     Ok(Bound {
         kick_drift: pass("kick_drift")?,
         decide: pass("decide")?,
+        decide_lean: pass("decide_lean")?,
         gather: pass("gather")?,
         count_neighbours: pass("count_neighbours")?,
         neighbours: pass("neighbours")?,
@@ -618,6 +619,7 @@ impl GpuEngine {
         let mut wanted = vec![
             "kick_drift",
             "decide",
+            "decide_lean",
             "gather",
             "count_neighbours",
             "neighbours",
@@ -829,6 +831,8 @@ impl GpuEngine {
             resume: None,
             clock: None,
             growths: 0,
+            rebuild_chain: options.rebuild_chain,
+            lean_halts: 0,
             program,
             bound,
             max_per_dim,

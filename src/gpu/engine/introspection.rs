@@ -41,6 +41,12 @@ impl GpuEngine {
         self.state.pages
     }
 
+    /// Batches halted for a rebuild due in a step recorded without one
+    /// ([`RebuildChain::OnDemand`]).
+    pub fn rebuild_halts(&self) -> u64 {
+        self.lean_halts
+    }
+
     /// The pages the particle state's two buffers are in (`gpu::pages`; one where they
     /// fit one buffer each).
     pub fn state_pages(&self) -> Pages {
@@ -101,6 +107,7 @@ impl GpuEngine {
             Some(&b.collect_kick_drift),
             b.wall_move.as_ref(),
             Some(&b.decide),
+            Some(&b.decide_lean),
             Some(&b.gather),
             Some(&b.count_neighbours),
             Some(&b.neighbours),
@@ -175,8 +182,9 @@ impl GpuEngine {
 
     /// What each pass of a step binds, for the estimate of the bytes a step moves
     /// (`gpu::traffic`, where the counting is explained): the passes of every step in
-    /// recording order (`collect_kick_drift`, the wall kernels where walls move, `decide`,
-    /// the mirror copies, `force`), then those of a rebuild (the cell sort's as `grid.*`,
+    /// recording order (`collect_kick_drift`, the wall kernels where walls move, `decide`
+    /// or `decide_lean` ([`RebuildChain`]), the mirror copies, `force`), then those of a
+    /// rebuild (`decide` where the steps record `decide_lean`, the cell sort's as `grid.*`,
     /// `gather`, `count_neighbours`, the lists' scans as `lists.*`, `neighbours`, `commit`,
     /// the re-sort's `permute *`, `remap`, `copy_back_history`).
     pub fn traffic(&self) -> Vec<PassTraffic> {
@@ -184,7 +192,11 @@ impl GpuEngine {
         let pass = |p: &Pass, when| PassTraffic::new(p.kernel.name.clone(), when, p.bound.clone());
         let mut out = vec![pass(&b.collect_kick_drift, When::Step)];
         out.extend(b.wall_move.as_ref().map(|p| pass(p, When::Step)));
-        out.push(pass(&b.decide, When::Step));
+        let on_demand = self.rebuild_chain == RebuildChain::OnDemand;
+        out.push(pass(
+            if on_demand { &b.decide_lean } else { &b.decide },
+            When::Step,
+        ));
         if !self.mirrors.is_empty() {
             out.push(PassTraffic::new(
                 "mirror copies",
@@ -194,6 +206,9 @@ impl GpuEngine {
         }
         out.push(pass(&b.force, When::Step));
         out.extend(b.wall_servo.as_ref().map(|p| pass(p, When::Step)));
+        if on_demand {
+            out.push(pass(&b.decide, When::Rebuild));
+        }
         for (name, mut bound) in self.grid.traffic(&self.state.state[0]) {
             // the sort reads the state's first field, the cells
             for (global, bytes) in &mut bound {

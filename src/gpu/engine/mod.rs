@@ -58,6 +58,7 @@ use stepping::*;
 use walls::*;
 
 pub use checkpoint::GpuSavedState;
+pub use record::RebuildChain;
 
 /// The Verlet skin in units of the smallest radius: lists hold the pairs within
 /// r_i + r_j + reach + skin, rebuilt once some particle has moved more than skin/2.
@@ -144,6 +145,9 @@ pub struct GpuOptions {
     /// adapter's largest buffer): beyond it both are cut into pages of whole windows
     /// likewise. Results are bitwise the same either way.
     pub state_page_bytes: Option<u64>,
+    /// How the steps hold a rebuild of the neighbour lists ([`RebuildChain`]; default
+    /// on demand). Results are bitwise the same either way.
+    pub rebuild_chain: RebuildChain,
 }
 
 impl Default for GpuOptions {
@@ -157,6 +161,7 @@ impl Default for GpuOptions {
             contacts: false,
             entry_page_bytes: None,
             state_page_bytes: None,
+            rebuild_chain: RebuildChain::OnDemand,
         }
     }
 }
@@ -210,6 +215,9 @@ pub struct GpuEngine {
     clock: Option<PassClock>,
     /// Times the lists grew (each a halted batch, or the first build).
     growths: u64,
+    /// How the steps hold a rebuild, and the batches halted for one (`decide_lean`).
+    rebuild_chain: RebuildChain,
+    lean_halts: u64,
     program: Program,
     bound: Bound,
     max_per_dim: u32,

@@ -6,6 +6,7 @@ use super::*;
 pub(super) struct Bound {
     pub(super) kick_drift: Pass,
     pub(super) decide: Pass,
+    pub(super) decide_lean: Pass,
     pub(super) gather: Pass,
     pub(super) count_neighbours: Pass,
     pub(super) neighbours: Pass,
@@ -33,23 +34,26 @@ pub(super) struct Pass {
 }
 
 impl Pass {
-    /// One workgroup (a window).
-    pub(super) fn once(&self, pass: &mut wgpu::ComputePass<'_>, max_per_dim: u32) {
+    /// One workgroup (a window); returns the dispatches recorded.
+    pub(super) fn once(&self, pass: &mut wgpu::ComputePass<'_>, max_per_dim: u32) -> usize {
         for group in &self.groups {
             self.kernel.dispatch_workgroups(pass, group, 1, max_per_dim);
         }
+        self.groups.len()
     }
 
-    /// Workgroup counts from `args` at byte `offset` (each window's dispatch the same).
+    /// Workgroup counts from `args` at byte `offset` (each window's dispatch the same);
+    /// returns the dispatches recorded.
     pub(super) fn indirect(
         &self,
         pass: &mut wgpu::ComputePass<'_>,
         args: &wgpu::Buffer,
         offset: u64,
-    ) {
+    ) -> usize {
         for group in &self.groups {
             self.kernel.dispatch_indirect(pass, group, args, offset);
         }
+        self.groups.len()
     }
 }
 
@@ -87,6 +91,39 @@ pub(super) enum Drift {
     AfterStep,
 }
 
+/// How the steps of a batch hold a rebuild of the neighbour lists (bitwise the same run
+/// either way).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum RebuildChain {
+    /// Every step records the rebuild's passes, dispatched with no workgroups where
+    /// `decide` finds no rebuild due (about 30 dispatches a step, each a barrier).
+    EveryStep,
+    /// Steps record only `decide_lean`, which halts the batch where a rebuild is due; the
+    /// host runs that step again from its rebuild (one more submission a rebuild).
+    #[default]
+    OnDemand,
+}
+
+/// What a recorded step holds of a rebuild.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Chain {
+    /// `decide` and the rebuild's passes.
+    Full,
+    /// `decide_lean` only ([`RebuildChain::OnDemand`]).
+    Lean,
+    /// Neither (a quiet batch, `gpu::quiet`).
+    Quiet,
+}
+
+/// Why a batch halted (monitor[7]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Halt {
+    /// A rebuild's new lists need this many entries (`commit`).
+    Grow(u64),
+    /// A rebuild is due in a step recorded without one (`decide_lean`).
+    Rebuild,
+}
+
 /// What the host reads after a batch: the monitor and the skin state.
 pub(super) struct BatchReport {
     pub(super) monitor: Vec<u32>,
@@ -94,9 +131,13 @@ pub(super) struct BatchReport {
 }
 
 impl BatchReport {
-    /// The list entries a rebuild needed when the batch halted for them (`commit`).
-    pub(super) fn halted(&self) -> Option<u64> {
-        (self.monitor[7] != 0).then_some(self.monitor[11] as u64)
+    /// Why the batch halted, if it did (`halt` in `shaders/step.wgsl`).
+    pub(super) fn halted(&self) -> Option<Halt> {
+        match self.monitor[7] {
+            0 => None,
+            2 => Some(Halt::Rebuild),
+            _ => Some(Halt::Grow(self.monitor[11] as u64)),
+        }
     }
 
     /// Steps of a halted batch completed before the one that halted (`decide` counts the
@@ -109,19 +150,21 @@ impl BatchReport {
 impl GpuEngine {
     /// Records one step: drift, decide whether to rebuild, on a rebuild (indirect: no
     /// workgroups otherwise) sort, build the new lists in B (count, place, fill), re-sort
-    /// the state in place, remap the history and copy the lists back; then the forces. Their collect and the closing kick are recorded
-    /// with the next step (`Drift::AfterStep`) or by [`Self::record_finish`]. `quiet`:
-    /// without `decide` and the rebuild chain (a quiet batch, `gpu::quiet`).
+    /// the state in place, remap the history and copy the lists back; then the forces.
+    /// Their collect and the closing kick are recorded with the next step
+    /// (`Drift::AfterStep`) or by [`Self::record_finish`]. `chain`: with the rebuild's
+    /// passes, `decide_lean` alone, or neither ([`Chain`]). Returns the dispatches recorded.
     pub(super) fn record_step(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         drift: Drift,
-        quiet: bool,
-    ) {
+        chain: Chain,
+    ) -> usize {
         let bound = &self.bound;
         let max = self.max_per_dim;
         let clock = self.clock.as_ref();
         let (args, at, step) = (&self.b.args, self.rebuild_args, self.step_args);
+        let mut n = 0;
         {
             let mut pass = begin(encoder, clock);
             if drift != Drift::None {
@@ -129,42 +172,49 @@ impl GpuEngine {
                     Drift::AfterStep => (&bound.collect_kick_drift, "collect_kick_drift"),
                     _ => (&bound.kick_drift, "kick_drift"),
                 };
-                first.indirect(&mut pass, args, step);
+                n += first.indirect(&mut pass, args, step);
                 mark(&mut pass, clock, name);
                 if let Some(p) = &bound.wall_move {
-                    p.indirect(&mut pass, args, step + 12);
+                    n += p.indirect(&mut pass, args, step + 12);
                     mark(&mut pass, clock, "wall_move");
                 }
             }
-            if !quiet {
-                bound.decide.once(&mut pass, max);
-                mark(&mut pass, clock, "decide");
+            match chain {
+                Chain::Full => {
+                    n += bound.decide.once(&mut pass, max);
+                    mark(&mut pass, clock, "decide");
+                }
+                Chain::Lean => {
+                    n += bound.decide_lean.once(&mut pass, max);
+                    mark(&mut pass, clock, "decide_lean");
+                }
+                Chain::Quiet => {}
             }
         }
-        if !quiet {
+        if chain == Chain::Full {
             clock.inspect(|c| c.start_between(encoder));
-            self.grid.encode_indirect(encoder, &self.grid_keys, args, 0);
+            n += self.grid.encode_indirect(encoder, &self.grid_keys, args, 0);
             clock.inspect(|c| c.mark_between(encoder, "grid sort"));
             let mut pass = begin(encoder, clock);
             if !self.mirrors.is_empty() {
-                bound.gather.indirect(&mut pass, args, at);
+                n += bound.gather.indirect(&mut pass, args, at);
                 mark(&mut pass, clock, "gather");
             }
-            bound.count_neighbours.indirect(&mut pass, args, at);
+            n += bound.count_neighbours.indirect(&mut pass, args, at);
             mark(&mut pass, clock, "count_neighbours");
             for (scan, &offset) in self.scans.iter().zip(self.scan_args.iter().cycle()) {
-                scan.record_indirect(&mut pass, args, offset);
+                n += scan.record_indirect(&mut pass, args, offset);
             }
             mark(&mut pass, clock, "list scans");
-            bound.neighbours.indirect(&mut pass, args, at);
+            n += bound.neighbours.indirect(&mut pass, args, at);
             mark(&mut pass, clock, "neighbours");
-            bound.commit.once(&mut pass, max);
+            n += bound.commit.once(&mut pass, max);
             mark(&mut pass, clock, "commit");
-            self.permutation.encode_indirect(&mut pass, args, at);
+            n += self.permutation.encode_indirect(&mut pass, args, at);
             mark(&mut pass, clock, "permute");
-            bound.remap.indirect(&mut pass, args, at);
+            n += bound.remap.indirect(&mut pass, args, at);
             mark(&mut pass, clock, "remap");
-            bound.copy_back_history.indirect(&mut pass, args, at);
+            n += bound.copy_back_history.indirect(&mut pass, args, at);
             mark(&mut pass, clock, "copy_back_history");
         }
         // the state the forces see, drifted (and re-sorted on a rebuild)
@@ -174,16 +224,31 @@ impl GpuEngine {
             clock.inspect(|c| c.mark_between(encoder, "mirror copies"));
         }
         let mut pass = begin(encoder, clock);
-        bound.force.indirect(&mut pass, args, step);
+        n += bound.force.indirect(&mut pass, args, step);
         mark(&mut pass, clock, "force");
         if let Some(p) = &bound.wall_servo {
-            p.indirect(&mut pass, args, step + 12);
+            n += p.indirect(&mut pass, args, step + 12);
             mark(&mut pass, clock, "wall_servo");
         }
         if let Some(p) = &bound.wall_servo_apply {
-            p.indirect(&mut pass, args, step + 12);
+            n += p.indirect(&mut pass, args, step + 12);
             mark(&mut pass, clock, "wall_servo_apply");
         }
+        n
+    }
+
+    /// The compute dispatches a step records (each window's counts, empty ones too): one
+    /// that holds no rebuild's passes as this run records them ([`RebuildChain`]), and one
+    /// that does. Recorded into an encoder that is never submitted.
+    pub fn dispatches_per_step(&self) -> [usize; 2] {
+        let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+        let plain = match self.rebuild_chain {
+            RebuildChain::OnDemand => Chain::Lean,
+            RebuildChain::EveryStep => Chain::Full,
+        };
+        let plain = self.record_step(&mut encoder, Drift::AfterStep, plain);
+        let full = self.record_step(&mut encoder, Drift::AfterStep, Chain::Full);
+        [plain, full]
     }
 
     /// Records `collect` (the forces of the step just recorded are then complete) and,

@@ -60,19 +60,20 @@ impl GpuEngine {
         loop {
             let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
             self.start_batch();
-            self.record_step(&mut encoder, Drift::None, false);
+            self.record_step(&mut encoder, Drift::None, Chain::Full);
             self.record_finish(&mut encoder, false);
             let report = self.submit_batch(encoder)?;
             // the first lists did not fit the first guess: grown, built again
             match report.halted() {
-                Some(need) => {
+                Some(Halt::Grow(need)) => {
                     self.check_windows(&report.monitor)?;
                     if rewindow && self.outgrows_one_window(need) {
                         return Ok(Some(need));
                     }
                     self.grow_lists(need)?
                 }
-                None => break self.apply_monitor(&report.monitor)?,
+                // (a full step: `decide_lean` does not run)
+                Some(Halt::Rebuild) | None => break self.apply_monitor(&report.monitor)?,
             }
         }
         if self.keeps.ledger {
@@ -118,7 +119,12 @@ impl GpuEngine {
                     let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
                     for i in 0..batch {
                         let drift = if i == 0 { first } else { Drift::AfterStep };
-                        self.record_step(&mut encoder, drift, false);
+                        // (a halted batch's rest starts from the halted step's rebuild)
+                        let chain = match self.rebuild_chain {
+                            RebuildChain::OnDemand if drift != Drift::None => Chain::Lean,
+                            _ => Chain::Full,
+                        };
+                        self.record_step(&mut encoder, drift, chain);
                     }
                     self.record_finish(&mut encoder, true);
                     self.submit_batch(encoder)?
@@ -138,9 +144,13 @@ impl GpuEngine {
             left -= done;
             self.apply_monitor(&report.monitor)?;
             match report.halted() {
-                Some(need) => {
+                Some(Halt::Grow(need)) => {
                     self.check_windows(&report.monitor)?;
                     self.grow_lists(need)?;
+                    self.resume = Some(batch - done);
+                }
+                Some(Halt::Rebuild) => {
+                    self.lean_halts += 1;
                     self.resume = Some(batch - done);
                 }
                 None => self.observe(batch, &report),
@@ -187,7 +197,7 @@ impl GpuEngine {
             c.save(&mut encoder);
         }
         for i in 0..batch {
-            self.record_step(&mut encoder, Self::drift_of(i), true);
+            self.record_step(&mut encoder, Self::drift_of(i), Chain::Quiet);
         }
         self.record_finish(&mut encoder, true);
         let report = self.submit_batch(encoder)?;
