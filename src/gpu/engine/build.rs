@@ -131,6 +131,64 @@ impl StepSpec {
     }
 }
 
+/// The step's kernels a scene runs: the wall kernels only where walls move, `appear` only
+/// where particles appear during the run (the others are not compiled).
+fn wanted_kernels(scene: &Scene) -> Vec<&'static str> {
+    let mut wanted = vec![
+        "kick_drift",
+        "decide",
+        "decide_lean",
+        "gather",
+        "count_neighbours",
+        "neighbours",
+        "commit",
+        "remap",
+        "copy_back_history",
+        "force",
+        "kick",
+        "collect_kick_drift",
+        "collect",
+    ];
+    if scene.walls.iter().any(|w| w.motion.moves()) {
+        wanted.push("wall_move");
+    }
+    if scene.walls.iter().any(|w| w.motion.servo()) {
+        wanted.extend(["wall_servo", "wall_servo_apply"]);
+    }
+    if scene.pours() {
+        wanted.push("appear");
+    }
+    wanted
+}
+
+/// The force pass's read-only texture copies of what it loads per pair (`gpu::mirror`):
+/// the cells, offsets, predictions (and angular predictions) of `state`, on the software
+/// adapter's path only (none otherwise).
+fn state_mirrors(
+    device: &wgpu::Device,
+    state: &StateSet,
+    (n, software): (u32, bool),
+) -> Result<Mirrors, PowderError> {
+    if !software {
+        return Mirrors::new(device, n, &[]);
+    }
+    let at = |name: &str| state.layout.place(name).map_or(0, |(_, at)| at);
+    let (sint, float) = (
+        wgpu::TextureFormat::Rgba32Sint,
+        wgpu::TextureFormat::Rgba32Float,
+    );
+    let s = &state.state[0];
+    let mut mirrored = vec![
+        ("m_cell", Some("m_cell_out"), s, at("cell"), sint),
+        ("m_off", Some("m_off_out"), s, at("off"), float),
+        ("m_vpred", None, s, at("vpred"), float),
+    ];
+    if let Some((_, w)) = state.layout.place("wpred") {
+        mirrored.push(("m_wpred", None, s, w, float));
+    }
+    Mirrors::new(device, n, &mirrored)
+}
+
 /// The buffers the step binds by name: the state set's and the step's others.
 pub(super) type NamedBuffers<'a> = [Vec<(String, &'a wgpu::Buffer)>; 2];
 
@@ -616,35 +674,9 @@ impl GpuEngine {
                 n, windows.len, windows.count
             )));
         }
-        let mut wanted = vec![
-            "kick_drift",
-            "decide",
-            "decide_lean",
-            "gather",
-            "count_neighbours",
-            "neighbours",
-            "commit",
-            "remap",
-            "copy_back_history",
-            "force",
-            "kick",
-            "collect_kick_drift",
-            "collect",
-        ];
-        // the wall kernels only where walls move (not compiled otherwise)
-        if moving_walls {
-            wanted.push("wall_move");
-        }
-        if servo_walls {
-            wanted.extend(["wall_servo", "wall_servo_apply"]);
-        }
-        // the appeared flags into the state, only where particles appear during the run
-        if scene.pours() {
-            wanted.push("appear");
-        }
         let constants = pipeline_constants(scene, &r, &all_models);
         let spec = StepSpec {
-            wanted,
+            wanted: wanted_kernels(scene),
             constants,
             mirrors: software,
         };
@@ -697,46 +729,7 @@ impl GpuEngine {
             mapped_at_creation: false,
         });
         alloc.list.push(("args".into(), args.size()));
-        // the force pass's read-only copies of what it loads per pair (`gpu::mirror`)
-        let s0 = &state;
-        let at = |name: &str| s0.layout.place(name).map_or(0, |(_, at)| at);
-        let mut mirrored = vec![
-            (
-                "m_cell",
-                Some("m_cell_out"),
-                &s0.state[0],
-                at("cell"),
-                wgpu::TextureFormat::Rgba32Sint,
-            ),
-            (
-                "m_off",
-                Some("m_off_out"),
-                &s0.state[0],
-                at("off"),
-                wgpu::TextureFormat::Rgba32Float,
-            ),
-            (
-                "m_vpred",
-                None,
-                &s0.state[0],
-                at("vpred"),
-                wgpu::TextureFormat::Rgba32Float,
-            ),
-        ];
-        if let Some((_, w)) = s0.layout.place("wpred") {
-            mirrored.push((
-                "m_wpred",
-                None,
-                &s0.state[0],
-                w,
-                wgpu::TextureFormat::Rgba32Float,
-            ));
-        }
-        // (only on the software adapter's path)
-        if !software {
-            mirrored.clear();
-        }
-        let mirrors = Mirrors::new(device, n as u32, &mirrored)?;
+        let mirrors = state_mirrors(device, &state, (n as u32, software))?;
         alloc.list.extend(mirrors.sizes());
         // (before anything binds them)
         alloc.check(n)?;
