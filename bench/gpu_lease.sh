@@ -16,9 +16,9 @@
 set -u
 cd "$(dirname "$0")/.."
 TESTS=(gpu_engine gpu_sticking gpu_jumps gpu_ledger gpu_mixed gpu_friction gpu_default_limits
-       gpu_grid gpu_pages contact_network walls periodic stability pouring run_outputs)
+       gpu_grid gpu_pages gpu_rebuild_chain walls periodic stability pouring run_outputs)
 # (the working tree, .gl, .gpubench and these, gzipped, must stay under the 64 MiB a call
-# carries: about 3 MiB each)
+# carries: about 3 MiB each; `prepare` refuses more than 60)
 
 case "${1:-}" in
 prepare)
@@ -40,6 +40,10 @@ EOF
         strip -o ".gputests/$t" "$exe" && gzip -9 ".gputests/$t"
     done
     du -sh .gl .gpubench .gputests
+    tree=$(git ls-files -z --cached --others --exclude-standard | du -cb --files0-from=- | tail -n 1 | cut -f1)
+    carried=$(( tree + $(du -sb .gl .gpubench .gputests | awk '{s += $1} END {print s}') ))
+    echo "carried in all: $(( carried / 1048576 )) MiB"
+    [ "$carried" -le $(( 60 * 1048576 )) ] || { echo "over 60 MiB: carry fewer test binaries"; exit 1; }
     ;;
 run)
     : "${OUT:?run it on the lent machine, where OUT is set}"
