@@ -2,6 +2,7 @@
 //! particles wrap, and the GPU follows the CPU.
 
 mod common;
+use common::builder::SceneBuilder;
 use common::gpu;
 
 use powder::cpu::CpuEngine;
@@ -13,28 +14,16 @@ use powder::scene::Scene;
 /// Two LSD spheres (r = 1 mm) 1 mm apart *through* the periodic x face of a 1 cm box,
 /// flying toward it: they collide across the face with the closed-form restitution.
 fn pair_text(extra: &str) -> String {
-    format!(
-        r#"
-[domain]
-min = [0.0, 0.0, 0.0]
-max = [0.01, 0.01, 0.01]
-periodic = [true, false, false]
-[simulation]
-duration = 0.01
-[[material]]
-name = "m"
-density = 2000.0
-model = "lsd"
-k = 100.0
-gamma0 = 2e-3
-[[particles]]
-kind = "list"
-radius = 1e-3
-positions = [[0.0015, 0.005, 0.005], [0.0085, 0.005, 0.005]]
-velocities = [[-0.1, 0.0, 0.0], [0.1, 0.0, 0.0]]
-{extra}
-"#
-    )
+    let text = SceneBuilder::new("pair", [0.0; 3], [0.01, 0.01, 0.01], 0.01)
+        .periodic([true, false, false])
+        .material("m", 2000.0, "model = \"lsd\"\nk = 100.0\ngamma0 = 2e-3")
+        .particles(
+            "list",
+            "radius = 1e-3\npositions = [[0.0015, 0.005, 0.005], [0.0085, 0.005, 0.005]]\n\
+             velocities = [[-0.1, 0.0, 0.0], [0.1, 0.0, 0.0]]",
+        )
+        .toml();
+    format!("{text}{extra}\n")
 }
 
 #[test]

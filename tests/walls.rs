@@ -3,6 +3,7 @@
 //! walls' work, and the GPU follows the CPU.
 
 mod common;
+use common::builder::SceneBuilder;
 use common::gpu;
 
 use powder::cpu::CpuEngine;
@@ -13,35 +14,19 @@ use powder::scene::Scene;
 /// floor, without gravity, under a lid 0.5 mm above the top one; `lid` is the lid's
 /// motion keys.
 fn column_text(lid: &str) -> String {
-    format!(
-        r#"
-[domain]
-min = [-0.003, -0.003, 0.0]
-max = [0.003, 0.003, 0.01]
-[simulation]
-duration = 0.2
-[[material]]
-name = "m"
-density = 2000.0
-model = "hysteretic"
-k1 = 100.0
-kp = 500.0
-kc = 100.0
-phi_f = 0.05
-gamma0 = 2e-3
-[[wall]]
-point = [0.0, 0.0, 0.0]
-normal = [0.0, 0.0, 1.0]
-[[wall]]
-point = [0.0, 0.0, 0.0065]
-normal = [0.0, 0.0, -1.0]
-{lid}
-[[particles]]
-kind = "list"
-radius = 1e-3
-positions = [[0.0, 0.0, 0.0010001], [0.0, 0.0, 0.0030002], [0.0, 0.0, 0.0050003]]
-"#
-    )
+    SceneBuilder::new("column", [-0.003, -0.003, 0.0], [0.003, 0.003, 0.01], 0.2)
+        .material(
+            "m",
+            2000.0,
+            "model = \"hysteretic\"\nk1 = 100.0\nkp = 500.0\nkc = 100.0\nphi_f = 0.05\ngamma0 = 2e-3",
+        )
+        .floor()
+        .wall_with([0.0, 0.0, 0.0065], [0.0, 0.0, -1.0], lid)
+        .particles(
+            "list",
+            "radius = 1e-3\npositions = [[0.0, 0.0, 0.0010001], [0.0, 0.0, 0.0030002], [0.0, 0.0, 0.0050003]]",
+        )
+        .toml()
 }
 
 fn column(lid: &str) -> Scene {

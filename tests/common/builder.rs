@@ -106,6 +106,17 @@ impl SceneBuilder {
         self
     }
 
+    /// A wall through `point` facing `normal` with more keys (its motion, material, ...) as
+    /// TOML.
+    pub fn wall_with(mut self, point: [f64; 3], normal: [f64; 3], keys: &str) -> Self {
+        self = self.wall(point, normal);
+        if let Some(wall) = self.walls.last_mut() {
+            wall.push('\n');
+            wall.push_str(keys);
+        }
+        self
+    }
+
     /// The floor: a fixed wall at z = 0 facing up.
     pub fn floor(self) -> Self {
         self.wall([0.0; 3], [0.0, 0.0, 1.0])
