@@ -23,7 +23,7 @@ const SMALL_CELL: u32 = 32u;
 const SCAN_ITEMS: u32 = 4u;
 const SCAN_BLOCK: u32 = 1024u; // WG_SIZE * SCAN_ITEMS
 
-// Integer cell of each particle (xyz; w = material, unused here): the particle state's
+// Integer cell of each particle (xyz; w = material and `NOT_APPEARED`, unused here): the state's
 // first field, blocked by window (`state_blocked`).
 @group(0) @binding(1) var<storage, read> cells: array<vec4<i32>>;
 // Clamped linear cell key of each particle, in original order.

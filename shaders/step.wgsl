@@ -367,12 +367,13 @@ struct WallRef {
 // contacts dropped by a rebuild (ledger.wgsl), [4] = largest overlap/a12 of any contact
 // (f32 bits, atomicMax; non-negative f32 bits order as the values), [5] = persistent id
 // (+1) of a particle with a contact beyond MONITOR_MAX_OVERLAP_RATIO, [6] = persistent id
-// (+1) of a particle whose centre left the domain box, [7] = 1 when the batch halted
-// (`commit`: the new lists did not fit); for the host's forecast of the next rebuild
+// (+1) of a particle whose centre left the domain box, [7] = why the batch halted (`halt`:
+// HALT_GROW from `commit`, the new lists did not fit; HALT_REBUILD from `decide_lean`, a
+// rebuild is due); for the host's forecast of the next rebuild
 // (`gpu::quiet`): [8] = the largest displacement since the last rebuild at the batch's end
-// (f32 bits; `collect`), [9] = the steps since this batch's last rebuild (`decide`: 0 on a
-// rebuild, +1 on any other step); [10] = the steps begun before any halt (`decide`),
-// [11] = the list entries a halted rebuild needed.
+// (f32 bits; `collect`), [9] = the steps since this batch's last rebuild (`decide`,
+// `decide_lean`: 0 on a rebuild, +1 on any other step); [10] = the steps begun before any
+// halt (`decide`, `decide_lean`), [11] = the list entries a halted rebuild needed.
 @group(0) @binding(48) var<storage, read_write> control: array<atomic<u32>, 16>;
 
 // [12, 16): the Verlet skin state, persistent across batches: SKIN_MOVED = 1 once some
@@ -387,7 +388,7 @@ const SKIN_REBUILDS: u32 = 14u;
 // Indirect dispatch arguments: first those of a rebuild (the grid sort's, the per-particle
 // passes', the list scans'), which decide copies from full_args or zeroes each step; then
 // those of every step's passes (per particle, one workgroup), which the host writes at
-// each batch's start and `commit` zeroes to halt the batch.
+// each batch's start and `halt` zeroes.
 @group(0) @binding(57) var<storage, read_write> args: array<u32>;
 @group(0) @binding(58) var<storage, read> full_args: array<u32>;
 
@@ -550,7 +551,7 @@ const HALT_REBUILD: u32 = 2u;
 // workgroups without a rebuild), and starts the next maximum afresh.
 @compute @workgroup_size(1)
 fn decide() {
-    // a halted batch runs nothing more (`commit`)
+    // a halted batch runs nothing more (`halt`)
     if (atomicLoad(&control[7]) != 0u) {
         return;
     }

@@ -198,7 +198,8 @@ fn state_in_pages_changes_no_bit() {
 
 /// Particles poured in batches appear in a paged state (`appear` writes each window's
 /// page) bitwise as in one buffer: 400 cohesive spheres, a quarter each at 0, 1, 2 and
-/// 3 ms, in 4 windows of 128, the state in pages of three.
+/// 3 ms, in 4 windows of 128, the state in pages of three; at 2.5 ms exactly the first
+/// three quarters have moved.
 #[test]
 fn poured_particles_appear_in_pages() {
     use common::builder::{SceneBuilder, COHESIVE};
@@ -229,9 +230,16 @@ fn poured_particles_appear_in_pages() {
             e = GpuEngine::with_options(&scene, context()?, options(Some(page))).unwrap();
             assert_eq!(e.state_pages().count, 2);
         }
-        // past the last batch's appearance
-        let steps = (4e-3 / e.dt()).round() as u64;
+        // between the third batch's appearance and the last's: exactly the first three
+        // batches have moved (in 4 windows: both runs could share a windowed bug)
+        let start = e.state().unwrap();
+        let steps = (2.5e-3 / e.dt()).round() as u64;
         e.run_steps(steps).unwrap();
+        let now = e.state().unwrap();
+        for (i, p) in scene.particles.iter().enumerate() {
+            let moved = now.positions[i] != start.positions[i];
+            assert_eq!(moved, p.insert_at < 2.5e-3, "particle {i}, paged {paged}");
+        }
         Some(e)
     };
     let (Some(one), Some(paged)) = (run(false), run(true)) else {

@@ -31,8 +31,8 @@
 use bytemuck::{Pod, Zeroable};
 use glam::DVec3;
 
-/// Integer cell of a particle: xyz = cell coordinates, w = material index.
-/// WGSL: `vec4<i32>`.
+/// Integer cell of a particle: xyz = cell coordinates, w = material index (in the engine's
+/// state with `gpu::state::NOT_APPEARED` added until the particle appears). WGSL: `vec4<i32>`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
 pub struct CellCoord(pub [i32; 4]);
@@ -137,7 +137,7 @@ pub fn decode3(cell: [i32; 4], offset: [f32; 4], origin: DVec3, h: DVec3) -> DVe
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct PackedPosition {
-    /// Integer cell; w = material index.
+    /// Integer cell; w = material index (see [`CellCoord`]).
     pub cell: CellCoord,
     /// Offset inside the cell, m; w = radius, m.
     pub offset: CellOffset,
@@ -161,9 +161,9 @@ impl PackedPosition {
         decode(self.cell.0, self.offset.0, origin, h)
     }
 
-    /// The material index (cell.w).
+    /// The material index (cell.w without `NOT_APPEARED`).
     pub fn material(&self) -> u32 {
-        self.cell.0[3] as u32
+        (self.cell.0[3] & !crate::gpu::state::NOT_APPEARED) as u32
     }
 
     /// The radius, m (offset.w).

@@ -79,9 +79,10 @@ impl Pages {
         (at / page, at % page)
     }
 
-    /// The `win` uniform's record fields for window w whose binding of a one-page buffer
-    /// starts at window `bound`: the first window of the entries' binding, the end of the
-    /// windows it holds, the first window of the other page's binding.
+    /// The `win` uniform's fields of a paged buffer (the entries' `rec_*`, the state's
+    /// `st_*`) for window w whose binding of a one-page buffer starts at window `bound`: the
+    /// first window of the buffer's binding, the end of the windows it holds, the first
+    /// window of the other page's binding.
     pub fn params(&self, w: u64, bound: u64, total: u64) -> [u32; 3] {
         if !self.paged() {
             return [bound as u32, (bound + 3).min(total) as u32, 0];

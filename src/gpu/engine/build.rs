@@ -826,6 +826,8 @@ impl GpuEngine {
             growths: 0,
             rebuild_chain: options.rebuild_chain,
             lean_halts: 0,
+            lean: true,
+            rebuilds_seen: 0,
             program,
             bound,
             max_per_dim,

@@ -85,6 +85,11 @@ const CONTROL_BYTES: u64 = SKIN_OFFSET + 16;
 /// Steps recorded into one submission.
 pub const STEPS_PER_SUBMIT: u64 = 64;
 
+/// Steps between rebuilds, on average, below which the steps record the rebuild's passes
+/// in every step though [`RebuildChain::OnDemand`] is asked for (each halt costs a
+/// submission and records the batch's rest again; bitwise the same run either way).
+const MIN_LEAN_STEPS: u64 = 8;
+
 /// List entries a particle the automatic windows leave room for (the lists hold 3.7–3.8 a
 /// particle with their headroom and wall entries on the dense bench packings, `powder
 /// bench`).
@@ -218,6 +223,10 @@ pub struct GpuEngine {
     /// How the steps hold a rebuild, and the batches halted for one (`decide_lean`).
     rebuild_chain: RebuildChain,
     lean_halts: u64,
+    /// Whether the next batch's steps are recorded lean (on demand, while rebuilds are
+    /// rarer than one in `MIN_LEAN_STEPS` steps), and the rebuilds the last batch ended at.
+    lean: bool,
+    rebuilds_seen: u64,
     program: Program,
     bound: Bound,
     max_per_dim: u32,

@@ -83,6 +83,13 @@ impl GpuEngine {
         let mut rows = vec![[0.0f32; 4]; 4 * self.n as usize];
         for (f, name) in crate::gpu::state::ledger_fields().enumerate() {
             let values: Vec<[f32; 4]> = l.unpack(&motion, name);
+            if values.len() != ids.len() {
+                return Err(PowderError::Run(format!(
+                    "the energy ledger's `{name}` read back short: {} of {} particles",
+                    values.len(),
+                    ids.len()
+                )));
+            }
             for (k, v) in values.into_iter().enumerate() {
                 rows[4 * ids[k][0] as usize + f] = v;
             }

@@ -140,8 +140,8 @@ impl BatchReport {
         }
     }
 
-    /// Steps of a halted batch completed before the one that halted (`decide` counts the
-    /// steps begun).
+    /// Steps of a halted batch completed before the one that halted (`decide` and
+    /// `decide_lean` count the steps begun).
     pub(super) fn completed(&self) -> u64 {
         (self.monitor[10] as u64).saturating_sub(1)
     }

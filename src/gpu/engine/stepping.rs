@@ -121,7 +121,9 @@ impl GpuEngine {
                         let drift = if i == 0 { first } else { Drift::AfterStep };
                         // (a halted batch's rest starts from the halted step's rebuild)
                         let chain = match self.rebuild_chain {
-                            RebuildChain::OnDemand if drift != Drift::None => Chain::Lean,
+                            RebuildChain::OnDemand if drift != Drift::None && self.lean => {
+                                Chain::Lean
+                            }
                             _ => Chain::Full,
                         };
                         self.record_step(&mut encoder, drift, chain);
@@ -143,6 +145,16 @@ impl GpuEngine {
             self.time = self.steps as f64 * self.dt;
             left -= done;
             self.apply_monitor(&report.monitor)?;
+            // lean while rebuilds are rare: a halt costs a submission, and the batch's
+            // remaining steps are recorded again (where they come every few steps, the
+            // chain in every step is cheaper)
+            let rebuilds = report.skin[2] as u64;
+            let rebuilt = rebuilds.saturating_sub(self.rebuilds_seen);
+            self.rebuilds_seen = rebuilds;
+            self.lean = match report.halted() {
+                Some(Halt::Rebuild) => done >= MIN_LEAN_STEPS,
+                _ => rebuilt * MIN_LEAN_STEPS <= batch,
+            };
             match report.halted() {
                 Some(Halt::Grow(need)) => {
                     self.check_windows(&report.monitor)?;
