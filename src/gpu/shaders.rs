@@ -119,6 +119,24 @@ pub fn stage(name: &str) -> Option<ShaderVariant> {
         })
 }
 
+/// The kernels every step variant has and every run builds (besides the wall kernels
+/// where walls move and `appear` where particles are poured).
+pub const STEP_KERNELS: [&str; 13] = [
+    "kick_drift",
+    "decide",
+    "decide_lean",
+    "gather",
+    "count_neighbours",
+    "neighbours",
+    "commit",
+    "remap",
+    "copy_back_history",
+    "force",
+    "kick",
+    "collect_kick_drift",
+    "collect",
+];
+
 /// Every shader module the engine builds.
 pub fn all_variants() -> Vec<ShaderVariant> {
     let mut all: Vec<ShaderVariant> = STAGES
@@ -289,20 +307,7 @@ mod tests {
             let v = kind.variant(keeps, mirrors, false);
             let (module, _) = validate(&v.source).unwrap();
             let eps = compute_entry_points(&module);
-            for name in [
-                "kick_drift",
-                "decide",
-                "decide_lean",
-                "gather",
-                "count_neighbours",
-                "neighbours",
-                "commit",
-                "remap",
-                "copy_back_history",
-                "force",
-                "kick",
-                "appear",
-            ] {
+            for name in STEP_KERNELS.iter().chain(&["appear"]) {
                 assert!(
                     eps.iter().any(|e| e == name),
                     "{}: no kernel {name}",

@@ -134,21 +134,7 @@ impl StepSpec {
 /// The step's kernels a scene runs: the wall kernels only where walls move, `appear` only
 /// where particles appear during the run (the others are not compiled).
 fn wanted_kernels(scene: &Scene) -> Vec<&'static str> {
-    let mut wanted = vec![
-        "kick_drift",
-        "decide",
-        "decide_lean",
-        "gather",
-        "count_neighbours",
-        "neighbours",
-        "commit",
-        "remap",
-        "copy_back_history",
-        "force",
-        "kick",
-        "collect_kick_drift",
-        "collect",
-    ];
+    let mut wanted = crate::gpu::shaders::STEP_KERNELS.to_vec();
     if scene.walls.iter().any(|w| w.motion.moves()) {
         wanted.push("wall_move");
     }
