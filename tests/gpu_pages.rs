@@ -16,6 +16,16 @@ fn options(window: u64, first_entries: u64, page: Option<u64>) -> GpuOptions {
     }
 }
 
+/// The scene's particles scrambled, so the re-sorts move them across windows (and pages);
+/// returns how many there are.
+fn scramble(scene: &mut powder::scene::Scene) -> usize {
+    let n = scene.particles.len();
+    for i in 0..n {
+        scene.particles.swap(i, (i * 7919 + 13) % n);
+    }
+    n
+}
+
 /// Bytes of one window's block of the larger of the particle state's two buffers.
 fn state_block_bytes(engine: &GpuEngine) -> u64 {
     let largest = engine
@@ -61,11 +71,7 @@ fn entries_in_pages_change_no_bit() {
     ];
     for (name, mut scene, steps, len, paged_from_the_start) in scenes {
         let Some(ctx) = context() else { return };
-        // scrambled, so the re-sorts move particles across windows (and pages)
-        let n = scene.particles.len();
-        for i in 0..n {
-            scene.particles.swap(i, (i * 7919 + 13) % n);
-        }
+        let n = scramble(&mut scene);
         let mut one = GpuEngine::with_options(&scene, ctx, options(len, 1, None)).unwrap();
         let half = steps / 2;
         one.run_steps(half).unwrap();
@@ -149,11 +155,7 @@ fn state_in_pages_changes_no_bit() {
     let (steps, half) = (600, 300);
     for (name, mut scene, len, entries_too) in scenes {
         let Some(ctx) = context() else { return };
-        // scrambled, so the re-sorts move particles across windows (and pages)
-        let n = scene.particles.len();
-        for i in 0..n {
-            scene.particles.swap(i, (i * 7919 + 13) % n);
-        }
+        let n = scramble(&mut scene);
         let mut one = GpuEngine::with_options(&scene, ctx, options(len, 1, None)).unwrap();
         one.run_steps(half).unwrap();
         let mid = one.state().unwrap();

@@ -393,12 +393,23 @@ pub fn uniform_buffer(device: &wgpu::Device, label: &str, data: &[u8]) -> wgpu::
 /// to `encoder`, submits it, waits, and returns the bytes: one submission for all.
 pub fn submit_and_read(
     ctx: &GpuContext,
-    mut encoder: wgpu::CommandEncoder,
+    encoder: wgpu::CommandEncoder,
     sources: &[(&wgpu::Buffer, u64)],
+) -> Result<Vec<Vec<u8>>, PowderError> {
+    let parts: Vec<(&wgpu::Buffer, u64, u64)> = sources.iter().map(|&(b, n)| (b, 0, n)).collect();
+    submit_and_read_parts(ctx, encoder, &parts)
+}
+
+/// As [`submit_and_read`], each source a part of a buffer: (buffer, byte offset, bytes;
+/// the offset a multiple of 4).
+pub fn submit_and_read_parts(
+    ctx: &GpuContext,
+    mut encoder: wgpu::CommandEncoder,
+    sources: &[(&wgpu::Buffer, u64, u64)],
 ) -> Result<Vec<Vec<u8>>, PowderError> {
     let staging: Vec<(wgpu::Buffer, u64)> = sources
         .iter()
-        .map(|&(src, bytes)| {
+        .map(|&(src, at, bytes)| {
             let size = bytes.max(4).next_multiple_of(4);
             let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("read-back"),
@@ -407,7 +418,7 @@ pub fn submit_and_read(
                 mapped_at_creation: false,
             });
             if bytes > 0 {
-                encoder.copy_buffer_to_buffer(src, 0, &buf, 0, size.min(src.size()));
+                encoder.copy_buffer_to_buffer(src, at, &buf, 0, size.min(src.size() - at));
             }
             (buf, bytes)
         })

@@ -77,24 +77,50 @@ impl GpuEngine {
                 "this GPU run keeps no energy ledger (GpuOptions { ledger: false })".into(),
             ));
         }
-        let (state, motion) = self.read_state()?;
-        let l = &self.state.layout;
-        let ids: Vec<[u32; 4]> = l.unpack(&state, "ids");
+        // (only the ids and the ledger's fields: 80 bytes a particle)
+        let names: Vec<&str> = std::iter::once("ids")
+            .chain(crate::gpu::state::ledger_fields())
+            .collect();
+        let fields = self.read_fields(&names)?;
+        let ids: &[[u32; 4]] = &fields[0];
         let mut rows = vec![[0.0f32; 4]; 4 * self.n as usize];
-        for (f, name) in crate::gpu::state::ledger_fields().enumerate() {
-            let values: Vec<[f32; 4]> = l.unpack(&motion, name);
-            if values.len() != ids.len() {
-                return Err(PowderError::Run(format!(
-                    "the energy ledger's `{name}` read back short: {} of {} particles",
-                    values.len(),
-                    ids.len()
-                )));
-            }
-            for (k, v) in values.into_iter().enumerate() {
-                rows[4 * ids[k][0] as usize + f] = v;
+        for (f, values) in fields[1..].iter().enumerate() {
+            for (k, v) in values.iter().enumerate() {
+                rows[4 * ids[k][0] as usize + f] = bytemuck::cast(*v);
             }
         }
         Ok(rows)
+    }
+
+    /// The state fields `names` read back, each its `n` vectors in the device's order:
+    /// only their regions, window by window (and page by page), in one submission.
+    pub(super) fn read_fields(&self, names: &[&str]) -> Result<Vec<Vec<[u32; 4]>>, PowderError> {
+        let s = &self.state;
+        let (l, windows) = (&s.layout, s.layout.windows());
+        let field = crate::gpu::state::FIELD_BYTES;
+        let region = windows.len * field;
+        let mut parts = Vec::new();
+        for name in names {
+            let Some((b, at)) = l.place(name) else {
+                return Err(PowderError::Run(format!("the state has no field `{name}`")));
+            };
+            let block = l.count(b) * region;
+            for w in 0..windows.count {
+                let (page, offset) = s.state_pages.locate(w * block + at, block);
+                parts.push((&s.buffer(b)[page as usize], offset, region));
+            }
+        }
+        let encoder = self.ctx.device.create_command_encoder(&Default::default());
+        let out = crate::gpu::kernel::submit_and_read_parts(&self.ctx, encoder, &parts)?;
+        let n = self.n as usize;
+        Ok(out
+            .chunks(windows.count as usize)
+            .map(|regions| {
+                let mut v: Vec<[u32; 4]> = bytemuck::pod_collect_to_vec(&regions.concat());
+                v.truncate(n);
+                v
+            })
+            .collect())
     }
 
     /// The energy ledger for a read-back state (kinetic and gravitational from it; stored
