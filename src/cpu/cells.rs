@@ -77,13 +77,25 @@ impl CellGrid {
         (c[2] * self.dims[1] + c[1]) * self.dims[0] + c[0]
     }
 
+    /// The cell a position is binned into.
+    pub fn cell_of(&self, p: DVec3) -> usize {
+        self.index(self.coord(p))
+    }
+
     /// Bins all particles (in reverse, so each cell lists its particles in ascending order).
     pub fn rebuild(&mut self, positions: &[DVec3]) {
+        let cells: Vec<usize> = positions.iter().map(|&p| self.cell_of(p)).collect();
+        self.link(&cells);
+    }
+
+    /// Bins particle i into `cells[i]` (each from [`Self::cell_of`], computed by the caller,
+    /// e.g. in parallel): the linking itself, in reverse, so each cell lists its particles
+    /// in ascending order.
+    pub fn link(&mut self, cells: &[usize]) {
         self.head.fill(EMPTY);
         self.next.clear();
-        self.next.resize(positions.len(), EMPTY);
-        for i in (0..positions.len()).rev() {
-            let cell = self.index(self.coord(positions[i]));
+        self.next.resize(cells.len(), EMPTY);
+        for (i, &cell) in cells.iter().enumerate().rev() {
             self.next[i] = self.head[cell];
             self.head[cell] = i;
         }

@@ -405,9 +405,14 @@ struct Search<'a> {
 struct ChunkList {
     counts: Vec<usize>,
     partner: Vec<u32>,
-    live: Vec<bool>,
-    record: Vec<ContactRecord>,
+    /// The old list's entry each kept contact comes from ([`NEW_ENTRY`]: a new entry):
+    /// the records are gathered once, into the joined list (a list of 2³² entries would
+    /// hold 600 GB of records).
+    source: Vec<u32>,
 }
+
+/// [`ChunkList::source`] of an entry without an old contact.
+const NEW_ENTRY: u32 = u32::MAX;
 
 impl Search<'_> {
     /// The entries of particles `range`: for each, the union of its candidates j > i and
@@ -418,8 +423,7 @@ impl Search<'_> {
         let mut out = ChunkList {
             counts: Vec::with_capacity(range.len()),
             partner: Vec::new(),
-            live: Vec::new(),
-            record: Vec::new(),
+            source: Vec::new(),
         };
         let mut cand: Vec<u32> = Vec::new();
         for i in range {
@@ -450,26 +454,25 @@ impl Search<'_> {
                 }
                 let kept = (b < end).then(|| old.partner[b]);
                 let next = cand.get(a).copied();
-                let (j, record) = match (next, kept) {
+                let (j, source) = match (next, kept) {
                     (None, None) => break,
                     (Some(c), Some(o)) if c == o => {
                         a += 1;
                         b += 1;
-                        (c, Some(old.record[b - 1]))
+                        (c, b - 1)
                     }
                     (Some(c), o) if o.is_none_or(|o| c < o) => {
                         a += 1;
-                        (c, None)
+                        (c, NEW_ENTRY as usize)
                     }
                     (_, Some(o)) => {
                         b += 1;
-                        (o, Some(old.record[b - 1]))
+                        (o, b - 1)
                     }
                     (Some(_), None) => unreachable!(),
                 };
                 out.partner.push(j);
-                out.live.push(record.is_some());
-                out.record.push(record.unwrap_or_default());
+                out.source.push(source as u32);
             }
             out.counts.push(out.partner.len() - before);
         }
@@ -1696,11 +1699,15 @@ impl CpuEngine {
 
     /// Rebuilds the pair list from the positions now: every active pair closer than
     /// r_i + r_j + reach + skin, and every contact of the old list (with its record),
-    /// in key order. Chunks of particles are searched in parallel and joined in order.
+    /// in key order. The particles are binned, chunks of them searched, and the records
+    /// gathered in parallel; the chunks' partners are joined in order.
     fn rebuild_list(&mut self) {
         let chunk = self.threads.chunk();
         let n = self.pos.len();
-        self.grid.rebuild(&self.pos);
+        let grid = &self.grid;
+        let cells = self.threads.map_slice(&self.pos, |&p| grid.cell_of(p));
+        self.grid.link(&cells);
+        drop(cells);
         // the old list is freed after the merge (not kept for its allocations: the list is
         // most of the engine's memory, and rebuilds are rare)
         let old = std::mem::take(&mut self.pairs);
@@ -1722,10 +1729,9 @@ impl CpuEngine {
         let mut new = PairList {
             start: Vec::with_capacity(n + 1),
             partner: Vec::with_capacity(total),
-            live: Vec::with_capacity(total),
-            record: Vec::with_capacity(total),
             ..Default::default()
         };
+        let mut source = Vec::with_capacity(total);
         new.start.push(0);
         for part in parts {
             for count in part.counts {
@@ -1733,9 +1739,14 @@ impl CpuEngine {
                     .push(new.start.last().copied().unwrap_or(0) + count);
             }
             new.partner.extend(part.partner);
-            new.live.extend(part.live);
-            new.record.extend(part.record);
+            source.extend(part.source);
         }
+        new.live = self.threads.map_slice(&source, |&s| s != NEW_ENTRY);
+        new.record = self.threads.map_slice(&source, |&s| match s {
+            NEW_ENTRY => ContactRecord::default(),
+            s => old.record[s as usize],
+        });
+        drop(source);
         new.index_incoming();
         drop(old);
         self.pairs = new;
@@ -1746,28 +1757,49 @@ impl CpuEngine {
     }
 
     /// The wall candidates from the positions now: per wall, the active particles whose
-    /// overlap exceeds −(range + skin), and those in contact with it, ascending.
+    /// overlap exceeds −(range + skin), and those in contact with it, ascending. Pieces of
+    /// a chunk of particles of one wall are searched in parallel and joined in order.
     fn rebuild_wall_candidates(&mut self) {
+        let n = self.pos.len();
+        let pieces: Vec<(usize, std::ops::Range<usize>)> = (0..self.walls.len())
+            .flat_map(|w| chunks(n, self.threads.chunk()).map(move |r| (w, r)))
+            .collect();
+        let keys = &self.wall_contacts.key;
+        let (pos, radius, active, material) =
+            (&self.pos, &self.radius, &self.active, &self.material);
+        let (walls, ranges, nm, skin) =
+            (&self.walls, &self.wall_ranges, self.n_materials, self.skin);
+        let found = self
+            .threads
+            .map_work(walls.len() * n, pieces, |(w, range)| {
+                let wall = &walls[w];
+                let first = (w as u32, range.start as u32);
+                let mut cursor = keys.partition_point(|k| *k < first);
+                let mut out = Vec::new();
+                for i in range {
+                    if !active[i] {
+                        continue;
+                    }
+                    let key = (w as u32, i as u32);
+                    while cursor < keys.len() && keys[cursor] < key {
+                        cursor += 1;
+                    }
+                    let in_contact = keys.get(cursor) == Some(&key);
+                    let delta = wall.overlap(pos[i], radius[i]);
+                    let range = ranges[w * nm + material[i]];
+                    if in_contact || delta > -(range + skin) {
+                        out.push(i as u32);
+                    }
+                }
+                (w, out)
+            });
         self.wall_start.clear();
         self.wall_candidates.clear();
         self.wall_start.push(0);
-        let keys = &self.wall_contacts.key;
-        let mut cursor = 0;
-        for (w, wall) in self.walls.iter().enumerate() {
-            for i in 0..self.pos.len() {
-                if !self.active[i] {
-                    continue;
-                }
-                let key = (w as u32, i as u32);
-                while cursor < keys.len() && keys[cursor] < key {
-                    cursor += 1;
-                }
-                let in_contact = keys.get(cursor) == Some(&key);
-                let delta = wall.overlap(self.pos[i], self.radius[i]);
-                let range = self.wall_ranges[w * self.n_materials + self.material[i]];
-                if in_contact || delta > -(range + self.skin) {
-                    self.wall_candidates.push(i as u32);
-                }
+        let mut pieces = found.into_iter().peekable();
+        for w in 0..self.walls.len() {
+            while let Some((_, out)) = pieces.next_if(|(pw, _)| *pw == w) {
+                self.wall_candidates.extend(out);
             }
             self.wall_start.push(self.wall_candidates.len());
         }

@@ -125,6 +125,24 @@ impl Threads {
         }
         self.map(items, f)
     }
+
+    /// `f` applied to every element of `items`, results in element order, written in
+    /// place by the threads in runs of at least a chunk (on the calling thread with one
+    /// thread or no more than a chunk of elements). Elementwise: no order to keep.
+    pub fn map_slice<T: Sync, R: Send>(
+        &self,
+        items: &[T],
+        f: impl Fn(&T) -> R + Sync + Send,
+    ) -> Vec<R> {
+        if self.count <= 1 || items.len() <= self.chunk {
+            return items.iter().map(f).collect();
+        }
+        let work = || items.par_iter().with_min_len(self.chunk).map(&f).collect();
+        match &self.pool {
+            Some(pool) => pool.install(work),
+            None => work(),
+        }
+    }
 }
 
 #[cfg(test)]
@@ -148,6 +166,13 @@ mod tests {
             let threads = Threads::new(t).unwrap();
             assert_eq!(threads.count(), t);
             assert_eq!(threads.map(items.clone(), |x| x * x), want);
+        }
+        let big: Vec<usize> = (0..3 * CHUNK + 5).collect();
+        let squares: Vec<usize> = big.iter().map(|x| x * x).collect();
+        for t in [1, 2, 3] {
+            let threads = Threads::new(t).unwrap();
+            assert_eq!(threads.map_slice(&big, |x| x * x), squares);
+            assert_eq!(threads.map_slice(&items, |x| x * x), want);
         }
         let err = Threads::new(MAX_THREADS + 1).unwrap_err().to_string();
         assert!(err.contains("threads") && err.contains("1025"), "{err}");
