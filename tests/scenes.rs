@@ -200,7 +200,7 @@ fn luding_friction_keys_in_a_scene() {
 }
 
 /// A particle block's `angular_velocity` starts the spin where particles rotate (the CPU
-/// engine holds it from step 0; the GPU's is `tests/gpu_friction.rs`), and is refused with
+/// engine holds it from step 0; the GPU's is `tests/friction.rs`), and is refused with
 /// the particle named where no contact model makes them rotate.
 #[test]
 fn angular_velocity_starts_the_spin_where_particles_rotate() {

@@ -33,6 +33,33 @@ impl Backend {
         }
     }
 
+    /// The simulated time, s.
+    pub fn time(&self) -> f64 {
+        match self {
+            Self::Cpu(e) => Simulation::time(e.as_ref()),
+            Self::Gpu(e) => Simulation::time(e.as_ref()),
+        }
+    }
+
+    /// The steps taken.
+    pub fn steps(&self) -> u64 {
+        match self {
+            Self::Cpu(e) => Simulation::steps(e.as_ref()),
+            Self::Gpu(e) => Simulation::steps(e.as_ref()),
+        }
+    }
+
+    /// Advances to the first step at or after time `t` (s).
+    pub fn run_to(&mut self, t: f64) {
+        let target = (t / self.dt()).ceil() as u64;
+        self.run_steps(target.saturating_sub(self.steps()));
+    }
+
+    /// Whether this is the GPU engine (f32: the looser of a test's two tolerances).
+    pub fn is_gpu(&self) -> bool {
+        matches!(self, Self::Gpu(_))
+    }
+
     /// Advances `n` steps (a failure is the test's).
     pub fn run_steps(&mut self, n: u64) {
         let done = match self {
