@@ -43,7 +43,7 @@ fn undamped_jkr_loses_0_7722_fc_delta0_per_collision() {
             let r = run(p, v);
             assert!(!r.stuck);
             // The force jumps at the touch (−8/9·Fc) and at pull-off (placed inside the
-            // step, see `jkr_restitution_is_second_order_through_the_force_jumps`). At the
+            // step, see `tests/force_jumps.rs`). At the
             // default dt the lost energy is within 1.5 % of W (plus 1e-4 of the kinetic
             // energy, the integrator's share); e near the sticking velocity is very
             // sensitive to it (e² = 1 − W/E), so compare W.
@@ -97,46 +97,6 @@ fn undamped_jkr_loses_0_7722_fc_delta0_per_collision() {
         ..jkr()
     };
     assert!(loss(&f) < loss(&d));
-}
-
-/// max |e − e_closed| over head-on JKR collisions from 1.05 to 5 times the sticking speed,
-/// equal and unequal radii, at `dt_factor` times the default dt.
-fn worst_restitution_error(pulloff: Pulloff, dt_factor: f64, jump_impulses: Option<bool>) -> f64 {
-    let p = JkrParams { pulloff, ..jkr() };
-    let pairs = [(R, false), (2.0 * R, false)];
-    let mut worst: f64 = 0.0;
-    for (s, e) in common::jkr_collisions(p, &pairs, jump_impulses) {
-        let dt = dt_factor * s.time_step().default;
-        let what = format!("{pulloff:?} r2 {} v {}", s.radius2, s.velocity);
-        let c = collide(&CollideSpec { dt: Some(dt), ..s }).unwrap();
-        assert!(!c.stuck, "{what}");
-        worst = worst.max((c.e - e).abs());
-    }
-    worst
-}
-
-/// The force jumps at the touch and at pull-off, placed inside the step: e within 1e-3 of
-/// the closed form at the default dt for both pull-off rules (measured ≤ 1.0e-4; plain
-/// velocity Verlet: 5.9e-3, the jump's misplaced impulse), and second order in dt for the
-/// force rule (the displacement rule's force has an infinite slope at the break: order
-/// about 1.5).
-#[test]
-fn jkr_restitution_is_second_order_through_the_force_jumps() {
-    for pulloff in [Pulloff::Displacement, Pulloff::Force] {
-        let at_default = worst_restitution_error(pulloff, 1.0, None);
-        eprintln!("{pulloff:?}: worst |e - e_closed| at the default dt {at_default:.2e}");
-        assert!(at_default < 1e-3, "{pulloff:?}: {at_default:e}");
-    }
-    let verlet = worst_restitution_error(Pulloff::Force, 1.0, Some(false));
-    eprintln!("plain velocity Verlet, force rule: {verlet:.2e}");
-    assert!(verlet > 3e-3, "{verlet:e}");
-    // four times finer: 16 times closer at second order (measured 39), 4 at first
-    let (coarse, fine) = (
-        worst_restitution_error(Pulloff::Force, 0.5, None),
-        worst_restitution_error(Pulloff::Force, 0.125, None),
-    );
-    eprintln!("force rule: {coarse:.2e} at dt/2, {fine:.2e} at dt/8");
-    assert!(fine < coarse / 10.0, "{coarse:e} -> {fine:e}");
 }
 
 /// Fast impacts cross the adhesive zone at the adhesion speed's resolution, not their own
