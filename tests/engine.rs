@@ -1,61 +1,11 @@
 //! The CPU reference engine on small scenes: walls, gravity, history, determinism, energy.
 
+mod common;
+use common::model_scene::{floor, particle, scene};
+
 use powder::cpu::CpuEngine;
 use powder::model::{ContactModel, HystereticParams, LsdParams};
-use powder::scene::{Domain, DtSetting, Material, ParticleInit, Scene, Wall};
-
-fn scene(
-    model: ContactModel,
-    particles: Vec<ParticleInit>,
-    walls: Vec<Wall>,
-    gravity: f64,
-) -> Scene {
-    Scene {
-        name: "test".into(),
-        domain: Domain {
-            min: [-0.01; 3],
-            max: [0.01; 3],
-            periodic: [false; 3],
-        },
-        gravity: [0.0, 0.0, gravity],
-        dt: DtSetting::Auto,
-        force_dt: false,
-        jump_impulses: None,
-        duration: 1.0,
-        output_every: 1000,
-        contact_output: None,
-        impact_velocity: 1.0,
-        checkpoint_every: 10_000,
-        materials: vec![Material {
-            name: "m".into(),
-            density: 2000.0,
-            model,
-        }],
-        interactions: vec![],
-        walls,
-        particles,
-    }
-}
-
-fn particle(position: [f64; 3], velocity: [f64; 3]) -> ParticleInit {
-    ParticleInit {
-        position,
-        velocity,
-        angular_velocity: [0.0; 3],
-        radius: 1e-3,
-        material: 0,
-        insert_at: 0.0,
-    }
-}
-
-fn floor() -> Wall {
-    Wall {
-        point: [0.0, 0.0, 0.0],
-        normal: [0.0, 0.0, 1.0],
-        motion: Default::default(),
-        material: 0,
-    }
-}
+use powder::scene::{DtSetting, ParticleInit, Scene};
 
 #[test]
 fn sphere_settles_on_a_floor_at_mg_over_k() {
@@ -189,44 +139,6 @@ fn runs_are_bitwise_deterministic() {
         .all(|(x, y)| x.to_array().map(f64::to_bits) == y.to_array().map(f64::to_bits)));
 }
 
-#[test]
-fn cohesive_pile_keeps_its_energy_ledger() {
-    let p = HystereticParams {
-        fa: 2e-6,
-        kca: 100.0,
-        gamma0: 1e-3,
-        ..HystereticParams::paper_figure()
-    };
-    let mut particles = Vec::new();
-    for i in 0..3 {
-        for j in 0..3 {
-            for l in 0..4 {
-                particles.push(particle(
-                    [
-                        -2.2e-3 + 2.2e-3 * i as f64,
-                        -2.2e-3 + 2.2e-3 * j as f64,
-                        1.5e-3 + 2.3e-3 * l as f64,
-                    ],
-                    [0.0; 3],
-                ));
-            }
-        }
-    }
-    let s = scene(ContactModel::Hysteretic(p), particles, vec![floor()], -9.81);
-    let mut e = CpuEngine::new(&s).unwrap();
-    let start = e.energies();
-    e.run_steps(40_000).unwrap();
-    let end = e.energies();
-    let moved = (end.gravitational - start.gravitational).abs();
-    assert!(moved > 0.0 && end.dissipated > 0.0);
-    assert!(
-        (end.total() - start.total()).abs() < 2e-3 * moved,
-        "drift {} vs gravitational change {moved}",
-        end.total() - start.total()
-    );
-    assert!(e.contact_stats().coordination > 1.0);
-}
-
 /// A sphere stuck to a wall by JKR adhesion under a constant force along the wall: it stops
 /// when the force is below the rolling yield force F_yield = M_r/R = 4·Fc·ξcrit/R, and keeps
 /// rolling above it (paper 002 §5.3, F̂ = F_ext/F_yield). The rolling spring is undamped
@@ -286,71 +198,4 @@ fn rolling_resistance_holds_below_the_yield_force_and_yields_above() {
     );
     let (_, dx) = travel(2.0);
     assert!(dx > 1000.0 * xi_crit, "above F_yield it rolls on: {dx} m");
-}
-
-/// The energy ledger closes with Luding's sliding, rolling and twisting friction on
-/// (hysteretic with adhesion and damping, μs > μd): the springs' energy is in the contacts'
-/// potential and the couples' work is booked along ω_i − ω_j. Spheres with some spin and
-/// sideways motion drop onto a floor and onto each other.
-#[test]
-fn cohesive_frictional_pile_keeps_its_energy_ledger() {
-    use glam::DVec3;
-    use powder::model::{CoulombSpring, LudingFriction};
-    let spring = |mu: f64, mu_d: f64, k: f64, gamma: f64| CoulombSpring {
-        mu_s: mu,
-        mu_d,
-        k,
-        gamma,
-    };
-    let p = HystereticParams {
-        fa: 2e-6,
-        kca: 100.0,
-        gamma0: 1e-3,
-        luding: LudingFriction {
-            sliding: spring(0.5, 0.4, 100.0 * 2.0 / 7.0, 1e-3 * 2.0 / 7.0),
-            rolling: spring(0.1, 0.1, 40.0, 4e-4),
-            twisting: spring(0.1, 0.1, 40.0, 4e-4),
-        },
-        ..HystereticParams::paper_figure()
-    };
-    let mut particles = Vec::new();
-    for i in 0..3 {
-        for j in 0..3 {
-            for l in 0..4 {
-                particles.push(particle(
-                    [
-                        -2.2e-3 + 2.2e-3 * i as f64 + 2e-4 * l as f64,
-                        -2.2e-3 + 2.2e-3 * j as f64,
-                        1.5e-3 + 2.3e-3 * l as f64,
-                    ],
-                    [0.01 * (j as f64 - 1.0), 0.01 * (i as f64 - 1.0), 0.0],
-                ));
-            }
-        }
-    }
-    let s = scene(ContactModel::Hysteretic(p), particles, vec![floor()], -9.81);
-    let mut e = CpuEngine::new(&s).unwrap();
-    assert!(e.rotates());
-    for i in 0..e.len() {
-        let k = i as f64;
-        e.set_angular_velocity(i, DVec3::new(20.0 * k.sin(), 20.0 * k.cos(), 30.0))
-            .unwrap();
-    }
-    let start = e.energies();
-    e.run_steps(40_000).unwrap();
-    let end = e.energies();
-    let moved = (end.gravitational - start.gravitational).abs();
-    assert!(moved > 0.0 && end.dissipated > 0.0);
-    let drift = (end.total() - start.total()).abs();
-    assert!(
-        drift < 2e-3 * moved,
-        "drift {drift} vs gravitational change {moved}"
-    );
-    assert!(e.contact_stats().coordination > 1.0);
-    // the friction acted: the spins are damped, and some contact keeps a stretched spring
-    assert!(e.angular_velocities().iter().all(|w| w.length() < 20.0));
-    assert!(e
-        .contacts()
-        .iter()
-        .any(|(_, d, h)| *d > 0.0 && h.tangential.length() > 0.0 && h.twist != 0.0));
 }

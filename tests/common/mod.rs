@@ -2,6 +2,7 @@
 
 pub mod backends;
 pub mod builder;
+pub mod model_scene;
 pub use builder::SceneBuilder;
 
 use powder::gpu::{GpuContext, GpuState};
