@@ -450,6 +450,41 @@ pub fn submit_and_read_parts(
     Ok(out)
 }
 
+/// Whole buffers (buffer, bytes from its start) as parts from offset 0.
+pub fn whole(sources: Vec<(&wgpu::Buffer, u64)>) -> Vec<(&wgpu::Buffer, u64, u64)> {
+    sources.into_iter().map(|(b, n)| (b, 0, n)).collect()
+}
+
+/// Reads `groups` of buffer parts (buffer, byte offset, bytes) back, each group's bytes
+/// joined into one vector, one part at a time (`encoder`, submitted with the first copy,
+/// may hold earlier commands): one staging buffer alive at once and no joined copy, so a
+/// state read in pages takes about its own size in host memory, not three times it.
+pub fn read_joined(
+    ctx: &GpuContext,
+    encoder: wgpu::CommandEncoder,
+    groups: &[Vec<(&wgpu::Buffer, u64, u64)>],
+) -> Result<Vec<Vec<u8>>, PowderError> {
+    let mut encoder = Some(encoder);
+    let mut out = Vec::with_capacity(groups.len());
+    for group in groups {
+        let bytes: u64 = group.iter().map(|p| p.2).sum();
+        let mut joined = Vec::with_capacity(bytes as usize);
+        for &part in group {
+            let encoder = encoder
+                .take()
+                .unwrap_or_else(|| ctx.device.create_command_encoder(&Default::default()));
+            for page in submit_and_read_parts(ctx, encoder, &[part])? {
+                joined.extend_from_slice(&page);
+            }
+        }
+        out.push(joined);
+    }
+    if let Some(encoder) = encoder {
+        ctx.queue.submit([encoder.finish()]);
+    }
+    Ok(out)
+}
+
 /// Reinterprets read-back bytes as u32s.
 pub fn u32s(bytes: &[u8]) -> Vec<u32> {
     bytemuck::pod_collect_to_vec(bytes)

@@ -70,15 +70,11 @@ impl GpuEngine {
     pub fn save_state(&self) -> Result<GpuSavedState, PowderError> {
         let list = self.state_buffers();
         let encoder = self.ctx.device.create_command_encoder(&Default::default());
-        let sources: Vec<(&wgpu::Buffer, u64)> = list
+        let groups: Vec<_> = list
             .iter()
-            .flat_map(|(_, bs)| bs.iter().map(|b| (*b, b.size())))
+            .map(|(_, bs)| bs.iter().map(|b| (*b, 0, b.size())).collect())
             .collect();
-        let mut read = submit_and_read(&self.ctx, encoder, &sources)?.into_iter();
-        let mut out: Vec<Vec<u8>> = list
-            .iter()
-            .map(|(_, bs)| read.by_ref().take(bs.len()).collect::<Vec<_>>().concat())
-            .collect();
+        let mut out = read_joined(&self.ctx, encoder, &groups)?;
         // the monitor words are a batch's scratch (zeroed when one starts): left out, so a
         // state saved after a quiet batch (no `decide` counting steps) and one saved after
         // a normal batch are the same bytes

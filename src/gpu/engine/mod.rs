@@ -23,7 +23,8 @@ use crate::gpu::composition::{Composition, Keeps};
 use crate::gpu::context::GpuContext;
 use crate::gpu::grid::{ExclusiveScan, GridSort};
 use crate::gpu::kernel::{
-    split_workgroups, storage_buffer, submit_and_read, u32s, uniform_buffer, Kernel, Part, Program,
+    read_joined, split_workgroups, storage_buffer, submit_and_read, u32s, uniform_buffer, whole,
+    Kernel, Part, Program,
 };
 use crate::gpu::layout::{encode3, gpu_cell_width, HystereticPair, JkrPair, StepParams, WallGpu};
 use crate::gpu::mirror::Mirrors;

@@ -190,12 +190,12 @@ impl GpuEngine {
     pub(super) fn read_lists(&self) -> Result<(Vec<[u32; 4]>, Vec<u8>), PowderError> {
         let s = &self.state;
         let encoder = self.ctx.device.create_command_encoder(&Default::default());
-        let mut sources = s.sources(Buffer::State);
-        let pages = sources.len();
-        sources.extend(s.entry_sources());
-        let out = submit_and_read(&self.ctx, encoder, &sources)?;
-        let entries = out[pages..].concat();
-        Ok((s.layout.unpack(&out[..pages].concat(), "ids"), entries))
+        let groups = [whole(s.sources(Buffer::State)), whole(s.entry_sources())];
+        let [state, entries]: [Vec<u8>; 2] =
+            read_joined(&self.ctx, encoder, &groups)?
+                .try_into()
+                .map_err(|_| PowderError::Run("a short read-back of the lists".into()))?;
+        Ok((s.layout.unpack(&state, "ids"), entries))
     }
 
     /// The particle state's two buffers read back (`state`, `motion`; their pages one
@@ -203,11 +203,14 @@ impl GpuEngine {
     pub(super) fn read_state(&self) -> Result<(Vec<u8>, Vec<u8>), PowderError> {
         let s = &self.state;
         let encoder = self.ctx.device.create_command_encoder(&Default::default());
-        let mut sources = s.sources(Buffer::State);
-        let pages = sources.len();
-        sources.extend(s.sources(Buffer::Motion));
-        let out = submit_and_read(&self.ctx, encoder, &sources)?;
-        Ok((out[..pages].concat(), out[pages..].concat()))
+        let groups = [
+            whole(s.sources(Buffer::State)),
+            whole(s.sources(Buffer::Motion)),
+        ];
+        let [state, motion]: [Vec<u8>; 2] = read_joined(&self.ctx, encoder, &groups)?
+            .try_into()
+            .map_err(|_| PowderError::Run("a short read-back of the state".into()))?;
+        Ok((state, motion))
     }
 
     /// The wall entries of the lists (`WALL_ENTRY` in `shaders/step.wgsl`: particle k's
