@@ -16,7 +16,7 @@
 set -u
 cd "$(dirname "$0")/.."
 TESTS=(gpu_engine sticking ledger gpu_mixed friction force_jumps gpu_default_limits
-       gpu_grid gpu_pages gpu_rebuild_chain walls periodic stability pouring run_outputs)
+       gpu_grid gpu_pages gpu_rebuild_chain walls periodic stability collide_jkr collide_hysteretic)
 # (the working tree, .gl, .gpubench and these, gzipped, must stay under the 64 MiB a call
 # carries: about 3 MiB each; `prepare` refuses more than 60)
 

@@ -1,4 +1,7 @@
-//! `collide` on the CPU reference path against the closed forms of papers 000 and 003.
+//! Hysteretic (and LSD) collisions through `collide` against the closed forms of papers 000
+//! and 003: on the CPU reference, and on the GPU against it (`on_the_gpu`).
+
+mod common;
 
 use powder::measure::collide::{collide, CollideResult, CollideSpec};
 use powder::model::analytic::{self, beta_star, en_no_fa};
@@ -307,4 +310,134 @@ fn oblique_impacts_carry_no_head_on_closed_form() {
     // the pair's scales stay: χ of the normal speed and vp
     assert!((r.chi.unwrap() - head_on.chi.unwrap()).abs() < 1e-12);
     assert_eq!(r.v_p, head_on.v_p);
+}
+
+/// The hysteretic and LSD collisions on the GPU (f32) against the CPU reference (f64) and
+/// the closed forms.
+mod on_the_gpu {
+    use super::common::gpu as context;
+    use powder::measure::collide::{collide_on, Backend, CollideSpec};
+    use powder::model::{analytic, ContactModel, HystereticParams, LsdParams};
+
+    fn hysteretic(kc: f64, v: f64) -> CollideSpec {
+        let p = HystereticParams {
+            kc,
+            ..HystereticParams::paper_figure()
+        };
+        CollideSpec::head_on(ContactModel::Hysteretic(p), 1.1e-3, 2000.0, v)
+    }
+
+    #[test]
+    fn gpu_collisions_match_the_cpu_and_the_closed_forms() {
+        if context().is_none() {
+            return;
+        }
+        // χ = 0.2, 0.69 and 2.0 for β = 0.1
+        for v in [0.05823, 0.2009, 0.5823] {
+            let s = hysteretic(10.0, v);
+            let (g, c) = (
+                collide_on(&s, Backend::Gpu).unwrap(),
+                collide_on(&s, Backend::Cpu).unwrap(),
+            );
+            assert_eq!(g.backend, "gpu");
+            assert!(g.adapter.is_some());
+            // f32 on the device: e within 1e-3 of the f64 reference
+            assert!((g.e - c.e).abs() < 1e-3, "v {v}: gpu {} cpu {}", g.e, c.e);
+            assert!((g.e - g.e_analytic.unwrap()).abs() < 5e-3);
+            assert_eq!(g.steps, c.steps);
+        }
+        // every branch of the f32 kernel: √ rule, jump-in and reversible non-contact adhesion
+        use powder::model::{AdhesionMode, K2Rule};
+        for p in [
+            HystereticParams {
+                k2_rule: K2Rule::Sqrt,
+                kc: 10.0,
+                ..HystereticParams::paper_figure()
+            },
+            HystereticParams {
+                fa: 5e-6,
+                kca: 100.0,
+                kc: 100.0,
+                ..HystereticParams::paper_figure()
+            },
+            HystereticParams {
+                fa: 5e-6,
+                kca: 100.0,
+                kc: 100.0,
+                adhesion: AdhesionMode::Reversible,
+                ..HystereticParams::paper_figure()
+            },
+            // jump-in with a range (fa/kca = 0.1 mm) whose pull on the separating pair
+            // changes e by percents: only after the touch, so the stored "touched" flag
+            // (the sign bit of the f32 history on the device) must survive the steps
+            HystereticParams {
+                fa: 1e-4,
+                kca: 1.0,
+                kc: 100.0,
+                ..HystereticParams::paper_figure()
+            },
+        ] {
+            for v in [0.02, 0.2, 0.6] {
+                let s = CollideSpec::head_on(ContactModel::Hysteretic(p), 1.1e-3, 2000.0, v);
+                let (g, c) = (
+                    collide_on(&s, Backend::Gpu).unwrap(),
+                    collide_on(&s, Backend::Cpu).unwrap(),
+                );
+                assert_eq!(g.stuck, c.stuck, "{p:?} v {v}");
+                assert!(
+                    (g.e - c.e).abs() < 2e-3,
+                    "{p:?} v {v}: gpu {} cpu {}",
+                    g.e,
+                    c.e
+                );
+            }
+        }
+        let lsd = CollideSpec::head_on(
+            ContactModel::Lsd(LsdParams {
+                k: 1000.0,
+                gamma0: 5e-3,
+                luding: Default::default(),
+            }),
+            1e-3,
+            2500.0,
+            0.1,
+        );
+        let g = collide_on(&lsd, Backend::Gpu).unwrap();
+        let m = 2500.0 * 4.0 / 3.0 * std::f64::consts::PI * 1e-9;
+        let e = analytic::lsd_restitution(1000.0, 5e-3, 0.5 * m).unwrap();
+        assert!((g.e - e).abs() < 5e-3, "lsd gpu {} vs {e}", g.e);
+    }
+
+    /// A sticking collision needs δmax to survive the re-sort and neighbour rebuild of
+    /// every step: the GPU must stick at the same overlap δc as the CPU (eq. 36).
+    #[test]
+    fn history_survives_resorting_in_a_sticking_collision() {
+        if context().is_none() {
+            return;
+        }
+        let s = hysteretic(100.0, 0.8 * 0.29116);
+        let (g, c) = (
+            collide_on(&s, Backend::Gpu).unwrap(),
+            collide_on(&s, Backend::Cpu).unwrap(),
+        );
+        assert!(g.stuck && c.stuck);
+        let (dg, dc) = (g.delta_c.unwrap(), c.delta_c.unwrap());
+        assert!((dg - dc).abs() < 1e-3 * dc, "gpu δc {dg} vs cpu {dc}");
+    }
+
+    #[test]
+    fn gpu_wall_bounce() {
+        if context().is_none() {
+            return;
+        }
+        let s = CollideSpec {
+            wall: true,
+            ..hysteretic(10.0, 0.2)
+        };
+        let (g, c) = (
+            collide_on(&s, Backend::Gpu).unwrap(),
+            collide_on(&s, Backend::Cpu).unwrap(),
+        );
+        assert!((g.e - c.e).abs() < 1e-3, "wall: gpu {} cpu {}", g.e, c.e);
+    }
 }
