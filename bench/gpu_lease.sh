@@ -18,7 +18,8 @@ cd "$(dirname "$0")/.."
 TESTS=(gpu_engine sticking ledger gpu_mixed friction force_jumps gpu_default_limits
        gpu_grid gpu_pages gpu_rebuild_chain walls periodic stability collide_jkr collide_hysteretic)
 # (the working tree, .gl, .gpubench and these, gzipped, must stay under the 64 MiB a call
-# carries: about 3 MiB each; `prepare` refuses more than 60)
+# carries: about 3 MiB each; `prepare` refuses more than 60. The feature files also run
+# their CPU-only tests there, a few seconds of each binary's 90.)
 
 case "${1:-}" in
 prepare)

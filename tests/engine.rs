@@ -1,4 +1,4 @@
-//! The CPU reference engine on small scenes: walls, gravity, history, determinism, energy.
+//! The CPU reference engine on small scenes: walls, gravity, history, determinism, rolling resistance.
 
 mod common;
 use common::model_scene::{floor, particle, scene};

@@ -41,9 +41,11 @@ fn collisions(pulloff: Pulloff, jump_impulses: Option<bool>) -> Vec<(CollideSpec
 #[test]
 fn jkr_restitution_through_the_force_jumps_on_both_backends() {
     for pulloff in [Pulloff::Displacement, Pulloff::Force] {
+        // the CPU's e of each collision, for the GPU's (the CPU runs first)
+        let mut cpu_e = Vec::new();
         for engine in engines() {
             let mut worst: f64 = 0.0;
-            for (spec, e) in collisions(pulloff, Some(true)) {
+            for (k, (spec, e)) in collisions(pulloff, Some(true)).into_iter().enumerate() {
                 let what = format!(
                     "{engine:?} {pulloff:?} r2 {:e} wall {} v {:e}",
                     spec.radius2, spec.wall, spec.velocity
@@ -54,9 +56,12 @@ fn jkr_restitution_through_the_force_jumps_on_both_backends() {
                 assert!((r.e - e).abs() < tol, "{what}: e {} vs {e}", r.e);
                 let balance = r.energy.balance_error.unwrap();
                 assert!(balance < 1e-4, "{what}: ledger balance {balance:e}");
-                if engine == Backend::Gpu {
-                    let c = collide_on(&spec, Backend::Cpu).unwrap();
-                    assert!((r.e - c.e).abs() < 2e-5, "{what}: gpu {} cpu {}", r.e, c.e);
+                match engine {
+                    Backend::Cpu => cpu_e.push(r.e),
+                    Backend::Gpu => {
+                        let c = cpu_e[k];
+                        assert!((r.e - c).abs() < 2e-5, "{what}: gpu {} cpu {c}", r.e);
+                    }
                 }
                 worst = worst.max((r.e - e).abs());
             }
@@ -74,7 +79,11 @@ fn jkr_without_the_force_jumps_is_first_order() {
         let worst = collisions(Pulloff::Force, Some(false))
             .into_iter()
             .filter(|(s, _)| !s.wall)
-            .map(|(spec, e)| (collide_on(&spec, engine).unwrap().e - e).abs())
+            .map(|(spec, e)| {
+                let r = collide_on(&spec, engine).unwrap();
+                assert!(!r.stuck, "{engine:?} v {:e}", spec.velocity);
+                (r.e - e).abs()
+            })
             .fold(0.0, f64::max);
         eprintln!("plain velocity Verlet on {engine:?}, force rule: {worst:.2e}");
         assert!(worst > 3e-3, "{engine:?}: {worst:e}");
@@ -239,8 +248,9 @@ fn touch_jumps_converge(adhesion: AdhesionMode) {
 /// The hysteretic law's jumps on the GPU as on the CPU: jump-in adhesion with a range
 /// (the force jumps to −fa at the touch, an edge), with and without damping, and
 /// reversible adhesion with a range and damping (γ0·δ̇ switches at δ = 0 inside the engaged
-/// range): e within 10⁻⁶ of the CPU's
-/// (measured 1·10⁻⁷) and the same ledger balance, where the jumps move e by 2·10⁻⁴.
+/// range): e within 10⁻⁶ of the CPU's (measured 1·10⁻⁷) and the same ledger balance,
+/// where the jumps move e by more than 10⁻⁴ (measured 2.2–3.3·10⁻⁴ at the worst speed of
+/// each case).
 #[test]
 fn hysteretic_jumps_on_the_gpu_as_on_the_cpu() {
     if gpu().is_none() {
@@ -259,6 +269,7 @@ fn hysteretic_jumps_on_the_gpu_as_on_the_cpu() {
             adhesion,
             ..HystereticParams::paper_figure()
         };
+        let mut moved: f64 = 0.0;
         for v in [0.1, 0.8, 2.0] {
             let spec = CollideSpec::head_on(ContactModel::Hysteretic(p), 1.1e-3, 2000.0, v);
             let (g, c) = (
@@ -276,6 +287,7 @@ fn hysteretic_jumps_on_the_gpu_as_on_the_cpu() {
             let what = format!("{adhesion:?} v {v}");
             eprintln!("{what}: gpu {} cpu {} verlet {}", g.e, c.e, verlet.e);
             assert!((g.e - c.e).abs() < 1e-6, "{what}: gpu {} cpu {}", g.e, c.e);
+            moved = moved.max((verlet.e - c.e).abs());
             let (bg, bc) = (
                 g.energy.balance_error.unwrap(),
                 c.energy.balance_error.unwrap(),
@@ -285,5 +297,9 @@ fn hysteretic_jumps_on_the_gpu_as_on_the_cpu() {
                 "{what}: balance {bg:e} vs {bc:e}"
             );
         }
+        assert!(
+            moved > 1e-4,
+            "{adhesion:?}: the jumps move e by {moved:e} only"
+        );
     }
 }

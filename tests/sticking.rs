@@ -125,7 +125,8 @@ fn the_sticking_window_matches_eqs_34_and_37() {
 /// displacement pull-off, 0.3814 with the force rule) on 1 µm silica-like spheres: the
 /// same verdict and e on both backends at 0.995 and 1.005 of it. (The force jumps at touch
 /// and pull-off put the engines' own threshold within ~1 % of the closed form at the
-/// default dt — issue 17 — so the verdicts are compared between backends, not with it.)
+/// default dt — issue 17 — so there the verdicts are compared between backends, not with
+/// it; at 0.97 and 1.03 both stick and rebound as it says.)
 #[test]
 fn both_backends_agree_at_the_jkr_sticking_velocity() {
     let r: f64 = 1e-6;
@@ -138,14 +139,19 @@ fn both_backends_agree_at_the_jkr_sticking_velocity() {
         };
         let w = analytic::jkr_loss(pulloff) * p.fc(geom.r_eff()) * p.delta0(geom.r_eff());
         let v_stick = analytic::jkr_sticking_velocity(w, geom.reduced_mass);
-        for f in [0.995, 1.005] {
+        let at = |f: f64| {
             verdicts_of(&CollideSpec::head_on(
                 ContactModel::Jkr(p),
                 r,
                 2000.0,
                 f * v_stick,
-            ));
+            ))
+        };
+        for f in [0.995, 1.005] {
+            at(f);
         }
+        assert!(at(0.97), "{pulloff:?}: sticks at 0.97 v_stick");
+        assert!(!at(1.03), "{pulloff:?}: rebounds at 1.03 v_stick");
     }
 }
 

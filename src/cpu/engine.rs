@@ -406,8 +406,7 @@ struct ChunkList {
     counts: Vec<usize>,
     partner: Vec<u32>,
     /// The old list's entry each kept contact comes from ([`NEW_ENTRY`]: a new entry):
-    /// the records are gathered once, into the joined list (a list of 2³² entries would
-    /// hold 600 GB of records).
+    /// the records are gathered once, into the joined list.
     source: Vec<u32>,
 }
 
@@ -472,6 +471,9 @@ impl Search<'_> {
                     (Some(_), None) => unreachable!(),
                 };
                 out.partner.push(j);
+                // (entries are u32-indexed throughout, as `incoming` is: a list stays below
+                // 2³² − 1 entries, whose records alone would fill 600 GB)
+                debug_assert!(source <= NEW_ENTRY as usize);
                 out.source.push(source as u32);
             }
             out.counts.push(out.partner.len() - before);

@@ -404,9 +404,22 @@ pub fn submit_and_read(
 /// the offset a multiple of 4).
 pub fn submit_and_read_parts(
     ctx: &GpuContext,
-    mut encoder: wgpu::CommandEncoder,
+    encoder: wgpu::CommandEncoder,
     sources: &[(&wgpu::Buffer, u64, u64)],
 ) -> Result<Vec<Vec<u8>>, PowderError> {
+    let mut out = Vec::with_capacity(sources.len());
+    read_parts_with(ctx, encoder, sources, |bytes| out.push(bytes.to_vec()))?;
+    Ok(out)
+}
+
+/// Copies `sources` into fresh staging buffers (appended to `encoder`), submits, waits and
+/// hands each part's mapped bytes to `each`, in order, unmapping each after.
+fn read_parts_with(
+    ctx: &GpuContext,
+    mut encoder: wgpu::CommandEncoder,
+    sources: &[(&wgpu::Buffer, u64, u64)],
+    mut each: impl FnMut(&[u8]),
+) -> Result<(), PowderError> {
     let staging: Vec<(wgpu::Buffer, u64)> = sources
         .iter()
         .map(|&(src, at, bytes)| {
@@ -438,16 +451,15 @@ pub fn submit_and_read_parts(
     for (i, r) in rx.iter() {
         r.map_err(|e| PowderError::Run(format!("cannot map read-back buffer {i}: {e}")))?;
     }
-    let mut out = Vec::with_capacity(staging.len());
     for (buf, bytes) in &staging {
         let view = buf
             .get_mapped_range(..)
             .map_err(|e| PowderError::Run(format!("cannot read mapped buffer: {e}")))?;
-        out.push(view[..*bytes as usize].to_vec());
+        each(&view[..*bytes as usize]);
         drop(view);
         buf.unmap();
     }
-    Ok(out)
+    Ok(())
 }
 
 /// Whole buffers (buffer, bytes from its start) as parts from offset 0.
@@ -456,9 +468,10 @@ pub fn whole(sources: Vec<(&wgpu::Buffer, u64)>) -> Vec<(&wgpu::Buffer, u64, u64
 }
 
 /// Reads `groups` of buffer parts (buffer, byte offset, bytes) back, each group's bytes
-/// joined into one vector, one part at a time (`encoder`, submitted with the first copy,
-/// may hold earlier commands): one staging buffer alive at once and no joined copy, so a
-/// state read in pages takes about its own size in host memory, not three times it.
+/// joined into one vector, one part at a time (a submission and wait each; `encoder`,
+/// submitted with the first copy, may hold earlier commands): each part goes from its
+/// staging buffer straight into the joined bytes, so at the peak the host holds the bytes
+/// read so far and one part's staging copy (3× the bytes before: staging, parts, joined).
 pub fn read_joined(
     ctx: &GpuContext,
     encoder: wgpu::CommandEncoder,
@@ -473,9 +486,9 @@ pub fn read_joined(
             let encoder = encoder
                 .take()
                 .unwrap_or_else(|| ctx.device.create_command_encoder(&Default::default()));
-            for page in submit_and_read_parts(ctx, encoder, &[part])? {
-                joined.extend_from_slice(&page);
-            }
+            read_parts_with(ctx, encoder, &[part], |bytes| {
+                joined.extend_from_slice(bytes)
+            })?;
         }
         out.push(joined);
     }
