@@ -503,7 +503,6 @@ impl GpuEngine {
         let extent = DVec3::from_array(scene.domain.max) - origin;
         let cutoff = 2.0 * r.r_max + r.max_reach + skin;
         let (h, dims) = cell_grid(scene, n, cutoff)?;
-        let periodic = scene.domain.periodic;
         let mut grid =
             GridSort::with_cell_widths(&ctx, n as u32, dims, [h.x as f32, h.y as f32, h.z as f32])?;
         // the windows (`gpu::window`): asked for, or one where every array fits a binding
@@ -570,7 +569,6 @@ impl GpuEngine {
         // the per-particle buffers fit before the initial state is written into them
         alloc.check(n)?;
         let initial = InitialState::new(scene, &r, (origin, h, dims), dt32);
-        let g = scene.gravity;
         let q0 = &ctx.queue;
         for b in Buffer::ALL {
             write_pages(
@@ -585,34 +583,7 @@ impl GpuEngine {
             .map(|w| WallGpu::from_scene(w, origin, h))
             .collect();
         let moving_walls = scene.walls.iter().any(|w| w.motion.moves());
-        let step = StepParams {
-            gravity: [g[0] as f32, g[1] as f32, g[2] as f32],
-            dt: r.dt as f32,
-            list_capacity: entries as u32,
-            n_materials: r.n_materials as u32,
-            n_walls: n_walls as u32,
-            reach: r.max_reach as f32,
-            extent_cells: [
-                (extent.x / h.x) as f32,
-                (extent.y / h.y) as f32,
-                (extent.z / h.z) as f32,
-            ],
-            servo_walls: servo_walls as u32,
-            periodic: periodic.map(u32::from),
-            zero: 0,
-            skin: skin as f32,
-            // on once the initial forces are in (`initial_forces`)
-            jumps: 0,
-            _pad: [0; 2],
-            period_lo: [0, 1, 2].map(|a| {
-                if periodic[a] {
-                    (extent[a] - dims[a] as f64 * h[a]) as f32
-                } else {
-                    0.0
-                }
-            }),
-            _pad_end: 0,
-        };
+        let step = step_params(scene, &r, (extent, h, dims), (entries, skin));
         let step_buf = uniform_buffer(device, "step", bytemuck::bytes_of(&step));
         alloc.list.push(("step".into(), step_buf.size()));
         let pairs_buf = alloc.buffer("pairs", pairs.len() as u64);
@@ -840,17 +811,7 @@ impl GpuEngine {
                 .map(|w| DVec3::from_array(w.point))
                 .collect(),
             insert_at: scene.particles.iter().map(|p| p.insert_at).collect(),
-            insert_energy: scene
-                .particles
-                .iter()
-                .zip(&mass)
-                .map(|(p, m)| {
-                    let spin = 0.2 * m * p.radius * p.radius;
-                    0.5 * m * DVec3::from_array(p.velocity).length_squared()
-                        + spin * DVec3::from_array(p.angular_velocity).length_squared()
-                        - m * DVec3::from_array(scene.gravity).dot(DVec3::from_array(p.position))
-                })
-                .collect(),
+            insert_energy: insert_energies(scene, &mass),
             active,
             inserted: 0.0,
             ctx,
@@ -868,4 +829,62 @@ impl GpuEngine {
             }
         }
     }
+}
+
+/// The step's uniform parameters for a scene (`r` resolved from it; the cell grid's origin
+/// offset `extent`, widths `h` and `dims`; the lists' `entries` a window and the `skin`).
+fn step_params(
+    scene: &Scene,
+    r: &Resolved,
+    (extent, h, dims): (DVec3, DVec3, [u32; 3]),
+    (entries, skin): (u64, f64),
+) -> StepParams {
+    let g = scene.gravity;
+    let periodic = scene.domain.periodic;
+    let n_walls = scene.walls.len();
+    let servo_walls = scene.walls.iter().any(|w| w.motion.servo());
+    StepParams {
+        gravity: [g[0] as f32, g[1] as f32, g[2] as f32],
+        dt: r.dt as f32,
+        list_capacity: entries as u32,
+        n_materials: r.n_materials as u32,
+        n_walls: n_walls as u32,
+        reach: r.max_reach as f32,
+        extent_cells: [
+            (extent.x / h.x) as f32,
+            (extent.y / h.y) as f32,
+            (extent.z / h.z) as f32,
+        ],
+        servo_walls: servo_walls as u32,
+        periodic: periodic.map(u32::from),
+        zero: 0,
+        skin: skin as f32,
+        // on once the initial forces are in (`initial_forces`)
+        jumps: 0,
+        _pad: [0; 2],
+        period_lo: [0, 1, 2].map(|a| {
+            if periodic[a] {
+                (extent[a] - dims[a] as f64 * h[a]) as f32
+            } else {
+                0.0
+            }
+        }),
+        _pad_end: 0,
+    }
+}
+
+/// The energy each particle brings when it appears (kinetic, rotational about its centre,
+/// gravitational), J: the ledger books it at its insertion.
+fn insert_energies(scene: &Scene, mass: &[f64]) -> Vec<f64> {
+    scene
+        .particles
+        .iter()
+        .zip(mass)
+        .map(|(p, m)| {
+            let spin = 0.2 * m * p.radius * p.radius;
+            0.5 * m * DVec3::from_array(p.velocity).length_squared()
+                + spin * DVec3::from_array(p.angular_velocity).length_squared()
+                - m * DVec3::from_array(scene.gravity).dot(DVec3::from_array(p.position))
+        })
+        .collect()
 }
