@@ -562,23 +562,11 @@ fn a_deposited_sphere_rests_below_the_rolling_yield_force_and_rolls_above() {
 /// The JKR family on the GPU (f32) against the CPU reference (f64).
 mod on_the_gpu {
     use super::common::{gpu as context, SceneBuilder};
+    use super::{jkr, spec, R, RHO};
     use powder::gpu::GpuEngine;
     use powder::measure::collide::{collide_on, Backend, CollideResult, CollideSpec};
-    use powder::model::{
-        analytic, ContactModel, Dissipation, JkrParams, PairGeometry, Pulloff, TsujiStiffness,
-    };
+    use powder::model::{analytic, Dissipation, JkrParams, PairGeometry, Pulloff, TsujiStiffness};
     use powder::scene::Scene;
-
-    const R: f64 = 1e-6;
-    const RHO: f64 = 2000.0;
-
-    fn jkr() -> JkrParams {
-        JkrParams::jkr(1e9, 0.3, 0.05)
-    }
-
-    fn spec(p: JkrParams, v: f64) -> CollideSpec {
-        CollideSpec::head_on(ContactModel::Jkr(p), R, RHO, v)
-    }
 
     fn both(s: &CollideSpec) -> (CollideResult, CollideResult) {
         let g = collide_on(s, Backend::Gpu).unwrap();

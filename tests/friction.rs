@@ -11,7 +11,7 @@
 mod common;
 use common::backends::{backends, Backend};
 use common::builder::{HALF_COHESIVE, STICKY};
-use common::{floor_scene, gpu, law, packing, rough, SceneBuilder};
+use common::{floor_scene, gpu, law, packing, report, rough, SceneBuilder};
 
 use glam::DVec3;
 use powder::cpu::CpuEngine;
@@ -468,22 +468,6 @@ fn adhesion_holds_friction_at_zero_net_normal_load() {
 /// The GPU's tolerance on μ_eff and the spin rate of the sliding sphere (f32: measured 8e-8
 /// in μ_eff, 3.2e-5 in the spin on lavapipe).
 const GPU_SLIDING: f64 = 1e-4;
-
-fn report(c: &powder::measure::compare::Comparison) {
-    for s in &c.samples {
-        eprintln!(
-            "step {}: pos {:.2e} vel {:.2e} energy {:.2e} contacts {}/{} history {:.2e} over {}",
-            s.step,
-            s.position,
-            s.velocity,
-            s.energy,
-            s.contacts_cpu,
-            s.contacts_gpu,
-            s.history,
-            s.history_pairs
-        );
-    }
-}
 
 /// Adhesive elasto-plastic spheres with Luding's sliding (μs > μd), rolling and twisting
 /// friction: one pair law and its three sub-models, against the CPU. The thrown spheres'

@@ -36,19 +36,7 @@ fn a_mixed_scene_runs_on_the_gpu_and_matches_the_cpu() {
     // (7 ms of the collapse: the GPU and CPU drift apart like any chaotic pair of runs
     // beyond that; dt = 5.8e-6 s, the adhesive zone crossed at the adhesion speed)
     let c = compare(&scene, ctx, 1200, 300, Tolerances::default()).unwrap();
-    for s in &c.samples {
-        eprintln!(
-            "step {}: pos {:.2e} vel {:.2e} energy {:.2e} contacts {}/{} history {:.2e} over {}",
-            s.step,
-            s.position,
-            s.velocity,
-            s.energy,
-            s.contacts_cpu,
-            s.contacts_gpu,
-            s.history,
-            s.history_pairs
-        );
-    }
+    common::report(&c);
     let last = c.samples.last().unwrap();
     assert!(last.contacts_cpu > 5 && last.history_pairs > 0, "{last:?}");
     assert!(c.passed, "{:?}", last);

@@ -249,3 +249,21 @@ pub fn packing(materials: impl FnOnce(SceneBuilder) -> SceneBuilder, upper: &str
 pub fn rough(b: SceneBuilder) -> SceneBuilder {
     b.material("rough", 2000.0, builder::ROUGH)
 }
+
+/// Prints a GPU-against-CPU comparison's samples (to read a failure's trace).
+#[allow(dead_code)]
+pub fn report(c: &powder::measure::compare::Comparison) {
+    for s in &c.samples {
+        eprintln!(
+            "step {}: pos {:.2e} vel {:.2e} energy {:.2e} contacts {}/{} history {:.2e} over {}",
+            s.step,
+            s.position,
+            s.velocity,
+            s.energy,
+            s.contacts_cpu,
+            s.contacts_gpu,
+            s.history,
+            s.history_pairs
+        );
+    }
+}
