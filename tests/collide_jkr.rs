@@ -2,6 +2,8 @@
 //! reference, and on the GPU against it (`on_the_gpu`).
 
 mod common;
+use common::backends::{backends, Backend};
+use common::SceneBuilder;
 
 use powder::measure::collide::{collide, CollideResult, CollideSpec};
 use powder::model::{
@@ -559,6 +561,96 @@ fn a_deposited_sphere_rests_below_the_rolling_yield_force_and_rolls_above() {
     assert!(err.contains("--wall"), "{err}");
 }
 
+/// A sphere stuck to a wall by JKR adhesion under a constant force along the wall: held
+/// below the rolling yield force F_yield = M_r/R = 4·Fc·ξcrit/R, rolling on above it (paper
+/// 002 §5.3, F̂ = F_ext/F_yield), on both backends, the GPU within 1e-2 (held) and 2e-3
+/// (rolling) of the CPU. The rolling spring is undamped (paper 002 gives no rolling
+/// damping) and rolling without slip has no sliding to damp, so a held sphere keeps rocking
+/// about its rest position, within ξcrit.
+///
+/// The domain is 1 mm × 0.1 mm × 0.1 mm: the GPU sizes its cells from the domain and the
+/// particle count (about 4 cells per particle, 64 at least), so one particle in a 2 cm cube
+/// gets 5 mm cells, whose f32 offsets resolve 3e-10 m — 1/70 of ξcrit = 2.1e-8 m and more
+/// than the sphere moves per step while it rocks, so it would not move at all. Here the
+/// cells are 54 µm (3e-12 m).
+#[test]
+fn rolling_resistance_holds_below_the_yield_force_and_yields_above() {
+    let r = 5e-6;
+    let p = JkrParams {
+        dissipation: Dissipation::tsuji(0.3),
+        friction: 0.5,
+        rolling_hysteresis: 0.5,
+        ..JkrParams::jkr(1e8, 0.3, 0.01)
+    };
+    let m = 2000.0 * 4.0 / 3.0 * std::f64::consts::PI * r * r * r;
+    let xi_crit = p.a0(r) / 12.0 * p.rolling_hysteresis;
+    let f_yield = 4.0 * p.fc(r) * xi_crit / r;
+    let law = "model = \"jkr\"\nyoungs = 1e8\npoisson = 0.3\nsurface_energy = 0.01\n\
+               restitution = 0.3\nfriction = 0.5\nrolling_hysteresis = 0.5";
+    let z = r - 0.5 * p.delta0(r);
+    let base = SceneBuilder::new("rolling", [-5e-5; 3], [1e-3, 5e-5, 5e-5], 1.0)
+        .simulation("impact_velocity", "0.01")
+        .material("m", 2000.0, law)
+        .floor()
+        .particles(
+            "list",
+            &format!("positions = [[0.0, 0.0, {z:e}]]\nradius = {r:e}"),
+        )
+        .build();
+    // 20 000 steps (0.2 ms, ~16 periods of the rocking about the rest position) on each
+    // backend: largest |x| over the run, distance rolled in the second half, final spin
+    let travel = |f_hat: f64| {
+        let mut s = base.clone();
+        s.gravity = [f_hat * f_yield / m, 0.0, 0.0];
+        let mut out = Vec::new();
+        for mut b in backends(&s) {
+            let (mut x_max, mut x_half): (f64, f64) = (0.0, 0.0);
+            for k in 0..40 {
+                b.run_steps(500);
+                let x = b.observe().positions[0].x;
+                x_max = x_max.max(x.abs());
+                if k == 19 {
+                    x_half = x;
+                }
+            }
+            let h = match &b {
+                Backend::Cpu(e) => e.wall_contact_history(0, 0),
+                Backend::Gpu(e) => e.wall_contact_history(0, 0).ok(),
+            };
+            let h = h.unwrap_or_default();
+            assert!(h.touched, "{}: stays attached", b.name());
+            assert!(h.rolling.length() <= xi_crit * (1.0 + 1e-5), "{}", b.name());
+            let o = b.observe();
+            out.push((x_max, o.positions[0].x - x_half, o.angular_velocities[0]));
+        }
+        out
+    };
+    let held = travel(0.5);
+    for (k, &(x_max, _, _)) in held.iter().enumerate() {
+        eprintln!(
+            "F = 0.5 F_yield, backend {k}: largest |x| {:.4} xi_crit",
+            x_max / xi_crit
+        );
+        assert!(
+            x_max < 1.1 * xi_crit,
+            "held: moved up to {x_max} m, xi_crit {xi_crit} m"
+        );
+        assert!((x_max / held[0].0 - 1.0).abs() < 1e-2, "{held:?}");
+    }
+    let rolls = travel(2.0);
+    for (k, &(_, dx, w)) in rolls.iter().enumerate() {
+        eprintln!(
+            "F = 2 F_yield, backend {k}: rolled {dx:.4e} m = {:.0} xi_crit; omega {w}",
+            dx / xi_crit
+        );
+        assert!(dx > 1000.0 * xi_crit, "above F_yield it rolls on: {dx} m");
+        // rolling along +x on a floor below: spin about +y
+        assert!(w.y > 0.0 && w.y > 10.0 * w.x.abs().max(w.z.abs()), "{w}");
+        assert!((dx / rolls[0].1 - 1.0).abs() < 2e-3, "{rolls:?}");
+        assert!((w.y / rolls[0].2.y - 1.0).abs() < 2e-3, "{rolls:?}");
+    }
+}
+
 /// The JKR family on the GPU (f32) against the CPU reference (f64).
 mod on_the_gpu {
     use super::common::{gpu as context, SceneBuilder};
@@ -827,104 +919,6 @@ mod on_the_gpu {
             assert!((tg - tc).abs() < 2e-3, "{angle}°: e_t {tg} {tc}");
             assert!((wg / wc - 1.0).abs() < 2e-3, "{angle}°: omega {wg} {wc}");
         }
-    }
-
-    /// A sphere stuck to a wall by JKR adhesion under a constant force along the wall
-    /// (`tests/engine.rs`, paper 002 §5.3) on the GPU: held below the rolling yield force
-    /// F_yield = 4·Fc·ξcrit/R, rolling on above it.
-    ///
-    /// The domain is 1 mm × 0.1 mm × 0.1 mm instead of the CPU test's 2 cm cube: the GPU
-    /// sizes its cells from the domain and the particle count (about 4 cells per particle,
-    /// 64 at least), so one particle in a 2 cm cube gets 5 mm cells, whose f32 offsets
-    /// resolve 3e-10 m — 1/70 of ξcrit = 2.1e-8 m and more than the sphere moves per step
-    /// while it rocks, so it would not move at all. Here the cells are 54 µm (3e-12 m).
-    #[test]
-    fn gpu_rolling_resistance_holds_below_the_yield_force_and_yields_above() {
-        let Some(ctx) = context() else { return };
-        let r = 5e-6;
-        let p = JkrParams {
-            dissipation: Dissipation::tsuji(0.3),
-            friction: 0.5,
-            rolling_hysteresis: 0.5,
-            ..JkrParams::jkr(1e8, 0.3, 0.01)
-        };
-        let m = 2000.0 * 4.0 / 3.0 * std::f64::consts::PI * r * r * r;
-        let xi_crit = p.a0(r) / 12.0 * p.rolling_hysteresis;
-        let f_yield = 4.0 * p.fc(r) * xi_crit / r;
-        let law = "model = \"jkr\"\nyoungs = 1e8\npoisson = 0.3\nsurface_energy = 0.01\n\
-                   restitution = 0.3\nfriction = 0.5\nrolling_hysteresis = 0.5";
-        let z = r - 0.5 * p.delta0(r);
-        let base = SceneBuilder::new("gpu-jkr", [-5e-5; 3], [1e-3, 5e-5, 5e-5], 1.0)
-            .simulation("impact_velocity", "0.01")
-            .material("m", 2000.0, law)
-            .floor()
-            .particles(
-                "list",
-                &format!("positions = [[0.0, 0.0, {z:e}]]\nradius = {r:e}"),
-            )
-            .build();
-        let mut ctx = Some(ctx);
-        // 20 000 steps (0.2 ms, ~16 periods of the rocking about the rest position; the
-        // CPU test runs 200 000): largest |x| over the run, distance rolled in the second
-        // half, final spin; GPU and CPU
-        let mut travel = |f_hat: f64| {
-            let mut s = base.clone();
-            s.gravity = [f_hat * f_yield / m, 0.0, 0.0];
-            let mut g = GpuEngine::new(&s, ctx.take().or_else(context).unwrap()).unwrap();
-            let mut c = powder::cpu::CpuEngine::new(&s).unwrap();
-            assert!(g.rotates() && c.rotates());
-            let (mut x_max, mut x_max_cpu): (f64, f64) = (0.0, 0.0);
-            let (mut x_half, mut x_half_cpu) = (0.0, 0.0);
-            for k in 0..40 {
-                g.run_steps(500).unwrap();
-                c.run_steps(500).unwrap();
-                let x = g.state().unwrap().positions[0].x;
-                x_max = x_max.max(x.abs());
-                x_max_cpu = x_max_cpu.max(c.positions()[0].x.abs());
-                if k == 19 {
-                    x_half = x;
-                    x_half_cpu = c.positions()[0].x;
-                }
-            }
-            let h = g.wall_contact_history(0, 0).unwrap();
-            assert!(h.touched, "stays attached");
-            assert!(h.rolling.length() <= xi_crit * (1.0 + 1e-5));
-            let st = g.state().unwrap();
-            (
-                [x_max, x_max_cpu],
-                [st.positions[0].x - x_half, c.positions()[0].x - x_half_cpu],
-                [st.angular_velocities[0], c.angular_velocities()[0]],
-            )
-        };
-        let (x_max, _, _) = travel(0.5);
-        eprintln!(
-            "rolling, F = 0.5 F_yield: largest |x| gpu {:.4} cpu {:.4} xi_crit",
-            x_max[0] / xi_crit,
-            x_max[1] / xi_crit
-        );
-        assert!(
-            x_max[0] < 1.1 * xi_crit,
-            "held: moved up to {} m, xi_crit {xi_crit} m",
-            x_max[0]
-        );
-        assert!((x_max[0] / x_max[1] - 1.0).abs() < 1e-2, "{x_max:?}");
-        let (_, dx, w) = travel(2.0);
-        eprintln!(
-            "rolling, F = 2 F_yield: rolled {:.4e} m (gpu) {:.4e} m (cpu) = {:.0} xi_crit in the second half; omega gpu {} cpu {}",
-            dx[0],
-            dx[1],
-            dx[0] / xi_crit,
-            w[0],
-            w[1]
-        );
-        assert!(
-            dx[0] > 1000.0 * xi_crit,
-            "above F_yield it rolls on: {dx:?} m"
-        );
-        assert!((dx[0] / dx[1] - 1.0).abs() < 2e-3, "{dx:?}");
-        // rolling along +x on a floor below: spin about +y
-        assert!(w[0].y > 0.0 && w[0].y > 10.0 * w[0].x.abs().max(w[0].z.abs()));
-        assert!((w[0].y / w[1].y - 1.0).abs() < 2e-3, "{w:?}");
     }
 
     /// Adhesive micro-spheres (r = 5 µm) with friction and rolling resistance: a 3×3 layer
