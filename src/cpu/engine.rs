@@ -502,11 +502,11 @@ struct PairInputs<'a> {
     dt: f64,
 }
 
-/// What the pair loop derives from a partner's radius, mass and model (the key): the pair
-/// geometry, the rolling factor ½(r_i − r_j)/(r_i + r_j) and the model's pair constants.
+/// What the pair loop derives from the two radii and masses and the pair's model (the key):
+/// the pair geometry, the rolling factor ½(r_i − r_j)/(r_i + r_j) and the model's pair constants.
 #[derive(Clone, Copy)]
 struct PairShape {
-    key: (u64, u64, usize),
+    key: (u64, u64, u64, u64, usize),
     geom: PairGeometry,
     roll: f64,
     pair: PairConstants,
@@ -524,10 +524,66 @@ struct PairChunk<'a> {
     own_torque: &'a mut [DVec3],
 }
 
+/// Entries of a row gauged ahead of their forces at a time.
+const AHEAD: usize = 8;
+
+/// What the pair loop measures of an entry ahead of its force, for a block of entries side
+/// by side (their square roots, divisions and the law's root solve overlap): the distance,
+/// its reciprocal and the law's overlap root.
+#[derive(Clone, Copy, Default)]
+struct Gauge {
+    dist: f64,
+    inv_dist: f64,
+    root: Option<f64>,
+}
+
+impl Gauge {
+    fn new(dist: f64, root: Option<f64>) -> Self {
+        Self {
+            dist,
+            inv_dist: 1.0 / dist,
+            root,
+        }
+    }
+}
+
+impl PairShape {
+    /// The shape of pair (i, j) with model index m: `cache`'s if it has the same key, else
+    /// computed and cached.
+    fn cached<'c>(
+        cache: &'c mut Option<PairShape>,
+        (i, j, m): (usize, usize, usize),
+        radius: &[f64],
+        mass: &[f64],
+        model: &ContactModel,
+    ) -> &'c PairShape {
+        let (ri, rj) = (radius[i], radius[j]);
+        let key = (
+            ri.to_bits(),
+            mass[i].to_bits(),
+            rj.to_bits(),
+            mass[j].to_bits(),
+            m,
+        );
+        if cache.as_ref().is_none_or(|known| known.key != key) {
+            let geom = PairGeometry::spheres(ri, rj, mass[i], mass[j]);
+            *cache = Some(Self {
+                key,
+                geom,
+                roll: 0.5 * (ri - rj) / (ri + rj),
+                pair: model.pair_constants(&geom),
+            });
+        }
+        cache.as_ref().expect("just filled")
+    }
+}
+
 impl PairInputs<'_> {
-    /// The entries of one chunk, in key order; returns the chunk's log.
+    /// The entries of one chunk, in key order; returns the chunk's log. `ROOTS`: some law
+    /// solves overlap roots ahead ([`ContactModel::root_ahead`]), so the entries are gauged
+    /// ahead of their forces.
     #[inline(never)]
-    fn chunk<const ROT: bool>(&self, c: PairChunk) -> StepLog {
+    fn chunk<const ROT: bool, const ROOTS: bool>(&self, c: PairChunk) -> StepLog {
         let omega_of = |i: usize| if ROT { self.w_pred[i] } else { DVec3::ZERO };
         let (pos, radius, pad, mass, material) =
             (self.pos, self.radius, self.pad, self.mass, self.material);
@@ -536,6 +592,8 @@ impl PairInputs<'_> {
         let nm = self.n_materials;
         let mut log = StepLog::new(self.dt, None);
         let base = self.start[c.range.start];
+        // the last pair's shape (the pairs of a packing share few)
+        let mut shape: Option<PairShape> = None;
         for (a, i) in c.range.clone().enumerate() {
             let (s, e) = (self.start[i], self.start[i + 1]);
             if s == e {
@@ -545,109 +603,131 @@ impl PairInputs<'_> {
             let (vi, wi) = (self.v_pred[i], omega_of(i));
             // i's own sums
             let (mut fi, mut ti) = (DVec3::ZERO, DVec3::ZERO);
-            // the last partner's shape (partners of a packing share them)
-            let mut shape: Option<PairShape> = None;
-            for k in s..e {
-                let x = k - base;
-                let j = self.partner[k] as usize;
-                let mut d = pi - pos[j];
+            let separation = |j: usize| {
+                let d = pi - pos[j];
                 if any_periodic {
-                    d = minimum_image(d, periodic, domain);
+                    minimum_image(d, periodic, domain)
+                } else {
+                    d
                 }
-                let dist2 = d.length_squared();
-                let reach = pad_i + radius[j];
-                let live = c.live[x];
-                // an engaged contact beyond the reach broke within the step: visited, so its
-                // exit edge is booked and its force jump placed (as on the GPU)
-                let visit = live && c.record[x].engaged();
-                if dist2 >= reach * reach && !visit {
-                    if live {
-                        log.depart(&c.record[x], ri + radius[j] - dist2.sqrt());
-                        c.live[x] = false;
+            };
+            // the row in blocks: each block's gauges first, side by side, then its forces
+            for block in (s..e).step_by(AHEAD) {
+                let block = block..(block + AHEAD).min(e);
+                let mut gauges = [Gauge::default(); AHEAD];
+                for (g, k) in gauges.iter_mut().zip(block.clone()) {
+                    if !ROOTS {
+                        break;
                     }
-                    c.entry_force[x] = DVec3::ZERO;
+                    let x = k - base;
+                    let j = self.partner[k] as usize;
+                    let dist2 = separation(j).length_squared();
+                    let dist = dist2.sqrt();
+                    let reach = pad_i + radius[j];
+                    let live = c.live[x];
+                    // (the entries the force pass skips need no root)
+                    let root = if dist2 < reach * reach || live && c.record[x].engaged() {
+                        let m = mi + material[j];
+                        let model = &self.models[m];
+                        let pair = &PairShape::cached(&mut shape, (i, j, m), radius, mass, model);
+                        let touched = live && c.record[x].history.touched;
+                        model.root_ahead(&pair.pair, ri + radius[j] - dist, touched)
+                    } else {
+                        None
+                    };
+                    *g = Gauge::new(dist, root);
+                }
+                for (g, k) in gauges.iter().zip(block) {
+                    let x = k - base;
+                    let j = self.partner[k] as usize;
+                    let d = separation(j);
+                    let dist2 = d.length_squared();
+                    // (without roots to solve, measured here: where it is needed)
+                    let Gauge {
+                        dist,
+                        inv_dist,
+                        root,
+                    } = if ROOTS {
+                        *g
+                    } else {
+                        Gauge::new(dist2.sqrt(), None)
+                    };
+                    let reach = pad_i + radius[j];
+                    let live = c.live[x];
+                    // an engaged contact beyond the reach broke within the step: visited, so its
+                    // exit edge is booked and its force jump placed (as on the GPU)
+                    let visit = live && c.record[x].engaged();
+                    if dist2 >= reach * reach && !visit {
+                        if live {
+                            log.depart(&c.record[x], ri + radius[j] - dist);
+                            c.live[x] = false;
+                        }
+                        c.entry_force[x] = DVec3::ZERO;
+                        if ROT {
+                            c.entry_torque[x] = DVec3::ZERO;
+                        }
+                        continue;
+                    }
+                    let delta = ri + radius[j] - dist;
+                    let m = mi + material[j];
+                    let (model, range) = (&self.models[m], self.ranges[m]);
+                    if delta <= -range && !live {
+                        c.entry_force[x] = DVec3::ZERO;
+                        if ROT {
+                            c.entry_torque[x] = DVec3::ZERO;
+                        }
+                        continue;
+                    }
+                    let prior = live.then(|| &c.record[x]);
+                    let n = if dist > 0.0 { d * inv_dist } else { DVec3::Z };
+                    let &PairShape {
+                        geom, roll, pair, ..
+                    } = PairShape::cached(&mut shape, (i, j, m), radius, mass, model);
+                    let wj = omega_of(j);
+                    let v_rel = vi - self.v_pred[j];
+                    let v_c = if ROT {
+                        v_rel - ri * wi.cross(n) - radius[j] * wj.cross(n)
+                    } else {
+                        v_rel
+                    };
+                    let v_t = v_c - n * v_c.dot(n);
+                    // rolling needs rotation: no model reads v_roll without it
+                    let v_roll = if ROT {
+                        geom.r_eff() * (wi - wj).cross(n) + roll * v_t
+                    } else {
+                        DVec3::ZERO
+                    };
+                    let contact = Contact {
+                        model,
+                        geom,
+                        pair,
+                        kin: Kinematics {
+                            delta,
+                            delta_dot: -v_rel.dot(n),
+                            n,
+                            v_t,
+                            v_roll,
+                            omega_rel: wi - wj,
+                            root,
+                        },
+                        i,
+                        partner: Partner::Particle(j),
+                    };
+                    let (r, couple) = log.contact(contact, prior);
+                    let f = r.force * n + r.tangential;
+                    fi += f;
+                    c.entry_force[x] = f;
                     if ROT {
-                        c.entry_torque[x] = DVec3::ZERO;
+                        let t = n.cross(r.tangential);
+                        ti += -ri * t + couple;
+                        c.entry_torque[x] = -radius[j] * t - couple;
                     }
-                    continue;
-                }
-                let dist = dist2.sqrt();
-                let delta = ri + radius[j] - dist;
-                let m = mi + material[j];
-                let (model, range) = (&self.models[m], self.ranges[m]);
-                if delta <= -range && !live {
-                    c.entry_force[x] = DVec3::ZERO;
-                    if ROT {
-                        c.entry_torque[x] = DVec3::ZERO;
+                    let keep = r.stays(range);
+                    if keep {
+                        c.record[x] = r;
                     }
-                    continue;
+                    c.live[x] = keep;
                 }
-                let prior = live.then(|| &c.record[x]);
-                let n = if dist > 0.0 {
-                    d * (1.0 / dist)
-                } else {
-                    DVec3::Z
-                };
-                let key = (radius[j].to_bits(), mass[j].to_bits(), m);
-                let PairShape {
-                    geom, roll, pair, ..
-                } = match shape {
-                    Some(known) if known.key == key => known,
-                    _ => {
-                        let geom = PairGeometry::spheres(ri, radius[j], mass[i], mass[j]);
-                        let known = PairShape {
-                            key,
-                            geom,
-                            roll: 0.5 * (ri - radius[j]) / (ri + radius[j]),
-                            pair: model.pair_constants(&geom),
-                        };
-                        shape = Some(known);
-                        known
-                    }
-                };
-                let wj = omega_of(j);
-                let v_rel = vi - self.v_pred[j];
-                let v_c = if ROT {
-                    v_rel - ri * wi.cross(n) - radius[j] * wj.cross(n)
-                } else {
-                    v_rel
-                };
-                let v_t = v_c - n * v_c.dot(n);
-                // rolling needs rotation: no model reads v_roll without it
-                let v_roll = if ROT {
-                    geom.r_eff() * (wi - wj).cross(n) + roll * v_t
-                } else {
-                    DVec3::ZERO
-                };
-                let contact = Contact {
-                    model,
-                    geom,
-                    pair,
-                    kin: Kinematics {
-                        delta,
-                        delta_dot: -v_rel.dot(n),
-                        n,
-                        v_t,
-                        v_roll,
-                        omega_rel: wi - wj,
-                    },
-                    i,
-                    partner: Partner::Particle(j),
-                };
-                let (r, couple) = log.contact(contact, prior);
-                let f = r.force * n + r.tangential;
-                fi += f;
-                c.entry_force[x] = f;
-                if ROT {
-                    let t = n.cross(r.tangential);
-                    ti += -ri * t + couple;
-                    c.entry_torque[x] = -radius[j] * t - couple;
-                }
-                let keep = r.stays(range);
-                if keep {
-                    c.record[x] = r;
-                }
-                c.live[x] = keep;
             }
             c.own_force[a] = fi;
             if ROT {
@@ -767,6 +847,7 @@ impl WallInputs<'_> {
                     // eq. 20 with r_j → ∞: (r_i − r_j)/(r_i + r_j) → −1
                     v_roll: geom.r_eff() * wi.cross(n) - 0.5 * v_t,
                     omega_rel: wi,
+                    root: None,
                 },
                 i,
                 partner: Partner::Wall(w),
@@ -1878,7 +1959,11 @@ impl CpuEngine {
             w_pred,
             dt: self.dt,
         };
-        let logs = self.threads.map(work, |c| inputs.chunk::<ROT>(c));
+        let logs = if self.models.iter().any(ContactModel::solves_roots) {
+            self.threads.map(work, |c| inputs.chunk::<ROT, true>(c))
+        } else {
+            self.threads.map(work, |c| inputs.chunk::<ROT, false>(c))
+        };
         let mut log = StepLog::new(self.dt, self.peak);
         for l in logs {
             log.append(l);

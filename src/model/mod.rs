@@ -147,6 +147,8 @@ pub struct Kinematics {
     pub v_roll: DVec3,
     /// Relative angular velocity ω_i − ω_j (ω_i against a wall); zero without rotation.
     pub omega_rel: DVec3,
+    /// The law's overlap root solved ahead ([`ContactModel::root_ahead`]), or None.
+    pub root: Option<f64>,
 }
 
 /// Forces and torques of one contact on particle i (particle j gets the opposite force;
@@ -209,6 +211,21 @@ impl ContactModel {
         }
     }
 
+    /// Whether [`Self::root_ahead`] ever gives a root (JKR with adhesion).
+    pub fn solves_roots(&self) -> bool {
+        matches!(self, Self::Jkr(p) if p.gamma() != 0.0)
+    }
+
+    /// The root a law solves from the overlap alone (JKR: s = √(a/a0)) where `respond`
+    /// will need it, so that a force loop can solve the roots of several contacts side by
+    /// side; None where the law needs none.
+    pub fn root_ahead(&self, pair: &PairConstants, delta: f64, touched: bool) -> Option<f64> {
+        match (self, pair) {
+            (Self::Jkr(p), PairConstants::Jkr(c)) => p.root_ahead(c, delta, touched),
+            _ => None,
+        }
+    }
+
     /// [`Self::respond`] with the pair's constants, which must be [`Self::pair_constants`]
     /// of this model and `geom` (a force loop keeps them for partners of the same shape).
     pub fn respond_with(
@@ -226,7 +243,7 @@ impl ContactModel {
                     PairConstants::None => p.pair(0.5 * geom.a12),
                 };
                 let normal =
-                    p.normal_force_of_pair(&pair, (k.delta, k.delta_dot), geom, dt, history);
+                    p.normal_force_rooted(&pair, (k.delta, k.delta_dot), k.root, geom, dt, history);
                 let mut r = Response {
                     normal,
                     potential: normal.potential,

@@ -776,6 +776,28 @@ impl JkrParams {
         dt: f64,
         history: &mut ContactHistory,
     ) -> NormalForce {
+        self.normal_force_rooted(pair, (delta, delta_dot), None, geom, dt, history)
+    }
+
+    /// s = √(a/a0) at `delta` where [`Self::normal_force_of_pair`] solves it (a touched
+    /// or overlapping adhesive contact short of its break), else None.
+    pub fn root_ahead(&self, pair: &JkrPair, delta: f64, touched: bool) -> Option<f64> {
+        let live = pair.gamma != 0.0
+            && (touched || delta > 0.0)
+            && delta > self.pulloff.break_overlap_ratio() * pair.scales.d0;
+        live.then(|| pair.scales.root(delta))
+    }
+
+    /// [`Self::normal_force_of_pair`] with s = √(a/a0) solved ahead ([`Self::root_ahead`]).
+    pub(crate) fn normal_force_rooted(
+        &self,
+        pair: &JkrPair,
+        (delta, delta_dot): (f64, f64),
+        root: Option<f64>,
+        geom: &PairGeometry,
+        dt: f64,
+        history: &mut ContactHistory,
+    ) -> NormalForce {
         let r = 0.5 * geom.a12;
         let (gamma, es) = (pair.gamma, pair.es);
         let (a, conservative, potential) = if gamma == 0.0 {
@@ -798,7 +820,7 @@ impl JkrParams {
                 *history = ContactHistory::default();
                 return NormalForce::default();
             }
-            let s = sc.root(delta);
+            let s = root.unwrap_or_else(|| sc.root(delta));
             let a_eq = a0 * s * s;
             if let Some(law) = self.dissipation.krijt_law() {
                 let mat = self.krijt_material();
@@ -933,6 +955,61 @@ mod tests {
             ..Default::default()
         };
         p.normal_force(delta, 0.0, &geom(), &mut h)
+    }
+
+    /// The root a force loop solves ahead is the one the normal force solves, wherever it
+    /// solves one: same force, same history, bit for bit.
+    #[test]
+    fn roots_solved_ahead_change_no_bit() {
+        let g = geom();
+        let r = reff();
+        let base = params();
+        let tsuji = JkrParams {
+            dissipation: Dissipation::Tsuji {
+                restitution: 0.5,
+                stiffness: TsujiStiffness::default(),
+            },
+            ..base
+        };
+        let krijt = JkrParams {
+            dissipation: Dissipation::Krijt {
+                tvis: 1e-9,
+                sigma0: 0.0,
+            },
+            ..base
+        };
+        let mut ahead = 0;
+        for p0 in [base, tsuji, krijt] {
+            for pulloff in [Pulloff::Displacement, Pulloff::Force, Pulloff::Zero] {
+                let p = JkrParams {
+                    pulloff,
+                    ..p0
+                };
+                let pair = p.pair(r);
+                let d0 = p.delta0(r);
+                for step in -300..=600 {
+                    let delta = step as f64 * 0.01 * d0;
+                    for touched in [false, true] {
+                        let h0 = ContactHistory {
+                            touched,
+                            contact_radius: if touched { 0.9 * p.a0(r) } else { 0.0 },
+                            ..Default::default()
+                        };
+                        let (mut h1, mut h2) = (h0, h0);
+                        let kin = (delta, -0.01);
+                        let solved = p.normal_force_of_pair(&pair, kin, &g, 1e-9, &mut h1);
+                        let root = p.root_ahead(&pair, delta, touched);
+                        let given = p.normal_force_rooted(&pair, kin, root, &g, 1e-9, &mut h2);
+                        assert_eq!(solved, given, "{pulloff:?} δ = {delta:e}, touched {touched}");
+                        assert_eq!(h1, h2);
+                        // every solve is done ahead (else the force loop gains nothing)
+                        assert_eq!(root.is_some(), solved.in_contact, "δ = {delta:e}");
+                        ahead += usize::from(root.is_some());
+                    }
+                }
+            }
+        }
+        assert!(ahead > 1000, "{ahead}");
     }
 
     #[test]
