@@ -15,7 +15,7 @@
 # 60 s each (120 at 6*10^7), none started after 520 s: the call's limit is 590).
 set -u
 cd "$(dirname "$0")/.."
-TESTS=(gpu_engine sticking ledger gpu_mixed friction force_jumps gpu_default_limits
+TESTS=(gpu_engine sticking ledger mixed_materials friction force_jumps gpu_default_limits
        gpu_grid gpu_pages gpu_rebuild_chain walls periodic stability collide_jkr collide_hysteretic)
 # (the working tree, .gl, .gpubench and these, gzipped, must stay under the 64 MiB a call
 # carries: about 3 MiB each; `prepare` refuses more than 60. The feature files also run

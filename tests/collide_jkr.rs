@@ -1133,7 +1133,7 @@ mod on_the_gpu {
                 .build()
         };
         let scene = families("model = \"hertz\"\nyoungs = 1e8\npoisson = 0.3");
-        // LSD and Hertz pairs in one scene: the mixed step (tests/gpu_mixed.rs runs one)
+        // LSD and Hertz pairs in one scene: the mixed step (tests/mixed_materials.rs runs one)
         let e = GpuEngine::new(&scene, ctx).unwrap();
         assert_eq!(e.kind().name(), "step_hysteretic+jkr");
         let Some(ctx) = context() else { return };

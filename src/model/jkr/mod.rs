@@ -981,10 +981,7 @@ mod tests {
         let mut ahead = 0;
         for p0 in [base, tsuji, krijt] {
             for pulloff in [Pulloff::Displacement, Pulloff::Force, Pulloff::Zero] {
-                let p = JkrParams {
-                    pulloff,
-                    ..p0
-                };
+                let p = JkrParams { pulloff, ..p0 };
                 let pair = p.pair(r);
                 let d0 = p.delta0(r);
                 for step in -300..=600 {
@@ -1000,7 +997,10 @@ mod tests {
                         let solved = p.normal_force_of_pair(&pair, kin, &g, 1e-9, &mut h1);
                         let root = p.root_ahead(&pair, delta, touched);
                         let given = p.normal_force_rooted(&pair, kin, root, &g, 1e-9, &mut h2);
-                        assert_eq!(solved, given, "{pulloff:?} δ = {delta:e}, touched {touched}");
+                        assert_eq!(
+                            solved, given,
+                            "{pulloff:?} δ = {delta:e}, touched {touched}"
+                        );
                         assert_eq!(h1, h2);
                         // every solve is done ahead (else the force loop gains nothing)
                         assert_eq!(root.is_some(), solved.in_contact, "δ = {delta:e}");
