@@ -196,6 +196,8 @@ struct Contact<'a> {
     /// The model's constants of this pair ([`ContactModel::pair_constants`]).
     pair: PairConstants,
     kin: Kinematics,
+    /// The law's root at `kin.delta` solved ahead ([`ContactModel::root_ahead`]), or None.
+    root: Option<f64>,
     /// The particle and its partner, for the peak overlap and the error message.
     i: usize,
     partner: Partner,
@@ -256,7 +258,7 @@ impl StepLog {
         let mut history = prior.map(|p| p.history).unwrap_or_default();
         let r = c
             .model
-            .respond_with(&c.pair, kin, geom, self.dt, &mut history);
+            .respond_rooted(&c.pair, kin, c.root, geom, self.dt, &mut history);
         if !(r.normal.force.is_finite() && r.tangential.is_finite()) && self.failure.is_none() {
             self.failure = Some(non_finite(c.i, c.partner, kin.delta));
         }
@@ -524,8 +526,8 @@ struct PairChunk<'a> {
     own_torque: &'a mut [DVec3],
 }
 
-/// Entries of a row gauged ahead of their forces at a time.
-const AHEAD: usize = 8;
+/// Entries of a row gauged ahead of their forces at a time (where a law solves roots).
+const BLOCK: usize = 8;
 
 /// What the pair loop measures of an entry ahead of its force, for a block of entries side
 /// by side (their square roots, divisions and the law's root solve overlap): the distance,
@@ -581,7 +583,7 @@ impl PairShape {
 impl PairInputs<'_> {
     /// The entries of one chunk, in key order; returns the chunk's log. `ROOTS`: some law
     /// solves overlap roots ahead ([`ContactModel::root_ahead`]), so the entries are gauged
-    /// ahead of their forces.
+    /// ahead of their forces, BLOCK at a time.
     #[inline(never)]
     fn chunk<const ROT: bool, const ROOTS: bool>(&self, c: PairChunk) -> StepLog {
         let omega_of = |i: usize| if ROT { self.w_pred[i] } else { DVec3::ZERO };
@@ -611,54 +613,45 @@ impl PairInputs<'_> {
                     d
                 }
             };
-            // the row in blocks: each block's gauges first, side by side, then its forces
-            for block in (s..e).step_by(AHEAD) {
-                let block = block..(block + AHEAD).min(e);
-                let mut gauges = [Gauge::default(); AHEAD];
-                for (g, k) in gauges.iter_mut().zip(block.clone()) {
-                    if !ROOTS {
-                        break;
+            // whether an entry (live or not, its record) at squared distance dist2 from
+            // partner j gets a force: within reach, or an engaged contact beyond it that broke
+            // within the step (visited, so its exit edge is booked and its force jump placed,
+            // as on the GPU)
+            let visited = |(live, record): (bool, &ContactRecord), j: usize, dist2: f64| {
+                let reach = pad_i + radius[j];
+                dist2 < reach * reach || live && record.engaged()
+            };
+            // the row in blocks: with roots to solve, each block's gauges first, side by
+            // side, then its forces
+            for start in (s..e).step_by(BLOCK) {
+                let block = start..(start + BLOCK).min(e);
+                let mut gauges = [Gauge::default(); BLOCK];
+                if ROOTS {
+                    for (g, k) in gauges.iter_mut().zip(block.clone()) {
+                        let (x, j) = (k - base, self.partner[k] as usize);
+                        let dist2 = separation(j).length_squared();
+                        let dist = dist2.sqrt();
+                        let root = if visited((c.live[x], &c.record[x]), j, dist2) {
+                            let m = mi + material[j];
+                            let model = &self.models[m];
+                            let pair =
+                                PairShape::cached(&mut shape, (i, j, m), radius, mass, model);
+                            let touched = c.live[x] && c.record[x].history.touched;
+                            model.root_ahead(&pair.pair, ri + radius[j] - dist, touched)
+                        } else {
+                            None
+                        };
+                        *g = Gauge::new(dist, root);
                     }
-                    let x = k - base;
-                    let j = self.partner[k] as usize;
-                    let dist2 = separation(j).length_squared();
-                    let dist = dist2.sqrt();
-                    let reach = pad_i + radius[j];
-                    let live = c.live[x];
-                    // (the entries the force pass skips need no root)
-                    let root = if dist2 < reach * reach || live && c.record[x].engaged() {
-                        let m = mi + material[j];
-                        let model = &self.models[m];
-                        let pair = &PairShape::cached(&mut shape, (i, j, m), radius, mass, model);
-                        let touched = live && c.record[x].history.touched;
-                        model.root_ahead(&pair.pair, ri + radius[j] - dist, touched)
-                    } else {
-                        None
-                    };
-                    *g = Gauge::new(dist, root);
                 }
                 for (g, k) in gauges.iter().zip(block) {
-                    let x = k - base;
-                    let j = self.partner[k] as usize;
+                    let (x, j) = (k - base, self.partner[k] as usize);
                     let d = separation(j);
                     let dist2 = d.length_squared();
-                    // (without roots to solve, measured here: where it is needed)
-                    let Gauge {
-                        dist,
-                        inv_dist,
-                        root,
-                    } = if ROOTS {
-                        *g
-                    } else {
-                        Gauge::new(dist2.sqrt(), None)
-                    };
-                    let reach = pad_i + radius[j];
                     let live = c.live[x];
-                    // an engaged contact beyond the reach broke within the step: visited, so its
-                    // exit edge is booked and its force jump placed (as on the GPU)
-                    let visit = live && c.record[x].engaged();
-                    if dist2 >= reach * reach && !visit {
+                    if !visited((live, &c.record[x]), j, dist2) {
                         if live {
+                            let dist = if ROOTS { g.dist } else { dist2.sqrt() };
                             log.depart(&c.record[x], ri + radius[j] - dist);
                             c.live[x] = false;
                         }
@@ -668,6 +661,16 @@ impl PairInputs<'_> {
                         }
                         continue;
                     }
+                    // (without roots to solve, measured here, where a force needs them)
+                    let Gauge {
+                        dist,
+                        inv_dist,
+                        root,
+                    } = if ROOTS {
+                        *g
+                    } else {
+                        Gauge::new(dist2.sqrt(), None)
+                    };
                     let delta = ri + radius[j] - dist;
                     let m = mi + material[j];
                     let (model, range) = (&self.models[m], self.ranges[m]);
@@ -708,8 +711,8 @@ impl PairInputs<'_> {
                             v_t,
                             v_roll,
                             omega_rel: wi - wj,
-                            root,
                         },
+                        root,
                         i,
                         partner: Partner::Particle(j),
                     };
@@ -847,8 +850,8 @@ impl WallInputs<'_> {
                     // eq. 20 with r_j → ∞: (r_i − r_j)/(r_i + r_j) → −1
                     v_roll: geom.r_eff() * wi.cross(n) - 0.5 * v_t,
                     omega_rel: wi,
-                    root: None,
                 },
+                root: None,
                 i,
                 partner: Partner::Wall(w),
             };
@@ -999,6 +1002,9 @@ pub struct CpuEngine {
     cutoff_pad: Vec<f64>,
     /// Verlet skin, m ([`SKIN`]·r_min, less on a periodic axis too short for it).
     skin: f64,
+    /// Whether the pair loop solves the laws' roots ahead where a law has them (a test
+    /// compares it with the loop that does not).
+    roots_ahead: bool,
     /// Candidate pairs with their contacts.
     pairs: PairList,
     /// Positions at the last rebuild.
@@ -1182,6 +1188,7 @@ impl CpuEngine {
             grid,
             cutoff_pad,
             skin,
+            roots_ahead: true,
             pairs: PairList::empty(n),
             pos_ref: Vec::new(),
             rebuild_due: true,
@@ -1959,7 +1966,7 @@ impl CpuEngine {
             w_pred,
             dt: self.dt,
         };
-        let logs = if self.models.iter().any(ContactModel::solves_roots) {
+        let logs = if self.roots_ahead && self.models.iter().any(ContactModel::solves_roots) {
             self.threads.map(work, |c| inputs.chunk::<ROT, true>(c))
         } else {
             self.threads.map(work, |c| inputs.chunk::<ROT, false>(c))
@@ -2255,14 +2262,9 @@ mod tests {
     use super::*;
     use crate::measure::bench::{packing, Case};
 
-    /// Runs `steps` steps with the default skin and without any (a rebuild every step):
-    /// the two runs must agree bitwise (the forces do not depend on the list beyond its
-    /// contacts), and the skinned one must rebuild less often.
-    fn same_without_skin(scene: &Scene, steps: u64) {
-        let mut a = CpuEngine::new(scene).unwrap();
-        let mut b = CpuEngine::new(scene).unwrap();
-        assert!(a.skin > 0.0);
-        b.skin = 0.0;
+    /// Steps `a` and `b` `steps` times: they must agree bitwise (positions, velocities,
+    /// spins, energies, contacts), with contacts.
+    fn same_bits(a: &mut CpuEngine, b: &mut CpuEngine, steps: u64) {
         for _ in 0..steps {
             a.step().unwrap();
             b.step().unwrap();
@@ -2275,9 +2277,54 @@ mod tests {
         assert_eq!(a.energies(), b.energies());
         assert_eq!(a.contacts(), b.contacts());
         assert!(!a.contacts().is_empty());
+    }
+
+    /// Runs `steps` steps with the default skin and without any (a rebuild every step):
+    /// the two runs must agree bitwise (the forces do not depend on the list beyond its
+    /// contacts), and the skinned one must rebuild less often.
+    fn same_without_skin(scene: &Scene, steps: u64) {
+        let mut a = CpuEngine::new(scene).unwrap();
+        let mut b = CpuEngine::new(scene).unwrap();
+        assert!(a.skin > 0.0);
+        b.skin = 0.0;
+        same_bits(&mut a, &mut b, steps);
         assert!(b.rebuilds() > steps);
         eprintln!("rebuilds {} of {}", a.rebuilds(), b.rebuilds());
         assert!(a.rebuilds() > 2 && a.rebuilds() < b.rebuilds() / 2);
+    }
+
+    /// The pair loop that gauges a row's entries and solves JKR's roots ahead, a block at a
+    /// time, gives the bits of the loop that does not: JKR with friction and rolling, rows
+    /// longer than a block (a wide skin), contacts made and broken, closed and periodic.
+    #[test]
+    fn roots_solved_ahead_change_no_bit() {
+        for periodic in [false, true] {
+            let mut scene = packing(Case::Jkr, 512, 300.0, 6).unwrap();
+            if periodic {
+                scene.domain.periodic = [true, true, false];
+                scene.walls.retain(|w| w.normal[2] != 0.0);
+            }
+            let mut a = CpuEngine::new(&scene).unwrap();
+            let mut b = CpuEngine::new(&scene).unwrap();
+            assert!(a.models.iter().any(ContactModel::solves_roots));
+            b.roots_ahead = false;
+            // a skin beyond the lattice's diagonal neighbours (and cells that hold it)
+            let r = scene.particles[0].radius;
+            for e in [&mut a, &mut b] {
+                e.skin = 1.2 * r;
+                let (lo, hi) = e.domain;
+                e.grid = CellGrid::periodic(lo, hi, 4.0 * r, e.pos.len(), e.periodic).unwrap();
+                e.rebuild_list();
+            }
+            same_bits(&mut a, &mut b, 2000);
+            let rows = a.pairs.start.windows(2).map(|w| w[1] - w[0]);
+            let longest = rows.max().unwrap();
+            eprintln!(
+                "periodic {periodic}: longest row {longest}, {} rebuilds",
+                a.rebuilds()
+            );
+            assert!(longest > BLOCK && a.rebuilds() > 2);
+        }
     }
 
     #[test]

@@ -147,8 +147,6 @@ pub struct Kinematics {
     pub v_roll: DVec3,
     /// Relative angular velocity ω_i − ω_j (ω_i against a wall); zero without rotation.
     pub omega_rel: DVec3,
-    /// The law's overlap root solved ahead ([`ContactModel::root_ahead`]), or None.
-    pub root: Option<f64>,
 }
 
 /// Forces and torques of one contact on particle i (particle j gets the opposite force;
@@ -212,14 +210,19 @@ impl ContactModel {
     }
 
     /// Whether [`Self::root_ahead`] ever gives a root (JKR with adhesion).
-    pub fn solves_roots(&self) -> bool {
+    pub(crate) fn solves_roots(&self) -> bool {
         matches!(self, Self::Jkr(p) if p.gamma() != 0.0)
     }
 
     /// The root a law solves from the overlap alone (JKR: s = √(a/a0)) where `respond`
     /// will need it, so that a force loop can solve the roots of several contacts side by
     /// side; None where the law needs none.
-    pub fn root_ahead(&self, pair: &PairConstants, delta: f64, touched: bool) -> Option<f64> {
+    pub(crate) fn root_ahead(
+        &self,
+        pair: &PairConstants,
+        delta: f64,
+        touched: bool,
+    ) -> Option<f64> {
         match (self, pair) {
             (Self::Jkr(p), PairConstants::Jkr(c)) => p.root_ahead(c, delta, touched),
             _ => None,
@@ -236,6 +239,21 @@ impl ContactModel {
         dt: f64,
         history: &mut ContactHistory,
     ) -> Response {
+        self.respond_rooted(pair, k, None, geom, dt, history)
+    }
+
+    /// [`Self::respond_with`] given the law's root at `k.delta` where the force loop solved
+    /// it ahead: `root` must be [`Self::root_ahead`] of `pair`, `k.delta` and
+    /// `history.touched`, or None.
+    pub(crate) fn respond_rooted(
+        &self,
+        pair: &PairConstants,
+        k: &Kinematics,
+        root: Option<f64>,
+        geom: &PairGeometry,
+        dt: f64,
+        history: &mut ContactHistory,
+    ) -> Response {
         match self {
             Self::Jkr(p) => {
                 let pair = match pair {
@@ -243,7 +261,7 @@ impl ContactModel {
                     PairConstants::None => p.pair(0.5 * geom.a12),
                 };
                 let normal =
-                    p.normal_force_rooted(&pair, (k.delta, k.delta_dot), k.root, geom, dt, history);
+                    p.normal_force_rooted(&pair, (k.delta, k.delta_dot), root, geom, dt, history);
                 let mut r = Response {
                     normal,
                     potential: normal.potential,

@@ -430,6 +430,57 @@ impl StepBuffers {
     }
 }
 
+/// How the lists' entries and the state are stored: entries a window and their pages, the
+/// state's pages, and the largest buffer the entries' pages may take (bytes).
+pub(super) struct Storage {
+    pub(super) entries: u64,
+    pub(super) pages: Pages,
+    pub(super) state_pages: Pages,
+    pub(super) largest: u64,
+}
+
+impl Storage {
+    /// The storage of `n` particles in `windows` for the composition `kind` keeping `keeps`:
+    /// the list entries a window a first guess (`options.list_entries`, or
+    /// `INITIAL_ENTRIES_PER_PARTICLE` a particle; the first rebuild grows them to what it
+    /// needs), the pages within the adapter's limits and the page sizes `options` asks for.
+    pub(super) fn plan(
+        ctx: &GpuContext,
+        options: &GpuOptions,
+        (kind, keeps): (&Composition, Keeps),
+        (n, windows): (u64, &Windows),
+    ) -> Result<Self, PowderError> {
+        let per_window = if windows.count == 1 { n } else { windows.len };
+        let entries = options
+            .list_entries
+            .unwrap_or(INITIAL_ENTRIES_PER_PARTICLE * per_window + 256)
+            .max(1);
+        let entries = window_entries(windows, entries);
+        let [entry_layout, ..] = kind.records(keeps);
+        let largest = entry_buffer_limit(ctx, options.entry_page_bytes);
+        let pages = check_entries(
+            (entries, windows),
+            entry_layout.words(),
+            n,
+            (ctx.max_storage_binding(), largest),
+        )?;
+        let state_pages = StateSet::pages_of(
+            &StateLayout::windowed(n, kind.state_extras(keeps), *windows),
+            windows,
+            (
+                ctx.max_storage_binding(),
+                entry_buffer_limit(ctx, options.state_page_bytes),
+            ),
+        )?;
+        Ok(Self {
+            entries,
+            pages,
+            state_pages,
+            largest,
+        })
+    }
+}
+
 /// The pages of `entries` list entries a window of `words` words each (the entries'
 /// records), or an error when they do not fit: a window's numbering, the adapter's storage
 /// binding limit (the whole buffer with one window, a window and its neighbours with

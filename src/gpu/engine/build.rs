@@ -529,33 +529,12 @@ impl GpuEngine {
             ("grid.cell_start".into(), grid.cell_start().size()),
             ("grid.sorted_index".into(), grid.sorted_index().size()),
         ];
-        // list entries a window: a first guess, grown by the first rebuild to what it needs
-        let per_window = if windows.count == 1 {
-            n as u64
-        } else {
-            windows.len
-        };
-        let entries = options
-            .list_entries
-            .unwrap_or(INITIAL_ENTRIES_PER_PARTICLE * per_window + 256)
-            .max(1);
-        let entries = window_entries(&windows, entries);
-        let [entry_layout, ..] = kind.records(keeps);
-        let largest = entry_buffer_limit(&ctx, options.entry_page_bytes);
-        let pages = check_entries(
-            (entries, &windows),
-            entry_layout.words(),
-            n as u64,
-            (ctx.max_storage_binding(), largest),
-        )?;
-        let state_pages = StateSet::pages_of(
-            &StateLayout::windowed(n as u64, kind.state_extras(keeps), windows),
-            &windows,
-            (
-                ctx.max_storage_binding(),
-                entry_buffer_limit(&ctx, options.state_page_bytes),
-            ),
-        )?;
+        let Storage {
+            entries,
+            pages,
+            state_pages,
+            largest,
+        } = Storage::plan(&ctx, &options, (&kind, keeps), (n as u64, &windows))?;
         let windowing = WindowBindings::new(&ctx.device, windows, pages, state_pages);
         let servo_walls = scene.walls.iter().any(|w| w.motion.servo());
         let state = StateSet::new(
@@ -641,9 +620,6 @@ impl GpuEngine {
         let max_per_dim = ctx.limits().max_compute_workgroups_per_dimension;
         // the scans that place the new lists (counts -> first entries)
         let scans = list_scans(&ctx, &rows, (&windows, n as u32))?;
-        // the indirect arguments of a rebuild (the grid sort's, one per-particle pass's,
-        // the scans'), and the ones decide writes each step (those, or zeros)
-        let sort_args = grid.indirect_args();
         let per_group = program
             .kernel("gather")?
             .workgroup_size
@@ -659,33 +635,8 @@ impl GpuEngine {
         let servo_lanes = alloc.buffer("servo_lanes", 4 * lanes.max(1));
         // (a window's particles: every window's dispatch the same)
         let per_window = (n as u64).min(windows.len) as u32;
-        let particle_args = split_workgroups(per_window.div_ceil(per_group), max_per_dim);
-        // (every window's scans have the first window's dispatches)
-        let rebuild_args = 12 * sort_args.len() as u64;
-        let scan_args = [
-            rebuild_args + 12,
-            rebuild_args + 12 + 12 * scans[0].indirect_args().len() as u64,
-        ];
-        let full: Vec<u32> = sort_args
-            .into_iter()
-            .chain([particle_args])
-            .chain(scans[0].indirect_args())
-            .chain(scans[1].indirect_args())
-            .flatten()
-            .collect();
-        let full_args = alloc.buffer("full_args", 4 * full.len() as u64);
-        q0.write_buffer(&full_args, 0, bytemuck::cast_slice(&full));
-        // then every step's: one invocation per particle, one workgroup
-        let step_args = 4 * full.len() as u64;
-        let args = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("args"),
-            size: step_args + 24,
-            usage: wgpu::BufferUsages::STORAGE
-                | wgpu::BufferUsages::INDIRECT
-                | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        alloc.list.push(("args".into(), args.size()));
+        let (dispatch, full_args, args) =
+            Dispatches::new(&ctx, &mut alloc, (&grid, &scans), (per_window, per_group));
         let mirrors = state_mirrors(device, &state, (n as u32, software))?;
         alloc.list.extend(mirrors.sizes());
         // (before anything binds them)
@@ -775,9 +726,7 @@ impl GpuEngine {
             _new_lists: new_lists,
             permutation,
             b,
-            rebuild_args,
-            step_args,
-            step_args_full: [particle_args, [1, 1, 1]],
+            dispatch,
             resume: None,
             clock: None,
             growths: 0,
@@ -797,7 +746,6 @@ impl GpuEngine {
             peak: None,
             escaped: None,
             scans,
-            scan_args,
             wall_normals: scene
                 .walls
                 .iter()

@@ -23,8 +23,8 @@ use crate::gpu::composition::{Composition, Keeps};
 use crate::gpu::context::GpuContext;
 use crate::gpu::grid::{ExclusiveScan, GridSort};
 use crate::gpu::kernel::{
-    read_joined, split_workgroups, storage_buffer, submit_and_read, u32s, uniform_buffer, whole,
-    Kernel, Part, Program,
+    read_joined, storage_buffer, submit_and_read, u32s, uniform_buffer, whole, Kernel, Part,
+    Program,
 };
 use crate::gpu::layout::{encode3, gpu_cell_width, HystereticPair, JkrPair, StepParams, WallGpu};
 use crate::gpu::mirror::Mirrors;
@@ -45,6 +45,7 @@ use glam::DVec3;
 mod buffers;
 mod build;
 mod checkpoint;
+mod dispatch;
 mod introspection;
 mod readback;
 mod record;
@@ -53,6 +54,7 @@ mod walls;
 
 use buffers::*;
 use build::*;
+use dispatch::Dispatches;
 use readback::*;
 use record::*;
 use stepping::*;
@@ -210,11 +212,8 @@ pub struct GpuEngine {
     permutation: Permutation,
     /// The step's other buffers.
     b: StepBuffers,
-    /// Offsets in `b.args`: the rebuild's per-particle passes', and every step's
-    /// (per particle, then one workgroup), with the values the latter take.
-    rebuild_args: u64,
-    step_args: u64,
-    step_args_full: [[u32; 3]; 2],
+    /// Where the indirect dispatches' arguments lie in `b.args`.
+    dispatch: Dispatches,
     /// A halted batch's remaining steps, the first without its drift (`run_steps`).
     resume: Option<u64>,
     /// The pass profile's timestamps while it runs ([`GpuEngine::profile`]).
@@ -246,10 +245,9 @@ pub struct GpuEngine {
     /// A particle whose centre left the domain box (monitor[6]).
     escaped: Option<usize>,
     /// A rebuild's scans of the new lists' lengths into their first entries (the pair
-    /// lists', `lower`'s), dispatched indirectly from `args` at `scan_args`.
+    /// lists', `lower`'s), dispatched indirectly from `args` at `dispatch.scans`.
     /// Two a window, in window order (`lower`'s after each window's pair lists').
     scans: Vec<ExclusiveScan>,
-    scan_args: [u64; 2],
     /// Unit normals of the walls (into the domain).
     wall_normals: Vec<DVec3>,
     /// How each wall moves, and the walls on the device (they move: state).

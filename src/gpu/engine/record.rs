@@ -163,7 +163,7 @@ impl GpuEngine {
         let bound = &self.bound;
         let max = self.max_per_dim;
         let clock = self.clock.as_ref();
-        let (args, at, step) = (&self.b.args, self.rebuild_args, self.step_args);
+        let (args, at, step) = (&self.b.args, self.dispatch.rebuild, self.dispatch.step);
         let mut n = 0;
         {
             let mut pass = begin(encoder, clock);
@@ -202,7 +202,7 @@ impl GpuEngine {
             }
             n += bound.count_neighbours.indirect(&mut pass, args, at);
             mark(&mut pass, clock, "count_neighbours");
-            for (scan, &offset) in self.scans.iter().zip(self.scan_args.iter().cycle()) {
+            for (scan, &offset) in self.scans.iter().zip(self.dispatch.scans.iter().cycle()) {
                 n += scan.record_indirect(&mut pass, args, offset);
             }
             mark(&mut pass, clock, "list scans");
@@ -255,7 +255,7 @@ impl GpuEngine {
     /// with `kick`, the closing kick: at the end of a batch, or without the kick after the
     /// initial forces.
     pub(super) fn record_finish(&self, encoder: &mut wgpu::CommandEncoder, kick: bool) {
-        let (args, at) = (&self.b.args, self.step_args);
+        let (args, at) = (&self.b.args, self.dispatch.step);
         let clock = self.clock.as_ref();
         let mut pass = begin(encoder, clock);
         self.bound.collect.indirect(&mut pass, args, at);
@@ -273,8 +273,8 @@ impl GpuEngine {
         q.write_buffer(&self.b.control, 0, &[0u8; MONITOR_BYTES as usize]);
         q.write_buffer(
             &self.b.args,
-            self.step_args,
-            bytemuck::cast_slice(&self.step_args_full),
+            self.dispatch.step,
+            bytemuck::cast_slice(&self.dispatch.step_full),
         );
     }
 

@@ -779,13 +779,16 @@ impl JkrParams {
         self.normal_force_rooted(pair, (delta, delta_dot), None, geom, dt, history)
     }
 
-    /// s = √(a/a0) at `delta` where [`Self::normal_force_of_pair`] solves it (a touched
-    /// or overlapping adhesive contact short of its break), else None.
-    pub fn root_ahead(&self, pair: &JkrPair, delta: f64, touched: bool) -> Option<f64> {
-        let live = pair.gamma != 0.0
-            && (touched || delta > 0.0)
-            && delta > self.pulloff.break_overlap_ratio() * pair.scales.d0;
-        live.then(|| pair.scales.root(delta))
+    /// Whether an adhesive contact is on its JKR branch at `delta`: touched before or
+    /// overlapping, and short of its break (else it exerts nothing and forgets its history).
+    fn bound(&self, pair: &JkrPair, delta: f64, touched: bool) -> bool {
+        (touched || delta > 0.0) && delta > self.pulloff.break_overlap_ratio() * pair.scales.d0
+    }
+
+    /// s = √(a/a0) at `delta` where [`Self::normal_force_of_pair`] solves it (an adhesive
+    /// contact on its branch), else None.
+    pub(crate) fn root_ahead(&self, pair: &JkrPair, delta: f64, touched: bool) -> Option<f64> {
+        (pair.gamma != 0.0 && self.bound(pair, delta, touched)).then(|| pair.scales.root(delta))
     }
 
     /// [`Self::normal_force_of_pair`] with s = √(a/a0) solved ahead ([`Self::root_ahead`]).
@@ -810,16 +813,12 @@ impl JkrParams {
             let potential = 8.0 / 15.0 * es * r.sqrt() * delta * delta * delta.sqrt();
             (a, conservative, potential)
         } else {
-            if !history.touched && delta <= 0.0 {
+            if !self.bound(pair, delta, history.touched) {
                 *history = ContactHistory::default();
                 return NormalForce::default();
             }
             let sc = pair.scales;
             let (a0, d0) = (sc.a0, sc.d0);
-            if delta <= self.pulloff.break_overlap_ratio() * d0 {
-                *history = ContactHistory::default();
-                return NormalForce::default();
-            }
             let s = root.unwrap_or_else(|| sc.root(delta));
             let a_eq = a0 * s * s;
             if let Some(law) = self.dissipation.krijt_law() {
@@ -957,10 +956,10 @@ mod tests {
         p.normal_force(delta, 0.0, &geom(), &mut h)
     }
 
-    /// The root a force loop solves ahead is the one the normal force solves, wherever it
-    /// solves one: same force, same history, bit for bit.
+    /// A force loop solves a root ahead exactly where the normal force solves one, and the
+    /// force given it is the force that solves it: same force, same history, bit for bit.
     #[test]
-    fn roots_solved_ahead_change_no_bit() {
+    fn roots_are_solved_ahead_where_the_force_needs_them() {
         let g = geom();
         let r = reff();
         let base = params();
