@@ -1,5 +1,6 @@
-//! Scenes that mix the model families: hysteretic spheres and adhesive JKR spheres (with
-//! friction, rolling resistance, Krijt's dissipation) in one box, on both backends, and the
+//! Scenes that mix the model families: hysteretic spheres and adhesive JKR spheres with
+//! friction and rolling resistance in one box, whose ledger closes on both backends; and
+//! mixes (JKR laws that differ per pair, Krijt's dissipation beside hysteretic pairs) on the
 //! GPU against the CPU reference.
 
 mod common;
@@ -77,10 +78,6 @@ fn a_mixed_scene_runs_on_the_gpu_and_matches_the_cpu() {
     assert!(last.contacts_cpu > 5 && last.history_pairs > 0, "{last:?}");
     assert!(c.passed, "{:?}", last);
 }
-/// Two JKR-family materials whose pairs differ in dissipation law and adhesion (adhesive
-/// JKR with Tsuji damping, Hertz with power-law damping, adhesive JKR between them): the
-/// pipelines cannot fold either choice (`JKR_ONE_DISSIPATION`, `JKR_ADHESION` stay at
-/// "decide per pair"), so this runs the per-pair branches, against the CPU.
 /// Hertz with power-law damping and Mindlin friction.
 const SMOOTH: &str = "model = \"hertz\"\nyoungs = 1e5\npoisson = 0.3\ndissipation = \"powerlaw\"\n\
      D = 1e-3\nalpha = 1.0\nbeta = 1.0\nfriction = 0.3";
@@ -93,6 +90,10 @@ const BETWEEN: &str = "model = \"jkr\"\nyoungs = 1e5\npoisson = 0.3\nsurface_ene
 const KRIJT: &str = "model = \"jkr\"\nyoungs = 1e5\npoisson = 0.3\nsurface_energy = 0.05\n\
      dissipation = \"krijt\"\ntvis = 1e-5\nfriction = 0.3";
 
+/// Two JKR-family materials whose pairs differ in dissipation law and adhesion (adhesive
+/// JKR with Tsuji damping, Hertz with power-law damping, adhesive JKR between them): the
+/// pipelines cannot fold either choice (`JKR_ONE_DISSIPATION`, `JKR_ADHESION` stay at
+/// "decide per pair"), so this runs the per-pair branches, against the CPU.
 #[test]
 fn jkr_pairs_with_different_laws_match_the_cpu() {
     let scene = two_lattices(
