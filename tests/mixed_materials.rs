@@ -12,19 +12,38 @@ use powder::gpu::GpuEngine;
 use powder::measure::compare::{compare, Tolerances};
 use powder::scene::Scene;
 
-/// Hysteretic spheres below and JKR (friction, rolling resistance, Tsuji damping) above,
-/// thrown down onto them; hysteretic–JKR pairs and the floor use the hysteretic model.
-fn mixed_scene() -> Scene {
+/// Hysteretic spheres below and spheres of the JKR-family law `upper` above, thrown down
+/// onto them; hysteretic–JKR pairs and the floor use the hysteretic model.
+fn plastic_under(upper: &str) -> Scene {
     two_lattices(
         |b| {
             b.material("plastic", 2000.0, COHESIVE)
-                .material("sticky", 2000.0, STICKY)
+                .material("sticky", 2000.0, upper)
                 .interaction(["plastic", "sticky"], HALF_COHESIVE)
         },
         ["plastic", "sticky", "plastic"],
         2.1e-3,
         [0.0, 0.0, -0.3],
     )
+}
+
+/// The mixed scene: [`plastic_under`] JKR with friction, rolling resistance and Tsuji
+/// damping.
+fn mixed_scene() -> Scene {
+    plastic_under(STICKY)
+}
+
+/// `scene` on the GPU against the CPU for `steps` steps, sampled every `every`: the
+/// comparison passes with more than 5 contacts at the end (and, with `history`, some pair
+/// keeping history).
+fn matches_the_cpu(scene: &Scene, steps: u64, every: u64, history: bool) {
+    let Some(ctx) = gpu() else { return };
+    let c = compare(scene, ctx, steps, every, Tolerances::default()).unwrap();
+    common::report(&c);
+    let last = c.samples.last().unwrap();
+    assert!(last.contacts_cpu > 5, "{last:?}");
+    assert!(!history || last.history_pairs > 0, "{last:?}");
+    assert!(c.passed, "{:?}", last);
 }
 
 /// The mixed scene's collapse (35 ms) on each backend: the energy ledger, which books each
@@ -69,14 +88,9 @@ fn a_mixed_scene_runs_on_the_gpu_and_matches_the_cpu() {
     assert_eq!(g.kind().name(), "step_hysteretic+jkr+mindlin+jkr_rolling");
     assert!(g.rotates());
     drop(g);
-    let Some(ctx) = gpu() else { return };
     // (7 ms of the collapse: the GPU and CPU drift apart like any chaotic pair of runs
     // beyond that; dt = 5.8e-6 s, the adhesive zone crossed at the adhesion speed)
-    let c = compare(&scene, ctx, 1200, 300, Tolerances::default()).unwrap();
-    common::report(&c);
-    let last = c.samples.last().unwrap();
-    assert!(last.contacts_cpu > 5 && last.history_pairs > 0, "{last:?}");
-    assert!(c.passed, "{:?}", last);
+    matches_the_cpu(&scene, 1200, 300, true);
 }
 /// Hertz with power-law damping and Mindlin friction.
 const SMOOTH: &str = "model = \"hertz\"\nyoungs = 1e5\npoisson = 0.3\ndissipation = \"powerlaw\"\n\
@@ -106,37 +120,18 @@ fn jkr_pairs_with_different_laws_match_the_cpu() {
         2.02e-3,
         [0.0, 0.0, -0.5],
     );
-    let Some(ctx) = gpu() else { return };
-    let c = compare(&scene, ctx, 12000, 2000, Tolerances::default()).unwrap();
-    let last = c.samples.last().unwrap();
-    eprintln!("{last:?}");
-    assert!(last.contacts_cpu > 5, "{last:?}");
-    assert!(c.passed, "{:?}", last);
+    matches_the_cpu(&scene, 12000, 2000, false);
 }
 
 /// A Krijt JKR material (its contact radius as per-contact state) above hysteretic spheres:
 /// both laws and the Krijt sub-model composed into one step, against the CPU.
 #[test]
 fn krijt_pairs_beside_hysteretic_pairs_match_the_cpu() {
-    let scene = two_lattices(
-        |b| {
-            b.material("plastic", 2000.0, COHESIVE)
-                .material("sticky", 2000.0, KRIJT)
-                .interaction(["plastic", "sticky"], HALF_COHESIVE)
-        },
-        ["plastic", "sticky", "plastic"],
-        2.1e-3,
-        [0.0, 0.0, -0.3],
-    );
+    let scene = plastic_under(KRIJT);
     let Some(ctx) = gpu() else { return };
     let g = GpuEngine::new(&scene, ctx).unwrap();
     assert_eq!(g.kind().name(), "step_hysteretic+jkr+krijt+mindlin");
     drop(g);
-    let Some(ctx) = gpu() else { return };
     // (7 ms of the collapse, as above)
-    let c = compare(&scene, ctx, 1200, 400, Tolerances::default()).unwrap();
-    let last = c.samples.last().unwrap();
-    eprintln!("{last:?}");
-    assert!(last.contacts_cpu > 5 && last.history_pairs > 0, "{last:?}");
-    assert!(c.passed, "{:?}", last);
+    matches_the_cpu(&scene, 1200, 400, true);
 }
