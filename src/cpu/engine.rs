@@ -1047,10 +1047,31 @@ pub struct CpuEngine {
     /// neither moves nor interacts. All true without insertion.
     insert_at: Vec<f64>,
     active: Vec<bool>,
+    /// The earliest `insert_at` of a particle not yet active (∞ when all are): a step
+    /// before it looks at none of them.
+    next_insert: f64,
     /// Kinetic + gravitational energy the inserted particles brought in, J.
     inserted: f64,
     /// Deepest overlap over a12 since the monitor last looked: (ratio, i, partner).
     peak: Option<(f64, usize, Partner)>,
+}
+
+/// A particle's acceleration from its force, mass and gravity.
+#[inline(always)]
+fn acceleration(force: DVec3, mass: f64, gravity: DVec3) -> DVec3 {
+    force / mass + gravity
+}
+
+/// `v` in chunks of `chunk` elements where it holds all `n` particles' values, else one
+/// empty slice a chunk (rotations of a scene whose particles do not rotate).
+fn chunks_or_empty(v: &mut [DVec3], n: usize, chunk: usize) -> Vec<&mut [DVec3]> {
+    if v.len() == n {
+        v.chunks_mut(chunk).collect()
+    } else {
+        chunks(n, chunk)
+            .map(|_| <&mut [DVec3]>::default())
+            .collect()
+    }
 }
 
 /// `d` with each periodic axis's component replaced by its nearest periodic image.
@@ -1213,9 +1234,11 @@ impl CpuEngine {
             periodic,
             insert_at: scene.particles.iter().map(|p| p.insert_at).collect(),
             active: scene.particles.iter().map(|p| p.insert_at <= 0.0).collect(),
+            next_insert: 0.0,
             inserted: 0.0,
             peak: None,
         };
+        engine.next_insert = engine.earliest_pending();
         engine.v_pred.clone_from(&engine.vel);
         engine.w_pred.clone_from(&engine.omega);
         engine.compute_forces()?;
@@ -1360,6 +1383,7 @@ impl CpuEngine {
         }
         self.wall_work = s.wall_work;
         self.active = s.active;
+        self.next_insert = self.earliest_pending();
         self.inserted = s.inserted;
         Ok(())
     }
@@ -1515,7 +1539,7 @@ impl CpuEngine {
             .collect();
         self.threads.map(work, |(acc, range)| {
             for (a, i) in range.enumerate() {
-                acc[a] = force[i] / mass[i] + gravity;
+                acc[a] = acceleration(force[i], mass[i], gravity);
             }
         });
     }
@@ -1528,24 +1552,36 @@ impl CpuEngine {
         self.insert_due();
         let n = self.pos.len();
         self.v_pred.resize(n, DVec3::ZERO);
+        self.w_pred.resize(self.omega.len(), DVec3::ZERO);
         let (acc, active) = (&self.acc, &self.active);
+        let (torque, inertia) = (&self.torque, &self.inertia);
+        // the half kick and drift of the translations, and the half kick of the rotations
+        // where particles rotate, in one pass over the chunks
         let work: Vec<_> = (self.pos.chunks_mut(chunk))
             .zip(self.vel.chunks_mut(chunk))
             .zip(self.v_pred.chunks_mut(chunk))
+            .zip(chunks_or_empty(&mut self.omega, n, chunk))
+            .zip(chunks_or_empty(&mut self.w_pred, n, chunk))
             .zip(chunks(n, chunk))
             .collect();
-        self.threads.map(work, |(((pos, vel), v_pred), range)| {
-            for (a, i) in range.enumerate() {
-                if !active[i] {
-                    v_pred[a] = vel[a];
-                    continue;
+        self.threads
+            .map(work, |(((((pos, vel), v_pred), omega), w_pred), range)| {
+                for (a, i) in range.clone().enumerate() {
+                    if !active[i] {
+                        v_pred[a] = vel[a];
+                        continue;
+                    }
+                    let v_half = vel[a] + 0.5 * dt * acc[i];
+                    pos[a] += dt * v_half;
+                    v_pred[a] = v_half + 0.5 * dt * acc[i];
+                    vel[a] = v_half;
                 }
-                let v_half = vel[a] + 0.5 * dt * acc[i];
-                pos[a] += dt * v_half;
-                v_pred[a] = v_half + 0.5 * dt * acc[i];
-                vel[a] = v_half;
-            }
-        });
+                for (a, i) in range.take(omega.len()).enumerate() {
+                    let alpha = torque[i] / inertia[i];
+                    omega[a] += 0.5 * dt * alpha;
+                    w_pred[a] = omega[a] + 0.5 * dt * alpha;
+                }
+            });
         if self.periodic.iter().any(|&p| p) {
             self.wrap_positions();
         }
@@ -1580,20 +1616,6 @@ impl CpuEngine {
                 wall.point += dt * wall.velocity;
             }
         }
-        self.w_pred.resize(self.omega.len(), DVec3::ZERO);
-        let (torque, inertia) = (&self.torque, &self.inertia);
-        let spinning = self.omega.len();
-        let work: Vec<_> = (self.omega.chunks_mut(chunk))
-            .zip(self.w_pred.chunks_mut(chunk))
-            .zip(chunks(spinning, chunk))
-            .collect();
-        self.threads.map(work, |((omega, w_pred), range)| {
-            for (a, i) in range.enumerate() {
-                let alpha = torque[i] / inertia[i];
-                omega[a] += 0.5 * dt * alpha;
-                w_pred[a] = omega[a] + 0.5 * dt * alpha;
-            }
-        });
         self.compute_forces()?;
         if let Some(before) = push_before {
             let after = self.wall_forces();
@@ -1602,14 +1624,23 @@ impl CpuEngine {
                 self.wall_work -= 0.5 * (before[w] + after[w]).dot(wall.velocity) * dt;
             }
         }
-        self.update_acceleration();
-        let (acc, active) = (&self.acc, &self.active);
-        let work: Vec<_> = self.vel.chunks_mut(chunk).zip(chunks(n, chunk)).collect();
-        self.threads.map(work, |(vel, range)| {
-            for (a, i) in range.enumerate() {
+        // the new accelerations and the second half kicks, in one pass over the chunks
+        let (force, mass, gravity, active) = (&self.force, &self.mass, self.gravity, &self.active);
+        let (torque, inertia) = (&self.torque, &self.inertia);
+        let work: Vec<_> = (self.acc.chunks_mut(chunk))
+            .zip(self.vel.chunks_mut(chunk))
+            .zip(chunks_or_empty(&mut self.omega, n, chunk))
+            .zip(chunks(n, chunk))
+            .collect();
+        self.threads.map(work, |(((acc, vel), omega), range)| {
+            for (a, i) in range.clone().enumerate() {
+                acc[a] = acceleration(force[i], mass[i], gravity);
                 if active[i] {
-                    vel[a] += 0.5 * dt * acc[i];
+                    vel[a] += 0.5 * dt * acc[a];
                 }
+            }
+            for (a, i) in range.take(omega.len()).enumerate() {
+                omega[a] += 0.5 * dt * torque[i] / inertia[i];
             }
         });
         // the impulses velocity Verlet misplaced at force jumps, in key order
@@ -1626,15 +1657,6 @@ impl CpuEngine {
                 }
             }
         }
-        let (torque, inertia) = (&self.torque, &self.inertia);
-        let work: Vec<_> = (self.omega.chunks_mut(chunk))
-            .zip(chunks(spinning, chunk))
-            .collect();
-        self.threads.map(work, |(omega, range)| {
-            for (a, i) in range.enumerate() {
-                omega[a] += 0.5 * dt * torque[i] / inertia[i];
-            }
-        });
         self.time += dt;
         self.steps += 1;
         Ok(())
@@ -1643,6 +1665,9 @@ impl CpuEngine {
     /// Activates the particles whose insertion time has come (at the start of a step whose
     /// time has reached it), booking the energy they bring.
     fn insert_due(&mut self) {
+        if self.time < self.next_insert {
+            return;
+        }
         for i in 0..self.pos.len() {
             if !self.active[i] && self.insert_at[i] <= self.time {
                 self.active[i] = true;
@@ -1655,6 +1680,15 @@ impl CpuEngine {
                 }
             }
         }
+        self.next_insert = self.earliest_pending();
+    }
+
+    /// The earliest insertion time of the particles not yet active (∞ when none is left).
+    fn earliest_pending(&self) -> f64 {
+        (self.insert_at.iter().zip(&self.active))
+            .filter(|(_, &a)| !a)
+            .map(|(&t, _)| t)
+            .fold(f64::INFINITY, f64::min)
     }
 
     /// Whether particle `i` has appeared (pouring: see `ParticleInit::insert_at`).
@@ -1675,10 +1709,13 @@ impl CpuEngine {
 
     /// Runs `n` steps.
     pub fn run_steps(&mut self, n: u64) -> Result<(), PowderError> {
-        for _ in 0..n {
-            self.step()?;
-        }
-        Ok(())
+        let threads = self.threads.clone();
+        threads.install(|| {
+            for _ in 0..n {
+                self.step()?;
+            }
+            Ok(())
+        })
     }
 
     /// Energy dissipated by one contact over the last step: the work the pair did on the
@@ -1979,13 +2016,7 @@ impl CpuEngine {
         let (start, in_start, incoming) = (&*start, &*in_start, &*incoming);
         let (entry_force, entry_torque) = (&self.entry_force, &self.entry_torque);
         let (own_force, own_torque) = (&self.own_force, &self.own_torque);
-        let torque_chunks: Vec<&mut [DVec3]> = if ROT {
-            self.torque.chunks_mut(chunk).collect()
-        } else {
-            chunks(n, chunk)
-                .map(|_| <&mut [DVec3]>::default())
-                .collect()
-        };
+        let torque_chunks = chunks_or_empty(&mut self.torque, n, chunk);
         let gather: Vec<_> = self
             .force
             .chunks_mut(chunk)

@@ -96,6 +96,15 @@ impl Threads {
         self.chunk
     }
 
+    /// `f` run inside the pool, so the parallel sections it opens need no hand-over from
+    /// an outside thread (on the calling thread without a pool).
+    pub fn install<R: Send>(&self, f: impl FnOnce() -> R + Send) -> R {
+        match &self.pool {
+            Some(pool) => pool.install(f),
+            None => f(),
+        }
+    }
+
     /// `f` applied to every item, results in item order: on the calling thread with one
     /// thread or one item, otherwise spread over the threads (each item whole on one).
     pub fn map<T: Send, R: Send>(&self, items: Vec<T>, f: impl Fn(T) -> R + Sync) -> Vec<R> {
