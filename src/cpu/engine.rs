@@ -1056,7 +1056,8 @@ pub struct CpuEngine {
     peak: Option<(f64, usize, Partner)>,
 }
 
-/// A particle's acceleration from its force, mass and gravity.
+/// A particle's acceleration from its force, mass and gravity: one expression for the
+/// constructor and the step, so both give the same bits.
 #[inline(always)]
 fn acceleration(force: DVec3, mass: f64, gravity: DVec3) -> DVec3 {
     force / mass + gravity
@@ -1531,6 +1532,8 @@ impl CpuEngine {
         self.peak.take()
     }
 
+    /// The accelerations from the forces (at construction; `step` computes them with its
+    /// last half kicks).
     fn update_acceleration(&mut self) {
         let chunk = self.threads.chunk();
         let (force, mass, gravity) = (&self.force, &self.mass, self.gravity);

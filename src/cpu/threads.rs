@@ -96,11 +96,14 @@ impl Threads {
         self.chunk
     }
 
-    /// `f` run inside the pool, so the parallel sections it opens need no hand-over from
-    /// an outside thread (on the calling thread without a pool).
+    /// `f` run on one of the pool's threads (rayon's global pool for every core), so the
+    /// parallel sections it opens need no hand-over from an outside thread; on the calling
+    /// thread with one thread. Where engines share a pool and run from several threads at
+    /// once, a waiting thread may run another's whole `f` (results unchanged).
     pub fn install<R: Send>(&self, f: impl FnOnce() -> R + Send) -> R {
         match &self.pool {
             Some(pool) => pool.install(f),
+            None if self.count > 1 => rayon::scope(|_| f()),
             None => f(),
         }
     }
