@@ -1,16 +1,12 @@
 //! The impulse velocity Verlet misplaces when a contact's normal force jumps inside a step
 //! (JKR at the touch and at pull-off, jump-in adhesion), and the correction that places it.
 //!
-//! Velocity Verlet gives a step the impulse ½(F_n + F_{n+1})·dt. A force that jumps on (off)
-//! at a time θ·dt inside the step delivers instead about (1 − θ)·dt·(F_e + F_{n+1})/2
-//! (θ·dt·(F_n + F_e)/2), F_e the force just inside the edge: the jump counts as ½·F_e·dt
-//! where it delivers (1 − θ)·F_e·dt (θ·F_e·dt), an O(dt) error per crossing that makes the
-//! restitution first order in dt. The difference, added as a velocity impulse at the end of
-//! the step, leaves O(dt²) (θ from the overlaps before and after, linear in time), and it
-//! is the trapezoid the energy ledger books over the part of the step inside the contact,
-//! so the ledger stays consistent with the motion. Laws without a jump (F_e = 0: Hertz,
-//! whose damping may rise like δ^(1/4) there, where a trapezoid would not help) are left as
-//! velocity Verlet has them.
+//! Verlet counts a jump F_e at θ·dt as ½·F_e·dt where the force delivers (1 − θ)·F_e·dt
+//! (switching on; θ·F_e·dt off), an O(dt) error per crossing. The difference to the
+//! trapezoid over the part of the step inside the contact (θ linear in time) is added as a
+//! velocity impulse at the step's end, leaving O(dt²) and matching what the energy ledger
+//! books. Laws without a jump (F_e = 0: Hertz) are left as Verlet has them. Why and what
+//! it gains: `docs/force_jumps.md`.
 
 /// Where a contact crossed an edge of its force law within the step: the overlap at the
 /// start and at the end of the step, the edge (δ, force just inside) and the force at the

@@ -2,28 +2,6 @@
 
 use super::*;
 
-/// Whether the step places force jumps: as the scene says (`jump_impulses`), by default
-/// where some contact law's force can jump (on the CPU they cost nothing where none does;
-/// here they are fields and code the step would carry for nothing).
-pub(super) fn places_jumps(scene: &Scene, models: &[ContactModel], r_max: f64) -> bool {
-    scene.jump_impulses.unwrap_or_else(|| {
-        let geom = PairGeometry::spheres(r_max, r_max, 1.0, 1.0);
-        models.iter().any(|m| m.has_force_jumps(&geom))
-    })
-}
-
-/// The particles (by index into `cells`) in the order of the grid sort (`grid.wgsl`):
-/// by clamped linear cell key, x fastest, then by index.
-pub(super) fn grid_order(cells: &[[i32; 4]], dims: [u32; 3]) -> Vec<usize> {
-    let key = |c: &[i32; 4]| {
-        let k: [u64; 3] = [0, 1, 2].map(|a| c[a].clamp(0, dims[a] as i32 - 1) as u64);
-        k[0] + dims[0] as u64 * (k[1] + dims[1] as u64 * k[2])
-    };
-    let mut order: Vec<usize> = (0..cells.len()).collect();
-    order.sort_by_key(|&i| (key(&cells[i]), i));
-    order
-}
-
 /// The scans that place a rebuild's new lists (counts into first entries): two a window,
 /// the pair lists' and `lower`'s, over the window's block of `rows`; each window's counts
 /// of its `n` particles (one window) or `len` (several: the last one's counts beyond n
@@ -106,47 +84,6 @@ fn quiet_batches(
     (q, alloc.list)
 }
 
-/// What the step's program is compiled from besides the composition: the kernels a scene
-/// runs, its pipeline constants, the state read through mirrors.
-pub(super) struct StepSpec {
-    pub(super) wanted: Vec<&'static str>,
-    pub(super) constants: Vec<(&'static str, f64)>,
-    pub(super) mirrors: bool,
-}
-
-impl StepSpec {
-    /// The step's program, the lists' entries in one buffer or `paged`.
-    pub(super) fn compile(
-        &self,
-        ctx: &GpuContext,
-        (kind, keeps): (&Composition, Keeps),
-        paged: bool,
-    ) -> Result<Program, PowderError> {
-        Program::specialized(
-            ctx,
-            &kind.variant(keeps, self.mirrors, paged),
-            Some(&self.wanted),
-            &self.constants,
-        )
-    }
-}
-
-/// The step's kernels a scene runs: the wall kernels only where walls move, `appear` only
-/// where particles appear during the run (the others are not compiled).
-fn wanted_kernels(scene: &Scene) -> Vec<&'static str> {
-    let mut wanted = crate::gpu::shaders::STEP_KERNELS.to_vec();
-    if scene.walls.iter().any(|w| w.motion.moves()) {
-        wanted.push("wall_move");
-    }
-    if scene.walls.iter().any(|w| w.motion.servo()) {
-        wanted.extend(["wall_servo", "wall_servo_apply"]);
-    }
-    if scene.pours() {
-        wanted.push("appear");
-    }
-    wanted
-}
-
 /// The force pass's read-only texture copies of what it loads per pair (`gpu::mirror`):
 /// the cells, offsets, predictions (and angular predictions) of `state`, on the software
 /// adapter's path only (none otherwise).
@@ -173,131 +110,6 @@ fn state_mirrors(
         mirrored.push(("m_wpred", None, s, w, float));
     }
     Mirrors::new(device, n, &mirrored)
-}
-
-/// The buffers the step binds by name: the state set's and the step's others.
-pub(super) type NamedBuffers<'a> = [Vec<(String, &'a wgpu::Buffer)>; 2];
-
-/// Binds every kernel of the step to the run's buffers and the mirrors' textures, window
-/// by window where a kernel works on windows (`blocks`: the blocked buffers' bytes a
-/// window).
-pub(super) fn bind_all(
-    device: &wgpu::Device,
-    program: &Program,
-    (layout, records, blocks): (&StateLayout, &[(&RecordLayout, u64)], &Blocks),
-    (mirrors, windows): (&Mirrors, &WindowBindings),
-    grid: &GridSort,
-    (buffers, paged): (NamedBuffers, &[Paged]),
-) -> Result<Bound, PowderError> {
-    let mut list: Vec<(String, &wgpu::Buffer)> = buffers.into_iter().flatten().collect();
-    list.push(("grid".into(), grid.params()));
-    list.push(("sorted_index".into(), grid.sorted_index()));
-    list.push(("cell_start".into(), grid.cell_start()));
-    let refs: Vec<(&str, &wgpu::Buffer)> = list.iter().map(|(n, b)| (n.as_str(), *b)).collect();
-    let textures = mirrors.view_bytes();
-    let pass = |name: &str| -> Result<Pass, PowderError> {
-        let kernel = program.kernel(name)?.clone();
-        let groups = windows.groups(device, &kernel, (&refs, blocks), &mirrors.views(), paged)?;
-        let mut bound = kernel.bound_bytes(&refs, &textures);
-        // the state: the fields the kernel's accessors touch, not the whole buffers
-        for (name, bytes) in &mut bound {
-            if let Some(b) = Buffer::ALL.into_iter().find(|b| b.name() == name) {
-                *bytes = layout.touched_bytes(b, &kernel.calls);
-            }
-            // and the records: the fields it touches (of every layout living in the buffer)
-            let mut living = records.iter().filter(|(r, _)| r.array() == name).peekable();
-            if living.peek().is_some() {
-                *bytes = living
-                    .map(|(r, capacity)| r.touched_bytes(&kernel.calls, *capacity))
-                    .sum();
-            }
-        }
-        Ok(Pass {
-            kernel,
-            groups,
-            bound,
-        })
-    };
-    let optional = |name: &str| program.kernels.contains_key(name).then(|| pass(name));
-    Ok(Bound {
-        kick_drift: pass("kick_drift")?,
-        decide: pass("decide")?,
-        decide_lean: pass("decide_lean")?,
-        gather: pass("gather")?,
-        count_neighbours: pass("count_neighbours")?,
-        neighbours: pass("neighbours")?,
-        commit: pass("commit")?,
-        remap: pass("remap")?,
-        copy_back_history: pass("copy_back_history")?,
-        force: pass("force")?,
-        kick: pass("kick")?,
-        collect_kick_drift: pass("collect_kick_drift")?,
-        collect: pass("collect")?,
-        wall_move: optional("wall_move").transpose()?,
-        wall_servo: optional("wall_servo").transpose()?,
-        wall_servo_apply: optional("wall_servo_apply").transpose()?,
-        appear: optional("appear").transpose()?,
-    })
-}
-
-/// The value every item of `values` has, or `mixed` when they differ or there is none.
-pub(super) fn common_or<T: PartialEq + Copy>(values: impl IntoIterator<Item = T>, mixed: T) -> T {
-    let mut values = values.into_iter();
-    match values.next() {
-        Some(first) if values.all(|v| v == first) => first,
-        _ => mixed,
-    }
-}
-
-/// The step's pipeline-overridable constants for a scene: what it does not use is folded
-/// out of its pipelines (the WGSL `override`s of step.wgsl and the model files). The
-/// model constants go only to variants that declare them (wgpu refuses unknown names).
-pub(super) fn pipeline_constants(
-    scene: &Scene,
-    r: &Resolved,
-    models: &[ContactModel],
-) -> Vec<(&'static str, f64)> {
-    let flag = |b: bool| f64::from(u8::from(b));
-    let mut constants = vec![
-        ("ONE_MATERIAL", flag(r.n_materials == 1)),
-        ("POURING", flag(scene.pours())),
-        ("PERIODIC", flag(scene.domain.periodic.iter().any(|&p| p))),
-        ("WALLS", flag(!scene.walls.is_empty())),
-    ];
-    let hyst: Vec<HystereticPair> = models
-        .iter()
-        .filter_map(|m| match m {
-            ContactModel::Hysteretic(p) => Some(HystereticPair::hysteretic(p)),
-            ContactModel::Lsd(p) => Some(HystereticPair::lsd(p)),
-            _ => None,
-        })
-        .collect();
-    if !hyst.is_empty() {
-        let flags = common_or(hyst.iter().map(|h| h.flags), u32::MAX);
-        constants.push(("HYST_ONE_FLAGS", flags as f64));
-    }
-    let jkr: Vec<JkrPair> = models
-        .iter()
-        .filter_map(|m| match m {
-            ContactModel::Jkr(p) => Some(JkrPair::new(p)),
-            _ => None,
-        })
-        .collect();
-    if !jkr.is_empty() {
-        // one dissipation code or 255; all Hertz 0 / all adhesive 1 / both 2
-        let dissipation = common_or(jkr.iter().map(|j| j.dissipation), 255);
-        let adhesion = common_or(jkr.iter().map(|j| u32::from(j.gamma > 0.0)), 2);
-        constants.push(("JKR_ONE_DISSIPATION", dissipation as f64));
-        constants.push(("JKR_ADHESION", adhesion as f64));
-    }
-    constants
-}
-
-/// The step a scene's pair models need and their pair table as bytes.
-pub(super) fn pair_table(models: &[ContactModel]) -> (Composition, Vec<u8>) {
-    let kind = Composition::of(models);
-    let rows = models.iter().flat_map(|m| kind.pair_row(m)).collect();
-    (kind, rows)
 }
 
 /// The neighbour grid's cell widths (m) and counts per axis for `n` particles whose pairs
@@ -335,120 +147,6 @@ fn cell_grid(scene: &Scene, n: usize, cutoff: f64) -> Result<(DVec3, [u32; 3]), 
         }
     }
     Ok((h, dims))
-}
-
-/// A run's initial particle state as the state's fields want it, each particle's values
-/// in the grid's order (the first sort keeps it: every particle starts in its window, and
-/// a window's neighbours hold its partners, `gpu::window`).
-struct InitialState {
-    /// Scene index of each particle, in upload order.
-    order: Vec<usize>,
-    cells: Vec<[i32; 4]>,
-    offs: Vec<[f32; 4]>,
-    vels: Vec<[f32; 4]>,
-    acc0: [f32; 4],
-    /// The prediction `kick_drift` writes each step, for the initial forces.
-    vpred0: Vec<[f32; 4]>,
-    /// The compensations (stored − true) of velocity and position, and the radius's
-    /// rounding residual: the kernels' x − c is the scene's value to ~1e-16 relative.
-    kahan_v: Vec<[f32; 4]>,
-    kahan_o: Vec<[f32; 4]>,
-    /// ω as the scene gives it, w = I = 2/5·m·r².
-    omega: Vec<[f32; 4]>,
-}
-
-impl InitialState {
-    /// The scene's particles in cells of width `h` from `origin` (`dims` per axis).
-    fn new(
-        scene: &Scene,
-        r: &Resolved,
-        (origin, h, dims): (DVec3, DVec3, [u32; 3]),
-        dt32: f32,
-    ) -> Self {
-        let n = scene.particles.len();
-        let mut cells = Vec::with_capacity(n);
-        let mut offs = Vec::with_capacity(n);
-        let mut vels = Vec::with_capacity(n);
-        let mut kahan_v: Vec<[f32; 4]> = Vec::with_capacity(n);
-        let mut kahan_o: Vec<[f32; 4]> = Vec::with_capacity(n);
-        for (p, m) in scene.particles.iter().zip(&r.mass) {
-            let x = DVec3::from_array(p.position);
-            let (mut c, mut o) = encode3(x, origin, h);
-            c[3] = p.material as i32;
-            if p.insert_at > 0.0 {
-                c[3] |= NOT_APPEARED;
-            }
-            o[3] = p.radius as f32;
-            let dx = crate::gpu::layout::decode3(c, o, origin, h) - x;
-            let v = p.velocity;
-            let v32 = v.map(|c| c as f32);
-            let cv = [0, 1, 2].map(|a| (v32[a] as f64 - v[a]) as f32);
-            kahan_v.push([cv[0], cv[1], cv[2], 0.0]);
-            kahan_o.push([
-                dx.x as f32,
-                dx.y as f32,
-                dx.z as f32,
-                (o[3] as f64 - p.radius) as f32,
-            ]);
-            cells.push(c);
-            offs.push(o);
-            vels.push([v32[0], v32[1], v32[2], *m as f32]);
-        }
-        let g = scene.gravity;
-        let acc0 = [g[0] as f32, g[1] as f32, g[2] as f32, 0.0];
-        let vpred0: Vec<[f32; 4]> = vels
-            .iter()
-            .map(|v| {
-                let p = |i: usize| v[i] + 0.5 * dt32 * acc0[i];
-                [p(0), p(1), p(2), v[3]]
-            })
-            .collect();
-        let omega = scene
-            .particles
-            .iter()
-            .zip(&r.mass)
-            .map(|(p, m)| {
-                let [x, y, z] = p.angular_velocity.map(|c| c as f32);
-                [x, y, z, (0.4 * m * p.radius * p.radius) as f32]
-            })
-            .collect();
-        Self {
-            order: grid_order(&cells, dims),
-            cells,
-            offs,
-            vels,
-            acc0,
-            vpred0,
-            kahan_v,
-            kahan_o,
-            omega,
-        }
-    }
-
-    /// The state field `name`'s initial words in upload order (`None`: zero).
-    fn field(&self, name: &str) -> Option<Vec<[u32; 4]>> {
-        let words = |v: &[[f32; 4]]| -> Vec<[u32; 4]> {
-            self.order.iter().map(|&i| bytemuck::cast(v[i])).collect()
-        };
-        match name {
-            "cell" => Some(
-                self.order
-                    .iter()
-                    .map(|&i| bytemuck::cast(self.cells[i]))
-                    .collect(),
-            ),
-            "off" => Some(words(&self.offs)),
-            "vel" => Some(words(&self.vels)),
-            "acc" => Some(vec![bytemuck::cast(self.acc0); self.order.len()]),
-            "vpred" => Some(words(&self.vpred0)),
-            "kahan_v" => Some(words(&self.kahan_v)),
-            "kahan_o" => Some(words(&self.kahan_o)),
-            // persistent id; the lists and wall entries come with the first rebuild
-            "ids" => Some(self.order.iter().map(|&i| [i as u32, 0, 0, 0]).collect()),
-            "omega" => Some(words(&self.omega)),
-            _ => None,
-        }
-    }
 }
 
 impl GpuEngine {
@@ -505,30 +203,13 @@ impl GpuEngine {
         let (h, dims) = cell_grid(scene, n, cutoff)?;
         let mut grid =
             GridSort::with_cell_widths(&ctx, n as u32, dims, [h.x as f32, h.y as f32, h.z as f32])?;
-        // the windows (`gpu::window`): asked for, or one where every array fits a binding
         let n_walls = scene.walls.len() as u64;
-        let layout0 = StateLayout::new(0, kind.state_extras(keeps));
-        let state_fields = layout0.count(Buffer::State);
-        let windows = match options.window_particles {
-            Some(len) => Windows::of(n as u64, len)?,
-            None => automatic_windows(
-                &layout0,
-                kind.records(keeps),
-                n as u64,
-                ctx.max_storage_binding(),
-                measured,
-            ),
-        };
+        let state_fields = StateLayout::new(0, kind.state_extras(keeps)).count(Buffer::State);
+        let windows = plan_windows(&ctx, &options, (&kind, keeps), n as u64, measured)?;
         grid.set_windows(&ctx.queue, &windows, state_fields as u32);
         let device = &ctx.device;
         let mut alloc = Allocator::new(device, ctx.max_storage_binding());
-        alloc.list = vec![
-            ("grid.params".into(), grid.params().size()),
-            ("grid.keys".into(), grid.keys().size()),
-            ("grid.cell_count".into(), grid.cell_count().size()),
-            ("grid.cell_start".into(), grid.cell_start().size()),
-            ("grid.sorted_index".into(), grid.sorted_index().size()),
-        ];
+        alloc.list = grid_sizes(&grid);
         let Storage {
             entries,
             pages,
@@ -556,60 +237,17 @@ impl GpuEngine {
                 &state.layout.pack(b, &|f| initial.field(f)),
             );
         }
-        let walls: Vec<WallGpu> = scene
-            .walls
-            .iter()
-            .map(|w| WallGpu::from_scene(w, origin, h))
-            .collect();
         let moving_walls = scene.walls.iter().any(|w| w.motion.moves());
         let step = step_params(scene, &r, (extent, h, dims), (entries, skin));
-        let step_buf = uniform_buffer(device, "step", bytemuck::bytes_of(&step));
-        alloc.list.push(("step".into(), step_buf.size()));
-        let pairs_buf = alloc.buffer("pairs", pairs.len() as u64);
-        q0.write_buffer(&pairs_buf, 0, &pairs);
-        let walls_buf = alloc.buffer(
-            "walls",
-            (walls.len().max(1) * std::mem::size_of::<WallGpu>()) as u64,
-        );
-        if !walls.is_empty() {
-            q0.write_buffer(&walls_buf, 0, bytemuck::cast_slice(&walls));
-        }
-        // each wall's point at the last rebuild (decide); 32 bytes a wall
-        let wall_ref = alloc.buffer("wall_ref", 32 * walls.len().max(1) as u64);
-        // which particles have appeared, by persistent id: a word each where the scene
-        // pours (`POURING`), else one word nothing reads
         let active: Vec<bool> = scene.particles.iter().map(|p| p.insert_at <= 0.0).collect();
-        let pouring = scene.pours();
-        let active_buf = alloc.buffer("active", 4 * if pouring { n as u64 } else { 1 });
-        if pouring {
-            q0.write_buffer(
-                &active_buf,
-                0,
-                bytemuck::cast_slice(&appeared_flags(&active)),
-            );
-        }
-        // the new lists' and the `lower` lists' rows (four regions a window)
-        let rows = blocked_buffer(
-            &mut alloc,
+        let small = SceneBuffers::upload(
+            (&mut alloc, q0),
+            scene,
+            (&step, &pairs, &active),
+            (origin, h),
             &windows,
-            ("rows", 4 * 4 * windows.len * windows.count),
-            4 * 4 * windows.len,
         );
-        let control = alloc.buffer("control", CONTROL_BYTES);
-        // moved beyond skin/2 (flag set): the first step builds the lists
-        let skin_init = [1u32, 0, 0, 0];
-        q0.write_buffer(&control, SKIN_OFFSET, bytemuck::cast_slice(&skin_init));
-        // the software adapter's paths (texture mirrors; quiet batches under `auto`)
-        // (the mirrors copy a field's region: one window only)
-        let software = options
-            .software_paths
-            .unwrap_or_else(|| ctx.is_software() && windows.count == 1);
-        if software && windows.count > 1 {
-            return Err(PowderError::Run(format!(
-                "the software adapter's paths (texture mirrors) need one window, and {} particles in windows of {} make {}: turn them off (`--software-paths off`, GpuOptions::software_paths)",
-                n, windows.len, windows.count
-            )));
-        }
+        let software = software_paths(&options, &ctx, &windows, n)?;
         let constants = pipeline_constants(scene, &r, &all_models);
         let spec = StepSpec {
             wanted: wanted_kernels(scene),
@@ -619,7 +257,7 @@ impl GpuEngine {
         let program = spec.compile(&ctx, (&kind, keeps), pages.paged() || state_pages.paged())?;
         let max_per_dim = ctx.limits().max_compute_workgroups_per_dimension;
         // the scans that place the new lists (counts -> first entries)
-        let scans = list_scans(&ctx, &rows, (&windows, n as u32))?;
+        let scans = list_scans(&ctx, &small.rows, (&windows, n as u32))?;
         let per_group = program
             .kernel("gather")?
             .workgroup_size
@@ -653,17 +291,17 @@ impl GpuEngine {
         alloc
             .list
             .push(("permute.scratch".into(), permutation.scratch_bytes()));
-        let buffers = alloc.list;
+        let mut buffers = alloc.list;
         let b = StepBuffers {
-            step: step_buf,
-            pairs: pairs_buf,
-            walls: walls_buf,
-            wall_ref,
-            appeared: active_buf,
-            control,
+            step: small.step,
+            pairs: small.pairs,
+            walls: small.walls,
+            wall_ref: small.wall_ref,
+            appeared: small.appeared,
+            control: small.control,
             args,
             full_args,
-            rows,
+            rows: small.rows,
             servo_lanes,
         };
         let bound = bind_all(
@@ -678,31 +316,17 @@ impl GpuEngine {
             &grid,
             ([state.named(), b.named()], &state.paged()),
         )?;
-        // the grid sort's keys, a window at a time (its page where the state has pages)
-        let state_block = state_fields * windows.len * crate::gpu::state::FIELD_BYTES;
-        let grid_keys = (0..windows.count)
-            .map(|w| {
-                let cells = match state_pages.paged() {
-                    true => Part::whole(&state.state[state_pages.page_of(w) as usize]),
-                    false => windowing.part(&state.state[0], state_block, w),
-                };
-                grid.keys_bind_group_part(cells, &windowing.uniforms[w as usize])
-            })
-            .collect::<Result<Vec<_>, _>>()?;
-        // quiet batches: not where walls move (their rebuild trigger is decide's) nor where
-        // particles appear (an insertion rebuilds)
-        let pouring = scene.pours();
+        let grid_keys = grid_keys(&grid, &state, &windowing, (state_fields, state_pages))?;
+        // quiet batches: not where walls move (their rebuild trigger is decide's), nor where
+        // particles appear (an insertion rebuilds), nor in pages (the copies are one buffer)
         let mode = options.quiet.on(software);
-        // (nor where the lists' entries or the state are in pages: the copies would be one
-        // buffer)
         let paged = pages.paged() || state_pages.paged();
-        let quiet = (mode != QuietBatches::Off && !moving_walls && !pouring && !paged)
-            .then(|| quiet_batches(device, mode, &state, (&new_lists, entries), skin));
-        let mut buffers = buffers;
-        let quiet = quiet.map(|(q, list)| {
-            buffers.extend(list);
-            q
-        });
+        let quiet =
+            (mode != QuietBatches::Off && !moving_walls && !scene.pours() && !paged).then(|| {
+                let (q, list) = quiet_batches(device, mode, &state, (&new_lists, entries), skin);
+                buffers.extend(list);
+                q
+            });
         let radius = scene.particles.iter().map(|p| p.radius).collect();
         let mass = r.mass.clone();
         let mut engine = Self {
@@ -821,18 +445,151 @@ fn step_params(
     }
 }
 
-/// The energy each particle brings when it appears (kinetic, rotational about its centre,
-/// gravitational), J: the ledger books it at its insertion.
-fn insert_energies(scene: &Scene, mass: &[f64]) -> Vec<f64> {
-    scene
-        .particles
-        .iter()
-        .zip(mass)
-        .map(|(p, m)| {
-            let spin = 0.2 * m * p.radius * p.radius;
-            0.5 * m * DVec3::from_array(p.velocity).length_squared()
-                + spin * DVec3::from_array(p.angular_velocity).length_squared()
-                - m * DVec3::from_array(scene.gravity).dot(DVec3::from_array(p.position))
+/// The step's buffers a scene fills before its program is built: the uniform parameters,
+/// the pair table, the walls and each one's point at the last rebuild, which particles
+/// have appeared, the new lists' rows and `control`.
+struct SceneBuffers {
+    step: wgpu::Buffer,
+    pairs: wgpu::Buffer,
+    walls: wgpu::Buffer,
+    wall_ref: wgpu::Buffer,
+    appeared: wgpu::Buffer,
+    rows: wgpu::Buffer,
+    control: wgpu::Buffer,
+}
+
+impl SceneBuffers {
+    /// Allocates and writes them: `active` tells which particles have appeared, the walls
+    /// are placed in the cells of width `h` from `origin`.
+    fn upload(
+        (alloc, q0): (&mut Allocator, &wgpu::Queue),
+        scene: &Scene,
+        (step, pairs, active): (&StepParams, &[u8], &[bool]),
+        (origin, h): (DVec3, DVec3),
+        windows: &Windows,
+    ) -> Self {
+        let walls: Vec<WallGpu> = scene
+            .walls
+            .iter()
+            .map(|w| WallGpu::from_scene(w, origin, h))
+            .collect();
+        let step_buf = uniform_buffer(alloc.device, "step", bytemuck::bytes_of(step));
+        alloc.list.push(("step".into(), step_buf.size()));
+        let pairs_buf = alloc.buffer("pairs", pairs.len() as u64);
+        q0.write_buffer(&pairs_buf, 0, pairs);
+        let walls_buf = alloc.buffer(
+            "walls",
+            (walls.len().max(1) * std::mem::size_of::<WallGpu>()) as u64,
+        );
+        if !walls.is_empty() {
+            q0.write_buffer(&walls_buf, 0, bytemuck::cast_slice(&walls));
+        }
+        // each wall's point at the last rebuild (decide); 32 bytes a wall
+        let wall_ref = alloc.buffer("wall_ref", 32 * walls.len().max(1) as u64);
+        // which particles have appeared, by persistent id: a word each where the scene
+        // pours (`POURING`), else one word nothing reads
+        let pouring = scene.pours();
+        let n = active.len() as u64;
+        let appeared = alloc.buffer("active", 4 * if pouring { n } else { 1 });
+        if pouring {
+            q0.write_buffer(&appeared, 0, bytemuck::cast_slice(&appeared_flags(active)));
+        }
+        // the new lists' and the `lower` lists' rows (four regions a window)
+        let rows = blocked_buffer(
+            alloc,
+            windows,
+            ("rows", 4 * 4 * windows.len * windows.count),
+            4 * 4 * windows.len,
+        );
+        let control = alloc.buffer("control", CONTROL_BYTES);
+        // moved beyond skin/2 (flag set): the first step builds the lists
+        let skin_init = [1u32, 0, 0, 0];
+        q0.write_buffer(&control, SKIN_OFFSET, bytemuck::cast_slice(&skin_init));
+        Self {
+            step: step_buf,
+            pairs: pairs_buf,
+            walls: walls_buf,
+            wall_ref,
+            appeared,
+            rows,
+            control,
+        }
+    }
+}
+
+/// Whether the run takes the software adapter's paths (texture mirrors; quiet batches
+/// under `auto`): as the options say, by default on a software adapter with one window
+/// (the mirrors copy a field's region, so they need one).
+fn software_paths(
+    options: &GpuOptions,
+    ctx: &GpuContext,
+    windows: &Windows,
+    n: usize,
+) -> Result<bool, PowderError> {
+    let software = options
+        .software_paths
+        .unwrap_or_else(|| ctx.is_software() && windows.count == 1);
+    if software && windows.count > 1 {
+        return Err(PowderError::Run(format!(
+            "the software adapter's paths (texture mirrors) need one window, and {} particles in windows of {} make {}: turn them off (`--software-paths off`, GpuOptions::software_paths)",
+            n, windows.len, windows.count
+        )));
+    }
+    Ok(software)
+}
+
+/// The grid sort's bind groups for the cells' keys, a window each (its page where the
+/// state has pages; `state_fields` fields a particle in the state buffer).
+fn grid_keys(
+    grid: &GridSort,
+    state: &StateSet,
+    windowing: &WindowBindings,
+    (state_fields, state_pages): (u64, Pages),
+) -> Result<Vec<wgpu::BindGroup>, PowderError> {
+    let windows = state.layout.windows();
+    let state_block = state_fields * windows.len * crate::gpu::state::FIELD_BYTES;
+    (0..windows.count)
+        .map(|w| {
+            let cells = match state_pages.paged() {
+                true => Part::whole(&state.state[state_pages.page_of(w) as usize]),
+                false => windowing.part(&state.state[0], state_block, w),
+            };
+            grid.keys_bind_group_part(cells, &windowing.uniforms[w as usize])
         })
         .collect()
+}
+
+/// The windows (`gpu::window`): as the options ask, or the fewest where every array fits
+/// one binding (`measured`: the list entries a first build needed, where it outgrew one).
+fn plan_windows(
+    ctx: &GpuContext,
+    options: &GpuOptions,
+    (kind, keeps): (&Composition, Keeps),
+    n: u64,
+    measured: Option<u64>,
+) -> Result<Windows, PowderError> {
+    let layout = StateLayout::new(0, kind.state_extras(keeps));
+    Ok(match options.window_particles {
+        Some(len) => Windows::of(n, len)?,
+        None => automatic_windows(
+            &layout,
+            kind.records(keeps),
+            n,
+            ctx.max_storage_binding(),
+            measured,
+        ),
+    })
+}
+
+/// The grid sort's buffers, named with their sizes (bytes).
+fn grid_sizes(grid: &GridSort) -> Vec<(String, u64)> {
+    [
+        ("grid.params", grid.params()),
+        ("grid.keys", grid.keys()),
+        ("grid.cell_count", grid.cell_count()),
+        ("grid.cell_start", grid.cell_start()),
+        ("grid.sorted_index", grid.sorted_index()),
+    ]
+    .map(|(name, b)| (name.to_string(), b.size()))
+    .to_vec()
 }

@@ -1,21 +1,19 @@
 //! The GPU engine: the time step of `shaders/step.wgsl` driven from the host, for every
 //! contact law the scene composes (`gpu::composition`), with walls, gravity and pouring.
 //!
-//! The particle state lives in one buffer set, A, in the order of the last neighbour-list
-//! rebuild. Each step drifts A, decides on the device whether to rebuild (some particle
-//! moved more than half the Verlet skin, [`SKIN`]·r_min), and on a rebuild sorts A by
-//! cell, re-sorts it in place, builds the new lists from the grid, remaps every contact's
-//! history by the partner's persistent id and copies it back; then the forces and the
-//! kicks. The rebuild's passes are recorded every step as indirect dispatches whose
-//! workgroup counts `decide` writes (zero without a rebuild), so the decision never leaves
-//! the device. Many steps go into one submission; the host reads back a small monitor per
-//! batch and whatever output needs. Every run is bitwise deterministic.
+//! The particle state lives in one buffer set in the order of the last neighbour-list
+//! rebuild. A step drifts it and asks on the device whether a rebuild is due (some particle
+//! moved more than half the Verlet skin, [`SKIN`]·r_min); if so the batch halts there and
+//! the host runs that step again with the rebuild recorded (grid sort, re-sort in place,
+//! new lists, history remapped by persistent id). Then the forces and the kicks. Many steps go into
+//! one submission; the host reads back a small monitor per batch. Every run is bitwise
+//! deterministic. How the step works and why: `docs/architecture.md`.
 //!
-//! The files: `build` (an engine for a scene), `buffers` (the device buffers and the
-//! lists' sizes), `record` (a step's passes, a batch's submission and monitor),
-//! `stepping` (running steps, halts, quiet batches), `walls` (prescribed, servo and
-//! programmed walls, pouring), `readback`, `checkpoint`, `introspection` (sizes, kernels,
-//! traffic, the pass profile). How the step works and why: `docs/architecture.md`.
+//! The files: `build` (an engine for a scene) with `program` (what its shaders are
+//! compiled from), `initial` (the first state), `bind` (bind groups); `buffers` (device
+//! buffers, list sizes); `dispatch` (workgroup counts); `record` (a step's passes, a
+//! batch); `stepping` (running steps, halts, quiet batches); `walls` (walls, pouring);
+//! `readback`, `checkpoint`, `introspection` (sizes, kernels, traffic, pass profile).
 
 use crate::cpu::{ContactStats, Energies, Partner};
 use crate::error::PowderError;
@@ -42,19 +40,24 @@ use crate::scene::{Scene, WallPhase};
 use crate::setup::Resolved;
 use glam::DVec3;
 
+mod bind;
 mod buffers;
 mod build;
 mod checkpoint;
 mod dispatch;
+mod initial;
 mod introspection;
+mod program;
 mod readback;
 mod record;
 mod stepping;
 mod walls;
 
+use bind::*;
 use buffers::*;
-use build::*;
 use dispatch::Dispatches;
+use initial::*;
+use program::*;
 use readback::*;
 use record::*;
 use stepping::*;
