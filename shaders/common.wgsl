@@ -1,7 +1,7 @@
 // common.wgsl — shared by every shader stage of the GPU engine.
 //
-// `src/gpu/shaders.rs` prepends this file to each stage file (grid.wgsl, and later the
-// force and integration kernels), so everything here is visible to every stage. Keep it
+// `src/gpu/shaders.rs` prepends this file to each stage file (grid.wgsl, permute.wgsl,
+// step.wgsl), so everything here is visible to every stage. Keep it
 // to declarations that every stage can share: constants, structs mirrored in Rust
 // (`src/gpu/layout.rs`, checked there against naga's layout), and pure helpers.
 //

@@ -1,21 +1,17 @@
-// grid.wgsl — deterministic counting sort of particles by cell key.
+// grid.wgsl — deterministic counting sort of particles by cell key (`src/gpu/grid.rs`).
+// Result: sorted_index[k] = original index of the k-th particle ordered by (key, index),
+// exactly a stable counting sort; cell_start/cell_count give each cell's range.
 //
-// Pass order (all recorded into one compute pass by `GridSort::encode`):
-//   clear_counts       per cell      cell_count = 0, large-cell list emptied
+// Passes, recorded into one compute pass (`GridSort::encode`, `encode_indirect`):
+//   clear_counts       per cell      cell_count = 0, large-cell queue emptied
 //   cell_keys          per particle  keys[i] = clamped linear cell key of cells[i]
 //   count              per particle  atomicAdd(cell_count[keys[i]], 1)
-//   scan_blocks/_add   per element   cell_start = exclusive scan of cell_count
-//                                    (multi-level: block scans, block sums scanned
-//                                    recursively, carries added back)
-//   scatter            per particle  claims a slot in its cell with atomicSub on
-//                                    cell_count (order within a cell is racy here)
-//   sort_within_cells  per cell      restores cell_count from the ranges and sorts the
-//                                    cell's slice by original index (insertion sort for
-//                                    cells of <= SMALL_CELL particles; larger cells are
-//                                    queued for sort_large_cells)
+//   scan_blocks/_add   per element   cell_start = multi-level exclusive scan of cell_count
+//   scatter            per particle  a slot in its cell by atomicSub on cell_count
+//                                    (racy order within the cell)
+//   sort_within_cells  per cell      restores cell_count, sorts the slice by index
+//                                    (insertion sort up to SMALL_CELL; larger cells queued)
 //   sort_large_cells   workgroup per queued cell: bitonic sort of the slice
-// Result: sorted_index[k] = original index of the k-th particle ordered by (key, index),
-// which is exactly a stable counting sort; cell_start/cell_count give each cell's range.
 
 // Cells queued for the workgroup sort hold more than this many particles.
 const SMALL_CELL: u32 = 32u;

@@ -1,33 +1,20 @@
 // ledger.wgsl — the energy ledger and contact statistics on the device, composed into the
-// step instead of ledger_off.wgsl when a run wants them (`GpuOptions::ledger`). The twin
-// of the CPU engine's ledger (`CpuEngine::book`, `CpuEngine::contact_stats`).
+// step instead of ledger_off.wgsl when a run wants them (`GpuOptions::ledger`); the twin
+// of the CPU engine's (`CpuEngine::book`, `CpuEngine::contact_stats`).
 //
-// Energy dissipated by one contact over a step = the work done on it minus the change of
-// its stored energy: 0.5·(f0 + f1)·(delta1 − delta0) − ½·dt·(P0 + P1) − (U1 − U0), with
-// P = tangential force · tangential velocity + rolling torque · relative angular velocity.
-// A step that crosses the contact's entry or exit edge integrates the normal work only
-// over the part inside, from the force just inside the edge (`pair_edges` of the model),
-// so the force jumps of JKR and jump-in adhesion are booked right. A pair is evaluated
-// once, by the particle whose half list holds it (see step.wgsl), which books all of it
-// (and counts it twice: once for each particle); so does a wall contact.
+// A contact dissipates over a step the work done on it less the change of its stored
+// energy: 0.5·(f0 + f1)·(delta1 − delta0) − ½·dt·(P0 + P1) − (U1 − U0), with
+// P = tangential force · tangential velocity + rolling torque · relative angular velocity,
+// the normal work of a step that crosses the entry or exit edge taken only over the part
+// inside (`pair_edges`), so force jumps are booked right. The last step's values come
+// from the entries' `prior`. A pair's evaluator (step.wgsl) books all of it and counts it
+// for both particles; a wall contact's particle books it, and a moving wall's work on it
+// (its normal force's and a placed force jump's, exact for a wall moving along its normal;
+// the tangential force's is left out).
 //
-// What the last step left of a contact comes from the entries' `prior` (step.wgsl), kept
-// per slot next to its history and moved with it through re-sorts.
-//
-// Per particle, four fields of its state (`ledger_counts`, `ledger_overlaps`,
-// `ledger_energy`, `ledger_wall` in `gpu::state`: re-sorted with it; each invocation writes
-// only its own particle, so no atomics and bitwise reproducible sums):
-//   [0] (pairs overlapping, walls overlapping, pairs engaged without overlap, walls
-//        engaged without overlap), the pairs counted twice by their evaluator;
-//   [1] (largest overlap, largest overlap/a12, sum over pairs of overlap/a12 (twice, as
-//        the counts), sum over walls of overlap/a12);
-//   [2] (dissipated energy so far: Kahan sum and its compensation; the stored energy of
-//        the pairs it evaluates and of its walls; 0);
-//   [3] (work moving walls did on it so far: Kahan sum and compensation; 0; 0) — the
-//        normal force's work 0.5·(f0 + f1)·(n·v_wall)·dt and a placed force jump's
-//        J·(n·v_wall), exact for walls moving along their normal (the tangential force's
-//        is left out).
-// The host reads them back only when asked and sums in f64 in id order.
+// Each particle's totals are four fields of its state (`ledger_*` in `gpu::state`,
+// re-sorted with it); each invocation writes only its own, so no atomics and sums that
+// are bitwise reproducible. The host reads them only when asked and sums in f64 in id order.
 
 const LEDGER: bool = true;
 

@@ -1,8 +1,9 @@
-// overlap.wgsl — a pair's overlap to far below f32 rounding of positions (issue 15):
+// overlap.wgsl — a pair's overlap to far below f32 rounding of positions (~1e-16 m at a
+// mm separation, where an f32 ulp is a sizeable part of a nm adhesion range):
 // double-float (hi + lo) arithmetic on the compensated positions x = cell·h + o − c and
 // radii r − c_r (the Kahan compensations the drift keeps, and the radius's rounding
-// residual, both in the state's `kahan_o`). A separation of 2 mm has an f32 ulp of 2.3e-10 m,
-// more than 4 % of a 5e-9 m adhesion range; this resolves the overlap to ~1e-16 m.
+// residual, both in the state's `kahan_o`). Why: `docs/architecture.md`, *Overlaps below
+// f32 rounding*.
 //
 // Every intermediate goes through `opaque1` (step.wgsl): Mesa's NIR folds the error terms
 // of these exact transformations ((a + b) − a → b) for operations not marked exact.

@@ -1,7 +1,8 @@
-// permute.wgsl — a rebuild's re-sort of the particle state, in place, one field at a time
-// through one scratch buffer (`src/gpu/permute.rs`).
+// permute.wgsl — a rebuild's re-sort of the particle state, in place, a group of fields
+// (up to `ROW_WORDS` words a particle) at a time through one scratch buffer
+// (`src/gpu/permute.rs`).
 //
-// Dispatch i stores field i−1 from the scratch into its sorted place and loads field i of
+// Dispatch i stores group i−1 from the scratch into its sorted place and loads group i of
 // the particle that sorts to k into the scratch. Invocation k touches only scratch row k
 // and sorted place k, so one dispatch does both without a race.
 

@@ -1,72 +1,27 @@
-// step.wgsl — one time step of the GPU engine (after the grid sort of grid.wgsl).
-// Composed per scene (`src/gpu/composition.rs`) as
-//   common.wgsl + <contact sub-models> + <generated contact law> + <rotation> + <ledger>
-//   + this file
-// where the sub-models are the files of shaders/contact/ that some pair of the scene uses,
-// and the generated part declares what this file calls:
-//   struct PairRow  the pair-table row,   struct Hist  one contact's stored history,
-//   fn hist_zero() -> Hist, fn hist_same(Hist, Hist) -> bool, fn hist_mirror(Hist) -> Hist,
-//   fn pair_contact(PairRow, Kin, ptr<function, Hist>) -> Contact,
-//   fn pair_edges(PairRow, Kin) -> vec4<f32>, fn pair_touch_jump(PairRow, Kin) -> f32
-// and <rotation> is rotation.wgsl (angular velocity, torques) or rotation_off.wgsl (no
-// rotation: no angular buffers declared at all), with the state RotState and the hooks
-// rot_load, rot_collect, rot_finite, rot_drift, rot_wpred,
-// rot_store_partial, rot_pair_store, rot_pair_load, rot_kick.
+// step.wgsl — one time step of the GPU engine: drift, a rebuild of the neighbour lists
+// where one is due, forces, kick. Composed per scene (`Composition::variant` in
+// `src/gpu/composition.rs`) after common.wgsl, the state's and records' accessors, the
+// contact laws and sub-models the scene uses, overlap.wgsl, the generated interface this
+// file calls (`PairRow`, `Hist`, `hist_*`, `pair_contact`, `pair_edges`,
+// `pair_touch_jump`), the rotation, ledger and force-jump hooks (or their no-op twins)
+// and the state's reads (buffers, or texture mirrors).
 //
-// The particle state lives in one buffer set, A, in the order of the last neighbour-list
-// rebuild; a rebuild re-sorts it in place (`permute.wgsl`) and builds the new lists (B:
-// `new_entries`, in the entries' per-step fields, widened where they need it) before
-// copying them back. Pass order, recorded by
-// `gpu::engine` into one encoder per batch of steps:
-//   kick_drift   per particle (A)        v += dt/2·a (omega += dt/2·alpha); offset +=
-//   (collect_kick_drift after a step of the same batch: its collect and kick first, in
-//   the same pass)
-//                                        dt·v, carried into the cell; disp += dt·v and
-//                                        a flag past skin/2 (Verlet skin); the predicted
-//                                        velocity vpred = v + dt/2·a (wpred likewise)
-//   decide       one invocation          rebuild this step when max |disp| > skin/2 (or a
-//                                        moving wall moved > skin/2 along its normal)
-// only on a rebuild (indirect dispatches: zero workgroups on the other steps):
-//   <grid sort of A's cells>             sorted_index, cell_start
-//   gather       per particle            the cell and offset mirrors in sorted order
-//   count_neighbours  per particle       the new lists' lengths (the 27 cells, cut-off
-//                                        r_i + r_j + reach + skin; the walls within
-//                                        reach + skin)
-//   <two exclusive scans (grid.wgsl)>    b_row, lower_row: where each list goes
-//   neighbours   per particle            the half lists into B (the same search)
-//   commit       one invocation          halts the batch when they did not fit
-//   <permute.wgsl, a dispatch a field>   A[k] = A[sorted_index[k]] field by field
-//   remap        per particle            resolves `lower`; each new entry finds its
-//                                        history in A's old lists by the persistent ids
-//   copy_back_history                    the B lists into A; disp = 0
-// every step:
-//   <mirror copies>                      A's cell, offset, vpred (wpred) into the read-only
-//                                        textures m_* (`gpu::mirror`)
-//   force        per particle (A)        evaluates the pairs of its list in slot order
-//                                        (candidates beyond reach skipped) and its wall
-//                                        entries;
-//                                        leaves each pair's force in its slot; with the
-//                                        force jumps (jump.wgsl) the impulse of a jump
-//                                        inside the step: k's into its velocity, the
-//                                        partner's in the slot (`jump`, `jump_normal`)
-//   collect      per particle (A)        adds the pairs its partners evaluated (no atomics:
-//                                        deterministic), gravity -> acc (alpha); the
-//                                        partners' force-jump impulses into v
-//   kick         per particle (A)        v += dt/2·a (omega += dt/2·alpha)
-// (collect and kick are recorded as kernels only at the end of a batch; within it they
-// run with the next step's drift.) Between rebuilds a step touches each particle's state in place, once per pass, and
-// copies nothing (the lists, built in sorted order, stay valid: the order is unchanged).
+// The state lives in one buffer set, A, in the order of the last rebuild, updated in
+// place. A step records `kick_drift` (within a batch `collect_kick_drift`, finishing the
+// step before), `decide_lean`, `force` (`collect` and `kick` close a batch); `decide_lean`
+// halts the batch where a particle or moving wall moved more than skin/2, and the host
+// runs that step again with `decide` and the rebuild's passes (grid sort, `gather`,
+// `count_neighbours`, scans, `neighbours`, `commit`, permute.wgsl, `remap`,
+// `copy_back_history`; `RebuildChain` in `src/gpu/engine/record.rs`). The passes:
+// `docs/architecture.md`, *The GPU engine*.
 //
-// One evaluation per pair (Newton's third law). A rebuild splits each particle's
-// neighbours in two (`evaluates`): k evaluates the pairs with the partners ahead of it
-// along the separation's dominant axis (its list, with their history) and finds the others
-// through `lower` (the slot in the partner's list). `force` evaluates each pair once, adds it to the evaluator and leaves the
-// pair's force (and the partner's torque) in the pair's slot; `collect` subtracts those
-// from each partner. Action = −reaction holds bitwise by construction, and each contact
-// has one history. When a re-sort makes the other particle a pair's evaluator, its history
-// is handed over as the partner sees it (`hist_mirror`: the tangential spring, kept in the
-// evaluator's frame, changes sign; the normal history, the rolling displacement and the
-// contact radius are the same on both sides). (Why not both sides: `docs/design_log.md`.)
+// One evaluation per pair: a rebuild splits each particle's neighbours (`evaluates`); k
+// evaluates the pairs with the partners ahead of it along the separation's dominant axis
+// (its list, with their history) and finds the others through `lower`. `force` leaves
+// each pair's force (and the partner's torque) in the pair's slot, `collect` subtracts it
+// from the partner: action = −reaction bitwise, one history per contact, handed over by
+// `hist_mirror` where a re-sort makes the partner the evaluator (why not both sides:
+// `docs/design_log.md`).
 //
 // `dt` first: with `gravity` at offset 0 Mesa lavapipe 22.3 ran slower and leaked
 // (docs/design_log.md, *Measurements moved out of the code*).

@@ -1,12 +1,10 @@
-// contact/jkr.wgsl — the JKR family's normal law (JKR, Hertz) in f32: the twin of
-// `src/model/jkr/mod.rs` (papers 001 §II and 002 §2–3). Normal force with contact hysteresis and
-// the Tsuji or power-law damping. The `krijt` and `stress` dissipations (contact/krijt.wgsl),
-// the Mindlin tangential spring (contact/mindlin.wgsl) and the rolling resistance
-// (contact/jkr_rolling.wgsl) are sub-models composed in where some pair uses them. Tests tie
-// it to the f64 reference through whole collisions (`tests/gpu_engine.rs`).
-//
-// Sign convention as in Rust: delta > 0 is overlap, delta_dot the approach speed, a
-// positive normal force is repulsive, the unit normal n points from j to i.
+// contact/jkr.wgsl — the JKR family's normal law (JKR, Hertz) in f32, with contact
+// hysteresis and the Tsuji or power-law damping: the twin of `src/model/jkr/mod.rs`
+// (papers 001 §II and 002 §2–3), tied to it through whole collisions
+// (`tests/collide_jkr.rs`, `mod on_the_gpu`). The Krijt dissipations, Mindlin friction and
+// rolling resistance are sub-models in their own files, composed in where some pair uses
+// them. Signs as in Rust: delta > 0 overlap, delta_dot the approach speed, repulsive force
+// positive, n from j to i.
 //
 // Needs, from the composition (`src/gpu/composition.rs`): `Kin`, `Normal`, `History` with
 // the field `touched`, and the dissipation hooks, generated from the sub-models present:
@@ -110,7 +108,8 @@ const JKR_SLOPE0: f32 = 2.3348153;
 // Newton iterations in f32 (`jkr::NEWTON_ITERATIONS_F32`).
 const JKR_NEWTON_ITERATIONS: i32 = 3;
 
-// The contact's history, unpacked.
+// s = sqrt(a/a0), the stable root of 3s⁴ − 2s = delta/delta0: the guarded Newton of
+// `jkr::contact_radius_f32`, step for step.
 fn jkr_solve_s(delta: f32, delta0: f32) -> f32 {
     let e = max(delta / delta0 - JKR_D_MIN, 0.0);
     let r = sqrt(e);

@@ -1,23 +1,18 @@
-// contact/krijt.wgsl — the Krijt viscoelastic JKR contact (paper 001 §II C, eqs. 10–12 and
-// appendix B) and the stress-dependent relaxation time (§V A, eqs. 17–18) in f32: the twin
-// of `src/model/krijt.rs` and of the `krijt`/`stress` branch of
-// `JkrParams::normal_force_step`. A dissipation sub-model of contact/jkr.wgsl, composed in
-// where some pair uses it: it answers the JKR law's hooks `jkr_radius_state` and
-// `jkr_damping` for those pairs (`src/gpu/composition.rs`).
+// contact/krijt.wgsl — the Krijt viscoelastic JKR contact and the stress-dependent
+// relaxation time (paper 001 §II C, appendix B, §V A) in f32: the twin of
+// `src/model/krijt.rs`. A dissipation sub-model of contact/jkr.wgsl: it answers the JKR
+// law's hooks `jkr_radius_state` and `jkr_damping` for the pairs that use it
+// (`src/gpu/composition.rs`). The contact radius a is per-contact history
+// (`contact_radius`, 0 = unset), advanced by a backward-Euler step of eq. B2 solved by
+// bisection between the old radius and the JKR root (never past the equilibrium).
 //
-// The contact radius a is per-contact state (the history field `contact_radius`,
-// `model::krijt::HISTORY`; 0 = unset), advanced once per
-// evaluation by a backward-Euler step of the crack speed of eq. B2, solved by bisection
-// between the old radius and the JKR root (it never passes the equilibrium).
-//
-// f32 care: everything is evaluated in normalised form, x = a/a0 and d = delta/delta0
-// (a0³ = 9·pi·gamma·R*²/E*, delta0 = a0²/(3R*), Fc = 3·pi·gamma·R*), which keeps every
-// intermediate O(1) or O(Fc):
-//   G_eff/gamma = (3x² − d)²/(4x)                               (eq. B1)
-//   F_E         = 4E*a³/(3R*) − 2E*a(a²/R* − delta) = 2·Fc·x·(d − x²)   (eq. 11)
-//   U           = Fc·delta0·x·(9/5·x⁴ − 2x²·d + d² − 2x)        (eq. 7; = P(x) on the JKR curve)
-//   p_c/E*      = 2·a0/(pi·R*)·(x − 1/(3·sqrt(x)))               (eq. 9)
-//   v_c·dt/a0   = (2E*·gamma/sigma0²)/a0 · dt/T_vis               (eq. B2)
+// Everything is normalised, x = a/a0 and d = delta/delta0, so that f32 intermediates stay
+// O(1) or O(Fc):
+//   G_eff/gamma = (3x² − d)²/(4x)                           (eq. B1)
+//   F_E         = 2·Fc·x·(d − x²)                            (eq. 11)
+//   U           = Fc·delta0·x·(9/5·x⁴ − 2x²·d + d² − 2x)     (eq. 7; = P(x) on the JKR curve)
+//   p_c/E*      = 2·a0/(pi·R*)·(x − 1/(3·sqrt(x)))           (eq. 9)
+//   v_c·dt/a0   = (2E*·gamma/sigma0²)/a0 · dt/T_vis           (eq. B2)
 
 // The crack speed of eq. B2 diverges below and above these G_eff/gamma (`krijt::BETA_MIN`,
 // `krijt::BETA_MAX`).

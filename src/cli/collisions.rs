@@ -64,7 +64,7 @@ pub(crate) struct CollideArgs {
     /// Print JSON on stdout (one object, or an array for a sweep).
     #[arg(long)]
     json: bool,
-    // ---- reports beyond the collision (issue 14) ----
+    // ---- reports beyond the collision ----
     /// JKR: D_min of the Tabor parameter (paper 002 eq. 1) in the unit of --radius,
     /// default 1.65e-10 (m, the paper's value).
     #[arg(long = "tabor-dmin")]
@@ -83,7 +83,8 @@ pub(crate) fn fmt_opt(x: Option<f64>) -> String {
     x.map_or_else(|| "-".into(), |v| format!("{v:.6}"))
 }
 
-/// What `collide` reports beyond the collision, from the options of issue 14.
+/// What `collide` reports beyond the collision, from `--tabor-dmin`, `--yield-velocity`
+/// and `--yield-stress`.
 pub(crate) struct CollideReport {
     /// D_min of the Tabor parameter.
     tabor_dmin: f64,

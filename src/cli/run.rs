@@ -52,7 +52,7 @@ pub(crate) struct RunArgs {
     /// are bitwise the same whatever the choice.
     #[arg(long = "quiet-batches", value_enum, default_value = "auto")]
     quiet_batches: QuietChoice,
-    // ---- reports (issue 14) ----
+    // ---- reports ----
     /// D_min of the Tabor parameter (paper 002 eq. 1) in the scene's length unit, default
     /// 1.65e-10 (m, the paper's value). The summary lists lambda_T of every JKR pair of
     /// materials; a pair below the JKR range (lambda_T <= 3) is warned about on stderr.

@@ -1,22 +1,12 @@
 //! Deterministic counting sort of particles by grid cell on the GPU ([`GridSort`]) and the
 //! multi-level exclusive scan it uses ([`ExclusiveScan`]).
 //!
-//! Input: one `vec4<i32>` cell per particle (xyz = integer cell relative to the grid
-//! origin, see [`crate::gpu::layout`]). Each particle's key is its cell clamped into the
-//! grid and linearised x fastest, `key = x + dx (y + dy z)`. Output:
-//!
-//! * `sorted_index[k]`: original index of the k-th particle in order of (key, index) —
-//!   exactly what a stable counting sort by key produces, identical on every run and
-//!   every adapter;
-//! * `cell_start[c]`, `cell_count[c]`: the slice of `sorted_index` holding cell c.
-//!
-//! The passes (kernels in `shaders/grid.wgsl`): clear the counts, compute keys, count
-//! per cell with atomics, exclusive-scan the counts into `cell_start`, scatter each
-//! particle into its cell's slice with an atomic slot (racy order inside a cell), then
-//! sort each cell's slice by original index (insertion sort per cell; cells of more than
-//! [`SMALL_CELL`] particles — only found when particles pile up in the clamped boundary
-//! cells or the grid is coarse — get a workgroup each and a bitonic sort). All passes
-//! are dispatches of one compute pass in the caller's encoder: no submission in between.
+//! A particle's key is its cell ([`crate::gpu::layout`]) clamped into the grid and
+//! linearised x fastest, `key = x + dx (y + dy z)`. The output is `sorted_index[k]`, the
+//! original index of the k-th particle in order of (key, index) — a stable counting sort's
+//! order, the same on every run and adapter: each cell's slice is sorted by index after the
+//! atomics' racy scatter — and `cell_start[c]`, `cell_count[c]`, cell c's slice of it. The
+//! passes (`shaders/grid.wgsl`) are dispatches of one compute pass in the caller's encoder.
 
 use crate::gpu::context::GpuContext;
 use crate::gpu::kernel::{self, split_workgroups, Kernel, Part, Program};

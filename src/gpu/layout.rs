@@ -3,30 +3,15 @@
 //! twins live in `shaders/common.wgsl` / `shaders/grid.wgsl` (the tests check the two
 //! layouts against naga's).
 //!
-//! # Positions: integer cell + f32 offset
-//!
-//! An f32 absolute position carries 24 significant bits: at 1e4 particle diameters from
-//! the origin its spacing is ~1e-3 diameters, as large as the overlaps that decide the
-//! contact forces, so two touching particles far from the origin see garbage overlaps.
-//! The GPU engine therefore stores each particle's position as
-//!
-//! * an integer **cell** `vec4<i32>` ([`CellCoord`]): xyz = cell coordinates on the
-//!   run's grid, w = the particle's material index;
-//! * an f32 **offset** `vec4<f32>` ([`CellOffset`]): xyz = position inside that cell, in
-//!   `[0, h)` for cell width h, w = the particle's radius.
-//!
-//! The grid origin is the domain's min corner and the cell width `h` (>= the largest
-//! interaction distance + the Verlet skin) is fixed for a run; it is also the cell width
-//! of the neighbour grid ([`crate::gpu::grid`]), so the integer cell doubles as the
-//! neighbour-search cell. The vector between two particles is formed as
-//! `(cell_i - cell_j) * h + (off_i - off_j)`: the integer difference is exact, and the
-//! f32 terms are of the size of a cell, so the separation keeps f32's relative precision
-//! (about `h * 2^-24`) wherever the pair sits. A position is resolved to
-//! `h * 2^-24` per axis (half an f32 ulp of `h`), anywhere in a domain of up to `2^31`
-//! cells per axis.
-//!
-//! Use the same `h` on both sides: the kernels see `h` as f32, so a run should pick an
-//! f32-representable cell width ([`gpu_cell_width`]) and use it for the f64 encode too.
+//! **Positions: integer cell + f32 offset.** f32 absolute positions ~1e4 diameters from
+//! the origin are spaced as coarsely as the overlaps that decide the forces, so a particle
+//! is an integer cell ([`CellCoord`], w = material) and an f32 offset inside it
+//! ([`CellOffset`], in `[0, h)`, w = radius). Separations are formed as
+//! `(cell_i - cell_j) * h + (off_i - off_j)`: the integer difference is exact, so an
+//! overlap keeps f32's relative precision (`h * 2^-24`) anywhere in a domain of up to
+//! `2^31` cells per axis. The cell width `h` (from the domain's min corner, fixed for a
+//! run) is the neighbour grid's ([`crate::gpu::grid`]); encode with the f32 value the
+//! kernels see ([`gpu_cell_width`]).
 
 use bytemuck::{Pod, Zeroable};
 use glam::DVec3;

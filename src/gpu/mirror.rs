@@ -3,27 +3,19 @@
 //! (and the predicted angular velocity when the scene rotates), copied from the state's
 //! fields right before each force pass — on a software adapter only
 //! (`GpuOptions::software_paths`, `shaders/state_mirrors.wgsl`; a GPU reads the buffers,
-//! `shaders/state_buffers.wgsl`).
+//! `shaders/state_buffers.wgsl`). Why: on Mesa lavapipe a storage-buffer load with a
+//! per-invocation index is a loop over the SIMD lanes, a texture load one gather
+//! (`docs/design_log.md`, *Measurements moved out of the code*).
 //!
-//! Why: on Mesa lavapipe a storage-buffer load with a per-invocation index is a scalar loop
-//! over the SIMD lanes, while a read-only storage-texture load is one gather; the force
-//! pass loads the partner's three vec4s once per pair, so the copies (48 bytes a particle
-//! per step, 64 with rotation) buy back many times their cost there (the measurements:
-//! `docs/design_log.md`, *Measurements moved out of the code*).
-//!
-//! A rebuild re-sorts the state: its `gather` writes the re-sorted cells and offsets into
-//! the cell and offset mirrors itself (texture stores, once per rebuild), so the neighbour
-//! search reads every candidate's position through a gather too (two vec4 buffer loads per
-//! candidate before; the search dominates a rebuild). The copy before the force pass then
-//! writes the same values again from A.
-//!
-//! Texels are laid out row-major, [`MIRROR_WIDTH`] particles a row (a power of two, so
-//! the shader maps an index to its texel with a mask and a shift: `mirror_texel` in
-//! `shaders/step.wgsl`).
+//! A rebuild's `gather` writes the re-sorted cells and offsets into their mirrors itself,
+//! so the neighbour search reads its candidates through gathers too. Texels are row-major,
+//! [`MIRROR_WIDTH`] particles a row (a power of two: `mirror_texel` in
+//! `shaders/state_mirrors.wgsl` finds a texel with a mask and a shift).
 
 use crate::error::PowderError;
 
-/// Particles per texture row (`MIRROR_WIDTH` in `shaders/step.wgsl`; a test ties them).
+/// Particles per texture row (`MIRROR_WIDTH` in `shaders/state_mirrors.wgsl`; a test ties
+/// them).
 pub const MIRROR_WIDTH: u32 = 4096;
 
 /// Bytes of one texel (a vec4 of 32-bit components).

@@ -1,6 +1,5 @@
 //! Pages: the lists' entries, and the particle state's two buffers, in several buffers of
-//! whole windows where one buffer would exceed the adapter's largest (4 GiB on an H200:
-//! the entries of about 2·10⁷ hysteretic particles, the state of about 5·10⁷). A window's
+//! whole windows where one buffer would exceed the adapter's largest. A window's
 //! dispatches bind its page whole, and the next or previous page (read only) where its
 //! neighbours' data lie there; the pages' bytes one after the other are the one buffer's
 //! (checkpoints do not change). See `docs/gpu_rebuild.md`, *Pages*.
@@ -21,7 +20,7 @@ pub struct Pages {
 pub const MIN_PAGE_WINDOWS: u64 = 3;
 
 impl Pages {
-    /// One page: the buffer bound as before pages (whole, or a window and its neighbours).
+    /// One page: the one buffer, bound whole or a window and its neighbours at a time.
     pub fn one(windows: &Windows) -> Self {
         Self {
             windows: windows.count,
@@ -101,7 +100,7 @@ mod tests {
     fn pages_hold_whole_windows_and_pair_each_window_with_its_neighbours() {
         let windows = Windows::of(1000, 64).unwrap();
         assert_eq!(windows.count, 16);
-        // fits the largest buffer: one page, bound as before
+        // fits the largest buffer: one page
         let one = Pages::of(&windows, 256, (16 * 256, 1024)).unwrap();
         assert_eq!(one, Pages::one(&windows));
         assert_eq!(one.params(5, 4, 16), [4, 7, 0]);

@@ -1,7 +1,8 @@
-//! A rebuild's re-sort of the particle state, in place, one field at a time through one
-//! scratch buffer (`shaders/permute.wgsl`): the scratch holds one field's words per
-//! particle instead of a second copy of the whole state. `n` fields take `n + 1`
-//! dispatches (each stores the previous field and loads the next). The scratch may be
+//! A rebuild's re-sort of the particle state, in place, through one scratch buffer
+//! (`shaders/permute.wgsl`): the state's fields move in groups of up to [`ROW_WORDS`] words
+//! a particle (each a [`Field`]; a wider field alone), so the scratch holds one group's row
+//! a particle instead of a second copy of the whole state. `n` groups take `n + 1`
+//! dispatches (each stores the previous group and loads the next). The scratch may be
 //! lent: a buffer idle while the re-sort runs (the new lists', written only after it).
 
 use crate::error::PowderError;

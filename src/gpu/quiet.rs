@@ -1,27 +1,20 @@
 //! Quiet batches: batches of steps recorded without the per-step rebuild decision.
 //!
-//! Every step of a normal batch asks the device whether to rebuild the neighbour lists
-//! (`decide`, one invocation) and records the rebuild's passes as indirect dispatches that
-//! launch nothing when it does not: a fixed cost a step, whatever the particle count,
-//! which on a software adapter is large (`docs/design_log.md`, *Measurements moved out of
-//! the code*).
+//! A normal batch's steps ask the device whether to rebuild the neighbour lists (by default
+//! `decide_lean`, one invocation a step that halts the batch where a rebuild is due; with
+//! `RebuildChain::EveryStep`, `decide` and the rebuild's passes as indirect dispatches): a
+//! fixed cost a step, large on a software adapter (`docs/design_log.md`, *Measurements
+//! moved out of the code*). A quiet batch records only the drift, the mirror copies and the
+//! forces, after copying what the steps change (the contacts' history into the lists a
+//! rebuild builds, idle in a quiet batch; the rest into copies of its own). If the drift's
+//! "moved more than skin/2" flag is still clear at the end, no step would have rebuilt and
+//! the batch is kept, bitwise what a normal batch computes; otherwise the copies go back
+//! and the batch runs again the normal way. Wrong guesses cost time, never results.
 //!
-//! Most batches rebuild nothing. A quiet batch records only the drift, the mirror copies and
-//! the forces, after copying what the steps change (the contacts' history into the lists
-//! a rebuild builds, which a quiet batch leaves idle, the rest into copies of its own).
-//! The drift raises its "moved more than skin/2" flag as always; no `decide`
-//! clears it. If the flag is still clear at the end, no step of the batch would have
-//! rebuilt, so the batch computed exactly what the normal one would have (the skipped
-//! dispatches launched no work): it is kept, bitwise the same. Otherwise the copy is put
-//! back and the batch runs again the normal way. Wrong guesses cost time, never results.
-//!
-//! Whether to try: [`Forecast`] extrapolates the largest displacement since the last rebuild
-//! (the device reports it, and the steps since that rebuild, at each batch's end) to the end
-//! of the next batch at the rate it grew since the rebuild (the last such rate when the
-//! rebuild was too recent to tell), with a margin of 1.5.
-//!
-//! The copies cost as much memory as the particle state, so `Auto` uses quiet batches on
-//! software adapters only ([`QuietBatches::on`]).
+//! Whether to try: [`Forecast`] extrapolates the largest displacement since the last
+//! rebuild to the end of the next batch, with a margin of 1.5. The copies cost as much
+//! memory as the particle state, so `Auto` uses quiet batches on software adapters only
+//! ([`QuietBatches::on`]).
 
 /// How a GPU run uses quiet batches (`GpuOptions::quiet`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -1,16 +1,11 @@
 //! An estimate of the device memory a GPU step moves, from the resources each of its passes
 //! binds ([`crate::gpu::GpuEngine::traffic`]; `powder bench` and `powder info SCENE` report
-//! it).
-//!
-//! Every pass is counted as touching each distinct buffer or texture it binds once, whole
-//! (an atomic and a plain view of one buffer count once). That is an **upper bound** on
-//! what a pass reads and writes when it reads each element at most once: a pass that reads
-//! only part of a buffer (the neighbour slots a particle does not fill, a single-workgroup
-//! pass such as `decide`) is over-counted, and a pass that reads an element many times (the
-//! force pass reads each partner's state once per pair) goes through caches the estimate
-//! does not model. Per step it sums the passes of every step, plus the rebuild passes times
-//! the rebuilds per step measured; the passes that open and close a batch (`kick_drift`,
-//! the last `collect` and `kick`) replace one `collect_kick_drift` each and are left out.
+//! it): each pass is counted as touching each distinct buffer or texture it binds once,
+//! whole — an upper bound for passes that read each element at most once, blind to caches.
+//! Per step: the every-step passes plus the rebuild's times the rebuilds per step; the
+//! passes that open and close a batch (`kick_drift`, the last `collect` and `kick`) stand
+//! in for a `collect_kick_drift` each and are left out. More: `docs/performance.md`,
+//! *`powder bench`*.
 
 use serde::Serialize;
 
@@ -20,8 +15,7 @@ use serde::Serialize;
 pub enum When {
     /// Every step.
     Step,
-    /// Only on a step that rebuilds the neighbour lists (indirect dispatches of no
-    /// workgroups otherwise).
+    /// Only on a step that rebuilds the neighbour lists.
     Rebuild,
 }
 

@@ -1,10 +1,10 @@
 //! Windows: the particles cut into ranges of `len` (a power of two) in sorted order,
 //! every per-particle array and every record array blocked by window, so one window's
 //! data (and its neighbours') is one contiguous range of each buffer — what a binding
-//! over part of a buffer needs (issue 15, increment 5c; docs/gpu_rebuild.md). A record
-//! index carries its window in the high bits (`(w << rec_shift) | local`), so a list
-//! entry is found without a division. One window (the default wherever
-//! the arrays fit one binding) lays everything out as before windows existed.
+//! over part of a buffer needs (`docs/gpu_rebuild.md`, *Windows*). A record index carries
+//! its window in the high bits (`(w << rec_shift) | local`), so a list entry is found
+//! without a division. One window (the default wherever the arrays fit one binding) is the
+//! plain layout: each array one block.
 
 use crate::error::PowderError;
 use crate::gpu::kernel::{storage_buffer, uniform_buffer, Kernel, Part};

@@ -4,52 +4,15 @@
 //! [`crate::model::jkr`]; the conventions are those of that module (δ > 0 overlap,
 //! δ̇ approach speed, repulsive force positive, γ per surface so that Fc = 3πγR*).
 //!
-//! # State
-//! The contact radius a is a per-contact state variable
-//! ([`crate::model::ContactHistory::contact_radius`], 0 = unset), not the JKR root a(δ).
-//!
-//! * **Initial condition** (first touch, paper 001 appendix B following Krijt et al.):
-//!   a = a_JKR(δ = 0) = (4πγR*²/E*)^(1/3) = (2/3)^(2/3)·a0. The surfaces snap together
-//!   at the touch; eq. B2 itself says so: at δ = 0 and a → 0, G_eff → 0, so β < 0.02,
-//!   where the crack speed of eq. B2 diverges.
-//! * **Crack speed** (eq. B2): ȧ = v_c·f(β), β = G_eff/γ, v_c = 2E*γ/(σ0²·T_vis), with
-//!   G_eff = E*(a² − δR*)²/(4πaR*²) (eq. B1; G_eff = γ on the JKR curve). f(β) > 0 for
-//!   β < 1 (the contact grows), < 0 for β > 1, and diverges at β = 0.02 and β = 50 (the
-//!   zeros of the logarithms in eq. B2). We use the signed β = sgn(a² − δR*)·G_eff/γ: for
-//!   a² < δR* the edge is compressed (negative stress intensity) and the contact closes
-//!   at the limiting speed.
-//! * **Integration** ([`advance_radius`]): backward (implicit) Euler,
-//!   a_new = a_old + dt·ȧ(a_new, δ_new), solved by bisection between a_old and the JKR
-//!   root a_eq(δ_new). ȧ is stiff (it diverges at both ends of its range, and v_c·dt can
-//!   exceed the contact size by orders of magnitude), so an explicit update would
-//!   overshoot or blow up. On the stable JKR branch (a above the turning point
-//!   √(−δR*/3)) β grows monotonically with a at fixed δ and f falls with β, so the
-//!   backward-Euler residual a − a_old − dt·ȧ(a) increases monotonically: the root is
-//!   unique, lies between a_old and a_eq (it never overshoots the equilibrium), and
-//!   bisection always finds it; for dt → ∞ it gives a_eq, for dt → 0 it keeps a_old.
-//!   Because a_new never passes a_eq, G − γ keeps one sign over the step, so the crack
-//!   dissipation of every step (below) is ≥ 0 by construction.
-//!
-//! # Forces and stored energy
-//! * Elastic force for any (a, δ) (eq. 11 with the JKR pressure distribution):
-//!   F_E = 4E*a³/(3R*) − 2E*a(a²/R* − δ); on the JKR curve it is the JKR force (eq. 6).
-//! * Dissipative force (eq. 12): F_dis = (2·T_vis·E*/ν²)·a·δ̇, ν the Poisson ratio.
-//! * Stored energy: the JKR energy of eq. 7 for any (a, δ),
-//!   U(a, δ) = E*a³[(a/R*)²/5 − 2δ/(3R*) + (δ/a)²] − 2πγa², measured from its value at
-//!   the JKR break point (so it equals the JKR potential of [`crate::model::jkr`] on the
-//!   equilibrium curve). ∂U/∂δ|_a = F_E exactly, and ∂U/∂a|_δ = 4πa(G_eff − γ): the
-//!   elastic force does no work that is not stored, and the crack motion dissipates
-//!   4πa(γ − G_eff)·ȧ ≥ 0. The engine's ledger (work minus change of stored energy) thus
-//!   books exactly the viscous work, the crack dissipation, the JKR touch loss and the
-//!   energy left in the neck at the break.
-//!
-//! # Relaxation time
-//! * `krijt`: a constant T_vis (paper 001 uses T_vis = 0.075·R/147 in LJ units).
-//! * `stress` (eqs. 17–18): T_vis = C·R·exp[(B·p_c/E*)^ζ] for p_c > 0, C·R otherwise, with
-//!   p_c the JKR centre pressure of eq. 9 at the current contact radius and R = 2R*
-//!   (the particle radius for equal spheres, the paper's R; 2·r1·r2/(r1 + r2) in general).
-//!   The crack speed of a step uses T_vis at the start of the step (a_old), the force the
-//!   one at the new radius.
+//! The contact radius a is per-contact state
+//! ([`crate::model::ContactHistory::contact_radius`], 0 = unset), not the JKR root a(δ):
+//! a_JKR(δ = 0) at the first touch, then moved by the crack speed of eq. B2 with a
+//! backward-Euler step ([`advance_radius`]; ȧ is stiff), which never passes the JKR
+//! equilibrium, so the crack dissipation 4πa(γ − G_eff)·ȧ is ≥ 0 every step. The stored
+//! energy ([`stored_energy`]) has ∂U/∂δ = F_E exactly, so the ledger books the viscous
+//! work, the crack dissipation, the touch loss and the neck energy at the break. The
+//! derivation and the relaxation times: `docs/models.md`, *Krijt and stress-dependent
+//! dissipation*.
 
 use crate::model::analytic;
 use crate::model::history::{HistoryField, HostField, Mirror, Shape};
@@ -150,7 +113,7 @@ impl KrijtLaw {
     }
 
     /// One step of the contact radius: from `a_old` to the backward-Euler solution at
-    /// overlap `delta` (see the module notes). `a_eq` is the JKR root a(δ).
+    /// overlap `delta` ([`advance_radius`]). `a_eq` is the JKR root a(δ).
     pub fn step_radius(
         &self,
         a_old: f64,

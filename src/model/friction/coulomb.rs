@@ -10,19 +10,12 @@
 //! * **slip** otherwise: f = μd·f_N*·t̂ with t̂ = f0/|f0|, and the spring is reset to the
 //!   length that gives that force, ξ = −(f + γ·v)/k.
 //!
-//! **Time discretisation (staggered spring).** The engine evaluates forces at the step's
-//! end t_n with the predicted velocity v_n. The stored spring `ξ_s` is the spring half a step
-//! *ahead* of the last evaluation, ξ(t_{n−1} + dt/2); the spring at t_n is
-//! ξ_n = ξ_s + ½·v_n·dt, and after the step ξ_s ← ξ_n + ½·v_n·dt (stick: ξ_s + v_n·dt, the
-//! midpoint rule), or ξ_s ← ξ_n' + ½·v_n·dt with the reset ξ_n' = −(f + γ·v_n)/k (slip).
-//! Luding's text, ξ' = ξ + v·dt *after* the force (f0 from the spring of the step before),
-//! lags the spring by half a step: that is a negative damping −k·dt/2, which adds a
-//! relative energy ≈ π²·dt/(2·tc) per sticking contact (an elastic sphere that sticks on a
-//! wall reverses with |e_t| = 1.0503 instead of 1 at dt = tc/50); incrementing *before* the
-//! force (MercuryDPM, powder's JKR spring) leads by half a step and damps by as much. The
-//! staggered spring is second order: |e_t| = 1.00009 in the same impact
-//! (`tests/friction.rs`, `docs/models.md`). The stored energy is ½·k·|ξ_n|², the spring the force was
-//! computed with: the ledger's trapezoidal work matches it to a telescoping ⅛·k·dt²·Δ|v|².
+//! **Staggered spring.** The stored spring ξ_s is half a step ahead of the last force: the
+//! force at the step's end uses ξ_n = ξ_s + ½·v_n·dt (v_n the predicted velocity), then
+//! ξ_s ← ξ_n + ½·v_n·dt (after a slip, from the reset spring). Second order, where Luding's
+//! literal order lags half a step, a negative damping (`docs/luding2008_laws.md` §8,
+//! `docs/models.md`, *Time discretisation*). The stored energy is ½·k·|ξ_n|², the spring
+//! the force used.
 
 use glam::DVec3;
 use serde::{Deserialize, Serialize};

@@ -7,20 +7,16 @@
 //! Sign conventions: δ > 0 is overlap, δ̇ = dδ/dt is the approach speed, a positive normal
 //! force is repulsive. The unit normal n points from particle j to particle i.
 //!
-//! Material: both bodies share E and ν, so E* = E/(2(1−ν²)) (paper 002 eq. 2) and, with
-//! G = E/(2(1+ν)), G* = G/(2(2−ν)) (paper 002 eq. 15). γ is the surface energy *per
-//! surface* (work of adhesion w = 2γ), so Fc = 3πγR*, a0 = (9πγR*²/E*)^(1/3) and
-//! δ0 = a0²/(3R*) (paper 001 eq. 8, paper 002 eq. 7).
+//! Material: both bodies share E and ν, so E* = E/(2(1−ν²)) (paper 002 eq. 2) and
+//! G* = G/(2(2−ν)), G = E/(2(1+ν)) (eq. 15). γ is the surface energy *per surface* (work
+//! of adhesion 2γ), so Fc = 3πγR*, a0 = (9πγR*²/E*)^(1/3), δ0 = a0²/(3R*) (paper 001
+//! eq. 8, paper 002 eq. 7).
 //!
-//! Dimensionless JKR: with x = a/a0 and d = δ/δ0,
-//! * d = 3x² − 2√x (paper 001 eq. 5),
-//! * F/Fc = 4x³ − 4x^(3/2) (paper 001 eq. 6),
-//! * ∫F dδ = Fc·δ0·P(x) + const, P(x) = (24/5)x⁵ − 8x^(7/2) + 2x² (see [`potential_shape`]).
-//!
-//! Landmarks: touch at d = 0, x = (2/3)^(2/3), F = −8/9·Fc; largest attraction F = −Fc at
-//! x = 2^(−2/3), d = −2^(−4/3) ≈ −0.397; pull-off under displacement control at the turning
-//! point of d(x), x = 6^(−2/3), d = −(3/4)^(2/3) ≈ −0.8255, F = −5/9·Fc; equilibrium at
-//! x = 1, d = 1, F = 0.
+//! Dimensionless JKR, x = a/a0 and d = δ/δ0: d = 3x² − 2√x (paper 001 eq. 5),
+//! F/Fc = 4x³ − 4x^(3/2) (eq. 6), ∫F dδ = Fc·δ0·P(x) + const ([`potential_shape`]). The
+//! touch and pull-off points are the constants [`X_TOUCH`], [`S_MIN`],
+//! [`D_PULLOFF_DISPLACEMENT`], [`D_PULLOFF_FORCE`]; the whole law: `docs/models.md`,
+//! *The JKR family*.
 
 use crate::error::ParamError;
 
@@ -88,9 +84,9 @@ pub enum Dissipation {
     None,
     /// Tsuji-type damping calibrated from a target restitution e ∈ (0, 1]
     /// (paper 002 eqs. 11–13 normal and 16 tangential). For Hertz (γ = 0) the restitution
-    /// of a head-on collision equals the target, independent of the impact velocity
-    /// (measured: within 2.5e-7 at dt = tc/2e5 and 1.6e-8 at tc/1e6 for e = 0.1…0.95;
-    /// `tests::tsuji_damping_calibration`). With adhesion the JKR loss comes on top.
+    /// of a head-on collision equals the target, independent of the impact velocity, up to
+    /// the integration error (`tests::tsuji_damping_calibration`, `docs/models.md`). With
+    /// adhesion the JKR loss comes on top.
     Tsuji {
         /// Target coefficient of restitution e ∈ (0, 1].
         restitution: f64,

@@ -31,8 +31,8 @@ fn newton_step(t: f64, r3: f64) -> f64 {
 }
 
 /// Solves 3s⁴ − 2s = d for s = s_min + t on the stable branch, given e = d − d_min ≥ 0,
-/// returning t ≥ 0 to rounding (within 4 ulp of [`solve_t_iterative`], measured by
-/// `tabulated_solve_matches_the_iterative_one`).
+/// returning t ≥ 0 to rounding (within 4 ulp of [`solve_t_iterative`], as
+/// `tabulated_solve_matches_the_iterative_one` checks).
 ///
 /// For δ/δ0 < 1023: a cubic Hermite interpolation of t(r), r = √e, on a uniform table and
 /// one Newton step (error ∝ the start's squared: at rounding), on the polynomial 3t²w − e
