@@ -1,0 +1,403 @@
+//! Running a collision on either engine: the pair read back each step, the stop and stick
+//! rules, the energy ledger and the trace.
+
+use super::*;
+use crate::cpu::CpuEngine;
+use crate::gpu::{GpuContext, GpuEngine};
+
+/// The pair as a backend reports it after a step.
+pub(super) struct PairView {
+    pos: [DVec3; 2],
+    vel: [DVec3; 2],
+    omega: [DVec3; 2],
+    /// Whether the contact persists (JKR necks at negative overlap); `None` when the
+    /// backend cannot say, then δ > 0 decides.
+    in_contact: Option<bool>,
+}
+
+/// What the collision loop needs of an engine.
+pub(super) trait CollisionRun {
+    fn step(&mut self) -> Result<(), PowderError>;
+    /// `n` steps with nothing read between them (the GPU batches them).
+    fn advance(&mut self, n: u64) -> Result<(), PowderError> {
+        for _ in 0..n {
+            self.step()?;
+        }
+        Ok(())
+    }
+    fn view(&self) -> Result<PairView, PowderError>;
+    fn time(&self) -> f64;
+    fn steps(&self) -> u64;
+    /// (kinetic, total) energy; total is `None` where the backend keeps no ledger.
+    fn energy(&self, view: &PairView) -> (f64, Option<f64>, Option<f64>);
+    fn rotates(&self) -> bool;
+    /// Force on sphere 1 and the pair's contact history (CPU only, for the trace).
+    fn trace_sample(&self) -> Option<(DVec3, Option<crate::model::ContactHistory>)>;
+}
+
+pub(super) struct CpuRun {
+    engine: CpuEngine,
+    wall: bool,
+}
+
+impl CollisionRun for CpuRun {
+    fn step(&mut self) -> Result<(), PowderError> {
+        self.engine.step()
+    }
+    fn view(&self) -> Result<PairView, PowderError> {
+        let e = &self.engine;
+        let two = |s: &[DVec3]| {
+            [
+                s.first().copied().unwrap_or_default(),
+                s.get(1).copied().unwrap_or_default(),
+            ]
+        };
+        let history = if self.wall {
+            e.wall_contact_history(0, 0)
+        } else {
+            e.contact_history(0, 1)
+        };
+        Ok(PairView {
+            pos: two(e.positions()),
+            vel: two(e.velocities()),
+            omega: two(e.angular_velocities()),
+            in_contact: Some(history.is_some_and(|h| h.touched)),
+        })
+    }
+    fn time(&self) -> f64 {
+        self.engine.time
+    }
+    fn steps(&self) -> u64 {
+        self.engine.steps
+    }
+    fn energy(&self, _: &PairView) -> (f64, Option<f64>, Option<f64>) {
+        let e = self.engine.energies();
+        (e.kinetic, Some(e.total()), Some(e.dissipated))
+    }
+    fn rotates(&self) -> bool {
+        self.engine.rotates()
+    }
+    fn trace_sample(&self) -> Option<(DVec3, Option<crate::model::ContactHistory>)> {
+        let history = if self.wall {
+            self.engine.wall_contact_history(0, 0)
+        } else {
+            self.engine.contact_history(0, 1)
+        };
+        Some((self.engine.forces()[0], history))
+    }
+}
+
+pub(super) struct GpuRun {
+    engine: GpuEngine,
+    wall: bool,
+}
+
+impl CollisionRun for GpuRun {
+    fn step(&mut self) -> Result<(), PowderError> {
+        self.engine.run_steps(1)
+    }
+    fn advance(&mut self, n: u64) -> Result<(), PowderError> {
+        self.engine.run_steps(n)
+    }
+    fn view(&self) -> Result<PairView, PowderError> {
+        let s = self.engine.state()?;
+        let two = |v: &[DVec3]| {
+            [
+                v.first().copied().unwrap_or_default(),
+                v.get(1).copied().unwrap_or_default(),
+            ]
+        };
+        // the contact's own flag: a JKR neck persists at negative overlap
+        let touched = if self.wall {
+            self.engine.wall_contact_history(0, 0)?.touched
+        } else {
+            self.engine
+                .contact_history(0, 1)?
+                .is_some_and(|h| h.touched)
+        };
+        Ok(PairView {
+            pos: two(&s.positions),
+            vel: two(&s.velocities),
+            omega: two(&s.angular_velocities),
+            in_contact: Some(touched),
+        })
+    }
+    fn time(&self) -> f64 {
+        self.engine.time
+    }
+    fn steps(&self) -> u64 {
+        self.engine.steps
+    }
+    fn energy(&self, view: &PairView) -> (f64, Option<f64>, Option<f64>) {
+        let n = self.engine.len();
+        let state = crate::gpu::GpuState {
+            positions: view.pos[..n].to_vec(),
+            velocities: view.vel[..n].to_vec(),
+            angular_velocities: if self.engine.rotates() {
+                view.omega[..n].to_vec()
+            } else {
+                Vec::new()
+            },
+        };
+        match self.engine.energies(&state) {
+            Ok(e) => (e.kinetic, Some(e.total()), Some(e.dissipated)),
+            // a run without the ledger: kinetic energy only
+            Err(_) => (self.engine.kinetic_energy(&state), None, None),
+        }
+    }
+    fn rotates(&self) -> bool {
+        self.engine.rotates()
+    }
+    fn trace_sample(&self) -> Option<(DVec3, Option<crate::model::ContactHistory>)> {
+        let force = self.engine.contact_forces().ok()?[0];
+        let history = if self.wall {
+            Some(self.engine.wall_contact_history(0, 0).ok()?)
+        } else {
+            self.engine.contact_history(0, 1).ok()?
+        };
+        Some((force, history))
+    }
+}
+
+impl CollideSpec {
+    /// Relative motion of the colliding pair: overlap, normal approach speed, unit normal
+    /// (from the partner to sphere 1) and the tangential contact-point velocity.
+    fn pair_state(&self, p: &PairView, wall_x: f64) -> (f64, f64, DVec3, DVec3) {
+        let r1 = self.radius1;
+        if self.wall {
+            // the plane x = x_w faces −x; x_w = r1 + gap from the scene
+            let n = DVec3::new(-1.0, 0.0, 0.0);
+            let v = p.vel[0];
+            let vc = v - r1 * p.omega[0].cross(n);
+            let delta = r1 - (wall_x - p.pos[0].x);
+            (delta, -v.dot(n), n, vc - n * vc.dot(n))
+        } else {
+            let d = p.pos[0] - p.pos[1];
+            let dist = d.length();
+            let n = d / dist;
+            let v = p.vel[0] - p.vel[1];
+            let vc = v - r1 * p.omega[0].cross(n) - self.radius2 * p.omega[1].cross(n);
+            (r1 + self.radius2 - dist, -v.dot(n), n, vc - n * vc.dot(n))
+        }
+    }
+}
+
+/// The settle time in steps of `dt` (at least 4: its last quarter is one step or more).
+pub(super) fn settle_steps(spec: &CollideSpec, dt: f64) -> u64 {
+    ((spec.settle / dt).ceil() as u64).max(4)
+}
+
+pub(super) fn run_collision(
+    spec: &CollideSpec,
+    mut run: impl CollisionRun,
+    wall_x: f64,
+    dt: f64,
+    backend: &'static str,
+    adapter: Option<String>,
+    mut trace: Option<&mut Vec<TraceRow>>,
+) -> Result<CollideResult, PowderError> {
+    if spec.settle > 0.0 && settle_steps(spec, dt) >= MAX_STEPS {
+        return Err(PowderError::Run(format!(
+            "the settle time {} s needs {} steps of {dt:e} s, over the {MAX_STEPS} a collision may take: shorten --settle or raise --dt",
+            spec.settle,
+            settle_steps(spec, dt)
+        )));
+    }
+    let geom = spec.geometry();
+    let reach = spec.model.reach(geom.r_eff());
+    let vn0 = spec.normal_speed();
+    let view0 = run.view()?;
+    let (ke0, total0, _) = run.energy(&view0);
+    let mut touched = false;
+    let mut receding = false;
+    let mut first_contact = None;
+    let mut last_contact = 0.0;
+    let mut delta_max: f64 = 0.0;
+    let mut delta_c = None;
+    let mut vt_in = None;
+    let mut e = 0.0;
+    let mut vt_out = DVec3::ZERO;
+    let mut vt_before = spec.pair_state(&view0, wall_x).3;
+    let mut last;
+    loop {
+        if run.steps() >= MAX_STEPS {
+            return Err(PowderError::Run(format!(
+                "the collision at v = {} m/s was not decided after {MAX_STEPS} steps (t = {:e} s): the pair neither separated nor turned back; try a larger --dt or --velocity",
+                spec.velocity,
+                run.time()
+            )));
+        }
+        run.step()?;
+        let view = run.view()?;
+        let (delta, vn, n, vt) = spec.pair_state(&view, wall_x);
+        if let Some(rows) = trace.as_deref_mut() {
+            if let Some((f, history)) = run.trace_sample() {
+                rows.push(trace_row(
+                    spec,
+                    &geom,
+                    run.time(),
+                    delta,
+                    vn,
+                    f.dot(n),
+                    history,
+                ));
+            }
+        }
+        let neck = view.in_contact.unwrap_or(delta > 0.0);
+        let contact = delta > 0.0 || (touched && neck);
+        if contact {
+            if !touched {
+                vt_in = Some(vt_before);
+            }
+            touched = true;
+            first_contact.get_or_insert(run.time() - dt);
+            last_contact = run.time();
+            delta_max = delta_max.max(delta);
+        }
+        vt_before = vt;
+        last = view;
+        if !touched {
+            continue;
+        }
+        if vn < 0.0 {
+            receding = true;
+        }
+        if receding && vn > 0.0 && delta > -reach {
+            delta_c = Some(delta);
+            break;
+        }
+        if receding && delta <= -reach && !neck {
+            e = -vn / vn0;
+            vt_out = vt;
+            break;
+        }
+    }
+    let stuck = delta_c.is_some();
+    let mut outcome = if stuck { "stuck" } else { "rebound" };
+    let mut settled_speed = None;
+    if stuck && spec.settle > 0.0 {
+        // (in two runs of steps: to three quarters of the settle time, and the rest)
+        let total = settle_steps(spec, dt);
+        let first = total - total / 4;
+        run.advance(first)?;
+        let quarter = run.view()?.pos[0];
+        let quarter_time = run.time();
+        run.advance(total - first)?;
+        last = run.view()?;
+        let (delta, ..) = spec.pair_state(&last, wall_x);
+        // along the wall only (the plane faces −x): a normal vibration is no roll
+        let moved = (last.pos[0] - quarter).y.hypot((last.pos[0] - quarter).z);
+        outcome = if !(delta > 0.0 || last.in_contact.unwrap_or(false)) {
+            "detached"
+        } else if moved > ROLLING_TRAVEL * spec.radius1 {
+            "rolling"
+        } else {
+            "resting"
+        };
+        settled_speed = Some(moved / (run.time() - quarter_time));
+    }
+    let (ke1, total1, dissipated) = run.energy(&last);
+    let rotates = run.rotates();
+    let mut result = CollideResult {
+        model: model_name(&spec.model),
+        velocity: spec.velocity,
+        e,
+        stuck,
+        outcome,
+        settled_speed,
+        e_analytic: None,
+        stuck_analytic: None,
+        e_tangential: (rotates && !stuck && !spec.is_head_on())
+            .then(|| {
+                vt_in
+                    .filter(|v| v.length() > 0.0)
+                    .map(|v| vt_out.dot(v) / v.length_squared())
+            })
+            .flatten(),
+        e_tangential_analytic: None,
+        omega_final: rotates.then(|| last.omega[0].length()),
+        delta_max,
+        delta_max_analytic: None,
+        chi: None,
+        v_p: None,
+        delta_c,
+        delta_c_analytic: None,
+        contact_duration: (!stuck).then(|| last_contact - first_contact.unwrap_or(0.0)),
+        contact_duration_analytic: None,
+        jkr: None,
+        tabor: None,
+        v_yield: None,
+        e_tn: None,
+        e_pl: None,
+        dt,
+        steps: run.steps(),
+        backend,
+        adapter,
+        energy: CollisionEnergy {
+            initial_kinetic: ke0,
+            final_kinetic: ke1,
+            dissipated,
+            balance_error: total0.zip(total1).map(|(a, b)| (b - a).abs() / ke0),
+        },
+    };
+    predict(spec, &geom, &mut result);
+    Ok(result)
+}
+
+pub(super) fn trace_row(
+    spec: &CollideSpec,
+    geom: &PairGeometry,
+    t: f64,
+    delta: f64,
+    delta_dot: f64,
+    force: f64,
+    history: Option<crate::model::ContactHistory>,
+) -> TraceRow {
+    let mut row = TraceRow {
+        t,
+        delta,
+        delta_dot,
+        force,
+        ..Default::default()
+    };
+    if let ContactModel::Jkr(p) = &spec.model {
+        let touched = history.is_some_and(|h| h.touched);
+        if touched || (p.gamma() == 0.0 && delta > 0.0) {
+            let r = geom.r_eff();
+            row.a_jkr = p.contact_radius(delta, r);
+            row.a = match history {
+                Some(h) if h.contact_radius > 0.0 => h.contact_radius,
+                _ => row.a_jkr,
+            };
+        }
+    }
+    row
+}
+
+/// Runs one collision on `backend`, each step's row into `trace` where one is given.
+pub(super) fn collide_with(
+    spec: &CollideSpec,
+    backend: Backend,
+    trace: Option<&mut Vec<TraceRow>>,
+) -> Result<CollideResult, PowderError> {
+    spec.validate()?;
+    let dt = spec.dt.unwrap_or_else(|| spec.time_step().default);
+    let scene = spec.scene(dt);
+    let wall_x = scene.walls.first().map_or(0.0, |w| w.point[0]);
+    let wall = spec.wall;
+    match backend {
+        Backend::Cpu => {
+            let run = CpuRun {
+                engine: CpuEngine::new(&scene)?,
+                wall,
+            };
+            run_collision(spec, run, wall_x, dt, "cpu", None, trace)
+        }
+        Backend::Gpu => {
+            let engine = GpuEngine::new(&scene, GpuContext::new()?)?;
+            let adapter = Some(engine.adapter().to_string());
+            let run = GpuRun { engine, wall };
+            run_collision(spec, run, wall_x, dt, "gpu", adapter, trace)
+        }
+    }
+}
