@@ -3,7 +3,7 @@
 // `src/gpu/shaders.rs` prepends this file to each stage file (grid.wgsl, permute.wgsl,
 // step.wgsl), so everything here is visible to every stage. Keep it
 // to declarations that every stage can share: constants, structs mirrored in Rust
-// (`src/gpu/layout.rs`, checked there against naga's layout), and pure helpers.
+// (`src/gpu/layout/`, checked there against naga's layout), and pure helpers.
 //
 // Core WGSL only: no f64, no float atomics, no subgroups, so the kernels run on every
 // wgpu backend (Vulkan, Metal, DX12, GL) and every adapter, the software ones included.

@@ -1,6 +1,6 @@
 // ledger.wgsl — the energy ledger and contact statistics on the device, composed into the
 // step instead of ledger_off.wgsl when a run wants them (`GpuOptions::ledger`); the twin
-// of the CPU engine's (`CpuEngine::book`, `CpuEngine::contact_stats`).
+// of the CPU engine's (`book` in `src/cpu/engine/contact.rs`, `CpuEngine::contact_stats`).
 //
 // A contact dissipates over a step the work done on it less the change of its stored
 // energy: 0.5·(f0 + f1)·(delta1 − delta0) − ½·dt·(P0 + P1) − (U1 − U0), with

@@ -20,7 +20,7 @@ pub enum Dissipation {
     /// Tsuji-type damping calibrated from a target restitution e ∈ (0, 1]
     /// (paper 002 eqs. 11–13 normal and 16 tangential). For Hertz (γ = 0) the restitution
     /// of a head-on collision equals the target, independent of the impact velocity, up to
-    /// the integration error (`tests::tsuji_damping_calibration`, `docs/models.md`). With
+    /// the integration error (`tsuji_damping_calibration` in `jkr/tests.rs`, `docs/models.md`). With
     /// adhesion the JKR loss comes on top.
     Tsuji {
         /// Target coefficient of restitution e ∈ (0, 1].

@@ -1,0 +1,311 @@
+//! The pair table's rows, one block a contact law or sub-model (`gpu::composition` lays
+//! them out; their WGSL twins are the `PairRow` fields the generated code declares).
+
+use bytemuck::{Pod, Zeroable};
+
+/// The hysteretic law's block of the pair table (`HystereticPair` of
+/// `shaders/contact/hysteretic.wgsl`).
+/// LSD is the special case k1 = kp = k with the LSD flag.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct HystereticPair {
+    /// Initial (plastic) loading stiffness k1, N/m (paper 000 eq. 5).
+    pub k1: f32,
+    /// Largest (limit-branch) un-/re-loading stiffness kp, N/m (paper 000 eqs. 9–11).
+    pub kp: f32,
+    /// Slope of the irreversible tensile (adhesive) branch kc, N/m (paper 000 eq. 5).
+    pub kc: f32,
+    /// kp/(kp − k1)·φf (a huge finite number when kp = k1: WGSL may assume no infinities).
+    pub dmaxp_per_a12: f32,
+    /// Plasticity depth φf: δ0 on the limit branch over a12 (paper 000 eqs. 10–11).
+    pub phi_f: f32,
+    /// Non-contact adhesion force fa, N (paper 000 eq. 14).
+    pub fa: f32,
+    /// Non-contact stiffness; 0 encodes zero range (kca = ∞).
+    pub kca: f32,
+    /// Viscous damping coefficient γ0, kg/s (paper 000 eq. 2).
+    pub gamma0: f32,
+    /// [`HYST_JUMP_IN`], [`HYST_SQRT_RULE`] and [`HYST_LSD`], or-ed.
+    pub flags: u32,
+    /// 1/`dmaxp_per_a12` (the kernel multiplies where the f64 reference divides).
+    pub inv_dmaxp_per_a12: f32,
+    /// (k1 + kc)/(kp − k1), 0 when kp <= k1: the tensile branch's history
+    /// (`HystereticParams::delta_max_on_tensile_branch`, linear rule) is
+    /// 0.5·δ + √(0.25·δ² + tensile_c·δ·δmax^p).
+    pub tensile_c: f32,
+    /// kp·φf/(kp + kc): where the limit line meets the tensile branch, over a12.
+    pub tensile_limit_per_a12: f32,
+}
+
+/// Flags of [`HystereticPair`], as in the WGSL.
+pub const HYST_JUMP_IN: u32 = 1;
+
+/// The k2 rule is the √ interpolation (paper 000 appendix D) instead of the linear eq. 9.
+pub const HYST_SQRT_RULE: u32 = 2;
+
+/// The row is a linear spring-dashpot (LSD): f = k·δ + γ0·δ̇ with k = k1 = kp.
+pub const HYST_LSD: u32 = 4;
+
+impl HystereticPair {
+    /// The row of a hysteretic pair, rounded to f32 (kca = ∞ encoded as 0).
+    pub fn hysteretic(p: &crate::model::HystereticParams) -> Self {
+        use crate::model::{AdhesionMode, K2Rule};
+        let dmaxp = if p.kp > p.k1 {
+            p.kp / (p.kp - p.k1) * p.phi_f
+        } else {
+            1e30
+        };
+        let mut flags = 0;
+        if p.adhesion == AdhesionMode::JumpIn {
+            flags |= HYST_JUMP_IN;
+        }
+        if p.k2_rule == K2Rule::Sqrt {
+            flags |= HYST_SQRT_RULE;
+        }
+        let dmaxp = dmaxp.min(1e30);
+        Self {
+            k1: p.k1 as f32,
+            kp: p.kp as f32,
+            kc: p.kc as f32,
+            dmaxp_per_a12: dmaxp as f32,
+            phi_f: p.phi_f as f32,
+            fa: p.fa as f32,
+            kca: if p.kca.is_finite() { p.kca as f32 } else { 0.0 },
+            gamma0: p.gamma0 as f32,
+            flags,
+            inv_dmaxp_per_a12: (1.0 / dmaxp) as f32,
+            tensile_c: if p.kp > p.k1 {
+                ((p.k1 + p.kc) / (p.kp - p.k1)) as f32
+            } else {
+                0.0
+            },
+            tensile_limit_per_a12: (p.kp * p.phi_f / (p.kp + p.kc)) as f32,
+        }
+    }
+
+    /// The row of an LSD pair: k1 = kp = k, the [`HYST_LSD`] flag.
+    pub fn lsd(p: &crate::model::LsdParams) -> Self {
+        Self {
+            k1: p.k as f32,
+            kp: p.k as f32,
+            dmaxp_per_a12: 1e30,
+            inv_dmaxp_per_a12: 1e-30,
+            gamma0: p.gamma0 as f32,
+            flags: HYST_LSD,
+            ..Default::default()
+        }
+    }
+}
+
+/// The JKR law's block of the pair table (`JkrPair` of `shaders/contact/jkr.wgsl`): the JKR
+/// family's parameters, derived in f64 from [`JkrParams`](crate::model::JkrParams) and
+/// rounded once. Per-contact quantities that depend on R* (a0, δ0, Fc, ξcrit) are formed in
+/// the kernel from the coefficients here, since R* varies with the particles' radii.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct JkrPair {
+    /// E* (scaled), Pa.
+    pub e_star: f32,
+    /// G* (scaled), Pa.
+    pub g_star: f32,
+    /// Surface energy after scaling, γ·S^(2/5), J/m²; 0 = Hertz.
+    pub gamma: f32,
+    /// (9πγ/E*)^(1/3) (scaled): a0 = a0_coef·R*^(2/3).
+    pub a0_coef: f32,
+    /// δ/δ0 at which a touching contact breaks ([`Pulloff`](crate::model::Pulloff)).
+    pub break_ratio: f32,
+    /// Sliding friction coefficient μs; 0 = no tangential force.
+    pub friction: f32,
+    /// Δγ/γ of the rolling resistance; 0 = none.
+    pub rolling_hysteresis: f32,
+    /// Unscaled 3πγ: the rolling model's Fc = this·R*.
+    pub fc_unscaled_per_r: f32,
+    /// Unscaled (9πγ/E*)^(1/3): the rolling model's a0 = this·R*^(2/3).
+    pub a0_unscaled_coef: f32,
+    /// [`JKR_DISSIPATION_NONE`], [`JKR_DISSIPATION_TSUJI`], [`JKR_DISSIPATION_POWER`],
+    /// [`JKR_DISSIPATION_KRIJT`] or [`JKR_DISSIPATION_STRESS`].
+    pub dissipation: u32,
+    /// Tsuji: −2√(5/6)·β(e) ≥ 0.
+    pub tsuji: f32,
+    /// Power law: D, α, β.
+    pub power_d: f32,
+    /// Power law: exponent α of |v| (paper 001 eqs. 19–20).
+    pub power_alpha: f32,
+    /// Power law: exponent β of the contact radius a (paper 001 eqs. 19–20).
+    pub power_beta: f32,
+    /// P(x_break) of [`potential_shape`](crate::model::jkr::potential_shape): the stored
+    /// energy of a contact is Fc·δ0·(P(x) − P(x_break)) (energy ledger).
+    pub p_break: f32,
+    /// Krijt and stress (`shaders/contact/krijt.wgsl`): 2E*/ν² of the viscous force (eq. 12).
+    pub visc: f32,
+    /// T_vis (krijt) or C of T_vis,0 = C·R (stress, eq. 18).
+    pub tvis: f32,
+    /// 2E*·γ/σ0² of the crack speed (eq. B2), m; 0 for σ0 = 0 (no delay of a).
+    pub crack: f32,
+    /// B of eq. 17 (stress).
+    pub stress_b: f32,
+    /// ζ of eq. 17 (stress).
+    pub stress_zeta: f32,
+    /// Tsuji: 1 when the dashpots use paper 002's Hertz stiffness, ρ = √(R*·max(δ, 0)) in
+    /// Sn = 2E*·ρ and St = 8G*·ρ; 0 for the contact radius a
+    /// ([`TsujiStiffness`](crate::model::TsujiStiffness)).
+    pub tsuji_hertz: u32,
+}
+
+/// Dissipation kinds of [`JkrPair`], as in the WGSL.
+pub const JKR_DISSIPATION_NONE: u32 = 0;
+
+/// Tsuji-type viscous damping from a restitution coefficient (paper 002 eqs. 11–13).
+pub const JKR_DISSIPATION_TSUJI: u32 = 1;
+
+/// Power-law dissipation F = sgn(v)·D·E*·|v|^α·a^β (paper 001 eqs. 19–20).
+pub const JKR_DISSIPATION_POWER: u32 = 2;
+
+/// Krijt viscoelastic dissipation with a delayed contact radius, constant T_vis (paper 001
+/// eqs. 10–12, B1–B2).
+pub const JKR_DISSIPATION_KRIJT: u32 = 3;
+
+/// Krijt dissipation with the stress-dependent T_vis of paper 001 eqs. 17–18.
+pub const JKR_DISSIPATION_STRESS: u32 = 4;
+
+impl JkrPair {
+    /// The row of a JKR/Hertz pair, derived in f64 and rounded once to f32. Krijt and
+    /// stress-dependent dissipation are not ported and leave `dissipation` at
+    /// [`JKR_DISSIPATION_NONE`].
+    pub fn new(p: &crate::model::JkrParams) -> Self {
+        use crate::model::jkr::tsuji_beta;
+        use crate::model::Dissipation;
+        use std::f64::consts::PI;
+        let gamma = p.gamma();
+        let a0_coef = if gamma > 0.0 {
+            (9.0 * PI * gamma / p.e_star()).cbrt()
+        } else {
+            0.0
+        };
+        let a0_unscaled_coef = if p.surface_energy > 0.0 {
+            (9.0 * PI * p.surface_energy / p.e_star_unscaled()).cbrt()
+        } else {
+            0.0
+        };
+        let mut row = Self {
+            e_star: p.e_star() as f32,
+            g_star: p.g_star() as f32,
+            gamma: gamma as f32,
+            a0_coef: a0_coef as f32,
+            break_ratio: p.pulloff.break_overlap_ratio() as f32,
+            friction: p.friction as f32,
+            rolling_hysteresis: p.rolling_hysteresis as f32,
+            fc_unscaled_per_r: (3.0 * PI * p.surface_energy) as f32,
+            a0_unscaled_coef: a0_unscaled_coef as f32,
+            p_break: crate::model::jkr::potential_shape(p.pulloff.break_radius_ratio()) as f32,
+            ..Default::default()
+        };
+        match p.dissipation {
+            Dissipation::None => {}
+            Dissipation::Tsuji {
+                restitution,
+                stiffness,
+            } => {
+                row.dissipation = JKR_DISSIPATION_TSUJI;
+                // 2·√(5/6)·(−β): the prefactor of paper 002 eqs. 11 and 16
+                row.tsuji = (-2.0 * (5.0f64 / 6.0).sqrt() * tsuji_beta(restitution)) as f32;
+                row.tsuji_hertz = u32::from(stiffness == crate::model::TsujiStiffness::Hertz);
+            }
+            Dissipation::PowerLaw { d, alpha, beta } => {
+                row.dissipation = JKR_DISSIPATION_POWER;
+                row.power_d = d as f32;
+                row.power_alpha = alpha as f32;
+                row.power_beta = beta as f32;
+            }
+            Dissipation::Krijt { tvis, sigma0 } => {
+                row.dissipation = JKR_DISSIPATION_KRIJT;
+                row.tvis = tvis as f32;
+                row.set_krijt(p, sigma0);
+            }
+            Dissipation::Stress {
+                tvis0_per_radius,
+                b,
+                zeta,
+                sigma0,
+            } => {
+                row.dissipation = JKR_DISSIPATION_STRESS;
+                row.tvis = tvis0_per_radius as f32;
+                row.stress_b = b as f32;
+                row.stress_zeta = zeta as f32;
+                row.set_krijt(p, sigma0);
+            }
+        }
+        row
+    }
+
+    /// The material coefficients of the Krijt law (E* and γ after the stiffness scale, as
+    /// `JkrParams::krijt_material`): 2E*/ν² and 2E*γ/σ0² (capped at f32::MAX: a step of
+    /// the crack that long is no delay at all).
+    fn set_krijt(&mut self, p: &crate::model::JkrParams, sigma0: f64) {
+        let m = p.krijt_material();
+        self.visc = (2.0 * m.e_star / (m.poisson * m.poisson)) as f32;
+        self.crack = if sigma0 > 0.0 {
+            (2.0 * m.e_star * m.gamma / (sigma0 * sigma0)).min(f32::MAX as f64) as f32
+        } else {
+            0.0
+        };
+    }
+}
+
+/// One Luding spring's block of the pair table (`CoulombSpring` of
+/// `shaders/contact/coulomb.wgsl`): [`CoulombSpring`](crate::model::CoulombSpring) rounded to
+/// f32; all zero (μs = 0) is off.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct CoulombSpringRow {
+    /// Static coefficient μs; 0 = off.
+    pub mu_s: f32,
+    /// Dynamic coefficient μd.
+    pub mu_d: f32,
+    /// Stiffness k, N/m.
+    pub k: f32,
+    /// Dashpot γ, kg/s.
+    pub gamma: f32,
+}
+
+impl CoulombSpringRow {
+    /// The block of a spring.
+    pub fn new(s: &crate::model::CoulombSpring) -> Self {
+        Self {
+            mu_s: s.mu_s as f32,
+            mu_d: s.mu_d as f32,
+            k: s.k as f32,
+            gamma: s.gamma as f32,
+        }
+    }
+}
+
+/// The twisting block of the pair table (`TwistingRow` of
+/// `shaders/contact/luding_twisting.wgsl`): the spring, and for the JKR family without a
+/// given k_o the stiffness per contact radius (k_o = k + k_per_a·a).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct TwistingRow {
+    /// The spring (its `k` is 0 where the stiffness follows the contact radius).
+    pub spring: CoulombSpringRow,
+    /// dk_o/da, N/m²: 2/5·8G* for the JKR family's default, else 0.
+    pub k_per_a: f32,
+}
+
+impl TwistingRow {
+    /// The block of a pair's model, `None` where it has no twisting friction.
+    pub fn new(m: &crate::model::ContactModel) -> Option<Self> {
+        use crate::model::ContactModel;
+        let (spring, k_per_a) = match m {
+            ContactModel::Hysteretic(p) => (p.luding.twisting, 0.0),
+            ContactModel::Lsd(p) => (p.luding.twisting, 0.0),
+            // the stiffness of `JkrParams::twisting_stiffness` at a: k_o, or 2/5·8G*·a
+            ContactModel::Jkr(p) if p.luding.twisting.k > 0.0 => (p.luding.twisting, 0.0),
+            ContactModel::Jkr(p) => (p.luding.twisting, p.twisting_stiffness(1.0)),
+        };
+        spring.is_on().then(|| Self {
+            spring: CoulombSpringRow::new(&spring),
+            k_per_a: k_per_a as f32,
+        })
+    }
+}
