@@ -1,7 +1,7 @@
 // common.wgsl — shared by every shader stage of the GPU engine.
 //
 // `src/gpu/shaders.rs` prepends this file to each stage file (grid.wgsl, permute.wgsl,
-// step.wgsl), so everything here is visible to every stage. Keep it
+// and the step's files), so everything here is visible to every stage. Keep it
 // to declarations that every stage can share: constants, structs mirrored in Rust
 // (`src/gpu/layout/`, checked there against naga's layout), and pure helpers.
 //

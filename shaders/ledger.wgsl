@@ -7,7 +7,7 @@
 // P = tangential force · tangential velocity + rolling torque · relative angular velocity,
 // the normal work of a step that crosses the entry or exit edge taken only over the part
 // inside (`pair_edges`), so force jumps are booked right. The last step's values come
-// from the entries' `prior`. A pair's evaluator (step.wgsl) books all of it and counts it
+// from the entries' `prior`. A pair's evaluator (step/force.wgsl) books all of it and counts it
 // for both particles; a wall contact's particle books it, and a moving wall's work on it
 // (its normal force's and a placed force jump's, exact for a wall moving along its normal;
 // the tangential force's is left out).
@@ -109,7 +109,7 @@ fn ledger_departed(acc: ptr<function, LedgerAcc>, old: vec4<f32>, delta: f32) {
 fn ledger_store(k: u32, acc: LedgerAcc) {
     let e = load_ledger_energy(k);
     let y = acc.dissipated - e.y;
-    // (opaque: see step.wgsl; without it the compiler folds the compensation to 0)
+    // (opaque: see step/shared.wgsl; without it the compiler folds the compensation to 0)
     let t = opaque1(e.x + y);
     let comp = (t - e.x) - y;
     store_ledger_counts(k, acc.counts);

@@ -5,7 +5,7 @@
 // residual, both in the state's `kahan_o`). Why: `docs/architecture.md`, *Overlaps below
 // f32 rounding*.
 //
-// Every intermediate goes through `opaque1` (step.wgsl): Mesa's NIR folds the error terms
+// Every intermediate goes through `opaque1` (step/shared.wgsl): Mesa's NIR folds the error terms
 // of these exact transformations ((a + b) − a → b) for operations not marked exact.
 
 // a + b = s + e exactly (Knuth's TwoSum).

@@ -5,7 +5,7 @@
 //! history fields (declared once, in its Rust module) and, here, how it plugs in. From the
 //! set a scene uses come the pair-table row, the history layout (the stored struct, its
 //! load and store, the partner's view, its size and the host's decoder) and the dispatch
-//! `pair_contact` / `pair_edges` that `shaders/step.wgsl` calls. Nothing a scene does not
+//! `pair_contact` / `pair_edges` that `shaders/step/` calls. Nothing a scene does not
 //! use is compiled in.
 
 use super::layout::{CoulombSpringRow, HystereticPair, JkrPair, TwistingRow};
@@ -764,7 +764,7 @@ impl Composition {
         }
         ShaderVariant {
             name: self.variant_name(keeps, mirrors, paged),
-            source: compose("shaders/step.wgsl", STEP, &parts),
+            source: compose(&STEP, &parts),
         }
     }
 }

@@ -14,7 +14,7 @@ use crate::gpu::composition::Keeps;
 use crate::gpu::window::Windows;
 
 /// A list entry whose `nbr` (and partner id) is `WALL_ENTRY | w` is its particle's contact
-/// with wall w (`WALL_ENTRY` in `shaders/step.wgsl`).
+/// with wall w (`WALL_ENTRY` in `shaders/step/shared.wgsl`).
 pub const WALL_ENTRY: u32 = 0x8000_0000;
 
 /// What one field of a record holds.
@@ -104,7 +104,7 @@ pub struct Host {
 
 impl RecordLayout {
     /// The neighbour lists' entries: each entry's partner (`nbr`; a wall's `WALL_ENTRY | w`
-    /// in `shaders/step.wgsl`), the slot of its pair in
+    /// in `shaders/step/shared.wgsl`), the slot of its pair in
     /// the partner's list for the `lower` list at the same index, the partner's persistent
     /// id and the contact's history, the contact at the end of the last step (`prior`:
     /// with the ledger or the force jumps), this step's pair force (a servo wall's push on

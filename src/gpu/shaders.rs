@@ -45,9 +45,34 @@ pub const JUMP_OFF: &str = include_str!("../../shaders/jump_off.wgsl");
 pub const OVERLAP: &str = include_str!("../../shaders/overlap.wgsl");
 /// A rebuild's in-place re-sort of the particle state through one scratch buffer.
 pub const PERMUTE: &str = include_str!("../../shaders/permute.wgsl");
-/// One time step: drift, (on a rebuild: gather, neighbours, history remap, copy back),
-/// forces, kick.
-pub const STEP: &str = include_str!("../../shaders/step.wgsl");
+/// One time step, a file a phase (path, source): what the kernels share, the drift, a
+/// rebuild's kernels, the forces, the collect and closing kick, walls and pouring.
+pub const STEP: [(&str, &str); 6] = [
+    (
+        "shaders/step/shared.wgsl",
+        include_str!("../../shaders/step/shared.wgsl"),
+    ),
+    (
+        "shaders/step/drift.wgsl",
+        include_str!("../../shaders/step/drift.wgsl"),
+    ),
+    (
+        "shaders/step/rebuild.wgsl",
+        include_str!("../../shaders/step/rebuild.wgsl"),
+    ),
+    (
+        "shaders/step/force.wgsl",
+        include_str!("../../shaders/step/force.wgsl"),
+    ),
+    (
+        "shaders/step/collect.wgsl",
+        include_str!("../../shaders/step/collect.wgsl"),
+    ),
+    (
+        "shaders/step/walls.wgsl",
+        include_str!("../../shaders/step/walls.wgsl"),
+    ),
+];
 
 /// The step of a hysteretic/LSD scene, with the energy ledger.
 pub fn step_variant() -> ShaderVariant {
@@ -93,18 +118,22 @@ pub struct ShaderVariant {
     pub source: String,
 }
 
-/// `common.wgsl`, then each snippet, then the stage, each part headed by a comment
-/// naming where it comes from (so naga's error excerpts are easy to place).
-pub fn compose(stage_path: &str, stage_source: &str, snippets: &[&str]) -> String {
-    let mut s = String::with_capacity(COMMON.len() + stage_source.len() + 256);
+/// `common.wgsl`, then each snippet, then the stage's files (path, source), each part
+/// headed by a comment naming where it comes from (so naga's error excerpts are easy to
+/// place).
+pub fn compose(stage: &[(&str, &str)], snippets: &[&str]) -> String {
+    let bytes: usize = stage.iter().map(|(_, src)| src.len()).sum();
+    let mut s = String::with_capacity(COMMON.len() + bytes + 256);
     s.push_str("// ---- shaders/common.wgsl ----\n");
     s.push_str(COMMON);
     for (i, snippet) in snippets.iter().enumerate() {
         s.push_str(&format!("\n// ---- snippet {i} ----\n"));
         s.push_str(snippet);
     }
-    s.push_str(&format!("\n// ---- {stage_path} ----\n"));
-    s.push_str(stage_source);
+    for (path, source) in stage {
+        s.push_str(&format!("\n// ---- {path} ----\n"));
+        s.push_str(source);
+    }
     s
 }
 
@@ -115,7 +144,7 @@ pub fn stage(name: &str) -> Option<ShaderVariant> {
         .find(|st| st.name == name)
         .map(|st| ShaderVariant {
             name: st.name.to_string(),
-            source: compose(st.path, st.source, &[]),
+            source: compose(&[(st.path, st.source)], &[]),
         })
 }
 
@@ -143,7 +172,7 @@ pub fn all_variants() -> Vec<ShaderVariant> {
         .iter()
         .map(|st| ShaderVariant {
             name: st.name.to_string(),
-            source: compose(st.path, st.source, &[]),
+            source: compose(&[(st.path, st.source)], &[]),
         })
         .collect();
     for c in Composition::all() {
@@ -457,11 +486,25 @@ mod tests {
 
     #[test]
     fn gpu_shaders_compose_keeps_parts_in_order() {
-        let s = compose("shaders/x.wgsl", "fn stage() {}", &["const A: u32 = 1u;"]);
+        let s = compose(
+            &[("shaders/x.wgsl", "fn stage() {}")],
+            &["const A: u32 = 1u;"],
+        );
         let common = s.find("struct GridParams").unwrap();
         let snippet = s.find("const A").unwrap();
         let stage = s.find("fn stage").unwrap();
         assert!(common < snippet && snippet < stage);
         validate(&s).unwrap();
+    }
+
+    /// The step's monitor flags overlaps beyond the run loop's limit.
+    #[test]
+    fn the_step_monitor_limit_is_the_run_loops() {
+        let key = "const MONITOR_MAX_OVERLAP_RATIO: f32 = ";
+        let (path, shared) = STEP[0];
+        let line = (shared.lines().find(|l| l.starts_with(key)))
+            .unwrap_or_else(|| panic!("{path} declares no {key}"));
+        let value: f32 = line[key.len()..].trim_end_matches(';').parse().unwrap();
+        assert_eq!(value, crate::run::MAX_OVERLAP_RATIO as f32);
     }
 }

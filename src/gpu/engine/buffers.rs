@@ -395,7 +395,7 @@ pub(super) struct StepBuffers {
     /// Which particles have appeared (pouring), by persistent id.
     pub(super) appeared: wgpu::Buffer,
     /// The monitor (zeroed per batch) and the Verlet skin state (`control` in
-    /// `shaders/step.wgsl`): [0] some particle moved more than skin/2 since the last
+    /// `shaders/step/shared.wgsl`): [0] some particle moved more than skin/2 since the last
     /// rebuild, [1] rebuild flag, [2] rebuilds so far.
     pub(super) control: wgpu::Buffer,
     /// The indirect dispatch arguments: a rebuild's (written by `decide` each step), then
@@ -403,7 +403,7 @@ pub(super) struct StepBuffers {
     pub(super) args: wgpu::Buffer,
     pub(super) full_args: wgpu::Buffer,
     /// The new lists' and the `lower` lists' lengths and first entries (`rows` in
-    /// `shaders/step.wgsl`: four regions a window, blocked like the state).
+    /// `shaders/step/shared.wgsl`: four regions a window, blocked like the state).
     pub(super) rows: wgpu::Buffer,
     /// Each servo wall's pushes this step, summed per lane of a workgroup.
     pub(super) servo_lanes: wgpu::Buffer,

@@ -1,4 +1,4 @@
-//! The GPU engine: the time step of `shaders/step.wgsl` driven from the host, for every
+//! The GPU engine: the time step of `shaders/step/` driven from the host, for every
 //! contact law the scene composes (`gpu::composition`), with walls, gravity and pouring.
 //!
 //! The particle state lives in one buffer set in the order of the last neighbour-list
@@ -78,7 +78,7 @@ const INITIAL_ENTRIES_PER_PARTICLE: u64 = 2;
 /// binding limit leaves less).
 const LIST_HEADROOM: f64 = 1.25;
 
-/// Bytes of the device monitor, the first part of `control` in `shaders/step.wgsl`.
+/// Bytes of the device monitor, the first part of `control` in `shaders/step/shared.wgsl`.
 const MONITOR_BYTES: u64 = 48;
 
 /// Where the Verlet skin state follows it in `control` (4 words: moved, rebuild flag,

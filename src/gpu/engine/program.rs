@@ -64,7 +64,7 @@ pub(super) fn common_or<T: PartialEq + Copy>(values: impl IntoIterator<Item = T>
 }
 
 /// The step's pipeline-overridable constants for a scene: what it does not use is folded
-/// out of its pipelines (the WGSL `override`s of step.wgsl and the model files). The
+/// out of its pipelines (the WGSL `override`s of `shaders/step/` and the model files). The
 /// model constants go only to variants that declare them (wgpu refuses unknown names).
 pub(super) fn pipeline_constants(
     scene: &Scene,

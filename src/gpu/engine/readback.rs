@@ -213,7 +213,7 @@ impl GpuEngine {
         Ok((state, motion))
     }
 
-    /// The wall entries of the lists (`WALL_ENTRY` in `shaders/step.wgsl`: particle k's
+    /// The wall entries of the lists (`WALL_ENTRY` in `shaders/step/shared.wgsl`: particle k's
     /// contacts with the walls near it, after its pairs), read back.
     pub(super) fn read_wall_entries(&self) -> Result<WallEntries, PowderError> {
         let s = &self.state;
@@ -307,7 +307,7 @@ impl GpuEngine {
     /// The history particle `i` keeps of its contact with particle `j` (persistent ids)
     /// after the last step, if `j` is in `i`'s neighbour list. Each side keeps its own
     /// copy: `contact_history(j, i)` has the same flags and ξ, and the negated tangential
-    /// spring (see `shaders/step.wgsl`). For tests and diagnostics: reads buffers back.
+    /// spring (`hist_mirror`, `remap` in `shaders/step/rebuild.wgsl`). For tests and diagnostics: reads buffers back.
     pub fn contact_history(
         &self,
         i: usize,
@@ -334,7 +334,7 @@ impl GpuEngine {
         let hb = hb as usize;
         let mut list = Vec::new();
         for &[pid, row, count, _] in &ids {
-            // a particle's entries (ids.y, ids.z as in shaders/step.wgsl)
+            // a particle's entries (ids.y, ids.z as in shaders/step/shared.wgsl)
             for e in row as u64..(row + count) as u64 {
                 let partner = u32s(&entries[at("hist_pid", e) as usize..][..4])[0];
                 let h = at("hist", e) as usize;

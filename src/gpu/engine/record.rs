@@ -131,7 +131,7 @@ pub(super) struct BatchReport {
 }
 
 impl BatchReport {
-    /// Why the batch halted, if it did (`halt` in `shaders/step.wgsl`).
+    /// Why the batch halted, if it did (`halt` in `shaders/step/rebuild.wgsl`).
     pub(super) fn halted(&self) -> Option<Halt> {
         match self.monitor[7] {
             0 => None,

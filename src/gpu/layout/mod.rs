@@ -45,7 +45,7 @@ pub struct ScanParams {
     pub out_offset: u32,
 }
 
-/// Per-run step parameters: twin of `StepParams` in `shaders/step.wgsl`.
+/// Per-run step parameters: twin of `StepParams` in `shaders/step/shared.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct StepParams {
@@ -69,7 +69,7 @@ pub struct StepParams {
     /// 1 on periodic axes.
     pub periodic: [u32; 3],
     /// Always 0: the kernels read it to hide values from the shader compiler, so Kahan
-    /// compensations are not folded away (see `opaque` in `shaders/step.wgsl`).
+    /// compensations are not folded away (see `opaque` in `shaders/step/shared.wgsl`).
     pub zero: u32,
     /// The Verlet skin, m: a rebuild comes once a particle (or a moving wall, along its
     /// normal) has moved more than half of it.
@@ -87,7 +87,7 @@ pub struct StepParams {
 }
 
 /// A planar wall: a point as cell + offset and the unit normal. Twin of `Wall` in
-/// `shaders/step.wgsl`.
+/// `shaders/step/shared.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct WallGpu {
