@@ -3,7 +3,8 @@
 //! Without an adapter these tests print a notice and pass, unless the environment
 //! variable `CI` is set: then they fail, so CI cannot silently stop testing the GPU path.
 
-use powder::gpu::grid::{scan_blocking, sort_reference, GridSort};
+use powder::gpu::grid::{sort_reference, GridSort};
+use powder::gpu::scan::scan_blocking;
 use powder::gpu::GpuContext;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;

@@ -168,15 +168,6 @@ fn jkr_dissipation(p: JkrPair, a: f32, delta: f32, a0: f32, delta_dot: f32, m: f
 // Normal force with the JKR contact hysteresis (`JkrParams::normal_force`):
 // * no force before the first touch (delta <= 0, not touched);
 // * from delta > 0 the contact persists (also at negative overlap) until delta falls to
-//   break_ratio·delta0, where it breaks and the whole history is forgotten;
-// * Hertz (gamma = 0): contact only while delta > 0.
-// The elastic force is evaluated in the normalised form F = 4·Fc·(x³ − x^(3/2)), x = a/a0
-// = s², which equals 4E*a³/(3R*) − 4·sqrt(pi·gamma·E*·a³) (a0³ = 9·pi·gamma·R*²/E*) and
-// keeps every intermediate O(Fc) in f32. With the Krijt dissipations the contact radius
-// is the state (*h).a instead of the JKR root (`krijt_normal`).
-// Normal force with the JKR contact hysteresis (`JkrParams::normal_force`):
-// * no force before the first touch (delta <= 0, not touched);
-// * from delta > 0 the contact persists (also at negative overlap) until delta falls to
 //   break_ratio·delta0, where it breaks and the whole history is forgotten (the
 //   composition clears the other sub-models' fields when a pair is out of contact);
 // * Hertz (gamma = 0): contact only while delta > 0.

@@ -103,10 +103,7 @@ fn gather(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: v
 // differences, negated offsets) — so exactly one of the two evaluates. Against "the later
 // one in the sorted order" it evens out the lists' lengths: each gets the partners of one
 // half-space, not those of the later cells, whose share depends on where a particle sits
-// in its cell. A SIMD group loops as long as its longest list: on the settled packing
-// example the force and collect loops run 13–14 % fewer iterations (max of 8 consecutive
-// lists 5.9 -> 5.2; the longest list 10 -> 7), and the bench lattice still gets exactly
-// its +x, +y, +z neighbours.
+// in its cell; a SIMD group loops as long as its longest list (`docs/performance.md`).
 fn evaluates(d: vec3<f32>, k: u32, j: u32) -> bool {
     let a = abs(d);
     var c = d.x;
@@ -356,45 +353,4 @@ fn copy_back_history(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgro
     // (w: the batch's largest overlap so far, which the re-sort carried)
     store_disp(k, vec4<f32>(0.0, 0.0, 0.0, load_disp(k).w));
     store_ids(k, vec4<u32>(load_ids(k).x, row, n - n_walls, n_walls));
-}
-
-// The relative motion of one contact, as the model sees it (`model::Kinematics` plus the
-// pair geometry and the time step).
-struct Kin {
-    // Overlap and approach speed.
-    delta: f32,
-    delta_dot: f32,
-    // R* = r_i·r_j/(r_i + r_j) (r for a wall; a12 = 2R*) and m* (m for a wall).
-    r_eff: f32,
-    m_eff: f32,
-    dt: f32,
-    // Unit normal from j (or the wall) to i.
-    n: vec3<f32>,
-    // Tangential velocity of i relative to j at the contact point.
-    v_t: vec3<f32>,
-    // Rolling velocity R*·(w_i − w_j) × n + ½·(r_i − r_j)/(r_i + r_j)·v_t (paper 002 eq. 20).
-    v_roll: vec3<f32>,
-    // 1/a12 = 1/(2R*) (the step needs it for the overlap monitor; the hysteretic model
-    // multiplies by it where the reference divides by a12).
-    inv_a12: f32,
-    // Relative angular velocity w_i − w_j (w_i for a wall): Luding's rolling and twisting.
-    w_rel: vec3<f32>,
-}
-
-// A normal law's result, what the composition and the friction sub-models need of it.
-struct Normal {
-    // Mechanical contact: the tangential, rolling and twisting laws act (their history
-    // is cleared otherwise).
-    in_contact: bool,
-    // The energy ledger's "engaged" (the law's touched flag).
-    engaged: bool,
-    // Normal force along n, repulsive positive, and the stored energy.
-    force: f32,
-    potential: f32,
-    // Contact radius a and a/a0 (JKR family; 0 for the linear laws).
-    a: f32,
-    x: f32,
-    // The load of the Coulomb limits (>= 0): |F_el + 2Fc| for JKR, Luding's
-    // f_n + kc·delta + fa for the hysteretic law.
-    coulomb: f32,
 }

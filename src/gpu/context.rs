@@ -469,6 +469,30 @@ impl GpuContext {
         let l = self.device.limits();
         l.max_storage_buffer_binding_size.min(l.max_buffer_size)
     }
+
+    /// An error naming `what` where `count` items of `per_item` bytes exceed one storage
+    /// binding, with how many would fit.
+    pub fn check_binding(
+        &self,
+        what: &str,
+        count: u64,
+        per_item: u64,
+        unit: &str,
+    ) -> Result<(), PowderError> {
+        let limit = self.max_storage_binding();
+        let bytes = count * per_item;
+        if bytes > limit {
+            return Err(PowderError::Run(format!(
+                "{what}: {count} {unit} need {bytes} bytes ({per_item} bytes each), over the \
+                 adapter's storage binding limit of {limit} bytes ({} MiB, {}); at most {} {unit} \
+                 fit",
+                limit >> 20,
+                self.summary.name,
+                limit / per_item
+            )));
+        }
+        Ok(())
+    }
 }
 
 #[cfg(test)]

@@ -204,6 +204,12 @@ impl<'a> Part<'a> {
 }
 
 impl Kernel {
+    /// Workgroups of a 1-D dispatch of `invocations` invocations (as [`Kernel::dispatch`]
+    /// rounds).
+    pub fn workgroups_for(&self, invocations: u32) -> u32 {
+        invocations.div_ceil(self.workgroup_size.iter().product::<u32>().max(1))
+    }
+
     /// Bind group 0 for this kernel from `(global name, buffer)` pairs (whole buffers).
     /// Names the kernel does not use are ignored; a missing one is an error.
     pub fn bind(

@@ -18,6 +18,7 @@ pub mod pages;
 pub mod permute;
 pub mod quiet;
 pub mod records;
+pub mod scan;
 pub mod shaders;
 pub mod state;
 pub mod timestamps;
@@ -26,8 +27,9 @@ pub mod window;
 
 pub use context::{AdapterPreference, AdapterSummary, GpuContext, LimitsSummary};
 pub use engine::{GpuEngine, GpuOptions, GpuSavedState, GpuState, RebuildChain};
-pub use grid::{ExclusiveScan, GridSort, SortResult};
+pub use grid::{GridSort, SortResult};
 pub use layout::{decode, encode, CellCoord, CellOffset, GridParams, PackedPosition};
 pub use quiet::QuietBatches;
+pub use scan::ExclusiveScan;
 pub use shaders::{all_variants, validate, ShaderVariant};
 pub use traffic::{PassTraffic, TrafficEstimate};

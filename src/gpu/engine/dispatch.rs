@@ -3,8 +3,9 @@
 
 use super::buffers::Allocator;
 use crate::gpu::context::GpuContext;
-use crate::gpu::grid::{ExclusiveScan, GridSort};
+use crate::gpu::grid::GridSort;
 use crate::gpu::kernel::split_workgroups;
+use crate::gpu::scan::ExclusiveScan;
 
 /// Offsets (bytes) into `args` and the values every step's arguments take.
 pub(super) struct Dispatches {

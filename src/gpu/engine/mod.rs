@@ -19,7 +19,7 @@ use crate::cpu::{ContactStats, Energies, Partner};
 use crate::error::PowderError;
 use crate::gpu::composition::{Composition, Keeps};
 use crate::gpu::context::GpuContext;
-use crate::gpu::grid::{ExclusiveScan, GridSort};
+use crate::gpu::grid::GridSort;
 use crate::gpu::kernel::{
     read_joined, storage_buffer, submit_and_read, u32s, uniform_buffer, whole, Kernel, Part,
     Program,
@@ -30,6 +30,7 @@ use crate::gpu::pages::{Pages, MIN_PAGE_WINDOWS};
 use crate::gpu::permute::{self, Field, Permutation, ROW_WORDS};
 use crate::gpu::quiet::{Forecast, QuietBatches};
 use crate::gpu::records::{RecordLayout, WALL_ENTRY};
+use crate::gpu::scan::ExclusiveScan;
 use crate::gpu::state::{Buffer, StateLayout, NOT_APPEARED};
 use crate::gpu::timestamps::{PassClock, PassProfile};
 use crate::gpu::traffic::{PassTraffic, When};
@@ -121,7 +122,7 @@ pub type KeyedHistory = ((u32, u32), ContactHistory);
 pub struct GpuOptions {
     /// Keep the energy ledger and contact statistics on the device
     /// ([`GpuEngine::energies`], [`GpuEngine::contact_stats`], [`GpuEngine::wall_forces`]):
-    /// 32 bytes per neighbour slot and 64 per particle more, and about 20 % of the step.
+    /// its memory a particle: `docs/gpu_rebuild.md`, *Where it stands*.
     /// Default on; `powder run --no-ledger` turns it off.
     pub ledger: bool,
     /// Quiet batches (`gpu::quiet`): batches recorded without the per-step rebuild

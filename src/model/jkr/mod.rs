@@ -404,20 +404,10 @@ impl JkrParams {
     /// increasing and convex with a non-zero slope at t = 0, started to the right of the
     /// root (guarded Newton, monotone, quadratic everywhere).
     ///
-    /// In f64: a cubic Hermite start from a table over √(δ/δ0 − δc/δ0) and one Newton step,
-    /// within 4 ulp of the guarded Newton run to convergence (which it uses past
-    /// δ/δ0 ≈ 1023); δ(a(δ)) round-trips to 1e-12 over δ/δ0 ∈ [δc/δ0, 10⁸]. The f32 twin
-    /// [`contact_radius_f32`], guarded Newton,
-    /// 3 iterations (the initial guess is within 8.5 %; 2 iterations give 7.7e-7, 3 reach the
-    /// f32 rounding floor): f32 relative error ≤ 4.4e-7 over δ/δ0 ∈ [−0.8255, 1000]
-    /// against the f64 solve of the same rounded δ/δ0, including at the pull-off point.
-    /// Against the f64 solve of the same f32 inputs δ, δ0 the error also contains the
-    /// f32 rounding of δ/δ0 (≈ 5e-8), which the infinite slope da/dδ at δc amplifies
-    /// (≈ 4e-8/√(δ/δ0 − δc/δ0)): ≤ 4.4e-7 for δ/δ0 − δc/δ0 ≥ 1e-2, ≤ 3.5e-6 for ≥ 1e-4,
-    /// ≤ 2.9e-5 for ≥ 1e-6 and ≤ 1.1e-4 at the pull-off point itself (there the force is
-    /// still accurate to ≈ 7e-5·Fc since dF/da is finite). This is conditioning, not the
-    /// solver; f32 positions give far larger errors in δ anyway. Measured by
-    /// `tests::f32_solver_accuracy`.
+    /// In f64 a cubic Hermite start from a table and one Newton step (within 4 ulp of the
+    /// converged solve); the f32 twin [`contact_radius_f32`] runs 3 guarded Newton
+    /// iterations. Their accuracy, and the conditioning at the pull-off point:
+    /// `docs/models.md`, *The JKR family* (checked by `tests::f32_solver_accuracy`).
     pub fn contact_radius(&self, delta: f64, r_eff: f64) -> f64 {
         if self.gamma() == 0.0 {
             return (r_eff * delta.max(0.0)).sqrt();
