@@ -2,7 +2,8 @@
 //! validation with naga (no GPU needed).
 //!
 //! Every module is `shaders/common.wgsl` (shared structs, constants and helpers)
-//! followed by snippets followed by one stage file (`shaders/grid.wgsl`, the step). The
+//! followed by snippets followed by the stage's files (`shaders/grid.wgsl`, or the step's
+//! six of `shaders/step/`). The
 //! step's snippets are the contact sub-models a scene uses and the interface generated for
 //! them (`gpu::composition`). A [`ShaderVariant`] is one such composition under a name;
 //! [`all_variants`] lists every variant the engine can build, and the unit test validates

@@ -5,8 +5,11 @@
 //! --no-ledger`) leaves what only the ledger knows absent: empty CSV cells, keys left out
 //! of the JSON, "n/a" in the progress line.
 
+mod monitor;
 pub mod observed;
 pub mod simulation;
+mod snapshot;
+mod tabor;
 
 use crate::cpu::{ContactStats, CpuEngine, Threads};
 use crate::error::PowderError;
@@ -22,19 +25,11 @@ use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
-/// The state of a run at one output instant.
-#[derive(Clone, Copy, Debug, Serialize)]
-pub struct Snapshot {
-    /// Steps taken.
-    pub step: u64,
-    /// Simulated time, s.
-    pub time: f64,
-    /// Energies, J (without the ledger: kinetic, gravitational and inserted only).
-    pub energies: ObservedEnergies,
-    /// Contact statistics; absent without the ledger.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub contacts: Option<ContactStats>,
-}
+use monitor::{energy_scale, monitor};
+pub use monitor::{MAX_ENERGY_GROWTH, MAX_OVERLAP_RATIO};
+pub use snapshot::{csv_header, Snapshot};
+use snapshot::{csv_row, snapshot};
+pub use tabor::{tabor_pairs, TaborPair};
 
 /// What `powder run` reports at the end.
 #[derive(Clone, Debug, Serialize)]
@@ -106,106 +101,6 @@ pub struct RunSummary {
     pub tabor: Vec<TaborPair>,
 }
 
-/// The Tabor parameter λT (paper 002 eq. 1) of one JKR pair of materials of a scene.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct TaborPair {
-    /// The two material names; for a wall pair the wall's material comes first.
-    pub materials: [String; 2],
-    /// A wall and a particle (the plane has infinite radius).
-    pub wall: bool,
-    /// R* of the pair's smallest particles (the smallest radius of each material; a
-    /// particle's own radius against a wall), m: λT ∝ R*^(1/3), so this is the pair's
-    /// lowest λT.
-    pub r_eff: f64,
-    /// D_min of eq. 1, m.
-    pub d_min: f64,
-    /// λT = (4R*γ²/(E*²D_min³))^(1/3), from the materials' own E, ν, γ.
-    pub tabor: f64,
-    /// Whether λT is in the JKR range λT > 3.
-    pub jkr_range: bool,
-}
-
-impl TaborPair {
-    /// The pair for people: `a`-`b`, or wall `w`-`b`.
-    pub fn label(&self) -> String {
-        let [a, b] = &self.materials;
-        if self.wall {
-            format!("wall `{a}`-`{b}`")
-        } else {
-            format!("`{a}`-`{b}`")
-        }
-    }
-
-    /// The warning when λT is below the JKR range, naming the pair.
-    pub fn warning(&self) -> Option<String> {
-        let [a, b] = &self.materials;
-        let what = if self.wall {
-            "the wall-particle pair"
-        } else {
-            "the material pair"
-        };
-        crate::model::analytic::tabor_warning(
-            &format!("{what} `{a}`-`{b}` (R* = {:.4e})", self.r_eff),
-            self.tabor,
-            self.d_min,
-        )
-    }
-}
-
-/// The Tabor parameter of each JKR pair (surface energy > 0) of materials that can meet in
-/// `scene`: particle pairs (the same material only with two particles of it) and wall–
-/// particle pairs, with R* of the smallest particles of each material and D_min `d_min`.
-pub fn tabor_pairs(scene: &Scene, d_min: f64) -> Vec<TaborPair> {
-    use crate::model::{analytic, ContactModel};
-    let n = scene.materials.len();
-    let (mut r_min, mut count) = (vec![f64::INFINITY; n], vec![0usize; n]);
-    for p in &scene.particles {
-        r_min[p.material] = r_min[p.material].min(p.radius);
-        count[p.material] += 1;
-    }
-    let entry = |a: usize, b: usize, wall: bool, r_eff: f64| match scene.pair_model(a, b) {
-        Ok(ContactModel::Jkr(p)) if p.surface_energy > 0.0 => {
-            let tabor = analytic::jkr_tabor(&p, r_eff, d_min);
-            Some(TaborPair {
-                materials: [a, b].map(|m| scene.materials[m].name.clone()),
-                wall,
-                r_eff,
-                d_min,
-                tabor,
-                jkr_range: tabor > analytic::TABOR_JKR_MIN,
-            })
-        }
-        _ => None,
-    };
-    let mut pairs = Vec::new();
-    for a in 0..n {
-        for b in a..n {
-            if count[a] > 0 && count[b] > 0 && (a != b || count[a] > 1) {
-                let r_eff = r_min[a] * r_min[b] / (r_min[a] + r_min[b]);
-                pairs.extend(entry(a, b, false, r_eff));
-            }
-        }
-    }
-    let mut wall_materials: Vec<usize> = scene.walls.iter().map(|w| w.material).collect();
-    wall_materials.sort_unstable();
-    wall_materials.dedup();
-    for w in wall_materials {
-        for b in (0..n).filter(|&b| count[b] > 0) {
-            pairs.extend(entry(w, b, true, r_min[b]));
-        }
-    }
-    pairs
-}
-
-fn snapshot(engine: &impl Simulation, obs: &Observation) -> Snapshot {
-    Snapshot {
-        step: engine.steps(),
-        time: engine.time(),
-        energies: obs.energies,
-        contacts: obs.contacts,
-    }
-}
-
 /// Where and how `powder run` writes its outputs.
 #[derive(Clone, Debug, Default)]
 pub struct RunOptions {
@@ -236,169 +131,6 @@ pub struct RunOptions {
     /// Write no VTK snapshots (nor the contact network): the series, checkpoints and
     /// summary only.
     pub no_snapshots: bool,
-}
-
-/// Header of `series.csv`: per wall the force of the particles on it and, for a moving
-/// wall, where its plane passes (the scene point moved with the wall).
-pub fn csv_header(walls: &[crate::scene::Wall]) -> String {
-    let mut h = String::from(
-        "step,time,kinetic,elastic,gravitational,dissipated,wall_work,inserted,total,contacts,wall_contacts,non_contact,coordination,max_overlap,max_overlap_ratio,mean_overlap_ratio",
-    );
-    for (w, wall) in walls.iter().enumerate() {
-        h.push_str(&format!(",wall{w}_fx,wall{w}_fy,wall{w}_fz"));
-        if wall.motion.moves() {
-            h.push_str(&format!(",wall{w}_x,wall{w}_y,wall{w}_z"));
-        }
-    }
-    h
-}
-
-/// A CSV cell: empty when the value is unknown (no ledger), so the header stays the same
-/// and readers see a missing value, not a zero.
-fn cell<T: std::fmt::LowerExp>(v: Option<T>) -> String {
-    v.map(|v| format!("{v:e}")).unwrap_or_default()
-}
-
-/// A CSV cell of a count: empty when unknown.
-fn count_cell(v: Option<usize>) -> String {
-    v.map(|v| v.to_string()).unwrap_or_default()
-}
-
-fn csv_row(s: &Snapshot, obs: &Observation, walls: &[crate::scene::Wall]) -> String {
-    let e = &s.energies;
-    let c = s.contacts.as_ref();
-    let mut row = format!(
-        "{},{:e},{:e},{},{:e},{},{},{:e},{},{},{},{},{},{},{},{}",
-        s.step,
-        s.time,
-        e.kinetic,
-        cell(e.elastic),
-        e.gravitational,
-        cell(e.dissipated),
-        cell(e.wall_work),
-        e.inserted,
-        cell(e.total()),
-        count_cell(c.map(|c| c.contacts)),
-        count_cell(c.map(|c| c.wall_contacts)),
-        count_cell(c.map(|c| c.non_contact)),
-        cell(c.map(|c| c.coordination)),
-        cell(c.map(|c| c.max_overlap)),
-        cell(c.map(|c| c.max_overlap_ratio)),
-        cell(c.map(|c| c.mean_overlap_ratio))
-    );
-    for (w, wall) in walls.iter().enumerate() {
-        match obs.wall_forces.as_ref().map(|f| f[w]) {
-            Some(f) => row.push_str(&format!(",{:e},{:e},{:e}", f.x, f.y, f.z)),
-            None => row.push_str(",,,"),
-        }
-        if wall.motion.moves() {
-            let p = obs.wall_points[w];
-            row.push_str(&format!(",{:e},{:e},{:e}", p.x, p.y, p.z));
-        }
-    }
-    row
-}
-
-/// A value for people: "n/a" when unknown (no ledger).
-fn shown(v: Option<f64>, format: impl Fn(f64) -> String) -> String {
-    v.map(format).unwrap_or_else(|| "n/a".into())
-}
-
-impl Snapshot {
-    /// One human-readable progress line ("n/a" for what a run without the ledger does not
-    /// know).
-    pub fn line(&self) -> String {
-        let e = &self.energies;
-        let c = self.contacts.as_ref();
-        format!(
-            "step {:>9}  t = {:.4e} s  E_kin {:.4e}  E_el {}  E_diss {}  E_tot {} J  Z = {}  max δ/a12 = {}",
-            self.step,
-            self.time,
-            e.kinetic,
-            shown(e.elastic, |v| format!("{v:.4e}")),
-            shown(e.dissipated, |v| format!("{v:.4e}")),
-            shown(e.total(), |v| format!("{v:.6e}")),
-            shown(c.map(|c| c.coordination), |v| format!("{v:.3}")),
-            shown(c.map(|c| c.max_overlap_ratio), |v| format!("{v:.3e}"))
-        )
-    }
-}
-
-/// Largest overlap over the reduced radius a12 the run monitor accepts: beyond it the
-/// contact model is outside anything the papers calibrate (overlaps of half a radius).
-pub const MAX_OVERLAP_RATIO: f64 = 0.5;
-/// Largest growth of the total energy (kinetic + stored + gravitational + dissipated),
-/// relative to the run's energy scale, that the monitor accepts: none of the models
-/// injects energy, so growth means the integration has gone wrong.
-pub const MAX_ENERGY_GROWTH: f64 = 0.05;
-
-/// The run monitor: what must stop a run, with the step, the particles and a hint.
-/// `totals` is the total energy now and at the start, `None` without the ledger: the
-/// energy-growth check is then skipped. What that loses: a slow blow-up (a time step a
-/// little too large for the stiffest contact, pumping energy in a few per cent per
-/// chunk) is caught only once it shows as a non-finite value, an overlap beyond
-/// [`MAX_OVERLAP_RATIO`] or a particle leaving the domain, which the other checks watch
-/// every step, with or without the ledger. Kinetic energy alone is no substitute: stored
-/// adhesion and moving walls legitimately feed it.
-fn monitor(
-    engine: &mut impl Simulation,
-    dt_rule: &str,
-    totals: Option<(f64, f64)>,
-    scale: f64,
-) -> Result<(), PowderError> {
-    let steps = engine.steps();
-    let hint = format!(
-        "the time step ({:.4e} s; {dt_rule}) may be too large for this scene",
-        engine.dt(),
-    );
-    if let Some(i) = engine.non_finite() {
-        return Err(PowderError::Run(format!(
-            "step {steps}: particle {i} has a non-finite position or velocity; {hint}"
-        )));
-    }
-    if let Some(peak) = engine.take_peak_overlap() {
-        if peak.ratio > MAX_OVERLAP_RATIO {
-            return Err(PowderError::Run(format!(
-                "step {steps}: {} by {:.3} of the reduced radius (limit {MAX_OVERLAP_RATIO}); the impact is too violent for the contact stiffness or {hint}",
-                peak.who, peak.ratio
-            )));
-        }
-    }
-    let escaped = engine.escaped(5);
-    if !escaped.is_empty() {
-        return Err(PowderError::Run(format!(
-            "step {steps}: particles {escaped:?} left the domain box; enlarge [domain] or add walls (or {hint})"
-        )));
-    }
-    let Some((total, initial_total)) = totals else {
-        return Ok(());
-    };
-    if scale > 0.0 && total - initial_total > MAX_ENERGY_GROWTH * scale {
-        return Err(PowderError::Run(format!(
-            "step {steps}: the total energy grew by {:.3e} J ({:.1}% of the run's energy scale {:.3e} J), which no contact model can inject; {hint}",
-            total - initial_total,
-            100.0 * (total - initial_total) / scale,
-            scale
-        )));
-    }
-    Ok(())
-}
-
-/// The run's energy scale so far, grown by `now`: the largest kinetic and stored energy,
-/// gravitational change and work of the moving walls seen (the stored part and the walls'
-/// work only with the ledger). The ledger's integration error grows with the energy that
-/// flows through the contacts, which walls that drive a packing supply many times over its
-/// kinetic energy; so the energy check loosens as the walls work.
-fn energy_scale(scale: f64, now: &ObservedEnergies, initial: &ObservedEnergies) -> f64 {
-    let walls = now
-        .wall_work
-        .zip(initial.wall_work)
-        .map_or(0.0, |(w, w0)| w - w0);
-    scale
-        .max(now.kinetic.abs())
-        .max(now.elastic.unwrap_or(0.0).abs())
-        .max((now.gravitational - initial.gravitational).abs())
-        .max(walls.abs())
 }
 
 /// Solid fraction of the particles in the domain box and in the box that encloses them.
