@@ -1,17 +1,22 @@
 //! `powder`: a discrete element method (DEM) engine for cohesive powders.
 //!
-//! * [`model`] — contact models in f64, one module each, plus the papers' closed forms;
-//! * [`cpu`] — the f64 CPU reference backend (linked cells, per-contact history, Verlet),
-//!   spread over every core with the same bits on any thread count;
-//! * [`backend`] — which engine a command runs on (`auto`: a hardware GPU, else the CPU);
+//! The engine, what a library user builds from a scene and steps:
 //! * [`scene`] — the TOML scene description and its validation;
-//! * [`gpu`] — the GPU engine (wgpu + WGSL), compared against the CPU engine in the tests;
-//! * [`setup`], [`checkpoint`], [`output`] — what both engines derive from a scene, bitwise
-//!   checkpoints, and the outputs (VTK, CSV, SVG plots, atomically written files);
-//! * [`run`] — `powder run` on either backend over one `Simulation` trait, with the
-//!   energies a run observes;
+//! * [`model`] — contact models in f64, one module each, plus the papers' closed forms;
+//! * [`setup`] — what both engines derive from a scene (pair tables, time step, reach);
+//! * [`cpu`] — the f64 CPU reference engine, spread over every core with the same bits on
+//!   any thread count;
+//! * [`gpu`] — the GPU engine (wgpu + WGSL), compared against the CPU engine in the tests.
+//!
+//! The application, what the `powder` commands add around it:
+//! * [`run`] — `powder run` on either engine over one `Simulation` trait (outputs,
+//!   checkpoints, the monitor); [`backend`] — which engine `auto` picks;
+//! * [`checkpoint`], [`output`] — bitwise checkpoints, and the outputs (VTK, CSV, SVG plots,
+//!   atomically written files); [`overrides`] — `--set KEY=VALUE`;
 //! * [`measure`] — the engines measured: the two-sphere collision against the papers'
 //!   closed forms, CPU against GPU, error against run time, throughput against N.
+//!
+//! The crate map: `docs/architecture.md`.
 
 #![warn(missing_docs)]
 

@@ -39,8 +39,8 @@ pub(crate) struct RunArgs {
     /// Print the summary as JSON on stdout.
     #[arg(long)]
     json: bool,
-    /// Run the GPU engine without its energy ledger (about 20 % of the GPU step, and 32
-    /// bytes per neighbour slot): stored and dissipated energy, the energy balance, contact
+    /// Run the GPU engine without its energy ledger (less device memory and time): stored
+    /// and dissipated energy, the energy balance, contact
     /// statistics and wall forces are then absent (empty CSV cells, keys left out of the
     /// JSON), and the run monitor has no energy-growth check. A checkpoint resumes only in
     /// a run with the same choice. The CPU backend always keeps its (cheap) ledger and
