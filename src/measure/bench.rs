@@ -1,10 +1,7 @@
 //! `powder bench`: throughput (particle-steps per second, wall time per step) and GPU memory
 //! per particle against the particle count, on both backends.
 //!
-//! Two cases, both a dense, settled-ish packing built in code so the same scene runs on
-//! both backends ([`packing`]): particles in contact on a simple cubic lattice (overlaps of
-//! 0.1–0.3 % of the diameter), with a small random jitter and small random velocities, in a
-//! box (floor and four side walls) under gravity:
+//! Two cases, both the dense packing of [`packing`] (`measure::packing`):
 //!
 //! * [`Case::Hysteretic`] — the frictionless hysteretic adhesive elasto-plastic model with
 //!   the paper's parameters and viscous damping (the cohesive cluster's material);
@@ -17,45 +14,16 @@
 //! measured at the previous size predicts more than the per-case time budget; larger sizes
 //! of that case and backend are then skipped too. Timings are measured, never asserted.
 
-use crate::cpu::cells::CellGrid;
 use crate::cpu::{CpuEngine, Threads};
 use crate::error::{ParamError, PowderError};
 use crate::gpu::{GpuContext, GpuEngine};
 use crate::measure::collide::Backend;
-use crate::model::{
-    AdhesionMode, ContactModel, Dissipation, HystereticParams, JkrParams, K2Rule, Pulloff,
-};
-use crate::scene::{Domain, DtSetting, Material, ParticleInit, Scene, Wall};
-use glam::DVec3;
-use rand::{Rng, SeedableRng};
-use rand_pcg::Pcg64;
+use crate::scene::Scene;
 use serde::Serialize;
 use std::time::Instant;
 
-/// Overlap of lattice neighbours, as a fraction of the diameter: the packing starts in
-/// contact (a simple cubic lattice, six contacts per inner particle), as a settled one is.
-pub const LATTICE_OVERLAP: f64 = 0.002;
-
-/// Which benchmark scene.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Case {
-    /// Frictionless hysteretic packing (radius 1.1 mm, k1 = 100, kp = 500, kc = 100 N/m,
-    /// φf = 0.05, γ0 = 10⁻³ kg/s; random velocities up to 2 cm/s).
-    Hysteretic,
-    /// JKR packing with friction and rolling (radius 5 µm, E = 10⁸ Pa, ν = 0.3,
-    /// γ = 0.01 J/m², Tsuji e = 0.5, μs = 0.3, Δγ/γ = 0.5; random velocities up to 2 cm/s).
-    Jkr,
-}
-
-impl Case {
-    /// The name used in tables, JSON and on the command line.
-    pub fn name(self) -> &'static str {
-        match self {
-            Case::Hysteretic => "hysteretic",
-            Case::Jkr => "jkr",
-        }
-    }
-}
+pub use super::packing::{coordination, packing, Case, LATTICE_OVERLAP};
+pub use super::provenance::{utc_date, utc_now, Adapter, Machine, Provenance};
 
 /// The name of a backend in tables and JSON.
 pub fn backend_name(b: Backend) -> &'static str {
@@ -63,302 +31,6 @@ pub fn backend_name(b: Backend) -> &'static str {
         Backend::Cpu => "cpu",
         Backend::Gpu => "gpu",
     }
-}
-
-/// A dense packing of `n` particles of `case`'s material: a simple cubic lattice (x fastest,
-/// then y, then z; as many layers as needed over a square base of ⌈∛n⌉² sites) whose
-/// neighbours overlap by [`LATTICE_OVERLAP`] of the diameter, each particle displaced by up
-/// to a quarter of that per axis (so every lattice neighbour and the walls stay in contact,
-/// with overlaps of 0.1–0.3 % of the diameter), with random velocities up to
-/// `velocity_scale` × 2 cm/s per component, in a box with a floor and four side walls under
-/// gravity; seeded, so a given (case, n, seed) is always the same scene.
-pub fn packing(case: Case, n: usize, velocity_scale: f64, seed: u64) -> Result<Scene, PowderError> {
-    if n == 0 {
-        return Err(ParamError::new("sizes", "a packing needs at least one particle").into());
-    }
-    crate::error::require_non_negative("velocity-scale", velocity_scale, "the velocity scale")?;
-    let (radius, density, model, impact_velocity, v0) = match case {
-        Case::Hysteretic => (
-            1.1e-3,
-            2000.0,
-            ContactModel::Hysteretic(HystereticParams {
-                k1: 100.0,
-                kp: 500.0,
-                kc: 100.0,
-                phi_f: 0.05,
-                fa: 0.0,
-                kca: 100.0,
-                adhesion: AdhesionMode::default(),
-                gamma0: 1e-3,
-                k2_rule: K2Rule::default(),
-                luding: Default::default(),
-            }),
-            1.0,
-            0.02,
-        ),
-        Case::Jkr => (
-            5e-6,
-            2500.0,
-            ContactModel::Jkr(JkrParams {
-                youngs: 1e8,
-                poisson: 0.3,
-                surface_energy: 0.01,
-                dissipation: Dissipation::tsuji(0.5),
-                friction: 0.3,
-                rolling_hysteresis: 0.5,
-                pulloff: Pulloff::default(),
-                stiffness_scale: 1.0,
-                luding: Default::default(),
-            }),
-            0.1,
-            0.02,
-        ),
-    };
-    let v0 = v0 * velocity_scale;
-    let side = ((n as f64).cbrt().ceil() as usize).max(1);
-    let layers = n.div_ceil(side * side);
-    let spacing = 2.0 * radius * (1.0 - LATTICE_OVERLAP);
-    let overlap = 2.0 * radius - spacing;
-    let width = side as f64 * spacing;
-    // room above the packing for particles thrown up by the random velocities
-    let height = (layers + 3) as f64 * spacing;
-    let mut rng = Pcg64::seed_from_u64(seed);
-    let mut particles = Vec::with_capacity(n);
-    for k in 0..n {
-        let (i, j, l) = (k % side, (k / side) % side, k / (side * side));
-        let mut position = [0.0; 3];
-        for (axis, site) in [i, j, l].into_iter().enumerate() {
-            let jitter = rng.random_range(-0.25..=0.25) * overlap;
-            position[axis] = (site as f64 + 0.5) * spacing + jitter;
-        }
-        let velocity = [0, 1, 2].map(|_| {
-            if v0 > 0.0 {
-                rng.random_range(-v0..=v0)
-            } else {
-                0.0
-            }
-        });
-        particles.push(ParticleInit {
-            position,
-            velocity,
-            radius,
-            material: 0,
-            angular_velocity: [0.0; 3],
-            insert_at: 0.0,
-        });
-    }
-    let wall = |point: [f64; 3], normal: [f64; 3]| Wall {
-        point,
-        normal,
-        motion: Default::default(),
-        material: 0,
-    };
-    Ok(Scene {
-        name: format!("bench_{}_{n}", case.name()),
-        domain: Domain {
-            min: [0.0; 3],
-            max: [width, width, height],
-            periodic: [false; 3],
-        },
-        gravity: [0.0, 0.0, -9.81],
-        dt: DtSetting::Auto,
-        force_dt: false,
-        jump_impulses: None,
-        duration: 1.0,
-        output_every: 1000,
-        contact_output: None,
-        impact_velocity,
-        checkpoint_every: 10_000,
-        materials: vec![Material {
-            name: case.name().into(),
-            density,
-            model,
-        }],
-        interactions: Vec::new(),
-        walls: vec![
-            wall([0.0; 3], [0.0, 0.0, 1.0]),
-            wall([0.0; 3], [1.0, 0.0, 0.0]),
-            wall([width, 0.0, 0.0], [-1.0, 0.0, 0.0]),
-            wall([0.0; 3], [0.0, 1.0, 0.0]),
-            wall([0.0, width, 0.0], [0.0, -1.0, 0.0]),
-        ],
-        particles,
-    })
-}
-
-/// Particle–particle contacts (δ > 0) per particle of a configuration (2·pairs/N).
-pub fn coordination(scene: &Scene, positions: &[DVec3], radius: &[f64]) -> f64 {
-    let r_max = radius.iter().copied().fold(0.0, f64::max);
-    let mut grid = CellGrid::new(
-        DVec3::from_array(scene.domain.min),
-        DVec3::from_array(scene.domain.max),
-        2.0 * r_max * (1.0 + 1e-9),
-        positions.len(),
-    );
-    grid.rebuild(positions);
-    let mut pairs = 0usize;
-    grid.for_each_pair(positions, |i, j| {
-        if positions[i].distance(positions[j]) < radius[i] + radius[j] {
-            pairs += 1;
-        }
-    });
-    2.0 * pairs as f64 / positions.len().max(1) as f64
-}
-
-/// The machine a measurement ran on.
-#[derive(Clone, Debug, Serialize)]
-pub struct Machine {
-    /// `model name` of /proc/cpuinfo (null where unreadable).
-    pub cpu_model: Option<String>,
-    /// `processor` entries of /proc/cpuinfo.
-    pub logical_cpus: Option<usize>,
-    /// Threads this process may use (`std::thread::available_parallelism`).
-    pub available_parallelism: usize,
-    /// `MemAvailable` at the start, bytes.
-    pub memory_available: Option<u64>,
-    /// The 1-minute load average at the start (/proc/loadavg): other work on a shared
-    /// machine slows every timing down.
-    pub load_average: Option<f64>,
-    /// `std::env::consts::OS`.
-    pub os: &'static str,
-    /// `std::env::consts::ARCH`.
-    pub arch: &'static str,
-}
-
-impl Machine {
-    /// Reads /proc/cpuinfo and /proc/meminfo (Linux; null fields elsewhere).
-    pub fn detect() -> Self {
-        let cpuinfo = std::fs::read_to_string("/proc/cpuinfo").ok();
-        let cpu_model = cpuinfo.as_deref().and_then(|t| {
-            t.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split_once(':'))
-                .map(|(_, v)| v.trim().to_string())
-        });
-        let logical_cpus = cpuinfo
-            .as_deref()
-            .map(|t| t.lines().filter(|l| l.starts_with("processor")).count())
-            .filter(|&c| c > 0);
-        Self {
-            cpu_model,
-            logical_cpus,
-            available_parallelism: std::thread::available_parallelism()
-                .map(|n| n.get())
-                .unwrap_or(1),
-            memory_available: crate::memory::available(),
-            load_average: std::fs::read_to_string("/proc/loadavg")
-                .ok()
-                .and_then(|t| t.split_whitespace().next()?.parse().ok()),
-            os: std::env::consts::OS,
-            arch: std::env::consts::ARCH,
-        }
-    }
-}
-
-/// The GPU adapter a measurement ran on (from [`crate::gpu::AdapterSummary`]).
-#[derive(Clone, Debug, Serialize)]
-pub struct Adapter {
-    /// E.g. `llvmpipe (LLVM 15.0.6, 256 bits)`.
-    pub name: String,
-    /// `vulkan`, `metal`, `dx12` or `gl`.
-    pub backend: String,
-    /// `DiscreteGpu`, `IntegratedGpu`, `VirtualGpu`, `Cpu` (software) or `Other`.
-    pub device_type: String,
-    /// Driver name.
-    pub driver: String,
-    /// Driver version and details.
-    pub driver_info: String,
-    /// The limits the GPU engine cares about.
-    pub limits: crate::gpu::LimitsSummary,
-}
-
-impl Adapter {
-    /// The adapter of an open context.
-    pub fn of(ctx: &GpuContext) -> Self {
-        let s = &ctx.summary;
-        Self {
-            name: s.name.clone(),
-            backend: s.backend.clone(),
-            device_type: s.device_type.clone(),
-            driver: s.driver.clone(),
-            driver_info: s.driver_info.clone(),
-            limits: s.limits.clone(),
-        }
-    }
-}
-
-/// Where a measurement comes from: powder's version, the source tree's commit, the date.
-#[derive(Clone, Debug, Serialize)]
-pub struct Provenance {
-    /// The crate version.
-    pub powder_version: &'static str,
-    /// `git rev-parse HEAD` of the source tree this binary was built from, if it is still
-    /// there and a git checkout (with `-dirty` when it has uncommitted changes).
-    pub git_commit: Option<String>,
-    /// UTC, ISO 8601.
-    pub date: String,
-    /// Where it ran.
-    pub machine: Machine,
-}
-
-impl Provenance {
-    /// Collects the version, commit, date and machine now.
-    pub fn now() -> Self {
-        Self {
-            powder_version: env!("CARGO_PKG_VERSION"),
-            git_commit: git_commit(),
-            date: utc_now(),
-            machine: Machine::detect(),
-        }
-    }
-}
-
-fn git_commit() -> Option<String> {
-    let dir = env!("CARGO_MANIFEST_DIR");
-    let run = |args: &[&str]| {
-        std::process::Command::new("git")
-            .arg("-C")
-            .arg(dir)
-            .args(args)
-            .output()
-            .ok()
-            .filter(|o| o.status.success())
-            .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
-    };
-    let head = run(&["rev-parse", "HEAD"]).filter(|h| !h.is_empty())?;
-    let dirty =
-        run(&["status", "--porcelain", "--untracked-files=no"]).is_some_and(|s| !s.is_empty());
-    Some(if dirty { format!("{head}-dirty") } else { head })
-}
-
-/// The current UTC time as `YYYY-MM-DDTHH:MM:SSZ`.
-pub fn utc_now() -> String {
-    let secs = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map(|d| d.as_secs() as i64)
-        .unwrap_or(0);
-    utc_date(secs)
-}
-
-/// Seconds since the Unix epoch as `YYYY-MM-DDTHH:MM:SSZ`.
-pub fn utc_date(secs: i64) -> String {
-    let (days, rem) = (secs.div_euclid(86_400), secs.rem_euclid(86_400));
-    // civil_from_days (H. Hinnant)
-    let z = days + 719_468;
-    let era = z.div_euclid(146_097);
-    let doe = z - era * 146_097;
-    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
-    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    let mp = (5 * doy + 2) / 153;
-    let d = doy - (153 * mp + 2) / 5 + 1;
-    let m = if mp < 10 { mp + 3 } else { mp - 9 };
-    let y = yoe + era * 400 + i64::from(m <= 2);
-    format!(
-        "{y:04}-{m:02}-{d:02}T{:02}:{:02}:{:02}Z",
-        rem / 3600,
-        rem / 60 % 60,
-        rem % 60
-    )
 }
 
 /// What to measure.
@@ -1028,6 +700,7 @@ pub fn table_line(r: &BenchRow) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::DVec3;
 
     #[test]
     fn packings_do_not_overlap_and_fill_the_count() {

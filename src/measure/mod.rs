@@ -5,3 +5,5 @@ pub mod accuracy;
 pub mod bench;
 pub mod collide;
 pub mod compare;
+pub mod packing;
+pub mod provenance;

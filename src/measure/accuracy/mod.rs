@@ -35,6 +35,22 @@ use glam::DVec3;
 use serde::Serialize;
 use std::time::Instant;
 
+mod jkr;
+mod packing;
+mod pair;
+mod plot;
+mod timing;
+
+use jkr::{jkr_point, jkr_setup};
+pub use jkr::{JkrSetup, JkrSweep, JKR_RANGE};
+pub use packing::PackingSetup;
+use packing::{packing_scene, run_packing};
+pub use pair::{pair_params, PairSetup};
+use pair::{pair_point, pair_setup, PAIR_DENSITY};
+pub use plot::work_precision_plot;
+use timing::{repeat_stepping, timed};
+pub use timing::{MAX_REPEATS, MIN_TIMING};
+
 /// Smallest accepted divisor: dt above tc/10 is refused by the time-step guard.
 pub const MIN_DIVISOR: f64 = 10.0;
 
@@ -171,165 +187,6 @@ pub struct AccuracyPoint {
     pub setup_seconds: Option<f64>,
 }
 
-/// The pair case's set-up.
-#[derive(Clone, Debug, Serialize)]
-pub struct PairSetup {
-    /// Loading stiffness, N/m.
-    pub k1: f64,
-    /// Limit stiffness, N/m.
-    pub kp: f64,
-    /// Tensile-branch stiffness, N/m.
-    pub kc: f64,
-    /// Plasticity depth.
-    pub phi_f: f64,
-    /// Radius of both spheres, m.
-    pub radius: f64,
-    /// kg/m³.
-    pub density: f64,
-    /// Contact time on kp, s.
-    pub tc: f64,
-    /// The sweep's χ = v/vp.
-    pub chi: Vec<f64>,
-    /// The impact speeds, m/s.
-    pub velocities: Vec<f64>,
-    /// The closed-form restitution at each.
-    pub e_closed: Vec<f64>,
-}
-
-/// The JKR pair case's set-up: one sweep per pull-off rule.
-#[derive(Clone, Debug, Serialize)]
-pub struct JkrSetup {
-    /// Young's modulus, Pa.
-    pub youngs: f64,
-    /// Poisson's ratio.
-    pub poisson: f64,
-    /// Surface energy per surface, J/m².
-    pub surface_energy: f64,
-    /// Radius of both spheres, m.
-    pub radius: f64,
-    /// kg/m³.
-    pub density: f64,
-    /// The contact time of the time-step rule at the fastest impact, s (dt = tc/D).
-    pub tc: f64,
-    /// The sweeps.
-    pub rules: Vec<JkrSweep>,
-}
-
-/// One pull-off rule's sweep of the JKR pair case.
-#[derive(Clone, Debug, Serialize)]
-pub struct JkrSweep {
-    /// The pull-off rule.
-    pub pulloff: Pulloff,
-    /// The sticking speed √(2W/m*), m/s.
-    pub sticking_velocity: f64,
-    /// The impact speeds (1.05 … 5 times the sticking speed, log-spaced), m/s.
-    pub velocities: Vec<f64>,
-    /// The closed-form restitution √(1 − W/(½m*v²)) at each.
-    pub e_closed: Vec<f64>,
-}
-
-/// The JKR material of the pair case (the e(v) example of `docs/models.md`: sticking below 0.66 m/s).
-const JKR_MATERIAL: (f64, f64, f64) = (1e9, 0.3, 0.05);
-const JKR_RADIUS: f64 = 1e-6;
-/// The JKR sweep's range of v/v_stick.
-pub const JKR_RANGE: (f64, f64) = (1.05, 5.0);
-
-fn jkr_spec(pulloff: Pulloff) -> CollideSpec {
-    let (youngs, poisson, gamma) = JKR_MATERIAL;
-    let p = JkrParams {
-        pulloff,
-        ..JkrParams::jkr(youngs, poisson, gamma)
-    };
-    CollideSpec::head_on(ContactModel::Jkr(p), JKR_RADIUS, PAIR_DENSITY, 1.0)
-}
-
-fn jkr_setup(points: usize) -> JkrSetup {
-    let (lo, hi) = JKR_RANGE;
-    let mut tc = f64::INFINITY;
-    let rules = [Pulloff::Displacement, Pulloff::Force]
-        .into_iter()
-        .map(|pulloff| {
-            let spec = jkr_spec(pulloff);
-            let g = spec.geometry();
-            let ContactModel::Jkr(p) = spec.model else {
-                unreachable!("a JKR spec")
-            };
-            let r = g.r_eff();
-            let w = analytic::jkr_loss(pulloff) * p.fc(r) * p.delta0(r);
-            let v_stick = analytic::jkr_sticking_velocity(w, g.reduced_mass);
-            let velocities: Vec<f64> = (0..points)
-                .map(|k| v_stick * lo * (hi / lo).powf(k as f64 / (points - 1) as f64))
-                .collect();
-            let fastest = CollideSpec {
-                velocity: v_stick * hi,
-                ..spec.clone()
-            };
-            tc = tc.min(fastest.time_step().contact_time);
-            JkrSweep {
-                pulloff,
-                sticking_velocity: v_stick,
-                e_closed: velocities
-                    .iter()
-                    .map(|&v| analytic::jkr_restitution(w, g.reduced_mass, v).unwrap_or(f64::NAN))
-                    .collect(),
-                velocities,
-            }
-        })
-        .collect();
-    let (youngs, poisson, surface_energy) = JKR_MATERIAL;
-    JkrSetup {
-        youngs,
-        poisson,
-        surface_energy,
-        radius: JKR_RADIUS,
-        density: PAIR_DENSITY,
-        tc,
-        rules,
-    }
-}
-
-/// One JKR sweep at dt = tc/`divisor`; `verlet` leaves the force jumps to plain velocity
-/// Verlet (CPU).
-fn jkr_point(
-    setup: &JkrSetup,
-    sweep: &JkrSweep,
-    divisor: f64,
-    backend: Backend,
-    verlet: bool,
-) -> Result<AccuracyPoint, PowderError> {
-    let pulloff = sweep.pulloff;
-    let dt = setup.tc / divisor;
-    let spec = CollideSpec {
-        dt: Some(dt),
-        force: true,
-        jump_impulses: verlet.then_some(false),
-        ..jkr_spec(pulloff)
-    };
-    let (results, wall) = timed(|| collide::sweep_on(&spec, &sweep.velocities, backend))?;
-    debug_assert_eq!(results.len(), sweep.e_closed.len());
-    // a NaN (no closed form, a failed run) must show, not vanish in the max
-    let error = results
-        .iter()
-        .zip(&sweep.e_closed)
-        .map(|(r, e)| (r.e - e).abs())
-        .fold(0.0, |worst: f64, x| {
-            if x.is_nan() || worst.is_nan() {
-                f64::NAN
-            } else {
-                worst.max(x)
-            }
-        });
-    let case = match (pulloff, verlet) {
-        (Pulloff::Force, false) => "jkr-force",
-        (Pulloff::Force, true) => "jkr-force-verlet",
-        (_, false) => "jkr-displacement",
-        (_, true) => "jkr-displacement-verlet",
-    };
-    Ok(sweep_point(
-        case, backend, divisor, dt, &results, wall, error,
-    ))
-}
-
 /// The point of a collision sweep (pair or JKR): steps summed over the sweep.
 fn sweep_point(
     case: &'static str,
@@ -354,31 +211,6 @@ fn sweep_point(
     }
 }
 
-/// The packing case's set-up and reference.
-#[derive(Clone, Debug, Serialize)]
-pub struct PackingSetup {
-    /// N.
-    pub particles: usize,
-    /// Seed of the packing's jitter and velocities.
-    pub seed: u64,
-    /// Contact time on the stiffest branch, s.
-    pub tc: f64,
-    /// Physical time compared, s (`packing_time`·tc).
-    pub time: f64,
-    /// The reference's dt = tc/reference_divisor.
-    pub reference_divisor: f64,
-    /// s.
-    pub reference_dt: f64,
-    /// Steps of the reference run.
-    pub reference_steps: u64,
-    /// Its stepping time, s.
-    pub reference_wall_seconds: f64,
-    /// Its kinetic energy at `time`, J.
-    pub reference_kinetic: f64,
-    /// Particle–particle contacts per particle of the reference at `time`.
-    pub reference_contacts_per_particle: f64,
-}
-
 /// The whole measurement, as `--json` writes it.
 #[derive(Clone, Debug, Serialize)]
 pub struct AccuracyReport {
@@ -397,163 +229,6 @@ pub struct AccuracyReport {
     pub points: Vec<AccuracyPoint>,
     /// What was left out and why (e.g. no GPU adapter).
     pub notes: Vec<String>,
-}
-
-/// The pair's hysteretic parameters: the paper's with kc = 10 N/m (β = 0.1 < β* = 1/3, so
-/// no sticking at any χ), no viscosity (the closed forms exclude it).
-pub fn pair_params() -> HystereticParams {
-    HystereticParams {
-        k1: 100.0,
-        kp: 500.0,
-        kc: 10.0,
-        phi_f: 0.05,
-        fa: 0.0,
-        kca: 10.0,
-        adhesion: AdhesionMode::default(),
-        gamma0: 0.0,
-        k2_rule: K2Rule::default(),
-        luding: Default::default(),
-    }
-}
-
-const PAIR_RADIUS: f64 = 1.1e-3;
-const PAIR_DENSITY: f64 = 2000.0;
-
-fn pair_setup(points: usize) -> (CollideSpec, PairSetup) {
-    let p = pair_params();
-    let spec = CollideSpec::head_on(ContactModel::Hysteretic(p), PAIR_RADIUS, PAIR_DENSITY, 1.0);
-    let geom = spec.geometry();
-    let (lo, hi) = CHI_RANGE;
-    let chi: Vec<f64> = (0..points)
-        .map(|k| lo * (hi / lo).powf(k as f64 / (points - 1) as f64))
-        .collect();
-    let velocities: Vec<f64> = chi
-        .iter()
-        .map(|&c| analytic::velocity_for_chi(&p, geom.a12, geom.reduced_mass, c))
-        .collect();
-    let e_closed = velocities
-        .iter()
-        .map(|&v| {
-            collide::closed_form_e(&CollideSpec {
-                velocity: v,
-                ..spec.clone()
-            })
-            .unwrap_or(f64::NAN)
-        })
-        .collect();
-    let tc = spec.time_step().contact_time;
-    let setup = PairSetup {
-        k1: p.k1,
-        kp: p.kp,
-        kc: p.kc,
-        phi_f: p.phi_f,
-        radius: PAIR_RADIUS,
-        density: PAIR_DENSITY,
-        tc,
-        chi,
-        velocities,
-        e_closed,
-    };
-    (spec, setup)
-}
-
-fn pair_point(
-    spec: &CollideSpec,
-    setup: &PairSetup,
-    divisor: f64,
-    backend: Backend,
-) -> Result<AccuracyPoint, PowderError> {
-    let dt = setup.tc / divisor;
-    let spec = CollideSpec {
-        dt: Some(dt),
-        force: true,
-        ..spec.clone()
-    };
-    let (results, wall) = timed(|| collide::sweep_on(&spec, &setup.velocities, backend))?;
-    let error = results
-        .iter()
-        .filter_map(|r| r.e_analytic.map(|ea| (r.e - ea).abs()))
-        .fold(0.0, f64::max);
-    Ok(sweep_point(
-        "pair", backend, divisor, dt, &results, wall, error,
-    ))
-}
-
-/// The packing scene with dt = `time`/`steps` exactly.
-fn packing_scene(base: &Scene, time: f64, steps: u64) -> Scene {
-    Scene {
-        dt: DtSetting::Fixed(time / steps as f64),
-        force_dt: true,
-        ..base.clone()
-    }
-}
-
-/// A run shorter than this is repeated (up to [`MAX_REPEATS`] times) and its mean wall time
-/// reported, so that millisecond runs are not timer and scheduler noise, s.
-pub const MIN_TIMING: f64 = 0.2;
-/// Most repetitions of one short run.
-pub const MAX_REPEATS: u32 = 50;
-
-/// Runs `f` once, then again until [`MIN_TIMING`] has passed (at most [`MAX_REPEATS`]
-/// times); the result of the first run and the mean wall time per run.
-fn timed<T>(mut f: impl FnMut() -> Result<T, PowderError>) -> Result<(T, f64), PowderError> {
-    let t0 = Instant::now();
-    let first = f()?;
-    let mut runs = 1;
-    while t0.elapsed().as_secs_f64() < MIN_TIMING && runs < MAX_REPEATS {
-        f()?;
-        runs += 1;
-    }
-    Ok((first, t0.elapsed().as_secs_f64() / runs as f64))
-}
-
-/// Builds an engine with `make` and steps it with `step`; while less than [`MIN_TIMING`]
-/// of stepping has passed, does it again with a fresh engine (at most [`MAX_REPEATS`]
-/// times). Returns the first engine, the set-up time of the first and the mean stepping time.
-fn repeat_stepping<E>(
-    mut make: impl FnMut() -> Result<E, PowderError>,
-    mut step: impl FnMut(&mut E) -> Result<(), PowderError>,
-) -> Result<(E, f64, f64), PowderError> {
-    let t0 = Instant::now();
-    let mut first = make()?;
-    let setup = t0.elapsed().as_secs_f64();
-    let t1 = Instant::now();
-    step(&mut first)?;
-    let mut stepping = t1.elapsed().as_secs_f64();
-    let mut runs = 1;
-    while stepping < MIN_TIMING && runs < MAX_REPEATS {
-        let mut again = make()?;
-        let t1 = Instant::now();
-        step(&mut again)?;
-        stepping += t1.elapsed().as_secs_f64();
-        runs += 1;
-    }
-    Ok((first, setup, stepping / runs as f64))
-}
-
-/// Positions and kinetic energy after `steps` steps on `backend`, with the set-up and
-/// stepping times (a short run repeated, see [`MIN_TIMING`]).
-fn run_packing(
-    scene: &Scene,
-    steps: u64,
-    backend: Backend,
-) -> Result<(Vec<DVec3>, f64, f64, f64), PowderError> {
-    match backend {
-        Backend::Cpu => {
-            let (e, setup, wall) =
-                repeat_stepping(|| CpuEngine::new(scene), |e| e.run_steps(steps))?;
-            Ok((e.positions().to_vec(), e.energies().kinetic, setup, wall))
-        }
-        Backend::Gpu => {
-            let (e, setup, wall) = repeat_stepping(
-                || GpuEngine::new(scene, GpuContext::new()?),
-                |e| e.run_steps(steps),
-            )?;
-            let s = e.state()?;
-            let ke = e.kinetic_energy(&s);
-            Ok((s.positions, ke, setup, wall))
-        }
-    }
 }
 
 /// Runs the work–precision measurement, calling `progress` after every point.
@@ -672,98 +347,6 @@ pub fn accuracy(
         points,
         notes,
     })
-}
-
-/// The work–precision diagram: error against wall time, log-log, one line per case and
-/// backend (the packing's kinetic-energy error dashed).
-pub fn work_precision_plot(report: &AccuracyReport) -> Plot {
-    let mut series = Vec::new();
-    let adapter = report.adapter.as_ref().map_or_else(
-        || "GPU f32".to_string(),
-        |a| format!("GPU f32, {}", a.name.split(" (").next().unwrap_or(&a.name)),
-    );
-    for (case, label) in [
-        ("pair", "pair, max |e - e_closed| over chi"),
-        (
-            "jkr-displacement",
-            "JKR displacement pull-off, max |e - e_closed|",
-        ),
-        (
-            "jkr-displacement-verlet",
-            "JKR displacement pull-off, jumps left to Verlet",
-        ),
-        ("jkr-force", "JKR force pull-off, max |e - e_closed|"),
-        (
-            "jkr-force-verlet",
-            "JKR force pull-off, jumps left to Verlet",
-        ),
-        ("packing", "packing, RMS |x - x_ref|/r"),
-    ] {
-        for backend in ["cpu", "gpu"] {
-            let pts: Vec<&AccuracyPoint> = report
-                .points
-                .iter()
-                .filter(|p| p.case == case && p.backend == backend)
-                .collect();
-            if pts.is_empty() {
-                continue;
-            }
-            let who = if backend == "cpu" {
-                "CPU f64".to_string()
-            } else {
-                adapter.clone()
-            };
-            series.push(Series {
-                label: format!("{label} ({who})"),
-                points: pts.iter().map(|p| (p.wall_seconds, p.error)).collect(),
-                style: Style::Line,
-            });
-            if case == "packing" {
-                series.push(Series {
-                    label: format!("packing, |dE_kin|/E_kin ({who})"),
-                    points: pts
-                        .iter()
-                        .filter_map(|p| p.kinetic_error.map(|k| (p.wall_seconds, k)))
-                        .collect(),
-                    style: Style::DashedLine,
-                });
-            }
-        }
-    }
-    let divisors: Vec<String> = {
-        let mut d: Vec<f64> = report.points.iter().map(|p| p.divisor).collect();
-        d.sort_by(f64::total_cmp);
-        d.dedup();
-        d.iter().map(|x| format!("{x}")).collect()
-    };
-    Plot {
-        title: format!("Work-precision, dt = tc/({})", divisors.join(", ")),
-        x_label: "wall time (s)".into(),
-        y_label: "error".into(),
-        log_x: true,
-        log_y: true,
-        series,
-        // a band below the data for the legend
-        y_range: lowest_error(report).map(|lo| (lo * 3e-3, highest_error(report) * 3.0)),
-        legend: Legend::LowerRight,
-    }
-}
-
-fn errors(report: &AccuracyReport) -> impl Iterator<Item = f64> + '_ {
-    report
-        .points
-        .iter()
-        .flat_map(|p| [Some(p.error), p.kinetic_error])
-        .flatten()
-        .filter(|e| e.is_finite() && *e > 0.0)
-}
-
-fn lowest_error(report: &AccuracyReport) -> Option<f64> {
-    errors(report).reduce(f64::min)
-}
-
-fn highest_error(report: &AccuracyReport) -> f64 {
-    errors(report).fold(0.0, f64::max)
 }
 
 /// Parses `--divisors`: comma-separated numbers.
