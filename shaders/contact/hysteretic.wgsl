@@ -197,7 +197,7 @@ fn hyst_force(p: HystereticPair, delta: f32, delta_dot: f32, a12: f32, inv_a12: 
     return HystForce(0.0, HystHistory(0.0, false), 0.0);
 }
 
-// ---- the sub-model interface (see `src/gpu/composition.rs`) ----
+// ---- the sub-model interface (see `src/gpu/composition/interface.rs`) ----
 
 // The stored history word `hyst_state` (`model::hysteretic::HISTORY`): delta_max (never
 // negative) with the sign bit as the "touched" flag. +0.0, the zeroed buffer's value, is

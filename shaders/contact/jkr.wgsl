@@ -6,7 +6,7 @@
 // them. Signs as in Rust: delta > 0 overlap, delta_dot the approach speed, repulsive force
 // positive, n from j to i.
 //
-// Needs, from the composition (`src/gpu/composition.rs`): `Kin`, `Normal`, `History` with
+// Needs, from the composition (`src/gpu/composition/`): `Kin`, `Normal`, `History` with
 // the field `touched`, and the dissipation hooks, generated from the sub-models present:
 //   fn jkr_damping(p: JkrPair, a: f32, a0: f32, k: Kin) -> f32      the dissipative force;
 //   fn jkr_radius_state(p: JkrPair, k: Kin, a0: f32, d0: f32, fc: f32, x_eq: f32,

@@ -1,6 +1,6 @@
 // shared.wgsl — what the step's kernels share: its parameters, bindings, the lists' rows
 // and helpers. The step is composed per scene (`Composition::variant` in
-// `src/gpu/composition.rs`) after common.wgsl, the state's and records' accessors, the
+// `src/gpu/composition/mod.rs`) after common.wgsl, the state's and records' accessors, the
 // contact laws and sub-models the scene uses, overlap.wgsl, the generated interface the
 // step calls (`PairRow`, `Hist`, `hist_*`, `pair_contact`, `pair_edges`,
 // `pair_touch_jump`), the rotation, ledger and force-jump hooks (or their no-op twins)

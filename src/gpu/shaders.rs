@@ -110,7 +110,7 @@ pub const STAGES: &[Stage] = &[
     },
 ];
 
-/// A complete WGSL module: common declarations, snippets and one stage.
+/// A complete WGSL module: common declarations, snippets and a stage's files.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ShaderVariant {
     /// Variant name (also the shader module's label).
@@ -507,5 +507,23 @@ mod tests {
             .unwrap_or_else(|| panic!("{path} declares no {key}"));
         let value: f32 = line[key.len()..].trim_end_matches(';').parse().unwrap();
         assert_eq!(value, crate::run::MAX_OVERLAP_RATIO as f32);
+    }
+
+    /// A step variant holds common.wgsl, then its snippets, then the step's six files in
+    /// `STEP`'s order, each once.
+    #[test]
+    fn the_step_files_follow_the_snippets_in_order() {
+        let v = step_variant();
+        let at: Vec<usize> = (STEP.iter())
+            .map(|(path, _)| {
+                let mark = format!("// ---- {path} ----");
+                assert_eq!(v.source.matches(&mark).count(), 1, "{path}");
+                v.source.find(&mark).unwrap()
+            })
+            .collect();
+        assert!(at.windows(2).all(|w| w[0] < w[1]), "{at:?}");
+        let common = v.source.find("// ---- shaders/common.wgsl ----").unwrap();
+        let snippet = v.source.find("// ---- snippet 0 ----").unwrap();
+        assert!(common < snippet && snippet < at[0]);
     }
 }
