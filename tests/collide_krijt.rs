@@ -4,6 +4,7 @@
 
 mod common;
 
+use common::builder::SceneBuilder;
 use powder::measure::collide::{collide, collide_traced, CollideResult, CollideSpec, TraceRow};
 use powder::model::{analytic, krijt, ContactModel, Dissipation, JkrParams, PairGeometry};
 
@@ -16,6 +17,11 @@ const E_STAR: f64 = 65.5;
 const SIGMA0: f64 = GAMMA / 1.091;
 /// T_vis = 0.075·R/147 (paper 001 §IV B 3).
 const TVIS: f64 = 0.075;
+
+/// Paper 001's Lennard-Jones pair material as a scene's JKR law, with `extra` keys.
+fn lj_law(extra: &str) -> String {
+    format!("model = \"jkr\"\nyoungs = 122.8125\npoisson = 0.25\nsurface_energy = {GAMMA}\n{extra}")
+}
 
 fn params(dissipation: Dissipation) -> JkrParams {
     JkrParams {
@@ -265,11 +271,11 @@ fn lj_example_restitution_peaks_at_low_speed_then_declines() {
 /// The Krijt and stress dissipations on the GPU (f32, `shaders/contact/krijt.wgsl`) against
 /// the CPU reference (f64): restitution, the energy ledger, the contact radius as history.
 mod gpu {
-    use super::{krijt, params, spec, stress, GAMMA, R, SIGMA0, TVIS};
+    use super::common::builder::SceneBuilder;
+    use super::{krijt, lj_law, params, spec, stress, R, RHO, SIGMA0, TVIS};
     use powder::gpu::GpuEngine;
     use powder::measure::collide::{collide_on, Backend, CollideResult, CollideSpec};
     use powder::model::{Dissipation, JkrParams};
-    use powder::scene::Scene;
 
     use super::common::gpu as context;
 
@@ -416,22 +422,23 @@ mod gpu {
         // the pair's axis along (1, −1), 296 apart (gap 2), approaching at 0.1, drifting
         // along +y at 0.3
         let (p, u) = (104.652, 0.05 / 2f64.sqrt());
-        let text = format!(
-            "[domain]\nmin = [-400.0, -400.0, -400.0]\nmax = [400.0, 1200.0, 400.0]\n\
-             [simulation]\nduration = 1.0\nimpact_velocity = 0.1\n\
-             [[material]]\nname = \"m\"\ndensity = 1.09\nmodel = \"jkr\"\n\
-             youngs = 122.8125\npoisson = 0.25\nsurface_energy = {GAMMA}\n\
-             dissipation = \"krijt\"\ntvis = 3.0\nsigma0 = {SIGMA0}\n\
-             [[particles]]\nkind = \"list\"\n\
-             positions = [[{}, {p}, 0.0], [{p}, {}, 0.0]]\nradius = {R}\n\
-             velocities = [[{u}, {}, 0.0], [{}, {}, 0.0]]\n",
+        let law = lj_law(&format!(
+            "dissipation = \"krijt\"\ntvis = 3.0\nsigma0 = {SIGMA0}"
+        ));
+        let pair = format!(
+            "positions = [[{}, {p}, 0.0], [{p}, {}, 0.0]]\nradius = {R}\n\
+             velocities = [[{u}, {}, 0.0], [{}, {}, 0.0]]",
             -p,
             -p,
             0.3 - u,
             -u,
             0.3 + u
         );
-        let scene = Scene::from_toml_str(&text, "drifting pair").unwrap();
+        let scene = SceneBuilder::new("drifting pair", [-400.0; 3], [400.0, 1200.0, 400.0], 1.0)
+            .simulation("impact_velocity", "0.1")
+            .material("m", RHO, &law)
+            .particles("list", &pair)
+            .build();
         let mut cpu = powder::cpu::CpuEngine::new(&scene).unwrap();
         let mut gpu = GpuEngine::new(&scene, ctx).unwrap();
         assert_eq!(gpu.kind().name(), "step_jkr+krijt");
@@ -472,19 +479,14 @@ mod gpu {
             return;
         }
         let scene = |dissipation: &str, extra: &str| {
-            Scene::from_toml_str(
-                &format!(
-                    "[domain]\nmin = [-400.0, -400.0, -400.0]\nmax = [400.0, 400.0, 400.0]\n\
-                     [simulation]\nduration = 1.0\nimpact_velocity = 0.1\n\
-                     [[material]]\nname = \"m\"\ndensity = 1.09\nmodel = \"jkr\"\n\
-                     youngs = 122.8125\npoisson = 0.25\nsurface_energy = {GAMMA}\n\
-                     {dissipation}\n{extra}\n\
-                     [[particles]]\nkind = \"list\"\n\
-                     positions = [[-148.0, 0.0, 0.0], [148.0, 0.0, 0.0]]\nradius = {R}\n"
-                ),
-                "t",
-            )
-            .unwrap()
+            SceneBuilder::new("t", [-400.0; 3], [400.0; 3], 1.0)
+                .simulation("impact_velocity", "0.1")
+                .material("m", RHO, &lj_law(&format!("{dissipation}\n{extra}")))
+                .particles(
+                    "list",
+                    &format!("positions = [[-148.0, 0.0, 0.0], [148.0, 0.0, 0.0]]\nradius = {R}"),
+                )
+                .build()
         };
         let krijt = "dissipation = \"krijt\"\ntvis = 0.075";
         let stress = "dissipation = \"stress\"\ntvis0_per_radius = 2.1e-4\nB = 6.2\nzeta = 4.0";
@@ -535,14 +537,16 @@ mod gpu {
 
 #[test]
 fn scene_keys_parse_and_errors_name_the_key() {
+    // (parsed here rather than by `build`: the errors are the test)
     let scene = |extra: &str| {
-        let text = format!(
-            "[domain]\nmin = [-400.0, -200.0, -200.0]\nmax = [400.0, 200.0, 200.0]\n\
-             [simulation]\nduration = 1.0\nimpact_velocity = 0.1\n\
-             [[material]]\nname = \"m\"\ndensity = 1.09\nmodel = \"jkr\"\n\
-             youngs = 122.8125\npoisson = 0.25\nsurface_energy = 3.17\n{extra}\n\
-             [[particles]]\nkind = \"list\"\npositions = [[-148.0, 0.0, 0.0], [148.0, 0.0, 0.0]]\nradius = 147.0\n"
-        );
+        let text = SceneBuilder::new("t", [-400.0, -200.0, -200.0], [400.0, 200.0, 200.0], 1.0)
+            .simulation("impact_velocity", "0.1")
+            .material("m", RHO, &lj_law(extra))
+            .particles(
+                "list",
+                "positions = [[-148.0, 0.0, 0.0], [148.0, 0.0, 0.0]]\nradius = 147.0",
+            )
+            .toml();
         powder::scene::Scene::from_toml_str(&text, "t")
     };
     let s = scene(
