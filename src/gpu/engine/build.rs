@@ -204,8 +204,15 @@ impl GpuEngine {
         let mut grid =
             GridSort::with_cell_widths(&ctx, n as u32, dims, [h.x as f32, h.y as f32, h.z as f32])?;
         let n_walls = scene.walls.len() as u64;
-        let state_fields = StateLayout::new(0, kind.state_extras(keeps)).count(Buffer::State);
-        let windows = plan_windows(&ctx, &options, (&kind, keeps), n as u64, measured)?;
+        let layout0 = StateLayout::new(0, kind.state_extras(keeps));
+        let state_fields = layout0.count(Buffer::State);
+        let windows = plan_windows(
+            &ctx,
+            &options,
+            (&layout0, kind.records(keeps)),
+            n as u64,
+            measured,
+        )?;
         grid.set_windows(&ctx.queue, &windows, state_fields as u32);
         let device = &ctx.device;
         let mut alloc = Allocator::new(device, ctx.max_storage_binding());
@@ -564,20 +571,13 @@ fn grid_keys(
 fn plan_windows(
     ctx: &GpuContext,
     options: &GpuOptions,
-    (kind, keeps): (&Composition, Keeps),
+    (layout, records): (&StateLayout, [RecordLayout; 2]),
     n: u64,
     measured: Option<u64>,
 ) -> Result<Windows, PowderError> {
-    let layout = StateLayout::new(0, kind.state_extras(keeps));
     Ok(match options.window_particles {
         Some(len) => Windows::of(n, len)?,
-        None => automatic_windows(
-            &layout,
-            kind.records(keeps),
-            n,
-            ctx.max_storage_binding(),
-            measured,
-        ),
+        None => automatic_windows(layout, records, n, ctx.max_storage_binding(), measured),
     })
 }
 
