@@ -314,13 +314,8 @@ impl Kernel {
         invocations: u32,
         max_per_dim: u32,
     ) {
-        let per_group = self.workgroup_size.iter().product::<u32>().max(1);
-        self.dispatch_workgroups(
-            pass,
-            bind_group,
-            invocations.div_ceil(per_group),
-            max_per_dim,
-        );
+        let groups = self.workgroups_for(invocations);
+        self.dispatch_workgroups(pass, bind_group, groups, max_per_dim);
     }
 
     /// Records a dispatch whose `[x, y, z]` workgroup counts the device reads from `args`
