@@ -123,3 +123,10 @@ fn linear_workgroup(wid: vec3<u32>, nwg: vec3<u32>) -> u32 {
 fn global_index(wid: vec3<u32>, nwg: vec3<u32>, lid: u32) -> u32 {
     return linear_workgroup(wid, nwg) * WG_SIZE + lid;
 }
+
+// Whether every component is finite: by the exponent bits, which a compiler that assumes
+// no NaN or infinity (as WGSL lets it) cannot fold away, where `x != x` it may.
+fn all_finite(v: vec3<f32>) -> bool {
+    let exponent = bitcast<vec3<u32>>(v) & vec3<u32>(0x7f800000u);
+    return all(exponent != vec3<u32>(0x7f800000u));
+}

@@ -35,7 +35,7 @@ fn rot_collect(k: u32, torque: vec3<f32>) -> RotState {
 }
 
 fn rot_finite(r: RotState) -> bool {
-    return !(any(r.alpha != r.alpha) || any(abs(r.alpha) > vec3<f32>(3.0e38)));
+    return all_finite(r.alpha);
 }
 
 // kick_drift: omega += dt/2·alpha (first the previous step's closing kick when it is

@@ -1,5 +1,6 @@
 //! `--set KEY=VALUE`: change values of a scene file from the command line (scale an example
-//! up, sweep a parameter) without editing it.
+//! up, sweep a parameter) without editing it. Parsed here; applied to the parsed scene by
+//! [`crate::scene::Scene::from_toml_str_with`], so errors keep the file's line numbers.
 //!
 //! KEY is a dotted path into the TOML document; `name[i]` picks the i-th (0-based) block of
 //! an array of tables such as `[[particles]]`: `simulation.duration`, `particles[0].count`,
@@ -55,7 +56,7 @@ impl Override {
     }
 
     /// The path as written.
-    fn key(&self) -> String {
+    pub fn key(&self) -> String {
         self.path
             .iter()
             .map(|(n, i)| match i {
@@ -65,110 +66,34 @@ impl Override {
             .collect::<Vec<_>>()
             .join(".")
     }
-
-    /// Applies the override to a parsed document.
-    fn apply(&self, doc: &mut Table) -> Result<(), PowderError> {
-        let key = self.key();
-        let mut table = doc;
-        let (last, parents) = self.path.split_last().expect("a path has a component");
-        for (name, index) in parents {
-            let entry = table.get_mut(name).ok_or_else(|| {
-                PowderError::Scene(format!("--set {key}: the scene has no `{name}`"))
-            })?;
-            table = match (entry, index) {
-                (Value::Table(t), None) => t,
-                (Value::Array(blocks), Some(i)) => {
-                    let n = blocks.len();
-                    match blocks.get_mut(*i) {
-                        Some(Value::Table(t)) => t,
-                        _ => {
-                            return Err(PowderError::Scene(format!(
-                                "--set {key}: `{name}` has {n} blocks, no block [{i}] (indices start at 0)"
-                            )))
-                        }
-                    }
-                }
-                (Value::Array(_), None) => {
-                    return Err(PowderError::Scene(format!(
-                        "--set {key}: `{name}` is a list of blocks: pick one with {name}[INDEX]"
-                    )))
-                }
-                _ => {
-                    return Err(PowderError::Scene(format!(
-                        "--set {key}: `{name}` is not a table"
-                    )))
-                }
-            };
-        }
-        let (name, index) = last;
-        match index {
-            None => {
-                table.insert(name.clone(), self.value.clone());
-            }
-            Some(i) => match table.get_mut(name) {
-                Some(Value::Array(items)) if *i < items.len() => items[*i] = self.value.clone(),
-                _ => {
-                    return Err(PowderError::Scene(format!(
-                        "--set {key}: `{name}` has no element [{i}]"
-                    )))
-                }
-            },
-        }
-        Ok(())
-    }
-}
-
-/// The scene text with every `KEY=VALUE` of `sets` applied, in order (comments are not
-/// kept; line numbers in later error messages refer to the rewritten text).
-pub fn apply(text: &str, sets: &[String]) -> Result<String, PowderError> {
-    if sets.is_empty() {
-        return Ok(text.to_string());
-    }
-    let mut doc: Table = text.parse().map_err(|e| {
-        PowderError::Scene(format!(
-            "cannot apply --set: the scene is not valid TOML: {e}"
-        ))
-    })?;
-    for set in sets {
-        Override::parse(set)?.apply(&mut doc)?;
-    }
-    Ok(doc.to_string())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    const TEXT: &str = "[domain]\nmin = [0.0, 0.0, 0.0]\nmax = [1.0, 1.0, 1.0]\n\n[[particles]]\nkind = \"random\"\ncount = 10\n\n[[particles]]\nkind = \"list\"\n";
-
     #[test]
-    fn overrides_reach_tables_blocks_and_elements() {
-        let out = apply(
-            TEXT,
-            &[
-                "particles[0].count = 1e5".into(),
-                "domain.max=[2.0, 2.0, 1.0]".into(),
-                "particles[1].radius = 0.5".into(),
-                "domain.min[2] = -1.0".into(),
-            ],
-        )
-        .unwrap();
-        let doc: Table = out.parse().unwrap();
-        assert_eq!(doc["particles"][0]["count"].as_float(), Some(1e5));
-        assert_eq!(doc["particles"][1]["radius"].as_float(), Some(0.5));
-        assert_eq!(doc["domain"]["max"][0].as_float(), Some(2.0));
-        assert_eq!(doc["domain"]["min"][2].as_float(), Some(-1.0));
-        assert_eq!(apply(TEXT, &[]).unwrap(), TEXT);
+    fn overrides_parse_paths_and_values() {
+        let o = Override::parse("particles[0].count = 1e5").unwrap();
+        assert_eq!(
+            o.path,
+            vec![
+                ("particles".to_string(), Some(0)),
+                ("count".to_string(), None)
+            ]
+        );
+        assert_eq!(o.value.as_float(), Some(1e5));
+        assert_eq!(o.key(), "particles[0].count");
+        let o = Override::parse("domain.max=[2.0, 2.0, 1.0]").unwrap();
+        assert_eq!(o.value.as_array().map(Vec::len), Some(3));
     }
 
     #[test]
     fn bad_overrides_say_what_is_wrong() {
-        let e = |s: &str| apply(TEXT, &[s.to_string()]).unwrap_err().to_string();
+        let e = |s: &str| Override::parse(s).unwrap_err().to_string();
         assert!(e("count").contains("no `=`"));
-        assert!(e("particles[2].count = 1").contains("has 2 blocks"));
-        assert!(e("particles.count = 1").contains("pick one with particles[INDEX]"));
-        assert!(e("simulation.duration = 1").contains("no `simulation`"));
         assert!(e("domain.max = [1.0, ").contains("not a TOML value"));
         assert!(e("particles[x].count = 1").contains("NAME[INDEX]"));
+        assert!(e(".count = 1").contains("an empty key"));
     }
 }

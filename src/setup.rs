@@ -57,6 +57,19 @@ impl Resolved {
                     * p.radius.powi(3)
             })
             .collect();
+        // (a radius and density each in range can still give a mass of 0 or ∞ in f64)
+        if let Some((i, m)) = mass
+            .iter()
+            .enumerate()
+            .find(|(_, m)| !(m.is_finite() && **m > 0.0))
+        {
+            let p = &scene.particles[i];
+            let material = &scene.materials[p.material];
+            return Err(PowderError::Scene(format!(
+                "particle {i}: its mass comes out as {m:e} kg (radius {:e} m, density {:e} kg/m^3 of material `{}`): choose a radius and density whose mass 4/3·π·r³·ρ is a finite number above 0",
+                p.radius, material.density, material.name
+            )));
+        }
         // Time step: the most demanding pair of materials, with the lightest particles of
         // each (walls count as infinite mass).
         let mut lightest: Vec<Option<(f64, f64)>> = vec![None; n_materials];
@@ -67,8 +80,13 @@ impl Resolved {
             }
         }
         let mut time_step: Option<TimeStep> = None;
+        // (the first rule whose step is not a finite number above 0: it would stop time)
+        let mut unusable: Option<TimeStep> = None;
         let mut consider = |ts: TimeStep| {
-            if time_step.as_ref().is_none_or(|t| ts.max < t.max) {
+            let usable = |t: f64| t.is_finite() && t > 0.0;
+            if !(usable(ts.max) && usable(ts.default)) {
+                unusable.get_or_insert(ts);
+            } else if time_step.as_ref().is_none_or(|t| ts.max < t.max) {
                 time_step = Some(ts);
             }
         };
@@ -94,6 +112,12 @@ impl Resolved {
                 let t_r = p.rayleigh_time(r, material.density);
                 consider(TimeStep::rayleigh(t_r, &material.name, r));
             }
+        }
+        if let Some(ts) = unusable {
+            return Err(PowderError::Scene(format!(
+                "the time step comes out as {:e} s (largest stable {:e} s; {}): the parameters of that contact are beyond what a time step can resolve (a stiffness, damping, velocity or mass out of range)",
+                ts.default, ts.max, ts.reason
+            )));
         }
         let time_step =
             time_step.ok_or_else(|| PowderError::Scene("the scene has no particles".into()))?;
@@ -143,5 +167,39 @@ impl Resolved {
             max_reach,
             rotation,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scene(material: &str, radius: &str) -> Scene {
+        let text = format!(
+            "[domain]\nmin = [0.0, 0.0, 0.0]\nmax = [0.01, 0.01, 0.01]\n[simulation]\nduration = 0.1\n[[material]]\nname = \"m\"\ndensity = 2000.0\n{material}\n[[particles]]\nkind = \"list\"\npositions = [[0.005, 0.005, 0.005]]\nradius = {radius}\n"
+        );
+        Scene::from_toml_str(&text, "t").unwrap()
+    }
+
+    fn refused(s: &Scene) -> String {
+        match Resolved::new(s) {
+            Ok(r) => panic!("accepted with dt = {:e} s", r.dt),
+            Err(e) => e.to_string(),
+        }
+    }
+
+    #[test]
+    fn a_mass_or_time_step_that_overflows_is_refused() {
+        let e = refused(&scene("model = \"lsd\"\nk = 100.0", "1e-300"));
+        assert!(
+            e.contains("particle 0: its mass comes out as 0e0 kg"),
+            "{e}"
+        );
+        let jkr = "model = \"jkr\"\nyoungs = 1e300\npoisson = 0.3\nsurface_energy = 0.05";
+        let e = refused(&scene(jkr, "1e-3"));
+        assert!(e.contains("the time step comes out as 0e0 s"), "{e}");
+        // the same law in range runs
+        let jkr = "model = \"jkr\"\nyoungs = 1e9\npoisson = 0.3\nsurface_energy = 0.05";
+        assert!(Resolved::new(&scene(jkr, "1e-3")).unwrap().dt > 0.0);
     }
 }

@@ -1412,3 +1412,109 @@ fn collide_adds_thornton_ning_with_a_yield_velocity() {
     ]);
     assert!(!ok && err.contains("cannot be used with"), "{err}");
 }
+
+/// Inputs each within its rule whose combination overflows f64 (a time step of 0, a
+/// result of ∞, a sweep too long to allocate) are refused with what to change.
+#[test]
+fn inputs_in_range_that_overflow_together_are_refused() {
+    let refused = |(ok, out, err): (bool, String, String), parts: &[&str]| {
+        assert!(!ok, "accepted: {out}");
+        for p in parts {
+            assert!(err.contains(p), "{err:?} lacks {p:?}");
+        }
+        assert!(!err.contains("panicked"), "{err}");
+    };
+    let stiff = [
+        "collide",
+        "--model",
+        "jkr",
+        "--youngs",
+        "1e300",
+        "--poisson",
+        "0.3",
+        "--surface-energy",
+        "0.05",
+        "--radius",
+        "1e-6",
+        "--density",
+        "2000",
+        "--velocity",
+        "0.1",
+    ];
+    refused(powder(&stiff), &["time step comes out as 0e0 s"]);
+    let damped = [
+        "collide",
+        "--model",
+        "jkr",
+        "--youngs",
+        "1e8",
+        "--poisson",
+        "0.3",
+        "--surface-energy",
+        "0.01",
+        "--radius",
+        "5e-6",
+        "--density",
+        "2500",
+        "--velocity",
+        "0.1",
+        "--dissipation",
+        "powerlaw",
+        "--D",
+        "1e300",
+        "--alpha",
+        "3",
+        "--beta",
+        "1.5",
+    ];
+    refused(
+        powder(&damped),
+        &["final_kinetic = inf, not a finite number"],
+    );
+    refused(
+        hysteretic(&["--sweep-velocity", "0.1:1:100000000000"]),
+        &["sweep-velocity", "more than the 1000000"],
+    );
+    refused(
+        powder(&[
+            "accuracy",
+            "--backend",
+            "cpu",
+            "--case",
+            "pair",
+            "--chi-points",
+            "100000000000",
+        ]),
+        &["chi-points", "2 to 10000 points"],
+    );
+    refused(
+        powder(&[
+            "analytic",
+            "kp-prime",
+            "--k1",
+            "100",
+            "--kp",
+            "500",
+            "--phi-f",
+            "1e-300",
+            "--phi-f-new",
+            "1",
+        ]),
+        &["kp' comes out as inf"],
+    );
+    refused(
+        powder(&[
+            "analytic",
+            "tabor",
+            "--youngs",
+            "1e-300",
+            "--poisson",
+            "0.3",
+            "--surface-energy",
+            "1e300",
+            "--radius",
+            "1e300",
+        ]),
+        &["Tabor parameter comes out as inf"],
+    );
+}

@@ -83,8 +83,8 @@ fn quiet_batches_in_a_periodic_settling_bed() {
         "domain.max=[0.0184, 0.0184, 0.04]",
         "particles[0].max=[0.0173, 0.0173, 0.03]",
     ];
-    let text = powder::overrides::apply(&text, &sets.map(String::from)).unwrap();
-    let scene = powder::scene::Scene::from_toml_str(&text, "column").unwrap();
+    let scene =
+        powder::scene::Scene::from_toml_str_with(&text, "column", &sets.map(String::from)).unwrap();
     assert!(scene.particles.len() > 500, "{}", scene.particles.len());
     let mut states = Vec::new();
     for quiet in [QuietBatches::Off, QuietBatches::Always] {

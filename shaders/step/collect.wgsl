@@ -64,7 +64,7 @@ fn collect_particle(k: u32, mass: f32, store: bool) -> Collected {
     // (`opaque`: as in drift_particle, rounded the same in every kernel that collects)
     let acc = opaque(opaque(f / mass) + step.gravity);
     let rot = rot_collect(k, torque);
-    if (any(acc != acc) || any(abs(acc) > vec3<f32>(3.0e38)) || !rot_finite(rot)) {
+    if (!all_finite(acc) || !rot_finite(rot)) {
         atomicAdd(&control[2], 1u);
     }
     if (store) {

@@ -156,6 +156,18 @@ pub fn analytic_cmd(a: &AnalyticArgs) -> Result<(), PowderError> {
     }
 }
 
+/// `x`, or an error where the closed form overflowed (inputs each in range, but their
+/// combination beyond f64).
+fn finite(x: f64, what: &str) -> Result<f64, PowderError> {
+    if x.is_finite() {
+        Ok(x)
+    } else {
+        Err(PowderError::Run(format!(
+            "{what} comes out as {x}: the inputs, each in range, combine beyond what f64 holds; check their units"
+        )))
+    }
+}
+
 fn print_json<T: Serialize>(value: &T) -> Result<(), PowderError> {
     let text = serde_json::to_string_pretty(value)
         .map_err(|e| PowderError::Run(format!("cannot encode JSON: {e}")))?;
@@ -193,7 +205,7 @@ fn kp_prime(a: &KpPrimeArgs) -> Result<(), PowderError> {
         )
         .into());
     }
-    let kp_prime = p.kp_for_phi_f(a.phi_f_new)?;
+    let kp_prime = finite(p.kp_for_phi_f(a.phi_f_new)?, "kp'")?;
     let tuned = HystereticParams {
         kp: kp_prime,
         phi_f: a.phi_f_new,
@@ -205,7 +217,10 @@ fn kp_prime(a: &KpPrimeArgs) -> Result<(), PowderError> {
         phi_f: p.phi_f,
         phi_f_new: a.phi_f_new,
         kp_prime,
-        delta_max_p_over_a12: [p.delta_max_p(1.0), tuned.delta_max_p(1.0)],
+        delta_max_p_over_a12: [
+            finite(p.delta_max_p(1.0), "delta_max^p/a12")?,
+            finite(tuned.delta_max_p(1.0), "delta_max^p/a12 after the change")?,
+        ],
     };
     if a.json {
         return print_json(&out);
@@ -250,7 +265,10 @@ fn thornton_ning(a: &ThorntonNingArgs) -> Result<(), PowderError> {
             material.validate()?;
             require_positive("density", rho, "the density")?;
             let g = a.pair.geometry(rho)?;
-            analytic::yield_velocity(y, material.e_star(), g.r_eff(), g.reduced_mass)
+            finite(
+                analytic::yield_velocity(y, material.e_star(), g.r_eff(), g.reduced_mass),
+                "the yield velocity v_Y",
+            )?
         }
         (None, None) => unreachable!("clap requires one of them"),
     };
@@ -278,12 +296,16 @@ fn thornton_ning(a: &ThorntonNingArgs) -> Result<(), PowderError> {
                 .into());
             }
         }
-        let e_tn = analytic::thornton_ning_restitution(v, v_yield);
+        let e_tn = finite(analytic::thornton_ning_restitution(v, v_yield), "e_TN")?;
+        let e_pl = match e {
+            Some(e) => Some(finite(analytic::plastic_restitution(e, e_tn), "e_pl")?),
+            None => None,
+        };
         rows.push(ThorntonNingRow {
             velocity: v,
             e_tn,
             e,
-            e_pl: e.map(|e| analytic::plastic_restitution(e, e_tn)),
+            e_pl,
         });
     }
     let out = ThorntonNing {
@@ -343,7 +365,7 @@ fn tabor(a: &TaborArgs) -> Result<(), PowderError> {
         None => analytic::TABOR_MIN_SEPARATION,
     };
     let r_eff = a.pair.geometry(1.0)?.r_eff();
-    let t = analytic::jkr_tabor(&p, r_eff, d_min);
+    let t = finite(analytic::jkr_tabor(&p, r_eff, d_min), "the Tabor parameter")?;
     let out = Tabor {
         r_eff,
         d_min,

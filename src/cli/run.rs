@@ -77,10 +77,7 @@ pub(crate) fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
         Some(path) => Scene::load_with(path, &a.set)?,
         None => {
             eprintln!("no scene given: running the built-in cohesive cluster (examples/cohesive_cluster.toml)");
-            Scene::from_toml_str(
-                &powder::overrides::apply(DEFAULT_SCENE, &a.set)?,
-                "cohesive_cluster",
-            )?
+            Scene::from_toml_str_with(DEFAULT_SCENE, "cohesive_cluster", &a.set)?
         }
     };
     // auto resumes a checkpoint on the backend that wrote it

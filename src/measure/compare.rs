@@ -182,6 +182,12 @@ fn history_deviation(
     }
 }
 
+/// Whether a deviation is beyond its tolerance: one that is not a number is (NaN compares
+/// false with any tolerance, which would pass a run whose state went NaN).
+fn over(deviation: f64, tolerance: f64) -> bool {
+    deviation.is_nan() || deviation > tolerance
+}
+
 /// Runs `scene` on both backends for `steps` steps, sampling every `every` steps.
 pub fn compare(
     scene: &Scene,
@@ -261,22 +267,22 @@ pub fn compare(
         let h = history_deviation(&cpu.contacts(), &gpu.contact_histories()?, keeps_delta_max);
         let history = h.rms;
         let mut exceeded = Vec::new();
-        if position > tol.position {
+        if over(position, tol.position) {
             exceeded.push("position");
         }
-        if velocity > tol.velocity {
+        if over(velocity, tol.velocity) {
             exceeded.push("velocity");
         }
-        if kinetic > tol.kinetic {
+        if over(kinetic, tol.kinetic) {
             exceeded.push("kinetic");
         }
-        if contacts > tol.contacts {
+        if over(contacts, tol.contacts) {
             exceeded.push("contacts");
         }
-        if energy > tol.energy {
+        if over(energy, tol.energy) {
             exceeded.push("energy");
         }
-        if history > tol.history {
+        if over(history, tol.history) {
             exceeded.push("history");
         }
         samples.push(Sample {
@@ -315,4 +321,15 @@ pub fn compare(
         samples,
         passed,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::over;
+
+    #[test]
+    fn a_deviation_that_is_not_a_number_fails() {
+        assert!(over(f64::NAN, 1e-3) && over(2e-3, 1e-3) && over(f64::INFINITY, 1e-3));
+        assert!(!over(1e-3, 1e-3) && !over(0.0, 1e-3));
+    }
 }

@@ -4,7 +4,7 @@
 use super::hash_grid::{dist2, Grid};
 use super::particles::Origin;
 use super::toml_reader::{fmt_vec, Res, Src, AXES};
-use super::{Scene, OVERLAP_TOLERANCE};
+use super::{Domain, Scene, OVERLAP_TOLERANCE};
 use crate::error::PowderError;
 
 /// Periodic axes: no wall may face one (its normal would have a component along it) and
@@ -38,6 +38,30 @@ pub(super) fn check_periodic(src: &Src, scene: &Scene) -> Res<()> {
         }
     }
     Ok(())
+}
+
+/// `x` and, along each periodic axis where it lies within `reach` of a seam, its image one
+/// period over: the places a partner within `reach` of x may be found.
+fn periodic_images(x: [f64; 3], reach: f64, d: &Domain) -> Vec<[f64; 3]> {
+    let mut images = vec![x];
+    for a in 0..3 {
+        let period = d.max[a] - d.min[a];
+        let shift = if !d.periodic[a] {
+            continue;
+        } else if x[a] - d.min[a] < reach {
+            period
+        } else if d.max[a] - x[a] < reach {
+            -period
+        } else {
+            continue;
+        };
+        for k in 0..images.len() {
+            let mut image = images[k];
+            image[a] += shift;
+            images.push(image);
+        }
+    }
+    images
 }
 
 pub(super) fn check_particles(src: &Src, scene: &Scene, origin: &Origin) -> Res<()> {
@@ -78,26 +102,31 @@ pub(super) fn check_particles(src: &Src, scene: &Scene, origin: &Origin) -> Res<
     let rmax = ps.iter().map(|p| p.radius).fold(0.0, f64::max);
     let mut grid = Grid::new(2.0 * rmax);
     for (i, p) in ps.iter().enumerate() {
-        let first = grid
-            .neighbours(p.position, p.radius + rmax)
-            .filter(|&j| {
-                let q = &ps[j];
-                let overlap = p.radius + q.radius - dist2(p.position, q.position).sqrt();
-                // particles that appear at different times may share a place (pouring)
-                q.insert_at == p.insert_at && overlap > OVERLAP_TOLERANCE * p.radius.min(q.radius)
+        // (across a periodic seam the partner is an image: p's images near the seam too)
+        let first = periodic_images(p.position, p.radius + rmax, d)
+            .into_iter()
+            .flat_map(|at| {
+                grid.neighbours(at, p.radius + rmax).filter_map(move |j| {
+                    let q = &ps[j];
+                    let overlap = p.radius + q.radius - dist2(at, q.position).sqrt();
+                    // particles that appear at different times may share a place (pouring)
+                    (q.insert_at == p.insert_at
+                        && overlap > OVERLAP_TOLERANCE * p.radius.min(q.radius))
+                    .then_some((j, overlap, at != p.position))
+                })
             })
-            .min();
-        if let Some(j) = first {
+            .min_by_key(|&(j, _, _)| j);
+        if let Some((j, overlap, seam)) = first {
             let q = &ps[j];
-            let overlap = p.radius + q.radius - dist2(p.position, q.position).sqrt();
             return Err(src.err(
                 None,
                 format!(
-                    "particles {j} (from [[particles]] #{}, at {}) and {i} (from [[particles]] #{}, at {}) overlap by {overlap:.3e} m at the start, more than {}% of the smaller radius: move them apart",
+                    "particles {j} (from [[particles]] #{}, at {}) and {i} (from [[particles]] #{}, at {}) overlap by {overlap:.3e} m at the start{}, more than {}% of the smaller radius: move them apart",
                     origin[j],
                     fmt_vec(q.position),
                     origin[i],
                     fmt_vec(p.position),
+                    if seam { " across the periodic seam" } else { "" },
                     OVERLAP_TOLERANCE * 100.0
                 ),
             ));

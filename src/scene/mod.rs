@@ -194,12 +194,14 @@ mod hash_grid;
 mod keys;
 mod parse;
 mod particles;
+mod set;
 #[cfg(test)]
 mod tests;
 mod toml_reader;
 
 use crate::error::PowderError;
 use crate::model::ContactModel;
+use crate::overrides::Override;
 use parse::parse_scene;
 use std::path::Path;
 use toml_reader::Src;
@@ -422,9 +424,23 @@ pub struct Scene {
 impl Scene {
     /// Parses and validates a scene; `name` labels the errors (and becomes [`Scene::name`]).
     pub fn from_toml_str(text: &str, name: &str) -> Result<Scene, PowderError> {
+        Self::from_toml_str_with(text, name, &[])
+    }
+
+    /// [`Scene::from_toml_str`] with `--set KEY=VALUE` overrides applied in order
+    /// ([`crate::overrides`]); errors keep the file's line numbers.
+    pub fn from_toml_str_with(
+        text: &str,
+        name: &str,
+        sets: &[String],
+    ) -> Result<Scene, PowderError> {
+        let sets = sets
+            .iter()
+            .map(|s| Override::parse(s))
+            .collect::<Result<Vec<_>, _>>()?;
         let name = if name.is_empty() { "default" } else { name };
         let src = Src { name, text };
-        parse_scene(&src)
+        parse_scene(&src, &sets)
     }
 
     /// Reads and parses a scene file; the scene is named after the file stem.
@@ -441,8 +457,7 @@ impl Scene {
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_default();
-        let text = crate::overrides::apply(&text, sets)?;
-        Self::from_toml_str(&text, &name)
+        Self::from_toml_str_with(&text, &name, sets)
     }
 
     /// Whether some particle appears only during the run (pouring).

@@ -14,14 +14,19 @@ use super::toml_reader::{
 use super::{Domain, DtSetting, Interaction, Material, Scene, Wall, WallMotion, WallPhase};
 use crate::error::{ParamError, PowderError};
 use crate::model::{params, ContactModel};
+use crate::overrides::Override;
 use toml::de::DeTable;
 
-pub(super) fn parse_scene(src: &Src) -> Res<Scene> {
+/// Parses `src` with the `--set` overrides `sets` applied in order.
+pub(super) fn parse_scene(src: &Src, sets: &[Override]) -> Res<Scene> {
     let doc = DeTable::parse(src.text).map_err(|e| {
         let msg = format!("TOML syntax error: {}", e.message().trim_end());
         src.err(e.span().as_ref(), msg)
     })?;
-    let root_entries = convert_table(src, doc.get_ref())?;
+    let mut root_entries = convert_table(src, doc.get_ref())?;
+    for set in sets {
+        super::set::apply(&mut root_entries, &doc.span(), set)?;
+    }
     let root = Tbl::new(src, &root_entries, None, "the top-level table".to_string());
     root.check_keys(TOP_KEYS, |k| {
         let sections: [(&str, &[&str]); 2] =

@@ -73,6 +73,18 @@ pub(super) fn parse_particles(root: &Tbl, names: &[&str]) -> Res<(Vec<ParticleIn
                         ),
                     ));
                 }
+                // (a batch of none is a mistake, and a loop of 10^9 empty ones a hang)
+                if let Some(count) = t.u64("count").ok().flatten() {
+                    if batches > count.max(1) {
+                        return Err(t.err_key(
+                            "batches",
+                            format!(
+                                "{}: `batches` = {batches} is more than `count` = {count}: every batch must place a particle at least",
+                                t.ctx
+                            ),
+                        ));
+                    }
+                }
                 for k in 0..batches {
                     expand_random(
                         &t,

@@ -715,3 +715,109 @@ fn line_col_counts_characters() {
     assert_eq!(src.line_col(5), (2, 2));
     assert_eq!(src.line_col(100), (3, 1));
 }
+
+#[test]
+fn overlaps_across_a_periodic_seam_are_refused() {
+    let text = minimal("", "")
+        .replace(
+            "max = [0.01, 0.01, 0.01]",
+            "max = [0.01, 0.01, 0.01]\nperiodic = [true, false, false]",
+        )
+        .replace(
+            "[[0.005, 0.005, 0.005]]",
+            "[[0.0009, 0.005, 0.005], [0.0091, 0.005, 0.005]]",
+        );
+    let e = err(&text);
+    assert_contains(&e, &["particles 0", "and 1", "across the periodic seam"]);
+    // apart by 2.2 mm across the seam: no overlap
+    parse(&text.replace("0.0091", "0.0089")).unwrap();
+}
+
+#[test]
+fn pouring_more_batches_than_particles_is_refused() {
+    let block = "[[particles]]\nkind = \"random\"\ncount = 3\nbatches = 1000000000\nbatch_interval = 1e-6\nmin = [0, 0, 0]\nmax = [0.01, 0.01, 0.01]\nradius = 1e-4\n";
+    let e = err(&minimal("", block));
+    assert_contains(&e, &["`batches` = 1000000000", "more than `count` = 3"]);
+}
+
+fn parse_with(text: &str, sets: &[&str]) -> Result<Scene, String> {
+    let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+    Scene::from_toml_str_with(text, "test", &sets).map_err(|e| e.to_string())
+}
+
+#[test]
+fn overrides_reach_tables_blocks_and_elements() {
+    let text = minimal(
+        "",
+        "[[particles]]\nkind = \"list\"\npositions = [[0.002, 0.002, 0.002]]\nradius = 1e-3\n",
+    );
+    let scene = parse_with(
+        &text,
+        &[
+            "particles[1].radius = 5e-4",
+            "domain.max=[0.02, 0.02, 0.01]",
+            "domain.min[2] = -0.01",
+            "simulation.duration = 0.5",
+        ],
+    )
+    .unwrap();
+    assert_eq!(scene.particles[1].radius, 5e-4);
+    assert_eq!(scene.domain.max, [0.02, 0.02, 0.01]);
+    assert_eq!(scene.domain.min[2], -0.01);
+    assert_eq!(scene.duration, 0.5);
+    let e = |sets: &[&str]| parse_with(&text, sets).unwrap_err();
+    assert_contains(&e(&["particles[2].radius = 1"]), &["has 2 blocks"]);
+    assert_contains(
+        &e(&["particles.radius = 1"]),
+        &["pick one with particles[INDEX]"],
+    );
+    assert_contains(&e(&["walls.x = 1"]), &["no `walls`"]);
+    assert_contains(&e(&["domain.min.x = 1"]), &["`min` is not a table"]);
+    assert_contains(&e(&["domain.min[3] = 1"]), &["`min` has no element [3]"]);
+}
+
+#[test]
+fn errors_keep_the_files_line_numbers_with_overrides() {
+    let text = minimal("", "");
+    let line = |key: &str| 1 + text.lines().position(|l| l.starts_with(key)).unwrap();
+    // a value set takes the line of the one it replaces
+    let e = parse_with(&text, &["material[0].density = 0"]).unwrap_err();
+    assert_contains(
+        &e,
+        &[&format!("line {}, column", line("density")), "density"],
+    );
+    // an error elsewhere keeps its line, whatever was set before it
+    let bad = text.replace("k = 100.0", "k = -1.0");
+    let e = parse_with(
+        &bad,
+        &[
+            "simulation.duration = 0.5",
+            "domain.max = [0.02, 0.02, 0.02]",
+        ],
+    )
+    .unwrap_err();
+    assert_contains(&e, &[&format!("line {}, column", line("k = "))]);
+    // a key added takes the line of its table
+    let e = parse_with(&text, &["simulation.durration = 1"]).unwrap_err();
+    assert_contains(
+        &e,
+        &[
+            &format!("line {}, column", line("[simulation]")),
+            "durration",
+        ],
+    );
+}
+
+#[test]
+fn negative_coefficients_of_a_sub_model_left_off_are_refused() {
+    for key in ["friction", "rolling_friction", "twisting_friction"] {
+        let e = err(&minimal(&format!("{key} = -0.3"), ""));
+        assert_contains(
+            &e,
+            &[&format!("`{key}`"), "must be >= 0, got -0.3", "line 13"],
+        );
+    }
+    let jkr = "model = \"jkr\"\nyoungs = 1e9\npoisson = 0.3\nsurface_energy = 0.05\ntwisting_friction = -1.0";
+    let e = err(&minimal("", "").replace("model = \"lsd\"\nk = 100.0", jkr));
+    assert_contains(&e, &["`twisting_friction`", "must be >= 0"]);
+}

@@ -55,7 +55,7 @@ pub(super) enum Val {
 
 #[derive(Debug)]
 pub(super) struct Node {
-    span: Span,
+    pub(super) span: Span,
     pub(super) val: Val,
 }
 
@@ -63,7 +63,24 @@ pub(super) struct Node {
 pub(super) struct Entry {
     pub(super) key: String,
     key_span: Span,
-    node: Node,
+    pub(super) node: Node,
+}
+
+impl Node {
+    pub(super) fn new(span: Span, val: Val) -> Self {
+        Self { span, val }
+    }
+}
+
+impl Entry {
+    /// An entry whose key and value are placed at `span`.
+    pub(super) fn new(key: &str, span: &Span, node: Node) -> Self {
+        Self {
+            key: key.to_string(),
+            key_span: span.clone(),
+            node,
+        }
+    }
 }
 
 fn convert_value(src: &Src, v: &Spanned<DeValue>) -> Res<Node> {

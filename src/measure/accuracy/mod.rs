@@ -150,16 +150,22 @@ impl AccuracyOptions {
                 .into());
             }
         }
-        if (self.pair || self.jkr) && self.chi_points < 2 {
+        if (self.pair || self.jkr) && !(2..=MAX_CHI_POINTS).contains(&self.chi_points) {
             return Err(ParamError::new(
                 "chi-points",
-                "the χ and velocity sweeps need at least 2 points",
+                format!(
+                    "the χ and velocity sweeps take 2 to {MAX_CHI_POINTS} points (a collision each on every backend and time step), got {}",
+                    self.chi_points
+                ),
             )
             .into());
         }
         Ok(())
     }
 }
+
+/// The most points a χ or velocity sweep takes (each a collision per backend and time step).
+pub const MAX_CHI_POINTS: usize = 10_000;
 
 /// One (case, backend, dt) measurement.
 #[derive(Clone, Debug, Serialize)]

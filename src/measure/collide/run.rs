@@ -381,11 +381,29 @@ pub(super) fn collide_with(
     trace: Option<&mut Vec<TraceRow>>,
 ) -> Result<CollideResult, PowderError> {
     spec.validate()?;
-    let dt = spec.dt.unwrap_or_else(|| spec.time_step().default);
+    let (m1, m2) = spec.masses();
+    if !(m1.is_finite() && m1 > 0.0 && m2.is_finite() && m2 > 0.0) {
+        return Err(PowderError::Scene(format!(
+            "the spheres' masses come out as {m1:e} and {m2:e} kg: choose --radius and --density whose mass 4/3·π·r³·ρ is a finite number above 0"
+        )));
+    }
+    let dt = match spec.dt {
+        Some(dt) => dt,
+        None => {
+            let ts = spec.time_step();
+            if !(ts.default.is_finite() && ts.default > 0.0) {
+                return Err(PowderError::Scene(format!(
+                    "the time step comes out as {:e} s ({}): the contact's parameters, masses or --velocity are beyond what a time step can resolve",
+                    ts.default, ts.reason
+                )));
+            }
+            ts.default
+        }
+    };
     let scene = spec.scene(dt);
     let wall_x = scene.walls.first().map_or(0.0, |w| w.point[0]);
     let wall = spec.wall;
-    match backend {
+    let result = match backend {
         Backend::Cpu => {
             let run = CpuRun {
                 engine: CpuEngine::new(&scene)?,
@@ -399,5 +417,28 @@ pub(super) fn collide_with(
             let run = GpuRun { engine, wall };
             run_collision(spec, run, wall_x, dt, "gpu", adapter, trace)
         }
+    }?;
+    finite_result(result)
+}
+
+/// The result, or an error where a number of it is not finite (a parameter or speed that
+/// drove a force or energy beyond f64's range).
+fn finite_result(r: CollideResult) -> Result<CollideResult, PowderError> {
+    let en = &r.energy;
+    let numbers = [
+        ("e", Some(r.e)),
+        ("delta_max", Some(r.delta_max)),
+        ("initial_kinetic", Some(en.initial_kinetic)),
+        ("final_kinetic", Some(en.final_kinetic)),
+        ("dissipated", en.dissipated),
+        ("balance_error", en.balance_error),
+    ];
+    match numbers.iter().find(|(_, x)| x.is_some_and(|x| !x.is_finite())) {
+        Some((name, x)) => Err(PowderError::Run(format!(
+            "the collision at v = {} m/s gave {name} = {:e}, not a finite number: a parameter of the contact law or the velocity is beyond what the step can resolve in f64",
+            r.velocity,
+            x.unwrap_or(f64::NAN)
+        ))),
+        None => Ok(r),
     }
 }

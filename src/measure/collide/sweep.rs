@@ -2,6 +2,9 @@
 
 use super::*;
 
+/// The most collisions a sweep runs.
+pub const MAX_SWEEP: usize = 1_000_000;
+
 /// Velocities of a sweep `FROM:TO:N`, linear or logarithmic.
 pub fn sweep_velocities(text: &str, log: bool) -> Result<Vec<f64>, PowderError> {
     let bad = |why: &str| {
@@ -31,6 +34,11 @@ pub fn sweep_velocities(text: &str, log: bool) -> Result<Vec<f64>, PowderError> 
     }
     if n == 0 {
         return Err(bad("needs N >= 1"));
+    }
+    if n > MAX_SWEEP {
+        return Err(bad(&format!(
+            "asks for {n} collisions, more than the {MAX_SWEEP} a sweep runs"
+        )));
     }
     if n == 1 {
         return Ok(vec![from]);

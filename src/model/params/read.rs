@@ -179,7 +179,13 @@ pub fn read_model<S: ParamSource>(src: &S, name: &str) -> Result<ContactModel, S
     for key in &accepted {
         let p = param(key).expect("declared");
         if let Some(raw) = src.raw(key) {
-            values.given.push((p.key, typed(src, p, raw)?));
+            let value = typed(src, p, raw)?;
+            // every number given against its own rule, also where the model would not look
+            // (a negative coefficient of a sub-model that is then off)
+            if let Typed::Number(x) = value {
+                p.check(x).map_err(|e| src.invalid(e))?;
+            }
+            values.given.push((p.key, value));
         }
     }
     let dissipation = if law.dissipation {

@@ -1,0 +1,122 @@
+//! What the GPU holds in f32, checked before a run starts: a mass, radius or moment of
+//! inertia that rounds to 0 or ∞, or a pair parameter beyond f32's range, would turn the
+//! first forces into NaN.
+
+use super::*;
+
+/// Refuses a scene value the GPU's f32 cannot hold, naming the particle, pair or setting.
+/// `rows`: the pair table (`pair_table`), `row_bytes` a row, the pairs of materials first
+/// and then each wall's with every material.
+pub(super) fn check_f32_range(
+    scene: &Scene,
+    r: &Resolved,
+    (rows, row_bytes): (&[u8], usize),
+) -> Result<(), PowderError> {
+    // (f32's normal numbers: a subnormal loses its digits, 0 divides)
+    let normal = |x: f64| {
+        let y = x as f32;
+        y.is_finite() && y.abs() >= f32::MIN_POSITIVE
+    };
+    let finite = |v: &[f64; 3]| v.iter().all(|&x| (x as f32).is_finite());
+    let refuse = |what: String| {
+        Err(PowderError::Scene(format!(
+            "{what}, which the GPU engine holds in f32 (magnitudes from 1.2e-38 to 3.4e38): run the scene on the CPU (--backend cpu) or choose other units"
+        )))
+    };
+    if !normal(r.dt) {
+        return refuse(format!("the time step is {:e} s", r.dt));
+    }
+    let d = &scene.domain;
+    let extent = [0, 1, 2].map(|a| d.max[a] - d.min[a]);
+    if !(finite(&d.min) && finite(&d.max) && finite(&extent)) {
+        return refuse(format!("the [domain] spans {:?} to {:?} m", d.min, d.max));
+    }
+    if !finite(&scene.gravity) {
+        return refuse(format!("gravity is {:?} m/s^2", scene.gravity));
+    }
+    for (i, (p, &m)) in scene.particles.iter().zip(&r.mass).enumerate() {
+        if !normal(m) {
+            return refuse(format!("particle {i}'s mass is {m:e} kg"));
+        }
+        if !normal(p.radius) {
+            return refuse(format!("particle {i}'s radius is {:e} m", p.radius));
+        }
+        let inertia = 0.4 * m * p.radius * p.radius;
+        if r.rotation && !normal(inertia) {
+            return refuse(format!(
+                "particle {i}'s moment of inertia is {inertia:e} kg m^2"
+            ));
+        }
+        if !finite(&p.velocity) || !finite(&p.angular_velocity) {
+            return refuse(format!(
+                "particle {i}'s velocity is {:?} m/s (angular {:?} rad/s)",
+                p.velocity, p.angular_velocity
+            ));
+        }
+    }
+    let n = scene.materials.len();
+    let name = |m: usize| &scene.materials[m].name;
+    for (k, row) in rows.chunks(row_bytes.max(1)).enumerate() {
+        // (the rows hold no infinity by design: `kca` = ∞ is encoded as 0)
+        let beyond = row
+            .chunks_exact(4)
+            .any(|w| !f32::from_le_bytes([w[0], w[1], w[2], w[3]]).is_finite());
+        if beyond {
+            let pair = if k < n * n {
+                format!("materials `{}` and `{}`", name(k / n), name(k % n))
+            } else {
+                format!("wall {} and material `{}`", (k - n * n) / n, name(k % n))
+            };
+            return refuse(format!(
+                "the contact law of {pair} has a parameter (or one derived from them) beyond f32's range"
+            ));
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const LSD: &str = "density = 2000.0\nmodel = \"lsd\"\nk = 100.0";
+
+    fn check(material: &str, gravity: &str, domain_max: &str) -> Result<(), String> {
+        let text = format!(
+            "[domain]\nmin = [0.0, 0.0, 0.0]\nmax = {domain_max}\n[simulation]\nduration = 0.1\ngravity = {gravity}\n[[material]]\nname = \"m\"\n{material}\n[[particles]]\nkind = \"list\"\npositions = [[0.005, 0.005, 0.005]]\nradius = 1e-3\n"
+        );
+        let scene = Scene::from_toml_str(&text, "t").unwrap();
+        let r = Resolved::new(&scene).unwrap();
+        let models: Vec<ContactModel> = r.models.iter().chain(&r.wall_models).copied().collect();
+        let (kind, rows) = pair_table(&models);
+        check_f32_range(&scene, &r, (&rows, kind.row_bytes())).map_err(|e| e.to_string())
+    }
+
+    fn refused(material: &str, gravity: &str, domain_max: &str, part: &str) {
+        let e = check(material, gravity, domain_max).unwrap_err();
+        assert!(e.contains(part), "{e}");
+        assert!(e.contains("which the GPU engine holds in f32") && e.contains("--backend cpu"));
+    }
+
+    #[test]
+    fn values_beyond_f32_are_refused_before_the_run() {
+        let (g, max) = ("[0.0, 0.0, -9.81]", "[0.01, 0.01, 0.01]");
+        check(LSD, g, max).unwrap();
+        // the mass underflows f32
+        refused(
+            &LSD.replace("2000.0", "1e-40"),
+            g,
+            max,
+            "particle 0's mass is",
+        );
+        refused(
+            LSD,
+            "[0.0, 0.0, -1e39]",
+            max,
+            "gravity is [0.0, 0.0, -1e39]",
+        );
+        refused(LSD, g, "[0.01, 0.01, 1e200]", "the [domain] spans");
+        let stiff = "density = 2000.0\nmodel = \"hysteretic\"\nk1 = 1e40\nkp = 5e40\nkc = 1e40\nphi_f = 0.05";
+        refused(stiff, g, max, "the contact law of materials `m` and `m`");
+    }
+}
