@@ -1518,3 +1518,30 @@ fn inputs_in_range_that_overflow_together_are_refused() {
         &["Tabor parameter comes out as inf"],
     );
 }
+
+/// A pour whose next batch lands on particles still in its region is stopped by the run
+/// monitor, and the message names that cause beside the time step.
+#[test]
+fn a_batch_poured_onto_particles_is_named_as_a_cause() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("pour.toml");
+    std::fs::write(
+        &scene,
+        "[domain]\nmin = [0.0, 0.0, 0.0]\nmax = [0.01, 0.01, 0.01]\n[simulation]\nduration = 0.001\noutput_every = 50\ngravity = [0.0, 0.0, -9.81]\n[[material]]\nname = \"powder\"\ndensity = 2000.0\nmodel = \"hysteretic\"\nk1 = 100.0\nkp = 500.0\nkc = 100.0\nphi_f = 0.05\ngamma0 = 1e-3\n[[wall]]\npoint = [0.0, 0.0, 0.0]\nnormal = [0.0, 0.0, 1.0]\n[[particles]]\nkind = \"random\"\ncount = 200\nmin = [0.001, 0.001, 0.001]\nmax = [0.009, 0.009, 0.009]\nradius = 5e-4\nseed = 1\nbatches = 20\nbatch_interval = 1e-4\n",
+    )
+    .unwrap();
+    let (ok, _, err) = powder(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--backend",
+        "cpu",
+        "--no-output",
+    ]);
+    assert!(!ok);
+    assert!(
+        err.contains(
+            "may be too large for this scene, or particles appeared where earlier ones still were"
+        ),
+        "{err}"
+    );
+}

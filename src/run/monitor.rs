@@ -22,13 +22,18 @@ pub const MAX_ENERGY_GROWTH: f64 = 0.05;
 /// adhesion and moving walls legitimately feed it.
 pub(super) fn monitor(
     engine: &mut impl Simulation,
-    dt_rule: &str,
+    (dt_rule, pours): (&str, bool),
     totals: Option<(f64, f64)>,
     scale: f64,
 ) -> Result<(), PowderError> {
     let steps = engine.steps();
+    // (a batch poured onto particles still in its region overlaps them: no push aside)
+    let poured = match pours {
+        true => ", or particles appeared where earlier ones still were (a pour's region must have emptied before its next batch: *Pouring* in the README)",
+        false => "",
+    };
     let hint = format!(
-        "the time step ({:.4e} s; {dt_rule}) may be too large for this scene",
+        "the time step ({:.4e} s; {dt_rule}) may be too large for this scene{poured}",
         engine.dt(),
     );
     if let Some(i) = engine.non_finite() {

@@ -538,14 +538,22 @@ fn parse_walls(root: &Tbl, names: &[&str]) -> Res<Vec<Wall>> {
             "normal",
             "the wall normal [x, y, z], pointing into the domain",
         )?;
-        let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        let given = n;
+        let mut n = n;
+        let mut len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        // (a long normal's squares overflow: scaled by its largest component first)
+        let scale = n.iter().fold(0.0_f64, |m, c| m.max(c.abs()));
+        if len == f64::INFINITY && scale.is_finite() {
+            n = n.map(|c| c / scale);
+            len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        }
         if !(len > 0.0 && len.is_finite()) {
             return Err(t.err_key(
                 "normal",
                 format!(
                     "`normal` in {} must be a non-zero vector pointing into the domain, got {}",
                     t.ctx,
-                    fmt_vec(n)
+                    fmt_vec(given)
                 ),
             ));
         }

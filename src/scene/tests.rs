@@ -821,3 +821,20 @@ fn negative_coefficients_of_a_sub_model_left_off_are_refused() {
     let e = err(&minimal("", "").replace("model = \"lsd\"\nk = 100.0", jkr));
     assert_contains(&e, &["`twisting_friction`", "must be >= 0"]);
 }
+
+#[test]
+fn a_wall_normal_too_long_to_square_is_normalised() {
+    let wall = "[[wall]]\npoint = [0, 0, 0]\nnormal = [0, 1e300, 1e300]\n";
+    let scene = parse(&minimal("", wall)).unwrap();
+    let h = std::f64::consts::FRAC_1_SQRT_2;
+    let n = scene.walls[0].normal;
+    assert!(
+        n[0] == 0.0 && (n[1] - h).abs() < 1e-15 && (n[2] - h).abs() < 1e-15,
+        "{n:?}"
+    );
+    let e = err(&minimal(
+        "",
+        &wall.replace("[0, 1e300, 1e300]", "[0, 0, 0]"),
+    ));
+    assert_contains(&e, &["must be a non-zero vector", "got [0, 0, 0]"]);
+}

@@ -223,10 +223,16 @@ impl CpuEngine {
                 None if skin > 1e-3 * cutoff => skin *= 0.5,
                 None if skin > 0.0 => skin = 0.0,
                 None => {
+                    let extent = domain.1 - domain.0;
+                    let (axis, length) = (0..3)
+                        .filter(|&a| periodic[a])
+                        .map(|a| (["x", "y", "z"][a], extent[a]))
+                        .min_by(|a, b| a.1.total_cmp(&b.1))
+                        .unwrap_or(("?", f64::NAN));
                     return Err(PowderError::Scene(format!(
-                        "the domain is shorter than 3 interaction cut-offs ({:.4e} m) along a periodic axis: a pair would meet two periodic images; enlarge [domain] or make the axis non-periodic",
-                        cutoff
-                    )))
+                        "the domain is {length:.4e} m long along the periodic axis {axis}, shorter than 3 interaction cut-offs ({:.4e} m): a pair would meet two periodic images; enlarge [domain] or make the axis non-periodic",
+                        3.0 * cutoff
+                    )));
                 }
             }
         };

@@ -209,3 +209,14 @@ fn restore_continues_bitwise() {
         assert_eq!(b.positions(), before.pos.as_slice());
     }
 }
+
+#[test]
+fn a_periodic_axis_too_short_is_named() {
+    let text = "[domain]\nmin = [0.0, 0.0, 0.0]\nmax = [0.01, 0.003, 0.01]\nperiodic = [false, true, false]\n[simulation]\nduration = 0.1\n[[material]]\nname = \"m\"\ndensity = 2000.0\nmodel = \"lsd\"\nk = 100.0\n[[particles]]\nkind = \"list\"\npositions = [[0.005, 0.0015, 0.005]]\nradius = 1e-3\n";
+    let scene = Scene::from_toml_str(text, "t").unwrap();
+    let e = CpuEngine::new(&scene).err().expect("refused").to_string();
+    assert!(
+        e.contains("3.0000e-3 m long along the periodic axis y"),
+        "{e}"
+    );
+}
