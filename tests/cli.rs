@@ -1545,3 +1545,26 @@ fn a_batch_poured_onto_particles_is_named_as_a_cause() {
         "{err}"
     );
 }
+
+/// A collision where the spheres pass through each other (within a step, or overlapping by
+/// more than the smaller radius) is refused, where it reported e > 1.
+#[test]
+fn collisions_that_pass_through_are_refused() {
+    for (v, part) in [
+        ("1000", "they can pass through each other between two steps"),
+        (
+            "1e300",
+            "they can pass through each other between two steps",
+        ),
+        (
+            "10",
+            "more than the smaller radius 1.1e-3 m (a centre passed",
+        ),
+    ] {
+        let (ok, out, err) = hysteretic(&["--velocity", v]);
+        assert!(!ok, "{out}");
+        assert!(err.contains(part), "{v}: {err}");
+    }
+    let (ok, _, err) = hysteretic(&["--velocity", "5"]);
+    assert!(ok, "{err}");
+}

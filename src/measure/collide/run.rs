@@ -400,6 +400,20 @@ pub(super) fn collide_with(
             ts.default
         }
     };
+    // (with the smaller sphere's centre past the other's surface, or past the wall, the
+    // spheres pass through each other: no contact law holds, and e comes out above 1)
+    let reach = if spec.wall {
+        spec.radius1
+    } else {
+        spec.radius1.min(spec.radius2)
+    };
+    if spec.normal_speed() * dt > reach {
+        return Err(PowderError::Scene(format!(
+            "at v = {} m/s the spheres approach by {:e} m a step of {dt:e} s, more than the smaller radius {reach:e} m: they can pass through each other between two steps; lower --velocity or --dt",
+            spec.velocity,
+            spec.normal_speed() * dt
+        )));
+    }
     let scene = spec.scene(dt);
     let wall_x = scene.walls.first().map_or(0.0, |w| w.point[0]);
     let wall = spec.wall;
@@ -418,7 +432,14 @@ pub(super) fn collide_with(
             run_collision(spec, run, wall_x, dt, "gpu", adapter, trace)
         }
     }?;
-    finite_result(result)
+    let result = finite_result(result)?;
+    if result.delta_max > reach {
+        return Err(PowderError::Run(format!(
+            "the collision at v = {} m/s overlapped by {:e} m, more than the smaller radius {reach:e} m (a centre passed the other sphere's surface or the wall): the impact is too violent for the contact stiffness; lower --velocity or stiffen the contact",
+            result.velocity, result.delta_max
+        )));
+    }
+    Ok(result)
 }
 
 /// The result, or an error where a number of it is not finite (a parameter or speed that
