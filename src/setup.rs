@@ -35,6 +35,8 @@ impl Resolved {
     /// Resolves `scene`: pair and wall models, masses, the time step (checked against its
     /// rule unless `force_dt`), the largest radius and reach.
     pub fn new(scene: &Scene) -> Result<Self, PowderError> {
+        // (a scene built in code has not met the reader's checks)
+        scene.validate()?;
         let n_materials = scene.materials.len();
         let mut models = Vec::with_capacity(n_materials * n_materials);
         for a in 0..n_materials {

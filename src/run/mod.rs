@@ -200,6 +200,8 @@ pub fn run_with<S: Simulation>(
     opts: &RunOptions,
     mut progress: impl FnMut(&Snapshot),
 ) -> Result<RunSummary, PowderError> {
+    // before anything is written: a scene built in code may not have met the reader
+    scene.validate()?;
     let d_min = match opts.tabor_dmin {
         Some(d) => crate::error::require_positive("tabor-dmin", d, "D_min of the Tabor parameter")?,
         None => crate::model::analytic::TABOR_MIN_SEPARATION,

@@ -198,6 +198,7 @@ mod set;
 #[cfg(test)]
 mod tests;
 mod toml_reader;
+mod validate;
 
 use crate::error::PowderError;
 use crate::model::ContactModel;

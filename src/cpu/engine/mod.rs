@@ -426,11 +426,13 @@ impl CpuEngine {
     }
 
     /// Overlap δ = r_i + r_j − |x_i − x_j| of a pair (minimum image on periodic axes).
+    /// Panics where `i` or `j` is not a particle (as a slice index does).
     pub fn overlap(&self, i: usize, j: usize) -> f64 {
         self.radius[i] + self.radius[j] - self.separation(i, j).length()
     }
 
-    /// x_i − x_j, the nearest periodic image on periodic axes.
+    /// x_i − x_j, the nearest periodic image on periodic axes. Panics where `i` or `j` is
+    /// not a particle.
     pub fn separation(&self, i: usize, j: usize) -> DVec3 {
         minimum_image(self.pos[i] - self.pos[j], self.periodic, self.domain)
     }
@@ -499,6 +501,9 @@ impl CpuEngine {
 
     /// One velocity-Verlet step. Velocity-dependent forces see the predicted velocity
     /// v + a·dt (and ω + α·dt), which keeps the damped oscillator second-order accurate.
+    /// After an error the positions and velocities are those of the failed step while the
+    /// clock is not: restore a state taken before ([`CpuEngine::state`]) to go on, as
+    /// `powder run` does.
     pub fn step(&mut self) -> Result<(), PowderError> {
         let chunk = self.threads.chunk();
         let dt = self.dt;
@@ -611,7 +616,8 @@ impl CpuEngine {
             .fold(f64::INFINITY, f64::min)
     }
 
-    /// Whether particle `i` has appeared (pouring: see `ParticleInit::insert_at`).
+    /// Whether particle `i` has appeared (pouring: see `ParticleInit::insert_at`). Panics
+    /// where `i` is not a particle.
     pub fn is_active(&self, i: usize) -> bool {
         self.active[i]
     }

@@ -170,7 +170,7 @@ impl WallPlane {
 }
 
 impl CpuEngine {
-    /// Overlap of particle `i` with wall `w`.
+    /// Overlap of particle `i` with wall `w`. Panics where either is out of range.
     pub fn wall_overlap(&self, w: usize, i: usize) -> f64 {
         let wall = &self.walls[w];
         wall.overlap(self.pos[i], self.radius[i])

@@ -148,6 +148,13 @@ impl GpuEngine {
                 "the saved GPU state was written by a powder version that kept the energy ledger in a buffer of its own (`particle_ledger`; its rows are fields of the particle state now): rerun the scene from the start with this version".into(),
             ));
         }
+        // (the engine's clock is steps·dt: a state taken with another dt does not fit it)
+        if saved.time.to_bits() != (saved.steps as f64 * self.dt).to_bits() {
+            return Err(PowderError::Run(format!(
+                "the saved GPU state is at t = {:e} s after {} steps, which is not {} steps of this run's dt = {:e} s: it was taken with another time step",
+                saved.time, saved.steps, saved.steps, self.dt
+            )));
+        }
         // the ledger cannot be made up for steps already taken, nor dropped silently
         match (saved.has_ledger(), self.has_ledger()) {
             (true, false) => {

@@ -81,6 +81,9 @@ pub fn sweep_on(
 
 /// Runs one collision per velocity, spread over the available cores; results in input order.
 pub fn sweep(spec: &CollideSpec, velocities: &[f64]) -> Result<Vec<CollideResult>, PowderError> {
+    if velocities.is_empty() {
+        return Ok(Vec::new());
+    }
     let threads = std::thread::available_parallelism()
         .map(|n| n.get())
         .unwrap_or(1)

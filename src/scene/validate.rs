@@ -1,0 +1,151 @@
+//! A scene built in code checked for what the engines rely on: what the scene reader
+//! guarantees for a file (every index in range, every number finite and in its range,
+//! every contact law valid), so a library user's mistake is an error, not a panic or NaN.
+
+use super::{DtSetting, Scene, WallPhase};
+use crate::error::PowderError;
+
+fn bad(what: String) -> Result<(), PowderError> {
+    Err(PowderError::Scene(format!("scene: {what}")))
+}
+
+fn finite3(v: &[f64; 3]) -> bool {
+    v.iter().all(|x| x.is_finite())
+}
+
+impl Scene {
+    /// Checks what the engines rely on; the error names the particle, wall, material or
+    /// setting. The scene reader's scenes pass; [`crate::setup::Resolved::new`] (every
+    /// engine) calls it.
+    pub fn validate(&self) -> Result<(), PowderError> {
+        let n = self.materials.len();
+        let d = &self.domain;
+        for a in 0..3 {
+            if !(d.min[a].is_finite() && d.max[a].is_finite() && d.min[a] < d.max[a]) {
+                return bad(format!(
+                    "the domain must have finite min < max on every axis, got {:?} to {:?}",
+                    d.min, d.max
+                ));
+            }
+        }
+        if !finite3(&self.gravity) {
+            return bad(format!("gravity must be finite, got {:?}", self.gravity));
+        }
+        if let DtSetting::Fixed(dt) = self.dt {
+            if !(dt.is_finite() && dt > 0.0) {
+                return bad(format!(
+                    "the time step must be a finite number > 0 s, got {dt}"
+                ));
+            }
+        }
+        // (∞: until the caller stops, as `collide` does)
+        if self.duration.is_nan() || self.duration <= 0.0 {
+            return bad(format!("duration must be > 0 s, got {}", self.duration));
+        }
+        if self.output_every == 0 || self.checkpoint_every == 0 {
+            return bad(format!(
+                "output_every and checkpoint_every must be at least 1 step, got {} and {}",
+                self.output_every, self.checkpoint_every
+            ));
+        }
+        if !(self.impact_velocity.is_finite() && self.impact_velocity > 0.0) {
+            return bad(format!(
+                "impact_velocity must be a finite number > 0 m/s, got {}",
+                self.impact_velocity
+            ));
+        }
+        if n == 0 {
+            return bad("it has no materials".into());
+        }
+        for (m, material) in self.materials.iter().enumerate() {
+            if !(material.density.is_finite() && material.density > 0.0) {
+                return bad(format!(
+                    "material {m} (`{}`): density must be a finite number > 0, got {}",
+                    material.name, material.density
+                ));
+            }
+            material.model.validate().map_err(|e| {
+                PowderError::Scene(format!("scene: material {m} (`{}`): {e}", material.name))
+            })?;
+        }
+        for (k, it) in self.interactions.iter().enumerate() {
+            if it.materials.iter().any(|&m| m >= n) {
+                return bad(format!(
+                    "interaction {k} names materials {:?}, but there are {n}",
+                    it.materials
+                ));
+            }
+            it.model
+                .validate()
+                .map_err(|e| PowderError::Scene(format!("scene: interaction {k}: {e}")))?;
+        }
+        for (w, wall) in self.walls.iter().enumerate() {
+            let len2: f64 = wall.normal.iter().map(|c| c * c).sum();
+            if !(finite3(&wall.point) && finite3(&wall.normal) && len2 > 0.0 && len2.is_finite()) {
+                return bad(format!(
+                    "wall {w} needs a finite point and a finite non-zero normal, got {:?} and {:?}",
+                    wall.point, wall.normal
+                ));
+            }
+            if wall.material >= n {
+                return bad(format!(
+                    "wall {w} has material {}, but there are {n}",
+                    wall.material
+                ));
+            }
+            for (from, phase) in &wall.motion.phases {
+                let ok = from.is_finite()
+                    && match *phase {
+                        WallPhase::Rest => true,
+                        WallPhase::Velocity(v) => finite3(&v),
+                        WallPhase::Servo {
+                            force,
+                            gain,
+                            max_speed,
+                        } => {
+                            force.is_finite()
+                                && gain.is_finite()
+                                && gain > 0.0
+                                && max_speed.is_finite()
+                                && max_speed > 0.0
+                        }
+                    };
+                if !ok {
+                    return bad(format!(
+                        "wall {w}: the phase from t = {from} s must have finite values (a servo a gain and max_speed > 0), got {phase:?}"
+                    ));
+                }
+            }
+        }
+        if self.particles.is_empty() {
+            return bad("it has no particles".into());
+        }
+        for (i, p) in self.particles.iter().enumerate() {
+            if p.material >= n {
+                return bad(format!(
+                    "particle {i} has material {}, but there are {n}",
+                    p.material
+                ));
+            }
+            if !(p.radius.is_finite() && p.radius > 0.0) {
+                return bad(format!(
+                    "particle {i}: radius must be a finite number > 0 m, got {}",
+                    p.radius
+                ));
+            }
+            if !(finite3(&p.position) && finite3(&p.velocity) && finite3(&p.angular_velocity)) {
+                return bad(format!(
+                    "particle {i}: position, velocity and angular velocity must be finite, got {:?}, {:?}, {:?}",
+                    p.position, p.velocity, p.angular_velocity
+                ));
+            }
+            if !(p.insert_at.is_finite() && p.insert_at >= 0.0) {
+                return bad(format!(
+                    "particle {i}: insert_at must be a finite time >= 0 s, got {}",
+                    p.insert_at
+                ));
+            }
+        }
+        Ok(())
+    }
+}

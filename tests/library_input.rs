@@ -1,0 +1,163 @@
+//! A scene built in code meets no reader: the engines and the run loop check it
+//! themselves, and a mistake is an error that names it, never a panic, NaN or lost output.
+
+use powder::cpu::CpuEngine;
+use powder::gpu::{GpuContext, GpuEngine};
+use powder::model::{ContactModel, HystereticParams, LsdParams};
+use powder::run::{run_cpu_with, RunOptions};
+use powder::scene::{
+    Domain, DtSetting, Material, ParticleInit, Scene, Wall, WallMotion, WallPhase,
+};
+
+fn particle(x: f64) -> ParticleInit {
+    ParticleInit {
+        position: [x, 0.005, 0.002],
+        velocity: [0.0; 3],
+        angular_velocity: [0.0; 3],
+        radius: 1e-3,
+        material: 0,
+        insert_at: 0.0,
+    }
+}
+
+/// Two spheres above a floor: a valid scene that each case breaks in one place.
+fn scene() -> Scene {
+    Scene {
+        name: "library_input".into(),
+        domain: Domain {
+            min: [0.0; 3],
+            max: [0.01, 0.01, 0.01],
+            periodic: [false; 3],
+        },
+        gravity: [0.0, 0.0, -9.81],
+        dt: DtSetting::Auto,
+        force_dt: false,
+        jump_impulses: None,
+        duration: 0.001,
+        output_every: 50,
+        impact_velocity: 1.0,
+        checkpoint_every: 100,
+        contact_output: None,
+        materials: vec![Material {
+            name: "powder".into(),
+            density: 2000.0,
+            model: ContactModel::Lsd(LsdParams::new(300.0, 1e-3)),
+        }],
+        interactions: Vec::new(),
+        walls: vec![Wall {
+            point: [0.0; 3],
+            normal: [0.0, 0.0, 1.0],
+            motion: WallMotion::fixed(),
+            material: 0,
+        }],
+        particles: vec![particle(0.003), particle(0.006)],
+    }
+}
+
+fn refused(s: &Scene, part: &str) {
+    let e = match CpuEngine::new(s) {
+        Ok(_) => panic!("accepted a scene that should fail with {part:?}"),
+        Err(e) => e.to_string(),
+    };
+    assert!(e.contains(part), "{e:?} lacks {part:?}");
+}
+
+#[test]
+fn engines_refuse_a_scene_built_wrong_in_code() {
+    CpuEngine::new(&scene()).unwrap();
+    let mut s = scene();
+    s.particles[1].material = 3;
+    refused(&s, "particle 1 has material 3, but there are 1");
+    let mut s = scene();
+    s.walls[0].motion = WallMotion::always(WallPhase::Servo {
+        force: 1.0,
+        gain: 1e-3,
+        max_speed: -0.01,
+    });
+    refused(&s, "wall 0: the phase from t = 0 s");
+    let mut s = scene();
+    s.walls[0].normal = [0.0; 3];
+    refused(
+        &s,
+        "wall 0 needs a finite point and a finite non-zero normal",
+    );
+    let mut s = scene();
+    s.particles[0].position[2] = f64::NAN;
+    refused(
+        &s,
+        "particle 0: position, velocity and angular velocity must be finite",
+    );
+    let mut s = scene();
+    s.dt = DtSetting::Fixed(0.0);
+    refused(&s, "the time step must be a finite number > 0 s, got 0");
+    let mut s = scene();
+    s.domain.max[0] = -1.0;
+    refused(&s, "the domain must have finite min < max");
+    let mut s = scene();
+    s.materials[0].model = ContactModel::Hysteretic(HystereticParams {
+        kp: 50.0,
+        ..HystereticParams::paper_figure()
+    });
+    refused(&s, "material 0 (`powder`)");
+    let mut s = scene();
+    s.particles[0].insert_at = f64::NAN;
+    refused(&s, "insert_at must be a finite time >= 0 s");
+}
+
+#[test]
+fn a_run_refuses_a_bad_scene_before_it_touches_the_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let opts = RunOptions {
+        out_dir: Some(dir.path().to_path_buf()),
+        max_steps: Some(100),
+        ..Default::default()
+    };
+    run_cpu_with(&scene(), &opts, |_| {}).unwrap();
+    let listing = |p: &std::path::Path| {
+        let mut names: Vec<_> = std::fs::read_dir(p)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        names.sort();
+        names
+    };
+    let before = listing(dir.path());
+    let series = std::fs::read(dir.path().join("series.csv")).unwrap();
+    let mut bad = scene();
+    bad.output_every = 0;
+    let e = run_cpu_with(&bad, &opts, |_| {}).unwrap_err().to_string();
+    assert!(
+        e.contains("output_every and checkpoint_every must be at least 1"),
+        "{e}"
+    );
+    assert_eq!(listing(dir.path()), before);
+    assert_eq!(
+        std::fs::read(dir.path().join("series.csv")).unwrap(),
+        series
+    );
+}
+
+#[test]
+fn an_empty_sweep_is_empty() {
+    use powder::measure::collide::{sweep, CollideSpec};
+    let spec = CollideSpec::head_on(
+        ContactModel::Hysteretic(HystereticParams::paper_figure()),
+        1.1e-3,
+        2000.0,
+        1.0,
+    );
+    assert!(sweep(&spec, &[]).unwrap().is_empty());
+}
+
+#[test]
+fn a_gpu_state_of_another_time_step_is_refused() {
+    let Ok(ctx) = GpuContext::new() else { return };
+    let mut a = GpuEngine::new(&scene(), ctx).unwrap();
+    a.run_steps(10).unwrap();
+    let saved = a.save_state().unwrap();
+    let mut s = scene();
+    s.dt = DtSetting::Fixed(1e-7);
+    let mut b = GpuEngine::new(&s, GpuContext::new().unwrap()).unwrap();
+    let e = b.restore_state(saved).unwrap_err().to_string();
+    assert!(e.contains("it was taken with another time step"), "{e}");
+}
