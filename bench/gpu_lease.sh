@@ -19,7 +19,8 @@ cd "$(dirname "$0")/.."
 # deadline are not run)
 TESTS=(gpu_engine sticking ledger mixed_materials friction force_jumps gpu_default_limits
        gpu_grid gpu_pages gpu_rebuild_chain walls periodic stability collide_jkr collide_hysteretic
-       run_outputs contact_network pouring run_no_ledger collide_krijt quiet_batches cli bench)
+       run_outputs contact_network pouring run_no_ledger collide_krijt quiet_batches cli bench
+       library_input)
 # (the working tree, .gl, .gpubench and these must stay under the 64 MiB a call carries;
 # `prepare` refuses more than 60. The binaries share most of their code, so one xz archive
 # with a dictionary larger than a binary holds them in about a fifth of their gzipped

@@ -1,12 +1,14 @@
 //! A scene built in code meets no reader: the engines and the run loop check it
 //! themselves, and a mistake is an error that names it, never a panic, NaN or lost output.
 
+mod common;
+
 use powder::cpu::CpuEngine;
 use powder::gpu::{GpuContext, GpuEngine};
 use powder::model::{ContactModel, HystereticParams, LsdParams};
 use powder::run::{run_cpu_with, RunOptions};
 use powder::scene::{
-    Domain, DtSetting, Material, ParticleInit, Scene, Wall, WallMotion, WallPhase,
+    Domain, DtSetting, Interaction, Material, ParticleInit, Scene, Wall, WallMotion, WallPhase,
 };
 
 fn particle(x: f64) -> ParticleInit {
@@ -102,6 +104,50 @@ fn engines_refuse_a_scene_built_wrong_in_code() {
     let mut s = scene();
     s.particles[0].insert_at = f64::NAN;
     refused(&s, "insert_at must be a finite time >= 0 s");
+    let mut s = scene();
+    s.particles[1].velocity[0] = f64::INFINITY;
+    refused(
+        &s,
+        "particle 1: position, velocity and angular velocity must be finite",
+    );
+    let mut s = scene();
+    s.gravity[2] = f64::NAN;
+    refused(&s, "gravity must be finite");
+    let mut s = scene();
+    s.dt = DtSetting::Fixed(-1e-6);
+    refused(
+        &s,
+        "the time step must be a finite number > 0 s, got -0.000001",
+    );
+    let mut s = scene();
+    s.checkpoint_every = 0;
+    refused(
+        &s,
+        "output_every and checkpoint_every must be at least 1 step",
+    );
+    let mut s = scene();
+    s.walls[0].point[0] = f64::NAN;
+    refused(&s, "wall 0 needs a finite point");
+    let mut s = scene();
+    s.walls[0].motion = WallMotion::always(WallPhase::Velocity([0.0, 0.0, f64::NAN]));
+    refused(&s, "wall 0: the phase from t = 0 s must have finite values");
+    let mut s = scene();
+    s.walls[0].motion.phases = vec![(1e-3, WallPhase::Rest), (0.0, WallPhase::Rest)];
+    refused(&s, "wall 0: its phases must start at increasing times");
+    let mut s = scene();
+    s.interactions.push(Interaction {
+        materials: [0, 7],
+        model: ContactModel::Lsd(LsdParams::new(300.0, 1e-3)),
+    });
+    refused(&s, "interaction 0 names materials [0, 7], but there are 1");
+    let mut s = scene();
+    s.domain.periodic[0] = true;
+    s.gravity = [1.0, 0.0, -9.81];
+    refused(&s, "gravity has a component along the periodic axis x");
+    let mut s = scene();
+    s.domain.periodic[2] = true;
+    s.gravity = [0.0; 3];
+    refused(&s, "wall 0 faces the periodic axis z");
 }
 
 #[test]
@@ -151,7 +197,7 @@ fn an_empty_sweep_is_empty() {
 
 #[test]
 fn a_gpu_state_of_another_time_step_is_refused() {
-    let Ok(ctx) = GpuContext::new() else { return };
+    let Some(ctx) = common::gpu() else { return };
     let mut a = GpuEngine::new(&scene(), ctx).unwrap();
     a.run_steps(10).unwrap();
     let saved = a.save_state().unwrap();

@@ -378,7 +378,7 @@ pub fn run_with<S: Simulation>(
             let now = obs.energies;
             let scale = energy_scale(scale, &now, &initial.energies);
             let totals = now.total().zip(initial.energies.total());
-            monitor(&mut engine, (dt_rule, scene.pours()), totals, scale)?;
+            monitor(&mut engine, dt_rule, scene.pours(), totals, scale)?;
             Ok((obs, scale))
         });
         let obs = match stepped {

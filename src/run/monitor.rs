@@ -22,7 +22,8 @@ pub const MAX_ENERGY_GROWTH: f64 = 0.05;
 /// adhesion and moving walls legitimately feed it.
 pub(super) fn monitor(
     engine: &mut impl Simulation,
-    (dt_rule, pours): (&str, bool),
+    dt_rule: &str,
+    pours: bool,
     totals: Option<(f64, f64)>,
     scale: f64,
 ) -> Result<(), PowderError> {

@@ -40,25 +40,28 @@ pub(super) fn check_periodic(src: &Src, scene: &Scene) -> Res<()> {
     Ok(())
 }
 
-/// `x` and, along each periodic axis where it lies within `reach` of a seam, its image one
-/// period over: the places a partner within `reach` of x may be found.
+/// `x` and, along each periodic axis where it lies within `reach` of a seam, its images
+/// one period over: the places a partner within `reach` of x may be found.
 fn periodic_images(x: [f64; 3], reach: f64, d: &Domain) -> Vec<[f64; 3]> {
     let mut images = vec![x];
     for a in 0..3 {
+        if !d.periodic[a] {
+            continue;
+        }
         let period = d.max[a] - d.min[a];
-        let shift = if !d.periodic[a] {
-            continue;
-        } else if x[a] - d.min[a] < reach {
-            period
-        } else if d.max[a] - x[a] < reach {
-            -period
-        } else {
-            continue;
-        };
-        for k in 0..images.len() {
-            let mut image = images[k];
-            image[a] += shift;
-            images.push(image);
+        // (both, where the period is shorter than 2·reach)
+        let shifts = [
+            (x[a] - d.min[a] < reach).then_some(period),
+            (d.max[a] - x[a] < reach).then_some(-period),
+        ];
+        for shift in shifts.into_iter().flatten() {
+            for k in 0..images.len() {
+                if images[k][a] == x[a] {
+                    let mut image = images[k];
+                    image[a] += shift;
+                    images.push(image);
+                }
+            }
         }
     }
     images

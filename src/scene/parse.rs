@@ -541,9 +541,10 @@ fn parse_walls(root: &Tbl, names: &[&str]) -> Res<Vec<Wall>> {
         let given = n;
         let mut n = n;
         let mut len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-        // (a long normal's squares overflow: scaled by its largest component first)
+        // (a long or tiny normal's squares overflow or underflow: scaled by its largest
+        // component first)
         let scale = n.iter().fold(0.0_f64, |m, c| m.max(c.abs()));
-        if len == f64::INFINITY && scale.is_finite() {
+        if (len == f64::INFINITY || len == 0.0) && scale > 0.0 && scale.is_finite() {
             n = n.map(|c| c / scale);
             len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
         }

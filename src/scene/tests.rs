@@ -731,6 +731,17 @@ fn overlaps_across_a_periodic_seam_are_refused() {
     assert_contains(&e, &["particles 0", "and 1", "across the periodic seam"]);
     // apart by 2.2 mm across the seam: no overlap
     parse(&text.replace("0.0091", "0.0089")).unwrap();
+    // across two seams at once (a corner): 1.4 mm apart only through the corner image
+    let corner = minimal("", "")
+        .replace(
+            "max = [0.01, 0.01, 0.01]",
+            "max = [0.01, 0.01, 0.01]\nperiodic = [true, true, false]",
+        )
+        .replace(
+            "[[0.005, 0.005, 0.005]]",
+            "[[0.0005, 0.0005, 0.005], [0.0095, 0.0095, 0.005]]",
+        );
+    assert_contains(&err(&corner), &["particles 0", "across the periodic seam"]);
 }
 
 #[test]
@@ -832,6 +843,8 @@ fn a_wall_normal_too_long_to_square_is_normalised() {
         n[0] == 0.0 && (n[1] - h).abs() < 1e-15 && (n[2] - h).abs() < 1e-15,
         "{n:?}"
     );
+    let tiny = parse(&minimal("", &wall.replace("1e300", "1e-200"))).unwrap();
+    assert_eq!(tiny.walls[0].normal, n);
     let e = err(&minimal(
         "",
         &wall.replace("[0, 1e300, 1e300]", "[0, 0, 0]"),

@@ -31,6 +31,14 @@ impl Scene {
         if !finite3(&self.gravity) {
             return bad(format!("gravity must be finite, got {:?}", self.gravity));
         }
+        for (a, axis) in ["x", "y", "z"].iter().enumerate() {
+            if d.periodic[a] && self.gravity[a] != 0.0 {
+                return bad(format!(
+                    "gravity has a component along the periodic axis {axis} ({:?}): particles would fall forever",
+                    self.gravity
+                ));
+            }
+        }
         if let DtSetting::Fixed(dt) = self.dt {
             if !(dt.is_finite() && dt > 0.0) {
                 return bad(format!(
@@ -92,6 +100,20 @@ impl Scene {
                     "wall {w} has material {}, but there are {n}",
                     wall.material
                 ));
+            }
+            if wall.motion.phases.windows(2).any(|p| p[1].0 <= p[0].0) {
+                return bad(format!(
+                    "wall {w}: its phases must start at increasing times, got {:?}",
+                    wall.motion.phases.iter().map(|p| p.0).collect::<Vec<_>>()
+                ));
+            }
+            for (a, axis) in ["x", "y", "z"].iter().enumerate() {
+                if d.periodic[a] && wall.normal[a].abs() > 1e-12 {
+                    return bad(format!(
+                        "wall {w} faces the periodic axis {axis} (normal {:?}): a wall across a periodic axis cuts the periodic images",
+                        wall.normal
+                    ));
+                }
             }
             for (from, phase) in &wall.motion.phases {
                 let ok = from.is_finite()

@@ -31,6 +31,28 @@ pub(super) fn check_f32_range(
     if !(finite(&d.min) && finite(&d.max) && finite(&extent)) {
         return refuse(format!("the [domain] spans {:?} to {:?} m", d.min, d.max));
     }
+    // (points are held as cells and f32 offsets from the domain's corner)
+    let from_corner = |x: &[f64; 3]| [0, 1, 2].map(|a| x[a] - d.min[a]);
+    for (w, wall) in scene.walls.iter().enumerate() {
+        let phases_fit = wall.motion.phases.iter().all(|(from, phase)| {
+            (*from as f32).is_finite()
+                && match *phase {
+                    WallPhase::Rest => true,
+                    WallPhase::Velocity(v) => finite(&v),
+                    WallPhase::Servo {
+                        force,
+                        gain,
+                        max_speed,
+                    } => finite(&[force, gain, max_speed]),
+                }
+        });
+        if !finite(&from_corner(&wall.point)) || !phases_fit {
+            return refuse(format!(
+                "wall {w}'s point {:?} m or motion {:?}",
+                wall.point, wall.motion.phases
+            ));
+        }
+    }
     if !finite(&scene.gravity) {
         return refuse(format!("gravity is {:?} m/s^2", scene.gravity));
     }
@@ -46,6 +68,9 @@ pub(super) fn check_f32_range(
             return refuse(format!(
                 "particle {i}'s moment of inertia is {inertia:e} kg m^2"
             ));
+        }
+        if !finite(&from_corner(&p.position)) {
+            return refuse(format!("particle {i}'s position is {:?} m", p.position));
         }
         if !finite(&p.velocity) || !finite(&p.angular_velocity) {
             return refuse(format!(
@@ -116,6 +141,9 @@ mod tests {
             "gravity is [0.0, 0.0, -1e39]",
         );
         refused(LSD, g, "[0.01, 0.01, 1e200]", "the [domain] spans");
+        // (with friction the particles rotate: I = 2/5·m·r² underflows first)
+        let rough = format!("{}\nfriction = 0.3", LSD.replace("2000.0", "1e-26"));
+        refused(&rough, g, max, "particle 0's moment of inertia");
         let stiff = "density = 2000.0\nmodel = \"hysteretic\"\nk1 = 1e40\nkp = 5e40\nkc = 1e40\nphi_f = 0.05";
         refused(stiff, g, max, "the contact law of materials `m` and `m`");
     }

@@ -409,8 +409,13 @@ pub(super) fn collide_with(
     };
     if spec.normal_speed() * dt > reach {
         return Err(PowderError::Scene(format!(
-            "at v = {} m/s the spheres approach by {:e} m a step of {dt:e} s, more than the smaller radius {reach:e} m: they can pass through each other between two steps; lower --velocity or --dt",
+            "at v = {} m/s the {} by {:e} m a step of {dt:e} s, more than the smaller radius {reach:e} m: they can pass through each other between two steps; lower --velocity or --dt",
             spec.velocity,
+            if spec.wall {
+                "sphere approaches the wall"
+            } else {
+                "spheres approach"
+            },
             spec.normal_speed() * dt
         )));
     }
