@@ -7,37 +7,13 @@ use super::toml_reader::{fmt_vec, Res, Src, AXES};
 use super::{Domain, Scene, OVERLAP_TOLERANCE};
 use crate::error::PowderError;
 
-/// Periodic axes: no wall may face one (its normal would have a component along it) and
-/// gravity may not point along one (the potential energy would be unbounded).
+/// Periodic axes: no wall may face one and gravity may not point along one
+/// ([`Scene::periodic_conflict`], which scenes built in code meet too).
 pub(super) fn check_periodic(src: &Src, scene: &Scene) -> Res<()> {
-    let d = &scene.domain;
-    for (a, axis) in AXES.iter().enumerate() {
-        if !d.periodic[a] {
-            continue;
-        }
-        if scene.gravity[a] != 0.0 {
-            return Err(src.err(
-                None,
-                format!(
-                    "gravity {} has a component along the periodic axis {axis}: particles would fall forever and the gravitational energy is unbounded; make the axis non-periodic (with walls) or gravity perpendicular to it",
-                    fmt_vec(scene.gravity)
-                ),
-            ));
-        }
-        for (w, wall) in scene.walls.iter().enumerate() {
-            if wall.normal[a].abs() > 1e-12 {
-                return Err(src.err(
-                    None,
-                    format!(
-                        "[[wall]] #{} (normal {}) faces the periodic axis {axis}: a wall across a periodic axis would cut the periodic images; make the axis non-periodic or remove the wall",
-                        w + 1,
-                        fmt_vec(wall.normal)
-                    ),
-                ));
-            }
-        }
+    match scene.periodic_conflict() {
+        Some(why) => Err(src.err(None, why)),
+        None => Ok(()),
     }
-    Ok(())
 }
 
 /// `x` and, along each periodic axis where it lies within `reach` of a seam, its images

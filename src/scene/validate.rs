@@ -14,6 +14,32 @@ fn finite3(v: &[f64; 3]) -> bool {
 }
 
 impl Scene {
+    /// Gravity along a periodic axis (particles would fall forever: the gravitational
+    /// energy is unbounded) or a wall facing one (it would cut the periodic images).
+    pub(super) fn periodic_conflict(&self) -> Option<String> {
+        let d = &self.domain;
+        for (a, axis) in ["x", "y", "z"]
+            .iter()
+            .enumerate()
+            .filter(|(a, _)| d.periodic[*a])
+        {
+            if self.gravity[a] != 0.0 {
+                return Some(format!(
+                    "gravity has a component along the periodic axis {axis} ({:?}): particles would fall forever and the gravitational energy is unbounded; make the axis non-periodic (with walls) or gravity perpendicular to it",
+                    self.gravity
+                ));
+            }
+            if let Some(w) = self.walls.iter().position(|w| w.normal[a].abs() > 1e-12) {
+                return Some(format!(
+                    "wall {w} faces the periodic axis {axis} ([[wall]] #{}, normal {:?}): a wall across a periodic axis would cut the periodic images; make the axis non-periodic or remove the wall",
+                    w + 1,
+                    self.walls[w].normal
+                ));
+            }
+        }
+        None
+    }
+
     /// Checks what the engines rely on; the error names the particle, wall, material or
     /// setting. The scene reader's scenes pass; [`crate::setup::Resolved::new`] (every
     /// engine) calls it.
@@ -31,13 +57,8 @@ impl Scene {
         if !finite3(&self.gravity) {
             return bad(format!("gravity must be finite, got {:?}", self.gravity));
         }
-        for (a, axis) in ["x", "y", "z"].iter().enumerate() {
-            if d.periodic[a] && self.gravity[a] != 0.0 {
-                return bad(format!(
-                    "gravity has a component along the periodic axis {axis} ({:?}): particles would fall forever",
-                    self.gravity
-                ));
-            }
+        if let Some(why) = self.periodic_conflict() {
+            return Err(PowderError::Scene(format!("scene: {why}")));
         }
         if let DtSetting::Fixed(dt) = self.dt {
             if !(dt.is_finite() && dt > 0.0) {
@@ -106,14 +127,6 @@ impl Scene {
                     "wall {w}: its phases must start at increasing times, got {:?}",
                     wall.motion.phases.iter().map(|p| p.0).collect::<Vec<_>>()
                 ));
-            }
-            for (a, axis) in ["x", "y", "z"].iter().enumerate() {
-                if d.periodic[a] && wall.normal[a].abs() > 1e-12 {
-                    return bad(format!(
-                        "wall {w} faces the periodic axis {axis} (normal {:?}): a wall across a periodic axis cuts the periodic images",
-                        wall.normal
-                    ));
-                }
             }
             for (from, phase) in &wall.motion.phases {
                 let ok = from.is_finite()
