@@ -12,20 +12,56 @@
 # $OUT (8 files: the device tool returns at most 8). Budget: SUITE_BUDGET
 # seconds for the suite (default 200; 0 leaves it out), TEST_SECONDS for each test binary (default 90), and
 # no test binary starts after DEADLINE seconds (default 380; the profiles follow, at most
-# 60 s each (120 at 6*10^7), none started after 520 s: the call's limit is 590).
+# 60 s each (120 at 6*10^7), none started after 520 s: the call's limit is 590; PROFILES=0
+# leaves them out). ONLY="a b" runs those test binaries instead of the list below.
+# A binary that runs out of time is diagnosed before it is killed (each thread's state,
+# kernel wait channel and CPU seconds, twice a second apart: a deadlock sleeps, a loop
+# spins), and the tests it left running are run again alone (HANG_SECONDS each, default
+# 30, at most 3), diagnosed the same way.
 set -u
 cd "$(dirname "$0")/.."
 # every test binary that runs the GPU engine, the most telling first (those after the
 # deadline are not run)
 TESTS=(gpu_engine sticking ledger mixed_materials friction force_jumps gpu_default_limits
-       gpu_grid gpu_pages gpu_rebuild_chain walls periodic stability collide_jkr collide_hysteretic
-       run_outputs contact_network pouring run_no_ledger collide_krijt quiet_batches cli bench
-       library_input)
+       gpu_grid gpu_pages gpu_rebuild_chain walls periodic stability collide_jkr run_outputs
+       contact_network pouring run_no_ledger collide_krijt quiet_batches cli bench library_input
+       collide_hysteretic)
 # (the working tree, .gl, .gpubench and these must stay under the 64 MiB a call carries;
 # `prepare` refuses more than 60. The binaries share most of their code, so one xz archive
 # with a dictionary larger than a binary holds them in about a fifth of their gzipped
 # sizes. The feature files also run their CPU-only tests there, a few seconds of each
 # binary's 90.)
+
+# Runs a command for at most $1 seconds with its output in $2; where it runs out of time,
+# appends each of its threads' state, wait channel and CPU ticks (twice, a second apart)
+# to $2, then kills it and returns 124.
+watched() {
+    local limit=$1 log=$2
+    shift 2
+    "$@" >"$log" 2>&1 &
+    local pid=$! waited=0
+    while kill -0 "$pid" 2>/dev/null && [ "$waited" -lt "$limit" ]; do
+        sleep 1
+        waited=$((waited + 1))
+    done
+    if ! kill -0 "$pid" 2>/dev/null; then
+        wait "$pid"
+        return
+    fi
+    for sample in 1 2; do
+        echo "--- threads of the unfinished process, sample $sample (name state wchan utime stime)"
+        for task in /proc/"$pid"/task/*; do
+            # (fields after the parenthesised name: state is 3rd, utime 14th, stime 15th)
+            stat=$(sed 's/.*) //' "$task/stat" 2>/dev/null)
+            echo "$(cat "$task/comm" 2>/dev/null) $(cut -d' ' -f1 <<<"$stat")" \
+                "$(cat "$task/wchan" 2>/dev/null) $(cut -d' ' -f12,13 <<<"$stat")"
+        done
+        [ "$sample" = 1 ] && sleep 1
+    done >>"$log"
+    kill -9 "$pid" 2>/dev/null
+    wait "$pid" 2>/dev/null
+    return 124
+}
 
 case "${1:-}" in
 prepare)
@@ -73,17 +109,30 @@ run)
         || { echo "unpacking the test binaries failed"; exit 1; }
     : >"$OUT/tests.log"
     summary=""
+    [ -n "${ONLY:-}" ] && read -r -a TESTS <<<"$ONLY"
     for t in "${TESTS[@]}"; do
         left=$(( ${DEADLINE:-380} - SECONDS ))
         if [ "$left" -lt 20 ]; then summary="$summary$t not run (deadline)"$'\n'; continue; fi
         [ "$left" -gt "${TEST_SECONDS:-90}" ] && left=${TEST_SECONDS:-90}
         start=$(date +%s)
-        timeout "$left" "/tmp/gputests/$t" --test-threads "${TEST_THREADS:-4}" >"/tmp/gputests/$t.log" 2>&1
+        watched "$left" "/tmp/gputests/$t.log" "/tmp/gputests/$t" --test-threads "${TEST_THREADS:-4}"
         rc=$?
         { echo "=== $t (rc=$rc)"; cat "/tmp/gputests/$t.log"; } >>"$OUT/tests.log"
         line=$(grep "^test result" "/tmp/gputests/$t.log" | tail -n 1)
         summary="$summary$t rc=$rc $(( $(date +%s) - start ))s ${line#test result: }"$'\n'
+        if [ "$rc" = 124 ]; then
+            # the tests still running when it was killed, each alone
+            for name in $(sed -n 's/^test \(.*\) has been running for over .*/\1/p' \
+                    "/tmp/gputests/$t.log" | head -n 3); do
+                watched "${HANG_SECONDS:-30}" /tmp/gputests/alone.log "/tmp/gputests/$t" \
+                    --exact "$name" --test-threads 1
+                rc=$?
+                { echo "=== $t $name alone (rc=$rc)"; cat /tmp/gputests/alone.log; } >>"$OUT/tests.log"
+                summary="$summary  $name alone rc=$rc"$'\n'
+            done
+        fi
     done
+    [ "${PROFILES:-1}" = 0 ] && { printf '%s' "$summary"; exit 0; }
     # the pass profiles (GPU timestamps): hysteretic at 6*10^7 (the lists' entries and the
     # particle state in pages beyond the largest buffer), both cases at 10^6, JKR at 10^7
     for run in hysteretic:6e7:120 hysteretic:1e6:60 jkr:1e6:60 jkr:1e7:60; do

@@ -48,11 +48,16 @@ fn quiet_batches_give_the_same_bits_kept_or_rolled_back() {
             kept > 0 && back > 0,
             "{case:?}: {kept} kept, {back} rolled back"
         );
-        assert!(
-            auto.quiet_batches().0 > 0,
-            "{case:?}: {:?}",
-            auto.quiet_batches()
-        );
+        // `auto` runs quiet batches only on the software path, chosen by the adapter kind
+        if auto.adapter_is_software() {
+            assert!(
+                auto.quiet_batches().0 > 0,
+                "{case:?}: {:?}",
+                auto.quiet_batches()
+            );
+        } else {
+            assert_eq!(auto.quiet_batches(), (0, 0), "{case:?}");
+        }
         let reference = off.state().unwrap();
         for e in [&always, &auto] {
             assert_eq!(e.rebuilds().unwrap(), rebuilds);
