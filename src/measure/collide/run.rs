@@ -182,6 +182,20 @@ impl CollideSpec {
     }
 }
 
+/// Steps that close a gap of `gap` m at `vn` m/s (at least 1; saturating).
+fn approach_steps(gap: f64, vn: f64, dt: f64) -> u64 {
+    ((gap.max(0.0) / (vn * dt)).ceil() as u64).max(1)
+}
+
+/// Steps after which a pair that has not touched is an error: twice the closing steps and
+/// 100 more (rounding, an f32 engine), at most [`MAX_STEPS`].
+fn approach_limit(gap: f64, vn: f64, dt: f64) -> u64 {
+    approach_steps(gap, vn, dt)
+        .saturating_mul(2)
+        .saturating_add(100)
+        .min(MAX_STEPS)
+}
+
 /// The settle time in steps of `dt` (at least 4: its last quarter is one step or more).
 pub(super) fn settle_steps(spec: &CollideSpec, dt: f64) -> u64 {
     ((spec.settle / dt).ceil() as u64).max(4)
@@ -217,19 +231,33 @@ pub(super) fn run_collision(
     let mut vt_in = None;
     let mut e = 0.0;
     let mut vt_out = DVec3::ZERO;
-    let mut vt_before = spec.pair_state(&view0, wall_x).3;
+    let (delta0, _, _, mut vt_before) = spec.pair_state(&view0, wall_x);
+    let approach = approach_limit(-delta0, vn0, dt);
     let mut last;
     loop {
-        if run.steps() >= MAX_STEPS {
-            return Err(PowderError::Run(format!(
-                "the collision at v = {} m/s was not decided after {MAX_STEPS} steps (t = {:e} s): the pair neither separated nor turned back; try a larger --dt or --velocity",
-                spec.velocity,
-                run.time()
-            )));
-        }
         run.step()?;
         let view = run.view()?;
         let (delta, vn, n, vt) = spec.pair_state(&view, wall_x);
+        if run.steps() >= MAX_STEPS || (!touched && delta <= 0.0 && run.steps() >= approach) {
+            // (no force outside contact pushes the pair apart: it closes at vn0 or faster)
+            let what = if touched {
+                format!("was not decided after {} steps", run.steps())
+            } else {
+                format!(
+                    "had not touched after {} steps, where closing the gap of {:e} m at {vn0:e} m/s takes {}",
+                    run.steps(),
+                    -delta0,
+                    approach_steps(-delta0, vn0, dt)
+                )
+            };
+            return Err(PowderError::Run(format!(
+                "the collision at v = {} m/s {what} (t = {:e} s, {} backend; overlap {delta:e} m, approach speed {vn:e} m/s, contact flag {:?}): the pair neither separated nor turned back; try a larger --dt or --velocity, and report it if the other backend decides it",
+                spec.velocity,
+                run.time(),
+                backend,
+                view.in_contact
+            )));
+        }
         if let Some(rows) = trace.as_deref_mut() {
             if let Some((f, history)) = run.trace_sample() {
                 rows.push(trace_row(
@@ -466,5 +494,72 @@ fn finite_result(r: CollideResult) -> Result<CollideResult, PowderError> {
             x.unwrap_or(f64::NAN)
         ))),
         None => Ok(r),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::{ContactModel, HystereticParams};
+
+    /// An engine that never moves the pair.
+    struct Still {
+        steps: u64,
+        x2: f64,
+    }
+
+    impl CollisionRun for Still {
+        fn step(&mut self) -> Result<(), PowderError> {
+            self.steps += 1;
+            Ok(())
+        }
+        fn view(&self) -> Result<PairView, PowderError> {
+            Ok(PairView {
+                pos: [DVec3::ZERO, DVec3::new(self.x2, 0.0, 0.0)],
+                vel: [DVec3::ZERO; 2],
+                omega: [DVec3::ZERO; 2],
+                in_contact: Some(false),
+            })
+        }
+        fn time(&self) -> f64 {
+            self.steps as f64 * 1e-6
+        }
+        fn steps(&self) -> u64 {
+            self.steps
+        }
+        fn energy(&self, _: &PairView) -> (f64, Option<f64>, Option<f64>) {
+            (0.0, None, None)
+        }
+        fn rotates(&self) -> bool {
+            false
+        }
+        fn trace_sample(&self) -> Option<(DVec3, Option<crate::model::ContactHistory>)> {
+            None
+        }
+    }
+
+    /// A pair the engine never brings together is an error within twice the closing
+    /// steps (and 100), not after MAX_STEPS.
+    #[test]
+    fn a_pair_that_never_touches_is_an_error_soon() {
+        let law = ContactModel::Hysteretic(HystereticParams::paper_figure());
+        let spec = CollideSpec::head_on(law, 1e-3, 2000.0, 0.5);
+        // a gap of 1e-4 m closes in 200 steps of 1e-6 s at 0.5 m/s
+        let still = Still {
+            steps: 0,
+            x2: 2e-3 + 1e-4,
+        };
+        let err = run_collision(&spec, still, 0.0, 1e-6, "test", None, None)
+            .unwrap_err()
+            .to_string();
+        let steps: u64 = err
+            .split("had not touched after ")
+            .nth(1)
+            .and_then(|rest| rest.split(' ').next())
+            .and_then(|n| n.parse().ok())
+            .unwrap_or_else(|| panic!("{err}"));
+        assert!((500..=502).contains(&steps), "{err}");
+        assert!(err.contains("takes 20"), "{err}");
+        assert!(err.contains("test backend"), "{err}");
     }
 }
