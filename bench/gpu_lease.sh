@@ -12,12 +12,12 @@
 # $OUT (8 files: the device tool returns at most 8). Budget: SUITE_BUDGET
 # seconds for the suite (default 200; 0 leaves it out), TEST_SECONDS for each test binary (default 90), and
 # no test binary starts after DEADLINE seconds (default 380; the profiles follow, at most
-# 60 s each (120 at 6*10^7), none started after 520 s: the call's limit is 590; PROFILES=0
-# leaves them out). ONLY="a b" runs those test binaries instead of the list below.
+# 60 s each (120 at 6*10^7), none started unless it ends by 585 s: the call's limit is 590;
+# PROFILES=0 leaves them out). ONLY="a b" runs those test binaries instead of the list below.
 # A binary that runs out of time is diagnosed before it is killed (each thread's state,
-# kernel wait channel and CPU seconds, twice a second apart: a deadlock sleeps, a loop
-# spins), and the tests it left running are run again alone (HANG_SECONDS each, default
-# 30, at most 3), diagnosed the same way.
+# kernel wait channel and CPU ticks, twice a second apart: a deadlock sleeps, a loop
+# spins), and the tests it left unfinished are run again alone (HANG_SECONDS each, default
+# 30, at most 3, none past the deadline), diagnosed the same way.
 set -u
 cd "$(dirname "$0")/.."
 # every test binary that runs the GPU engine, the most telling first (those after the
@@ -32,33 +32,39 @@ TESTS=(gpu_engine sticking ledger mixed_materials friction force_jumps gpu_defau
 # sizes. The feature files also run their CPU-only tests there, a few seconds of each
 # binary's 90.)
 
-# Runs a command for at most $1 seconds with its output in $2; where it runs out of time,
-# appends each of its threads' state, wait channel and CPU ticks (twice, a second apart)
-# to $2, then kills it and returns 124.
+# Runs a command in a session of its own for at most $1 seconds, its output appended to $2
+# (emptied first); where it runs out of time, appends the state, wait channel and CPU ticks
+# of every thread of every process in the session (twice, a second apart: a deadlock
+# sleeps, a loop spins) to $2, then kills the session and returns 124.
 watched() {
     local limit=$1 log=$2
     shift 2
-    "$@" >"$log" 2>&1 &
-    local pid=$! waited=0
-    while kill -0 "$pid" 2>/dev/null && [ "$waited" -lt "$limit" ]; do
-        sleep 1
-        waited=$((waited + 1))
+    : >"$log"
+    local launch=()
+    command -v setsid >/dev/null && launch=(setsid)
+    "${launch[@]}" "$@" >>"$log" 2>&1 &
+    local pid=$! end=$((SECONDS + limit))
+    while kill -0 "$pid" 2>/dev/null && [ "$SECONDS" -lt "$end" ]; do
+        sleep 0.2
     done
     if ! kill -0 "$pid" 2>/dev/null; then
         wait "$pid"
         return
     fi
     for sample in 1 2; do
-        echo "--- threads of the unfinished process, sample $sample (name state wchan utime stime)"
-        for task in /proc/"$pid"/task/*; do
-            # (fields after the parenthesised name: state is 3rd, utime 14th, stime 15th)
-            stat=$(sed 's/.*) //' "$task/stat" 2>/dev/null)
-            echo "$(cat "$task/comm" 2>/dev/null) $(cut -d' ' -f1 <<<"$stat")" \
-                "$(cat "$task/wchan" 2>/dev/null) $(cut -d' ' -f12,13 <<<"$stat")"
+        echo "--- the unfinished session's threads, sample $sample (pid/tid name state wchan utime stime, ticks)"
+        # (after the parenthesised name: state, ppid, pgrp, session, ...; utime 12th, stime 13th)
+        for proc in $(awk -v sid="$pid" '{ sub(/.*\) /, ""); if ($4 == sid) { split(FILENAME, p, "/"); print p[3] } }' \
+                /proc/[0-9]*/stat 2>/dev/null); do
+            for task in /proc/"$proc"/task/*; do
+                stat=$(sed 's/.*) //' "$task/stat" 2>/dev/null)
+                echo "$proc/${task##*/} $(cat "$task/comm" 2>/dev/null) $(cut -d' ' -f1 <<<"$stat")" \
+                    "$(cat "$task/wchan" 2>/dev/null) $(cut -d' ' -f12,13 <<<"$stat")"
+            done
         done
         [ "$sample" = 1 ] && sleep 1
     done >>"$log"
-    kill -9 "$pid" 2>/dev/null
+    kill -9 -- -"$pid" 2>/dev/null
     wait "$pid" 2>/dev/null
     return 124
 }
@@ -121,9 +127,15 @@ run)
         line=$(grep "^test result" "/tmp/gputests/$t.log" | tail -n 1)
         summary="$summary$t rc=$rc $(( $(date +%s) - start ))s ${line#test result: }"$'\n'
         if [ "$rc" = 124 ]; then
-            # the tests still running when it was killed, each alone
-            for name in $(sed -n 's/^test \(.*\) has been running for over .*/\1/p' \
-                    "/tmp/gputests/$t.log" | head -n 3); do
+            # the tests that did not finish, each alone (none past the deadline)
+            "/tmp/gputests/$t" --list --format terse 2>/dev/null | sed -n 's/: test$//p' \
+                | sort >/tmp/gputests/all.txt
+            sed -n 's/^test \(.*\) \.\.\. .*/\1/p' "/tmp/gputests/$t.log" | sort >/tmp/gputests/done.txt
+            for name in $(comm -23 /tmp/gputests/all.txt /tmp/gputests/done.txt | head -n 3); do
+                if [ $((SECONDS + ${HANG_SECONDS:-30})) -gt "${DEADLINE:-380}" ]; then
+                    summary="$summary  $name alone: not run (deadline)"$'\n'
+                    continue
+                fi
                 watched "${HANG_SECONDS:-30}" /tmp/gputests/alone.log "/tmp/gputests/$t" \
                     --exact "$name" --test-threads 1
                 rc=$?
@@ -132,12 +144,12 @@ run)
             done
         fi
     done
-    [ "${PROFILES:-1}" = 0 ] && { printf '%s' "$summary"; exit 0; }
     # the pass profiles (GPU timestamps): hysteretic at 6*10^7 (the lists' entries and the
     # particle state in pages beyond the largest buffer), both cases at 10^6, JKR at 10^7
     for run in hysteretic:6e7:120 hysteretic:1e6:60 jkr:1e6:60 jkr:1e7:60; do
+        [ "${PROFILES:-1}" = 0 ] && break
         IFS=: read -r case size limit <<<"$run"
-        if [ "$SECONDS" -gt 520 ]; then echo "profile $case $size: not run (deadline)"; continue; fi
+        if [ $((SECONDS + limit)) -gt 585 ]; then echo "profile $case $size: not run (deadline)"; continue; fi
         timeout "$limit" .gpubench/powder bench --backend gpu --case "$case" --sizes "$size" --steps 400 \
             --warmup 32 --profile --json "$OUT/profile_${case}_$size.json" >/tmp/profile.txt 2>&1
         echo "profile $case $size: rc=$?"; grep "passes" /tmp/profile.txt

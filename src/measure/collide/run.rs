@@ -242,6 +242,16 @@ pub(super) fn run_collision(
             // (no force outside contact pushes the pair apart: it closes at vn0 or faster)
             let what = if touched {
                 format!("was not decided after {} steps", run.steps())
+            } else if delta < delta0 {
+                // (a grazing impact: the pair passed by, the gap grew)
+                return Err(PowderError::Run(format!(
+                    "the spheres at v = {} m/s and {}° passed each other without touching (the gap grew from {:e} to {:e} m after {} steps): raise --impact-angle",
+                    spec.velocity,
+                    spec.impact_angle,
+                    -delta0,
+                    -delta,
+                    run.steps()
+                )));
             } else {
                 format!(
                     "had not touched after {} steps, where closing the gap of {:e} m at {vn0:e} m/s takes {}",
@@ -559,7 +569,20 @@ mod tests {
             .and_then(|n| n.parse().ok())
             .unwrap_or_else(|| panic!("{err}"));
         assert!((500..=502).contains(&steps), "{err}");
-        assert!(err.contains("takes 20"), "{err}");
+        assert!(err.contains("takes 200 "), "{err}");
         assert!(err.contains("test backend"), "{err}");
+    }
+
+    /// A grazing impact whose spheres pass each other is named as such (CPU engine).
+    #[test]
+    fn a_grazing_miss_names_the_impact_angle() {
+        let law = ContactModel::Hysteretic(HystereticParams::paper_figure());
+        let spec = CollideSpec {
+            impact_angle: 1e-4,
+            ..CollideSpec::head_on(law, 1e-3, 2000.0, 0.1)
+        };
+        let err = collide_on(&spec, Backend::Cpu).unwrap_err().to_string();
+        assert!(err.contains("passed each other without touching"), "{err}");
+        assert!(err.contains("--impact-angle"), "{err}");
     }
 }
