@@ -252,25 +252,31 @@ fn a_checkpoint_branches_into_wall_phases_that_follow_it() {
     );
 }
 
-/// The checkpoint `bytes` with its header saying format 19 (the members otherwise as they
+/// The checkpoint `bytes` with its header changed by `edit` (the members otherwise as they
 /// are).
-fn as_format_19(bytes: &[u8]) -> Vec<u8> {
+fn with_header(bytes: &[u8], edit: impl Fn(&mut serde_json::Value)) -> Vec<u8> {
     let archive = npz::Archive::read(bytes).unwrap();
     let members: Vec<(String, npz::Member)> = archive
         .names()
         .map(|name| {
             let raw = archive.raw(name).unwrap().to_vec();
             let raw = match name {
-                "powder.json" => String::from_utf8(raw)
-                    .unwrap()
-                    .replace("\"format\": 18", "\"format\": 19")
-                    .into_bytes(),
+                "powder.json" => {
+                    let mut header: serde_json::Value = serde_json::from_slice(&raw).unwrap();
+                    edit(&mut header);
+                    serde_json::to_vec_pretty(&header).unwrap()
+                }
                 _ => raw,
             };
             (name.to_string(), npz::Member::Raw(raw))
         })
         .collect();
     npz::write(&members)
+}
+
+/// The checkpoint `bytes` with its header saying format 19.
+fn as_format_19(bytes: &[u8]) -> Vec<u8> {
+    with_header(bytes, |h| h["format"] = 19.into())
 }
 
 #[test]
@@ -315,6 +321,14 @@ fn foreign_or_broken_checkpoints_are_refused() {
     // another format is named: the archive written again with another header
     let err = refusal(&as_format_19(&bytes));
     assert!(err.contains("(format 19)"), "{err}");
+    // a header whose step is not the state's
+    let err = refusal(&with_header(&bytes, |h| {
+        h["steps"] = (h["steps"].as_u64().unwrap() + 1).into()
+    }));
+    assert!(
+        err.contains("damaged or truncated") && err.contains("its header says step"),
+        "{err}"
+    );
     // the bincode checkpoints of formats up to 16 are named as such
     let err = refusal(b"POWDERCK\x11\x00\x00\x00 and the rest");
     assert!(err.contains("format 16 or earlier"), "{err}");

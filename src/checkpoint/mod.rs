@@ -132,8 +132,25 @@ pub fn save(path: &Path, scene: &Scene, engine: &CpuEngine) -> Result<(), Powder
 /// Reads a CPU checkpoint of `scene` from `path`.
 pub fn load(path: &Path, scene: &Scene) -> Result<CpuState, PowderError> {
     let bytes = read(path)?;
-    let archive = open(&bytes, path, scene, "cpu")?;
-    cpu::state(&|name| array(&archive, name)).map_err(|e| damaged(path, &e.0))
+    let (header, archive) = open(&bytes, path, scene, "cpu")?;
+    let state = cpu::state(&|name| array(&archive, name)).map_err(|e| damaged(path, &e.0))?;
+    same_clock(path, &header, state.steps, state.time)?;
+    Ok(state)
+}
+
+/// The header's step and time against the state's (bitwise: both are written from one
+/// value); the scene's digest was taken at the header's time.
+fn same_clock(path: &Path, header: &Header, steps: u64, time: f64) -> Result<(), PowderError> {
+    if header.steps != steps || header.time.to_bits() != time.to_bits() {
+        return Err(damaged(
+            path,
+            &format!(
+                "its header says step {} at t = {:e} s, its state step {steps} at t = {time:e} s",
+                header.steps, header.time
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Writes a saved GPU state to `path` (atomically).
@@ -146,11 +163,14 @@ pub fn save_gpu(path: &Path, scene: &Scene, state: &GpuSavedState) -> Result<(),
 /// Reads a GPU checkpoint of `scene` from `path`.
 pub fn load_gpu(path: &Path, scene: &Scene) -> Result<GpuSavedState, PowderError> {
     let bytes = read(path)?;
-    let archive = open(&bytes, path, scene, "gpu")?;
+    let (header, archive) = open(&bytes, path, scene, "gpu")?;
     let about = archive
         .raw("gpu.json")
         .ok_or_else(|| damaged(path, "`gpu.json` is missing"))?;
-    gpu::state(about, &|name| array(&archive, name)).map_err(|e| damaged(path, &e.0))
+    let state =
+        gpu::state(about, &|name| array(&archive, name)).map_err(|e| damaged(path, &e.0))?;
+    same_clock(path, &header, state.steps, state.time)?;
+    Ok(state)
 }
 
 /// The backend (`"cpu"` or `"gpu"`) that wrote the checkpoint at `path`.
@@ -263,7 +283,7 @@ fn open<'a>(
     path: &Path,
     scene: &Scene,
     backend: &str,
-) -> Result<Archive<'a>, PowderError> {
+) -> Result<(Header, Archive<'a>), PowderError> {
     let (header, archive) = header(bytes, path)?;
     if header.backend != backend {
         return Err(PowderError::Run(format!(
@@ -285,7 +305,7 @@ fn open<'a>(
             header.time
         )));
     }
-    Ok(archive)
+    Ok((header, archive))
 }
 
 /// The array `name` of a checkpoint (missing or malformed: a [`StateError`]).

@@ -298,8 +298,7 @@ pub(crate) fn collide_cmd(a: &CollideArgs) -> Result<(), PowderError> {
                 text.push_str(&row.csv());
                 text.push('\n');
             }
-            std::fs::write(path, text)
-                .map_err(|e| PowderError::io(format!("cannot write {}", path.display()), e))?;
+            powder::output::atomic::write_atomic(path, text.as_bytes())?;
             eprintln!("wrote {} ({} steps)", path.display(), rows.len());
         }
         if let Some(path) = &a.plot {

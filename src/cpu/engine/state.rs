@@ -104,6 +104,44 @@ impl CpuEngine {
                 s.dt, self.dt
             )));
         }
+        // (time advances by dt a step: only rounding may separate it from steps·dt)
+        let expected = s.steps as f64 * self.dt;
+        let off = (s.time - expected).abs();
+        if off.is_nan() || off > 1e-6 * expected.max(self.dt) {
+            return Err(PowderError::Run(format!(
+                "the checkpoint's time {:e} s is not its {} steps of dt = {:e} s ({expected:e} s): the checkpoint is damaged or was edited",
+                s.time, s.steps, self.dt
+            )));
+        }
+        let vectors = [
+            ("positions", &s.pos),
+            ("velocities", &s.vel),
+            ("accelerations", &s.acc),
+            ("forces", &s.force),
+            ("angular velocities", &s.omega),
+            ("torques", &s.torque),
+            ("wall points", &s.wall_points),
+            ("wall velocities", &s.wall_velocities),
+        ];
+        for (what, v) in vectors {
+            if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+                return Err(PowderError::Run(format!(
+                    "the checkpoint's {what} hold a value that is not finite at index {i} ({}): the checkpoint is damaged or was edited",
+                    v[i]
+                )));
+            }
+        }
+        for (what, x) in [
+            ("dissipated energy", s.dissipated),
+            ("wall work", s.wall_work),
+            ("inserted energy", s.inserted),
+        ] {
+            if !x.is_finite() {
+                return Err(PowderError::Run(format!(
+                    "the checkpoint's {what} is {x}, not finite: the checkpoint is damaged or was edited"
+                )));
+            }
+        }
         // contact keys: pairs i < j < n and walls (w, i) with i < n, each once
         let mut pair_keys: Vec<(u32, u32)> = s.contacts.iter().map(|(k, _)| *k).collect();
         let mut wall_keys: Vec<(u32, u32)> = s.wall_contacts.iter().map(|(k, _)| *k).collect();

@@ -208,6 +208,23 @@ fn restore_continues_bitwise() {
         assert!(b.restore(bad).is_err());
         assert_eq!(b.positions(), before.pos.as_slice());
     }
+    // a time that is not its steps of dt, and values that are not finite
+    let mut bad = a.state();
+    bad.time *= 2.0;
+    let e = b.restore(bad).unwrap_err().to_string();
+    assert!(e.contains("is not its 300 steps"), "{e}");
+    let mut bad = a.state();
+    bad.vel[4].y = f64::NAN;
+    let e = b.restore(bad).unwrap_err().to_string();
+    assert!(
+        e.contains("velocities hold a value that is not finite at index 4"),
+        "{e}"
+    );
+    let mut bad = a.state();
+    bad.wall_work = f64::INFINITY;
+    let e = b.restore(bad).unwrap_err().to_string();
+    assert!(e.contains("wall work is inf"), "{e}");
+    assert_eq!(b.positions(), before.pos.as_slice());
 }
 
 #[test]
