@@ -163,6 +163,43 @@ fn outputs_are_written_and_a_resumed_run_is_bitwise_identical() {
             .unwrap();
     assert_eq!(summary["steps"], 3000);
     assert!(summary["solid_fraction_bounding_box"].as_f64().unwrap() > 0.0);
+    // a fresh run into the same folder removes that run's summary and snapshots at its
+    // start (a file of another series stays)
+    let other = split.path().join("snapshots/other_0000000500.vtp");
+    std::fs::write(&other, "another series").unwrap();
+    let summary = split.path().join("summary.json");
+    let mut checked = 0;
+    run_cpu_with(&scene, &options(split.path(), 1000, None), |_| {
+        assert!(
+            !summary.exists(),
+            "the earlier run's summary is still there"
+        );
+        checked += 1;
+    })
+    .unwrap();
+    assert!(checked > 0);
+    for folder in ["snapshots", "contacts"] {
+        let mut files: Vec<String> = std::fs::read_dir(split.path().join(folder))
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|f| f.starts_with("cohesive_cluster"))
+            .collect();
+        files.sort();
+        let steps: Vec<&str> = files
+            .iter()
+            .map(|f| &f[f.len() - 14..f.len() - 4])
+            .collect();
+        assert_eq!(
+            steps,
+            ["0000000000", "0000000500", "0000001000"],
+            "{folder}"
+        );
+    }
+    assert!(other.exists());
+    for collection in ["cohesive_cluster.pvd", "cohesive_cluster_contacts.pvd"] {
+        let pvd = std::fs::read_to_string(split.path().join(collection)).unwrap();
+        assert_eq!(pvd.matches("<DataSet").count(), 3, "{collection}");
+    }
 }
 
 /// A checkpoint resumes under a scene that changes only what follows it — the wall
@@ -277,6 +314,41 @@ fn with_header(bytes: &[u8], edit: impl Fn(&mut serde_json::Value)) -> Vec<u8> {
 /// The checkpoint `bytes` with its header saying format 19.
 fn as_format_19(bytes: &[u8]) -> Vec<u8> {
     with_header(bytes, |h| h["format"] = 19.into())
+}
+
+/// A resume keeps only the rows its checkpoint's run wrote: into a folder of another run
+/// it is refused (nothing there changes); into an empty one the series starts at the
+/// checkpoint's step.
+#[test]
+fn a_resume_into_another_runs_folder_is_refused() {
+    let scene = cluster();
+    let mut other = scene.clone();
+    other.gravity[2] *= 0.5;
+    let (mine, theirs, empty) = (
+        tempfile::tempdir().unwrap(),
+        tempfile::tempdir().unwrap(),
+        tempfile::tempdir().unwrap(),
+    );
+    run(&scene, mine.path(), 1500, None);
+    run(&other, theirs.path(), 1500, None);
+    let ckpt = mine.path().join("checkpoint.bin");
+    let before = std::fs::read(theirs.path().join("series.csv")).unwrap();
+    let err = run_cpu_with(&scene, &options(theirs.path(), 3000, Some(&ckpt)), |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("is not the one the run of checkpoint") && err.contains("--out"),
+        "{err}"
+    );
+    assert_eq!(
+        std::fs::read(theirs.path().join("series.csv")).unwrap(),
+        before
+    );
+    // its own folder and an empty one resume
+    run(&scene, empty.path(), 3000, Some(&ckpt));
+    let rows = std::fs::read_to_string(empty.path().join("series.csv")).unwrap();
+    assert!(rows.lines().nth(1).unwrap().starts_with("2000,"), "{rows}");
+    run(&scene, mine.path(), 3000, Some(&ckpt));
 }
 
 #[test]

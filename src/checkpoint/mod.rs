@@ -17,6 +17,7 @@ use crate::cpu::{CpuEngine, CpuState};
 use crate::error::PowderError;
 use crate::gpu::GpuSavedState;
 use crate::output::atomic::write_atomic;
+use crate::output::series_csv::SeriesMark;
 use crate::scene::Scene;
 use npz::{Archive, Array, Member, NpzError};
 use serde::{Deserialize, Serialize};
@@ -53,6 +54,10 @@ pub struct Header {
     pub steps: u64,
     /// Simulated time, s.
     pub time: f64,
+    /// The series' rows the run had written up to the checkpoint (`series.csv`; none
+    /// without one), so a resume keeps only that run's rows.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub series: Option<SeriesMark>,
 }
 
 /// Why a checkpoint's state arrays could not be taken (a member missing or not the array
@@ -92,7 +97,7 @@ pub fn run_digest(scene: &Scene, t: f64) -> u64 {
             w
         })
         .collect();
-    let mut h = Fnv(0xcbf29ce484222325);
+    let mut h = Fnv::new();
     // (streamed: a packing of 10^7 particles never becomes one string)
     let _ = write!(
         h,
@@ -105,7 +110,14 @@ pub fn run_digest(scene: &Scene, t: f64) -> u64 {
 }
 
 /// FNV-1a, fed as text.
-struct Fnv(u64);
+pub(crate) struct Fnv(pub(crate) u64);
+
+impl Fnv {
+    /// The hash of nothing yet.
+    pub(crate) fn new() -> Self {
+        Self(0xcbf29ce484222325)
+    }
+}
 
 impl std::fmt::Write for Fnv {
     fn write_str(&mut self, s: &str) -> std::fmt::Result {
@@ -117,14 +129,21 @@ impl std::fmt::Write for Fnv {
     }
 }
 
-/// Writes the CPU engine's state to `path` (atomically).
-pub fn save(path: &Path, scene: &Scene, engine: &CpuEngine) -> Result<(), PowderError> {
+/// Writes the CPU engine's state to `path` (atomically), with the mark of the series the
+/// run has written so far (`None`: it writes none).
+pub fn save(
+    path: &Path,
+    scene: &Scene,
+    engine: &CpuEngine,
+    series: Option<SeriesMark>,
+) -> Result<(), PowderError> {
     let state = engine.state();
     save_state(
         path,
         scene,
         "cpu",
         (state.steps, state.time),
+        series,
         cpu::arrays(&state),
     )
 }
@@ -153,11 +172,24 @@ fn same_clock(path: &Path, header: &Header, steps: u64, time: f64) -> Result<(),
     Ok(())
 }
 
-/// Writes a saved GPU state to `path` (atomically).
-pub fn save_gpu(path: &Path, scene: &Scene, state: &GpuSavedState) -> Result<(), PowderError> {
+/// Writes a saved GPU state to `path` (atomically), with the mark of the series the run
+/// has written so far (`None`: it writes none).
+pub fn save_gpu(
+    path: &Path,
+    scene: &Scene,
+    state: &GpuSavedState,
+    series: Option<SeriesMark>,
+) -> Result<(), PowderError> {
     let arrays = gpu::arrays(state)
         .map_err(|e| PowderError::Run(format!("cannot encode the checkpoint: {}", e.0)))?;
-    save_state(path, scene, "gpu", (state.steps, state.time), arrays)
+    save_state(
+        path,
+        scene,
+        "gpu",
+        (state.steps, state.time),
+        series,
+        arrays,
+    )
 }
 
 /// Reads a GPU checkpoint of `scene` from `path`.
@@ -173,6 +205,13 @@ pub fn load_gpu(path: &Path, scene: &Scene) -> Result<GpuSavedState, PowderError
     Ok(state)
 }
 
+/// The mark of the series the run of the checkpoint at `path` had written (`None`: none,
+/// or a checkpoint without one).
+pub fn series_of(path: &Path) -> Result<Option<SeriesMark>, PowderError> {
+    let bytes = read(path)?;
+    Ok(header(&bytes, path)?.0.series)
+}
+
 /// The backend (`"cpu"` or `"gpu"`) that wrote the checkpoint at `path`.
 pub fn backend_of(path: &Path) -> Result<String, PowderError> {
     let bytes = read(path)?;
@@ -184,6 +223,7 @@ fn save_state(
     scene: &Scene,
     backend: &str,
     (steps, time): (u64, f64),
+    series: Option<SeriesMark>,
     arrays: Vec<(String, Member)>,
 ) -> Result<(), PowderError> {
     let header = Header {
@@ -195,6 +235,7 @@ fn save_state(
         scene_digest: run_digest(scene, time),
         steps,
         time,
+        series,
     };
     let json = serde_json::to_vec_pretty(&header)
         .map_err(|e| PowderError::Run(format!("cannot encode the checkpoint: {e}")))?;

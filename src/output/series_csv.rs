@@ -2,9 +2,13 @@
 //! to the operating system at once, so a run killed at any point leaves every row it
 //! computed (`tail -f` follows it), and a resumed run drops the rows after its checkpoint.
 
+use serde::{Deserialize, Serialize};
+use std::fmt::Write as _;
 use std::fs::{File, OpenOptions};
 use std::io::Write;
 use std::path::{Path, PathBuf};
+
+use crate::checkpoint::Fnv;
 
 use crate::error::PowderError;
 use crate::output::atomic::write_atomic;
@@ -15,6 +19,45 @@ pub struct SeriesCsv {
     file: File,
     /// The step of the last row, so a step is never written twice.
     last: Option<u64>,
+    /// The rows written so far, counted and hashed.
+    mark: SeriesMark,
+}
+
+/// Which rows a series holds: how many and their FNV-1a hash (a checkpoint keeps the mark
+/// of the rows its run had written, so a resume keeps no other run's rows).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct SeriesMark {
+    /// Rows, the header not counted.
+    pub rows: u64,
+    /// FNV-1a of the rows, each with its line end.
+    pub digest: u64,
+}
+
+impl Default for SeriesMark {
+    fn default() -> Self {
+        Self {
+            rows: 0,
+            digest: Fnv::new().0,
+        }
+    }
+}
+
+impl SeriesMark {
+    /// The mark of `rows`.
+    pub fn of(rows: &[String]) -> Self {
+        let mut mark = Self::default();
+        for r in rows {
+            mark.add(r);
+        }
+        mark
+    }
+
+    fn add(&mut self, row: &str) {
+        let mut h = Fnv(self.digest);
+        let _ = writeln!(h, "{row}");
+        self.digest = h.0;
+        self.rows += 1;
+    }
 }
 
 impl SeriesCsv {
@@ -35,7 +78,13 @@ impl SeriesCsv {
             path: path.to_path_buf(),
             file,
             last: kept.last().and_then(|r| row_step(r)),
+            mark: SeriesMark::of(kept),
         })
+    }
+
+    /// The rows written so far.
+    pub fn mark(&self) -> SeriesMark {
+        self.mark
     }
 
     /// Appends the row of `step` in one write (a torn last line, from a kill or a full
@@ -49,6 +98,7 @@ impl SeriesCsv {
             .write_all(line.as_bytes())
             .map_err(|e| PowderError::io(format!("cannot write `{}`", self.path.display()), e))?;
         self.last = Some(step);
+        self.mark.add(row);
         Ok(())
     }
 

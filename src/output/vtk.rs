@@ -157,6 +157,38 @@ impl Series {
         self.entries = found.into_iter().map(|(_, t, f)| (t, f)).collect();
     }
 
+    /// Removes an earlier run's snapshots of this series (its name's `.vtp` files in the
+    /// folder) and its collection (a fresh run starts its own); returns how many files.
+    pub fn clear(&mut self) -> Result<usize, PowderError> {
+        let prefix = format!("{}_", self.name);
+        let ours = |file: &str| {
+            file.strip_prefix(&prefix)
+                .and_then(|rest| rest.strip_suffix(".vtp"))
+                .is_some_and(|step| !step.is_empty() && step.bytes().all(|b| b.is_ascii_digit()))
+        };
+        let folder = self.dir.join(&self.folder);
+        let mut removed = 0;
+        let files = std::fs::read_dir(&folder).into_iter().flatten().flatten();
+        for path in files
+            .filter(|e| ours(&e.file_name().to_string_lossy()))
+            .map(|e| e.path())
+            .chain([self.dir.join(&self.collection)])
+        {
+            match std::fs::remove_file(&path) {
+                Ok(()) => removed += 1,
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+                Err(e) => {
+                    return Err(PowderError::io(
+                        format!("cannot remove the earlier run's `{}`", path.display()),
+                        e,
+                    ))
+                }
+            }
+        }
+        self.entries.clear();
+        Ok(removed)
+    }
+
     /// The folder the snapshots go to.
     pub fn folder(&self) -> PathBuf {
         self.dir.join(&self.folder)

@@ -15,7 +15,7 @@ use crate::cpu::{ContactStats, CpuEngine, Threads};
 use crate::error::PowderError;
 use crate::gpu::{GpuContext, GpuEngine, GpuOptions};
 use crate::output::atomic::{remove_stale_temps, write_atomic};
-use crate::output::series_csv::{self, SeriesCsv};
+use crate::output::series_csv::{self, SeriesCsv, SeriesMark};
 use crate::output::{contacts, vtk};
 use crate::run::observed::ObservedEnergies;
 use crate::run::simulation::{Observation, Simulation};
@@ -229,6 +229,20 @@ pub fn run_with<S: Simulation>(
         (Some(p), Some(step)) => series_csv::rows_until(p, step, &header)?,
         _ => Vec::new(),
     };
+    // rows kept on resume must be those the checkpoint's run wrote (no series at all: it
+    // starts at the checkpoint's step)
+    if let (Some(ckpt), Some(p), Some(step)) = (&opts.resume, &csv_path, resumed_from) {
+        let ours = crate::checkpoint::series_of(ckpt)?;
+        if !kept.is_empty() && ours.is_some_and(|m| m != SeriesMark::of(&kept)) {
+            return Err(PowderError::Run(format!(
+                "the series `{}` is not the one the run of checkpoint `{}` wrote (its {} rows up to step {step} differ from that run's {}): resume into the folder that run wrote (--out), or into an empty one, where the series starts at the checkpoint's step",
+                p.display(),
+                ckpt.display(),
+                kept.len(),
+                ours.map_or(0, |m| m.rows)
+            )));
+        }
+    }
     let mut series = match out {
         Some(d) if !opts.no_snapshots => Some(vtk::Series::new(d, &scene.name)?),
         _ => None,
@@ -262,18 +276,31 @@ pub fn run_with<S: Simulation>(
     // a fresh run replaces the series (a resume keeps its rows up to the checkpoint's step:
     // a killed run may have written more), and the checkpoint of the run it replaces goes
     // with it (resumed, it would continue a series that is no longer there)
-    if let (Some(c), None) = (&ckpt_path, resumed_from) {
-        match std::fs::remove_file(c) {
-            Ok(()) if opts.verbose => {
-                eprintln!("removed the earlier run's checkpoint {}", c.display())
+    // with its summary and its snapshots (left beside the new run's, a killed run would
+    // look finished, its folder holding two runs)
+    if let (Some(d), None) = (out, resumed_from) {
+        for c in [d.join("checkpoint.bin"), d.join("summary.json")] {
+            match std::fs::remove_file(&c) {
+                Ok(()) if opts.verbose => {
+                    eprintln!("removed the earlier run's {}", c.display())
+                }
+                Ok(()) => {}
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+                Err(e) => {
+                    return Err(PowderError::io(
+                        format!("cannot remove `{}`", c.display()),
+                        e,
+                    ))
+                }
             }
-            Ok(()) => {}
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
-            Err(e) => {
-                return Err(PowderError::io(
-                    format!("cannot remove `{}`", c.display()),
-                    e,
-                ))
+        }
+        for s in series.iter_mut().chain(network.iter_mut()) {
+            let removed = s.clear()?;
+            if removed > 0 && opts.verbose {
+                eprintln!(
+                    "removed the earlier run's {removed} snapshot files in {}",
+                    s.folder().display()
+                );
             }
         }
     }
@@ -328,7 +355,7 @@ pub fn run_with<S: Simulation>(
     let save = |engine: &S, csv: &mut Option<SeriesCsv>| -> Result<(), PowderError> {
         if let (Some(c), Some(rows)) = (&ckpt_path, csv.as_mut()) {
             rows.sync()?;
-            engine.write_checkpoint(c, scene)?;
+            engine.write_checkpoint(c, scene, Some(rows.mark()))?;
         }
         Ok(())
     };

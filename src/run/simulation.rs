@@ -7,6 +7,7 @@ use crate::cpu::{ContactStats, CpuEngine, CpuState, Partner};
 use crate::error::PowderError;
 use crate::gpu::{GpuEngine, GpuSavedState};
 use crate::output::contacts::ContactNetwork;
+use crate::output::series_csv::SeriesMark;
 use crate::run::observed::ObservedEnergies;
 use crate::scene::Scene;
 use glam::DVec3;
@@ -80,7 +81,12 @@ pub trait Simulation {
     /// Returns to a state from [`Self::save`].
     fn restore(&mut self, saved: Self::Saved) -> Result<(), PowderError>;
     /// Writes a checkpoint that resumes bitwise on this backend.
-    fn write_checkpoint(&self, path: &Path, scene: &Scene) -> Result<(), PowderError>;
+    fn write_checkpoint(
+        &self,
+        path: &Path,
+        scene: &Scene,
+        series: Option<SeriesMark>,
+    ) -> Result<(), PowderError>;
     /// Continues from a checkpoint of `scene` written by this backend.
     fn read_checkpoint(&mut self, path: &Path, scene: &Scene) -> Result<(), PowderError>;
     /// A particle with a non-finite position or velocity (the GPU engine reports
@@ -150,8 +156,13 @@ impl Simulation for CpuEngine {
     fn restore(&mut self, saved: CpuState) -> Result<(), PowderError> {
         CpuEngine::restore(self, saved)
     }
-    fn write_checkpoint(&self, path: &Path, scene: &Scene) -> Result<(), PowderError> {
-        checkpoint::save(path, scene, self)
+    fn write_checkpoint(
+        &self,
+        path: &Path,
+        scene: &Scene,
+        series: Option<SeriesMark>,
+    ) -> Result<(), PowderError> {
+        checkpoint::save(path, scene, self, series)
     }
     fn read_checkpoint(&mut self, path: &Path, scene: &Scene) -> Result<(), PowderError> {
         CpuEngine::restore(self, checkpoint::load(path, scene)?)
@@ -245,8 +256,13 @@ impl Simulation for GpuEngine {
     fn restore(&mut self, saved: GpuSavedState) -> Result<(), PowderError> {
         self.restore_state(saved)
     }
-    fn write_checkpoint(&self, path: &Path, scene: &Scene) -> Result<(), PowderError> {
-        checkpoint::save_gpu(path, scene, &self.save_state()?)
+    fn write_checkpoint(
+        &self,
+        path: &Path,
+        scene: &Scene,
+        series: Option<SeriesMark>,
+    ) -> Result<(), PowderError> {
+        checkpoint::save_gpu(path, scene, &self.save_state()?, series)
     }
     fn read_checkpoint(&mut self, path: &Path, scene: &Scene) -> Result<(), PowderError> {
         let saved = checkpoint::load_gpu(path, scene)?;
