@@ -127,13 +127,17 @@ fn outputs_are_written_and_a_resumed_run_is_bitwise_identical() {
     let scene = cluster();
     let straight = tempfile::tempdir().unwrap();
     let split = tempfile::tempdir().unwrap();
-    run(&scene, straight.path(), 3000, None);
+    let whole = run(&scene, straight.path(), 3000, None);
     let first = run(&scene, split.path(), 1500, None);
     assert_eq!(first.steps, 1500);
     let ckpt = split.path().join("checkpoint.bin");
     let resumed = run(&scene, split.path(), 3000, Some(&ckpt));
     assert_eq!(resumed.resumed_from, Some(1500));
     assert_eq!(resumed.steps, 3000);
+    // the energy balance measured from the run's start, as the straight run's
+    let balance = whole.energy_balance_error.expect("the ledger's balance");
+    assert!(balance > 0.0);
+    assert_eq!(resumed.energy_balance_error, Some(balance));
     // identical state ⇒ identical checkpoint bytes
     let a = std::fs::read(straight.path().join("checkpoint.bin")).unwrap();
     let b = std::fs::read(split.path().join("checkpoint.bin")).unwrap();

@@ -18,6 +18,7 @@ use crate::error::PowderError;
 use crate::gpu::GpuSavedState;
 use crate::output::atomic::write_atomic;
 use crate::output::series_csv::SeriesMark;
+use crate::run::MonitorReference;
 use crate::scene::Scene;
 use npz::{Archive, Array, Member, NpzError};
 use serde::{Deserialize, Serialize};
@@ -54,10 +55,21 @@ pub struct Header {
     pub steps: u64,
     /// Simulated time, s.
     pub time: f64,
+    /// What the run keeps beside its state.
+    #[serde(default)]
+    pub run: RunMarks,
+}
+
+/// What a run keeps beside its state in a checkpoint's header (`run`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct RunMarks {
     /// The series' rows the run had written up to the checkpoint (`series.csv`; none
     /// without one), so a resume keeps only that run's rows.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub series: Option<SeriesMark>,
+    /// What the run monitor measures against, so a resumed run checks as the straight run.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub monitor: Option<MonitorReference>,
 }
 
 /// Why a checkpoint's state arrays could not be taken (a member missing or not the array
@@ -129,13 +141,12 @@ impl std::fmt::Write for Fnv {
     }
 }
 
-/// Writes the CPU engine's state to `path` (atomically), with the mark of the series the
-/// run has written so far (`None`: it writes none).
+/// Writes the CPU engine's state to `path` (atomically), with what the run keeps beside it.
 pub fn save(
     path: &Path,
     scene: &Scene,
     engine: &CpuEngine,
-    series: Option<SeriesMark>,
+    run: &RunMarks,
 ) -> Result<(), PowderError> {
     let state = engine.state();
     save_state(
@@ -143,7 +154,7 @@ pub fn save(
         scene,
         "cpu",
         (state.steps, state.time),
-        series,
+        run,
         cpu::arrays(&state),
     )
 }
@@ -172,24 +183,16 @@ fn same_clock(path: &Path, header: &Header, steps: u64, time: f64) -> Result<(),
     Ok(())
 }
 
-/// Writes a saved GPU state to `path` (atomically), with the mark of the series the run
-/// has written so far (`None`: it writes none).
+/// Writes a saved GPU state to `path` (atomically), with what the run keeps beside it.
 pub fn save_gpu(
     path: &Path,
     scene: &Scene,
     state: &GpuSavedState,
-    series: Option<SeriesMark>,
+    run: &RunMarks,
 ) -> Result<(), PowderError> {
     let arrays = gpu::arrays(state)
         .map_err(|e| PowderError::Run(format!("cannot encode the checkpoint: {}", e.0)))?;
-    save_state(
-        path,
-        scene,
-        "gpu",
-        (state.steps, state.time),
-        series,
-        arrays,
-    )
+    save_state(path, scene, "gpu", (state.steps, state.time), run, arrays)
 }
 
 /// Reads a GPU checkpoint of `scene` from `path`.
@@ -205,11 +208,10 @@ pub fn load_gpu(path: &Path, scene: &Scene) -> Result<GpuSavedState, PowderError
     Ok(state)
 }
 
-/// The mark of the series the run of the checkpoint at `path` had written (`None`: none,
-/// or a checkpoint without one).
-pub fn series_of(path: &Path) -> Result<Option<SeriesMark>, PowderError> {
+/// What the run of the checkpoint at `path` kept beside its state.
+pub fn run_marks_of(path: &Path) -> Result<RunMarks, PowderError> {
     let bytes = read(path)?;
-    Ok(header(&bytes, path)?.0.series)
+    Ok(header(&bytes, path)?.0.run)
 }
 
 /// The backend (`"cpu"` or `"gpu"`) that wrote the checkpoint at `path`.
@@ -223,7 +225,7 @@ fn save_state(
     scene: &Scene,
     backend: &str,
     (steps, time): (u64, f64),
-    series: Option<SeriesMark>,
+    run: &RunMarks,
     arrays: Vec<(String, Member)>,
 ) -> Result<(), PowderError> {
     let header = Header {
@@ -235,7 +237,7 @@ fn save_state(
         scene_digest: run_digest(scene, time),
         steps,
         time,
-        series,
+        run: *run,
     };
     let json = serde_json::to_vec_pretty(&header)
         .map_err(|e| PowderError::Run(format!("cannot encode the checkpoint: {e}")))?;

@@ -11,6 +11,7 @@ pub mod simulation;
 mod snapshot;
 mod tabor;
 
+use crate::checkpoint::RunMarks;
 use crate::cpu::{ContactStats, CpuEngine, Threads};
 use crate::error::PowderError;
 use crate::gpu::{GpuContext, GpuEngine, GpuOptions};
@@ -20,13 +21,13 @@ use crate::output::{contacts, vtk};
 use crate::run::observed::ObservedEnergies;
 use crate::run::simulation::{Observation, Simulation};
 use crate::scene::Scene;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 use monitor::{energy_scale, monitor};
-pub use monitor::{MAX_ENERGY_GROWTH, MAX_OVERLAP_RATIO};
+pub use monitor::{MonitorReference, MAX_ENERGY_GROWTH, MAX_OVERLAP_RATIO};
 pub use snapshot::{csv_header, Snapshot};
 use snapshot::{csv_row, snapshot};
 pub use tabor::{tabor_pairs, TaborPair};
@@ -229,10 +230,14 @@ pub fn run_with<S: Simulation>(
         (Some(p), Some(step)) => series_csv::rows_until(p, step, &header)?,
         _ => Vec::new(),
     };
+    let marks = match &opts.resume {
+        Some(ckpt) => crate::checkpoint::run_marks_of(ckpt)?,
+        None => RunMarks::default(),
+    };
     // rows kept on resume must be those the checkpoint's run wrote (no series at all: it
     // starts at the checkpoint's step)
     if let (Some(ckpt), Some(p), Some(step)) = (&opts.resume, &csv_path, resumed_from) {
-        let ours = crate::checkpoint::series_of(ckpt)?;
+        let ours = marks.series;
         if !kept.is_empty() && ours.is_some_and(|m| m != SeriesMark::of(&kept)) {
             return Err(PowderError::Run(format!(
                 "the series `{}` is not the one the run of checkpoint `{}` wrote (its {} rows up to step {step} differ from that run's {}): resume into the folder that run wrote (--out), or into an empty one, where the series starts at the checkpoint's step",
@@ -351,14 +356,6 @@ pub fn run_with<S: Simulation>(
         }
         Ok(())
     };
-    // the rows synced, then the checkpoint they lead up to
-    let save = |engine: &S, csv: &mut Option<SeriesCsv>| -> Result<(), PowderError> {
-        if let (Some(c), Some(rows)) = (&ckpt_path, csv.as_mut()) {
-            rows.sync()?;
-            engine.write_checkpoint(c, scene, Some(rows.mark()))?;
-        }
-        Ok(())
-    };
 
     let bar = opts.progress_bar.then(|| {
         let bar = indicatif::ProgressBar::new(total);
@@ -387,7 +384,30 @@ pub fn run_with<S: Simulation>(
     }
     let started = std::time::Instant::now();
     let start_steps = engine.steps();
-    let mut scale = initial.energies.kinetic.abs() + initial.energies.elastic.unwrap_or(0.0).abs();
+    // the energy check's reference: the run's start (a resume's from its checkpoint)
+    let (start, mut scale) = match marks.monitor {
+        Some(m) => (m.initial, m.scale),
+        None => (
+            initial.energies,
+            initial.energies.kinetic.abs() + initial.energies.elastic.unwrap_or(0.0).abs(),
+        ),
+    };
+    // the rows synced, then the checkpoint they lead up to, with what the monitor measures
+    // against
+    let save = |engine: &S, csv: &mut Option<SeriesCsv>, scale: f64| -> Result<(), PowderError> {
+        if let (Some(c), Some(rows)) = (&ckpt_path, csv.as_mut()) {
+            rows.sync()?;
+            let marks = RunMarks {
+                series: Some(rows.mark()),
+                monitor: Some(MonitorReference {
+                    initial: start,
+                    scale,
+                }),
+            };
+            engine.write_checkpoint(c, scene, &marks)?;
+        }
+        Ok(())
+    };
     let mut interrupted = false;
     let mut last_obs = obs;
     // Chunks end at outputs, checkpoints and at most 1000 steps apart (for Ctrl-C and the
@@ -403,8 +423,8 @@ pub fn run_with<S: Simulation>(
         let stepped = engine.run_steps(chunk).and_then(|()| {
             let obs = engine.observe()?;
             let now = obs.energies;
-            let scale = energy_scale(scale, &now, &initial.energies);
-            let totals = now.total().zip(initial.energies.total());
+            let scale = energy_scale(scale, &now, &start);
+            let totals = now.total().zip(start.total());
             monitor(&mut engine, dt_rule, scene.pours(), totals, scale)?;
             Ok((obs, scale))
         });
@@ -420,7 +440,7 @@ pub fn run_with<S: Simulation>(
                 }
                 let failed_at = engine.steps();
                 engine.restore(before)?;
-                save(&engine, &mut csv)?;
+                save(&engine, &mut csv, scale)?;
                 let note = match &ckpt_path {
                     Some(c) => format!(
                         "; the state at step {} (before the failure, at most 1000 steps earlier than step {failed_at}) is in {}",
@@ -446,7 +466,7 @@ pub fn run_with<S: Simulation>(
         }
         last_obs = obs;
         if steps.is_multiple_of(scene.checkpoint_every) {
-            save(&engine, &mut csv)?;
+            save(&engine, &mut csv, scale)?;
         }
         if opts
             .interrupt
@@ -464,12 +484,12 @@ pub fn run_with<S: Simulation>(
     if interrupted && !engine.steps().is_multiple_of(scene.output_every) {
         write_outputs(&engine, &last_obs, &last, &mut csv, &mut series)?;
     }
-    save(&engine, &mut csv)?;
+    save(&engine, &mut csv, scale)?;
     let wall = started.elapsed().as_secs_f64();
     let drift = last
         .energies
         .total()
-        .zip(initial.energies.total())
+        .zip(start.total())
         .map(|(end, start)| (end - start).abs());
     let (solid_fraction_domain, solid_fraction_bounding_box) =
         solid_fractions(scene, &last_obs.positions, &radii);

@@ -12,6 +12,17 @@ pub const MAX_OVERLAP_RATIO: f64 = 0.5;
 /// injects energy, so growth means the integration has gone wrong.
 pub const MAX_ENERGY_GROWTH: f64 = 0.05;
 
+/// What the energy check measures against: the run's energies at its start and the
+/// energy scale it has reached. A checkpoint carries it, so a resumed run checks (and
+/// reports its balance) as the straight run does.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MonitorReference {
+    /// The energies at the run's first step.
+    pub initial: ObservedEnergies,
+    /// The largest energy scale so far (`energy_scale`), J.
+    pub scale: f64,
+}
+
 /// The run monitor: what must stop a run, with the step, the particles and a hint.
 /// `totals` is the total energy now and at the start, `None` without the ledger: the
 /// energy-growth check is then skipped. What that loses: a slow blow-up (a time step a

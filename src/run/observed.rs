@@ -5,11 +5,11 @@
 //! measured value.
 
 use crate::cpu::Energies;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Energies of the whole system at one instant, J; `None` where the run keeps no ledger.
 /// Serialised like [`Energies`], with the absent parts left out.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct ObservedEnergies {
     /// Translational plus rotational kinetic energy (from the velocities).
     pub kinetic: f64,

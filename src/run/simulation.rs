@@ -3,11 +3,11 @@
 //! ([`GpuEngine`]).
 
 use crate::checkpoint;
+use crate::checkpoint::RunMarks;
 use crate::cpu::{ContactStats, CpuEngine, CpuState, Partner};
 use crate::error::PowderError;
 use crate::gpu::{GpuEngine, GpuSavedState};
 use crate::output::contacts::ContactNetwork;
-use crate::output::series_csv::SeriesMark;
 use crate::run::observed::ObservedEnergies;
 use crate::scene::Scene;
 use glam::DVec3;
@@ -85,7 +85,7 @@ pub trait Simulation {
         &self,
         path: &Path,
         scene: &Scene,
-        series: Option<SeriesMark>,
+        run: &RunMarks,
     ) -> Result<(), PowderError>;
     /// Continues from a checkpoint of `scene` written by this backend.
     fn read_checkpoint(&mut self, path: &Path, scene: &Scene) -> Result<(), PowderError>;
@@ -160,9 +160,9 @@ impl Simulation for CpuEngine {
         &self,
         path: &Path,
         scene: &Scene,
-        series: Option<SeriesMark>,
+        run: &RunMarks,
     ) -> Result<(), PowderError> {
-        checkpoint::save(path, scene, self, series)
+        checkpoint::save(path, scene, self, run)
     }
     fn read_checkpoint(&mut self, path: &Path, scene: &Scene) -> Result<(), PowderError> {
         CpuEngine::restore(self, checkpoint::load(path, scene)?)
@@ -260,9 +260,9 @@ impl Simulation for GpuEngine {
         &self,
         path: &Path,
         scene: &Scene,
-        series: Option<SeriesMark>,
+        run: &RunMarks,
     ) -> Result<(), PowderError> {
-        checkpoint::save_gpu(path, scene, &self.save_state()?, series)
+        checkpoint::save_gpu(path, scene, &self.save_state()?, run)
     }
     fn read_checkpoint(&mut self, path: &Path, scene: &Scene) -> Result<(), PowderError> {
         let saved = checkpoint::load_gpu(path, scene)?;
