@@ -114,8 +114,8 @@ impl SeriesCsv {
 /// step), in order; none when there is no file. A line without its end (a write cut by a
 /// kill) ends them. A series with another `header` (other columns) is refused.
 pub fn rows_until(path: &Path, step: u64, header: &str) -> Result<Vec<String>, PowderError> {
-    let text = match std::fs::read_to_string(path) {
-        Ok(t) => t,
+    let bytes = match std::fs::read(path) {
+        Ok(b) => b,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
         Err(e) => {
             return Err(PowderError::io(
@@ -124,6 +124,13 @@ pub fn rows_until(path: &Path, step: u64, header: &str) -> Result<Vec<String>, P
             ))
         }
     };
+    let text = std::str::from_utf8(&bytes).map_err(|e| {
+        PowderError::Run(format!(
+            "the series `{}` is not text at byte {} (damaged or not powder's): move it away to resume into this folder (the series then starts at the checkpoint's step), or resume into an empty folder with --out",
+            path.display(),
+            e.valid_up_to()
+        ))
+    })?;
     // (a header cut by a kill holds no rows either)
     let first = text
         .split_inclusive('\n')
@@ -198,6 +205,10 @@ mod tests {
         std::fs::write(&p, "step,x\n0,a\n10,b\n20,d").unwrap();
         assert_eq!(rows_until(&p, 30, "step,x").unwrap(), ["0,a", "10,b"]);
         std::fs::write(&p, [b's', 0xff, b'\n']).unwrap();
-        assert!(rows_until(&p, 30, "step,x").is_err());
+        let e = rows_until(&p, 30, "step,x").unwrap_err().to_string();
+        assert!(
+            e.contains("is not text at byte 1") && e.contains("move it away"),
+            "{e}"
+        );
     }
 }
