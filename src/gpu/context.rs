@@ -20,6 +20,7 @@
 use crate::PowderError;
 use serde::Serialize;
 use std::fmt;
+use std::sync::{Condvar, Mutex};
 
 /// Backends searched for adapters.
 pub const BACKENDS: wgpu::Backends = wgpu::Backends::VULKAN
@@ -45,6 +46,50 @@ pub struct GpuContext {
     pub adapter: wgpu::Adapter,
     /// What the adapter is and offers (for `powder info` and reports).
     pub summary: AdapterSummary,
+    /// Last: the handles above drop inside the section [`Drop`] opens, then this ends it.
+    section: SectionEnd,
+}
+
+/// Vulkan instances and devices created or destroyed on several threads at once race in
+/// drivers and the loader (NVIDIA's among them): this process does one at a time.
+static SECTION_BUSY: Mutex<bool> = Mutex::new(false);
+static SECTION_FREE: Condvar = Condvar::new();
+
+/// A section in which this thread alone creates or destroys instances and devices.
+struct Section;
+
+impl Section {
+    fn begin() -> Self {
+        let mut busy = SECTION_BUSY.lock().unwrap_or_else(|e| e.into_inner());
+        while *busy {
+            busy = SECTION_FREE.wait(busy).unwrap_or_else(|e| e.into_inner());
+        }
+        *busy = true;
+        Self
+    }
+}
+
+impl Drop for Section {
+    fn drop(&mut self) {
+        *SECTION_BUSY.lock().unwrap_or_else(|e| e.into_inner()) = false;
+        SECTION_FREE.notify_one();
+    }
+}
+
+/// Ends the section a context's drop began, once the fields before it have dropped.
+#[derive(Default)]
+struct SectionEnd(Option<Section>);
+
+impl Clone for SectionEnd {
+    fn clone(&self) -> Self {
+        Self(None)
+    }
+}
+
+impl Drop for GpuContext {
+    fn drop(&mut self) {
+        self.section.0 = Some(Section::begin());
+    }
 }
 
 /// The limits the GPU engine cares about (a subset of [`wgpu::Limits`]).
@@ -273,6 +318,11 @@ fn describe(info: &wgpu::AdapterInfo) -> String {
 
 /// Every adapter wgpu finds on [`BACKENDS`].
 pub fn enumerate_adapters() -> Vec<wgpu::Adapter> {
+    let _section = Section::begin();
+    enumerate_in_section()
+}
+
+fn enumerate_in_section() -> Vec<wgpu::Adapter> {
     let instance = new_instance();
     pollster::block_on(instance.enumerate_adapters(BACKENDS))
 }
@@ -422,7 +472,8 @@ impl GpuContext {
         choice: Limits,
         timestamps: bool,
     ) -> Result<Self, PowderError> {
-        let adapter = choose_adapter(enumerate_adapters(), pref)?;
+        let section = Section::begin();
+        let adapter = choose_adapter(enumerate_in_section(), pref)?;
         let summary = AdapterSummary::of(&adapter);
         let mut limits = adapter.limits();
         match choice {
@@ -451,11 +502,13 @@ impl GpuContext {
                 summary.name, summary.backend
             ))
         })?;
+        drop(section);
         Ok(Self {
             device,
             queue,
             adapter,
             summary,
+            section: SectionEnd::default(),
         })
     }
 
@@ -622,5 +675,53 @@ mod tests {
         let text = e.to_string();
         assert!(text.contains("no GPU adapter found"), "{text}");
         assert!(text.contains("apt-get install -y mesa-vulkan-drivers libvulkan1"));
+    }
+
+    /// One thread at a time in a section: a second waits until the first ends it.
+    #[test]
+    fn sections_exclude_each_other() {
+        use std::sync::atomic::{AtomicU32, Ordering};
+        use std::sync::Arc;
+        let inside = Arc::new(AtomicU32::new(0));
+        let most = Arc::new(AtomicU32::new(0));
+        let threads: Vec<_> = (0..4)
+            .map(|_| {
+                let (inside, most) = (inside.clone(), most.clone());
+                std::thread::spawn(move || {
+                    for _ in 0..50 {
+                        let _section = Section::begin();
+                        let now = inside.fetch_add(1, Ordering::SeqCst) + 1;
+                        most.fetch_max(now, Ordering::SeqCst);
+                        std::thread::yield_now();
+                        inside.fetch_sub(1, Ordering::SeqCst);
+                    }
+                })
+            })
+            .collect();
+        for t in threads {
+            t.join().unwrap();
+        }
+        assert_eq!(most.load(Ordering::SeqCst), 1);
+    }
+
+    /// Contexts opened, cloned and dropped on several threads at once (where an adapter
+    /// exists): each open and each drop takes the section, none deadlocks.
+    #[test]
+    fn contexts_open_and_drop_on_several_threads() {
+        let threads: Vec<_> = (0..3)
+            .map(|_| {
+                std::thread::spawn(|| {
+                    for _ in 0..2 {
+                        let Ok(ctx) = GpuContext::new() else { return };
+                        let clone = ctx.clone();
+                        drop(ctx);
+                        assert!(clone.limits().max_buffer_size > 0);
+                    }
+                })
+            })
+            .collect();
+        for t in threads {
+            t.join().unwrap();
+        }
     }
 }

@@ -182,7 +182,6 @@ impl Default for GpuOptions {
 
 /// The GPU simulation of one scene.
 pub struct GpuEngine {
-    ctx: GpuContext,
     /// Simulated time, s (kept in f64 on the host).
     pub time: f64,
     /// Steps taken.
@@ -272,6 +271,9 @@ pub struct GpuEngine {
     active: Vec<bool>,
     insert_energy: Vec<f64>,
     inserted: f64,
+    /// Last: the buffers and pipelines above drop first, so the device goes with it (one
+    /// thread at a time creates or destroys devices: `GpuContext`).
+    ctx: GpuContext,
 }
 
 #[cfg(test)]
