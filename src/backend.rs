@@ -2,7 +2,7 @@
 //! CPU engine (on every core) otherwise: the software adapter is slower than the CPU
 //! engine, so it runs only when asked for (`--backend gpu`, or `POWDER_ADAPTER` set).
 
-use crate::gpu::context::{enumerate_adapters, ADAPTER_ENV};
+use crate::gpu::context::{adapter_infos, ADAPTER_ENV};
 use crate::gpu::{AdapterPreference, GpuContext};
 use crate::PowderError;
 
@@ -52,12 +52,9 @@ pub fn choose(request: BackendRequest) -> Result<Chosen, PowderError> {
                 let value = std::env::var(ADAPTER_ENV).unwrap_or_default();
                 return Ok(gpu(ctx, format!("{ADAPTER_ENV}={value}")));
             }
-            let found: Vec<String> = enumerate_adapters()
+            let found: Vec<String> = adapter_infos()
                 .iter()
-                .map(|a| {
-                    let info = a.get_info();
-                    format!("{} ({:?})", info.name, info.device_type)
-                })
+                .map(|info| format!("{} ({:?})", info.name, info.device_type))
                 .collect();
             match GpuContext::with_preference(&AdapterPreference::Hardware) {
                 Ok(ctx) => Ok(gpu(ctx, "--backend auto found a hardware GPU".into())),

@@ -55,22 +55,33 @@ pub struct GpuContext {
 static SECTION_BUSY: Mutex<bool> = Mutex::new(false);
 static SECTION_FREE: Condvar = Condvar::new();
 
+thread_local! {
+    /// Whether this thread is in a section (one inside another would wait forever).
+    static IN_SECTION: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
 /// A section in which this thread alone creates or destroys instances and devices.
 struct Section;
 
 impl Section {
     fn begin() -> Self {
+        assert!(
+            !IN_SECTION.get(),
+            "a GPU context opened or dropped inside another's opening or drop"
+        );
         let mut busy = SECTION_BUSY.lock().unwrap_or_else(|e| e.into_inner());
         while *busy {
             busy = SECTION_FREE.wait(busy).unwrap_or_else(|e| e.into_inner());
         }
         *busy = true;
+        IN_SECTION.set(true);
         Self
     }
 }
 
 impl Drop for Section {
     fn drop(&mut self) {
+        IN_SECTION.set(false);
         *SECTION_BUSY.lock().unwrap_or_else(|e| e.into_inner()) = false;
         SECTION_FREE.notify_one();
     }
@@ -88,6 +99,8 @@ impl Clone for SectionEnd {
 
 impl Drop for GpuContext {
     fn drop(&mut self) {
+        // (the device idle first: a hung GPU must not hold up other threads' contexts)
+        let _ = self.device.poll(wgpu::PollType::wait_indefinitely());
         self.section.0 = Some(Section::begin());
     }
 }
@@ -316,10 +329,22 @@ fn describe(info: &wgpu::AdapterInfo) -> String {
     )
 }
 
-/// Every adapter wgpu finds on [`BACKENDS`].
+/// Every adapter wgpu finds on [`BACKENDS`] (dropping the last of them destroys their
+/// instance outside the section that keeps threads apart: [`adapter_infos`] where the
+/// descriptions suffice).
 pub fn enumerate_adapters() -> Vec<wgpu::Adapter> {
     let _section = Section::begin();
     enumerate_in_section()
+}
+
+/// What [`enumerate_adapters`] finds, the adapters (and their instance) dropped inside the
+/// section.
+pub fn adapter_infos() -> Vec<wgpu::AdapterInfo> {
+    let _section = Section::begin();
+    let adapters = enumerate_in_section();
+    let infos = adapters.iter().map(|a| a.get_info()).collect();
+    drop(adapters);
+    infos
 }
 
 fn enumerate_in_section() -> Vec<wgpu::Adapter> {
