@@ -159,13 +159,13 @@ pub fn save(
     )
 }
 
-/// Reads a CPU checkpoint of `scene` from `path`.
-pub fn load(path: &Path, scene: &Scene) -> Result<CpuState, PowderError> {
+/// Reads a CPU checkpoint of `scene` from `path`: the state and what its run kept beside it.
+pub fn load(path: &Path, scene: &Scene) -> Result<(CpuState, RunMarks), PowderError> {
     let bytes = read(path)?;
     let (header, archive) = open(&bytes, path, scene, "cpu")?;
     let state = cpu::state(&|name| array(&archive, name)).map_err(|e| damaged(path, &e.0))?;
     same_clock(path, &header, state.steps, state.time)?;
-    Ok(state)
+    Ok((state, header.run))
 }
 
 /// The header's step and time against the state's (bitwise: both are written from one
@@ -195,8 +195,8 @@ pub fn save_gpu(
     save_state(path, scene, "gpu", (state.steps, state.time), run, arrays)
 }
 
-/// Reads a GPU checkpoint of `scene` from `path`.
-pub fn load_gpu(path: &Path, scene: &Scene) -> Result<GpuSavedState, PowderError> {
+/// Reads a GPU checkpoint of `scene` from `path`: the state and what its run kept beside it.
+pub fn load_gpu(path: &Path, scene: &Scene) -> Result<(GpuSavedState, RunMarks), PowderError> {
     let bytes = read(path)?;
     let (header, archive) = open(&bytes, path, scene, "gpu")?;
     let about = archive
@@ -205,13 +205,7 @@ pub fn load_gpu(path: &Path, scene: &Scene) -> Result<GpuSavedState, PowderError
     let state =
         gpu::state(about, &|name| array(&archive, name)).map_err(|e| damaged(path, &e.0))?;
     same_clock(path, &header, state.steps, state.time)?;
-    Ok(state)
-}
-
-/// What the run of the checkpoint at `path` kept beside its state.
-pub fn run_marks_of(path: &Path) -> Result<RunMarks, PowderError> {
-    let bytes = read(path)?;
-    Ok(header(&bytes, path)?.0.run)
+    Ok((state, header.run))
 }
 
 /// The backend (`"cpu"` or `"gpu"`) that wrote the checkpoint at `path`.

@@ -214,8 +214,9 @@ pub fn run_with<S: Simulation>(
         }
     }
     let mut resumed_from = None;
+    let mut marks = RunMarks::default();
     if let Some(ckpt) = &opts.resume {
-        engine.read_checkpoint(ckpt, scene)?;
+        marks = engine.read_checkpoint(ckpt, scene)?;
         resumed_from = Some(engine.steps());
     }
     let total = ((scene.duration / engine.dt()).ceil() as u64).max(1);
@@ -229,10 +230,6 @@ pub fn run_with<S: Simulation>(
     let kept = match (&csv_path, resumed_from) {
         (Some(p), Some(step)) => series_csv::rows_until(p, step, &header)?,
         _ => Vec::new(),
-    };
-    let marks = match &opts.resume {
-        Some(ckpt) => crate::checkpoint::run_marks_of(ckpt)?,
-        None => RunMarks::default(),
     };
     // rows kept on resume must be those the checkpoint's run wrote (no series at all: it
     // starts at the checkpoint's step)

@@ -87,8 +87,9 @@ pub trait Simulation {
         scene: &Scene,
         run: &RunMarks,
     ) -> Result<(), PowderError>;
-    /// Continues from a checkpoint of `scene` written by this backend.
-    fn read_checkpoint(&mut self, path: &Path, scene: &Scene) -> Result<(), PowderError>;
+    /// Continues from a checkpoint of `scene` written by this backend; returns what its
+    /// run kept beside the state.
+    fn read_checkpoint(&mut self, path: &Path, scene: &Scene) -> Result<RunMarks, PowderError>;
     /// A particle with a non-finite position or velocity (the GPU engine reports
     /// non-finite accelerations from `run_steps` already).
     fn non_finite(&self) -> Option<usize>;
@@ -164,8 +165,10 @@ impl Simulation for CpuEngine {
     ) -> Result<(), PowderError> {
         checkpoint::save(path, scene, self, run)
     }
-    fn read_checkpoint(&mut self, path: &Path, scene: &Scene) -> Result<(), PowderError> {
-        CpuEngine::restore(self, checkpoint::load(path, scene)?)
+    fn read_checkpoint(&mut self, path: &Path, scene: &Scene) -> Result<RunMarks, PowderError> {
+        let (state, marks) = checkpoint::load(path, scene)?;
+        CpuEngine::restore(self, state)?;
+        Ok(marks)
     }
     fn non_finite(&self) -> Option<usize> {
         CpuEngine::non_finite(self)
@@ -264,8 +267,8 @@ impl Simulation for GpuEngine {
     ) -> Result<(), PowderError> {
         checkpoint::save_gpu(path, scene, &self.save_state()?, run)
     }
-    fn read_checkpoint(&mut self, path: &Path, scene: &Scene) -> Result<(), PowderError> {
-        let saved = checkpoint::load_gpu(path, scene)?;
+    fn read_checkpoint(&mut self, path: &Path, scene: &Scene) -> Result<RunMarks, PowderError> {
+        let (saved, marks) = checkpoint::load_gpu(path, scene)?;
         let adapter = saved.adapter.clone();
         // a state that does not fit (e.g. the other ledger option) names the file
         self.restore_state(saved).map_err(|e| match e {
@@ -283,7 +286,7 @@ impl Simulation for GpuEngine {
                 GpuEngine::adapter(self)
             );
         }
-        Ok(())
+        Ok(marks)
     }
     fn non_finite(&self) -> Option<usize> {
         None

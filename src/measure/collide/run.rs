@@ -238,20 +238,22 @@ pub(super) fn run_collision(
         run.step()?;
         let view = run.view()?;
         let (delta, vn, n, vt) = spec.pair_state(&view, wall_x);
-        if run.steps() >= MAX_STEPS || (!touched && delta <= 0.0 && run.steps() >= approach) {
+        let unmet = !touched && delta <= 0.0 && run.steps() >= approach;
+        if unmet && delta < delta0 {
+            // (a grazing impact: the pair passed by, the gap grew)
+            return Err(PowderError::Run(format!(
+                "the spheres at v = {} m/s and {}° passed each other without touching (the gap grew from {:e} to {:e} m after {} steps): raise --impact-angle",
+                spec.velocity,
+                spec.impact_angle,
+                -delta0,
+                -delta,
+                run.steps()
+            )));
+        }
+        if unmet || run.steps() >= MAX_STEPS {
             // (no force outside contact pushes the pair apart: it closes at vn0 or faster)
             let what = if touched {
                 format!("was not decided after {} steps", run.steps())
-            } else if delta < delta0 {
-                // (a grazing impact: the pair passed by, the gap grew)
-                return Err(PowderError::Run(format!(
-                    "the spheres at v = {} m/s and {}° passed each other without touching (the gap grew from {:e} to {:e} m after {} steps): raise --impact-angle",
-                    spec.velocity,
-                    spec.impact_angle,
-                    -delta0,
-                    -delta,
-                    run.steps()
-                )));
             } else {
                 format!(
                     "had not touched after {} steps, where closing the gap of {:e} m at {vn0:e} m/s takes {}",
