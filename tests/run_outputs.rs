@@ -837,17 +837,26 @@ fn a_full_disk_stops_the_run_and_keeps_the_last_checkpoint(backend: &str) {
     );
 }
 
-/// Whether `python3` with NumPy is here (CI installs it: there the test must run).
-fn python_with_numpy() -> bool {
-    let ok = std::process::Command::new("python3")
-        .args(["-c", "import numpy"])
-        .status()
-        .is_ok_and(|s| s.success());
+/// A Python that imports NumPy: `$PYTHON`, `python3` on PATH, then Debian's
+/// `/usr/bin/python3` (where `.ci/run` installs python3-numpy; a pyenv `python3` first on PATH
+/// may lack it). Under CI one must be found: there the test must run.
+fn python_with_numpy() -> Option<std::ffi::OsString> {
+    let candidates = std::env::var_os("PYTHON")
+        .into_iter()
+        .chain(["python3", "/usr/bin/python3"].map(std::ffi::OsString::from));
+    let found = candidates.into_iter().find(|python| {
+        std::process::Command::new(python)
+            .args(["-c", "import numpy"])
+            .stderr(std::process::Stdio::null())
+            .status()
+            .is_ok_and(|s| s.success())
+    });
     assert!(
-        ok || std::env::var_os("CI").is_none(),
-        "CI needs python3 with NumPy (python3-numpy) for the checkpoint reader's test"
+        found.is_some() || std::env::var_os("CI").is_none(),
+        "CI needs a python3 with NumPy (python3-numpy for /usr/bin/python3, or PYTHON=...) \
+         for the checkpoint reader's test"
     );
-    ok
+    found
 }
 
 /// A checkpoint is a NumPy archive: `tools/read_checkpoint.py` reads the engine's state from
@@ -855,10 +864,10 @@ fn python_with_numpy() -> bool {
 /// name.
 #[test]
 fn a_checkpoint_reads_in_python_to_the_bit() {
-    if !python_with_numpy() {
+    let Some(python3) = python_with_numpy() else {
         eprintln!("skipping: no python3 with NumPy here");
         return;
-    }
+    };
     let scene = common::packing(common::rough, "rough");
     let dir = tempfile::tempdir().unwrap();
     let opts = RunOptions {
@@ -883,7 +892,7 @@ print(json.dumps({
 }))
 "#;
     let python = |path: &Path| {
-        std::process::Command::new("python3")
+        std::process::Command::new(&python3)
             .current_dir(env!("CARGO_MANIFEST_DIR"))
             .args(["-c", script])
             .arg(path)
