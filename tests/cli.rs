@@ -243,6 +243,29 @@ fn run_prints_a_summary_and_rejects_missing_files() {
         .collect();
     files.sort();
     assert_eq!(files, ["checkpoint.bin", "series.csv", "summary.json"]);
+    // into a folder with an earlier run's snapshots: they go with that run's series
+    let again = tempfile::tempdir().unwrap();
+    let again_dir = again.path().to_str().unwrap();
+    let (ok, _, err) = powder(&["run", scene, "--steps", "200", "--out", again_dir]);
+    assert!(ok, "{err}");
+    let snapshots = |d: &std::path::Path| -> Vec<String> {
+        let mut found = Vec::new();
+        for sub in ["", "snapshots", "contacts"] {
+            for e in std::fs::read_dir(d.join(sub)).into_iter().flatten() {
+                let name = e.unwrap().file_name().to_string_lossy().into_owned();
+                if name.ends_with(".vtp") || name.ends_with(".pvd") {
+                    found.push(name);
+                }
+            }
+        }
+        found
+    };
+    assert!(snapshots(again.path()).len() >= 4);
+    let mut args = args;
+    args[6] = again_dir;
+    let (ok, _, err) = powder(&args);
+    assert!(ok, "{err}");
+    assert_eq!(snapshots(again.path()), Vec::<String>::new());
 }
 
 const JKR: [&str; 13] = [

@@ -151,6 +151,11 @@ pub fn rows_until(path: &Path, step: u64, header: &str) -> Result<Vec<String>, P
         .collect())
 }
 
+/// Whether `row` is the row of `step`.
+pub fn row_is_at(row: &str, step: u64) -> bool {
+    row_step(row) == Some(step)
+}
+
 /// The step a row starts with.
 fn row_step(row: &str) -> Option<u64> {
     row.split(',').next()?.parse().ok()

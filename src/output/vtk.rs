@@ -90,7 +90,24 @@ pub struct Series {
 impl Series {
     /// Particle snapshots: `dir/snapshots/<name>_<step>.vtp`, collected in `dir/<name>.pvd`.
     pub fn new(dir: &Path, name: &str) -> Result<Self, PowderError> {
-        Self::in_folder(dir, "snapshots", name, &format!("{name}.pvd"))
+        let [particles, _] = Self::both_unopened(dir, name);
+        particles.created()
+    }
+
+    /// Contact-network snapshots: `dir/contacts/<name>_<step>.vtp`, collected in
+    /// `dir/<name>_contacts.pvd`.
+    pub fn contacts(dir: &Path, name: &str) -> Result<Self, PowderError> {
+        let [_, contacts] = Self::both_unopened(dir, name);
+        contacts.created()
+    }
+
+    /// Both series of a run named `name` in `dir` (particles, contacts), their folders not
+    /// created.
+    pub fn both_unopened(dir: &Path, name: &str) -> [Self; 2] {
+        [
+            Self::unopened(dir, "snapshots", name, &format!("{name}.pvd")),
+            Self::unopened(dir, "contacts", name, &format!("{name}_contacts.pvd")),
+        ]
     }
 
     /// Snapshots `dir/<folder>/<name>_<step>.vtp`, collected in `dir/<collection>`.
@@ -100,34 +117,52 @@ impl Series {
         name: &str,
         collection: &str,
     ) -> Result<Self, PowderError> {
-        let snaps = dir.join(folder);
+        Self::unopened(dir, folder, name, collection).created()
+    }
+
+    /// The series with its folder created.
+    fn created(self) -> Result<Self, PowderError> {
+        let snaps = self.folder();
         std::fs::create_dir_all(&snaps).map_err(|e| {
             PowderError::io(
                 format!("cannot create the output directory `{}`", snaps.display()),
                 e,
             )
         })?;
-        Ok(Self {
+        Ok(self)
+    }
+
+    /// The series as [`Self::in_folder`] names it, its folder not created (to clear an
+    /// earlier run's where this run writes none).
+    pub fn unopened(dir: &Path, folder: &str, name: &str, collection: &str) -> Self {
+        Self {
             dir: dir.to_path_buf(),
             folder: folder.to_string(),
             name: name.to_string(),
             collection: collection.to_string(),
             entries: Vec::new(),
-        })
+        }
+    }
+
+    /// The step of a snapshot file of this series (`<name>_<step>.vtp`), by file name.
+    fn step_of_file(&self, file: &str) -> Option<u64> {
+        let step = file
+            .strip_prefix(&self.name)?
+            .strip_prefix('_')?
+            .strip_suffix(".vtp")?;
+        (!step.is_empty() && step.bytes().all(|b| b.is_ascii_digit()))
+            .then(|| step.parse().ok())
+            .flatten()
     }
 
     /// Re-opens a series (on resume): keeps the snapshots up to `step` that the earlier
     /// run's collection lists, with its times (a file it does not list is not this run's);
-    /// without a collection, those in the folder (times `step · dt`). The collection is
-    /// rewritten with the next snapshot.
-    pub fn keep_until(&mut self, step: u64, dt: f64) {
-        let prefix = format!("{}/{}_", self.folder, self.name);
-        let step_of = |file: &str| -> Option<u64> {
-            file.strip_prefix(&prefix)?
-                .strip_suffix(".vtp")?
-                .parse()
-                .ok()
-        };
+    /// without a collection, those in the folder (times `step · dt`). The series' files of
+    /// later steps (a killed or interrupted run's, which the resumed run writes again where
+    /// its cadence falls) are removed, and the collection lists only what is kept.
+    pub fn keep_until(&mut self, step: u64, dt: f64) -> Result<(), PowderError> {
+        let prefix = format!("{}/", self.folder);
+        let step_of = |file: &str| self.step_of_file(file.strip_prefix(&prefix)?);
         let listed = std::fs::read_to_string(self.dir.join(&self.collection)).unwrap_or_default();
         let mut found: Vec<(u64, f64, String)> = listed
             .lines()
@@ -155,35 +190,44 @@ impl Series {
         found.sort_by_key(|(s, ..)| *s);
         found.dedup_by_key(|(s, ..)| *s);
         self.entries = found.into_iter().map(|(_, t, f)| (t, f)).collect();
+        let folder = self.dir.join(&self.folder);
+        let later: Vec<PathBuf> = std::fs::read_dir(&folder)
+            .into_iter()
+            .flatten()
+            .flatten()
+            .filter(|e| {
+                self.step_of_file(&e.file_name().to_string_lossy())
+                    .is_some_and(|s| s > step)
+            })
+            .map(|e| e.path())
+            .collect();
+        for path in later {
+            remove_if_there(&path, "a later snapshot of the run resumed")?;
+        }
+        if !listed.is_empty() {
+            self.write_collection()?;
+        }
+        Ok(())
     }
 
     /// Removes an earlier run's snapshots of this series (its name's `.vtp` files in the
     /// folder) and its collection (a fresh run starts its own); returns how many files.
     pub fn clear(&mut self) -> Result<usize, PowderError> {
-        let prefix = format!("{}_", self.name);
-        let ours = |file: &str| {
-            file.strip_prefix(&prefix)
-                .and_then(|rest| rest.strip_suffix(".vtp"))
-                .is_some_and(|step| !step.is_empty() && step.bytes().all(|b| b.is_ascii_digit()))
-        };
         let folder = self.dir.join(&self.folder);
-        let mut removed = 0;
-        let files = std::fs::read_dir(&folder).into_iter().flatten().flatten();
-        for path in files
-            .filter(|e| ours(&e.file_name().to_string_lossy()))
+        let files: Vec<PathBuf> = std::fs::read_dir(&folder)
+            .into_iter()
+            .flatten()
+            .flatten()
+            .filter(|e| {
+                self.step_of_file(&e.file_name().to_string_lossy())
+                    .is_some()
+            })
             .map(|e| e.path())
             .chain([self.dir.join(&self.collection)])
-        {
-            match std::fs::remove_file(&path) {
-                Ok(()) => removed += 1,
-                Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
-                Err(e) => {
-                    return Err(PowderError::io(
-                        format!("cannot remove the earlier run's `{}`", path.display()),
-                        e,
-                    ))
-                }
-            }
+            .collect();
+        let mut removed = 0;
+        for path in files {
+            removed += usize::from(remove_if_there(&path, "the earlier run's")?);
         }
         self.entries.clear();
         Ok(removed)
@@ -211,6 +255,11 @@ impl Series {
         write_atomic(&self.dir.join(&file), doc)?;
         self.entries.retain(|(_, f)| f != &file);
         self.entries.push((time, file));
+        self.write_collection()
+    }
+
+    /// Rewrites the collection from the entries.
+    fn write_collection(&self) -> Result<(), PowderError> {
         let mut pvd = String::from(
             "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n  <Collection>\n",
         );
@@ -222,6 +271,18 @@ impl Series {
         }
         pvd.push_str("  </Collection>\n</VTKFile>\n");
         write_atomic(&self.dir.join(&self.collection), pvd.as_bytes())
+    }
+}
+
+/// Removes `path` where it exists (whether it did); `whose` names it in the error.
+fn remove_if_there(path: &Path, whose: &str) -> Result<bool, PowderError> {
+    match std::fs::remove_file(path) {
+        Ok(()) => Ok(true),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(false),
+        Err(e) => Err(PowderError::io(
+            format!("cannot remove {whose} `{}`", path.display()),
+            e,
+        )),
     }
 }
 
@@ -263,7 +324,11 @@ mod tests {
         // a file the collection does not list (another run's) is left out
         std::fs::write(dir.path().join("snapshots/demo_0000000015.vtp"), "x").unwrap();
         let mut again = Series::new(dir.path(), "demo").unwrap();
-        again.keep_until(15, 0.1);
+        again.keep_until(15, 0.1).unwrap();
+        // the later snapshot is gone, and the collection lists what is kept
+        assert!(!dir.path().join("snapshots/demo_0000000020.vtp").exists());
+        let pvd = std::fs::read_to_string(dir.path().join("demo.pvd")).unwrap();
+        assert_eq!(pvd.matches("<DataSet").count(), 2, "{pvd}");
         let files: Vec<&str> = again.entries().iter().map(|(_, f)| f.as_str()).collect();
         assert_eq!(
             files,
@@ -276,7 +341,7 @@ mod tests {
         assert_eq!(again.entries()[1].0, 10.0 * 0.1 + 1e-17);
         // without a collection: the folder, times step · dt
         std::fs::remove_file(dir.path().join("demo.pvd")).unwrap();
-        again.keep_until(15, 0.5);
+        again.keep_until(15, 0.5).unwrap();
         assert_eq!(again.entries().len(), 3);
         assert_eq!(again.entries()[2].0, 7.5);
     }

@@ -227,10 +227,15 @@ pub fn run_with<S: Simulation>(
     // the series' rows up to the checkpoint's step on resume, read (and its columns
     // checked) before anything in the directory changes
     let header = csv_header(&scene.walls);
-    let kept = match (&csv_path, resumed_from) {
+    let mut kept = match (&csv_path, resumed_from) {
         (Some(p), Some(step)) => series_csv::rows_until(p, step, &header)?,
         _ => Vec::new(),
     };
+    // only the rows written before the checkpoint: Ctrl-C's row off the output cadence
+    // follows it (the straight run has none there)
+    if let Some(m) = marks.series {
+        kept.truncate(usize::try_from(m.rows).unwrap_or(usize::MAX));
+    }
     // rows kept on resume must be those the checkpoint's run wrote (no series at all: it
     // starts at the checkpoint's step)
     if let (Some(ckpt), Some(p), Some(step)) = (&opts.resume, &csv_path, resumed_from) {
@@ -250,12 +255,9 @@ pub fn run_with<S: Simulation>(
         _ => None,
     };
     let mut network = match out {
-        Some(d) if scene.writes_contacts() && !opts.no_snapshots => Some(vtk::Series::in_folder(
-            d,
-            "contacts",
-            &scene.name,
-            &format!("{}_contacts.pvd", scene.name),
-        )?),
+        Some(d) if scene.writes_contacts() && !opts.no_snapshots => {
+            Some(vtk::Series::contacts(d, &scene.name)?)
+        }
         _ => None,
     };
     // what writes killed before their rename left (the files they replace are intact)
@@ -271,8 +273,14 @@ pub fn run_with<S: Simulation>(
         }
     }
     if let Some(step) = resumed_from {
+        // the snapshots go with the rows: none at the checkpoint's step where its row was
+        // written after the checkpoint (Ctrl-C off the cadence)
+        let last = match kept.last() {
+            Some(row) if !series_csv::row_is_at(row, step) => step.saturating_sub(1),
+            _ => step,
+        };
         for s in series.iter_mut().chain(network.iter_mut()) {
-            s.keep_until(step, engine.dt());
+            s.keep_until(last, engine.dt())?;
         }
     }
     // a fresh run replaces the series (a resume keeps its rows up to the checkpoint's step:
@@ -296,7 +304,8 @@ pub fn run_with<S: Simulation>(
                 }
             }
         }
-        for s in series.iter_mut().chain(network.iter_mut()) {
+        // (both series, whether this run writes them or not: they are the earlier run's)
+        for mut s in vtk::Series::both_unopened(d, &scene.name) {
             let removed = s.clear()?;
             if removed > 0 && opts.verbose {
                 eprintln!(
@@ -478,10 +487,15 @@ pub fn run_with<S: Simulation>(
         b.finish_and_clear();
     }
     let last = snapshot(&engine, &last_obs);
+    save(&engine, &mut csv, scale)?;
+    // Ctrl-C off the output cadence: a last row and snapshot after the checkpoint, which a
+    // resume drops (the straight run has none there)
     if interrupted && !engine.steps().is_multiple_of(scene.output_every) {
         write_outputs(&engine, &last_obs, &last, &mut csv, &mut series)?;
+        if let Some(c) = csv.as_mut() {
+            c.sync()?;
+        }
     }
-    save(&engine, &mut csv, scale)?;
     let wall = started.elapsed().as_secs_f64();
     let drift = last
         .energies
