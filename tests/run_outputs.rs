@@ -372,6 +372,16 @@ fn foreign_or_broken_checkpoints_are_refused() {
         err.contains("belongs to scene") && err.contains("very scene"),
         "{err}"
     );
+    // the refusal names what differs, and only that
+    assert!(err.contains("they differ in simulation.gravity:"), "{err}");
+    let mut other = scene.clone();
+    other.materials[0].density *= 1.01;
+    other.particles.pop();
+    let err = run_cpu_with(&other, &opts, |_| {}).unwrap_err().to_string();
+    assert!(
+        err.contains("they differ in material 0, particles:"),
+        "{err}"
+    );
     let bytes = std::fs::read(&ckpt).unwrap();
     let refusal = |file: &[u8]| {
         let broken = dir.path().join("broken.bin");

@@ -51,6 +51,9 @@ pub struct Header {
     pub scene: String,
     /// [`run_digest`] of the scene it ran, at its time.
     pub scene_digest: u64,
+    /// The digests of its parts ([`run_digests`]), to name what another scene changed.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub scene_parts: Vec<(String, u64)>,
     /// Steps taken and simulated time, s (also in the state's arrays, bitwise).
     pub steps: u64,
     /// Simulated time, s.
@@ -83,6 +86,13 @@ pub struct StateError(pub String);
 /// checkpoint taken at `t` resumes under either: the same run continued or extended, or a
 /// branch that changes what the walls do from `t` on (e.g. tests of one prepared sample).
 pub fn run_digest(scene: &Scene, t: f64) -> u64 {
+    run_digests(scene, t).0
+}
+
+/// [`run_digest`] and the digest of each part of the scene it covers, named as in the
+/// scene file (`simulation.gravity`, `material 1`, `interactions`, `wall 0` with its phases
+/// before `t`, `particles`, ...): a resume under another scene names the parts that differ.
+pub fn run_digests(scene: &Scene, t: f64) -> (u64, Vec<(String, u64)>) {
     // every field named: a new one must be placed here (hashed, or left out on purpose)
     let Scene {
         name: _,
@@ -110,15 +120,73 @@ pub fn run_digest(scene: &Scene, t: f64) -> u64 {
         })
         .collect();
     let mut h = Fnv::new();
-    // (streamed: a packing of 10^7 particles never becomes one string)
-    let _ = write!(
-        h,
-        "{domain:?}{gravity:?}{dt:?}{force_dt:?}{jump_impulses:?}{impact_velocity:?}{contact_output:?}{materials:?}{interactions:?}{past:?}"
-    );
-    for p in particles {
-        let _ = write!(h, "{p:?}");
+    let mut parts = Vec::new();
+    let mut part = |what: String, text: &str| {
+        let mut p = Fnv::new();
+        let _ = p.write_str(text);
+        parts.push((what, p.0));
+    };
+    // (the whole run's digest streams the text as it always has, so earlier checkpoints
+    // keep theirs)
+    let settings = [
+        ("domain", format!("{domain:?}")),
+        ("simulation.gravity", format!("{gravity:?}")),
+        ("simulation.dt", format!("{dt:?}")),
+        ("simulation.force_dt", format!("{force_dt:?}")),
+        ("simulation.jump_impulses", format!("{jump_impulses:?}")),
+        ("simulation.impact_velocity", format!("{impact_velocity:?}")),
+        ("simulation.contact_output", format!("{contact_output:?}")),
+    ];
+    for (what, text) in &settings {
+        let _ = h.write_str(text);
+        part(what.to_string(), text);
     }
-    h.0
+    let _ = write!(h, "{materials:?}{interactions:?}{past:?}");
+    for (i, m) in materials.iter().enumerate() {
+        part(format!("material {i}"), &format!("{m:?}"));
+    }
+    part("interactions".into(), &format!("{interactions:?}"));
+    for (i, w) in past.iter().enumerate() {
+        part(format!("wall {i}"), &format!("{w:?}"));
+    }
+    // (streamed: a packing of 10^7 particles never becomes one string)
+    let mut all = Fnv::new();
+    let mut text = String::new();
+    for p in particles {
+        text.clear();
+        let _ = write!(text, "{p:?}");
+        let _ = h.write_str(&text);
+        let _ = all.write_str(&text);
+    }
+    parts.push(("particles".into(), all.0));
+    (h.0, parts)
+}
+
+/// What differs between the scene parts a checkpoint recorded and this scene's, as a
+/// clause of the refusal (empty for a checkpoint that recorded none).
+fn differing_parts(theirs: &[(String, u64)], ours: &[(String, u64)]) -> String {
+    if theirs.is_empty() {
+        return String::new();
+    }
+    let find =
+        |list: &[(String, u64)], name: &str| list.iter().find(|(n, _)| n == name).map(|&(_, d)| d);
+    let mut named: Vec<String> = Vec::new();
+    for (name, d) in ours {
+        match find(theirs, name) {
+            Some(t) if t == *d => {}
+            Some(_) => named.push(name.clone()),
+            None => named.push(format!("{name} (not in the checkpoint's scene)")),
+        }
+    }
+    for (name, _) in theirs {
+        if find(ours, name).is_none() {
+            named.push(format!("{name} (only in the checkpoint's scene)"));
+        }
+    }
+    match named.is_empty() {
+        true => String::new(),
+        false => format!("; they differ in {}", named.join(", ")),
+    }
 }
 
 /// FNV-1a, fed as text.
@@ -222,13 +290,15 @@ fn save_state(
     run: &RunMarks,
     arrays: Vec<(String, Member)>,
 ) -> Result<(), PowderError> {
+    let (scene_digest, scene_parts) = run_digests(scene, time);
     let header = Header {
         magic: MAGIC.into(),
         format: FORMAT,
         version: env!("CARGO_PKG_VERSION").into(),
         backend: backend.into(),
         scene: scene.name.clone(),
-        scene_digest: run_digest(scene, time),
+        scene_digest,
+        scene_parts,
         steps,
         time,
         run: *run,
@@ -330,16 +400,17 @@ fn open<'a>(
             header.backend
         )));
     }
-    let digest = run_digest(scene, header.time);
+    let (digest, parts) = run_digests(scene, header.time);
     if header.scene_digest != digest {
         return Err(PowderError::Run(format!(
-            "checkpoint `{}` belongs to scene `{}` (digest {:016x}), not to this scene `{}` (digest {:016x} up to t = {:e} s): a resumed run must use the very scene it started with, but for its duration, its output cadences and the wall phases from the checkpoint's time on",
+            "checkpoint `{}` belongs to scene `{}` (digest {:016x}), not to this scene `{}` (digest {:016x} up to t = {:e} s){}: a resumed run must use the very scene it started with, but for its duration, its output cadences and the wall phases from the checkpoint's time on",
             path.display(),
             header.scene,
             header.scene_digest,
             scene.name,
             digest,
-            header.time
+            header.time,
+            differing_parts(&header.scene_parts, &parts)
         )));
     }
     Ok((header, archive))
