@@ -102,7 +102,8 @@
 //! rolling_hysteresis = 0.0      # jkr only, >= 0, default 0: Delta gamma / gamma of the
 //!                               # rolling resistance (xi_crit = a0/12 * Delta gamma / gamma)
 //! pulloff = "displacement"      # jkr only: "displacement" (default, breaks at
-//!                               # -(3/4)^(2/3) delta0) or "force" (breaks at F = -Fc)
+//!                               # -(3/4)^(2/3) delta0), "force" (breaks at F = -Fc) or
+//!                               # "zero" (breaks at zero overlap, paper 002's rule)
 //! stiffness_scale = 1.0         # > 0, default 1: E -> S E and gamma -> gamma S^(2/5)
 //! twisting_friction = 0.0       # >= 0, default 0 (off): Luding's twisting, mu_o
 //! ko = 1e3                      # N/m, > 0, default 2/5 * 8 G* a at the current contact radius
