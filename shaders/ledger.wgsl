@@ -85,10 +85,16 @@ fn ledger_pair(acc: ptr<function, LedgerAcc>, old: vec4<f32>, k: Kin, c: Contact
 }
 
 // One evaluated wall contact; v_n is the wall's velocity along n, `jump` the impulse of a
-// force jump placed at the end of the step (the wall does its work too).
-fn ledger_wall(acc: ptr<function, LedgerAcc>, old: vec4<f32>, k: Kin, c: Contact, power: f32, is_in: bool, edges: vec4<f32>, touch: f32, v_n: f32, jump: f32) {
+// force jump placed at the end of the step (the wall does its work too), `drag` the power
+// of the tangential force at the wall's velocity (at the step's end: no prior tangential
+// force is kept; over a constant velocity the sum differs from the trapezoid's by a
+// boundary term only).
+fn ledger_wall(acc: ptr<function, LedgerAcc>, old: vec4<f32>, k: Kin, c: Contact, power: f32, is_in: bool, edges: vec4<f32>, touch: f32, v_n: f32, jump: f32, drag: f32) {
     if (v_n != 0.0) {
         (*acc).wall_work += (0.5 * (select(0.0, old.y, old.w > 0.0) + c.normal) * k.dt + jump) * v_n;
+    }
+    if (drag != 0.0) {
+        (*acc).wall_work += drag * k.dt;
     }
     (*acc).dissipated += ledger_book(old, k, c, power, is_in, edges, touch);
     (*acc).stored += c.potential;

@@ -14,7 +14,7 @@ fn ledger_new() -> LedgerAcc {
 
 fn ledger_pair(acc: ptr<function, LedgerAcc>, old: vec4<f32>, k: Kin, c: Contact, power: f32, is_in: bool, edges: vec4<f32>, touch: f32) {}
 
-fn ledger_wall(acc: ptr<function, LedgerAcc>, old: vec4<f32>, k: Kin, c: Contact, power: f32, is_in: bool, edges: vec4<f32>, touch: f32, v_n: f32, jump: f32) {}
+fn ledger_wall(acc: ptr<function, LedgerAcc>, old: vec4<f32>, k: Kin, c: Contact, power: f32, is_in: bool, edges: vec4<f32>, touch: f32, v_n: f32, jump: f32, drag: f32) {}
 
 fn ledger_departed(acc: ptr<function, LedgerAcc>, old: vec4<f32>, delta: f32) {}
 

@@ -220,7 +220,7 @@ fn accuracy_json_plot_and_convergence() {
 
 #[test]
 fn bad_bench_and_accuracy_input_is_an_error_not_a_panic() {
-    let cases: [(&[&str], &str); 6] = [
+    let cases: [(&[&str], &str); 8] = [
         (&["bench", "--sizes", "0"], "sizes"),
         (&["bench", "--sizes", "1e3,abc"], "sizes"),
         (&["bench", "--steps", "0", "--sizes", "10"], "steps"),
@@ -229,6 +229,19 @@ fn bad_bench_and_accuracy_input_is_an_error_not_a_panic() {
             "max-seconds",
         ),
         (&["accuracy", "--divisors", "5,10"], "divisors"),
+        (&["accuracy", "--divisors", "1e300"], "divisors"),
+        (
+            &[
+                "accuracy",
+                "--case",
+                "packing",
+                "--divisors",
+                "10",
+                "--reference-divisor",
+                "1e300",
+            ],
+            "reference-divisor",
+        ),
         (
             &[
                 "accuracy",

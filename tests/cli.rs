@@ -1269,6 +1269,23 @@ fn analytic_parameter_flags_come_from_the_declarations() {
         "0.5",
     ]);
     assert!(!ok && err.contains("`k1`") && err.contains("> 0"), "{err}");
+    // kp = k1 has no elastic limit to tune
+    let (ok, _, err) = powder(&[
+        "analytic",
+        "kp-prime",
+        "--k1",
+        "100",
+        "--kp",
+        "100",
+        "--phi-f",
+        "0.05",
+        "--phi-f-new",
+        "0.1",
+    ]);
+    assert!(
+        !ok && err.contains("no elastic limit") && err.contains("kp > k1"),
+        "{err}"
+    );
     // E and ν of thornton-ning only with --yield-stress
     let (ok, _, err) = powder(&[
         "analytic",

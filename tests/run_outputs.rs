@@ -315,9 +315,12 @@ fn with_header(bytes: &[u8], edit: impl Fn(&mut serde_json::Value)) -> Vec<u8> {
     npz::write(&members)
 }
 
-/// The checkpoint `bytes` with its header saying format 19.
-fn as_format_19(bytes: &[u8]) -> Vec<u8> {
-    with_header(bytes, |h| h["format"] = 19.into())
+/// The format after this powder's.
+const NEXT_FORMAT: u32 = powder::checkpoint::FORMAT + 1;
+
+/// The checkpoint `bytes` with its header saying the next format.
+fn as_next_format(bytes: &[u8]) -> Vec<u8> {
+    with_header(bytes, |h| h["format"] = NEXT_FORMAT.into())
 }
 
 /// A resume keeps only the rows its checkpoint's run wrote: into a folder of another run
@@ -405,8 +408,8 @@ fn foreign_or_broken_checkpoints_are_refused() {
         assert!(err.contains("damaged or truncated"), "cut at {cut}: {err}");
     }
     // another format is named: the archive written again with another header
-    let err = refusal(&as_format_19(&bytes));
-    assert!(err.contains("(format 19)"), "{err}");
+    let err = refusal(&as_next_format(&bytes));
+    assert!(err.contains(&format!("(format {NEXT_FORMAT})")), "{err}");
     // a header whose step is not the state's
     let err = refusal(&with_header(&bytes, |h| {
         h["steps"] = (h["steps"].as_u64().unwrap() + 1).into()
@@ -1002,10 +1005,13 @@ print(json.dumps({
     }
     // another format, named by the reader
     let other = dir.path().join("other.bin");
-    std::fs::write(&other, as_format_19(&std::fs::read(&ckpt).unwrap())).unwrap();
+    std::fs::write(&other, as_next_format(&std::fs::read(&ckpt).unwrap())).unwrap();
     let out = python(&other);
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success() && err.contains("format 19"), "{err}");
+    assert!(
+        !out.status.success() && err.contains(&format!("format {NEXT_FORMAT}")),
+        "{err}"
+    );
 }
 
 #[test]

@@ -603,3 +603,31 @@ fn stiff_and_extreme_cases_on_the_gpu() {
         assert!(!w.stuck && w.e > 0.99, "weak, v {v}: {}", w.e);
     }
 }
+
+/// The energy check allows what rounding alone gives: the cohesive cluster at dt = 1e-11 s
+/// (a tiny step, as a tiny sphere sets) moves its total by ulps of the gravitational energy,
+/// 10^4 times the energy in play after 1000 steps, which once stopped it for "energy
+/// growth". A start whose kinetic energy overflows is refused before anything is written.
+#[test]
+fn the_energy_check_allows_rounding_and_refuses_overflowing_starts() {
+    let mut scene = common::cluster_with_outputs();
+    scene.dt = DtSetting::Fixed(1e-11);
+    let opts = RunOptions {
+        max_steps: Some(1000),
+        ..Default::default()
+    };
+    let s = run_cpu_with(&scene, &opts, |_| {}).unwrap();
+    assert_eq!(s.steps, 1000);
+    // (a spin: a speed that large would be refused first, as a step longer than a radius)
+    let mut scene = common::packing(common::rough, "rough");
+    scene.particles[3].angular_velocity = [1e200, 0.0, 0.0];
+    let dir = tempfile::tempdir().unwrap();
+    let opts = RunOptions {
+        out_dir: Some(dir.path().to_path_buf()),
+        max_steps: Some(10),
+        ..Default::default()
+    };
+    let err = run_cpu_with(&scene, &opts, |_| {}).unwrap_err().to_string();
+    assert!(err.contains("kinetic energy at step 0 is inf"), "{err}");
+    assert!(!dir.path().join("series.csv").exists());
+}

@@ -327,3 +327,58 @@ fn a_phase_starts_at_the_same_step_wherever_batches_begin() {
         "gpu lid at {zg}, expected {expected}"
     );
 }
+
+/// A lid sliding along its face over frictional spheres while it presses them: the wall's
+/// tangential work is in both engines' ledgers, which close, and the GPU's wall work
+/// follows the CPU's (the GPU once booked the normal part only, and its run monitor
+/// stopped such a run for "energy growth").
+#[test]
+fn a_lid_sliding_along_its_face_does_work_on_both_backends() {
+    let text = r#"
+[domain]
+min = [0.0, 0.0, 0.0]
+max = [0.01, 0.01, 0.01]
+[simulation]
+duration = 0.01
+output_every = 500
+[[material]]
+name = "m"
+density = 2000.0
+model = "lsd"
+k = 100.0
+gamma0 = 1e-3
+friction = 0.5
+[[wall]]
+point = [0.0, 0.0, 0.0]
+normal = [0.0, 0.0, 1.0]
+[[wall]]
+point = [0.0, 0.0, 0.00685]
+normal = [0.0, 0.0, -1.0]
+velocity = [0.1, 0.0, -0.01]
+[[particles]]
+kind = "lattice"
+min = [0.001, 0.001, 0.0]
+max = [0.009, 0.009, 0.0073]
+radius = 1e-3
+spacing = 2.4e-3
+"#;
+    let scene = Scene::from_toml_str(text, "shear").unwrap();
+    let opts = powder::run::RunOptions {
+        max_steps: Some(3000),
+        ..Default::default()
+    };
+    let cpu = powder::run::run_cpu_with(&scene, &opts, |_| {}).unwrap();
+    let work = |s: &powder::run::RunSummary| s.last.energies.wall_work.unwrap();
+    let w_cpu = work(&cpu);
+    // the sliding does most of the work: far more than the normal push alone
+    assert!(w_cpu > 0.0, "{w_cpu}");
+    assert!(cpu.energy_balance_error.unwrap() < 1e-3, "{cpu:?}");
+    let Some(ctx) = gpu() else { return };
+    let g = powder::run::run_gpu_with(&scene, ctx, &opts, |_| {}).unwrap();
+    let w_gpu = work(&g);
+    assert!(
+        (w_gpu - w_cpu).abs() < 1e-2 * w_cpu,
+        "wall work: GPU {w_gpu:e}, CPU {w_cpu:e}"
+    );
+    assert!(g.energy_balance_error.unwrap() < 1e-2, "{g:?}");
+}

@@ -251,7 +251,10 @@ fn particle_forces(k: u32, row0: PairRow) {
         let touch = touch_crossed(row, kin, old, is_in, edges);
         let jump = contact_jump(old, kin, c, is_in, edges, touch);
         impulse += jump * n;
-        ledger_wall(&ledger_acc, old, kin, c, power, is_in, edges, touch, dot(n, wall.velocity.xyz), jump);
+        let v_n = dot(n, wall.velocity.xyz);
+        // (the wall's velocity along its face: zero for lids and pistons)
+        let drag = dot(c.tangential, wall.velocity.xyz - n * v_n);
+        ledger_wall(&ledger_acc, old, kin, c, power, is_in, edges, touch, v_n, jump, drag);
         store_prior(slot, prior_of(kin, c, power, is_in));
         if (step.servo_walls != 0u) {
             store_wall_push(slot, c.normal);

@@ -33,8 +33,9 @@ const BINCODE_PREFIX: &[u8; 8] = b"POWDERCK";
 /// Bumped whenever the state's arrays change, or the GPU step's arithmetic does (a resume
 /// continues bitwise only with the same arithmetic). The history of earlier formats is in
 /// `docs/checkpoints.md`; 17: a `.npz` archive of named arrays (16 and before: bincode); 18:
-/// the digest covers the run up to the checkpoint ([`run_digest`]).
-pub const FORMAT: u32 = 18;
+/// the digest covers the run up to the checkpoint ([`run_digest`]); 19: the GPU books the
+/// work of a wall sliding along its face, and the header names the scene's parts.
+pub const FORMAT: u32 = 19;
 
 /// The checkpoint's header (`powder.json`).
 #[derive(Debug, Serialize, Deserialize)]

@@ -205,6 +205,17 @@ fn kp_prime(a: &KpPrimeArgs) -> Result<(), PowderError> {
         )
         .into());
     }
+    // (kp = k1: no elastic limit, so no plasticity depth to tune; eq. A.3 divides by 0)
+    if p.kp == p.k1 {
+        return Err(ParamError::new(
+            "kp",
+            format!(
+                "kp = k1 = {} N/m has no elastic limit (the contact stays on its plastic branch), so kp' for another phi_f is undefined: give kp > k1",
+                p.k1
+            ),
+        )
+        .into());
+    }
     let kp_prime = finite(p.kp_for_phi_f(a.phi_f_new)?, "kp'")?;
     let tuned = HystereticParams {
         kp: kp_prime,

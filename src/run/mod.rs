@@ -219,6 +219,15 @@ pub fn run_with<S: Simulation>(
         marks = engine.read_checkpoint(ckpt, scene)?;
         resumed_from = Some(engine.steps());
     }
+    // a start whose energies are beyond f64's range is refused before anything in the
+    // output folder changes
+    let first = engine.observe()?;
+    if let Some((name, value)) = first.energies.non_finite() {
+        return Err(PowderError::Run(format!(
+            "the {name} energy at step {} is {value}, beyond f64's range: a velocity, angular velocity or wall speed of the scene is far too large",
+            engine.steps()
+        )));
+    }
     let total = ((scene.duration / engine.dt()).ceil() as u64).max(1);
     let total = opts.max_steps.map_or(total, |m| m.min(total));
     let out = opts.out_dir.as_deref();
@@ -379,7 +388,7 @@ pub fn run_with<S: Simulation>(
         None => eprintln!("{}", snap.line()),
     };
 
-    let obs = engine.observe()?;
+    let obs = first;
     let initial = snapshot(&engine, &obs);
     progress(&initial);
     if opts.verbose {
@@ -430,8 +439,7 @@ pub fn run_with<S: Simulation>(
             let obs = engine.observe()?;
             let now = obs.energies;
             let scale = energy_scale(scale, &now, &start);
-            let totals = now.total().zip(start.total());
-            monitor(&mut engine, dt_rule, scene.pours(), totals, scale)?;
+            monitor(&mut engine, dt_rule, scene.pours(), (&now, &start), scale)?;
             Ok((obs, scale))
         });
         let obs = match stepped {

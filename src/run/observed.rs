@@ -29,6 +29,30 @@ pub struct ObservedEnergies {
 }
 
 impl ObservedEnergies {
+    /// The first term that is not finite (NaN or beyond f64's range), by name, with its value.
+    pub fn non_finite(&self) -> Option<(&'static str, f64)> {
+        [
+            ("kinetic", Some(self.kinetic)),
+            ("stored elastic", self.elastic),
+            ("gravitational", Some(self.gravitational)),
+            ("dissipated", self.dissipated),
+            ("wall work", self.wall_work),
+            ("inserted", Some(self.inserted)),
+        ]
+        .into_iter()
+        .find_map(|(name, v)| v.filter(|v| !v.is_finite()).map(|v| (name, v)))
+    }
+
+    /// The sum of the terms' magnitudes, J: what the total's rounding scales with.
+    pub fn magnitude(&self) -> f64 {
+        self.kinetic.abs()
+            + self.elastic.unwrap_or(0.0).abs()
+            + self.gravitational.abs()
+            + self.dissipated.unwrap_or(0.0).abs()
+            + self.wall_work.unwrap_or(0.0).abs()
+            + self.inserted.abs()
+    }
+
     /// The complete ledger, when every part is known.
     pub fn ledger(&self) -> Option<Energies> {
         Some(Energies {

@@ -21,6 +21,8 @@
 //! duration = 0.05               # required, s, > 0: simulated time
 //! dt = "auto"                   # "auto" (default: from the stiffest contact) or a time step in s, > 0
 //! force_dt = false              # default false; true accepts a dt above the stability limit
+//!                               # (and starting speeds at which a pair closes more than a
+//!                               # radius in one step)
 //! jump_impulses = true          # default true (the GPU: where some contact's force can jump):
 //!                               # place the impulse of a contact force's jump (JKR touch and
 //!                               # pull-off, jump-in adhesion, a viscous first touch) inside the

@@ -461,8 +461,16 @@ fn parse_size(t: &Tbl) -> Res<SizeDist> {
                     ),
                 ));
             }
+            let mut weights = weights;
+            // (weights near f64's largest sum to inf: scaled by the largest, they do not)
+            if !weights.iter().sum::<f64>().is_finite() {
+                let largest = weights.iter().copied().fold(0.0, f64::max);
+                if largest.is_finite() && largest > 0.0 {
+                    weights.iter_mut().for_each(|w| *w /= largest);
+                }
+            }
             let sum: f64 = weights.iter().sum();
-            if weights.iter().any(|w| *w < 0.0) || sum <= 0.0 {
+            if weights.iter().any(|w| *w < 0.0) || sum.is_nan() || sum <= 0.0 {
                 return Err(s.err_key(
                     "weights",
                     format!("`weights` in {} must be >= 0 with a positive sum", s.ctx),

@@ -677,6 +677,18 @@ fn size_distributions_stay_in_bounds() {
         "size = { distribution = \"list\", radii = [1e-3], weights = [1, 2] }",
     ));
     assert_contains(&e, &["`weights`", "has 2 entries"]);
+    // weights whose sum overflows f64 draw as their ratios do (equal: both radii)
+    let s = parse(&random_scene(
+        1,
+        300,
+        "size = { distribution = \"list\", radii = [0.8e-3, 1.2e-3], weights = [1e308, 1e308] }",
+    ))
+    .unwrap();
+    let small = s.particles[1250..]
+        .iter()
+        .filter(|p| p.radius == 0.8e-3)
+        .count();
+    assert!((100..200).contains(&small), "{small} of 300 small");
 }
 
 #[test]

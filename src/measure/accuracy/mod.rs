@@ -54,6 +54,11 @@ pub use timing::{MAX_REPEATS, MIN_TIMING};
 /// Smallest accepted divisor: dt above tc/10 is refused by the time-step guard.
 pub const MIN_DIVISOR: f64 = 10.0;
 
+/// The finest time step measured, dt = tc/MAX_DIVISOR: beyond it a run takes more steps a
+/// contact than its f64 positions resolve the motion of, and hours where tc/800 takes
+/// seconds.
+pub const MAX_DIVISOR: f64 = 1e6;
+
 /// What to measure.
 #[derive(Clone, Debug)]
 pub struct AccuracyOptions {
@@ -106,10 +111,10 @@ impl AccuracyOptions {
             return Err(ParamError::new("divisors", "give at least one divisor").into());
         }
         for &d in &self.divisors {
-            if !(d.is_finite() && d >= MIN_DIVISOR) {
+            if !(d.is_finite() && (MIN_DIVISOR..=MAX_DIVISOR).contains(&d)) {
                 return Err(ParamError::new(
                     "divisors",
-                    format!("dt = tc/{d}: each divisor must be a finite number >= {MIN_DIVISOR} (a dt above tc/10 is refused by the time-step guard)"),
+                    format!("dt = tc/{d}: each divisor must be a number from {MIN_DIVISOR} (a dt above tc/10 is refused by the time-step guard) to {MAX_DIVISOR:e}"),
                 )
                 .into());
             }
@@ -122,11 +127,11 @@ impl AccuracyOptions {
         }
         if self.packing {
             let finest = self.divisors.iter().copied().fold(0.0, f64::max);
-            if !(self.reference_divisor.is_finite() && self.reference_divisor > finest) {
+            if !(self.reference_divisor > finest && self.reference_divisor <= MAX_DIVISOR) {
                 return Err(ParamError::new(
                     "reference-divisor",
                     format!(
-                        "the reference (tc/{}) must be finer than every divisor (up to tc/{finest})",
+                        "the reference (tc/{}) must be finer than every divisor (up to tc/{finest}) and at most tc/{MAX_DIVISOR:e}",
                         self.reference_divisor
                     ),
                 )

@@ -232,6 +232,15 @@ pub(super) fn run_collision(
     let mut e = 0.0;
     let mut vt_out = DVec3::ZERO;
     let (delta0, _, _, mut vt_before) = spec.pair_state(&view0, wall_x);
+    // (placed outside the interaction range: a range of metres or more, from a huge fa
+    // against kc_a, leaves a gap no collision closes)
+    let closing = approach_steps(-delta0, vn0, dt);
+    if !delta0.is_finite() || closing >= MAX_STEPS {
+        return Err(PowderError::Run(format!(
+            "the spheres start {:e} m apart (outside the interaction range, {reach:e} m), which at {vn0:e} m/s takes {closing} steps of {dt:e} s, over the {MAX_STEPS} a collision may take: shorten the range (a non-contact adhesion range is fa/kc_a: lower --fa or raise --kca) or raise --velocity",
+            -delta0
+        )));
+    }
     let approach = approach_limit(-delta0, vn0, dt);
     let mut last;
     loop {
@@ -459,6 +468,16 @@ pub(super) fn collide_with(
             spec.normal_speed() * dt
         )));
     }
+    // (an approach per step within f64's resolution of the positions closes the gap in
+    // rounding steps: e comes out anywhere, even above 1)
+    let resolution = 1024.0 * f64::EPSILON * (spec.radius1 + reach);
+    let step = spec.normal_speed() * dt;
+    if step > 0.0 && step < resolution {
+        return Err(PowderError::Scene(format!(
+            "at v = {:e} m/s the approach is {step:e} m a step of {dt:e} s, within 1024 ulps of the positions ({resolution:e} m): f64 cannot resolve it; raise --velocity or --dt",
+            spec.velocity
+        )));
+    }
     let scene = spec.scene(dt);
     let wall_x = scene.walls.first().map_or(0.0, |w| w.point[0]);
     let wall = spec.wall;
@@ -573,6 +592,43 @@ mod tests {
         assert!((500..=502).contains(&steps), "{err}");
         assert!(err.contains("takes 200 "), "{err}");
         assert!(err.contains("test backend"), "{err}");
+    }
+
+    /// A gap no collision closes within MAX_STEPS is refused before the first step.
+    #[test]
+    fn a_gap_beyond_max_steps_is_refused_at_once() {
+        let law = ContactModel::Hysteretic(HystereticParams::paper_figure());
+        let spec = CollideSpec::head_on(law, 1e-3, 2000.0, 0.5);
+        // 100 m at 0.5 m/s: 2e8 steps of 1e-6 s
+        let still = Still {
+            steps: 0,
+            x2: 2e-3 + 100.0,
+        };
+        let err = run_collision(&spec, still, 0.0, 1e-6, "test", None, None)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("start 1e2 m apart") && err.contains("--fa"),
+            "{err}"
+        );
+        let still = Still {
+            steps: 0,
+            x2: f64::INFINITY,
+        };
+        let err = run_collision(&spec, still, 0.0, 1e-6, "test", None, None)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("start inf m apart"), "{err}");
+    }
+
+    /// An approach below f64's resolution of the positions a step is refused (it once gave
+    /// e = 1.01 for a dissipative law at 1e-15 m/s).
+    #[test]
+    fn an_approach_below_f64_resolution_is_refused() {
+        let law = ContactModel::Hysteretic(HystereticParams::paper_figure());
+        let spec = CollideSpec::head_on(law, 1e-3, 2000.0, 1e-15);
+        let err = collide_on(&spec, Backend::Cpu).unwrap_err().to_string();
+        assert!(err.contains("f64 cannot resolve it"), "{err}");
     }
 
     /// A grazing impact whose spheres pass each other is named as such (CPU engine).
