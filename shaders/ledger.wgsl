@@ -9,8 +9,8 @@
 // inside (`pair_edges`), so force jumps are booked right. The last step's values come
 // from the entries' `prior`. A pair's evaluator (step/force.wgsl) books all of it and counts it
 // for both particles; a wall contact's particle books it, and a moving wall's work on it
-// (its normal force's and a placed force jump's, exact for a wall moving along its normal;
-// the tangential force's is left out).
+// (its normal force's and a placed force jump's over the step, its tangential force's at
+// the step's end).
 //
 // Each particle's totals are four fields of its state (`ledger_*` in `gpu::state`,
 // re-sorted with it); each invocation writes only its own, so no atomics and sums that

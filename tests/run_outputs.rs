@@ -533,6 +533,28 @@ fn a_run_interrupted_off_its_cadence_resumes_to_the_straight_runs_outputs() {
             .exists());
         assert_same_outputs(straight.path(), split.path(), backend);
     }
+    // resumed without snapshots, the interrupt's snapshot goes all the same
+    let dir = tempfile::tempdir().unwrap();
+    let opts = RunOptions {
+        interrupt: Some(std::sync::Arc::new(std::sync::atomic::AtomicBool::new(
+            true,
+        ))),
+        ..options(dir.path(), 4000, None)
+    };
+    run_cpu_with(&scene, &opts, |_| {}).unwrap();
+    let at_1000 = dir.path().join("snapshots/cohesive_cluster_0000001000.vtp");
+    assert!(at_1000.exists());
+    let opts = RunOptions {
+        no_snapshots: true,
+        ..options(dir.path(), 2000, Some(&dir.path().join("checkpoint.bin")))
+    };
+    run_cpu_with(&scene, &opts, |_| {}).unwrap();
+    assert!(!at_1000.exists());
+    let pvd = std::fs::read_to_string(dir.path().join("cohesive_cluster.pvd")).unwrap();
+    assert!(
+        !pvd.contains("0000001000") && pvd.contains("0000000000"),
+        "{pvd}"
+    );
 }
 
 /// `powder run` of the cohesive cluster with rows every 100 steps and checkpoints every

@@ -371,7 +371,20 @@ spacing = 2.4e-3
     let work = |s: &powder::run::RunSummary| s.last.energies.wall_work.unwrap();
     let w_cpu = work(&cpu);
     // the sliding does most of the work: far more than the normal push alone
-    assert!(w_cpu > 0.0, "{w_cpu}");
+    let pressed = Scene::from_toml_str(
+        &text.replace(
+            "velocity = [0.1, 0.0, -0.01]",
+            "velocity = [0.0, 0.0, -0.01]",
+        ),
+        "pressed",
+    )
+    .unwrap();
+    let w_normal = work(&powder::run::run_cpu_with(&pressed, &opts, |_| {}).unwrap());
+    eprintln!("wall work: sliding and pressing {w_cpu:e} J, pressing only {w_normal:e} J");
+    assert!(
+        w_normal > 0.0 && w_cpu > 3.0 * w_normal,
+        "{w_cpu:e} {w_normal:e}"
+    );
     assert!(cpu.energy_balance_error.unwrap() < 1e-3, "{cpu:?}");
     let Some(ctx) = gpu() else { return };
     let g = powder::run::run_gpu_with(&scene, ctx, &opts, |_| {}).unwrap();

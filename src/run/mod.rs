@@ -241,9 +241,15 @@ pub fn run_with<S: Simulation>(
         _ => Vec::new(),
     };
     // only the rows written before the checkpoint: Ctrl-C's row off the output cadence
-    // follows it (the straight run has none there)
-    if let Some(m) = marks.series {
-        kept.truncate(usize::try_from(m.rows).unwrap_or(usize::MAX));
+    // follows it (the straight run has none there); `late` is that row
+    let mut late = None;
+    if let (Some(m), Some(step)) = (marks.series, resumed_from) {
+        let marked = usize::try_from(m.rows).unwrap_or(usize::MAX);
+        if kept.len() > marked {
+            late = kept
+                .drain(marked..)
+                .find(|r| series_csv::row_is_at(r, step));
+        }
     }
     // rows kept on resume must be those the checkpoint's run wrote (no series at all: it
     // starts at the checkpoint's step)
@@ -259,6 +265,17 @@ pub fn run_with<S: Simulation>(
             )));
         }
     }
+    // a branch whose cadence falls on the checkpoint's step keeps that row (its straight
+    // run has it, and a resumed run does not write its first step); otherwise the row and
+    // the snapshots of that step go
+    let drop_late = match late {
+        Some(row) if resumed_from.is_some_and(|s| s.is_multiple_of(scene.output_every)) => {
+            kept.push(row);
+            false
+        }
+        Some(_) => true,
+        None => false,
+    };
     let mut series = match out {
         Some(d) if !opts.no_snapshots => Some(vtk::Series::new(d, &scene.name)?),
         _ => None,
@@ -281,13 +298,18 @@ pub fn run_with<S: Simulation>(
             );
         }
     }
-    if let Some(step) = resumed_from {
-        // the snapshots go with the rows: none at the checkpoint's step where its row was
-        // written after the checkpoint (Ctrl-C off the cadence)
-        let last = match kept.last() {
-            Some(row) if !series_csv::row_is_at(row, step) => step.saturating_sub(1),
-            _ => step,
+    if let (Some(step), Some(d)) = (resumed_from, out) {
+        // the snapshots go with the rows: none at the checkpoint's step where its row goes;
+        // both series cleared whether this run writes them or not (--no-snapshots), then
+        // the ones it writes re-opened
+        let last = if drop_late {
+            step.saturating_sub(1)
+        } else {
+            step
         };
+        for mut s in vtk::Series::both_unopened(d, &scene.name) {
+            s.keep_until(last, engine.dt())?;
+        }
         for s in series.iter_mut().chain(network.iter_mut()) {
             s.keep_until(last, engine.dt())?;
         }

@@ -87,10 +87,9 @@ pub(super) fn monitor(
     let allowed = MAX_ENERGY_GROWTH * scale + rounding;
     if allowed > 0.0 && total - initial_total > allowed {
         return Err(PowderError::Run(format!(
-            "step {steps}: the total energy grew by {:.3e} J ({:.1}% of the run's energy scale {:.3e} J), which no contact model can inject; {hint}",
+            "step {steps}: the total energy grew by {:.3e} J, beyond the {allowed:.3e} J allowed ({}% of the run's energy scale {scale:.3e} J, and {rounding:.1e} J of rounding), which no contact model can inject; {hint}",
             total - initial_total,
-            100.0 * (total - initial_total) / scale,
-            scale
+            100.0 * MAX_ENERGY_GROWTH,
         )));
     }
     Ok(())

@@ -470,7 +470,14 @@ pub(super) fn collide_with(
     }
     // (an approach per step within f64's resolution of the positions closes the gap in
     // rounding steps: e comes out anywhere, even above 1)
-    let resolution = 1024.0 * f64::EPSILON * (spec.radius1 + reach);
+    // (sphere 2 starts beyond r1 + r2 and the interaction range: the positions' scale)
+    let range = spec.model.reach(reach);
+    let range = if range.is_finite() {
+        range.max(0.0)
+    } else {
+        0.0
+    };
+    let resolution = 1024.0 * f64::EPSILON * (spec.radius1 + spec.radius2 + range);
     let step = spec.normal_speed() * dt;
     if step > 0.0 && step < resolution {
         return Err(PowderError::Scene(format!(
