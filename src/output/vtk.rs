@@ -144,6 +144,21 @@ impl Series {
         }
     }
 
+    /// This series' snapshot files in its folder, with their steps (none without a folder).
+    fn files(&self) -> Vec<(u64, PathBuf)> {
+        std::fs::read_dir(self.folder())
+            .into_iter()
+            .flatten()
+            .flatten()
+            .filter_map(|e| {
+                Some((
+                    self.step_of_file(&e.file_name().to_string_lossy())?,
+                    e.path(),
+                ))
+            })
+            .collect()
+    }
+
     /// The step of a snapshot file of this series (`<name>_<step>.vtp`), by file name.
     fn step_of_file(&self, file: &str) -> Option<u64> {
         let step = file
@@ -190,18 +205,7 @@ impl Series {
         found.sort_by_key(|(s, ..)| *s);
         found.dedup_by_key(|(s, ..)| *s);
         self.entries = found.into_iter().map(|(_, t, f)| (t, f)).collect();
-        let folder = self.dir.join(&self.folder);
-        let later: Vec<PathBuf> = std::fs::read_dir(&folder)
-            .into_iter()
-            .flatten()
-            .flatten()
-            .filter(|e| {
-                self.step_of_file(&e.file_name().to_string_lossy())
-                    .is_some_and(|s| s > step)
-            })
-            .map(|e| e.path())
-            .collect();
-        for path in later {
+        for (_, path) in self.files().into_iter().filter(|(s, _)| *s > step) {
             remove_if_there(&path, "a later snapshot of the run resumed")?;
         }
         if !listed.is_empty() {
@@ -213,20 +217,9 @@ impl Series {
     /// Removes an earlier run's snapshots of this series (its name's `.vtp` files in the
     /// folder) and its collection (a fresh run starts its own); returns how many files.
     pub fn clear(&mut self) -> Result<usize, PowderError> {
-        let folder = self.dir.join(&self.folder);
-        let files: Vec<PathBuf> = std::fs::read_dir(&folder)
-            .into_iter()
-            .flatten()
-            .flatten()
-            .filter(|e| {
-                self.step_of_file(&e.file_name().to_string_lossy())
-                    .is_some()
-            })
-            .map(|e| e.path())
-            .chain([self.dir.join(&self.collection)])
-            .collect();
+        let files = self.files().into_iter().map(|(_, path)| path);
         let mut removed = 0;
-        for path in files {
+        for path in files.chain([self.dir.join(&self.collection)]) {
             removed += usize::from(remove_if_there(&path, "the earlier run's")?);
         }
         self.entries.clear();

@@ -300,18 +300,18 @@ pub fn run_with<S: Simulation>(
     }
     if let (Some(step), Some(d)) = (resumed_from, out) {
         // the snapshots go with the rows: none at the checkpoint's step where its row goes;
-        // both series cleared whether this run writes them or not (--no-snapshots), then
-        // the ones it writes re-opened
+        // both series, whether this run writes them or not (--no-snapshots)
         let last = if drop_late {
             step.saturating_sub(1)
         } else {
             step
         };
-        for mut s in vtk::Series::both_unopened(d, &scene.name) {
-            s.keep_until(last, engine.dt())?;
-        }
-        for s in series.iter_mut().chain(network.iter_mut()) {
-            s.keep_until(last, engine.dt())?;
+        let [particles, contacts] = vtk::Series::both_unopened(d, &scene.name);
+        for (opened, mut unopened) in [(series.as_mut(), particles), (network.as_mut(), contacts)] {
+            match opened {
+                Some(s) => s.keep_until(last, engine.dt())?,
+                None => unopened.keep_until(last, engine.dt())?,
+            }
         }
     }
     // a fresh run replaces the series (a resume keeps its rows up to the checkpoint's step:
