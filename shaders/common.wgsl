@@ -2,8 +2,9 @@
 //
 // `src/gpu/shaders.rs` prepends this file to each stage file (grid.wgsl, permute.wgsl,
 // and the step's files), so everything here is visible to every stage. Keep it
-// to declarations that every stage can share: constants, structs mirrored in Rust
-// (`src/gpu/layout/`, checked there against naga's layout), and pure helpers.
+// to declarations that every stage can share: constants and pure helpers. The structs
+// and constants the host shares follow it, generated from their Rust declarations
+// (`gpu::layout::declarations`).
 //
 // Core WGSL only: no f64, no float atomics, no subgroups, so the kernels run on every
 // wgpu backend (Vulkan, Metal, DX12, GL) and every adapter, the software ones included.
@@ -12,48 +13,10 @@
 // the workgroup size it reads back from naga, so changing this needs no Rust edit.
 const WG_SIZE: u32 = 256u;
 
-// Grid parameters of a run (uniform). The grid's origin (the domain's min corner) is
-// implicit: particle cells are integer coordinates relative to it.
-// Layout: mirrored by `layout::GridParams` (48 bytes).
-struct GridParams {
-    // Number of cells per axis.
-    dims: vec3<u32>,
-    n_particles: u32,
-    // Cell width h per axis (>= largest interaction distance + Verlet skin), fixed for a
-    // run; equal on all axes unless a periodic axis fixes it to its period / cell count.
-    cell_width: vec3<f32>,
-    // dims.x * dims.y * dims.z.
-    n_cells: u32,
-    // The windows (`gpu::window`): shift (k >> shift is particle k's window), len
-    // (particles a window holds), rec_shift (a record index's window bits start there),
-    // the `state` buffer's fields.
-    window: vec4<u32>,
-}
-
+// The grid of a run (`layout::GridParams`).
 @group(0) @binding(0) var<uniform> grid: GridParams;
 
-// The window a dispatch works on (`gpu::window`; twin of `window::WindowParams`): its
-// first particle, the first window its bindings of blocked arrays start at (they cover
-// that one and the next two: a particle's partners are in its own window or a
-// neighbouring one), and its index.
-struct WindowParams {
-    first: u32,
-    bound: u32,
-    index: u32,
-    // The lists' entries: the first window of their binding and the end of the windows it
-    // holds, and the first window of `entries_x`'s (`gpu::pages`).
-    rec_base: u32,
-    rec_end: u32,
-    rec_other: u32,
-    // The particle state likewise (`state`, `motion`; `state_x`).
-    st_base: u32,
-    st_end: u32,
-    st_other: u32,
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
-}
-
+// The window a dispatch works on (`window::WindowParams`).
 @group(0) @binding(19) var<uniform> win: WindowParams;
 
 // The particle of this invocation of a per-particle dispatch over the window, and the end

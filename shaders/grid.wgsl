@@ -44,17 +44,7 @@ struct LargeCells {
 @group(0) @binding(7) var<storage, read_write> large_cells_atomic: LargeCellsAtomic;
 @group(0) @binding(8) var<storage, read> large_cells: LargeCells;
 
-// One level of the exclusive scan. Layout mirrored by `layout::ScanParams`.
-struct ScanParams {
-    // Elements at this level.
-    n: u32,
-    // ceil(n / SCAN_BLOCK): workgroups doing real work.
-    n_blocks: u32,
-    // Where the elements start in scan_in and scan_out (the first level may scan one region
-    // of a buffer into another region of the same buffer).
-    in_offset: u32,
-    out_offset: u32,
-}
+// One level of the exclusive scan (`layout::ScanParams`).
 @group(0) @binding(10) var<uniform> scan_params: ScanParams;
 // (read_write: it may be scan_out's buffer, bound twice)
 @group(0) @binding(11) var<storage, read_write> scan_in: array<u32>;

@@ -159,7 +159,7 @@ fn ledger_dropped(old_row: u32, old_n: u32, k: u32) {
         }
         if (!found) {
             lost += old.z;
-            atomicAdd(&control[3], 1u);
+            atomicAdd(&control[CONTROL_DROPPED], 1u);
         }
     }
     if (lost != 0.0) {

@@ -3,13 +3,8 @@
 // `CoulombSpring::step_with` in `src/model/friction/coulomb.rs`. The stored spring is half
 // a step ahead of the evaluation (staggered, second order; see the Rust module).
 
-// One spring's block of the pair row (`gpu::layout::CoulombSpringRow`); mu_s = 0 is off.
-struct CoulombSpring {
-    mu_s: f32,
-    mu_d: f32,
-    k: f32,
-    gamma: f32,
-}
+// One spring's block of the pair row is `CoulombSpring` (`gpu::layout::CoulombSpringRow`);
+// mu_s = 0 is off.
 
 // One step of a vector spring: the force on i, the spring it was computed with (the stored
 // energy is ½·k·|spring|²) and the spring to store.

@@ -5,38 +5,8 @@
 // Sign convention as in Rust: delta > 0 is overlap, delta_dot the approach speed, a
 // positive force is repulsive.
 
-// Parameters of one pair of materials (a row of the pair table). Twin of
-// `gpu::layout::HystereticPair`. LSD is the special case k1 = kp = k (no plasticity),
-// kc = fa = 0: the same code path.
-struct HystereticPair {
-    k1: f32,
-    kp: f32,
-    kc: f32,
-    // Plastic flow limit overlap over the reduced radius: kp/(kp - k1) * phi_f
-    // (infinite when kp = k1); multiplied by a12 per pair.
-    dmaxp_per_a12: f32,
-    // phi_f: the limit branch's force-free overlap over a12.
-    phi_f: f32,
-    fa: f32,
-    // Non-contact stiffness; 0 encodes zero range (kca = inf).
-    kca: f32,
-    gamma0: f32,
-    // Bit 0: jump-in adhesion (else reversible); bit 1: sqrt k2 rule (else linear);
-    // bit 2: LSD (force k1*delta + gamma0*delta_dot, no history).
-    flags: u32,
-    // Derived on the host, so the kernel multiplies where the f64 reference divides (on
-    // a SIMD adapter every branch's divisions run for every pair): 1/dmaxp_per_a12,
-    // (k1 + kc)/(kp − k1) (0 when kp <= k1: the tensile branch's history moves as
-    // 0.5·δ + sqrt(0.25·δ² + tensile_c·δ·δmax^p)), and kp·φf/(kp + kc), where the limit
-    // line meets the tensile branch, over a12.
-    inv_dmaxp_per_a12: f32,
-    tensile_c: f32,
-    tensile_limit_per_a12: f32,
-}
-
-const HYST_JUMP_IN: u32 = 1u;
-const HYST_SQRT_RULE: u32 = 2u;
-const HYST_LSD: u32 = 4u;
+// A pair's parameters: `HystereticPair` and the `HYST_*` flags (`gpu::layout`). LSD is
+// the special case k1 = kp = k (no plasticity), kc = fa = 0: the same code path.
 
 // Set per pipeline (`gpu::engine`) when every hysteretic/LSD row of the scene has the same
 // flags (0xffffffff: they differ, each pair reads its own): the compiler then drops the

@@ -14,56 +14,8 @@
 //     (x, elastic force, stored energy, 1) where a sub-model keeps the contact radius as
 //     state, (x_eq, 0, 0, 0) where the JKR curve gives it.
 
-// One row of the pair table (materials x materials, then walls x materials). Twin of
-// `gpu::layout::JkrPair`, filled from `JkrParams` on the host (in f64, then rounded).
-struct JkrPair {
-    // E* = S·E/(2(1 − nu²)) (scaled), Pa.
-    e_star: f32,
-    // G* = G/(2(2 − nu)), G = S·E/(2(1 + nu)) (scaled), Pa.
-    g_star: f32,
-    // Surface energy per surface after scaling, gamma·S^(2/5), J/m²; 0 = Hertz.
-    gamma: f32,
-    // (9·pi·gamma/E*)^(1/3) (scaled): a0 = a0_coef·R*^(2/3).
-    a0_coef: f32,
-    // delta/delta0 where a touching contact breaks (negative; displacement or force rule).
-    break_ratio: f32,
-    // Sliding friction mu_s; 0 = no tangential force.
-    friction: f32,
-    // Adhesion hysteresis (delta gamma)/gamma of the rolling resistance; 0 = none.
-    rolling_hysteresis: f32,
-    // Unscaled 3·pi·gamma (rolling keeps the unscaled Fc = fc_unscaled_per_r·R*).
-    fc_unscaled_per_r: f32,
-    // Unscaled (9·pi·gamma/E*)^(1/3) (rolling keeps the unscaled a0 in xi_crit).
-    a0_unscaled_coef: f32,
-    // 0: none; 1: Tsuji; 2: power law.
-    dissipation: u32,
-    // Tsuji: −2·sqrt(5/6)·beta(e) >= 0 (beta = ln e/sqrt(ln² e + pi²)).
-    tsuji: f32,
-    // Power law sgn(delta_dot)·D·E*·|delta_dot|^alpha·a^beta.
-    power_d: f32,
-    power_alpha: f32,
-    power_beta: f32,
-    // P(x_break) (`jkr::potential_shape`): the stored energy is Fc·delta0·(P(x) − P(x_break)).
-    p_break: f32,
-    // Krijt and stress (contact/krijt.wgsl): 2E*/nu² of the viscous force (eq. 12),
-    visc: f32,
-    // T_vis (krijt) or C of T_vis,0 = C·R (stress, eq. 18),
-    tvis: f32,
-    // 2E*·gamma/sigma0² of the crack speed (eq. B2; 0 = sigma0 = 0, no delay of a),
-    crack: f32,
-    // B and zeta of eq. 17 (stress).
-    stress_b: f32,
-    stress_zeta: f32,
-    // Tsuji: 1 = paper 002's Hertz stiffness rho = sqrt(R*·max(delta, 0)) in the dashpots
-    // (Sn = 2E*·rho, St = 8G*·rho), 0 = the contact radius a.
-    tsuji_hertz: u32,
-}
-
-const JKR_DISSIPATION_TSUJI: u32 = 1u;
-const JKR_DISSIPATION_POWER: u32 = 2u;
-// The contact radius is state (contact/krijt.wgsl): constant T_vis, stress-dependent T_vis.
-const JKR_DISSIPATION_KRIJT: u32 = 3u;
-const JKR_DISSIPATION_STRESS: u32 = 4u;
+// A pair's parameters: `JkrPair` and the `JKR_DISSIPATION_*` kinds (`gpu::layout`), filled
+// from `JkrParams` on the host (in f64, then rounded).
 
 const JKR_PI: f32 = 3.1415927;
 

@@ -3,12 +3,8 @@
 // twisting friction; keeps the history field `twist` (`friction::twisting::HISTORY`), a
 // scalar along n, the same seen from both sides.
 
-// The twisting block of the pair row (`gpu::layout::TwistingRow`): the spring, and the
+// The twisting block of the pair row is `TwistingRow` (`gpu::layout`): the spring, and the
 // stiffness per contact radius of the JKR family's default k_o = 2/5·8G*·a.
-struct TwistingRow {
-    spring: CoulombSpring,
-    k_per_a: f32,
-}
 
 // Twisting couple on i (−it on j): the pseudo-force of one Coulomb step with the twisting
 // velocity v_o = a12·n·(w_i − w_j), applied at the lever a12 = 2R* along n.

@@ -17,16 +17,16 @@ fn collect(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: 
         let disp = load_disp(k);
         let ratio = max(disp.w, c.peak);
         let bits = bitcast<u32>(ratio);
-        if (bits > atomicLoad(&control[4])) {
-            atomicMax(&control[4], bits);
+        if (bits > atomicLoad(&control[CONTROL_PEAK_OVERLAP])) {
+            atomicMax(&control[CONTROL_PEAK_OVERLAP], bits);
         }
         if (ratio > MONITOR_MAX_OVERLAP_RATIO) {
-            atomicMax(&control[5], load_ids(k).x + 1u);
+            atomicMax(&control[CONTROL_OVERLAP_PARTICLE], load_ids(k).x + 1u);
         }
         // the displacement since the last rebuild, for the host's rebuild forecast
         let moved = bitcast<u32>(length(disp.xyz));
-        if (moved > atomicLoad(&control[8])) {
-            atomicMax(&control[8], moved);
+        if (moved > atomicLoad(&control[CONTROL_DISPLACEMENT])) {
+            atomicMax(&control[CONTROL_DISPLACEMENT], moved);
         }
         store_disp(k, vec4<f32>(disp.xyz, 0.0));
     }
@@ -65,7 +65,7 @@ fn collect_particle(k: u32, mass: f32, store: bool) -> Collected {
     let acc = opaque(opaque(f / mass) + step.gravity);
     let rot = rot_collect(k, torque);
     if (!all_finite(acc) || !rot_finite(rot)) {
-        atomicAdd(&control[2], 1u);
+        atomicAdd(&control[CONTROL_NON_FINITE], 1u);
     }
     if (store) {
         store_acc(k, vec4<f32>(acc, 0.0));

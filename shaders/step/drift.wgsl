@@ -104,6 +104,6 @@ fn drift_particle(i: u32, vel: vec4<f32>, acc: vec3<f32>, rot: RotState, pending
     let at = vec3<f32>(cell) + o / h;
     let outside = (at < vec3<f32>(0.0)) | (at > step.extent_cells);
     if (any(outside & !periodic_axes())) {
-        atomicMax(&control[6], load_ids(i).x + 1u);
+        atomicMax(&control[CONTROL_ESCAPED_PARTICLE], load_ids(i).x + 1u);
     }
 }

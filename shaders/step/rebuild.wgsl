@@ -22,23 +22,20 @@ fn rebuild_due() -> bool {
     return rebuild;
 }
 
-// Halts the batch (`why`: HALT_GROW or HALT_REBUILD in monitor[7]): every indirect argument
+// Halts the batch (`why`: HALT_GROW or HALT_REBUILD in control[CONTROL_HALT]): every indirect argument
 // zeroed, so every later pass of the batch launches nothing; the host finishes it
 // (`GpuEngine::run_steps`). True where this call halted it.
 fn halt(why: u32) -> bool {
     // (single-invocation kernels, one dispatch after another: no race)
-    if (atomicLoad(&control[7]) != 0u) {
+    if (atomicLoad(&control[CONTROL_HALT]) != 0u) {
         return false;
     }
-    atomicStore(&control[7], why);
+    atomicStore(&control[CONTROL_HALT], why);
     for (var i = 0u; i < arrayLength(&args); i++) {
         args[i] = 0u;
     }
     return true;
 }
-
-const HALT_GROW: u32 = 1u;
-const HALT_REBUILD: u32 = 2u;
 
 // One invocation, after kick_drift: whether to rebuild (`rebuild_due`). Writes the flag and
 // the indirect arguments of the grid sort and of the rebuild's per-particle passes (zero
@@ -46,10 +43,10 @@ const HALT_REBUILD: u32 = 2u;
 @compute @workgroup_size(1)
 fn decide() {
     // a halted batch runs nothing more (`halt`)
-    if (atomicLoad(&control[7]) != 0u) {
+    if (atomicLoad(&control[CONTROL_HALT]) != 0u) {
         return;
     }
-    atomicAdd(&control[10], 1u);
+    atomicAdd(&control[CONTROL_STEPS_BEGUN], 1u);
     let rebuild = rebuild_due();
     if (rebuild) {
         for (var w = 0u; w < wall_count(); w++) {
@@ -60,9 +57,9 @@ fn decide() {
     atomicStore(&control[SKIN_REBUILD], select(0u, 1u, rebuild));
     if (rebuild) {
         atomicAdd(&control[SKIN_REBUILDS], 1u);
-        atomicStore(&control[9], 0u);
+        atomicStore(&control[CONTROL_STEPS_SINCE_REBUILD], 0u);
     } else {
-        atomicAdd(&control[9], 1u);
+        atomicAdd(&control[CONTROL_STEPS_SINCE_REBUILD], 1u);
     }
     for (var i = 0u; i < arrayLength(&full_args); i++) {
         args[i] = select(0u, full_args[i], rebuild);
@@ -74,16 +71,16 @@ fn decide() {
 // raised; the host runs this step again from its rebuild, recorded in full.
 @compute @workgroup_size(1)
 fn decide_lean() {
-    if (atomicLoad(&control[7]) != 0u) {
+    if (atomicLoad(&control[CONTROL_HALT]) != 0u) {
         return;
     }
-    atomicAdd(&control[10], 1u);
+    atomicAdd(&control[CONTROL_STEPS_BEGUN], 1u);
     if (rebuild_due()) {
         halt(HALT_REBUILD);
         return;
     }
     atomicStore(&control[SKIN_REBUILD], 0u);
-    atomicAdd(&control[9], 1u);
+    atomicAdd(&control[CONTROL_STEPS_SINCE_REBUILD], 1u);
 }
 
 // On a rebuild, before the state is re-sorted: the cell and offset mirrors in the new
@@ -126,7 +123,7 @@ fn evaluates(d: vec3<f32>, k: u32, j: u32) -> bool {
 fn search(k: u32, fill: bool) -> vec2<u32> {
     // (a particle whose data lies beyond this window's bindings stops the run: monitor[1])
     if (!in_bindings(sorted_index[k])) {
-        atomicMax(&control[1], 1u);
+        atomicMax(&control[CONTROL_BEYOND_WINDOW], 1u);
         return vec2<u32>(0u);
     }
     // (the positions in the new order: `sorted_cell`)
@@ -177,7 +174,7 @@ fn search(k: u32, fill: bool) -> vec2<u32> {
                         continue;
                     }
                     if (!in_bindings(j) || !in_bindings(sorted_index[j])) {
-                        atomicMax(&control[1], 1u);
+                        atomicMax(&control[CONTROL_BEYOND_WINDOW], 1u);
                         continue;
                     }
                     let cj = sorted_cell(j);
@@ -227,7 +224,7 @@ fn count_neighbours(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgrou
         return;
     }
     let c = search(k, false);
-    atomicMax(&control[0], max(c.x, c.y));
+    atomicMax(&control[CONTROL_LONGEST_LIST], max(c.x, c.y));
     rows[row_at(ROWS_B_COUNT, k)] = c.x;
     rows[row_at(ROWS_LOWER_COUNT, k)] = c.y;
 }
@@ -258,8 +255,8 @@ fn commit() {
     }
     let last = particle_end() - 1u;
     let need = max(rows[row_at(ROWS_B_ROW, last)] + b_len(last), rows[row_at(ROWS_LOWER_ROW, last)] + lower_len(last));
-    if (need > step.list_capacity || atomicLoad(&control[1]) != 0u) {
-        atomicMax(&control[11], need);
+    if (need > step.list_capacity || atomicLoad(&control[CONTROL_BEYOND_WINDOW]) != 0u) {
+        atomicMax(&control[CONTROL_ENTRIES_NEEDED], need);
         if (halt(HALT_GROW)) {
             atomicStore(&control[SKIN_MOVED], 1u);
             atomicSub(&control[SKIN_REBUILDS], 1u);

@@ -24,40 +24,10 @@
 // `hist_mirror` where a re-sort makes the partner the evaluator (why not both sides:
 // `docs/design_log.md`).
 //
-// `dt` first: with `gravity` at offset 0 Mesa lavapipe 22.3 ran slower and leaked
-// (docs/design_log.md, *Measurements moved out of the code*).
-struct StepParams {
-    dt: f32,
-    // Entries the neighbour lists have room for (each of the per-entry arrays).
-    list_capacity: u32,
-    n_materials: u32,
-    n_walls: u32,
-    gravity: vec3<f32>,
-    // Largest distance beyond touching at which any pair interacts.
-    reach: f32,
-    // The domain box's extent in cells (the run monitor: a centre beyond it has left).
-    extent_cells: vec3<f32>,
-    // 1 when some wall is servo-controlled: the force kernel then writes each wall
-    // entry's push (`store_wall_push`).
-    servo_walls: u32,
-    // 1 on periodic axes: cells wrap around (the axis holds a whole number >= 3 of cells,
-    // so dims·cell_width is the period) and separations take the nearest image.
-    periodic: vec3<u32>,
-    // Always 0, but only known at run time: `opaque` hides a value behind it, so the
-    // shader compiler cannot fold Kahan compensations ((x + y) − x) − y to 0 (Mesa's NIR
-    // does, for floating-point operations not marked exact: measured on lavapipe).
-    zero: u32,
-    // The Verlet skin (m). A uniform rather than a storage value: on lavapipe each storage
-    // access is a loop over the SIMD lanes.
-    skin: f32,
-    // 1 when the variant's force jumps are placed (`jump.wgsl`); 0 for the initial forces,
-    // whose contacts crossed nothing.
-    jumps: u32,
-    // Per periodic axis, the scene's period less dims·h (h is rounded to f32), m: a wrap
-    // and a separation across the seam add it (overlap.wgsl; 0 on other axes).
-    period_lo: vec3<f32>,
-}
+// `StepParams`, `Wall` and the constants shared with the host are generated from Rust
+// (`gpu::layout::declarations`).
 
+// x, hidden from the compiler behind `step.zero`, so Kahan compensations are not folded.
 fn opaque(x: vec3<f32>) -> vec3<f32> {
     return select(x, vec3<f32>(0.0), step.zero != 0u);
 }
@@ -91,29 +61,6 @@ fn wrap_cell(c: vec3<i32>) -> vec3<i32> {
     let periods = select(vec3<i32>(0), max(-c - vec3<i32>(1), vec3<i32>(0)) / n + vec3<i32>(1), c < vec3<i32>(0));
     return select(c, (c + periods * n) % n, periodic_axes());
 }
-
-// The run monitor's overlap limit over a12 (`run::MAX_OVERLAP_RATIO`; a test ties them).
-const MONITOR_MAX_OVERLAP_RATIO: f32 = 0.5;
-
-struct Wall {
-    // A point of the plane as cell + offset (like particle positions); moves with the wall.
-    // offset.w: the plane's rounding residual (`WallGpu::offset`).
-    cell: vec4<i32>,
-    offset: vec4<f32>,
-    // Unit normal into the domain (xyz).
-    normal: vec4<f32>,
-    // Velocity over the current step (xyz): written by the host for prescribed motion (per
-    // batch, split at the schedule's switch times), by wall_servo for servo control.
-    velocity: vec4<f32>,
-    // x: 0 fixed, 1 prescribed, 2 servo; y: the servo's force (N), z: its gain (m/s per
-    // N), w: its largest speed (m/s).
-    motion: vec4<f32>,
-    // The normal's rounding residual (xyz: true − stored): the overlap's plane is the
-    // true one also far from the stored point (`WallGpu::normal_lo`).
-    normal_lo: vec4<f32>,
-}
-
-const WALL_SERVO: f32 = 2.0;
 
 // False for a scene without walls (set per pipeline by `gpu::engine`): no kernel then
 // contains wall code (on a SIMD adapter a loop body runs at least once per group of lanes,
@@ -231,10 +178,8 @@ fn lower_len(k: u32) -> u32 {
 
 // A list entry whose partner (`nbr`, and `hist_pid`) is WALL_ENTRY | w holds the
 // particle's contact with wall w: the walls within reach + skin at the rebuild, after the
-// pairs of its row (particle indices and ids stay below 2^31). So a wall contact takes
-// room only where a particle is near a wall, and its history survives the re-sort as a
-// pair's does (`remap`, by this id).
-const WALL_ENTRY: u32 = 0x80000000u;
+// pairs of its row. So a wall contact takes room only where a particle is near a wall, and
+// its history survives the re-sort as a pair's does (`remap`, by this id).
 
 // A servo wall's push on a wall entry this step (the normal force, written by every force
 // pass): kept in the entry's pair force, which a wall contact has no other use for.
@@ -303,33 +248,11 @@ struct WallRef {
 // normal, so a wall beyond reach + skin at the rebuild stays out of range: `force`
 // evaluates only the wall entries (and a far wall's contact has no history).
 
-// The control words: [0, 12) the monitor, zeroed per batch of steps and read back after
-// it (no per-step read-back):
-// [0] = largest list length seen (atomicMax; a particle's list, walls included, or its
-// `lower` list), [1] = 1 when a rebuild found a particle's neighbours beyond its window's
-// bindings (`search`), [2] = non-finite
-// acceleration count, [3] = engaged
-// contacts dropped by a rebuild (ledger.wgsl), [4] = largest overlap/a12 of any contact
-// (f32 bits, atomicMax; non-negative f32 bits order as the values), [5] = persistent id
-// (+1) of a particle with a contact beyond MONITOR_MAX_OVERLAP_RATIO, [6] = persistent id
-// (+1) of a particle whose centre left the domain box, [7] = why the batch halted (`halt`:
-// HALT_GROW from `commit`, the new lists did not fit; HALT_REBUILD from `decide_lean`, a
-// rebuild is due); for the host's forecast of the next rebuild
-// (`gpu::quiet`): [8] = the largest displacement since the last rebuild at the batch's end
-// (f32 bits; `collect`), [9] = the steps since this batch's last rebuild (`decide`,
-// `decide_lean`: 0 on a rebuild, +1 on any other step); [10] = the steps begun before any
-// halt (`decide`, `decide_lean`), [11] = the list entries a halted rebuild needed.
-@group(0) @binding(48) var<storage, read_write> control: array<atomic<u32>, 16>;
+// The control words (`gpu::control`, named there: `CONTROL_*` the monitor, zeroed per
+// batch of steps and read back after it, with no per-step read-back; `SKIN_*` the Verlet
+// skin state, persistent across batches).
+@group(0) @binding(48) var<storage, read_write> control: array<atomic<u32>, CONTROL_END>;
 
-// [12, 16): the Verlet skin state, persistent across batches: SKIN_MOVED = 1 once some
-// particle has moved more
-// than skin/2 since the last rebuild (set by kick_drift, only there: a store where it
-// happens rather than a maximum over all particles, which cost workgroup atomics and
-// barriers every step), SKIN_REBUILD = 1 when this step rebuilds (written by decide),
-// SKIN_REBUILDS = rebuilds so far.
-const SKIN_MOVED: u32 = 12u;
-const SKIN_REBUILD: u32 = 13u;
-const SKIN_REBUILDS: u32 = 14u;
 // Indirect dispatch arguments: first those of a rebuild (the grid sort's, the per-particle
 // passes', the list scans'), which decide copies from full_args or zeroes each step; then
 // those of every step's passes (per particle, one workgroup), which the host writes at

@@ -9,6 +9,7 @@
 
 pub mod composition;
 pub mod context;
+pub mod control;
 pub mod engine;
 pub mod grid;
 pub mod kernel;

@@ -13,9 +13,14 @@ use std::fmt::Write;
 use crate::gpu::composition::Keeps;
 use crate::gpu::window::Windows;
 
-/// A list entry whose `nbr` (and partner id) is `WALL_ENTRY | w` is its particle's contact
-/// with wall w (`WALL_ENTRY` in `shaders/step/shared.wgsl`).
-pub const WALL_ENTRY: u32 = 0x8000_0000;
+crate::gpu::layout::wgsl_consts! {
+    /// The marks of a list entry's partner.
+    pub ENTRY_MARKS: u32 = {
+        /// A list entry whose `nbr` (and partner id) is `WALL_ENTRY | w` is its particle's
+        /// contact with wall w (particle indices and ids stay below 2^31).
+        WALL_ENTRY = 0x8000_0000,
+    }
+}
 
 /// What one field of a record holds.
 #[derive(Clone, Debug, PartialEq)]

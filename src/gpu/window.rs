@@ -11,8 +11,9 @@ use crate::gpu::kernel::{storage_buffer, uniform_buffer, Kernel, Part};
 use crate::gpu::pages::Pages;
 use crate::gpu::state::{particle_stride, STRIDE_ALIGN};
 
-/// A dispatch's window (`WindowParams` in common.wgsl).
-#[repr(C)]
+crate::gpu::layout::wgsl_struct! {
+/// A dispatch's window (the uniform `win`).
+#[wgsl("WindowParams")]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct WindowParams {
     /// Its first particle.
@@ -33,7 +34,8 @@ pub struct WindowParams {
     pub st_end: u32,
     /// The first window of `state_x`'s binding.
     pub st_other: u32,
-    _pad: [u32; 3],
+    _pad: crate::gpu::layout::Pad<3>,
+}
 }
 
 /// The fewest particles a window holds: every window's block of any array (4-byte records
@@ -166,7 +168,7 @@ impl Windows {
             st_base,
             st_end,
             st_other,
-            _pad: [0; 3],
+            _pad: crate::gpu::layout::Pad::ZERO,
         }
     }
 

@@ -8,7 +8,7 @@
 //! `pair_contact` / `pair_edges` that `shaders/step/` calls. Nothing a scene does not
 //! use is compiled in.
 
-use super::layout::{CoulombSpringRow, HystereticPair, JkrPair, TwistingRow};
+use super::layout::{CoulombSpringRow, HystereticPair, JkrPair, TwistingRow, WgslStruct};
 use super::records::RecordLayout;
 use super::shaders::{
     compose, ShaderVariant, JUMP, JUMP_OFF, LEDGER, LEDGER_OFF, OVERLAP, ROTATION,

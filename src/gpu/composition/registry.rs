@@ -84,7 +84,7 @@ pub const LAWS: &[NormalLaw] = &[
         source: include_str!("../../../shaders/contact/hysteretic.wgsl"),
         row: RowBlock {
             member: "hysteretic",
-            wgsl_struct: "HystereticPair",
+            wgsl_struct: HystereticPair::WGSL_NAME,
             bytes: std::mem::size_of::<HystereticPair>(),
             fill: |m| match m {
                 ContactModel::Hysteretic(p) => Some(bytes(&HystereticPair::hysteretic(p))),
@@ -103,7 +103,7 @@ pub const LAWS: &[NormalLaw] = &[
         source: include_str!("../../../shaders/contact/jkr.wgsl"),
         row: RowBlock {
             member: "jkr",
-            wgsl_struct: "JkrPair",
+            wgsl_struct: JkrPair::WGSL_NAME,
             bytes: std::mem::size_of::<JkrPair>(),
             fill: |m| match m {
                 ContactModel::Jkr(p) => Some(bytes(&JkrPair::new(p))),
@@ -175,7 +175,7 @@ pub const SUB_MODELS: &[SubModel] = &[
         shared: &[COULOMB],
         row: Some(RowBlock {
             member: "luding_sliding",
-            wgsl_struct: "CoulombSpring",
+            wgsl_struct: CoulombSpringRow::WGSL_NAME,
             bytes: std::mem::size_of::<CoulombSpringRow>(),
             fill: |m| spring_block(luding_of(m).map(|l| l.sliding)),
         }),
@@ -190,7 +190,7 @@ pub const SUB_MODELS: &[SubModel] = &[
         shared: &[COULOMB],
         row: Some(RowBlock {
             member: "luding_rolling",
-            wgsl_struct: "CoulombSpring",
+            wgsl_struct: CoulombSpringRow::WGSL_NAME,
             bytes: std::mem::size_of::<CoulombSpringRow>(),
             fill: |m| spring_block(luding_of(m).map(|l| l.rolling)),
         }),
@@ -205,7 +205,7 @@ pub const SUB_MODELS: &[SubModel] = &[
         shared: &[COULOMB],
         row: Some(RowBlock {
             member: "luding_twisting",
-            wgsl_struct: "TwistingRow",
+            wgsl_struct: TwistingRow::WGSL_NAME,
             bytes: std::mem::size_of::<TwistingRow>(),
             fill: |m| TwistingRow::new(m).map(|r| bytes(&r)),
         }),

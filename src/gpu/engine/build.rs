@@ -441,7 +441,7 @@ fn step_params(
         skin: skin as f32,
         // on once the initial forces are in (`initial_forces`)
         jumps: 0,
-        _pad: [0; 2],
+        _pad: crate::gpu::layout::Pad::ZERO,
         period_lo: [0, 1, 2].map(|a| {
             if periodic[a] {
                 (extent[a] - dims[a] as f64 * h[a]) as f32

@@ -19,6 +19,7 @@ use crate::cpu::{ContactStats, Energies, Partner};
 use crate::error::PowderError;
 use crate::gpu::composition::{Composition, Keeps};
 use crate::gpu::context::GpuContext;
+use crate::gpu::control::*;
 use crate::gpu::grid::GridSort;
 use crate::gpu::kernel::{
     read_joined, storage_buffer, submit_and_read, u32s, uniform_buffer, whole, Kernel, Part,
@@ -80,16 +81,6 @@ const INITIAL_ENTRIES_PER_PARTICLE: u64 = 2;
 /// Headroom of a grown capacity over what a rebuild needed (less where the entries'
 /// binding limit leaves less).
 const LIST_HEADROOM: f64 = 1.25;
-
-/// Bytes of the device monitor, the first part of `control` in `shaders/step/shared.wgsl`.
-const MONITOR_BYTES: u64 = 48;
-
-/// Where the Verlet skin state follows it in `control` (4 words: moved, rebuild flag,
-/// rebuilds so far, unused).
-const SKIN_OFFSET: u64 = MONITOR_BYTES;
-
-/// Bytes of `control`.
-const CONTROL_BYTES: u64 = SKIN_OFFSET + 16;
 
 /// Steps recorded into one submission.
 pub const STEPS_PER_SUBMIT: u64 = 64;
@@ -242,12 +233,12 @@ pub struct GpuEngine {
     /// (name, bytes) of every buffer allocated for the run.
     buffers: Vec<(String, u64)>,
     gravity: DVec3,
-    /// Engaged contacts that left the neighbour lists within one step (monitor[3]).
+    /// Engaged contacts that left the neighbour lists within one step (`CONTROL_DROPPED`).
     dropped: u64,
     /// Deepest overlap/a12 since the run monitor last looked, and a particle with a
-    /// contact beyond `run::MAX_OVERLAP_RATIO` if any (monitor[4], [5]).
+    /// contact beyond `run::MAX_OVERLAP_RATIO` if any (`CONTROL_PEAK_OVERLAP`, `CONTROL_OVERLAP_PARTICLE`).
     peak: Option<(f64, Option<usize>)>,
-    /// A particle whose centre left the domain box (monitor[6]).
+    /// A particle whose centre left the domain box (`CONTROL_ESCAPED_PARTICLE`).
     escaped: Option<usize>,
     /// A rebuild's scans of the new lists' lengths into their first entries (the pair
     /// lists', `lower`'s), dispatched indirectly from `args` at `dispatch.scans`.
@@ -295,8 +286,6 @@ mod tests {
             wgsl_u32_const(&module, "SKIN_MOVED") as u64 * 4,
             SKIN_OFFSET
         );
-        assert_eq!(wgsl_u32_const(&module, "SKIN_REBUILDS"), 14);
-        assert_eq!(wgsl_u32_const(&module, "WALL_ENTRY"), WALL_ENTRY);
     }
 
     /// A state saved before the ledger's rows joined the particle state (a

@@ -115,7 +115,7 @@ pub(super) enum Chain {
     Quiet,
 }
 
-/// Why a batch halted (monitor[7]).
+/// Why a batch halted ([`CONTROL_HALT`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) enum Halt {
     /// A rebuild's new lists need this many entries (`commit`).
@@ -124,26 +124,31 @@ pub(super) enum Halt {
     Rebuild,
 }
 
-/// What the host reads after a batch: the monitor and the skin state.
+/// What the host reads after a batch: the control words, the monitor and the skin state
+/// (`gpu::control`).
 pub(super) struct BatchReport {
-    pub(super) monitor: Vec<u32>,
-    pub(super) skin: Vec<u32>,
+    pub(super) control: Vec<u32>,
 }
 
 impl BatchReport {
+    /// The control word `i` (one of [`CONTROL_WORDS`]).
+    pub(super) fn word(&self, i: u32) -> u32 {
+        self.control[i as usize]
+    }
+
     /// Why the batch halted, if it did (`halt` in `shaders/step/rebuild.wgsl`).
     pub(super) fn halted(&self) -> Option<Halt> {
-        match self.monitor[7] {
+        match self.word(CONTROL_HALT) {
             0 => None,
-            2 => Some(Halt::Rebuild),
-            _ => Some(Halt::Grow(self.monitor[11] as u64)),
+            HALT_REBUILD => Some(Halt::Rebuild),
+            _ => Some(Halt::Grow(self.word(CONTROL_ENTRIES_NEEDED) as u64)),
         }
     }
 
     /// Steps of a halted batch completed before the one that halted (`decide` and
     /// `decide_lean` count the steps begun).
     pub(super) fn completed(&self) -> u64 {
-        (self.monitor[10] as u64).saturating_sub(1)
+        (self.word(CONTROL_STEPS_BEGUN) as u64).saturating_sub(1)
     }
 }
 
@@ -290,11 +295,8 @@ impl GpuEngine {
         if let (Some(clock), Some(stamps)) = (&self.clock, out.get(1)) {
             clock.take(stamps);
         }
-        let words = u32s(&out[0]);
-        let (monitor, skin) = words.split_at(MONITOR_BYTES as usize / 4);
         Ok(BatchReport {
-            monitor: monitor.to_vec(),
-            skin: skin.to_vec(),
+            control: u32s(&out[0]).to_vec(),
         })
     }
 
@@ -308,9 +310,9 @@ impl GpuEngine {
 
     /// Takes in what a batch's monitor holds: its records, and an error for what stops a run.
     /// An error where a rebuild found a particle's neighbours beyond its window's
-    /// bindings (monitor[1]): the batch halted before anything read them.
-    pub(super) fn check_windows(&self, m: &[u32]) -> Result<(), PowderError> {
-        if m[1] == 0 {
+    /// bindings: the batch halted before anything read them.
+    pub(super) fn check_windows(&self, report: &BatchReport) -> Result<(), PowderError> {
+        if report.word(CONTROL_BEYOND_WINDOW) == 0 {
             return Ok(());
         }
         let w = self.state.layout.windows();
@@ -320,20 +322,24 @@ impl GpuEngine {
         )))
     }
 
-    pub(super) fn apply_monitor(&mut self, m: &[u32]) -> Result<(), PowderError> {
-        self.dropped += m[3] as u64;
-        let ratio = f32::from_bits(m[4]) as f64;
-        let beyond = (m[5] != 0).then(|| m[5] as usize - 1);
+    pub(super) fn apply_monitor(&mut self, report: &BatchReport) -> Result<(), PowderError> {
+        let m = |i| report.word(i);
+        self.dropped += m(CONTROL_DROPPED) as u64;
+        let ratio = f32::from_bits(m(CONTROL_PEAK_OVERLAP)) as f64;
+        let at = m(CONTROL_OVERLAP_PARTICLE);
+        let beyond = (at != 0).then(|| at as usize - 1);
         if self.peak.is_none_or(|(r, _)| ratio > r) {
             self.peak = Some((ratio, beyond.or(self.peak.and_then(|p| p.1))));
         }
-        if m[6] != 0 && self.escaped.is_none() {
-            self.escaped = Some(m[6] as usize - 1);
+        let escaped = m(CONTROL_ESCAPED_PARTICLE);
+        if escaped != 0 && self.escaped.is_none() {
+            self.escaped = Some(escaped as usize - 1);
         }
-        if m[2] != 0 {
+        let non_finite = m(CONTROL_NON_FINITE);
+        if non_finite != 0 {
             return Err(PowderError::Run(format!(
-                "step {}: {} particles got a non-finite acceleration; the time step may be too large",
-                self.steps, m[2]
+                "step {}: {non_finite} particles got a non-finite acceleration; the time step may be too large",
+                self.steps
             )));
         }
         Ok(())

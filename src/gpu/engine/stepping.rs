@@ -66,14 +66,14 @@ impl GpuEngine {
             // the first lists did not fit the first guess: grown, built again
             match report.halted() {
                 Some(Halt::Grow(need)) => {
-                    self.check_windows(&report.monitor)?;
+                    self.check_windows(&report)?;
                     if rewindow && self.outgrows_one_window(need) {
                         return Ok(Some(need));
                     }
                     self.grow_lists(need)?
                 }
                 // (a full step: `decide_lean` does not run)
-                Some(Halt::Rebuild) | None => break self.apply_monitor(&report.monitor)?,
+                Some(Halt::Rebuild) | None => break self.apply_monitor(&report)?,
             }
         }
         if self.keeps.ledger {
@@ -144,11 +144,11 @@ impl GpuEngine {
             // (steps·dt: the same bits wherever batches end or halt)
             self.time = self.steps as f64 * self.dt;
             left -= done;
-            self.apply_monitor(&report.monitor)?;
+            self.apply_monitor(&report)?;
             // lean while rebuilds are rare: a halt costs a submission, and the batch's
             // remaining steps are recorded again (where they come every few steps, the
             // chain in every step is cheaper)
-            let rebuilds = report.skin[2] as u64;
+            let rebuilds = report.word(SKIN_REBUILDS) as u64;
             let rebuilt = rebuilds.saturating_sub(self.rebuilds_seen);
             self.rebuilds_seen = rebuilds;
             self.lean = match report.halted() {
@@ -157,7 +157,7 @@ impl GpuEngine {
             };
             match report.halted() {
                 Some(Halt::Grow(need)) => {
-                    self.check_windows(&report.monitor)?;
+                    self.check_windows(&report)?;
                     self.grow_lists(need)?;
                     self.resume = Some(batch - done);
                 }
@@ -184,11 +184,14 @@ impl GpuEngine {
     /// Tells the rebuild forecast what a kept batch ended with.
     pub(super) fn observe(&mut self, batch: u64, report: &BatchReport) {
         if let Some(q) = &mut self.quiet {
-            let rebuilt = report.skin[2] as u64 != q.rebuilds;
-            let since = rebuilt.then_some(report.monitor[9] as u64);
-            q.forecast
-                .observe(batch, since, f32::from_bits(report.monitor[8]) as f64);
-            q.rebuilds = report.skin[2] as u64;
+            let rebuilt = report.word(SKIN_REBUILDS) as u64 != q.rebuilds;
+            let since = rebuilt.then_some(report.word(CONTROL_STEPS_SINCE_REBUILD) as u64);
+            q.forecast.observe(
+                batch,
+                since,
+                f32::from_bits(report.word(CONTROL_DISPLACEMENT)) as f64,
+            );
+            q.rebuilds = report.word(SKIN_REBUILDS) as u64;
         }
     }
 
@@ -213,7 +216,7 @@ impl GpuEngine {
         }
         self.record_finish(&mut encoder, true);
         let report = self.submit_batch(encoder)?;
-        if report.skin[0] == 0 {
+        if report.word(SKIN_MOVED) == 0 {
             // no step would have rebuilt: the batch is what the normal one computes
             if let Some(q) = &mut self.quiet {
                 q.kept += 1;
@@ -280,6 +283,6 @@ impl GpuEngine {
     pub fn rebuilds(&self) -> Result<u64, PowderError> {
         let encoder = self.ctx.device.create_command_encoder(&Default::default());
         let out = submit_and_read(&self.ctx, encoder, &[(&self.b.control, CONTROL_BYTES)])?;
-        Ok(u32s(&out[0])[SKIN_OFFSET as usize / 4 + 2] as u64)
+        Ok(u32s(&out[0])[SKIN_REBUILDS as usize] as u64)
     }
 }

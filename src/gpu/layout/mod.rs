@@ -1,7 +1,7 @@
 //! Memory layout shared by the host and the kernels: the particle position
 //! representation (`position`), each contact law's and sub-model's pair-table row
 //! (`pair_rows`) and the uniform blocks, as `#[repr(C)]` bytemuck structs whose WGSL twins
-//! live in `shaders/` (the tests check the two layouts against naga's).
+//! are generated from them (`wgsl`; the tests check the two layouts against naga's).
 
 use bytemuck::{Pod, Zeroable};
 use glam::DVec3;
@@ -10,12 +10,20 @@ mod pair_rows;
 mod position;
 #[cfg(test)]
 mod tests;
+mod wgsl;
 
 pub use pair_rows::*;
 pub use position::*;
+pub use wgsl::{
+    declarations, shared_consts, shared_structs, Pad, SharedStruct, WgslField, WgslLiteral,
+    WgslMember, WgslStruct, WgslType,
+};
+pub(crate) use wgsl::{wgsl_consts, wgsl_struct};
 
-/// Grid parameters of a run: twin of `GridParams` in `shaders/common.wgsl`.
-#[repr(C)]
+wgsl_struct! {
+/// Grid parameters of a run (the uniform `grid`). The grid's origin, the domain's min
+/// corner, is implicit: cells are integer coordinates relative to it.
+#[wgsl("GridParams")]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GridParams {
     /// Cells per axis.
@@ -27,12 +35,16 @@ pub struct GridParams {
     pub cell_width: [f32; 3],
     /// `dims[0] * dims[1] * dims[2]`.
     pub n_cells: u32,
-    /// The windows ([`crate::gpu::window::Windows::params`]).
+    /// The windows ([`crate::gpu::window::Windows::params`]): shift (k >> shift is
+    /// particle k's window), len (particles a window holds), rec_shift (where a record
+    /// index's window bits start), the `state` buffer's fields.
     pub window: [u32; 4],
 }
+}
 
-/// One level of the exclusive scan: twin of `ScanParams` in `shaders/grid.wgsl`.
-#[repr(C)]
+wgsl_struct! {
+/// One level of the exclusive scan (`shaders/grid.wgsl`).
+#[wgsl("ScanParams")]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
 pub struct ScanParams {
     /// Elements at this level.
@@ -44,9 +56,11 @@ pub struct ScanParams {
     /// Where they go in the output (elements).
     pub out_offset: u32,
 }
+}
 
-/// Per-run step parameters: twin of `StepParams` in `shaders/step/shared.wgsl`.
-#[repr(C)]
+wgsl_struct! {
+/// Per-run step parameters (the uniform `step`).
+#[wgsl("StepParams")]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct StepParams {
     /// Time step, s.
@@ -57,16 +71,19 @@ pub struct StepParams {
     pub n_materials: u32,
     /// Walls in the wall buffer.
     pub n_walls: u32,
-    /// At offset 16, not 0: see the note on the WGSL struct (a lavapipe slowdown and leak).
+    /// Gravity, m/s², at offset 16 rather than 0 (why: `docs/design_log.md`,
+    /// *Measurements moved out of the code*).
     pub gravity: [f32; 3],
     /// Largest distance beyond touching at which any pair interacts (non-contact range or
     /// JKR neck), m; pairs farther apart than r_i + r_j + reach exert no force.
     pub reach: f32,
     /// The domain box's extent in cells (the run monitor's escape check).
     pub extent_cells: [f32; 3],
-    /// 1 when some wall is servo-controlled.
+    /// 1 when some wall is servo-controlled: the force kernel then writes each wall
+    /// entry's push (`store_wall_push`).
     pub servo_walls: u32,
-    /// 1 on periodic axes.
+    /// 1 on periodic axes: cells wrap around (the axis holds a whole number ≥ 3 of cells,
+    /// so dims·cell_width is the period) and separations take the nearest image.
     pub periodic: [u32; 3],
     /// Always 0: the kernels read it to hide values from the shader compiler, so Kahan
     /// compensations are not folded away (see `opaque` in `shaders/step/shared.wgsl`).
@@ -78,17 +95,19 @@ pub struct StepParams {
     /// forces, whose contacts crossed nothing).
     pub jumps: u32,
     /// Pads `period_lo` to its 16-byte alignment.
-    pub _pad: [u32; 2],
+    pub _pad: Pad<2>,
     /// Per periodic axis, the scene's period less the device's, L − dims·h, m (h is
     /// rounded to f32): a wrap and a separation across the seam add it (0 elsewhere).
     pub period_lo: [f32; 3],
     /// Pads the struct to WGSL's 16-byte size multiple.
     pub _pad_end: u32,
 }
+}
 
-/// A planar wall: a point as cell + offset and the unit normal. Twin of `Wall` in
-/// `shaders/step/shared.wgsl`.
-#[repr(C)]
+wgsl_struct! {
+/// A planar wall: a point as cell + offset and the unit normal (`walls` in
+/// `shaders/step/shared.wgsl`).
+#[wgsl("Wall")]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct WallGpu {
     /// A point of the plane: integer cell (xyz), w unused.
@@ -108,15 +127,19 @@ pub struct WallGpu {
     /// wall overlap adds it, so a tilted plane does not turn about its stored point.
     pub normal_lo: [f32; 4],
 }
+}
 
-/// Wall motion kinds of [`WallGpu::motion`], as in the WGSL.
-pub const WALL_FIXED: f32 = 0.0;
-
-/// The wall moves with a prescribed velocity schedule.
-pub const WALL_PRESCRIBED: f32 = 1.0;
-
-/// The wall is servo-controlled to hold a target force.
-pub const WALL_SERVO: f32 = 2.0;
+wgsl_consts! {
+    /// Wall motion kinds of [`WallGpu::motion`].
+    pub WALL_MOTIONS: f32 = {
+        /// The wall is at rest.
+        WALL_FIXED = 0.0,
+        /// The wall moves with a prescribed velocity schedule.
+        WALL_PRESCRIBED = 1.0,
+        /// The wall is servo-controlled to hold a target force.
+        WALL_SERVO = 2.0,
+    }
+}
 
 impl WallGpu {
     /// A fixed wall through `point` (m) with normal `normal` (normalised here), encoded on the

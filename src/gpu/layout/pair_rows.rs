@@ -1,12 +1,13 @@
 //! The pair table's rows, one block a contact law or sub-model (`gpu::composition` lays
 //! them out; their WGSL twins are the `PairRow` fields the generated code declares).
 
+use super::{wgsl_consts, wgsl_struct};
 use bytemuck::{Pod, Zeroable};
 
-/// The hysteretic law's block of the pair table (`HystereticPair` of
-/// `shaders/contact/hysteretic.wgsl`).
+wgsl_struct! {
+/// The hysteretic law's block of the pair table (`shaders/contact/hysteretic.wgsl`).
 /// LSD is the special case k1 = kp = k with the LSD flag.
-#[repr(C)]
+#[wgsl("HystereticPair")]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct HystereticPair {
     /// Initial (plastic) loading stiffness k1, N/m (paper 000 eq. 5).
@@ -36,15 +37,20 @@ pub struct HystereticPair {
     /// kp·φf/(kp + kc): where the limit line meets the tensile branch, over a12.
     pub tensile_limit_per_a12: f32,
 }
+}
 
-/// Flags of [`HystereticPair`], as in the WGSL.
-pub const HYST_JUMP_IN: u32 = 1;
-
-/// The k2 rule is the √ interpolation (paper 000 appendix D) instead of the linear eq. 9.
-pub const HYST_SQRT_RULE: u32 = 2;
-
-/// The row is a linear spring-dashpot (LSD): f = k·δ + γ0·δ̇ with k = k1 = kp.
-pub const HYST_LSD: u32 = 4;
+wgsl_consts! {
+    /// Flags of [`HystereticPair`].
+    pub HYST_FLAGS: u32 = {
+        /// Jump-in adhesion (else reversible).
+        HYST_JUMP_IN = 1,
+        /// The k2 rule is the √ interpolation (paper 000 appendix D), not the linear eq. 9.
+        HYST_SQRT_RULE = 2,
+        /// The row is a linear spring-dashpot (LSD): f = k·δ + γ0·δ̇ with k = k1 = kp, no
+        /// history.
+        HYST_LSD = 4,
+    }
+}
 
 impl HystereticPair {
     /// The row of a hysteretic pair, rounded to f32 (kca = ∞ encoded as 0).
@@ -97,16 +103,17 @@ impl HystereticPair {
     }
 }
 
-/// The JKR law's block of the pair table (`JkrPair` of `shaders/contact/jkr.wgsl`): the JKR
+wgsl_struct! {
+/// The JKR law's block of the pair table (`shaders/contact/jkr.wgsl`): the JKR
 /// family's parameters, derived in f64 from [`JkrParams`](crate::model::JkrParams) and
 /// rounded once. Per-contact quantities that depend on R* (a0, δ0, Fc, ξcrit) are formed in
 /// the kernel from the coefficients here, since R* varies with the particles' radii.
-#[repr(C)]
+#[wgsl("JkrPair")]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct JkrPair {
-    /// E* (scaled), Pa.
+    /// E* = S·E/(2(1 − ν²)) (scaled), Pa.
     pub e_star: f32,
-    /// G* (scaled), Pa.
+    /// G* = G/(2(2 − ν)), G = S·E/(2(1 + ν)) (scaled), Pa.
     pub g_star: f32,
     /// Surface energy after scaling, γ·S^(2/5), J/m²; 0 = Hertz.
     pub gamma: f32,
@@ -151,27 +158,29 @@ pub struct JkrPair {
     /// ([`TsujiStiffness`](crate::model::TsujiStiffness)).
     pub tsuji_hertz: u32,
 }
+}
 
-/// Dissipation kinds of [`JkrPair`], as in the WGSL.
-pub const JKR_DISSIPATION_NONE: u32 = 0;
-
-/// Tsuji-type viscous damping from a restitution coefficient (paper 002 eqs. 11–13).
-pub const JKR_DISSIPATION_TSUJI: u32 = 1;
-
-/// Power-law dissipation F = sgn(v)·D·E*·|v|^α·a^β (paper 001 eqs. 19–20).
-pub const JKR_DISSIPATION_POWER: u32 = 2;
-
-/// Krijt viscoelastic dissipation with a delayed contact radius, constant T_vis (paper 001
-/// eqs. 10–12, B1–B2).
-pub const JKR_DISSIPATION_KRIJT: u32 = 3;
-
-/// Krijt dissipation with the stress-dependent T_vis of paper 001 eqs. 17–18.
-pub const JKR_DISSIPATION_STRESS: u32 = 4;
+wgsl_consts! {
+    /// Dissipation kinds of [`JkrPair`].
+    pub JKR_DISSIPATIONS: u32 = {
+        /// None beyond the JKR hysteresis.
+        JKR_DISSIPATION_NONE = 0,
+        /// Tsuji-type viscous damping from a restitution coefficient (paper 002 eqs.
+        /// 11–13).
+        JKR_DISSIPATION_TSUJI = 1,
+        /// Power-law dissipation F = sgn(v)·D·E*·|v|^α·a^β (paper 001 eqs. 19–20).
+        JKR_DISSIPATION_POWER = 2,
+        /// Krijt viscoelastic dissipation with a delayed contact radius, constant T_vis
+        /// (paper 001 eqs. 10–12, B1–B2; the contact radius is state,
+        /// `contact/krijt.wgsl`).
+        JKR_DISSIPATION_KRIJT = 3,
+        /// Krijt dissipation with the stress-dependent T_vis of paper 001 eqs. 17–18.
+        JKR_DISSIPATION_STRESS = 4,
+    }
+}
 
 impl JkrPair {
-    /// The row of a JKR/Hertz pair, derived in f64 and rounded once to f32. Krijt and
-    /// stress-dependent dissipation are not ported and leave `dissipation` at
-    /// [`JKR_DISSIPATION_NONE`].
+    /// The row of a JKR/Hertz pair, derived in f64 and rounded once to f32.
     pub fn new(p: &crate::model::JkrParams) -> Self {
         use crate::model::jkr::tsuji_beta;
         use crate::model::Dissipation;
@@ -252,10 +261,10 @@ impl JkrPair {
     }
 }
 
-/// One Luding spring's block of the pair table (`CoulombSpring` of
-/// `shaders/contact/coulomb.wgsl`): [`CoulombSpring`](crate::model::CoulombSpring) rounded to
-/// f32; all zero (μs = 0) is off.
-#[repr(C)]
+wgsl_struct! {
+/// One Luding spring's block of the pair table (`shaders/contact/coulomb.wgsl`):
+/// [`CoulombSpring`](crate::model::CoulombSpring) rounded to f32; all zero (μs = 0) is off.
+#[wgsl("CoulombSpring")]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct CoulombSpringRow {
     /// Static coefficient μs; 0 = off.
@@ -266,6 +275,7 @@ pub struct CoulombSpringRow {
     pub k: f32,
     /// Dashpot γ, kg/s.
     pub gamma: f32,
+}
 }
 
 impl CoulombSpringRow {
@@ -280,16 +290,18 @@ impl CoulombSpringRow {
     }
 }
 
-/// The twisting block of the pair table (`TwistingRow` of
-/// `shaders/contact/luding_twisting.wgsl`): the spring, and for the JKR family without a
-/// given k_o the stiffness per contact radius (k_o = k + k_per_a·a).
-#[repr(C)]
+wgsl_struct! {
+/// The twisting block of the pair table (`shaders/contact/luding_twisting.wgsl`): the
+/// spring, and for the JKR family without a given k_o the stiffness per contact radius
+/// (k_o = k + k_per_a·a).
+#[wgsl("TwistingRow")]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct TwistingRow {
     /// The spring (its `k` is 0 where the stiffness follows the contact radius).
     pub spring: CoulombSpringRow,
     /// dk_o/da, N/m²: 2/5·8G* for the JKR family's default, else 0.
     pub k_per_a: f32,
+}
 }
 
 impl TwistingRow {

@@ -5,7 +5,7 @@ use crate::gpu::composition::Keeps;
 use crate::gpu::shaders;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
-use std::mem::{offset_of, size_of};
+use std::mem::size_of;
 
 fn norm_f32(d: [f32; 3]) -> f32 {
     (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
@@ -199,95 +199,50 @@ fn wgsl_struct(module: &naga::Module, name: &str) -> (u32, Vec<(String, u32)>) {
     panic!("struct {name} not found in the WGSL module");
 }
 
+/// Every struct the host shares with the kernels has, in its generated WGSL, naga's
+/// layout of the Rust struct: the same size and each member at the field's offset (a
+/// field whose WGSL alignment differs from Rust's fails here).
 #[test]
-fn gpu_layout_rust_structs_match_wgsl() {
-    let grid = shaders::variant("grid").expect("grid variant");
-    let (module, _) = shaders::validate(&grid.source).unwrap();
-    let (size, members) = wgsl_struct(&module, "GridParams");
-    assert_eq!(size as usize, size_of::<GridParams>());
-    let expect = [
-        ("dims", offset_of!(GridParams, dims)),
-        ("n_particles", offset_of!(GridParams, n_particles)),
-        ("cell_width", offset_of!(GridParams, cell_width)),
-        ("n_cells", offset_of!(GridParams, n_cells)),
-    ];
-    for (name, off) in expect {
-        let m = members.iter().find(|(n, _)| n == name).unwrap();
-        assert_eq!(m.1 as usize, off, "GridParams.{name}");
+fn gpu_layout_shared_structs_match_naga() {
+    for module in [
+        shaders::variant("grid").expect("grid variant").source,
+        shaders::step_variant().source,
+    ] {
+        let (module, _) = shaders::validate(&module).unwrap();
+        for s in shared_structs() {
+            let (size, members) = wgsl_struct(&module, s.name);
+            assert_eq!(size as usize, s.size, "{} size", s.name);
+            let expect: Vec<(String, u32)> = (s.members.iter())
+                .map(|(n, o)| (n.clone(), *o as u32))
+                .collect();
+            assert_eq!(members, expect, "{}", s.name);
+        }
     }
-    let (size, members) = wgsl_struct(&module, "ScanParams");
-    assert_eq!(size as usize, size_of::<ScanParams>());
-    assert_eq!(
-        members[0],
-        ("n".to_string(), offset_of!(ScanParams, n) as u32)
-    );
-    assert_eq!(
-        members[1],
-        (
-            "n_blocks".to_string(),
-            offset_of!(ScanParams, n_blocks) as u32
-        )
-    );
     assert_eq!(size_of::<CellCoord>(), 16);
     assert_eq!(size_of::<CellOffset>(), 16);
 }
 
+/// Every constant the host shares with the kernels reads back through naga to the bit.
 #[test]
-fn gpu_layout_step_structs_match_wgsl() {
+fn gpu_layout_shared_constants_match_naga() {
     let (module, _) = shaders::validate(&shaders::step_variant().source).unwrap();
-    let check = |name: &str, size: usize, expect: &[(&str, usize)]| {
-        let (wsize, members) = wgsl_struct(&module, name);
-        assert_eq!(wsize as usize, size, "{name} size");
-        for (field, off) in expect {
-            let m = members
-                .iter()
-                .find(|(n, _)| n == field)
-                .unwrap_or_else(|| panic!("{name}.{field}"));
-            assert_eq!(m.1 as usize, *off, "{name}.{field}");
-        }
-    };
-    check(
-        "StepParams",
-        size_of::<StepParams>(),
-        &[
-            ("gravity", offset_of!(StepParams, gravity)),
-            ("dt", offset_of!(StepParams, dt)),
-            ("list_capacity", offset_of!(StepParams, list_capacity)),
-            ("n_materials", offset_of!(StepParams, n_materials)),
-            ("n_walls", offset_of!(StepParams, n_walls)),
-            ("reach", offset_of!(StepParams, reach)),
-            ("extent_cells", offset_of!(StepParams, extent_cells)),
-            ("servo_walls", offset_of!(StepParams, servo_walls)),
-            ("periodic", offset_of!(StepParams, periodic)),
-            ("zero", offset_of!(StepParams, zero)),
-            ("skin", offset_of!(StepParams, skin)),
-            ("period_lo", offset_of!(StepParams, period_lo)),
-        ],
-    );
-    check(
-        "HystereticPair",
-        size_of::<HystereticPair>(),
-        &[
-            ("k1", offset_of!(HystereticPair, k1)),
-            ("kp", offset_of!(HystereticPair, kp)),
-            ("kc", offset_of!(HystereticPair, kc)),
-            ("dmaxp_per_a12", offset_of!(HystereticPair, dmaxp_per_a12)),
-            ("phi_f", offset_of!(HystereticPair, phi_f)),
-            ("fa", offset_of!(HystereticPair, fa)),
-            ("kca", offset_of!(HystereticPair, kca)),
-            ("gamma0", offset_of!(HystereticPair, gamma0)),
-            ("flags", offset_of!(HystereticPair, flags)),
-            (
-                "inv_dmaxp_per_a12",
-                offset_of!(HystereticPair, inv_dmaxp_per_a12),
-            ),
-            ("tensile_c", offset_of!(HystereticPair, tensile_c)),
-            (
-                "tensile_limit_per_a12",
-                offset_of!(HystereticPair, tensile_limit_per_a12),
-            ),
-        ],
-    );
+    let consts = shared_consts();
+    assert!(consts.len() >= 25, "{}", consts.len());
+    for (name, ty, bits) in consts {
+        let (_, c) = (module.constants.iter())
+            .find(|(_, c)| c.name.as_deref() == Some(name))
+            .unwrap_or_else(|| panic!("no constant {name}"));
+        let got = match module.global_expressions[c.init] {
+            naga::Expression::Literal(naga::Literal::U32(v)) => (v, "u32"),
+            naga::Expression::Literal(naga::Literal::F32(v)) => (v.to_bits(), "f32"),
+            ref e => panic!("constant {name} is {e:?}"),
+        };
+        assert_eq!(got, (bits, ty), "{name}");
+    }
+}
+
+#[test]
+fn gpu_layout_pair_row_matches_wgsl() {
     // a scene with every law: the pair row is the tag and each law's block, unpadded
     use crate::gpu::composition::Composition;
     let all = Composition::all()
@@ -310,78 +265,6 @@ fn gpu_layout_step_structs_match_wgsl() {
             ("luding_rolling".to_string(), sliding_at + spring),
             ("luding_twisting".to_string(), sliding_at + 2 * spring),
         ]
-    );
-    let (wsize, members) = wgsl_struct(&jkr, "CoulombSpring");
-    assert_eq!(wsize, spring, "CoulombSpring size");
-    for (field, off) in [
-        ("mu_s", offset_of!(CoulombSpringRow, mu_s)),
-        ("mu_d", offset_of!(CoulombSpringRow, mu_d)),
-        ("k", offset_of!(CoulombSpringRow, k)),
-        ("gamma", offset_of!(CoulombSpringRow, gamma)),
-    ] {
-        assert!(
-            members.contains(&(field.to_string(), off as u32)),
-            "CoulombSpring.{field}"
-        );
-    }
-    let (wsize, members) = wgsl_struct(&jkr, "TwistingRow");
-    assert_eq!(wsize as usize, size_of::<TwistingRow>(), "TwistingRow size");
-    assert_eq!(
-        members,
-        vec![
-            ("spring".to_string(), offset_of!(TwistingRow, spring) as u32),
-            (
-                "k_per_a".to_string(),
-                offset_of!(TwistingRow, k_per_a) as u32
-            ),
-        ]
-    );
-    let (wsize, members) = wgsl_struct(&jkr, "JkrPair");
-    assert_eq!(wsize as usize, size_of::<JkrPair>(), "JkrPair size");
-    for (field, off) in [
-        ("e_star", offset_of!(JkrPair, e_star)),
-        ("g_star", offset_of!(JkrPair, g_star)),
-        ("gamma", offset_of!(JkrPair, gamma)),
-        ("a0_coef", offset_of!(JkrPair, a0_coef)),
-        ("break_ratio", offset_of!(JkrPair, break_ratio)),
-        ("friction", offset_of!(JkrPair, friction)),
-        (
-            "rolling_hysteresis",
-            offset_of!(JkrPair, rolling_hysteresis),
-        ),
-        ("fc_unscaled_per_r", offset_of!(JkrPair, fc_unscaled_per_r)),
-        ("a0_unscaled_coef", offset_of!(JkrPair, a0_unscaled_coef)),
-        ("dissipation", offset_of!(JkrPair, dissipation)),
-        ("tsuji", offset_of!(JkrPair, tsuji)),
-        ("power_d", offset_of!(JkrPair, power_d)),
-        ("power_alpha", offset_of!(JkrPair, power_alpha)),
-        ("power_beta", offset_of!(JkrPair, power_beta)),
-        ("p_break", offset_of!(JkrPair, p_break)),
-        ("visc", offset_of!(JkrPair, visc)),
-        ("tvis", offset_of!(JkrPair, tvis)),
-        ("crack", offset_of!(JkrPair, crack)),
-        ("stress_b", offset_of!(JkrPair, stress_b)),
-        ("stress_zeta", offset_of!(JkrPair, stress_zeta)),
-        ("tsuji_hertz", offset_of!(JkrPair, tsuji_hertz)),
-    ] {
-        let m = members
-            .iter()
-            .find(|(n, _)| n == field)
-            .unwrap_or_else(|| panic!("JkrPair.{field}"));
-        assert_eq!(m.1 as usize, off, "JkrPair.{field}");
-    }
-    assert_eq!(members.len(), 21, "JkrPair members: {members:?}");
-    check(
-        "Wall",
-        size_of::<WallGpu>(),
-        &[
-            ("cell", offset_of!(WallGpu, cell)),
-            ("offset", offset_of!(WallGpu, offset)),
-            ("normal", offset_of!(WallGpu, normal)),
-            ("velocity", offset_of!(WallGpu, velocity)),
-            ("motion", offset_of!(WallGpu, motion)),
-            ("normal_lo", offset_of!(WallGpu, normal_lo)),
-        ],
     );
 }
 
