@@ -91,7 +91,7 @@ pub struct WgslField {
     pub doc: &'static [&'static str],
 }
 
-/// A `#[repr(C)]` struct the kernels read, defined by [`wgsl_struct!`].
+/// A `#[repr(C)]` struct the kernels read, defined by `wgsl_struct!`.
 pub trait WgslStruct {
     /// Its WGSL name.
     const WGSL_NAME: &'static str;
