@@ -11,6 +11,7 @@
 
 use crate::error::{require_positive, ParamError};
 use crate::model::history::{HistoryField, HostField, Mirror, Shape};
+use crate::model::params::word_enum;
 use crate::model::{ContactHistory, LudingFriction, NormalForce};
 use serde::{Deserialize, Serialize};
 
@@ -24,27 +25,31 @@ pub const HISTORY: &[HistoryField] = &[HistoryField {
     doc: "delta_max with the sign bit as the touched flag",
 }];
 
+word_enum! {
 /// How the un-/re-loading stiffness k2 grows with the history δmax below the limit.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]
 pub enum K2Rule {
     /// k2 = k1 + (kp − k1)·δmax/δmax^p (paper 000 eq. 9, paper 003 eq. 10).
     #[default]
-    Linear,
+    Linear = "linear",
     /// k2 = k1 + (kp − k1)·√(δmax/δmax^p) (paper 000 appendix D, eq. D.1).
-    Sqrt,
+    Sqrt = "sqrt",
+}
 }
 
+word_enum! {
 /// How the non-contact adhesion acts before the first mechanical contact.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]
 pub enum AdhesionMode {
     /// Reversible linear attraction within the range δa (eq. 14), on approach and separation.
-    Reversible,
+    Reversible = "reversible",
     /// Irreversible jump-in (eq. 15): no force on first approach, −fa from the first touch
     /// on, and the reversible pull-off branch on separation.
     #[default]
-    JumpIn,
+    JumpIn = "jump-in",
+}
 }
 
 /// Parameters of the hysteretic model. Stiffnesses in N/m, forces in N, γ0 in kg/s.

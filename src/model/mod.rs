@@ -169,6 +169,16 @@ pub struct Response {
 }
 
 impl ContactModel {
+    /// The name of its law, as scenes and the command line write it (`params::LAWS`).
+    pub fn law_name(&self) -> &'static str {
+        match self {
+            Self::Hysteretic(_) => "hysteretic",
+            Self::Lsd(_) => "lsd",
+            Self::Jkr(p) if p.surface_energy == 0.0 => "hertz",
+            Self::Jkr(_) => "jkr",
+        }
+    }
+
     /// Checks the parameters against the model's rules; the error names the parameter.
     pub fn validate(&self) -> Result<(), ParamError> {
         match self {

@@ -190,15 +190,6 @@ pub struct CollideResult {
     pub energy: CollisionEnergy,
 }
 
-fn model_name(m: &ContactModel) -> &'static str {
-    match m {
-        ContactModel::Hysteretic(_) => "hysteretic",
-        ContactModel::Lsd(_) => "lsd",
-        ContactModel::Jkr(p) if p.surface_energy == 0.0 => "hertz",
-        ContactModel::Jkr(_) => "jkr",
-    }
-}
-
 impl CollideSpec {
     fn masses(&self) -> (f64, f64) {
         let m = |r: f64| self.density * 4.0 / 3.0 * PI * r.powi(3);

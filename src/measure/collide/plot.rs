@@ -167,7 +167,7 @@ pub fn restitution_plot(spec: &CollideSpec, results: &[CollideResult], log: bool
     Plot {
         title: format!(
             "Coefficient of restitution, {} model",
-            model_name(&spec.model)
+            spec.model.law_name()
         ),
         x_label,
         y_label: "e".into(),

@@ -348,7 +348,7 @@ pub(super) fn run_collision(
     let (ke1, total1, dissipated) = run.energy(&last);
     let rotates = run.rotates();
     let mut result = CollideResult {
-        model: model_name(&spec.model),
+        model: spec.model.law_name(),
         velocity: spec.velocity,
         e,
         stuck,

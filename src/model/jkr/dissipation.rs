@@ -3,6 +3,7 @@
 
 use super::{JkrPair, JkrParams};
 use crate::model::krijt::{self, KrijtLaw, Relaxation};
+use crate::model::params::word_enum;
 use crate::model::PairGeometry;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
@@ -70,6 +71,7 @@ pub enum Dissipation {
     },
 }
 
+word_enum! {
 /// The stiffness in the Tsuji dashpots, Sn = 2E*·ρ (normal, paper 002 eqs. 11–13) and
 /// St = 8G*·ρ (tangential, eq. 16), with ρ a contact radius.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -78,11 +80,12 @@ pub enum TsujiStiffness {
     /// ρ = a, the JKR contact radius: it exists (and the dashpots act) also at negative
     /// overlap while a JKR contact holds, and exceeds √(R*δ) at positive overlap.
     #[default]
-    ContactRadius,
+    ContactRadius = "contact-radius",
     /// ρ = √(R*·δ), zero at δ ≤ 0: paper 002's Hertz forms Sn = 2E*√(R*δ) (eq. 13) and
     /// St = 8G*√(R*δ) (below eq. 14), for which Tsuji's β(e) calibration was derived. The
     /// same as `ContactRadius` for Hertz (γ = 0), where a = √(R*δ).
-    Hertz,
+    Hertz = "hertz",
+}
 }
 
 impl TsujiStiffness {
@@ -91,14 +94,6 @@ impl TsujiStiffness {
         match self {
             Self::ContactRadius => a,
             Self::Hertz => (r_eff * delta.max(0.0)).sqrt(),
-        }
-    }
-
-    /// The name used in scenes and on the command line.
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::ContactRadius => "contact-radius",
-            Self::Hertz => "hertz",
         }
     }
 }

@@ -31,6 +31,7 @@ mod twisting;
 use crate::model::friction::LudingFriction;
 use crate::model::history::{HistoryField, HostField, Mirror, Shape};
 use crate::model::krijt;
+use crate::model::params::word_enum;
 use crate::model::{ContactHistory, NormalForce, PairGeometry};
 use dissipation::TSUJI_PREFACTOR;
 pub use dissipation::{tsuji_beta, Dissipation, TsujiStiffness};
@@ -76,6 +77,7 @@ pub const NEWTON_ITERATIONS_F64: usize = 5;
 /// Newton iterations of the f32 contact-radius solver (the WGSL kernel's count).
 pub const NEWTON_ITERATIONS_F32: usize = 3;
 
+word_enum! {
 /// Where a JKR contact breaks on separation.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]
@@ -83,13 +85,14 @@ pub enum Pulloff {
     /// Displacement control (paper 001): the contact persists down to the turning point
     /// δc = −(3/4)^(2/3)·δ0, where F = −5/9·Fc.
     #[default]
-    Displacement,
+    Displacement = "displacement",
     /// Force control (LAMMPS's choice): the contact breaks where F reaches −Fc, at
     /// δ = −2^(−4/3)·δ0 ≈ −0.397·δ0.
-    Force,
+    Force = "force",
     /// Paper 002's rule: the contact breaks as soon as the overlap turns negative on
     /// separation, where F = −8/9·Fc as at the touch, so the JKR curve itself loses nothing.
-    Zero,
+    Zero = "zero",
+}
 }
 
 impl Pulloff {

@@ -705,7 +705,7 @@ fn tsuji_hertz_stiffness_rule() {
     assert!(json.contains("\"stiffness\":\"hertz\""), "{json}");
     assert_eq!(serde_json::from_str::<JkrParams>(&json).unwrap(), q);
     assert_eq!(TsujiStiffness::default(), TsujiStiffness::ContactRadius);
-    assert_eq!(TsujiStiffness::Hertz.name(), "hertz");
+    assert_eq!(TsujiStiffness::Hertz.word(), "hertz");
 }
 
 #[test]

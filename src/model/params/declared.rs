@@ -2,6 +2,7 @@
 //! (`param!`) and list it in its law's row of [`LAWS`] or [`DISSIPATIONS`].
 
 use super::{Fallback, Kind, Law, Param, Rule};
+use crate::model::{AdhesionMode, K2Rule, Pulloff, TsujiStiffness};
 
 use Fallback::{Derived, Number, Required, Word};
 use Kind::{Choice, NumberOrInf};
@@ -65,18 +66,18 @@ param!(
 param!(
     ADHESION,
     "adhesion",
-    Choice(&["jump-in", "reversible"]),
+    Choice(AdhesionMode::WORDS),
     "",
-    Word("jump-in"),
+    Word(AdhesionMode::JumpIn.word()),
     Rule::None,
     "the non-contact adhesion on first approach (paper 000 eqs. 14-15)"
 );
 param!(
     K2_RULE,
     "k2_rule",
-    Choice(&["linear", "sqrt"]),
+    Choice(K2Rule::WORDS),
     "",
-    Word("linear"),
+    Word(K2Rule::Linear.word()),
     Rule::None,
     "the k2(delta_max) interpolation (paper 000 eq. 9 or D.1)"
 );
@@ -127,7 +128,7 @@ param!(
     Rule::NonNegative,
     "the surface energy gamma per surface (Fc = 3 pi gamma R*)"
 );
-param!(PULLOFF, "pulloff", Choice(&["displacement", "force", "zero"]), "", Word("displacement"), Rule::None, "where a stretched JKR contact breaks: at the turning point, at -Fc, or at zero overlap (paper 002)");
+param!(PULLOFF, "pulloff", Choice(Pulloff::WORDS), "", Word(Pulloff::Displacement.word()), Rule::None, "where a stretched JKR contact breaks: at the turning point, at -Fc, or at zero overlap (paper 002)");
 param!(
     STIFFNESS_SCALE,
     "stiffness_scale",
@@ -250,7 +251,7 @@ param!(
     Rule::LeftOpen(0.0, 1.0),
     "the target restitution e of dissipation = \"tsuji\" (paper 002 eq. 12)"
 );
-param!(TSUJI_STIFFNESS, "tsuji_stiffness", Choice(&["contact-radius", "hertz"]), "", Word("contact-radius"), Rule::None, "the stiffness of the Tsuji dashpots: \"contact-radius\" Sn = 2E* a, St = 8G* a (a the JKR contact radius, also at negative overlap) or \"hertz\" Sn = 2E* sqrt(R* delta), St = 8G* sqrt(R* delta), 0 at delta <= 0 (paper 002 eqs. 13-16)");
+param!(TSUJI_STIFFNESS, "tsuji_stiffness", Choice(TsujiStiffness::WORDS), "", Word(TsujiStiffness::ContactRadius.word()), Rule::None, "the stiffness of the Tsuji dashpots: \"contact-radius\" Sn = 2E* a, St = 8G* a (a the JKR contact radius, also at negative overlap) or \"hertz\" Sn = 2E* sqrt(R* delta), St = 8G* sqrt(R* delta), 0 at delta <= 0 (paper 002 eqs. 13-16)");
 param!(
     POWER_D,
     "D",

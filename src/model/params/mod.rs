@@ -156,6 +156,9 @@ mod declared;
 mod read;
 #[cfg(test)]
 mod tests;
+mod words;
+
+pub(crate) use words::word_enum;
 
 pub use declared::*;
 pub use read::{read_model, read_value, ParamSource, Raw, Value};

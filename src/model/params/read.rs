@@ -81,6 +81,11 @@ impl Values {
             _ => "",
         }
     }
+    /// The variant the word given for `p` (or its default) names: the choice list is the
+    /// enum's `WORDS` and the word was typed against it (`word_enum!`).
+    fn choice<T>(&self, p: &Param, from_word: fn(&str) -> Option<T>) -> T {
+        from_word(self.word(p)).expect("a word typed against the enum's own list")
+    }
 }
 
 /// Types one given value against its declaration.
@@ -329,15 +334,9 @@ fn build(law: &Law, dissipation: Option<&Law>, v: &Values) -> ContactModel {
                 kca: v
                     .opt(&KCA)
                     .unwrap_or(if kc > 0.0 { kc } else { f64::INFINITY }),
-                adhesion: match v.word(&ADHESION) {
-                    "reversible" => AdhesionMode::Reversible,
-                    _ => AdhesionMode::JumpIn,
-                },
+                adhesion: v.choice(&ADHESION, AdhesionMode::from_word),
                 gamma0: v.num(&GAMMA0),
-                k2_rule: match v.word(&K2_RULE) {
-                    "sqrt" => K2Rule::Sqrt,
-                    _ => K2Rule::Linear,
-                },
+                k2_rule: v.choice(&K2_RULE, K2Rule::from_word),
                 luding: luding(v, v.num(&K1), v.num(&GAMMA0)),
             })
         }
@@ -350,10 +349,7 @@ fn build(law: &Law, dissipation: Option<&Law>, v: &Values) -> ContactModel {
             let dissipation = match dissipation.map_or("none", |d| d.name) {
                 "tsuji" => Dissipation::Tsuji {
                     restitution: v.num(&RESTITUTION),
-                    stiffness: match v.word(&TSUJI_STIFFNESS) {
-                        "hertz" => TsujiStiffness::Hertz,
-                        _ => TsujiStiffness::ContactRadius,
-                    },
+                    stiffness: v.choice(&TSUJI_STIFFNESS, TsujiStiffness::from_word),
                 },
                 "powerlaw" => Dissipation::PowerLaw {
                     d: v.num(&POWER_D),
@@ -384,11 +380,7 @@ fn build(law: &Law, dissipation: Option<&Law>, v: &Values) -> ContactModel {
                 dissipation,
                 friction: v.num(&FRICTION),
                 rolling_hysteresis: v.num(&ROLLING_HYSTERESIS),
-                pulloff: match v.word(&PULLOFF) {
-                    "force" => Pulloff::Force,
-                    "zero" => Pulloff::Zero,
-                    _ => Pulloff::Displacement,
-                },
+                pulloff: v.choice(&PULLOFF, Pulloff::from_word),
                 stiffness_scale: v.num(&STIFFNESS_SCALE),
                 luding: LudingFriction {
                     // k_o = 0: the Mindlin-derived stiffness of the current contact radius
