@@ -9,6 +9,7 @@
 mod common;
 use common::gpu;
 
+use powder::cpu::CpuEngine;
 use powder::measure::collide::{collide_on, Backend, CollideSpec};
 use powder::model::{analytic, AdhesionMode, ContactModel, HystereticParams, JkrParams, Pulloff};
 
@@ -300,6 +301,59 @@ fn hysteretic_jumps_on_the_gpu_as_on_the_cpu() {
         assert!(
             moved > 1e-4,
             "{adhesion:?}: the jumps move e by {moved:e} only"
+        );
+    }
+}
+
+/// Spheres (and a sphere and a wall) that touch exactly at the start enter the contact as
+/// those one ulp apart do: the pair at the edge keeps its record, so its start is known,
+/// not estimated back along δ̇ (where rounding put it inside and dropped the entry's
+/// impulse while the ledger booked it: the run stopped for energy growth).
+#[test]
+fn a_contact_touching_exactly_at_the_start_enters_as_one_an_ulp_apart() {
+    let scene = |x: &str, wall: bool| {
+        let (second, walls) = if wall {
+            (
+                "",
+                "[[wall]]\npoint = [0.006, 0.0, 0.0]\nnormal = [-1.0, 0.0, 0.0]\n",
+            )
+        } else {
+            (", [0.006, 0.005, 0.005]", "")
+        };
+        let velocities = if wall {
+            "[[0.1, 0.0, 0.0]]"
+        } else {
+            "[[0.1, 0.0, 0.0], [-0.1, 0.0, 0.0]]"
+        };
+        let text = format!(
+            "[domain]\nmin = [0.0, 0.0, 0.0]\nmax = [0.01, 0.01, 0.01]\n\
+             [simulation]\nduration = 1e-3\n\
+             [[material]]\nname = \"s\"\ndensity = 2000.0\nmodel = \"lsd\"\nk = 100.0\ngamma0 = 0.1\n\
+             {walls}\
+             [[particles]]\nkind = \"list\"\npositions = [[{x}, 0.005, 0.005]{second}]\n\
+             radius = 1e-3\nvelocities = {velocities}\n"
+        );
+        powder::scene::Scene::from_toml_str(&text, "touch").unwrap()
+    };
+    for wall in [false, true] {
+        let x = if wall { "0.005" } else { "0.004" };
+        // one ulp farther apart
+        let apart = f64::from_bits(x.parse::<f64>().unwrap().to_bits() - 1);
+        let mut totals = Vec::new();
+        for s in [scene(x, wall), scene(&format!("{apart:e}"), wall)] {
+            let mut e = CpuEngine::new(&s).unwrap();
+            let start = e.energies().total();
+            e.run_steps(100).unwrap();
+            totals.push((start, e.energies().total()));
+        }
+        let (exact, ulp) = (totals[0], totals[1]);
+        assert!(
+            ((exact.1 - exact.0) / exact.0).abs() < 0.05,
+            "wall {wall}: balance {exact:?}"
+        );
+        assert!(
+            ((exact.1 - ulp.1) / ulp.1).abs() < 1e-9,
+            "wall {wall}: exact {exact:?}, an ulp apart {ulp:?}"
         );
     }
 }

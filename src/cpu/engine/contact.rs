@@ -38,7 +38,7 @@ impl ContactRecord {
     /// Whether the contact stays in the list: in the model's interaction range, or
     /// touched (a history that outlives the range until it lets go).
     pub(super) fn stays(&self, range: f64) -> bool {
-        self.delta > -range || self.history.touched
+        self.delta >= -range || self.history.touched
     }
 
     pub(super) fn new(history: ContactHistory, delta: f64, r: &Response, m: &Motion) -> Self {

@@ -143,7 +143,7 @@ impl PairInputs<'_> {
             // as on the GPU)
             let visited = |(live, record): (bool, &ContactRecord), j: usize, dist2: f64| {
                 let reach = pad_i + radius[j];
-                dist2 < reach * reach || live && record.engaged()
+                dist2 <= reach * reach || live && record.engaged()
             };
             // the row in blocks: with roots to solve, each block's gauges first, side by
             // side, then its forces
@@ -198,7 +198,7 @@ impl PairInputs<'_> {
                     let delta = ri + radius[j] - dist;
                     let m = mi + material[j];
                     let (model, range) = (&self.models[m], self.ranges[m]);
-                    if delta <= -range && !live {
+                    if delta < -range && !live {
                         c.entry_force[x] = DVec3::ZERO;
                         if ROT {
                             c.entry_torque[x] = DVec3::ZERO;

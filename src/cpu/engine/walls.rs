@@ -105,7 +105,7 @@ impl WallInputs<'_> {
             let delta = wall.overlap(self.pos[i], self.radius[i]);
             let m = w * self.n_materials + self.material[i];
             let (model, range) = (&self.wall_models[m], self.wall_ranges[m]);
-            if delta <= -range && prior.is_none() {
+            if delta < -range && prior.is_none() {
                 continue;
             }
             let geom = PairGeometry::wall(self.radius[i], self.mass[i]);
