@@ -351,6 +351,29 @@ fn a_resume_into_another_runs_folder_is_refused() {
         std::fs::read(theirs.path().join("series.csv")).unwrap(),
         before
     );
+    // a checkpoint whose run wrote no rows before it (a branch with a long cadence, into an
+    // empty folder) is refused too where the folder has rows
+    let mut sparse = scene.clone();
+    sparse.output_every = 1_000_000;
+    let branch = tempfile::tempdir().unwrap();
+    run(&sparse, branch.path(), 2500, Some(&ckpt));
+    let before = std::fs::read(mine.path().join("series.csv")).unwrap();
+    let zero_rows = branch.path().join("checkpoint.bin");
+    let err = run_cpu_with(
+        &sparse,
+        &options(mine.path(), 3000, Some(&zero_rows)),
+        |_| {},
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        err.contains("is not the one the run of checkpoint"),
+        "{err}"
+    );
+    assert_eq!(
+        std::fs::read(mine.path().join("series.csv")).unwrap(),
+        before
+    );
     // its own folder and an empty one resume
     run(&scene, empty.path(), 3000, Some(&ckpt));
     let rows = std::fs::read_to_string(empty.path().join("series.csv")).unwrap();
@@ -1075,4 +1098,67 @@ fn damaged_gpu_checkpoints_are_refused() {
             .to_string();
         assert!(err.contains("damaged or truncated"), "{what}: {err}");
     }
+}
+
+/// A run into a folder another live run holds is refused, and so is one that could not
+/// write one of its outputs (a folder where its `.pvd` goes): in both cases before the
+/// earlier run's outputs are touched. The lock goes with the run.
+#[test]
+fn a_held_or_unwritable_folder_is_refused_before_anything_changes() {
+    let scene = cluster();
+    let dir = tempfile::tempdir().unwrap();
+    run(&scene, dir.path(), 1000, None);
+    assert!(!dir.path().join(powder::output::folder::LOCK).exists());
+    let listing = || {
+        let mut names: Vec<(String, u64)> = walk(dir.path())
+            .into_iter()
+            .map(|p| {
+                let len = if p.is_dir() {
+                    0
+                } else {
+                    std::fs::metadata(&p).unwrap().len()
+                };
+                (p.display().to_string(), len)
+            })
+            .collect();
+        names.sort();
+        names
+    };
+    let before = listing();
+    // (pid 1 lives as long as the machine)
+    let lock = dir.path().join(powder::output::folder::LOCK);
+    std::fs::write(&lock, "1").unwrap();
+    let err = run_cpu_with(&scene, &options(dir.path(), 2000, None), |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("(process 1) is writing into"), "{err}");
+    std::fs::remove_file(&lock).unwrap();
+    assert_eq!(listing(), before);
+    let pvd = dir.path().join(format!("{}.pvd", scene.name));
+    std::fs::remove_file(&pvd).unwrap();
+    std::fs::create_dir(&pvd).unwrap();
+    let before = listing();
+    let err = run_cpu_with(&scene, &options(dir.path(), 2000, None), |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("is a folder where the run writes a file"),
+        "{err}"
+    );
+    assert_eq!(listing(), before);
+}
+
+/// Every file under `dir`, recursively.
+fn walk(dir: &Path) -> Vec<std::path::PathBuf> {
+    let mut out = Vec::new();
+    for e in std::fs::read_dir(dir).unwrap().flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            out.push(p.clone());
+            out.extend(walk(&p));
+        } else {
+            out.push(p);
+        }
+    }
+    out
 }

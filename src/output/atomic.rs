@@ -100,14 +100,23 @@ pub fn remove_stale_temps(dir: &Path) -> usize {
     removed
 }
 
-/// The process id in one of [`create_temp`]'s names, `.<file>.<pid>.<n>.tmp`.
+/// The kinds of file the runs write through [`create_temp`] (a temporary file of another
+/// name is not a run's, and stays).
+const OUTPUT_KINDS: [&str; 5] = [".csv", ".bin", ".json", ".pvd", ".vtp"];
+
+/// The process id in one of [`create_temp`]'s names for a run's output,
+/// `.<file>.<pid>.<n>.tmp`.
 fn temp_pid(name: &str) -> Option<u32> {
     let stem = name.strip_prefix('.')?.strip_suffix(".tmp")?;
     let digits = |p: &&str| !p.is_empty() && p.bytes().all(|b| b.is_ascii_digit());
     let mut parts = stem.rsplitn(3, '.');
     parts.next().filter(digits)?;
     let pid = parts.next().filter(digits)?;
-    parts.next().filter(|file| !file.is_empty())?;
+    parts.next().filter(|file| {
+        OUTPUT_KINDS
+            .iter()
+            .any(|k| file.len() > k.len() && file.ends_with(k))
+    })?;
     pid.parse().ok()
 }
 
@@ -151,6 +160,9 @@ mod tests {
             ".w.pvd.1.0.tmp",
         ];
         let gone = u32::MAX - 1;
+        // a user's file of that shape that is not a run's output kind
+        let notes = format!(".notes.{gone}.1.tmp");
+        keep.push(&notes);
         let stale = [
             format!(".checkpoint.bin.{gone}.9.tmp"),
             format!(".run_0000000300.vtp.{gone}.0.tmp"),

@@ -132,6 +132,11 @@ impl Series {
         Ok(self)
     }
 
+    /// The `.pvd` collection's path.
+    pub fn collection_path(&self) -> PathBuf {
+        self.dir.join(&self.collection)
+    }
+
     /// The series as [`Self::in_folder`] names it, its folder not created (to clear an
     /// earlier run's where this run writes none).
     pub fn unopened(dir: &Path, folder: &str, name: &str, collection: &str) -> Self {

@@ -16,6 +16,7 @@ use crate::cpu::{ContactStats, CpuEngine, Threads};
 use crate::error::PowderError;
 use crate::gpu::{GpuContext, GpuEngine, GpuOptions};
 use crate::output::atomic::{remove_stale_temps, write_atomic};
+use crate::output::folder::{check_writable, FolderLock};
 use crate::output::series_csv::{self, SeriesCsv, SeriesMark};
 use crate::output::{contacts, vtk};
 use crate::run::observed::ObservedEnergies;
@@ -233,6 +234,29 @@ pub fn run_with<S: Simulation>(
     let out = opts.out_dir.as_deref();
     let csv_path = out.map(|d| d.join("series.csv"));
     let ckpt_path = out.map(|d| d.join("checkpoint.bin"));
+    // the folder held for this run, and every output it writes checked writable before
+    // anything there changes
+    let _lock = match out {
+        Some(d) => {
+            let lock = FolderLock::take(d)?;
+            let [particles, contacts] = vtk::Series::both_unopened(d, &scene.name);
+            let files = [
+                d.join("series.csv"),
+                d.join("checkpoint.bin"),
+                d.join("summary.json"),
+                particles.collection_path(),
+                contacts.collection_path(),
+            ];
+            check_writable(d, &files)?;
+            for sub in [particles.folder(), contacts.folder()] {
+                if sub.is_dir() {
+                    check_writable(&sub, &[])?;
+                }
+            }
+            Some(lock)
+        }
+        None => None,
+    };
     // the series' rows up to the checkpoint's step on resume, read (and its columns
     // checked) before anything in the directory changes
     let header = csv_header(&scene.walls);
@@ -243,24 +267,27 @@ pub fn run_with<S: Simulation>(
     // only the rows written before the checkpoint: Ctrl-C's row off the output cadence
     // follows it (the straight run has none there); `late` is that row
     let mut late = None;
+    let found = kept.len();
+    // rows beyond the marked ones that are not that late row: another run's series
+    let mut foreign = false;
     if let (Some(m), Some(step)) = (marks.series, resumed_from) {
         let marked = usize::try_from(m.rows).unwrap_or(usize::MAX);
         if kept.len() > marked {
-            late = kept
-                .drain(marked..)
-                .find(|r| series_csv::row_is_at(r, step));
+            let beyond = kept.split_off(marked);
+            foreign = beyond.iter().any(|r| !series_csv::row_is_at(r, step));
+            late = beyond.into_iter().find(|r| series_csv::row_is_at(r, step));
         }
     }
     // rows kept on resume must be those the checkpoint's run wrote (no series at all: it
     // starts at the checkpoint's step)
     if let (Some(ckpt), Some(p), Some(step)) = (&opts.resume, &csv_path, resumed_from) {
         let ours = marks.series;
-        if !kept.is_empty() && ours.is_some_and(|m| m != SeriesMark::of(&kept)) {
+        let differ = !kept.is_empty() && ours.is_some_and(|m| m != SeriesMark::of(&kept));
+        if foreign || differ {
             return Err(PowderError::Run(format!(
-                "the series `{}` is not the one the run of checkpoint `{}` wrote (its {} rows up to step {step} differ from that run's {}): resume into the folder that run wrote (--out), or into an empty one, where the series starts at the checkpoint's step",
+                "the series `{}` is not the one the run of checkpoint `{}` wrote (its {found} rows up to step {step} differ from that run's {}): resume into the folder that run wrote (--out), or into an empty one, where the series starts at the checkpoint's step",
                 p.display(),
                 ckpt.display(),
-                kept.len(),
                 ours.map_or(0, |m| m.rows)
             )));
         }
