@@ -4,7 +4,13 @@
 
 use crate::error::PowderError;
 use crate::model::{ContactModel, PairGeometry, TimeStep};
-use crate::scene::{DtSetting, Scene};
+use crate::scene::{DtSetting, MaterialUse, Scene};
+
+/// The most steps a run counts: steps and times (step·dt) are exact to here.
+pub const MAX_STEPS: u64 = 1 << 53;
+
+/// The coarsest f64 position spacing in the domain accepted, over the smallest radius.
+pub const POSITION_RESOLUTION: f64 = 1e-6;
 
 /// A scene resolved for stepping.
 #[derive(Clone, Debug)]
@@ -38,16 +44,23 @@ impl Resolved {
         // (a scene built in code has not met the reader's checks)
         scene.validate()?;
         let n_materials = scene.materials.len();
+        // a pair of materials that never meets (no particle of one of them) needs no model:
+        // the first material's own stands in, never evaluated
+        let uses = MaterialUse::of(scene);
+        let model = |a: usize, b: usize| match scene.pair_model(a, b) {
+            Err(_) if !uses.meet(a, b) => Ok(scene.materials[a].model),
+            found => found,
+        };
         let mut models = Vec::with_capacity(n_materials * n_materials);
         for a in 0..n_materials {
             for b in 0..n_materials {
-                models.push(scene.pair_model(a, b)?);
+                models.push(model(a, b)?);
             }
         }
         let mut wall_models = Vec::with_capacity(scene.walls.len() * n_materials);
         for w in &scene.walls {
             for b in 0..n_materials {
-                wall_models.push(scene.pair_model(w.material, b)?);
+                wall_models.push(model(w.material, b)?);
             }
         }
         let mass: Vec<f64> = scene
@@ -135,6 +148,49 @@ impl Resolved {
                 dt
             }
         };
+        // positions are f64 coordinates: they must resolve far below a radius anywhere in
+        // the domain (a domain of ±1e20 m rounded every position to 0)
+        let r_min = (scene.particles.iter())
+            .map(|p| p.radius)
+            .fold(f64::INFINITY, f64::min);
+        for a in 0..3 {
+            let far = scene.domain.min[a].abs().max(scene.domain.max[a].abs());
+            let ulp = f64::from_bits(far.to_bits() + 1) - far;
+            if ulp > POSITION_RESOLUTION * r_min {
+                return Err(PowderError::Scene(format!(
+                    "the domain reaches {far:e} m on axis {}, where f64 positions resolve only {ulp:e} m, more than {POSITION_RESOLUTION:e} of the smallest radius {r_min:e} m: shrink the domain or move it nearer the origin",
+                    ["x", "y", "z"][a]
+                )));
+            }
+        }
+        // steps are counted in u64 and times are step·dt in f64: both exact up to 2^53
+        // steps; a run or an event beyond that would never end or never come
+        let rule = match scene.dt {
+            DtSetting::Auto => format!("the automatic dt, {}", time_step.reason),
+            DtSetting::Fixed(_) => "simulation.dt".to_string(),
+        };
+        let beyond = |t: f64| !(t / dt <= MAX_STEPS as f64);
+        if beyond(scene.duration) {
+            return Err(PowderError::Scene(format!(
+                "simulation.duration = {:e} s is {:.3e} steps of dt = {dt:e} s ({rule}), beyond the {MAX_STEPS} steps a run can count: shorten the run or check the parameter that sets dt",
+                scene.duration,
+                scene.duration / dt
+            )));
+        }
+        let events = (scene.particles.iter().enumerate())
+            .map(|(i, p)| (format!("particle {i}'s insert_at"), p.insert_at))
+            .chain(scene.walls.iter().enumerate().flat_map(|(w, wall)| {
+                (wall.motion.phases.iter())
+                    .map(move |(t, _)| (format!("wall {w}'s phase time"), *t))
+            }));
+        for (what, t) in events {
+            if beyond(t) {
+                return Err(PowderError::Scene(format!(
+                    "{what} {t:e} s is {:.3e} steps of dt = {dt:e} s ({rule}), beyond the {MAX_STEPS} steps a run can count: an event that late never comes; remove it or bring it within the run",
+                    t / dt
+                )));
+            }
+        }
         // (a pair closing more than a radius in one step can pass through each other
         // unseen: the monitor only sees overlaps at the ends of steps; a forced dt accepts it)
         // Relative speeds are bounded by the diagonal of the velocities' bounding box (with
@@ -238,6 +294,38 @@ mod tests {
         );
         assert!(Resolved::new(&scene([1.0, -1.0])).is_ok());
         assert!(Resolved::new(&scene([1000.0, 1000.0])).is_ok());
+    }
+
+    /// A run or an event beyond the steps a run can count, and a domain too far out for
+    /// f64 positions to resolve its particles, are refused, naming what.
+    #[test]
+    fn runs_events_and_domains_beyond_f64_are_refused() {
+        let lsd = "model = \"lsd\"\nk = 100.0";
+        let mut s = scene(lsd, "1e-3");
+        s.dt = DtSetting::Fixed(1e-320);
+        let e = refused(&s);
+        assert!(
+            e.contains("simulation.duration") && e.contains("steps a run can count"),
+            "{e}"
+        );
+        let mut s = scene(lsd, "1e-3");
+        s.particles[0].insert_at = 1e15;
+        let e = refused(&s);
+        assert!(e.contains("particle 0's insert_at 1e15 s"), "{e}");
+        let mut s = scene(lsd, "1e-3");
+        s.domain.min[0] = -1e20;
+        let e = refused(&s);
+        assert!(e.contains("reaches 1e20 m on axis x"), "{e}");
+        assert!(Resolved::new(&scene(lsd, "1e-3")).is_ok());
+    }
+
+    /// A material no particle uses needs no model with the others (the scene reader asks
+    /// for none; the engines did).
+    #[test]
+    fn a_material_no_particle_uses_needs_no_interaction() {
+        let lsd = "model = \"lsd\"\nk = 100.0\n[[material]]\nname = \"unused\"\ndensity = 1.0\nmodel = \"lsd\"\nk = 1.0";
+        let r = Resolved::new(&scene(lsd, "1e-3")).unwrap();
+        assert_eq!(r.models.len(), 4);
     }
 
     #[test]

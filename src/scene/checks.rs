@@ -141,21 +141,44 @@ pub(super) fn check_particles(src: &Src, scene: &Scene, origin: &Origin) -> Res<
     Ok(())
 }
 
+/// Which materials particles and walls use: the pairs of materials that can meet.
+pub struct MaterialUse {
+    /// Material a is some particle's.
+    pub particles: Vec<bool>,
+    /// Material a is some wall's.
+    pub walls: Vec<bool>,
+}
+
+impl MaterialUse {
+    /// The materials `scene`'s particles and walls use.
+    pub fn of(scene: &Scene) -> Self {
+        let n = scene.materials.len();
+        let (mut particles, mut walls) = (vec![false; n], vec![false; n]);
+        for p in &scene.particles {
+            particles[p.material] = true;
+        }
+        for w in &scene.walls {
+            walls[w.material] = true;
+        }
+        Self { particles, walls }
+    }
+
+    /// Whether materials a and b can touch: particles of both, or a wall of one and
+    /// particles of the other.
+    pub fn meet(&self, a: usize, b: usize) -> bool {
+        let (p, w) = (&self.particles, &self.walls);
+        (p[a] && (p[b] || w[b])) || (w[a] && p[b])
+    }
+}
+
 /// Every pair of materials that can meet needs a contact model.
 pub(super) fn check_pair_models(src: &Src, scene: &Scene) -> Res<()> {
     let n = scene.materials.len();
-    let mut used = vec![false; n];
-    for p in &scene.particles {
-        used[p.material] = true;
-    }
-    let mut wall_used = vec![false; n];
-    for w in &scene.walls {
-        wall_used[w.material] = true;
-    }
+    let uses = MaterialUse::of(scene);
+    let used = &uses.particles;
     for a in 0..n {
         for b in a..n {
-            let meets = (used[a] && (used[b] || wall_used[b])) || (wall_used[a] && used[b]);
-            if meets {
+            if uses.meet(a, b) {
                 if let Err(PowderError::Scene(msg)) = scene.pair_model(a, b) {
                     let what = if used[a] && used[b] {
                         "particles of both materials"

@@ -206,6 +206,7 @@ mod validate;
 use crate::error::PowderError;
 use crate::model::ContactModel;
 use crate::overrides::Override;
+pub use checks::MaterialUse;
 use parse::parse_scene;
 use std::path::Path;
 use toml_reader::Src;

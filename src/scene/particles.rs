@@ -75,6 +75,15 @@ pub(super) fn parse_particles(root: &Tbl, names: &[&str]) -> Res<(Vec<ParticleIn
                 }
                 // (a batch of none is a mistake, and a loop of 10^9 empty ones a hang)
                 if let Some(count) = t.u64("count").ok().flatten() {
+                    if count > MAX_BLOCK_PARTICLES {
+                        return Err(t.err_key(
+                            "count",
+                            format!(
+                                "`count` in {} is {count}, more than the limit {MAX_BLOCK_PARTICLES}",
+                                t.ctx
+                            ),
+                        ));
+                    }
                     if batches > count.max(1) {
                         return Err(t.err_key(
                             "batches",
@@ -91,7 +100,7 @@ pub(super) fn parse_particles(root: &Tbl, names: &[&str]) -> Res<(Vec<ParticleIn
                         names,
                         &mut particles,
                         insert_at + k as f64 * interval,
-                        (k, batches),
+                        (k, batches, before),
                     )?;
                 }
             }
@@ -253,7 +262,8 @@ fn expand_lattice(t: &Tbl, names: &[&str], out: &mut Vec<ParticleInit>) -> Res<(
     let seed = t.u64("seed")?.unwrap_or(1);
     let velocity = block_velocity(t)?;
     let angular_velocity = block_angular_velocity(t)?;
-    let mut counts = [0u64; 3];
+    // (in f64: a count beyond u64, e.g. a radius of 1e-22 m, is refused, not wrapped)
+    let mut counts = [0f64; 3];
     for a in 0..3 {
         let free = max[a] - min[a] - 2.0 * radius;
         if free < -1e-9 * radius {
@@ -268,18 +278,20 @@ fn expand_lattice(t: &Tbl, names: &[&str], out: &mut Vec<ParticleInit>) -> Res<(
             ));
         }
         // the tolerance keeps a region of exactly n diameters at n particles
-        counts[a] = (free.max(0.0) / spacing + 1e-6).floor() as u64 + 1;
+        counts[a] = (free.max(0.0) / spacing + 1e-6).floor() + 1.0;
     }
-    let total = counts[0] as u128 * counts[1] as u128 * counts[2] as u128;
-    if total > MAX_BLOCK_PARTICLES as u128 {
+    let total = counts[0] * counts[1] * counts[2];
+    if !(total <= MAX_BLOCK_PARTICLES as f64) {
         return Err(t.err_key(
             "spacing",
             format!(
-                "{} would create {total} particles (more than {MAX_BLOCK_PARTICLES}): check `spacing`, `radius` and the region",
+                "{} would create {total:.3e} particles (more than {MAX_BLOCK_PARTICLES}): check `spacing`, `radius` and the region",
                 t.ctx
             ),
         ));
     }
+    let counts = counts.map(|c| c as u64);
+    let total = counts[0] * counts[1] * counts[2];
     crate::memory::check_particles(
         total as u64 + out.len() as u64,
         crate::memory::CPU_BYTES_PER_PARTICLE,
@@ -491,13 +503,14 @@ fn parse_size(t: &Tbl) -> Res<SizeDist> {
 
 /// Places batch `batch.0` of `batch.1` of a random block (count/batches particles, the
 /// first batches taking the remainder) at time `insert_at`, clear of the particles that
-/// appear at the same time.
+/// appear at the same time (those of the blocks before, `out[..batch.2]`: the block's
+/// other batches appear at other times).
 fn expand_random(
     t: &Tbl,
     names: &[&str],
     out: &mut Vec<ParticleInit>,
     insert_at: f64,
-    batch: (u64, u64),
+    batch: (u64, u64, usize),
 ) -> Res<()> {
     let material = material_ref(t, names)?;
     let total = t
@@ -548,9 +561,10 @@ fn expand_random(
             ));
         }
     }
-    let rmax = out.iter().map(|p| p.radius).fold(block_rmax, f64::max);
+    let earlier = &out[..batch.2];
+    let rmax = earlier.iter().map(|p| p.radius).fold(block_rmax, f64::max);
     let mut grid = Grid::new(2.0 * rmax);
-    for (i, p) in out.iter().enumerate() {
+    for (i, p) in earlier.iter().enumerate() {
         // particles that appear at another time may occupy the same place
         if p.insert_at == insert_at {
             grid.insert(i, p.position);

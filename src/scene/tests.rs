@@ -514,6 +514,17 @@ fn particle_placement_errors() {
             "larger region",
         ],
     );
+    // a lattice whose count is beyond u64 (it wrapped to none), a pour beyond the limit
+    let e = err(&minimal(
+        "",
+        "[[particles]]\nkind = \"lattice\"\nmin = [0.001, 0.001, 0.0085]\nmax = [0.009, 0.009, 0.009]\nradius = 1e-22\nspacing = 2e-22\n",
+    ));
+    assert_contains(&e, &["would create", "e", "more than 100000000", "spacing"]);
+    let e = err(&minimal(
+        "",
+        "[[particles]]\nkind = \"random\"\ncount = 1000000000\nbatches = 1000000000\nbatch_interval = 1e-3\nmin = [0, 0, 0]\nmax = [0.004, 0.004, 0.004]\nradius = 1e-4\n",
+    ));
+    assert_contains(&e, &["`count`", "1000000000", "more than the limit"]);
 }
 
 fn random_scene(seed: u64, count: usize, size: &str) -> String {
