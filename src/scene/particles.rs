@@ -281,7 +281,7 @@ fn expand_lattice(t: &Tbl, names: &[&str], out: &mut Vec<ParticleInit>) -> Res<(
         counts[a] = (free.max(0.0) / spacing + 1e-6).floor() + 1.0;
     }
     let total = counts[0] * counts[1] * counts[2];
-    if !(total <= MAX_BLOCK_PARTICLES as f64) {
+    if total.is_nan() || total > MAX_BLOCK_PARTICLES as f64 {
         return Err(t.err_key(
             "spacing",
             format!(
@@ -293,7 +293,7 @@ fn expand_lattice(t: &Tbl, names: &[&str], out: &mut Vec<ParticleInit>) -> Res<(
     let counts = counts.map(|c| c as u64);
     let total = counts[0] * counts[1] * counts[2];
     crate::memory::check_particles(
-        total as u64 + out.len() as u64,
+        total + out.len() as u64,
         crate::memory::CPU_BYTES_PER_PARTICLE,
         "this scene",
     )
