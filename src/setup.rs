@@ -169,7 +169,7 @@ impl Resolved {
             DtSetting::Auto => format!("the automatic dt, {}", time_step.reason),
             DtSetting::Fixed(_) => "simulation.dt".to_string(),
         };
-        let beyond = |t: f64| !(t / dt <= MAX_STEPS as f64);
+        let beyond = |t: f64| t.is_nan() || t / dt > MAX_STEPS as f64;
         if beyond(scene.duration) {
             return Err(PowderError::Scene(format!(
                 "simulation.duration = {:e} s is {:.3e} steps of dt = {dt:e} s ({rule}), beyond the {MAX_STEPS} steps a run can count: shorten the run or check the parameter that sets dt",
