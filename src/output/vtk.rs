@@ -183,12 +183,18 @@ impl Series {
     pub fn keep_until(&mut self, step: u64, dt: f64) -> Result<(), PowderError> {
         let prefix = format!("{}/", self.folder);
         let step_of = |file: &str| self.step_of_file(file.strip_prefix(&prefix)?);
-        let listed = std::fs::read_to_string(self.dir.join(&self.collection)).unwrap_or_default();
+        let mut listed =
+            std::fs::read_to_string(self.dir.join(&self.collection)).unwrap_or_default();
+        // a cut or garbled collection lists what it still can: the folder tells more
+        let damaged = !listed.is_empty() && !listed.contains("</Collection>");
+        if damaged {
+            listed.clear();
+        }
         let mut found: Vec<(u64, f64, String)> = listed
             .lines()
             .filter_map(|l| {
                 let attr = |a: &str| l.split(&format!(r#"{a}=""#)).nth(1)?.split('"').next();
-                let file = attr("file")?.to_string();
+                let file = xml_unescape(attr("file")?);
                 let time: f64 = attr("timestep")?.parse().ok()?;
                 let s = step_of(&file)?;
                 (s <= step && self.dir.join(&file).exists()).then_some((s, time, file))
@@ -213,7 +219,7 @@ impl Series {
         for (_, path) in self.files().into_iter().filter(|(s, _)| *s > step) {
             remove_if_there(&path, "a later snapshot of the run resumed")?;
         }
-        if !listed.is_empty() {
+        if !listed.is_empty() || damaged {
             self.write_collection()?;
         }
         Ok(())
@@ -264,12 +270,29 @@ impl Series {
         for (t, f) in &self.entries {
             let _ = writeln!(
                 pvd,
-                r#"    <DataSet timestep="{t:e}" group="" part="0" file="{f}"/>"#
+                r#"    <DataSet timestep="{t:e}" group="" part="0" file="{}"/>"#,
+                xml_escape(f)
             );
         }
         pvd.push_str("  </Collection>\n</VTKFile>\n");
         write_atomic(&self.dir.join(&self.collection), pvd.as_bytes())
     }
+}
+
+/// `s` as an XML attribute value (a scene's name may hold `&`, `<`, `>` or `"`).
+fn xml_escape(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+/// The text of an attribute value [`xml_escape`] wrote.
+fn xml_unescape(s: &str) -> String {
+    s.replace("&quot;", "\"")
+        .replace("&gt;", ">")
+        .replace("&lt;", "<")
+        .replace("&amp;", "&")
 }
 
 /// Removes `path` where it exists (whether it did); `whose` names it in the error.
@@ -360,5 +383,45 @@ mod tests {
         let pvd = std::fs::read_to_string(dir.path().join("demo.pvd")).unwrap();
         assert_eq!(pvd.matches("<DataSet").count(), 2);
         assert!(dir.path().join("snapshots/demo_0000000010.vtp").exists());
+    }
+
+    /// A name with XML's special characters is escaped in the collection and read back;
+    /// a cut collection is rebuilt from the folder, not trusted for what it still lists.
+    #[test]
+    fn a_collection_escapes_names_and_a_cut_one_is_rebuilt() {
+        let dir = tempfile::tempdir().unwrap();
+        let name = r#"a&b"<c>"#;
+        let mut s = Series::new(dir.path(), name).unwrap();
+        let pos = [DVec3::ZERO];
+        let p = Particles {
+            positions: &pos,
+            velocities: &pos,
+            radii: &[1.0],
+            angular_velocities: &[],
+        };
+        for step in [0, 10, 20] {
+            s.write(step, step as f64, &p).unwrap();
+        }
+        let path = dir.path().join(format!("{name}.pvd"));
+        let pvd = std::fs::read_to_string(&path).unwrap();
+        assert!(
+            pvd.contains("a&amp;b&quot;&lt;c&gt;_0000000010.vtp"),
+            "{pvd}"
+        );
+        let mut again = Series::new(dir.path(), name).unwrap();
+        again.keep_until(20, 1.0).unwrap();
+        assert_eq!(again.entries().len(), 3);
+        assert_eq!(
+            again.entries()[1].1,
+            format!("snapshots/{name}_0000000010.vtp")
+        );
+        // cut after its first entry
+        let cut = pvd.find("_0000000010").unwrap();
+        std::fs::write(&path, &pvd[..cut]).unwrap();
+        let mut again = Series::new(dir.path(), name).unwrap();
+        again.keep_until(20, 1.0).unwrap();
+        assert_eq!(again.entries().len(), 3);
+        let pvd = std::fs::read_to_string(&path).unwrap();
+        assert_eq!(pvd.matches("<DataSet").count(), 3, "{pvd}");
     }
 }
