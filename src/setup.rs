@@ -136,6 +136,34 @@ impl Resolved {
         }
         let time_step =
             time_step.ok_or_else(|| PowderError::Scene("the scene has no particles".into()))?;
+        // a JKR adhesion too weak for f64 at the largest radius of the pair (the weakest)
+        let mut largest = vec![0f64; n_materials];
+        for p in &scene.particles {
+            largest[p.material] = largest[p.material].max(p.radius);
+        }
+        let pairs = (0..n_materials).flat_map(|a| (0..n_materials).map(move |b| (a, b)));
+        for (a, b) in pairs.filter(|&(a, b)| uses.particles[a] && uses.particles[b]) {
+            if let ContactModel::Jkr(p) = &models[a * n_materials + b] {
+                let r_eff = largest[a] * largest[b] / (largest[a] + largest[b]);
+                p.check_adhesion_scale(r_eff).map_err(|e| {
+                    let names = [a, b].map(|m| scene.materials[m].name.as_str());
+                    PowderError::Scene(format!("materials `{}` and `{}`: {e}", names[0], names[1]))
+                })?;
+            }
+        }
+        for (w, wall) in scene.walls.iter().enumerate() {
+            for b in (0..n_materials).filter(|&b| uses.particles[b]) {
+                if let ContactModel::Jkr(p) = &wall_models[w * n_materials + b] {
+                    p.check_adhesion_scale(largest[b]).map_err(|e| {
+                        let m = &scene.materials[b].name;
+                        PowderError::Scene(format!(
+                            "wall {w} (material `{}`) and material `{m}`: {e}",
+                            scene.materials[wall.material].name
+                        ))
+                    })?;
+                }
+            }
+        }
         let dt = match scene.dt {
             DtSetting::Auto => time_step.default,
             DtSetting::Fixed(dt) => {
@@ -170,7 +198,8 @@ impl Resolved {
             DtSetting::Fixed(_) => "simulation.dt".to_string(),
         };
         let beyond = |t: f64| t.is_nan() || t / dt > MAX_STEPS as f64;
-        if beyond(scene.duration) {
+        // (an infinite duration runs until its caller stops it: `collide`)
+        if scene.duration.is_finite() && beyond(scene.duration) {
             return Err(PowderError::Scene(format!(
                 "simulation.duration = {:e} s is {:.3e} steps of dt = {dt:e} s ({rule}), beyond the {MAX_STEPS} steps a run can count: shorten the run or check the parameter that sets dt",
                 scene.duration,
@@ -317,6 +346,21 @@ mod tests {
         let e = refused(&s);
         assert!(e.contains("reaches 1e20 m on axis x"), "{e}");
         assert!(Resolved::new(&scene(lsd, "1e-3")).is_ok());
+    }
+
+    /// A JKR adhesion too weak for f64 (it gave NaN energies) is refused; a weak one that
+    /// f64 carries runs.
+    #[test]
+    fn a_jkr_adhesion_below_f64_is_refused() {
+        let jkr =
+            |g: &str| format!("model = \"jkr\"\nyoungs = 1e8\npoisson = 0.3\nsurface_energy = {g}");
+        let e = refused(&scene(&jkr("1e-200"), "1e-3"));
+        assert!(
+            e.contains("materials `m` and `m`: surface_energy = 1e-200"),
+            "{e}"
+        );
+        assert!(e.contains("set surface_energy = 0"), "{e}");
+        assert!(Resolved::new(&scene(&jkr("1e-60"), "1e-3")).is_ok());
     }
 
     /// A material no particle uses needs no model with the others (the scene reader asks

@@ -430,6 +430,10 @@ pub(super) fn collide_with(
     trace: Option<&mut Vec<TraceRow>>,
 ) -> Result<CollideResult, PowderError> {
     spec.validate()?;
+    if let crate::model::ContactModel::Jkr(p) = &spec.model {
+        let r_eff = spec.geometry().r_eff();
+        p.check_adhesion_scale(r_eff).map_err(PowderError::Scene)?;
+    }
     let (m1, m2) = spec.masses();
     if !(m1.is_finite() && m1 > 0.0 && m2.is_finite() && m2 > 0.0) {
         return Err(PowderError::Scene(format!(

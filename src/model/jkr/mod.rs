@@ -74,6 +74,9 @@ const P_TOUCH: f64 = -0.6988643717890397;
 /// Newton iterations of the iterative f64 contact-radius solve at most (converged to
 /// rounding everywhere); it stops after a step below 1e-8 of the root (then at rounding).
 pub const NEWTON_ITERATIONS_F64: usize = 5;
+/// The least JKR adhesion 3πγ/(E*·R*) a contact carries in f64
+/// ([`JkrParams::check_adhesion_scale`]).
+pub const MIN_ADHESION_SCALE: f64 = 1e-100;
 /// Newton iterations of the f32 contact-radius solver (the WGSL kernel's count).
 pub const NEWTON_ITERATIONS_F32: usize = 3;
 
@@ -354,6 +357,21 @@ impl JkrParams {
         } else {
             self.surface_energy * self.stiffness_scale.powf(0.4)
         }
+    }
+
+    /// Refuses an adhesion too weak against the elastic scale at `r_eff` for f64 to carry:
+    /// below 3πγ/(E*·R*) = [`MIN_ADHESION_SCALE`] the contact radius over a0 overflows its
+    /// powers (NaN energies), while the adhesive force is far below the elastic force's
+    /// rounding, so Hertz (surface_energy = 0) is the same law.
+    pub fn check_adhesion_scale(&self, r_eff: f64) -> Result<(), String> {
+        let scale = 3.0 * std::f64::consts::PI * self.gamma() / (self.e_star() * r_eff);
+        if self.surface_energy > 0.0 && !(scale >= MIN_ADHESION_SCALE) {
+            return Err(format!(
+                "surface_energy = {:e} J/m^2 gives an adhesion 3πγ/(E*·R*) of {scale:.3e} at R* = {r_eff:e} m, below {MIN_ADHESION_SCALE:e}: far below the elastic force's rounding, and beyond what f64 carries through the JKR curve; set surface_energy = 0 (Hertz, the same law at that scale)",
+                self.surface_energy
+            ));
+        }
+        Ok(())
     }
 
     /// Pull-off force Fc = 3πγR* (scaled γ), N.
