@@ -430,10 +430,6 @@ pub(super) fn collide_with(
     trace: Option<&mut Vec<TraceRow>>,
 ) -> Result<CollideResult, PowderError> {
     spec.validate()?;
-    if let crate::model::ContactModel::Jkr(p) = &spec.model {
-        let r_eff = spec.geometry().r_eff();
-        p.check_adhesion_scale(r_eff).map_err(PowderError::Scene)?;
-    }
     let (m1, m2) = spec.masses();
     if !(m1.is_finite() && m1 > 0.0 && m2.is_finite() && m2 > 0.0) {
         return Err(PowderError::Scene(format!(
@@ -453,6 +449,10 @@ pub(super) fn collide_with(
             ts.default
         }
     };
+    if let crate::model::ContactModel::Jkr(p) = &spec.model {
+        let r_eff = spec.geometry().r_eff();
+        p.check_adhesion_scale(r_eff).map_err(PowderError::Scene)?;
+    }
     // (with the smaller sphere's centre past the other's surface, or past the wall, the
     // spheres pass through each other: no contact law holds, and e comes out above 1)
     let reach = if spec.wall {

@@ -365,7 +365,7 @@ impl JkrParams {
     /// rounding, so Hertz (surface_energy = 0) is the same law.
     pub fn check_adhesion_scale(&self, r_eff: f64) -> Result<(), String> {
         let scale = 3.0 * std::f64::consts::PI * self.gamma() / (self.e_star() * r_eff);
-        if self.surface_energy > 0.0 && !(scale >= MIN_ADHESION_SCALE) {
+        if self.surface_energy > 0.0 && (scale.is_nan() || scale < MIN_ADHESION_SCALE) {
             return Err(format!(
                 "surface_energy = {:e} J/m^2 gives an adhesion 3πγ/(E*·R*) of {scale:.3e} at R* = {r_eff:e} m, below {MIN_ADHESION_SCALE:e}: far below the elastic force's rounding, and beyond what f64 carries through the JKR curve; set surface_energy = 0 (Hertz, the same law at that scale)",
                 self.surface_energy
