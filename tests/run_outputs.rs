@@ -1098,6 +1098,35 @@ fn damaged_gpu_checkpoints_are_refused() {
             .to_string();
         assert!(err.contains("damaged or truncated"), "{what}: {err}");
     }
+    // a wall point edited to NaN, the archive otherwise whole (its CRCs made anew): the
+    // CPU refused it, the GPU resumed and carried the NaN on
+    let archive = npz::Archive::read(&bytes).unwrap();
+    let members: Vec<(String, npz::Member)> = archive
+        .names()
+        .map(|name| {
+            let mut raw = archive.raw(name).unwrap().to_vec();
+            if name == "wall_point.npy" || name == "wall_point" {
+                let at = raw.len() - 8;
+                raw[at..].copy_from_slice(&f64::NAN.to_le_bytes());
+            }
+            (name.to_string(), npz::Member::Raw(raw))
+        })
+        .collect();
+    assert!(members.iter().any(|(n, _)| n.starts_with("wall_point")));
+    let edited = dir.path().join("edited.bin");
+    std::fs::write(&edited, npz::write(&members)).unwrap();
+    let Some(ctx) = gpu() else { return };
+    let opts = RunOptions {
+        resume: Some(edited),
+        ..Default::default()
+    };
+    let err = run_gpu_with(&scene, ctx, &opts, |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("wall point") && err.contains("not finite"),
+        "{err}"
+    );
 }
 
 /// A run into a folder another live run holds is refused, and so is one that could not

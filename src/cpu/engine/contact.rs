@@ -29,6 +29,26 @@ pub(crate) struct ContactRecord {
 }
 
 impl ContactRecord {
+    /// Whether every number it holds is finite (a checkpoint's are checked on restore).
+    pub(super) fn is_finite(&self) -> bool {
+        let h = &self.history;
+        [
+            self.delta,
+            self.force,
+            self.potential,
+            self.friction_power,
+            self.couple_power,
+            h.delta_max,
+            h.contact_radius,
+            h.twist,
+        ]
+        .iter()
+        .all(|x| x.is_finite())
+            && [self.tangential, h.tangential, h.rolling]
+                .iter()
+                .all(|v| v.is_finite())
+    }
+
     /// Whether the contact takes part in the energy ledger: touched, or exerting a force,
     /// or storing energy (a pair merely within search range is not engaged).
     pub(super) fn engaged(&self) -> bool {

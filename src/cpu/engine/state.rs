@@ -76,19 +76,18 @@ impl CpuEngine {
             || s.omega.len() != self.omega.len()
             || s.torque.len() != self.omega.len()
         {
+            let rotation = |o: &[DVec3]| if o.is_empty() { "" } else { " with rotation" };
             return Err(PowderError::Run(format!(
-                "the checkpoint holds {} particles{} but the scene has {n}{}",
+                "the checkpoint's state does not fit the scene's {n} particles{}: it holds {} positions, {} velocities, {} accelerations, {} forces, {} active flags, {} angular velocities and {} torques{} (a checkpoint of another scene, or damaged or edited)",
+                rotation(&self.omega),
                 s.pos.len(),
-                if s.omega.is_empty() {
-                    ""
-                } else {
-                    " with rotation"
-                },
-                if self.omega.is_empty() {
-                    ""
-                } else {
-                    " with rotation"
-                }
+                s.vel.len(),
+                s.acc.len(),
+                s.force.len(),
+                s.active.len(),
+                s.omega.len(),
+                s.torque.len(),
+                rotation(&s.omega),
             )));
         }
         if s.wall_points.len() != self.walls.len() || s.wall_velocities.len() != self.walls.len() {
@@ -160,6 +159,22 @@ impl CpuEngine {
                 "the checkpoint holds an invalid or repeated contact ({a}, {b}) for {n} particles and {} walls",
                 self.walls.len()
             )));
+        }
+        let records = (s
+            .contacts
+            .iter()
+            .map(|(k, r)| ("contact of particles", k, r)))
+        .chain(
+            s.wall_contacts
+                .iter()
+                .map(|(k, r)| ("contact of wall and particle", k, r)),
+        );
+        for (what, (a, b), r) in records {
+            if !r.is_finite() {
+                return Err(PowderError::Run(format!(
+                    "the checkpoint's {what} ({a}, {b}) holds a value that is not finite: the checkpoint is damaged or was edited"
+                )));
+            }
         }
         self.time = s.time;
         self.steps = s.steps;

@@ -224,6 +224,29 @@ fn restore_continues_bitwise() {
     bad.wall_work = f64::INFINITY;
     let e = b.restore(bad).unwrap_err().to_string();
     assert!(e.contains("wall work is inf"), "{e}");
+    // (a contact's overlap, a wall contact's spring: the monitor found them only steps
+    // later and blamed the time step)
+    let mut bad = a.state();
+    bad.contacts[0].1.delta = f64::NAN;
+    let ((i, j), _) = bad.contacts[0];
+    let e = b.restore(bad).unwrap_err().to_string();
+    assert!(
+        e.contains(&format!(
+            "contact of particles ({i}, {j}) holds a value that is not finite"
+        )),
+        "{e}"
+    );
+    let mut bad = a.state();
+    bad.wall_contacts[0].1.history.tangential.x = f64::INFINITY;
+    assert!(b
+        .restore(bad)
+        .unwrap_err()
+        .to_string()
+        .contains("contact of wall and particle"));
+    let mut bad = a.state();
+    bad.vel.pop();
+    let e = b.restore(bad).unwrap_err().to_string();
+    assert!(e.contains("holds 343 positions, 342 velocities"), "{e}");
     assert_eq!(b.positions(), before.pos.as_slice());
 }
 

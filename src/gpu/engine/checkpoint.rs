@@ -176,6 +176,12 @@ impl GpuEngine {
                 self.saved_layout()
             )));
         }
+        if let Some(i) = saved.wall_points.iter().position(|p| !p.is_finite()) {
+            return Err(PowderError::Run(format!(
+                "the saved GPU state's wall point {i} is {:?}, not finite: the checkpoint is damaged or was edited",
+                saved.wall_points[i]
+            )));
+        }
         // the lists' capacity the state was saved with (its entries' size)
         let windows = *self.state.layout.windows();
         let entry_bytes = 4 * self.state.entry_layout.words() * windows.count;
