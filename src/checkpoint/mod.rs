@@ -312,8 +312,15 @@ fn save_state(
 }
 
 fn read(path: &Path) -> Result<Vec<u8>, PowderError> {
-    std::fs::read(path)
-        .map_err(|e| PowderError::io(format!("cannot read checkpoint `{}`", path.display()), e))
+    let cannot = |e| PowderError::io(format!("cannot read checkpoint `{}`", path.display()), e);
+    // (a device such as /dev/zero would be read until memory runs out)
+    if !std::fs::metadata(path).map_err(cannot)?.is_file() {
+        return Err(PowderError::Run(format!(
+            "`{}` is not a file: a checkpoint is the checkpoint.bin a run wrote",
+            path.display()
+        )));
+    }
+    std::fs::read(path).map_err(cannot)
 }
 
 fn not_a_checkpoint(path: &Path) -> PowderError {
@@ -423,5 +430,27 @@ fn array(archive: &Archive, name: &str) -> Result<Array, StateError> {
         Ok(Some(a)) => Ok(a),
         Ok(None) => Err(StateError(format!("the array `{name}` is missing"))),
         Err(_) => Err(StateError(format!("`{name}` is not an array"))),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A device or a folder given as a checkpoint is refused at once (`/dev/zero` was read
+    /// until memory ran out).
+    #[test]
+    fn a_checkpoint_that_is_not_a_file_is_refused() {
+        for path in ["/dev/zero", "/tmp"] {
+            let path = Path::new(path);
+            if path.exists() {
+                let e = read(path).unwrap_err().to_string();
+                assert!(e.contains("is not a file"), "{e}");
+            }
+        }
+        let e = read(Path::new("/no/such/checkpoint.bin"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("cannot read checkpoint"), "{e}");
     }
 }
