@@ -90,8 +90,8 @@
 //!                               # "hertz" (paper 002 eq. 13: 2E* sqrt(R* delta),
 //!                               # 8G* sqrt(R* delta), zero at delta <= 0)
 //! D = 118.0                     # "powerlaw": F = sgn(v) D E* |v|^alpha a^beta
-//! alpha = 3.0
-//! beta = 1.5
+//! alpha = 3.0                   # >= 0
+//! beta = 1.5                    # >= 0 (the paper fits 1 < beta < 1.5)
 //! tvis = 0.075                  # "krijt": relaxation time T_vis, s, >= 0
 //! tvis0_per_radius = 2.1e-4     # "stress": C, s/m, >= 0: T_vis = C R exp[(B p_c/E*)^zeta]
 //! B = 6.2                       # "stress": >= 0

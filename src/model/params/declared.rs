@@ -276,8 +276,8 @@ param!(
     NUM,
     "",
     Required,
-    Rule::Finite,
-    "the power-law contact-radius exponent beta (paper 001 eq. 19)"
+    Rule::NonNegative,
+    "the power-law contact-radius exponent beta (paper 001 eq. 19; it fits 1 < beta < 1.5, and a^beta with beta < 0 diverges as a contact opens)"
 );
 param!(
     TVIS,

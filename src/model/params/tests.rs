@@ -44,7 +44,7 @@ fn params_rules_name_the_key_and_the_rule() {
     assert!(K1.check(f64::INFINITY).is_err() && K1.check(f64::NAN).is_err());
     assert!(KCA.check(f64::INFINITY).is_ok() && KCA.check(0.0).is_err());
     assert!(KCA.check(f64::NAN).is_err());
-    assert!(POWER_BETA.check(-3.0).is_ok() && POWER_BETA.check(f64::NAN).is_err());
+    assert!(POWER_BETA.check(-3.0).is_err() && POWER_BETA.check(f64::NAN).is_err());
 }
 
 /// Values given as a front end would, for reading laws in tests.
