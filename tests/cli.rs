@@ -539,6 +539,11 @@ fn gpu_available() -> bool {
 
 #[test]
 fn compare_reports_deviations_and_fails_beyond_thresholds() {
+    // no steps or no samples compares nothing (it reported PASS)
+    for flag in ["--steps", "--every"] {
+        let (ok, _, err) = powder(&["compare", CLUSTER, flag, "0"]);
+        assert!(!ok && err.contains("invalid value '0'"), "{err}");
+    }
     if !gpu_available() {
         return;
     }

@@ -6,11 +6,11 @@ use super::*;
 pub(crate) struct CompareArgs {
     /// Scene file (TOML).
     scene: PathBuf,
-    /// Steps to run (default: the scene's duration, at most 2000).
-    #[arg(long)]
+    /// Steps to run, >= 1 (default: the scene's duration, at most 2000).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
     steps: Option<u64>,
-    /// Steps between samples (default: steps/10).
-    #[arg(long)]
+    /// Steps between samples, >= 1 (default: steps/10).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
     every: Option<u64>,
     /// A threshold, KEY=VALUE with KEY one of position (over the smallest radius, default
     /// 1e-3), velocity (over the largest speed, 1e-2), kinetic (relative, 1e-2), contacts
