@@ -516,16 +516,8 @@ fn expand_random(
     let total = t
         .u64("count")?
         .ok_or_else(|| t.missing("count", "the number of particles to place"))?;
+    // (the block's count is held to the limit before its batches)
     let count = total / batch.1 + u64::from(batch.0 < total % batch.1);
-    if count > MAX_BLOCK_PARTICLES {
-        return Err(t.err_key(
-            "count",
-            format!(
-                "`count` in {} is {count}, more than the limit {MAX_BLOCK_PARTICLES}",
-                t.ctx
-            ),
-        ));
-    }
     crate::memory::check_particles(
         count + out.len() as u64,
         crate::memory::CPU_BYTES_PER_PARTICLE,
