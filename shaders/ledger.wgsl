@@ -133,7 +133,7 @@ fn ledger_store(k: u32, acc: LedgerAcc) {
 // list moved out of reach + skin within one step (only a violent step does that). It is
 // booked as having left at its last overlap (U0 − ½·dt·P0; the CPU also adds the normal
 // work 0.5·f0·(delta − delta0) at its current overlap, which is not at hand here) and
-// counted in monitor[3], so the host can say so.
+// counted in `CONTROL_DROPPED`, so the host can say so.
 fn ledger_dropped(old_row: u32, old_n: u32, k: u32) {
     var lost = 0.0;
     for (var m = 0u; m < old_n; m++) {

@@ -121,7 +121,7 @@ fn evaluates(d: vec3<f32>, k: u32, j: u32) -> bool {
 // by the partner) counts; `fill`: also written to the new lists at b_row[k] and
 // lower_row[k], which the counts' scans placed.
 fn search(k: u32, fill: bool) -> vec2<u32> {
-    // (a particle whose data lies beyond this window's bindings stops the run: monitor[1])
+    // (a particle whose data lies beyond this window's bindings stops the run: `CONTROL_BEYOND_WINDOW`)
     if (!in_bindings(sorted_index[k])) {
         atomicMax(&control[CONTROL_BEYOND_WINDOW], 1u);
         return vec2<u32>(0u);
@@ -242,7 +242,7 @@ fn neighbours(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nw
 
 // On a rebuild, after the lists are filled and before anything is re-sorted, once per
 // window: when the window's new lists need more entries than its block has (or a
-// particle's neighbours lay beyond the windows bound, monitor[1]), halt the batch — zero
+// particle's neighbours lay beyond the windows bound, `CONTROL_BEYOND_WINDOW`), halt the batch — zero
 // every indirect argument, so the rest of this rebuild and every later pass of the batch
 // launches nothing — and leave the skin flag raised. The host grows the lists (or stops)
 // and finishes the batch from this step's rebuild (`GpuEngine::run_steps`): the state is

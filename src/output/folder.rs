@@ -2,18 +2,36 @@
 //! checked writable before anything in it changes.
 
 use crate::error::PowderError;
+use std::collections::HashSet;
 use std::fs;
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+use std::time::{Duration, SystemTime};
 
 /// The lock file's name in an output folder.
 pub const LOCK: &str = ".powder.lock";
+
+/// The folders this process holds: its own pid in a lock says nothing by itself (a
+/// container's restarted process may have the pid of the run that left the lock).
+static HELD: Mutex<Option<HashSet<PathBuf>>> = Mutex::new(None);
+
+/// How long a lock without a readable process id may be in the making before it counts
+/// as left by a run killed between creating and writing it.
+const UNREADABLE_GRACE: Duration = Duration::from_secs(10);
 
 /// An output folder held by this run: another run into it is refused while the lock
 /// exists; dropping it removes the lock.
 #[derive(Debug)]
 pub struct FolderLock {
     path: PathBuf,
+    /// The folder as [`HELD`] names it.
+    key: PathBuf,
+}
+
+fn held(key: &Path) -> bool {
+    let held = HELD.lock().unwrap_or_else(|e| e.into_inner());
+    held.as_ref().is_some_and(|h| h.contains(key))
 }
 
 impl FolderLock {
@@ -24,6 +42,7 @@ impl FolderLock {
             .map_err(|e| PowderError::io(format!("cannot create `{}`", dir.display()), e))?;
         let path = dir.join(LOCK);
         let cannot = |e| PowderError::io(format!("cannot create the lock `{}`", path.display()), e);
+        let key = fs::canonicalize(dir).unwrap_or_else(|_| dir.to_path_buf());
         // (twice: once more after removing a stale lock)
         for _ in 0..2 {
             match fs::OpenOptions::new()
@@ -32,26 +51,38 @@ impl FolderLock {
                 .open(&path)
             {
                 Ok(mut f) => {
-                    write!(f, "{}", std::process::id()).map_err(cannot)?;
-                    return Ok(Self { path });
+                    if let Err(e) = write!(f, "{}", std::process::id()) {
+                        let _ = fs::remove_file(&path);
+                        return Err(cannot(e));
+                    }
+                    let mut set = HELD.lock().unwrap_or_else(|e| e.into_inner());
+                    set.get_or_insert_with(HashSet::new).insert(key.clone());
+                    return Ok(Self { path, key });
                 }
                 Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
-                    let text = fs::read_to_string(&path).unwrap_or_default();
-                    match text.trim().parse::<u32>() {
-                        Ok(pid) if !process_alive(pid) => {
-                            fs::remove_file(&path).map_err(cannot)?;
-                        }
-                        holder => {
-                            let who = holder.map_or("a powder run".to_string(), |pid| {
-                                format!("powder run (process {pid})")
-                            });
-                            return Err(PowderError::Run(format!(
-                                "{who} is writing into `{}`: two runs in one folder would mix their outputs; wait for it to end or choose another --out (if no run is writing there, remove `{}`)",
-                                dir.display(),
-                                path.display()
-                            )));
-                        }
+                    let holder = fs::read_to_string(&path)
+                        .ok()
+                        .and_then(|t| t.trim().parse::<u32>().ok());
+                    let age = (fs::metadata(&path).and_then(|m| m.modified()).ok())
+                        .and_then(|t| SystemTime::now().duration_since(t).ok())
+                        .unwrap_or_default();
+                    let stale = match holder {
+                        Some(pid) if pid == std::process::id() => !held(&key),
+                        Some(pid) => !process_alive(pid),
+                        None => age > UNREADABLE_GRACE,
+                    };
+                    if stale {
+                        fs::remove_file(&path).map_err(cannot)?;
+                        continue;
                     }
+                    let who = holder.map_or("a powder run".to_string(), |pid| {
+                        format!("powder run (process {pid})")
+                    });
+                    return Err(PowderError::Run(format!(
+                        "{who} is writing into `{}`: two runs in one folder would mix their outputs; wait for it to end or choose another --out (if no run is writing there, remove `{}`)",
+                        dir.display(),
+                        path.display()
+                    )));
                 }
                 Err(e) => return Err(cannot(e)),
             }
@@ -66,22 +97,36 @@ impl FolderLock {
 
 impl Drop for FolderLock {
     fn drop(&mut self) {
-        let _ = fs::remove_file(&self.path);
+        // (only our own lock: another run may have taken it over meanwhile)
+        let ours = fs::read_to_string(&self.path)
+            .is_ok_and(|t| t.trim() == std::process::id().to_string());
+        if ours {
+            let _ = fs::remove_file(&self.path);
+        }
+        let mut held = HELD.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(h) = held.as_mut() {
+            h.remove(&self.key);
+        }
     }
 }
 
-/// Whether process `pid` runs on this host (always, where `/proc` cannot tell).
+/// Whether another process `pid` runs on this host, where `/proc` tells; without it, no
+/// (a lock is then taken over: a killed run must not block its folder for good).
 pub fn process_alive(pid: u32) -> bool {
-    pid == std::process::id()
-        || !Path::new("/proc/self").exists()
-        || Path::new(&format!("/proc/{pid}")).exists()
+    Path::new("/proc/self").exists() && Path::new(&format!("/proc/{pid}")).exists()
 }
 
 /// Refuses, before anything in `dir` changes, an output the run could not write: a folder
-/// where one of `files` goes, a file it may not write, a folder where it may not create
-/// files.
-pub fn check_writable(dir: &Path, files: &[PathBuf]) -> Result<(), PowderError> {
-    for f in files {
+/// where one of `replaced` (written whole through a rename, or removed) or `appended`
+/// goes, an `appended` file it may not write, a folder where it may not create files.
+pub fn check_writable(
+    dir: &Path,
+    replaced: &[PathBuf],
+    appended: &[PathBuf],
+) -> Result<(), PowderError> {
+    for (f, append) in
+        (replaced.iter().map(|f| (f, false))).chain(appended.iter().map(|f| (f, true)))
+    {
         match fs::metadata(f) {
             Ok(m) if m.is_dir() => {
                 return Err(PowderError::Run(format!(
@@ -89,12 +134,13 @@ pub fn check_writable(dir: &Path, files: &[PathBuf]) -> Result<(), PowderError> 
                     f.display()
                 )))
             }
-            Ok(_) => {
+            Ok(_) if append => {
                 fs::OpenOptions::new()
                     .append(true)
                     .open(f)
                     .map_err(|e| PowderError::io(format!("cannot write `{}`", f.display()), e))?;
             }
+            Ok(_) => {}
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
             Err(e) => return Err(PowderError::io(format!("cannot read `{}`", f.display()), e)),
         }
@@ -121,25 +167,36 @@ mod tests {
         );
         drop(lock);
         assert!(!dir.path().join(LOCK).exists());
-        // a live process's lock (pid 1), and an unreadable one, hold
+        // a live process's lock (pid 1), and a fresh unreadable one, hold
         fs::write(dir.path().join(LOCK), "1").unwrap();
         assert!(FolderLock::take(dir.path()).is_err());
         fs::write(dir.path().join(LOCK), "").unwrap();
         assert!(FolderLock::take(dir.path()).is_err());
-        // a process that is no more (beyond Linux's largest pid)
-        fs::write(dir.path().join(LOCK), "4194305").unwrap();
-        let _lock = FolderLock::take(dir.path()).unwrap();
-        let held = fs::read_to_string(dir.path().join(LOCK)).unwrap();
-        assert_eq!(held, std::process::id().to_string());
+        // a process that is no more (beyond Linux's largest pid), and this process's pid
+        // where it holds no lock (a restarted container's run has the old one's pid)
+        for stale in ["4194305".to_string(), std::process::id().to_string()] {
+            fs::write(dir.path().join(LOCK), &stale).unwrap();
+            let lock = FolderLock::take(dir.path()).unwrap();
+            let held = fs::read_to_string(dir.path().join(LOCK)).unwrap();
+            assert_eq!(held, std::process::id().to_string());
+            drop(lock);
+        }
+        // a lock taken over by another run is not removed by the run that lost it
+        let lock = FolderLock::take(dir.path()).unwrap();
+        fs::write(dir.path().join(LOCK), "1").unwrap();
+        drop(lock);
+        assert!(dir.path().join(LOCK).exists());
     }
 
     #[test]
     fn an_output_that_cannot_be_written_is_refused_first() {
         let dir = tempfile::tempdir().unwrap();
         let csv = dir.path().join("series.csv");
-        check_writable(dir.path(), std::slice::from_ref(&csv)).unwrap();
+        check_writable(dir.path(), &[], std::slice::from_ref(&csv)).unwrap();
         fs::create_dir(&csv).unwrap();
-        let err = check_writable(dir.path(), &[csv]).unwrap_err().to_string();
+        let err = check_writable(dir.path(), &[], &[csv])
+            .unwrap_err()
+            .to_string();
         assert!(
             err.contains("is a folder where the run writes a file"),
             "{err}"

@@ -240,17 +240,16 @@ pub fn run_with<S: Simulation>(
         Some(d) => {
             let lock = FolderLock::take(d)?;
             let [particles, contacts] = vtk::Series::both_unopened(d, &scene.name);
-            let files = [
-                d.join("series.csv"),
+            let replaced = [
                 d.join("checkpoint.bin"),
                 d.join("summary.json"),
                 particles.collection_path(),
                 contacts.collection_path(),
             ];
-            check_writable(d, &files)?;
+            check_writable(d, &replaced, &[d.join("series.csv")])?;
             for sub in [particles.folder(), contacts.folder()] {
                 if sub.is_dir() {
-                    check_writable(&sub, &[])?;
+                    check_writable(&sub, &[], &[])?;
                 }
             }
             Some(lock)

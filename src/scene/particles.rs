@@ -95,6 +95,18 @@ pub(super) fn parse_particles(root: &Tbl, names: &[&str]) -> Res<(Vec<ParticleIn
                     }
                 }
                 for k in 0..batches {
+                    // (each batch is placed clear of its own time's particles only)
+                    let at = insert_at + k as f64 * interval;
+                    if k > 0 && at == insert_at + (k - 1) as f64 * interval {
+                        return Err(t.err_key(
+                            "batch_interval",
+                            format!(
+                                "{}: batches {} and {k} fall at the same time {at:e} s: `batch_interval` is below the rounding of `insert_at`",
+                                t.ctx,
+                                k - 1
+                            ),
+                        ));
+                    }
                     expand_random(
                         &t,
                         names,

@@ -213,7 +213,7 @@ impl GpuEngine {
         Ok((state, motion))
     }
 
-    /// The wall entries of the lists (`WALL_ENTRY` in `shaders/step/shared.wgsl`: particle k's
+    /// The wall entries of the lists (`WALL_ENTRY` in `gpu::records`: particle k's
     /// contacts with the walls near it, after its pairs), read back.
     pub(super) fn read_wall_entries(&self) -> Result<WallEntries, PowderError> {
         let s = &self.state;
