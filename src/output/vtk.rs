@@ -328,17 +328,22 @@ mod tests {
         assert!(text.contains(r#"Name="offsets""#));
     }
 
+    /// One sphere at rest at the origin.
+    fn one_sphere() -> Particles<'static> {
+        const AT_REST: [DVec3; 1] = [DVec3::ZERO];
+        Particles {
+            positions: &AT_REST,
+            velocities: &AT_REST,
+            radii: &[1.0],
+            angular_velocities: &[],
+        }
+    }
+
     #[test]
     fn a_resumed_series_keeps_what_its_collection_lists() {
         let dir = tempfile::tempdir().unwrap();
         let mut s = Series::new(dir.path(), "demo").unwrap();
-        let pos = [DVec3::ZERO];
-        let p = Particles {
-            positions: &pos,
-            velocities: &pos,
-            radii: &[1.0],
-            angular_velocities: &[],
-        };
+        let p = one_sphere();
         for step in [0, 10, 20] {
             s.write(step, step as f64 * 0.1 + 1e-17, &p).unwrap();
         }
@@ -371,13 +376,7 @@ mod tests {
     fn series_writes_snapshots_and_a_collection() {
         let dir = tempfile::tempdir().unwrap();
         let mut s = Series::new(dir.path(), "demo").unwrap();
-        let pos = [DVec3::ZERO];
-        let p = Particles {
-            positions: &pos,
-            velocities: &pos,
-            radii: &[1.0],
-            angular_velocities: &[],
-        };
+        let p = one_sphere();
         s.write(0, 0.0, &p).unwrap();
         s.write(10, 0.5, &p).unwrap();
         let pvd = std::fs::read_to_string(dir.path().join("demo.pvd")).unwrap();
@@ -392,13 +391,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let name = r#"a&b"<c>"#;
         let mut s = Series::new(dir.path(), name).unwrap();
-        let pos = [DVec3::ZERO];
-        let p = Particles {
-            positions: &pos,
-            velocities: &pos,
-            radii: &[1.0],
-            angular_velocities: &[],
-        };
+        let p = one_sphere();
         for step in [0, 10, 20] {
             s.write(step, step as f64, &p).unwrap();
         }
