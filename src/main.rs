@@ -31,6 +31,8 @@ enum Command {
     /// Closed forms without a simulation: kp' (paper 000 eq. A.3), Thornton-Ning e_TN and
     /// e_pl (paper 001 eqs. 13-14), the Tabor parameter (paper 002 eq. 1).
     Analytic(analytic::AnalyticArgs),
+    /// Every contact law's parameters: key, unit, default, valid values and meaning.
+    Params(ParamsArgs),
 }
 
 fn main() -> ExitCode {
@@ -42,6 +44,7 @@ fn main() -> ExitCode {
         Command::Bench(a) => bench_cmd(a),
         Command::Accuracy(a) => accuracy_cmd(a),
         Command::Analytic(a) => analytic::analytic_cmd(a),
+        Command::Params(a) => params_cmd(a),
         Command::Compare(a) => match compare_cmd(a) {
             Ok(true) => Ok(()),
             Ok(false) => return ExitCode::from(1),

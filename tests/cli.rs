@@ -1605,3 +1605,36 @@ fn collisions_that_pass_through_are_refused() {
     let (ok, _, err) = hysteretic(&["--velocity", "5"]);
     assert!(ok, "{err}");
 }
+
+/// `powder params` prints the reference docs/parameters.md holds; one law prints its own
+/// table (and the dissipations where it takes them); an unknown law lists the laws.
+#[test]
+fn params_prints_the_declared_parameters() {
+    let (ok, all, _) = powder(&["params"]);
+    assert!(ok);
+    let file = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/parameters.md"))
+        .unwrap();
+    assert_eq!(
+        all, file,
+        "docs/parameters.md: `powder params > docs/parameters.md`"
+    );
+    let (ok, jkr, _) = powder(&["params", "jkr"]);
+    assert!(ok);
+    assert!(jkr.starts_with("# `jkr`"), "{jkr}");
+    assert!(
+        jkr.contains("| `surface_energy` | J/m^2 | required | >= 0 |"),
+        "{jkr}"
+    );
+    assert!(
+        jkr.contains("## `krijt`") && jkr.contains("| `tvis` | s |"),
+        "{jkr}"
+    );
+    assert!(!jkr.contains("`k1`"), "{jkr}");
+    let (ok, lsd, _) = powder(&["params", "lsd"]);
+    assert!(ok && lsd.contains("| `k` | N/m | required | > 0 |") && !lsd.contains("krijt"));
+    let (ok, _, err) = powder(&["params", "nosuchlaw"]);
+    assert!(
+        !ok && err.contains("hysteretic") && err.contains("hertz"),
+        "{err}"
+    );
+}

@@ -17,8 +17,6 @@
 // A pair's parameters: `JkrPair` and the `JKR_DISSIPATION_*` kinds (`gpu::layout`), filled
 // from `JkrParams` on the host (in f64, then rounded).
 
-const JKR_PI: f32 = 3.1415927;
-
 // Set per pipeline (`gpu::engine`) when every JKR-family row of the scene has the same
 // dissipation (its code; 255: they differ, each pair reads its own) and the same adhesion
 // (0: all Hertz, 1: all adhesive; 2: they differ). The compiler then drops the branches no
@@ -47,18 +45,9 @@ fn jkr_hertz(p: JkrPair) -> bool {
     }
     return p.gamma == 0.0;
 }
-// The f32 constants of `jkr::contact_radius_f32` (rounded exactly as Rust rounds its f64
-// constants; `gpu::shaders` tests check each literal against the Rust values):
-// s_min = 6^(−1/3), d_min = −(3/4)^(2/3) (displacement pull-off), c = 2·s_min,
-// b = 2·s_min², sqrt(3), sqrt(18)·s_min.
-const JKR_S_MIN: f32 = 0.5503212;
-const JKR_D_MIN: f32 = -0.82548183;
-const JKR_C: f32 = 1.1006424;
-const JKR_B: f32 = 0.6057069;
-const JKR_SQRT3: f32 = 1.7320508;
-const JKR_SLOPE0: f32 = 2.3348153;
-// Newton iterations in f32 (`jkr::NEWTON_ITERATIONS_F32`).
-const JKR_NEWTON_ITERATIONS: i32 = 3;
+// The solver's constants, `JKR_S_MIN`, `JKR_D_MIN`, `JKR_C`, `JKR_B`, `JKR_SQRT3`,
+// `JKR_SLOPE0`, `JKR_PI` and `JKR_NEWTON_ITERATIONS`, are rounded from the Rust solver's
+// (`gpu::layout::solver_consts`).
 
 // s = sqrt(a/a0), the stable root of 3s⁴ − 2s = delta/delta0: the guarded Newton of
 // `jkr::contact_radius_f32`, step for step.

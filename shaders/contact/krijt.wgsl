@@ -14,15 +14,9 @@
 //   p_c/E*      = 2·a0/(pi·R*)·(x − 1/(3·sqrt(x)))           (eq. 9)
 //   v_c·dt/a0   = (2E*·gamma/sigma0²)/a0 · dt/T_vis           (eq. B2)
 
-// The crack speed of eq. B2 diverges below and above these G_eff/gamma (`krijt::BETA_MIN`,
-// `krijt::BETA_MAX`).
-const KRIJT_BETA_MIN: f32 = 0.02;
-const KRIJT_BETA_MAX: f32 = 50.0;
-// a/a0 at the first touch, a_JKR(0)/a0 = (2/3)^(2/3) (`jkr::X_TOUCH`).
-const KRIJT_X_TOUCH: f32 = 0.76314283;
-// Bisection steps of the backward-Euler solve at most (it stops once the bracket has no
-// f32 between its ends; 24–30 halve any bracket of a few a0 to an ulp).
-const KRIJT_BISECTION_ITERATIONS: i32 = 30;
+// `KRIJT_BETA_MIN`, `KRIJT_BETA_MAX` (where the crack speed of eq. B2 diverges),
+// `KRIJT_X_TOUCH` (a/a0 at the first touch) and `KRIJT_BISECTION_ITERATIONS` are rounded
+// from the Rust model's (`gpu::layout::solver_consts`).
 
 // The dimensionless crack speed f(beta) = sigma0²·T_vis·da/dt/(2E*·gamma) of eq. B2 for
 // KRIJT_BETA_MIN < beta < KRIJT_BETA_MAX (`krijt::crack_speed_shape`), clamped to ±1e30

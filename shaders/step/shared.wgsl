@@ -147,15 +147,13 @@ fn material_of(c: vec4<i32>) -> u32 {
 // first entries of the lists a rebuild builds (B) and of the `lower` lists; the scans of
 // `gpu::grid` turn each window's count region into its row region.
 @group(0) @binding(90) var<storage, read_write> rows: array<u32>;
-const ROWS_B_COUNT: u32 = 0u;
-const ROWS_B_ROW: u32 = 1u;
-const ROWS_LOWER_COUNT: u32 = 2u;
-const ROWS_LOWER_ROW: u32 = 3u;
+// (its regions: `ROWS_B_COUNT`, `ROWS_B_ROW`, `ROWS_LOWER_COUNT`, `ROWS_LOWER_ROW`, of
+// `ROWS_REGION_COUNT`: `gpu::records`)
 
 // (blocked by window like the state; the rows are local to the particle's window: the
 // lists of a window's particles fill its block of entries, `gpu::window`)
 fn row_at(region: u32, k: u32) -> u32 {
-    return blocked(4u, region, k);
+    return blocked(ROWS_REGION_COUNT, region, k);
 }
 
 // Particle k's new list (B) and its `lower` list: the first entry (a record index) and

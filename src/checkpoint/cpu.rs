@@ -24,17 +24,11 @@ const fn column(name: &'static str, descr: &'static str, bytes: usize) -> Column
     Column { name, descr, bytes }
 }
 
-/// A contact's row: the key (i, j) — (wall, particle) for a wall contact — then the record
-/// (the history's columns named as the contact network output names them).
-const CONTACT: &[Column] = &[
-    column("i", "'<u4'", 4),
-    column("j", "'<u4'", 4),
-    column(HostField::DeltaMaxTouched.output().0, "'<f8'", 8),
-    column(HostField::Touched.output().0, "'|b1'", 1),
-    column(HostField::Tangential.output().0, "'<f8', (3,)", 24),
-    column(HostField::Rolling.output().0, "'<f8', (3,)", 24),
-    column(HostField::ContactRadius.output().0, "'<f8'", 8),
-    column(HostField::Twist.output().0, "'<f8'", 8),
+/// The key's columns: (i, j), or (wall, particle) for a wall contact.
+const KEY: &[Column] = &[column("i", "'<u4'", 4), column("j", "'<u4'", 4)];
+
+/// The record's columns after the history.
+const RECORD: &[Column] = &[
     column("overlap", "'<f8'", 8),
     column("normal_force", "'<f8'", 8),
     column("tangential_force", "'<f8', (3,)", 24),
@@ -44,17 +38,34 @@ const CONTACT: &[Column] = &[
     column("sliding", "'|b1'", 1),
 ];
 
+/// A history field's column, named as the contact network output names it.
+const fn history_column(f: HostField) -> Column {
+    match (f.is_flag(), f.output()) {
+        (true, (name, _)) => column(name, "'|b1'", 1),
+        (false, (name, 1)) => column(name, "'<f8'", 8),
+        (false, (name, _)) => column(name, "'<f8', (3,)", 24),
+    }
+}
+
+/// A contact's row: the key, the history ([`HostField::ALL`]), then the record.
+fn contact_columns() -> impl Iterator<Item = Column> {
+    let history = HostField::ALL.into_iter().map(history_column);
+    let own = |c: &Column| column(c.name, c.descr, c.bytes);
+    (KEY.iter().map(own))
+        .chain(history)
+        .chain(RECORD.iter().map(own))
+}
+
 /// The structured dtype of a contact row, as `.npy` writes it.
 fn contact_descr() -> String {
-    let fields: Vec<String> = CONTACT
-        .iter()
+    let fields: Vec<String> = contact_columns()
         .map(|c| format!("('{}', {})", c.name, c.descr))
         .collect();
     format!("[{}]", fields.join(", "))
 }
 
 fn row_bytes() -> usize {
-    CONTACT.iter().map(|c| c.bytes).sum()
+    contact_columns().map(|c| c.bytes).sum()
 }
 
 fn contacts_array(list: &[Keyed]) -> Array {
@@ -69,12 +80,13 @@ fn contacts_array(list: &[Keyed]) -> Array {
         let h = &r.history;
         data.extend(i.to_le_bytes());
         data.extend(j.to_le_bytes());
-        f(&mut data, h.delta_max);
-        data.push(u8::from(h.touched));
-        v3(&mut data, h.tangential);
-        v3(&mut data, h.rolling);
-        f(&mut data, h.contact_radius);
-        f(&mut data, h.twist);
+        for field in HostField::ALL {
+            let value = field.value(h);
+            match (field.is_flag(), field.output().1) {
+                (true, _) => data.push(u8::from(value[0] != 0.0)),
+                (false, components) => value[..components].iter().for_each(|&x| f(&mut data, x)),
+            }
+        }
         f(&mut data, r.delta);
         f(&mut data, r.force);
         v3(&mut data, r.tangential);
@@ -127,14 +139,15 @@ fn contacts_of(a: &Array, name: &str) -> Result<Vec<Keyed>, StateError> {
     for row in a.data.chunks_exact(width) {
         let mut r = Row(row);
         let key = (r.u32(), r.u32());
-        let history = ContactHistory {
-            delta_max: r.f64(),
-            touched: r.flag()?,
-            tangential: r.vec3(),
-            rolling: r.vec3(),
-            contact_radius: r.f64(),
-            twist: r.f64(),
-        };
+        let mut history = ContactHistory::default();
+        for field in HostField::ALL {
+            let mut value = [0.0; 3];
+            match (field.is_flag(), field.output().1) {
+                (true, _) => value[0] = f64::from(u8::from(r.flag()?)),
+                (false, components) => value[..components].fill_with(|| r.f64()),
+            }
+            field.set(&mut history, value);
+        }
         let record = ContactRecord {
             history,
             delta: r.f64(),
@@ -279,5 +292,39 @@ mod tests {
         let mut flag = contacts_array(&[((0, 1), ContactRecord::default())]);
         flag.data[16] = 2; // the touched flag
         assert!(contacts_of(&flag, "contacts").is_err());
+    }
+
+    /// Every field of a contact's history and record survives a checkpoint bitwise (a field
+    /// added to `ContactHistory` must be named here, and then in `HostField::ALL`).
+    #[test]
+    fn a_contact_row_keeps_every_field() {
+        let history = ContactHistory {
+            delta_max: 1.5e-6,
+            touched: true,
+            tangential: DVec3::new(1e-7, -2e-7, 3e-7),
+            rolling: DVec3::new(-4e-8, 5e-8, 6e-8),
+            contact_radius: 7e-5,
+            twist: -8e-9,
+        };
+        let record = ContactRecord {
+            history,
+            delta: -1e-9,
+            force: 2.5e-3,
+            tangential: DVec3::new(1e-4, 0.0, -1e-4),
+            potential: 3e-12,
+            friction_power: 4e-9,
+            couple_power: 5e-10,
+            sliding: true,
+        };
+        let list = [((3, 7), record), ((0, 2), ContactRecord::default())];
+        let back = contacts_of(&contacts_array(&list), "contacts").unwrap();
+        assert_eq!(back, list);
+        // the columns are the ones checkpoints have always had
+        let names: Vec<&str> = contact_columns().map(|c| c.name).collect();
+        assert_eq!(
+            names.join(" "),
+            "i j delta_max touched tangential_spring rolling_displacement contact_radius twist \
+             overlap normal_force tangential_force potential friction_power couple_power sliding"
+        );
     }
 }

@@ -15,6 +15,7 @@ mod choices;
 mod collisions;
 mod compare;
 mod info;
+mod params;
 mod run;
 
 pub(crate) use accuracy::*;
@@ -23,4 +24,5 @@ pub(crate) use choices::*;
 pub(crate) use collisions::*;
 pub(crate) use compare::*;
 pub(crate) use info::*;
+pub(crate) use params::*;
 pub(crate) use run::*;

@@ -22,6 +22,22 @@ crate::gpu::layout::wgsl_consts! {
     }
 }
 
+crate::gpu::layout::wgsl_consts! {
+    /// The regions of `rows`, one u32 a particle each (blocked by window like the state).
+    pub ROWS_REGIONS: u32 = {
+        /// The lengths of the lists a rebuild builds (B).
+        ROWS_B_COUNT = 0,
+        /// Their first entries (the scan of [`ROWS_B_COUNT`]).
+        ROWS_B_ROW = 1,
+        /// The lengths of the `lower` lists.
+        ROWS_LOWER_COUNT = 2,
+        /// Their first entries (the scan of [`ROWS_LOWER_COUNT`]).
+        ROWS_LOWER_ROW = 3,
+        /// How many regions `rows` holds.
+        ROWS_REGION_COUNT = 4,
+    }
+}
+
 /// What one field of a record holds.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Kind {

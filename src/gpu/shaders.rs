@@ -411,54 +411,6 @@ mod tests {
         }
     }
 
-    /// The value of `const name` in a WGSL source, as written.
-    fn literal(source: &str, name: &str) -> f64 {
-        let key = format!("const {name}: ");
-        let line = (source.lines())
-            .find(|l| l.starts_with(&key))
-            .unwrap_or_else(|| panic!("{name} not found"));
-        let value = line.split('=').nth(1).unwrap().trim().trim_end_matches(';');
-        value.trim_end_matches('u').parse().unwrap()
-    }
-
-    /// The f32 literals of contact/jkr.wgsl are the f32 roundings of the Rust constants of
-    /// `jkr::contact_radius_f32` (the two solvers must be the same function).
-    #[test]
-    fn gpu_shaders_jkr_constants_match_the_rust_solver() {
-        use crate::model::jkr::{D_PULLOFF_DISPLACEMENT, NEWTON_ITERATIONS_F32, S_MIN};
-        let jkr = super::super::composition::law("jkr").unwrap().source;
-        let literal = |name: &str| literal(jkr, name);
-        let f32_of = |name: &str| literal(name) as f32;
-        assert_eq!(f32_of("JKR_S_MIN"), S_MIN as f32);
-        assert_eq!(f32_of("JKR_D_MIN"), D_PULLOFF_DISPLACEMENT as f32);
-        assert_eq!(f32_of("JKR_C"), (2.0 * S_MIN) as f32);
-        assert_eq!(f32_of("JKR_B"), (2.0 * S_MIN * S_MIN) as f32);
-        assert_eq!(f32_of("JKR_SQRT3"), 3f64.sqrt() as f32);
-        assert_eq!(f32_of("JKR_SLOPE0"), (18f64.sqrt() * S_MIN) as f32);
-        assert_eq!(f32_of("JKR_PI"), std::f64::consts::PI as f32);
-        assert_eq!(
-            literal("JKR_NEWTON_ITERATIONS") as usize,
-            NEWTON_ITERATIONS_F32
-        );
-    }
-
-    /// The Krijt constants of contact/krijt.wgsl are the f32 roundings of `model::krijt`'s and
-    /// `jkr::X_TOUCH`.
-    #[test]
-    fn gpu_shaders_krijt_constants_match_the_rust_model() {
-        use crate::model::jkr::X_TOUCH;
-        use crate::model::krijt::{BETA_MAX, BETA_MIN};
-        let krijt = super::super::composition::sub_model("krijt")
-            .unwrap()
-            .source;
-        let f32_of = |name: &str| literal(krijt, name) as f32;
-        assert_eq!(f32_of("KRIJT_BETA_MIN"), BETA_MIN as f32);
-        assert_eq!(f32_of("KRIJT_BETA_MAX"), BETA_MAX as f32);
-        assert_eq!(f32_of("KRIJT_X_TOUCH"), X_TOUCH as f32);
-        // 30 halvings take any bracket up to 2^6·x to one f32 ulp of x
-        assert!(literal(krijt, "KRIJT_BISECTION_ITERATIONS") >= 24.0);
-    }
-
     #[test]
     fn gpu_shaders_validation_reports_naga_text() {
         let e = validate("fn f() -> u32 { return 1.5; }").unwrap_err();

@@ -80,6 +80,21 @@ pub const ROLLING_DISPLACEMENT: HistoryField = HistoryField {
 };
 
 impl HostField {
+    /// Every field of [`ContactHistory`], in the order checkpoints store them.
+    pub const ALL: [HostField; 6] = [
+        HostField::DeltaMaxTouched,
+        HostField::Touched,
+        HostField::Tangential,
+        HostField::Rolling,
+        HostField::ContactRadius,
+        HostField::Twist,
+    ];
+
+    /// Whether the field is a flag (its one value 0 or 1).
+    pub const fn is_flag(self) -> bool {
+        matches!(self, HostField::Touched)
+    }
+
     /// The name of the field's values in the contact network output and how many
     /// components they have (the touched flag of `DeltaMaxTouched` is output as `touched`).
     pub const fn output(self) -> (&'static str, usize) {
@@ -103,6 +118,20 @@ impl HostField {
             HostField::Rolling => v(h.rolling),
             HostField::ContactRadius => [h.contact_radius, 0.0, 0.0],
             HostField::Twist => [h.twist, 0.0, 0.0],
+        }
+    }
+
+    /// Sets the field in `h` to `v` (its first [`Self::output`] components; a flag is set
+    /// where `v[0]` is not 0), the inverse of [`Self::value`].
+    pub fn set(self, h: &mut ContactHistory, v: [f64; 3]) {
+        let d = DVec3::from_array(v);
+        match self {
+            HostField::DeltaMaxTouched => h.delta_max = v[0],
+            HostField::Touched => h.touched = v[0] != 0.0,
+            HostField::Tangential => h.tangential = d,
+            HostField::Rolling => h.rolling = d,
+            HostField::ContactRadius => h.contact_radius = v[0],
+            HostField::Twist => h.twist = v[0],
         }
     }
 }

@@ -160,6 +160,22 @@ impl HystereticParams {
         }
     }
 
+    /// The overlap δmin^p = kp·δ0^p/(kp + kc) where the limit line meets the tensile branch:
+    /// below it the history moves under the limit.
+    pub fn tensile_limit(&self, a12: f64) -> f64 {
+        self.kp * self.delta0_p(a12) / (self.kp + self.kc)
+    }
+
+    /// (k1 + kc)/(kp − k1), of the k2 line through a point of the tensile branch (0 when
+    /// kp ≤ k1: the lines never meet it).
+    pub fn tensile_coefficient(&self) -> f64 {
+        if self.kp > self.k1 {
+            (self.k1 + self.kc) / (self.kp - self.k1)
+        } else {
+            0.0
+        }
+    }
+
     /// Range of the non-contact force |δa| = fa/kc_a (0 without fa or with kc_a = ∞).
     pub fn range(&self) -> f64 {
         if self.fa > 0.0 && self.kca.is_finite() {
@@ -187,16 +203,15 @@ impl HystereticParams {
             // k2 = k1, δ0 = 0: the line is k1·δ, which never meets −kc·δ at δ > 0.
             return 0.0;
         }
-        // The limit line meets the tensile branch at δmin^p = kp·δ0^p/(kp + kc); below it the
-        // history moves under the limit, where k2 < kp.
-        if delta >= kp * self.delta0_p(a12) / (kp + kc) {
+        // beyond δmin^p the history stays at the limit; below it k2 < kp
+        if delta >= self.tensile_limit(a12) {
             return dp;
         }
         match self.k2_rule {
             K2Rule::Linear => {
-                // (k1 + s·x + kc)·δ = s·x², s = (kp−k1)/δmax^p.
-                let s = (kp - k1) / dp;
-                0.5 * delta + (0.25 * delta * delta + (k1 + kc) * delta / s).sqrt()
+                // (k1 + s·x + kc)·δ = s·x², s = (kp−k1)/δmax^p: (k1 + kc)/s = c·δmax^p.
+                let c = self.tensile_coefficient() * dp;
+                0.5 * delta + (0.25 * delta * delta + c * delta).sqrt()
             }
             K2Rule::Sqrt => {
                 // (k1 + s·u + kc)·δ = s·u³ with u = √x, s = (kp−k1)/√δmax^p; the cubic

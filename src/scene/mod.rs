@@ -41,75 +41,12 @@
 //! name = "powder"               # required, unique
 //! density = 2000.0              # required, kg/m^3, > 0
 //! model = "hysteretic"          # required: "hysteretic", "lsd", "jkr" or "hertz"; the other keys are the
-//!                               # model's parameters (below); no other keys are allowed
-//!
-//! # model = "hysteretic" (piece-wise linear adhesive elasto-plastic model):
-//! k1 = 100.0                    # required, N/m, > 0: plastic loading stiffness
-//! kp = 500.0                    # required, N/m, >= k1: elastic limit (un-/re-loading) stiffness
-//! kc = 100.0                    # required, N/m, >= 0: slope of the tensile (adhesive) branch
-//! phi_f = 0.05                  # required, dimensionless, 0 < phi_f <= 1: plasticity depth
-//! fa = 0.0                      # N, >= 0, default 0: non-contact adhesive force
-//! kca = "inf"                   # N/m, > 0, default kc if kc > 0 else "inf" (zero range):
-//!                               # non-contact adhesive stiffness; a number, inf or "inf"
-//! adhesion = "jump-in"          # "jump-in" (default) or "reversible"
-//! gamma0 = 0.0                  # kg/s, >= 0, default 0: viscous damping in contact
-//! k2_rule = "linear"            # "linear" (default) or "sqrt": how k2 grows with delta_max
-//! # Luding's friction (hysteretic and lsd; docs/models.md "Luding's sliding, rolling and twisting
-//! # friction"); > 0 makes particles rotate (both backends). Lever a12 = 2R* (2r at a wall),
-//! # Coulomb load max(0, f_n + kc delta + fa) (lsd: max(0, f_n)):
-//! friction = 0.0                # >= 0, default 0 (off): static sliding coefficient mu_s
-//! friction_dynamic = 0.0        # 0 <= mu_d <= mu_s, default friction
-//! kt = 28.6                     # N/m, > 0, default 2/7 k1 (lsd: 2/7 k)
-//! gamma_t = 0.0                 # kg/s, >= 0, default 2/7 gamma0
-//! rolling_friction = 0.0        # >= 0, default 0 (off): mu_r, torque <= mu_r a12 f_N*
-//! kr = 40.0                     # N/m, > 0, default 2/5 k1 (lsd: 2/5 k)
-//! gamma_r = 0.0                 # kg/s, >= 0, default 2/5 gamma0
-//! twisting_friction = 0.0       # >= 0, default 0 (off): mu_o, torque <= mu_o a12 f_N*
-//! ko = 40.0                     # N/m, > 0, default 2/5 k1 (lsd: 2/5 k)
-//! gamma_o = 0.0                 # kg/s, >= 0, default 2/5 gamma0
-//! # (a stiffness, damping or friction_dynamic without its coefficient > 0 is refused)
-//!
-//! # model = "lsd" (linear spring-dashpot):
-//! k = 300.0                     # required, N/m, > 0: spring stiffness
-//! gamma0 = 0.0                  # kg/s, >= 0, default 0: viscous damping
-//! # and Luding's friction keys as for "hysteretic"
-//!
-//! # model = "jkr" (JKR adhesive elastic spheres) or "hertz" (the same without adhesion):
-//! youngs = 1e8                  # required, Pa, > 0: Young's modulus E of the material
-//! poisson = 0.3                 # required, -1 < poisson < 0.5
-//! surface_energy = 0.05         # jkr only, required, J/m^2, >= 0: gamma per surface, Fc = 3 pi gamma R*
-//! dissipation = "none"          # "none" (default), "tsuji" (paper 002 eqs. 11-16, needs
-//!                               # restitution; the default when restitution is given) or
-//!                               # "powerlaw" (paper 001 eq. 19, needs D, alpha, beta),
-//!                               # "krijt" (jkr only, paper 001 eqs. 10-12, B1-B2, needs tvis)
-//!                               # or "stress" (jkr only, paper 001 eqs. 17-18, needs
-//!                               # tvis0_per_radius, B, zeta); krijt/stress: both backends
-//! restitution = 0.9             # target restitution e in (0, 1] of "tsuji"
-//! tsuji_stiffness = "contact-radius" # "tsuji" only: the stiffness of its dashpots,
-//!                               # "contact-radius" (default: Sn = 2E* a, St = 8G* a) or
-//!                               # "hertz" (paper 002 eq. 13: 2E* sqrt(R* delta),
-//!                               # 8G* sqrt(R* delta), zero at delta <= 0)
-//! D = 118.0                     # "powerlaw": F = sgn(v) D E* |v|^alpha a^beta
-//! alpha = 3.0                   # >= 0
-//! beta = 1.5                    # >= 0 (the paper fits 1 < beta < 1.5)
-//! tvis = 0.075                  # "krijt": relaxation time T_vis, s, >= 0
-//! tvis0_per_radius = 2.1e-4     # "stress": C, s/m, >= 0: T_vis = C R exp[(B p_c/E*)^zeta]
-//! B = 6.2                       # "stress": >= 0
-//! zeta = 4.0                    # "stress": > 0
-//! sigma0 = 2.9                  # "krijt"/"stress": Pa, >= 0, default 0: crack stress
-//!                               # ~ gamma/(atomic spacing) of the contact-radius dynamics
-//!                               # (eq. B2); 0 = a follows the JKR curve instantly
-//! friction = 0.0                # >= 0, default 0: sliding friction mu_s (adhesive Coulomb
-//!                               # limit |Ft| <= mu_s |F_N + 2 Fc|); > 0 makes particles rotate
-//! rolling_hysteresis = 0.0      # jkr only, >= 0, default 0: Delta gamma / gamma of the
-//!                               # rolling resistance (xi_crit = a0/12 * Delta gamma / gamma)
-//! pulloff = "displacement"      # jkr only: "displacement" (default, breaks at
-//!                               # -(3/4)^(2/3) delta0), "force" (breaks at F = -Fc) or
-//!                               # "zero" (breaks at zero overlap, paper 002's rule)
-//! stiffness_scale = 1.0         # > 0, default 1: E -> S E and gamma -> gamma S^(2/5)
-//! twisting_friction = 0.0       # >= 0, default 0 (off): Luding's twisting, mu_o
-//! ko = 1e3                      # N/m, > 0, default 2/5 * 8 G* a at the current contact radius
-//! gamma_o = 0.0                 # kg/s, >= 0, default 0
+//!                               # model's parameters and no others: `powder params`
+//!                               # (docs/parameters.md, generated from their declarations)
+//! k1 = 100.0                    # e.g. the hysteretic model's (paper 000 eqs. 5-15)
+//! kp = 500.0
+//! kc = 100.0
+//! phi_f = 0.05
 //!
 //! [[interaction]]               # optional: the model for a pair of materials
 //! materials = ["powder", "glass"]  # required: two material names (order does not matter)

@@ -9,7 +9,7 @@ use crate::model::{
 use glam::DVec3;
 
 /// What a contact remembers between steps.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub(crate) struct ContactRecord {
     pub(crate) history: ContactHistory,
     /// Overlap, forces and stored energy at the end of the last step, for the work

@@ -1,6 +1,7 @@
 //! The run's device buffers (the state set, the new lists, the step's others) and how large the lists and their windows are.
 
 use super::*;
+use crate::gpu::records::ROWS_REGION_COUNT;
 
 /// Creates storage buffers and records their names and sizes (for [`GpuEngine::buffers`]).
 /// A buffer that does not fit (bound whole: over the storage binding limit; bound a
@@ -226,7 +227,7 @@ impl StateSet {
     /// [`Self::blocks_of`] this set, with `rows`.
     pub(super) fn blocks(&self, entries: u64) -> Vec<(&'static str, u64)> {
         let mut v = Self::blocks_of(&self.layout, (&self.entry_layout, entries));
-        v.push(("rows", 4 * 4 * self.layout.stride()));
+        v.push(("rows", 4 * ROWS_REGION_COUNT as u64 * self.layout.stride()));
         v
     }
 

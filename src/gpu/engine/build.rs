@@ -1,6 +1,9 @@
 //! Building an engine for a scene: its composition, pipelines, buffers and bind groups, and the first lists and forces.
 
 use super::*;
+use crate::gpu::records::{
+    ROWS_B_COUNT, ROWS_B_ROW, ROWS_LOWER_COUNT, ROWS_LOWER_ROW, ROWS_REGION_COUNT,
+};
 
 /// The scans that place a rebuild's new lists (counts into first entries): two a window,
 /// the pair lists' and `lower`'s, over the window's block of `rows`; each window's counts
@@ -25,7 +28,7 @@ fn list_scans(
     let mut scans = Vec::new();
     for w in 0..windows.count {
         // (window w's block of `rows`: B's counts and rows, then `lower`'s)
-        let block = 4 * 4 * windows.len;
+        let block = 4 * ROWS_REGION_COUNT as u64 * windows.len;
         let part = match windows.count {
             1 => Part::whole(rows),
             _ => Part {
@@ -34,7 +37,10 @@ fn list_scans(
                 size: Some(block),
             },
         };
-        for (count, row) in [(0, 1), (2, 3)] {
+        for (count, row) in [
+            (ROWS_B_COUNT, ROWS_B_ROW),
+            (ROWS_LOWER_COUNT, ROWS_LOWER_ROW),
+        ] {
             scans.push(ExclusiveScan::with_parts(
                 ctx,
                 &scan_program,
@@ -506,8 +512,11 @@ impl SceneBuffers {
         let rows = blocked_buffer(
             alloc,
             windows,
-            ("rows", 4 * 4 * windows.len * windows.count),
-            4 * 4 * windows.len,
+            (
+                "rows",
+                4 * ROWS_REGION_COUNT as u64 * windows.len * windows.count,
+            ),
+            4 * ROWS_REGION_COUNT as u64 * windows.len,
         );
         let control = alloc.buffer("control", CONTROL_BYTES);
         // moved beyond skin/2 (flag set): the first step builds the lists

@@ -8,12 +8,14 @@ use glam::DVec3;
 
 mod pair_rows;
 mod position;
+mod solver_consts;
 #[cfg(test)]
 mod tests;
 mod wgsl;
 
 pub use pair_rows::*;
 pub use position::*;
+pub use solver_consts::*;
 pub use wgsl::{
     declarations, shared_consts, shared_structs, Pad, SharedStruct, WgslField, WgslLiteral,
     WgslMember, WgslStruct, WgslType,

@@ -56,11 +56,8 @@ impl HystereticPair {
     /// The row of a hysteretic pair, rounded to f32 (kca = ∞ encoded as 0).
     pub fn hysteretic(p: &crate::model::HystereticParams) -> Self {
         use crate::model::{AdhesionMode, K2Rule};
-        let dmaxp = if p.kp > p.k1 {
-            p.kp / (p.kp - p.k1) * p.phi_f
-        } else {
-            1e30
-        };
+        // (∞ without plasticity: 1e30 stays finite in f32)
+        let dmaxp = p.delta_max_p(1.0).min(1e30);
         let mut flags = 0;
         if p.adhesion == AdhesionMode::JumpIn {
             flags |= HYST_JUMP_IN;
@@ -68,7 +65,6 @@ impl HystereticPair {
         if p.k2_rule == K2Rule::Sqrt {
             flags |= HYST_SQRT_RULE;
         }
-        let dmaxp = dmaxp.min(1e30);
         Self {
             k1: p.k1 as f32,
             kp: p.kp as f32,
@@ -80,12 +76,8 @@ impl HystereticPair {
             gamma0: p.gamma0 as f32,
             flags,
             inv_dmaxp_per_a12: (1.0 / dmaxp) as f32,
-            tensile_c: if p.kp > p.k1 {
-                ((p.k1 + p.kc) / (p.kp - p.k1)) as f32
-            } else {
-                0.0
-            },
-            tensile_limit_per_a12: (p.kp * p.phi_f / (p.kp + p.kc)) as f32,
+            tensile_c: p.tensile_coefficient() as f32,
+            tensile_limit_per_a12: p.tensile_limit(1.0) as f32,
         }
     }
 
@@ -184,28 +176,17 @@ impl JkrPair {
     pub fn new(p: &crate::model::JkrParams) -> Self {
         use crate::model::jkr::tsuji_beta;
         use crate::model::Dissipation;
-        use std::f64::consts::PI;
-        let gamma = p.gamma();
-        let a0_coef = if gamma > 0.0 {
-            (9.0 * PI * gamma / p.e_star()).cbrt()
-        } else {
-            0.0
-        };
-        let a0_unscaled_coef = if p.surface_energy > 0.0 {
-            (9.0 * PI * p.surface_energy / p.e_star_unscaled()).cbrt()
-        } else {
-            0.0
-        };
+        // the coefficients of R*: the law's scales at R* = 1 m
         let mut row = Self {
             e_star: p.e_star() as f32,
             g_star: p.g_star() as f32,
-            gamma: gamma as f32,
-            a0_coef: a0_coef as f32,
+            gamma: p.gamma() as f32,
+            a0_coef: p.a0(1.0) as f32,
             break_ratio: p.pulloff.break_overlap_ratio() as f32,
             friction: p.friction as f32,
             rolling_hysteresis: p.rolling_hysteresis as f32,
-            fc_unscaled_per_r: (3.0 * PI * p.surface_energy) as f32,
-            a0_unscaled_coef: a0_unscaled_coef as f32,
+            fc_unscaled_per_r: p.fc_unscaled(1.0) as f32,
+            a0_unscaled_coef: p.a0_unscaled(1.0) as f32,
             p_break: crate::model::jkr::potential_shape(p.pulloff.break_radius_ratio()) as f32,
             ..Default::default()
         };

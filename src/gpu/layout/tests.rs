@@ -235,6 +235,7 @@ fn gpu_layout_shared_constants_match_naga() {
         let got = match module.global_expressions[c.init] {
             naga::Expression::Literal(naga::Literal::U32(v)) => (v, "u32"),
             naga::Expression::Literal(naga::Literal::F32(v)) => (v.to_bits(), "f32"),
+            naga::Expression::Literal(naga::Literal::I32(v)) => (v as u32, "i32"),
             ref e => panic!("constant {name} is {e:?}"),
         };
         assert_eq!(got, (bits, ty), "{name}");

@@ -187,6 +187,13 @@ impl WgslLiteral for u32 {
     }
 }
 
+impl WgslLiteral for i32 {
+    const TY: &'static str = "i32";
+    fn literal(self) -> String {
+        format!("{self}i")
+    }
+}
+
 impl WgslLiteral for f32 {
     const TY: &'static str = "f32";
     fn literal(self) -> String {
@@ -257,15 +264,18 @@ pub fn shared_consts() -> Vec<(&'static str, &'static str, u32)> {
         HYST_FLAGS,
         JKR_DISSIPATIONS,
         records::ENTRY_MARKS,
+        records::ROWS_REGIONS,
         control::CONTROL_WORDS,
         control::HALTS,
     ];
-    let f32s = [WALL_MOTIONS, control::MONITOR_LIMITS];
+    let i32s = [SOLVER_ITERATIONS];
+    let f32s = [WALL_MOTIONS, control::MONITOR_LIMITS, JKR_SOLVER];
     let words = u32s
         .iter()
         .flat_map(|l| l.iter().map(|&(n, v)| (n, u32::TY, v)));
+    let ints = (i32s.iter()).flat_map(|l| l.iter().map(|&(n, v)| (n, i32::TY, v as u32)));
     let floats = (f32s.iter()).flat_map(|l| l.iter().map(|&(n, v)| (n, f32::TY, v.to_bits())));
-    words.chain(floats).collect()
+    words.chain(ints).chain(floats).collect()
 }
 
 /// Every struct and constant the host shares with the kernels, in WGSL: each shader
@@ -279,6 +289,7 @@ pub fn declarations() -> String {
     for (name, ty, bits) in shared_consts() {
         let literal = match ty {
             "f32" => f32::from_bits(bits).literal(),
+            "i32" => (bits as i32).literal(),
             _ => bits.literal(),
         };
         w.push_str(&format!("const {name}: {ty} = {literal};\n"));

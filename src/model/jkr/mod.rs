@@ -23,7 +23,7 @@ use crate::error::ParamError;
 mod dissipation;
 pub mod mindlin;
 mod pair;
-mod radius;
+pub(crate) mod radius;
 pub mod rolling;
 mod scaling;
 mod twisting;

@@ -5,13 +5,15 @@
 use super::{D_PULLOFF_DISPLACEMENT, S_MIN};
 use std::sync::LazyLock;
 
-// Constants of the deflated solve (see `solve_t_iterative`): c = 2·s_min, b = 2·s_min²,
-// √18·s_min = dk/dt at t = 0.
-const C_T: f64 = 2.0 * S_MIN;
-const B_T: f64 = 2.0 * S_MIN * S_MIN;
-const SQRT3: f64 = 1.7320508075688772;
+/// c = 2·s_min, of the deflated solve (see `solve_t_iterative`).
+pub(crate) const C_T: f64 = 2.0 * S_MIN;
+/// b = 2·s_min², of the deflated solve.
+pub(crate) const B_T: f64 = 2.0 * S_MIN * S_MIN;
+/// √3.
+pub(crate) const SQRT3: f64 = 1.7320508075688772;
 const INV_SQRT3: f64 = 0.5773502691896258;
-const SLOPE0: f64 = 2.3348151486780315;
+/// √18·s_min = dk/dt at t = 0.
+pub(crate) const SLOPE0: f64 = 2.3348151486780315;
 
 /// Nodes of the table per unit of r = √(δ/δ0 − δc/δ0).
 const TABLE_DENSITY: f64 = 32.0;

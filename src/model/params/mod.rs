@@ -154,6 +154,7 @@ macro_rules! param {
 
 mod declared;
 mod read;
+pub mod reference;
 #[cfg(test)]
 mod tests;
 mod words;

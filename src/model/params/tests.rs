@@ -174,3 +174,16 @@ fn params_word_enums_agree_with_serde_and_clap() {
     assert_eq!(clap_words::<AdhesionMode>(), AdhesionMode::WORDS);
     assert_eq!(clap_words::<Pulloff>(), Pulloff::WORDS);
 }
+
+/// docs/parameters.md is the reference the declarations generate.
+#[test]
+fn the_parameter_reference_is_current() {
+    let file = include_str!("../../../docs/parameters.md");
+    assert!(
+        file == super::reference::markdown(),
+        "docs/parameters.md is out of date: `cargo run --release -- params > docs/parameters.md`"
+    );
+    for p in super::all_params() {
+        assert!(file.contains(&format!("| `{}` |", p.key)), "{}", p.key);
+    }
+}
