@@ -27,7 +27,7 @@ pub struct Chosen {
 
 /// Chooses the engine for `request`. `--backend gpu` without any adapter falls back to the
 /// CPU engine (saying so in the reason); an adapter `POWDER_ADAPTER` names that cannot be
-/// opened is an error.
+/// opened is an error, with either request.
 pub fn choose(request: BackendRequest) -> Result<Chosen, PowderError> {
     let gpu = |ctx: GpuContext, why: String| Chosen {
         reason: format!("{why}: {}", ctx.summary),
@@ -40,6 +40,8 @@ pub fn choose(request: BackendRequest) -> Result<Chosen, PowderError> {
         }),
         BackendRequest::Gpu => match GpuContext::new() {
             Ok(ctx) => Ok(gpu(ctx, "--backend gpu".into())),
+            // (an adapter asked for by name is not replaced by the CPU engine)
+            Err(e) if AdapterPreference::from_env() != AdapterPreference::Auto => Err(e),
             Err(e) => Ok(Chosen {
                 gpu: None,
                 reason: format!("--backend gpu, but {e}; the CPU engine runs instead"),

@@ -86,11 +86,17 @@ impl Resolved {
             )));
         }
         // Time step: the most demanding pair of materials, with the lightest particles of
-        // each (walls count as infinite mass).
+        // each, and each against the other's heaviest (a rolling or twisting oscillator is
+        // stiffest for a small sphere on a large one); walls count as infinite mass.
         let mut lightest: Vec<Option<(f64, f64)>> = vec![None; n_materials];
+        let mut heaviest: Vec<Option<(f64, f64)>> = vec![None; n_materials];
         for (p, &m) in scene.particles.iter().zip(&mass) {
             let slot = &mut lightest[p.material];
             if slot.is_none_or(|(lm, _)| m < lm) {
+                *slot = Some((m, p.radius));
+            }
+            let slot = &mut heaviest[p.material];
+            if slot.is_none_or(|(hm, _)| m > hm) {
                 *slot = Some((m, p.radius));
             }
         }
@@ -105,13 +111,23 @@ impl Resolved {
                 time_step = Some(ts);
             }
         };
-        let v_imp = scene.impact_velocity;
+        // the Hertz/JKR contact time follows the impact speed: the larger of the expected
+        // one and the fastest closing the starting velocities allow
+        let starting = starting_closing_speed(scene);
+        let v_imp = if starting > scene.impact_velocity * (1.0 + 1e-9) {
+            starting
+        } else {
+            scene.impact_velocity
+        };
         for a in 0..n_materials {
             let Some((ma, ra)) = lightest[a] else {
                 continue;
             };
             for b in 0..n_materials {
-                if let Some((mb, rb)) = lightest[b] {
+                let (Some(light), Some(heavy)) = (lightest[b], heaviest[b]) else {
+                    continue;
+                };
+                for (mb, rb) in [light, heavy] {
                     let geom = PairGeometry::spheres(ra, rb, ma, mb);
                     consider(models[a * n_materials + b].time_step(&geom, v_imp));
                 }
@@ -134,8 +150,14 @@ impl Resolved {
                 ts.default, ts.max, ts.reason
             )));
         }
-        let time_step =
+        let mut time_step =
             time_step.ok_or_else(|| PowderError::Scene("the scene has no particles".into()))?;
+        if v_imp > scene.impact_velocity && time_step.reason.contains("impact velocity") {
+            time_step.reason += &format!(
+                " (the starting velocities close a pair at up to {v_imp:e} m/s, above simulation.impact_velocity = {:e} m/s)",
+                scene.impact_velocity
+            );
+        }
         // a JKR adhesion too weak for f64 at the largest radius of the pair (the weakest)
         let mut largest = vec![0f64; n_materials];
         for p in &scene.particles {
@@ -222,21 +244,7 @@ impl Resolved {
         }
         // (a pair closing more than a radius in one step can pass through each other
         // unseen: the monitor only sees overlaps at the ends of steps; a forced dt accepts it)
-        // Relative speeds are bounded by the diagonal of the velocities' bounding box (with
-        // the walls at rest in it): particles moving together close nothing.
-        let velocities = scene
-            .particles
-            .iter()
-            .map(|p| glam::DVec3::from_array(p.velocity))
-            .chain((!scene.walls.is_empty()).then_some(glam::DVec3::ZERO));
-        let (lo, hi) = velocities.fold(
-            (
-                glam::DVec3::splat(f64::INFINITY),
-                glam::DVec3::splat(f64::NEG_INFINITY),
-            ),
-            |(lo, hi), v| (lo.min(v), hi.max(v)),
-        );
-        let closing = (hi - lo).max(glam::DVec3::ZERO).length();
+        let closing = velocity_spread(scene);
         if let Some((i, p)) = scene
             .particles
             .iter()
@@ -286,6 +294,34 @@ impl Resolved {
     }
 }
 
+/// The fastest a pair (or a particle and a wall) can close at the start, m/s: with two
+/// particles and no walls their approach along the line of centres (0 when they part),
+/// otherwise [`velocity_spread`].
+fn starting_closing_speed(scene: &Scene) -> f64 {
+    use glam::DVec3;
+    let v = |i: usize| DVec3::from_array(scene.particles[i].velocity);
+    if scene.particles.len() == 2 && scene.walls.is_empty() {
+        let x = |i: usize| DVec3::from_array(scene.particles[i].position);
+        let n = (x(1) - x(0)).normalize_or_zero();
+        return (v(0) - v(1)).dot(n).max(0.0);
+    }
+    velocity_spread(scene)
+}
+
+/// A bound on every relative speed at the start: the diagonal of the velocities' bounding
+/// box, with the walls at rest in it (particles moving together close nothing).
+fn velocity_spread(scene: &Scene) -> f64 {
+    use glam::DVec3;
+    let velocities = (scene.particles.iter())
+        .map(|p| DVec3::from_array(p.velocity))
+        .chain((!scene.walls.is_empty()).then_some(DVec3::ZERO));
+    let (lo, hi) = velocities.fold(
+        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+        |(lo, hi), v| (lo.min(v), hi.max(v)),
+    );
+    (hi - lo).max(DVec3::ZERO).length()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -323,6 +359,78 @@ mod tests {
         );
         assert!(Resolved::new(&scene([1.0, -1.0])).is_ok());
         assert!(Resolved::new(&scene([1000.0, 1000.0])).is_ok());
+    }
+
+    /// Hertz spheres starting at ±50 m/s (impact_velocity left at 1 m/s): the automatic dt
+    /// follows their 100 m/s approach, saying so; two spheres parting, or moving side by
+    /// side, keep impact_velocity's.
+    #[test]
+    fn the_automatic_dt_follows_faster_starting_velocities() {
+        let scene = |v: [[f64; 3]; 2]| {
+            let text = format!(
+                "[domain]\nmin = [0.0, 0.0, 0.0]\nmax = [0.02, 0.01, 0.01]\n[simulation]\nduration = 2e-4\n[[material]]\nname = \"g\"\ndensity = 2650.0\nmodel = \"hertz\"\nyoungs = 7e10\npoisson = 0.17\nrestitution = 0.5\n[[particles]]\nkind = \"list\"\npositions = [[0.0085, 0.005, 0.005], [0.0115, 0.005, 0.005]]\nradius = 1e-3\nvelocities = [{:?}, {:?}]\n",
+                v[0], v[1]
+            );
+            Scene::from_toml_str(&text, "t").unwrap()
+        };
+        let slow = Resolved::new(&scene([[0.5, 0.0, 0.0], [-0.5, 0.0, 0.0]])).unwrap();
+        let fast = Resolved::new(&scene([[50.0, 0.0, 0.0], [-50.0, 0.0, 0.0]])).unwrap();
+        // Hertz: tc ∝ v^(−1/5); at 1 m/s the Rayleigh rule binds (its limit is the lower)
+        let hertz = |v: f64| {
+            let Ok(ContactModel::Jkr(p)) = scene([[0.0; 3]; 2]).pair_model(0, 0) else {
+                panic!()
+            };
+            let m = 2650.0 * 4.0 / 3.0 * std::f64::consts::PI * 1e-9;
+            p.hertz_contact_time(0.5e-3, 0.5 * m, v) / crate::model::DEFAULT_DT_FRACTION
+        };
+        assert!(
+            slow.time_step.reason.contains("Rayleigh"),
+            "{}",
+            slow.time_step.reason
+        );
+        assert!(fast.dt < 0.5 * slow.dt, "{} {}", fast.dt, slow.dt);
+        assert!(
+            (fast.dt - hertz(100.0)).abs() < 1e-12 * fast.dt,
+            "{}",
+            fast.dt
+        );
+        assert!(
+            fast.time_step
+                .reason
+                .contains("close a pair at up to 1e2 m/s"),
+            "{}",
+            fast.time_step.reason
+        );
+        for v in [[-50.0, 50.0], [50.0, 50.0]] {
+            let r = Resolved::new(&scene([[v[0], 0.0, 0.0], [v[1], 0.0, 0.0]])).unwrap();
+            assert_eq!(r.dt, slow.dt, "{v:?}");
+        }
+    }
+
+    /// One material at r = 1 mm and 10 µm with Luding's rolling and twisting springs: the
+    /// stiffest oscillator is a small sphere rolling on a large one (m = 1/[ℓ²(1/I_s +
+    /// 1/I_b)] ≈ m_s/10, where two small ones give m_s/5), and the automatic dt resolves it.
+    #[test]
+    fn the_time_step_resolves_a_small_sphere_rolling_on_a_large_one() {
+        let text = "[domain]\nmin = [0.0, 0.0, 0.0]\nmax = [0.01, 0.01, 0.01]\n[simulation]\nduration = 1e-3\n[[material]]\nname = \"m\"\ndensity = 2000.0\nmodel = \"hysteretic\"\nk1 = 100.0\nkp = 500.0\nkc = 0.0\nphi_f = 0.05\nfriction = 0.3\nrolling_friction = 0.1\nkr = 1000.0\ntwisting_friction = 0.1\nko = 1000.0\n[[particles]]\nkind = \"list\"\npositions = [[0.003, 0.005, 0.005], [0.006, 0.005, 0.005], [0.008, 0.005, 0.005]]\nradii = [1e-3, 1e-5, 1e-5]\n";
+        let r = Resolved::new(&Scene::from_toml_str(text, "t").unwrap()).unwrap();
+        let (rs, rb) = (1e-5f64, 1e-3f64);
+        let mass = |r: f64| 2000.0 * 4.0 / 3.0 * std::f64::consts::PI * r.powi(3);
+        let inertia = |r: f64| 0.4 * mass(r) * r * r;
+        let lever = 2.0 * rs * rb / (rs + rb);
+        let m = 1.0 / (lever * lever * (1.0 / inertia(rs) + 1.0 / inertia(rb)));
+        let tc = std::f64::consts::PI * (m / 1000.0).sqrt();
+        assert!(
+            r.dt <= tc / crate::model::DEFAULT_DT_FRACTION * (1.0 + 1e-12),
+            "{:e} vs {:e}",
+            r.dt,
+            tc / 50.0
+        );
+        assert!(
+            r.time_step.reason.contains("oscillator"),
+            "{}",
+            r.time_step.reason
+        );
     }
 
     /// A run or an event beyond the steps a run can count, and a domain too far out for

@@ -1019,6 +1019,25 @@ fn run_reports_the_tabor_parameter_of_each_jkr_pair() {
         err.contains("the wall-particle pair `micro`-`micro`"),
         "{err}"
     );
+    // a thousand times the surface energy: a0 = 1.27·R*, beyond the small-contact range
+    let (ok, out, err) = powder(&[
+        "run",
+        DEPOSITION,
+        "--steps",
+        "2",
+        "--no-output",
+        "--json",
+        "--set",
+        "material[0].surface_energy=10",
+    ]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let a0 = v["tabor"][0]["a0_over_r"].as_f64().unwrap();
+    assert!((a0 - 1.27).abs() < 0.01, "{out}");
+    assert!(
+        err.contains("warning: the material pair `micro`-`micro` (R* = 2.5000e-6) has a JKR equilibrium contact radius"),
+        "{err}"
+    );
 }
 
 #[test]
@@ -1637,4 +1656,43 @@ fn params_prints_the_declared_parameters() {
         !ok && err.contains("hysteretic") && err.contains("hertz"),
         "{err}"
     );
+}
+
+/// A JKR impact at 50 m/s of 1 µm silica spheres loses less than the default step's error
+/// (W = 0.77·Fc·δ0 against 1e-11 J of kinetic energy): e comes out just above 1, which is
+/// said; a tenth of the step brings it under 1, unwarned.
+#[test]
+fn collide_warns_when_e_exceeds_one() {
+    let args = [
+        "collide",
+        "--model",
+        "jkr",
+        "--youngs",
+        "7e10",
+        "--poisson",
+        "0.17",
+        "--surface-energy",
+        "0.025",
+        "--radius",
+        "1e-6",
+        "--density",
+        "2650",
+        "--velocity",
+        "50",
+        "--json",
+    ];
+    let (ok, out, err) = powder(&args);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let r = if v.is_array() { &v[0] } else { &v };
+    let e = r["e"].as_f64().unwrap();
+    assert!(e > 1.0, "{out}");
+    assert!(
+        err.contains("warning: e = ") && err.contains("a smaller --dt"),
+        "{err}"
+    );
+    let dt = format!("{:e}", r["dt"].as_f64().unwrap() / 10.0);
+    let (ok, out, err) = powder(&[&args[..], &["--dt", &dt]].concat());
+    assert!(ok, "{err}");
+    assert!(!err.contains("warning: e = "), "{err}\n{out}");
 }

@@ -91,6 +91,43 @@ fn restitution_matches_eqs_32_33_for_beta_below_at_and_above_beta_star() {
     }
 }
 
+/// A tensile branch much steeper than the limit branch (kc = 10³·k1) is crossed within
+/// √(m_r/kc): the time step follows kc there, and e and the verdict follow eqs. 32/33.
+#[test]
+fn a_tensile_branch_steeper_than_kp_sets_the_time_step() {
+    let (eta, beta) = (4.0, 1000.0);
+    let p = params(beta * 100.0);
+    let (_, mr) = geometry(RADIUS);
+    let tc = std::f64::consts::PI * (mr / p.kc).sqrt();
+    let r = collide(&spec(p, RADIUS, 0.05)).unwrap();
+    assert!(
+        (r.dt - tc / 50.0).abs() < 1e-9 * tc,
+        "dt {} vs tc/50 {}",
+        r.dt,
+        tc / 50.0
+    );
+    for chi in [0.3, 0.5, 0.69, 0.9, 1.1, 1.5] {
+        let r = run(p, RADIUS, chi);
+        let expect = en_no_fa(eta, beta, chi);
+        let sq = if chi <= 1.0 {
+            analytic::en1_squared(eta, beta, chi)
+        } else {
+            analytic::en2_squared(eta, beta, chi)
+        };
+        assert!(
+            (r.e * r.e - expect * expect).abs() < 1e-3,
+            "chi {chi}: e = {} vs {expect}",
+            r.e
+        );
+        assert_eq!(
+            r.stuck,
+            sq <= 0.0,
+            "chi {chi}: e^2 = {sq}, stuck {}",
+            r.stuck
+        );
+    }
+}
+
 #[test]
 fn restitution_matches_for_a_stiffer_limit_branch() {
     // η = 19 (kp = 2000 N/m): β* = 1/18; below, at and above it
@@ -255,6 +292,29 @@ fn energy_balance_closes_and_dissipation_matches_the_loop() {
                 assert!((r.energy.final_kinetic - r.e * r.e * ke0).abs() < 1e-9 * ke0);
             }
         }
+    }
+}
+
+/// An overdamped pair (γ0 = 0.3 kg/s against m_r·ω ≈ 0.04 kg/s) creeps back towards δ0
+/// and never turns: it is stuck once its receding speed has fallen below `REST_SPEED` of
+/// the impact speed and of its own peak, with and without adhesion (it ran to the step
+/// limit and was reported undecided).
+#[test]
+fn an_overdamped_pair_creeps_to_rest_and_sticks() {
+    for kc in [100.0, 0.0] {
+        let p = HystereticParams {
+            gamma0: 0.3,
+            ..params(kc)
+        };
+        let r = collide(&spec(p, RADIUS, 0.3)).unwrap();
+        assert!(r.stuck && r.e == 0.0, "kc {kc}: {r:?}");
+        let dc = r.delta_c.unwrap();
+        assert!(
+            dc > 0.0 && dc < r.delta_max,
+            "kc {kc}: {dc} {}",
+            r.delta_max
+        );
+        assert!(r.steps < 5_000_000, "kc {kc}: {} steps", r.steps);
     }
 }
 

@@ -78,3 +78,14 @@ fn damped_lsd_converges_with_dt() {
     let (coarse, fine) = (err(20.0), err(160.0));
     assert!(fine < 0.25 * coarse, "coarse {coarse}, fine {fine}");
 }
+
+/// Overdamped (γ0 = 0.2 kg/s > 2·√(k·m_r) = 0.14 kg/s): the pair creeps back towards
+/// δ = 0 without ever reaching it, so it is stuck, e = 0, with no closed form (it was
+/// reported as a rebound at e ≈ 1e-14, from rounding).
+#[test]
+fn overdamped_lsd_creeps_to_rest() {
+    let r = collide(&spec(1000.0, 0.2, 1e-3)).unwrap();
+    assert!(r.stuck && r.e == 0.0, "{r:?}");
+    assert!(r.e_analytic.is_none(), "{:?}", r.e_analytic);
+    assert!(r.delta_c.unwrap() > 0.0);
+}

@@ -123,6 +123,25 @@ fn auto_backend_says_what_it_chose_and_why() {
     }
 }
 
+/// An adapter named in `POWDER_ADAPTER` that does not open is an error with `--backend
+/// gpu` as with `auto` (`gpu` fell back to the CPU engine, `auto` refused).
+#[test]
+fn an_unmatched_adapter_name_is_refused_by_every_backend_request() {
+    for backend in ["gpu", "auto"] {
+        let out = Command::new(env!("CARGO_BIN_EXE_powder"))
+            .args(["run", "--backend", backend, "--steps", "1", "--no-output"])
+            .env("POWDER_ADAPTER", "nosuchadapter")
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "--backend {backend}: {err}");
+        assert!(
+            err.contains("no GPU adapter matches POWDER_ADAPTER=nosuchadapter"),
+            "--backend {backend}: {err}"
+        );
+    }
+}
+
 #[test]
 fn bad_thread_counts_are_refused_with_the_option_named() {
     for (cmd, value) in [("run", "x"), ("bench", "1,x"), ("run", "5000")] {

@@ -1117,7 +1117,7 @@ fn damaged_gpu_checkpoints_are_refused() {
     std::fs::write(&edited, npz::write(&members)).unwrap();
     let Some(ctx) = gpu() else { return };
     let opts = RunOptions {
-        resume: Some(edited),
+        resume: Some(edited.clone()),
         ..Default::default()
     };
     let err = run_gpu_with(&scene, ctx, &opts, |_| {})
@@ -1125,6 +1125,33 @@ fn damaged_gpu_checkpoints_are_refused() {
         .to_string();
     assert!(
         err.contains("wall point") && err.contains("not finite"),
+        "{err}"
+    );
+    // a velocity edited to NaN (the first particle's in the `motion` buffer): refused,
+    // naming the field, where the GPU resumed and the monitor stopped the run later
+    let members: Vec<(String, npz::Member)> = archive
+        .names()
+        .map(|name| {
+            let mut raw = archive.raw(name).unwrap().to_vec();
+            if name.starts_with("buffer.motion") {
+                // (after the .npy header, which ends its 10-byte preamble's dict with \n)
+                let data = raw[10..].iter().position(|&b| b == b'\n').unwrap() + 11;
+                raw[data..data + 4].copy_from_slice(&f32::NAN.to_le_bytes());
+            }
+            (name.to_string(), npz::Member::Raw(raw))
+        })
+        .collect();
+    std::fs::write(&edited, npz::write(&members)).unwrap();
+    let Some(ctx) = gpu() else { return };
+    let opts = RunOptions {
+        resume: Some(edited),
+        ..Default::default()
+    };
+    let err = run_gpu_with(&scene, ctx, &opts, |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("`vel` (velocity (xyz), mass (w)) of particle") && err.contains("not finite"),
         "{err}"
     );
 }

@@ -170,9 +170,16 @@ pub(crate) fn finish_collide(
     }
     // one pair for every velocity: one warning
     if let Some(t) = results.first().and_then(|r| r.tabor) {
-        if let Some(w) = collide::tabor_warning(spec, t, report.tabor_dmin) {
+        for w in collide::theory_warnings(spec, t, report.tabor_dmin) {
             eprintln!("warning: {w}");
         }
+    }
+    // no contact law here adds energy: e above 1 is the integrator's error
+    if let Some(r) = results.iter().find(|r| r.e > 1.0 + 1e-9) {
+        eprintln!(
+            "warning: e = {} > 1 at v = {:e} m/s (dissipated {:?} J): the time step's error ({:e} s) exceeds what the law dissipates there; a smaller --dt brings e under 1",
+            r.e, r.velocity, r.energy.dissipated, r.dt
+        );
     }
     print_results(a, &results, report)
 }

@@ -600,11 +600,44 @@ pub fn tabor_warning(pair: &str, tabor: f64, d_min: f64) -> Option<String> {
     })
 }
 
+/// The largest equilibrium contact radius a0/R* taken without a warning: JKR, like Hertz,
+/// assumes a contact small against the spheres (paper 001's LJ spheres reach 0.27).
+pub const JKR_SMALL_CONTACT_MAX: f64 = 0.5;
+
+/// The warning for a JKR pair whose equilibrium contact radius a0 (after the stiffness
+/// scale, as simulated) exceeds [`JKR_SMALL_CONTACT_MAX`]·R*, naming the pair; `None`
+/// below it.
+pub fn small_contact_warning(pair: &str, p: &jkr::JkrParams, r_eff: f64) -> Option<String> {
+    let ratio = p.a0(r_eff) / r_eff;
+    (p.surface_energy > 0.0 && ratio > JKR_SMALL_CONTACT_MAX).then(|| {
+        format!(
+            "{pair} has a JKR equilibrium contact radius a0 = {:.4e} m, {ratio:.3}·R*, beyond {JKR_SMALL_CONTACT_MAX}·R*: JKR assumes contacts small against the spheres, so its forces are beyond the theory there (a smaller surface_energy, a stiffer material or a stiffness_scale nearer 1 shrinks a0/R* ∝ (γ/(E*·R*))^(1/3))",
+            p.a0(r_eff)
+        )
+    })
+}
+
 #[cfg(test)]
 mod jkr_tests {
     use super::*;
     use crate::model::jkr::JkrParams;
     use approx::assert_relative_eq;
+
+    /// a0 = 1.27·R* (5 µm spheres, E = 0.1 GPa, γ = 10 J/m²) is warned, naming the pair
+    /// and the ratio; paper 001's LJ spheres (a0 = 0.27·R*) and Hertz are not.
+    #[test]
+    fn a_contact_large_against_the_spheres_is_warned() {
+        let soft = JkrParams::jkr(1e8, 0.3, 10.0);
+        let r = 2.5e-6;
+        let ratio = soft.a0(r) / r;
+        assert!((ratio - 1.27).abs() < 0.01, "{ratio}");
+        let w = small_contact_warning("the pair `a`-`b`", &soft, r).unwrap();
+        assert!(w.contains("the pair `a`-`b`") && w.contains("1.27"), "{w}");
+        let lj = JkrParams::jkr(122.8125, 0.25, 3.17);
+        assert!((lj.a0(73.5) / 73.5 - 0.265).abs() < 0.01);
+        assert!(small_contact_warning("x", &lj, 73.5).is_none());
+        assert!(small_contact_warning("x", &JkrParams::hertz(1e8, 0.3), r).is_none());
+    }
 
     #[test]
     fn jkr_loss_values() {

@@ -185,12 +185,14 @@ impl HystereticParams {
         }
     }
 
-    /// Stiffest active branch, for the time step: kp, or kc_a when it is finite and larger.
+    /// Stiffest active branch, for the time step: the largest of kp, kc (the tensile
+    /// branch's slope: a pair on it parts or sticks within √(m_r/kc)) and kc_a where finite.
     pub fn stiffest(&self) -> f64 {
+        let k = self.kp.max(self.kc);
         if self.fa > 0.0 && self.kca.is_finite() {
-            self.kp.max(self.kca)
+            k.max(self.kca)
         } else {
-            self.kp
+            k
         }
     }
 

@@ -457,8 +457,8 @@ impl ContactModel {
 
     /// Time-step limits for a pair of geometry `geom` meeting at up to `impact_velocity`.
     ///
-    /// The contact time tc is π·√(m_r/k_max) on the stiffest linear branch (kp, or kc_a
-    /// when finite and larger; k for LSD); for Hertz/JKR the Hertz time
+    /// The contact time tc is π·√(m_r/k_max) on the stiffest linear branch (the largest of
+    /// kp, kc and kc_a where finite; k for LSD); for Hertz/JKR the Hertz time
     /// 2.87·(m*²/(R*·E*²·v))^(1/5) at the impact velocity, and for JKR no longer than the
     /// oscillation time π·√(m*/k_eq) about the equilibrium overlap (k_eq = dF/dδ at δ0)
     /// nor the time δ0/v to cross the adhesive zone at v = the impact velocity, at most the

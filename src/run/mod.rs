@@ -210,7 +210,7 @@ pub fn run_with<S: Simulation>(
     };
     let tabor = tabor_pairs(scene, d_min);
     if opts.verbose {
-        for w in tabor.iter().filter_map(TaborPair::warning) {
+        for w in tabor.iter().flat_map(TaborPair::warnings) {
             eprintln!("warning: {w}");
         }
     }
@@ -768,10 +768,10 @@ mod tests {
         }
         // E = 100 GPa at γ = 0.01 and R* = 8 µm: λT ≈ 0.618, warned; the soft pair is not
         assert!(!pairs[1].jkr_range && (pairs[1].tabor - 0.618).abs() < 1e-3);
-        let w = pairs[1].warning().unwrap();
+        let w = pairs[1].warnings().concat();
         assert!(w.contains("the material pair `soft`-`lone`"), "{w}");
-        assert!(pairs[0].jkr_range && pairs[0].warning().is_none());
-        let w = pairs[2].warning().unwrap();
+        assert!(pairs[0].jkr_range && pairs[0].warnings().is_empty());
+        let w = pairs[2].warnings().concat();
         assert!(w.contains("the wall-particle pair `lone`-`soft`"), "{w}");
     }
 }

@@ -20,6 +20,12 @@ pub struct TaborPair {
     pub tabor: f64,
     /// Whether λT is in the JKR range λT > 3.
     pub jkr_range: bool,
+    /// The equilibrium contact radius over R*, a0/R* (as simulated, after the stiffness
+    /// scale): JKR assumes it small ([`JKR_SMALL_CONTACT_MAX`](crate::model::analytic::JKR_SMALL_CONTACT_MAX)).
+    pub a0_over_r: f64,
+    /// The warning on a0/R*, if any.
+    #[serde(skip)]
+    small_contact: Option<String>,
 }
 
 impl TaborPair {
@@ -33,20 +39,29 @@ impl TaborPair {
         }
     }
 
-    /// The warning when λT is below the JKR range, naming the pair.
-    pub fn warning(&self) -> Option<String> {
-        let [a, b] = &self.materials;
-        let what = if self.wall {
-            "the wall-particle pair"
-        } else {
-            "the material pair"
-        };
-        crate::model::analytic::tabor_warning(
-            &format!("{what} `{a}`-`{b}` (R* = {:.4e})", self.r_eff),
-            self.tabor,
-            self.d_min,
-        )
+    /// The warnings on the pair's contact theory, naming the pair: λT below the JKR range,
+    /// a0 beyond the small-contact range.
+    pub fn warnings(&self) -> Vec<String> {
+        let tabor = crate::model::analytic::tabor_warning(&self.who(), self.tabor, self.d_min);
+        tabor
+            .into_iter()
+            .chain(self.small_contact.clone())
+            .collect()
     }
+
+    /// The pair in a warning.
+    fn who(&self) -> String {
+        who(&self.materials, self.wall, self.r_eff)
+    }
+}
+
+fn who([a, b]: &[String; 2], wall: bool, r_eff: f64) -> String {
+    let what = if wall {
+        "the wall-particle pair"
+    } else {
+        "the material pair"
+    };
+    format!("{what} `{a}`-`{b}` (R* = {r_eff:.4e})")
 }
 
 /// The Tabor parameter of each JKR pair (surface energy > 0) of materials that can meet in
@@ -63,13 +78,17 @@ pub fn tabor_pairs(scene: &Scene, d_min: f64) -> Vec<TaborPair> {
     let entry = |a: usize, b: usize, wall: bool, r_eff: f64| match scene.pair_model(a, b) {
         Ok(ContactModel::Jkr(p)) if p.surface_energy > 0.0 => {
             let tabor = analytic::jkr_tabor(&p, r_eff, d_min);
+            let materials = [a, b].map(|m| scene.materials[m].name.clone());
+            let who = who(&materials, wall, r_eff);
             Some(TaborPair {
-                materials: [a, b].map(|m| scene.materials[m].name.clone()),
+                small_contact: analytic::small_contact_warning(&who, &p, r_eff),
+                materials,
                 wall,
                 r_eff,
                 d_min,
                 tabor,
                 jkr_range: tabor > analytic::TABOR_JKR_MIN,
+                a0_over_r: p.a0(r_eff) / r_eff,
             })
         }
         _ => None,

@@ -31,7 +31,8 @@
 //!                               # VTK snapshot, CSV row of `powder run`)
 //! gravity = [0.0, 0.0, -9.81]   # m/s^2, default [0, 0, 0]
 //! impact_velocity = 1.0         # m/s, > 0, default 1: largest expected impact speed; sets the
-//!                               # Hertz/JKR contact time of the automatic time step
+//!                               # Hertz/JKR contact time of the automatic time step (the
+//!                               # starting velocities' fastest closing where that is faster)
 //! checkpoint_every = 10000      # default 10 * output_every, >= 1: steps between checkpoints
 //! contact_output = true         # default: true under 100000 particles; with each VTK snapshot,
 //!                               # the contact network (`contacts/<name>_<step>.vtp`: one line

@@ -239,6 +239,26 @@ impl Composition {
             .chain(self.subs().filter_map(|s| s.row.as_ref()))
     }
 
+    /// The pair-row member holding byte `at` of a row, `block.field` (`tag` for the law's
+    /// tag), for messages; `None` beyond the row.
+    pub fn row_member_at(&self, at: usize) -> Option<String> {
+        let mut start = if self.laws.len() > 1 { 4 } else { 0 };
+        if at < start {
+            return Some("tag".into());
+        }
+        for b in self.row_blocks() {
+            if at < start + b.bytes {
+                let block = (crate::gpu::layout::shared_structs().into_iter())
+                    .find(|s| s.name == b.wgsl_struct)?;
+                let (field, _) =
+                    (block.members.iter()).rfind(|(_, offset)| *offset <= at - start)?;
+                return Some(format!("{}.{field}", b.member));
+            }
+            start += b.bytes;
+        }
+        None
+    }
+
     /// Bytes of one pair-table row.
     pub fn row_bytes(&self) -> usize {
         let tag = if self.laws.len() > 1 { 4 } else { 0 };

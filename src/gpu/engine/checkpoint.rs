@@ -135,6 +135,33 @@ impl GpuEngine {
         }
     }
 
+    /// Refuses a saved particle state with a value that is not finite (a damaged or edited
+    /// checkpoint, or one of a run that had already diverged), naming the field and the
+    /// particle.
+    fn check_finite(&self, buffers: &[(String, Vec<u8>)]) -> Result<(), PowderError> {
+        use crate::gpu::state::{Buffer, Scalar};
+        let l = &self.state.layout;
+        let bytes = |b: Buffer| buffers.iter().find(|(n, _)| n == b.name()).map(|(_, v)| v);
+        let (Some(state), Some(_)) = (bytes(Buffer::State), bytes(Buffer::Motion)) else {
+            return Ok(());
+        };
+        let ids: Vec<[u32; 4]> = l.unpack(state, "ids");
+        for b in [Buffer::State, Buffer::Motion] {
+            let Some(data) = bytes(b) else { continue };
+            for f in l.in_buffer(b).filter(|f| f.scalar == Scalar::F32) {
+                let values: Vec<[f32; 4]> = l.unpack(data, f.name);
+                if let Some(k) = values.iter().position(|v| v.iter().any(|x| !x.is_finite())) {
+                    let id = ids.get(k).map_or(k as u32, |i| i[0]);
+                    return Err(PowderError::Run(format!(
+                        "the saved GPU state's `{}` ({}) of particle {id} is {:?}, not finite: the checkpoint is damaged or was edited, or its run had already diverged",
+                        f.name, f.doc, values[k]
+                    )));
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// Writes a saved state back: the run continues exactly as it would have from there.
     /// Refused when it does not fit this engine: taken with the other ledger option (the
     /// message names `--no-ledger`), or naming the buffer (another scene or step variant).
@@ -213,6 +240,7 @@ impl GpuEngine {
                 )));
             }
         }
+        self.check_finite(&saved.buffers)?;
         if entries != self.entries {
             self.resize_lists(entries, false)?;
         }

@@ -5,13 +5,14 @@
 use super::*;
 
 /// Refuses a scene value the GPU's f32 cannot hold, naming the particle, pair or setting.
-/// `rows`: the pair table (`pair_table`), `row_bytes` a row, the pairs of materials first
-/// and then each wall's with every material.
+/// `rows`: the pair table of composition `kind` (`pair_table`), the pairs of materials
+/// first and then each wall's with every material.
 pub(super) fn check_f32_range(
     scene: &Scene,
     r: &Resolved,
-    (rows, row_bytes): (&[u8], usize),
+    (rows, kind): (&[u8], &Composition),
 ) -> Result<(), PowderError> {
+    let row_bytes = kind.row_bytes();
     // (f32's normal numbers: a subnormal loses its digits, 0 divides)
     let normal = |x: f64| {
         let y = x as f32;
@@ -83,17 +84,20 @@ pub(super) fn check_f32_range(
     let name = |m: usize| &scene.materials[m].name;
     for (k, row) in rows.chunks(row_bytes.max(1)).enumerate() {
         // (the rows hold no infinity by design: `kca` = ∞ is encoded as 0)
-        let beyond = row
-            .chunks_exact(4)
-            .any(|w| !f32::from_le_bytes([w[0], w[1], w[2], w[3]]).is_finite());
-        if beyond {
+        let beyond = (row.chunks_exact(4))
+            .map(|w| f32::from_le_bytes([w[0], w[1], w[2], w[3]]))
+            .position(|x| !x.is_finite());
+        if let Some(word) = beyond {
             let pair = if k < n * n {
                 format!("materials `{}` and `{}`", name(k / n), name(k % n))
             } else {
                 format!("wall {} and material `{}`", (k - n * n) / n, name(k % n))
             };
+            let member = kind
+                .row_member_at(4 * word)
+                .unwrap_or_else(|| "a word".into());
             return refuse(format!(
-                "the contact law of {pair} has a parameter (or one derived from them) beyond f32's range"
+                "the contact law of {pair} has a parameter (or one derived from them) beyond f32's range: `{member}` of its GPU pair row (`gpu::layout::pair_rows`)"
             ));
         }
     }
@@ -114,7 +118,7 @@ mod tests {
         let r = Resolved::new(&scene).unwrap();
         let models: Vec<ContactModel> = r.models.iter().chain(&r.wall_models).copied().collect();
         let (kind, rows) = pair_table(&models);
-        check_f32_range(&scene, &r, (&rows, kind.row_bytes())).map_err(|e| e.to_string())
+        check_f32_range(&scene, &r, (&rows, &kind)).map_err(|e| e.to_string())
     }
 
     fn refused(material: &str, gravity: &str, domain_max: &str, part: &str) {
@@ -150,5 +154,9 @@ mod tests {
         refused(&rough, g, max, "particle 0's moment of inertia");
         let stiff = "density = 2000.0\nmodel = \"hysteretic\"\nk1 = 1e40\nkp = 5e40\nkc = 1e40\nphi_f = 0.05";
         refused(stiff, g, max, "the contact law of materials `m` and `m`");
+        refused(stiff, g, max, "`hysteretic.k1` of its GPU pair row");
+        let soft =
+            "density = 2000.0\nmodel = \"jkr\"\nyoungs = 1e8\npoisson = 0.3\nsurface_energy = 1e40";
+        refused(soft, g, max, "`jkr.gamma` of its GPU pair row");
     }
 }

@@ -23,7 +23,7 @@ mod sweep;
 
 pub use plot::{restitution_plot, trace_plot};
 use predict::predict;
-pub use predict::{add_plastic_restitution, closed_form_e, tabor, tabor_warning, yield_velocity};
+pub use predict::{add_plastic_restitution, closed_form_e, tabor, theory_warnings, yield_velocity};
 use run::collide_with;
 pub use sweep::{sweep, sweep_on, sweep_velocities};
 
@@ -60,6 +60,11 @@ pub struct CollideSpec {
     pub settle: f64,
 }
 
+/// A pair receding inside its interaction range slower than this fraction of the impact
+/// speed, and of its fastest receding so far, has come to rest: stuck (e below it
+/// whatever follows, since the contact only slows it further).
+pub const REST_SPEED: f64 = 1e-6;
+
 /// A settled sphere whose centre moved along the wall more than this many radii over the
 /// last quarter of the settle time rolls; one that moved less rests.
 pub const ROLLING_TRAVEL: f64 = 1e-3;
@@ -93,7 +98,9 @@ pub struct CollisionEnergy {
     pub final_kinetic: f64,
     /// From the energy ledger (both backends; the GPU keeps it on the device in f32).
     pub dissipated: Option<f64>,
-    /// |E_total(end) − E_total(start)| / E_kinetic(start).
+    /// |E_total(end) − E_total(start)| over the larger of E_kinetic(start) and the energy
+    /// dissipated (a stuck adhesive pair dissipates its well's depth, which can dwarf the
+    /// impact's kinetic energy).
     pub balance_error: Option<f64>,
 }
 
@@ -122,7 +129,8 @@ pub struct CollideResult {
     /// Normal separation speed / normal approach speed; 0 when stuck.
     pub e: f64,
     /// Whether the pair stuck (e = 0): the relative normal velocity turned back to approaching
-    /// inside the interaction range.
+    /// inside the interaction range, or, receding in it, fell below [`REST_SPEED`] of the
+    /// impact speed and of its own peak (an overdamped pair creeps to rest and never turns).
     pub stuck: bool,
     /// `"rebound"`, `"stuck"`, or after a settle time (`CollideSpec::settle`) `"resting"`
     /// (the centre moved less than [`ROLLING_TRAVEL`] radii along the wall over its last

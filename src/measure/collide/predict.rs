@@ -117,8 +117,9 @@ pub fn tabor(spec: &CollideSpec, d_min: f64) -> Option<f64> {
     }
 }
 
-/// The warning when the pair's λT is below the JKR range, naming the pair by its radii.
-pub fn tabor_warning(spec: &CollideSpec, tabor: f64, d_min: f64) -> Option<String> {
+/// The warnings on the pair's contact theory: λT below the JKR range, a0 beyond the
+/// small-contact range ([`analytic::small_contact_warning`]), naming the pair by its radii.
+pub fn theory_warnings(spec: &CollideSpec, tabor: f64, d_min: f64) -> Vec<String> {
     let pair = if spec.wall {
         format!("the sphere of radius {:e} on the wall", spec.radius1)
     } else {
@@ -129,7 +130,14 @@ pub fn tabor_warning(spec: &CollideSpec, tabor: f64, d_min: f64) -> Option<Strin
             spec.geometry().r_eff()
         )
     };
+    let small = match &spec.model {
+        ContactModel::Jkr(p) => analytic::small_contact_warning(&pair, p, spec.geometry().r_eff()),
+        _ => None,
+    };
     analytic::tabor_warning(&pair, tabor, d_min)
+        .into_iter()
+        .chain(small)
+        .collect()
 }
 
 /// Yield velocity of the pair for yield stress `yield_stress` (Pa): the Hertz impact whose

@@ -224,6 +224,7 @@ pub(super) fn run_collision(
     let (ke0, total0, _) = run.energy(&view0);
     let mut touched = false;
     let mut receding = false;
+    let mut fastest_receding: f64 = 0.0;
     let mut first_contact = None;
     let mut last_contact = 0.0;
     let mut delta_max: f64 = 0.0;
@@ -310,8 +311,11 @@ pub(super) fn run_collision(
         }
         if vn < 0.0 {
             receding = true;
+            fastest_receding = fastest_receding.max(-vn);
         }
-        if receding && vn > 0.0 && delta > -reach {
+        let turned = receding && vn > 0.0;
+        let crept = receding && -vn < REST_SPEED * vn0.min(fastest_receding) && contact;
+        if (turned || crept) && delta > -reach {
             delta_c = Some(delta);
             break;
         }
@@ -386,7 +390,9 @@ pub(super) fn run_collision(
             initial_kinetic: ke0,
             final_kinetic: ke1,
             dissipated,
-            balance_error: total0.zip(total1).map(|(a, b)| (b - a).abs() / ke0),
+            balance_error: total0
+                .zip(total1)
+                .map(|(a, b)| (b - a).abs() / ke0.max(dissipated.map_or(0.0, f64::abs))),
         },
     };
     predict(spec, &geom, &mut result);
@@ -436,10 +442,13 @@ pub(super) fn collide_with(
             "the spheres' masses come out as {m1:e} and {m2:e} kg: choose --radius and --density whose mass 4/3·π·r³·ρ is a finite number above 0"
         )));
     }
+    // (which rule set dt, for the messages below)
+    let mut rule = "--dt".to_string();
     let dt = match spec.dt {
         Some(dt) => dt,
         None => {
             let ts = spec.time_step();
+            rule = format!("the automatic dt: {}", ts.reason);
             if !(ts.default.is_finite() && ts.default > 0.0) {
                 return Err(PowderError::Scene(format!(
                     "the time step comes out as {:e} s ({}): the contact's parameters, masses or --velocity are beyond what a time step can resolve",
@@ -485,7 +494,7 @@ pub(super) fn collide_with(
     let step = spec.normal_speed() * dt;
     if step > 0.0 && step < resolution {
         return Err(PowderError::Scene(format!(
-            "at v = {:e} m/s the approach is {step:e} m a step of {dt:e} s, within 1024 ulps of the positions ({resolution:e} m): f64 cannot resolve it; raise --velocity or --dt",
+            "at v = {:e} m/s the approach is {step:e} m a step of {dt:e} s ({rule}), within 1024 ulps of the positions ({resolution:e} m): f64 cannot resolve it; raise --dt (with --force beyond the stable limit)",
             spec.velocity
         )));
     }
@@ -640,6 +649,7 @@ mod tests {
         let spec = CollideSpec::head_on(law, 1e-3, 2000.0, 1e-15);
         let err = collide_on(&spec, Backend::Cpu).unwrap_err().to_string();
         assert!(err.contains("f64 cannot resolve it"), "{err}");
+        assert!(err.contains("(the automatic dt: dt <= tc/10"), "{err}");
     }
 
     /// A grazing impact whose spheres pass each other is named as such (CPU engine).
