@@ -295,12 +295,13 @@ impl Resolved {
 }
 
 /// The fastest a pair (or a particle and a wall) can close at the start, m/s: with two
-/// particles and no walls their approach along the line of centres (0 when they part),
-/// otherwise [`velocity_spread`].
+/// particles moving on straight lines (no walls, periodic axes or pours) their approach
+/// along the line of centres (0 when they part), otherwise [`velocity_spread`].
 fn starting_closing_speed(scene: &Scene) -> f64 {
     use glam::DVec3;
     let v = |i: usize| DVec3::from_array(scene.particles[i].velocity);
-    if scene.particles.len() == 2 && scene.walls.is_empty() {
+    let alone = scene.walls.is_empty() && !scene.domain.any_periodic() && !scene.pours();
+    if scene.particles.len() == 2 && alone {
         let x = |i: usize| DVec3::from_array(scene.particles[i].position);
         let n = (x(1) - x(0)).normalize_or_zero();
         return (v(0) - v(1)).dot(n).max(0.0);
@@ -308,13 +309,13 @@ fn starting_closing_speed(scene: &Scene) -> f64 {
     velocity_spread(scene)
 }
 
-/// A bound on every relative speed at the start: the diagonal of the velocities' bounding
-/// box, with the walls at rest in it (particles moving together close nothing).
+/// A bound on every relative speed at the start: the diagonal of the bounding box of the
+/// particles' and the walls' starting velocities (particles moving together close nothing).
 fn velocity_spread(scene: &Scene) -> f64 {
     use glam::DVec3;
     let velocities = (scene.particles.iter())
         .map(|p| DVec3::from_array(p.velocity))
-        .chain((!scene.walls.is_empty()).then_some(DVec3::ZERO));
+        .chain((scene.walls.iter()).map(|w| DVec3::from_array(w.motion.prescribed_velocity(0.0))));
     let (lo, hi) = velocities.fold(
         (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
         |(lo, hi), v| (lo.min(v), hi.max(v)),

@@ -1696,3 +1696,47 @@ fn collide_warns_when_e_exceeds_one() {
     assert!(ok, "{err}");
     assert!(!err.contains("warning: e = "), "{err}\n{out}");
 }
+
+/// A servo lid on eight spheres: at a gain of 2000 m/s per N it swings about its target
+/// (0.012–0.027 N around 0.02 N, found by an audit, unwarned), which `summary.json` and
+/// stderr now say; at 20 m/s per N it holds, unwarned.
+#[test]
+fn run_says_when_a_servo_wall_does_not_hold_its_target() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = |gain: &str| {
+        let text = format!(
+            "[domain]\nmin = [0.0, 0.0, 0.0]\nmax = [0.0066, 0.0066, 0.012]\n[simulation]\nduration = 0.15\noutput_every = 50\ngravity = [0.0, 0.0, -9.81]\n\
+             [[material]]\nname = \"p\"\ndensity = 2000.0\nmodel = \"hysteretic\"\nk1 = 100.0\nkp = 500.0\nkc = 0.0\nphi_f = 0.05\ngamma0 = 1e-3\n\
+             [[wall]]\npoint = [0.0, 0.0, 0.0]\nnormal = [0.0, 0.0, 1.0]\n\
+             [[wall]]\npoint = [0.0, 0.0, 0.0066]\nnormal = [0.0, 0.0, -1.0]\nservo_force = 0.02\nservo_gain = {gain}\nservo_max_speed = 1.0\n\
+             [[particles]]\nkind = \"lattice\"\nmin = [0.0011, 0.0011, 0.0011]\nmax = [0.0056, 0.0056, 0.0056]\nradius = 1.0e-3\nspacing = 2.2e-3\n"
+        );
+        let path = dir.path().join(format!("servo_{gain}.toml"));
+        std::fs::write(&path, text).unwrap();
+        path
+    };
+    for (gain, holds) in [("2000.0", false), ("20.0", true)] {
+        let path = scene(gain);
+        let args = [
+            "run",
+            path.to_str().unwrap(),
+            "--backend",
+            "cpu",
+            "--no-output",
+            "--json",
+        ];
+        let (ok, out, err) = powder(&args);
+        assert!(ok, "{err}");
+        let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+        let hold = &v["servo"][0];
+        assert_eq!(hold["wall"], 1, "{out}");
+        let (min, max) = (hold["min"].as_f64().unwrap(), hold["max"].as_f64().unwrap());
+        let warned = err.contains("warning: wall 1's servo did not hold its target 2e-2 N");
+        assert_eq!(warned, !holds, "gain {gain}: {min} .. {max}\n{err}");
+        assert_eq!(
+            max - min <= 0.2 * 0.02,
+            holds,
+            "gain {gain}: {min} .. {max}"
+        );
+    }
+}

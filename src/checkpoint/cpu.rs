@@ -13,6 +13,7 @@ use glam::DVec3;
 type Keyed = ((u32, u32), ContactRecord);
 
 /// One column of a contact's row: its name and NumPy type.
+#[derive(Clone, Copy)]
 struct Column {
     name: &'static str,
     descr: &'static str,
@@ -43,17 +44,27 @@ const fn history_column(f: HostField) -> Column {
     match (f.is_flag(), f.output()) {
         (true, (name, _)) => column(name, "'|b1'", 1),
         (false, (name, 1)) => column(name, "'<f8'", 8),
-        (false, (name, _)) => column(name, "'<f8', (3,)", 24),
+        (false, (name, 3)) => column(name, "'<f8', (3,)", 24),
+        _ => unreachable!(),
     }
 }
+
+// every history field is a scalar, a flag or a vector (the columns above)
+const _: () = {
+    let mut i = 0;
+    while i < HostField::ALL.len() {
+        let components = HostField::ALL[i].output().1;
+        assert!(components == 1 || components == 3);
+        i += 1;
+    }
+};
 
 /// A contact's row: the key, the history ([`HostField::ALL`]), then the record.
 fn contact_columns() -> impl Iterator<Item = Column> {
     let history = HostField::ALL.into_iter().map(history_column);
-    let own = |c: &Column| column(c.name, c.descr, c.bytes);
-    (KEY.iter().map(own))
+    (KEY.iter().copied())
         .chain(history)
-        .chain(RECORD.iter().map(own))
+        .chain(RECORD.iter().copied())
 }
 
 /// The structured dtype of a contact row, as `.npy` writes it.

@@ -186,9 +186,15 @@ impl HystereticParams {
     }
 
     /// Stiffest active branch, for the time step: the largest of kp, kc (the tensile
-    /// branch's slope: a pair on it parts or sticks within √(m_r/kc)) and kc_a where finite.
+    /// branch's slope, where it is reached: a pair on it parts or sticks within √(m_r/kc))
+    /// and kc_a where finite.
     pub fn stiffest(&self) -> f64 {
-        let k = self.kp.max(self.kc);
+        // (with kp = k1 the k2 lines never meet the tensile branch: kc is never reached)
+        let k = if self.kp > self.k1 {
+            self.kp.max(self.kc)
+        } else {
+            self.kp
+        };
         if self.fa > 0.0 && self.kca.is_finite() {
             k.max(self.kca)
         } else {
@@ -211,9 +217,9 @@ impl HystereticParams {
         }
         match self.k2_rule {
             K2Rule::Linear => {
-                // (k1 + s·x + kc)·δ = s·x², s = (kp−k1)/δmax^p: (k1 + kc)/s = c·δmax^p.
-                let c = self.tensile_coefficient() * dp;
-                0.5 * delta + (0.25 * delta * delta + c * delta).sqrt()
+                // (k1 + s·x + kc)·δ = s·x², s = (kp−k1)/δmax^p.
+                let s = (kp - k1) / dp;
+                0.5 * delta + (0.25 * delta * delta + (k1 + kc) * delta / s).sqrt()
             }
             K2Rule::Sqrt => {
                 // (k1 + s·u + kc)·δ = s·u³ with u = √x, s = (kp−k1)/√δmax^p; the cubic

@@ -7,6 +7,7 @@
 
 mod monitor;
 pub mod observed;
+mod servo;
 pub mod simulation;
 mod snapshot;
 mod tabor;
@@ -29,6 +30,8 @@ use std::sync::Arc;
 
 use monitor::{energy_scale, monitor};
 pub use monitor::{MonitorReference, MAX_ENERGY_GROWTH, MAX_OVERLAP_RATIO};
+use servo::ServoWatch;
+pub use servo::{ServoHold, SERVO_SWING_MAX};
 pub use snapshot::{csv_header, Snapshot};
 use snapshot::{csv_row, snapshot};
 pub use tabor::{tabor_pairs, TaborPair};
@@ -101,6 +104,9 @@ pub struct RunSummary {
     /// The Tabor parameter of every JKR pair of materials that can meet ([`tabor_pairs`]);
     /// empty without JKR pairs.
     pub tabor: Vec<TaborPair>,
+    /// How each servo wall held its target over the last quarter of the run
+    /// ([`ServoHold`]); empty without servo walls or the ledger.
+    pub servo: Vec<ServoHold>,
 }
 
 /// Where and how `powder run` writes its outputs.
@@ -447,6 +453,8 @@ pub fn run_with<S: Simulation>(
     }
     let started = std::time::Instant::now();
     let start_steps = engine.steps();
+    let start_time = engine.time();
+    let mut servo = ServoWatch::new(scene);
     // the energy check's reference: the run's start (a resume's from its checkpoint)
     let (start, mut scale) = match marks.monitor {
         Some(m) => (m.initial, m.scale),
@@ -526,6 +534,7 @@ pub fn run_with<S: Simulation>(
             }
             write_outputs(&engine, &obs, &snap, &mut csv, &mut series)?;
         }
+        servo.record(engine.time(), obs.wall_forces.as_deref());
         last_obs = obs;
         if steps.is_multiple_of(scene.checkpoint_every) {
             save(&engine, &mut csv, scale)?;
@@ -560,6 +569,12 @@ pub fn run_with<S: Simulation>(
         .map(|(end, start)| (end - start).abs());
     let (solid_fraction_domain, solid_fraction_bounding_box) =
         solid_fractions(scene, &last_obs.positions, &radii);
+    let servo = servo.holds(scene, start_time, engine.time());
+    if opts.verbose {
+        for w in servo.iter().filter_map(|h| h.warning(engine.dt())) {
+            eprintln!("warning: {w}");
+        }
+    }
     let summary = RunSummary {
         scene: scene.name.clone(),
         backend: engine.backend(),
@@ -593,6 +608,7 @@ pub fn run_with<S: Simulation>(
         quiet_batches: engine.quiet_batches().map(|(kept, back)| [kept, back]),
         notes: engine.notes()?,
         tabor,
+        servo,
     };
     if let Some(d) = out {
         let text = serde_json::to_string_pretty(&summary)

@@ -99,8 +99,8 @@ impl CpuEngine {
         }
         if s.dt.to_bits() != self.dt.to_bits() {
             return Err(PowderError::Run(format!(
-                "the checkpoint was run with dt = {:e} s but the scene gives dt = {:e} s",
-                s.dt, self.dt
+                "the checkpoint was run with dt = {:e} s but the scene gives dt = {:e} s; to continue it, set simulation.dt = {:?} (an automatic dt's rule can change between powder versions)",
+                s.dt, self.dt, s.dt
             )));
         }
         // (time advances by dt a step: only rounding may separate it from steps·dt)

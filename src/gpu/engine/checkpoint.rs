@@ -178,8 +178,8 @@ impl GpuEngine {
         // (the engine's clock is steps·dt: a state taken with another dt does not fit it)
         if saved.time.to_bits() != (saved.steps as f64 * self.dt).to_bits() {
             return Err(PowderError::Run(format!(
-                "the saved GPU state is at t = {:e} s after {} steps, which is not {} steps of this run's dt = {:e} s: it was taken with another time step",
-                saved.time, saved.steps, saved.steps, self.dt
+                "the saved GPU state is at t = {:e} s after {} steps, which is not {} steps of this run's dt = {:e} s: it was taken with another time step (about {:e} s; to continue it, set simulation.dt to that run's, since an automatic dt's rule can change between powder versions)",
+                saved.time, saved.steps, saved.steps, self.dt, saved.time / saved.steps.max(1) as f64
             )));
         }
         // the ledger cannot be made up for steps already taken, nor dropped silently

@@ -22,6 +22,12 @@ wgsl_consts! {
         JKR_SLOPE0 = radius::SLOPE0 as f32,
         /// π.
         JKR_PI = std::f64::consts::PI as f32,
+    }
+}
+
+wgsl_consts! {
+    /// The f32 constants of the Krijt contact radius's dynamics (`model::krijt`).
+    pub KRIJT_SOLVER: f32 = {
         /// a/a0 at the first touch, a_JKR(0)/a0 = (2/3)^(2/3) (`jkr::X_TOUCH`).
         KRIJT_X_TOUCH = X_TOUCH as f32,
         /// β below which the crack speed of eq. B2 diverges (`krijt::BETA_MIN`).

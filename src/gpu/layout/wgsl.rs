@@ -269,7 +269,12 @@ pub fn shared_consts() -> Vec<(&'static str, &'static str, u32)> {
         control::HALTS,
     ];
     let i32s = [SOLVER_ITERATIONS];
-    let f32s = [WALL_MOTIONS, control::MONITOR_LIMITS, JKR_SOLVER];
+    let f32s = [
+        WALL_MOTIONS,
+        control::MONITOR_LIMITS,
+        JKR_SOLVER,
+        KRIJT_SOLVER,
+    ];
     let words = u32s
         .iter()
         .flat_map(|l| l.iter().map(|&(n, v)| (n, u32::TY, v)));

@@ -7,7 +7,9 @@
 //! first touch, their relative normal velocity turns from separating back to approaching
 //! while they are still inside the range: a head-on pair with forces that only conserve
 //! or dissipate energy can then never escape (it oscillates on an elastic k2 branch or in
-//! the adhesive well), so e = 0.
+//! the adhesive well), so e = 0. A pair that, receding in contact, has slowed below
+//! [`REST_SPEED`] of the impact speed and of its own fastest receding has come to rest
+//! (an overdamped contact creeps back and never turns): stuck too.
 
 use crate::error::PowderError;
 use crate::model::{analytic, ContactModel, Dissipation, PairGeometry};

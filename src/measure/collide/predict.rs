@@ -70,7 +70,8 @@ pub(super) fn predict_head_on(spec: &CollideSpec, geom: &PairGeometry, result: &
         }
         ContactModel::Lsd(p) => {
             result.e_analytic = analytic::lsd_restitution(p.k, p.gamma0, geom.reduced_mass);
-            result.stuck_analytic = result.e_analytic.map(|_| false);
+            // (a rebound slower than REST_SPEED of the impact reads as resting: stuck)
+            result.stuck_analytic = result.e_analytic.map(|e| e < super::REST_SPEED);
             result.contact_duration_analytic =
                 analytic::lsd_contact_time(p.k, p.gamma0, geom.reduced_mass);
             if p.gamma0 == 0.0 {

@@ -493,8 +493,15 @@ pub(super) fn collide_with(
     let resolution = 1024.0 * f64::EPSILON * (spec.radius1 + spec.radius2 + range);
     let step = spec.normal_speed() * dt;
     if step > 0.0 && step < resolution {
+        // (a larger dt helps only up to the stable limit)
+        let stable = spec.time_step().max;
+        let advice = if spec.normal_speed() * stable >= resolution {
+            format!("raise --dt (the stable limit is {stable:e} s)")
+        } else {
+            format!("no stable dt (at most {stable:e} s) resolves it: raise --velocity")
+        };
         return Err(PowderError::Scene(format!(
-            "at v = {:e} m/s the approach is {step:e} m a step of {dt:e} s ({rule}), within 1024 ulps of the positions ({resolution:e} m): f64 cannot resolve it; raise --dt (with --force beyond the stable limit)",
+            "at v = {:e} m/s the approach is {step:e} m a step of {dt:e} s ({rule}), within 1024 ulps of the positions ({resolution:e} m): f64 cannot resolve it; {advice}",
             spec.velocity
         )));
     }
@@ -650,6 +657,7 @@ mod tests {
         let err = collide_on(&spec, Backend::Cpu).unwrap_err().to_string();
         assert!(err.contains("f64 cannot resolve it"), "{err}");
         assert!(err.contains("(the automatic dt: dt <= tc/10"), "{err}");
+        assert!(err.contains("no stable dt"), "{err}");
     }
 
     /// A grazing impact whose spheres pass each other is named as such (CPU engine).

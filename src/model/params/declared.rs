@@ -421,13 +421,13 @@ pub const DISSIPATIONS: &[Law] = &[
     },
     Law {
         name: "krijt",
-        doc: "the Krijt viscoelastic contact radius (paper 001 eqs. 10-12, B1-B2)",
+        doc: "the Krijt viscoelastic contact radius (paper 001 eqs. 10-12, B1-B2); jkr only, with surface_energy > 0",
         params: &[&TVIS, &SIGMA0],
         dissipation: false,
     },
     Law {
         name: "stress",
-        doc: "the stress-dependent Krijt model (paper 001 eqs. 17-18)",
+        doc: "the stress-dependent Krijt model (paper 001 eqs. 17-18); jkr only, with surface_energy > 0",
         params: &[&TVIS0_PER_RADIUS, &STRESS_B, &STRESS_ZETA, &SIGMA0],
         dissipation: false,
     },

@@ -14,7 +14,9 @@ pub fn markdown() -> String {
          A `[[material]]` or `[[interaction]]` names its law with `model = \"<law>\"`; its \
          other keys are that law's parameters, and no others. On the command line \
          (`powder collide`, `powder analytic`) each key is a flag, `--` and the key with `_` \
-         as `-`. Units are SI.\n",
+         as `-`. Units are SI. A friction sub-model's stiffness, damping or dynamic \
+         coefficient given without its coefficient > 0 is refused: it would act on \
+         nothing.\n",
     );
     for law in LAWS {
         section(&mut w, "##", law);

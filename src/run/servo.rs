@@ -1,0 +1,110 @@
+//! How well each servo wall held its target force: the spread of the normal force on it
+//! over the last quarter of the run in the servo phase it ends in. A gain too high for the
+//! bed (stable while gain·k_bed·dt < 1, where k_bed is the packing's) makes the wall swing
+//! about its target; `powder run` reports the spread and warns about it.
+
+use crate::scene::{Scene, WallPhase};
+use glam::DVec3;
+use serde::Serialize;
+
+/// The spread (max − min) over |target| beyond which a servo wall did not hold its target.
+pub const SERVO_SWING_MAX: f64 = 0.2;
+
+/// The samples a verdict needs: fewer leave the wall unjudged.
+const MIN_SAMPLES: usize = 4;
+
+/// One servo wall's normal force over the last quarter of the run.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ServoHold {
+    /// The wall's index in the scene.
+    pub wall: usize,
+    /// The target normal force of the servo phase it ends in, N.
+    pub target: f64,
+    /// That phase's gain, m/s per N.
+    pub gain: f64,
+    /// The least and largest normal force sampled, N (after every chunk of steps).
+    pub min: f64,
+    /// See `min`.
+    pub max: f64,
+    /// How many samples.
+    pub samples: usize,
+}
+
+impl ServoHold {
+    /// Whether the force stayed within [`SERVO_SWING_MAX`] of the target.
+    pub fn held(&self) -> bool {
+        self.max - self.min <= SERVO_SWING_MAX * self.target.abs()
+    }
+
+    /// The warning when the wall did not hold its target.
+    pub fn warning(&self, dt: f64) -> Option<String> {
+        (!self.held()).then(|| {
+            format!(
+                "wall {}'s servo did not hold its target {:e} N: the normal force on it ranged from {:e} to {:e} N over the last quarter of the run; lower servo_gain ({:e} m/s per N; it is stable while gain·k_bed·dt < 1 with dt = {dt:e} s and k_bed the packing's stiffness under the wall)",
+                self.wall, self.target, self.min, self.max, self.gain
+            )
+        })
+    }
+}
+
+/// One watched wall: its index, its unit normal and its samples (time, normal force the
+/// particles push on it).
+type Watched = (usize, DVec3, Vec<(f64, f64)>);
+
+/// The normal forces on the servo walls, sampled after every chunk of a run.
+pub(super) struct ServoWatch {
+    walls: Vec<Watched>,
+}
+
+impl ServoWatch {
+    /// Watches every wall with a servo phase.
+    pub(super) fn new(scene: &Scene) -> Self {
+        let walls = (scene.walls.iter().enumerate())
+            .filter(|(_, w)| w.motion.servo())
+            .map(|(i, w)| (i, DVec3::from_array(w.normal).normalize(), Vec::new()))
+            .collect();
+        Self { walls }
+    }
+
+    /// Samples the walls' forces at time `t` (none without the ledger).
+    pub(super) fn record(&mut self, t: f64, forces: Option<&[DVec3]>) {
+        let Some(forces) = forces else { return };
+        for (w, n, samples) in &mut self.walls {
+            if let Some(f) = forces.get(*w) {
+                // (the particles push against the wall's normal)
+                samples.push((t, -f.dot(*n)));
+            }
+        }
+    }
+
+    /// Each watched wall ending in a servo phase: its force over the last quarter of the
+    /// run from `start` to `end` (within that phase), when sampled often enough.
+    pub(super) fn holds(&self, scene: &Scene, start: f64, end: f64) -> Vec<ServoHold> {
+        let mut out = Vec::new();
+        for (w, _, samples) in &self.walls {
+            let motion = &scene.walls[*w].motion;
+            let Some(i) = motion.index_at(end) else {
+                continue;
+            };
+            let (from, WallPhase::Servo { force, gain, .. }) = motion.phases[i] else {
+                continue;
+            };
+            let since = from.max(end - 0.25 * (end - start));
+            let window: Vec<f64> = (samples.iter())
+                .filter(|(t, _)| *t >= since)
+                .map(|&(_, f)| f)
+                .collect();
+            if window.len() >= MIN_SAMPLES {
+                out.push(ServoHold {
+                    wall: *w,
+                    target: force,
+                    gain,
+                    min: window.iter().copied().fold(f64::INFINITY, f64::min),
+                    max: window.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+                    samples: window.len(),
+                });
+            }
+        }
+        out
+    }
+}
