@@ -310,12 +310,27 @@ fn starting_closing_speed(scene: &Scene) -> f64 {
 }
 
 /// A bound on every relative speed at the start: the diagonal of the bounding box of the
-/// particles' and the walls' starting velocities (particles moving together close nothing).
+/// particles' starting velocities and the walls' along their normals (a prescribed one, or
+/// a servo's first step, min(gain·force, max_speed)); particles moving together close
+/// nothing.
 fn velocity_spread(scene: &Scene) -> f64 {
+    use crate::scene::{Wall, WallPhase};
     use glam::DVec3;
+    let wall = |w: &Wall| {
+        let n = DVec3::from_array(w.normal).normalize_or_zero();
+        match w.motion.at(0.0) {
+            WallPhase::Rest => DVec3::ZERO,
+            WallPhase::Velocity(v) => n * DVec3::from_array(v).dot(n),
+            WallPhase::Servo {
+                force,
+                gain,
+                max_speed,
+            } => n * (gain * force).min(max_speed),
+        }
+    };
     let velocities = (scene.particles.iter())
         .map(|p| DVec3::from_array(p.velocity))
-        .chain((scene.walls.iter()).map(|w| DVec3::from_array(w.motion.prescribed_velocity(0.0))));
+        .chain(scene.walls.iter().map(wall));
     let (lo, hi) = velocities.fold(
         (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
         |(lo, hi), v| (lo.min(v), hi.max(v)),

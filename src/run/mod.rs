@@ -31,7 +31,7 @@ use std::sync::Arc;
 use monitor::{energy_scale, monitor};
 pub use monitor::{MonitorReference, MAX_ENERGY_GROWTH, MAX_OVERLAP_RATIO};
 use servo::ServoWatch;
-pub use servo::{ServoHold, SERVO_SWING_MAX};
+pub use servo::{ServoHold, SERVO_RMS_MAX};
 pub use snapshot::{csv_header, Snapshot};
 use snapshot::{csv_row, snapshot};
 pub use tabor::{tabor_pairs, TaborPair};

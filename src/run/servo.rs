@@ -1,19 +1,21 @@
-//! How well each servo wall held its target force: the spread of the normal force on it
-//! over the last quarter of the run in the servo phase it ends in. A gain too high for the
+//! How well each servo wall held its target force: the normal force on it over the last
+//! quarter of the time the run spent in the servo phase it ends in. A gain too high for the
 //! bed (stable while gain·k_bed·dt < 1, where k_bed is the packing's) makes the wall swing
-//! about its target; `powder run` reports the spread and warns about it.
+//! about its target; a wall still travelling stays off it. `powder run` reports both.
 
 use crate::scene::{Scene, WallPhase};
 use glam::DVec3;
 use serde::Serialize;
 
-/// The spread (max − min) over |target| beyond which a servo wall did not hold its target.
-pub const SERVO_SWING_MAX: f64 = 0.2;
+/// The root-mean-square deviation from the target, over |target|, beyond which a servo wall
+/// did not hold its target (a rearranging bed's fluctuations stay well below it).
+pub const SERVO_RMS_MAX: f64 = 0.1;
 
 /// The samples a verdict needs: fewer leave the wall unjudged.
 const MIN_SAMPLES: usize = 4;
 
-/// One servo wall's normal force over the last quarter of the run.
+/// One servo wall's normal force over the last quarter of its final servo phase in this
+/// run (a resumed run judges its own part only).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct ServoHold {
     /// The wall's index in the scene.
@@ -22,28 +24,38 @@ pub struct ServoHold {
     pub target: f64,
     /// That phase's gain, m/s per N.
     pub gain: f64,
-    /// The least and largest normal force sampled, N (after every chunk of steps).
+    /// The least normal force sampled (after every chunk of steps: a swing faster than the
+    /// chunks is seen through its samples), N.
     pub min: f64,
-    /// See `min`.
+    /// The largest, N.
     pub max: f64,
+    /// The mean, N.
+    pub mean: f64,
+    /// The root-mean-square deviation from the target, N.
+    pub rms: f64,
     /// How many samples.
     pub samples: usize,
+    /// Whether `rms` is within [`SERVO_RMS_MAX`] of the target.
+    pub held: bool,
 }
 
 impl ServoHold {
-    /// Whether the force stayed within [`SERVO_SWING_MAX`] of the target.
-    pub fn held(&self) -> bool {
-        self.max - self.min <= SERVO_SWING_MAX * self.target.abs()
-    }
-
-    /// The warning when the wall did not hold its target.
+    /// The warning when the wall did not hold its target: swinging about it, or off it.
     pub fn warning(&self, dt: f64) -> Option<String> {
-        (!self.held()).then(|| {
+        let what = format!(
+            "wall {}'s servo did not hold its target {:e} N: the normal force on it ranged from {:e} to {:e} N (mean {:e} N) over the last quarter of its servo phase",
+            self.wall, self.target, self.min, self.max, self.mean
+        );
+        // (swinging about the target crosses it; a wall short of it never does)
+        let advice = if self.min <= self.target && self.target <= self.max {
             format!(
-                "wall {}'s servo did not hold its target {:e} N: the normal force on it ranged from {:e} to {:e} N over the last quarter of the run; lower servo_gain ({:e} m/s per N; it is stable while gain·k_bed·dt < 1 with dt = {dt:e} s and k_bed the packing's stiffness under the wall)",
-                self.wall, self.target, self.min, self.max, self.gain
+                "lower servo_gain ({:e} m/s per N; it is stable while gain·k_bed·dt < 1 with dt = {dt:e} s and k_bed the packing's stiffness under the wall)",
+                self.gain
             )
-        })
+        } else {
+            "the wall had not reached it (a longer run, or a larger servo_max_speed)".into()
+        };
+        (!self.held).then(|| format!("{what}; {advice}"))
     }
 }
 
@@ -78,7 +90,7 @@ impl ServoWatch {
     }
 
     /// Each watched wall ending in a servo phase: its force over the last quarter of the
-    /// run from `start` to `end` (within that phase), when sampled often enough.
+    /// time this run (from `start` to `end`) spent in that phase, when sampled often enough.
     pub(super) fn holds(&self, scene: &Scene, start: f64, end: f64) -> Vec<ServoHold> {
         let mut out = Vec::new();
         for (w, _, samples) in &self.walls {
@@ -89,21 +101,27 @@ impl ServoWatch {
             let (from, WallPhase::Servo { force, gain, .. }) = motion.phases[i] else {
                 continue;
             };
-            let since = from.max(end - 0.25 * (end - start));
+            let since = end - 0.25 * (end - from.max(start));
             let window: Vec<f64> = (samples.iter())
                 .filter(|(t, _)| *t >= since)
                 .map(|&(_, f)| f)
                 .collect();
-            if window.len() >= MIN_SAMPLES {
-                out.push(ServoHold {
-                    wall: *w,
-                    target: force,
-                    gain,
-                    min: window.iter().copied().fold(f64::INFINITY, f64::min),
-                    max: window.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-                    samples: window.len(),
-                });
+            if window.len() < MIN_SAMPLES {
+                continue;
             }
+            let k = window.len() as f64;
+            let rms = (window.iter().map(|f| (f - force).powi(2)).sum::<f64>() / k).sqrt();
+            out.push(ServoHold {
+                wall: *w,
+                target: force,
+                gain,
+                min: window.iter().copied().fold(f64::INFINITY, f64::min),
+                max: window.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+                mean: window.iter().sum::<f64>() / k,
+                rms,
+                samples: window.len(),
+                held: rms <= SERVO_RMS_MAX * force.abs(),
+            });
         }
         out
     }
