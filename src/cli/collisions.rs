@@ -181,7 +181,7 @@ pub(crate) fn finish_collide(
     if let Some(r) = results
         .iter()
         .find(over)
-        .filter(|_| !elastic_normal_law(&spec.model))
+        .filter(|_| !spec.model.elastic_normal())
     {
         let dissipated = r
             .energy
@@ -193,20 +193,6 @@ pub(crate) fn finish_collide(
         );
     }
     print_results(a, &results, report)
-}
-
-/// Whether the normal law loses nothing in a collision (its e sits on either side of 1 by
-/// the integrator's error): LSD and Hertz undamped, the hysteretic law without plasticity,
-/// damping or adhesion.
-fn elastic_normal_law(model: &ContactModel) -> bool {
-    use powder::model::Dissipation;
-    match model {
-        ContactModel::Lsd(p) => p.gamma0 == 0.0,
-        ContactModel::Jkr(p) => {
-            p.surface_energy == 0.0 && matches!(p.dissipation, Dissipation::None)
-        }
-        ContactModel::Hysteretic(p) => p.kp == p.k1 && p.gamma0 == 0.0 && p.fa == 0.0,
-    }
 }
 
 /// One column of the collide table: header, width and the cell of a result.

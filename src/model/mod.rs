@@ -416,6 +416,17 @@ impl ContactModel {
         }
     }
 
+    /// Whether the normal law loses nothing in a collision (its e sits on either side of 1
+    /// by the integrator's error): LSD and Hertz undamped, the hysteretic law without
+    /// plasticity, damping or non-contact adhesion.
+    pub fn elastic_normal(&self) -> bool {
+        match self {
+            Self::Lsd(p) => p.gamma0 == 0.0,
+            Self::Jkr(p) => p.surface_energy == 0.0 && matches!(p.dissipation, Dissipation::None),
+            Self::Hysteretic(p) => p.kp == p.k1 && p.gamma0 == 0.0 && p.fa == 0.0,
+        }
+    }
+
     /// The force that switches on at δ = 0 inside an engaged contact, where δ = 0 is not
     /// one of its [`Self::edges`]: the mechanical contact's viscous force γ0·δ̇ where a
     /// non-contact range surrounds the touch (the hysteretic contact and non-contact
