@@ -500,8 +500,6 @@ impl ContactModel {
             Self::Jkr(p) => {
                 let r = geom.r_eff();
                 let hertz = p.hertz_contact_time(r, mr, impact_velocity);
-                // the krijt/stress viscous force is explicit: the gamma0 rule below
-                let visc = p.viscous_coefficient_estimate(geom, impact_velocity);
                 if p.surface_energy > 0.0 {
                     let eq = std::f64::consts::PI * (mr / p.equilibrium_stiffness(r)).sqrt();
                     // the adhesive zone (depth ~δ0, force jumps at its edges) crossed in many
@@ -511,11 +509,11 @@ impl ContactModel {
                     let v_zone = impact_velocity.min(p.adhesion_speed(r, mr));
                     let zone = p.delta0(r) / v_zone;
                     if zone < eq.min(hertz) {
-                        (zone, format!("tc = delta0/v, the time to cross the JKR adhesive zone delta0 = {:.4e} m at {v_zone:.4e} m/s (the impact velocity {impact_velocity} m/s, at most the adhesion speed)", p.delta0(r)), visc)
+                        (zone, format!("tc = delta0/v, the time to cross the JKR adhesive zone delta0 = {:.4e} m at {v_zone:.4e} m/s (the impact velocity {impact_velocity} m/s, at most the adhesion speed)", p.delta0(r)), 0.0)
                     } else if eq < hertz {
-                        (eq, format!("tc = pi*sqrt(m*/k_eq), the JKR oscillation about the equilibrium overlap (k_eq = {:.4e} N/m)", p.equilibrium_stiffness(r)), visc)
+                        (eq, format!("tc = pi*sqrt(m*/k_eq), the JKR oscillation about the equilibrium overlap (k_eq = {:.4e} N/m)", p.equilibrium_stiffness(r)), 0.0)
                     } else {
-                        (hertz, format!("tc = Hertz contact time at the impact velocity {impact_velocity} m/s"), visc)
+                        (hertz, format!("tc = Hertz contact time at the impact velocity {impact_velocity} m/s"), 0.0)
                     }
                 } else {
                     (
@@ -542,14 +540,25 @@ impl ContactModel {
         }
         let mut max = tc / MAX_DT_FRACTION;
         let mut reason = format!("dt <= tc/{MAX_DT_FRACTION} with {what}, tc = {tc:.4e} s");
+        // the krijt/stress viscous force is explicit: a dashpot of the coefficient the
+        // compression reaches, found at the steps the rules so far allow
+        let krijt = match self {
+            Self::Jkr(p) => {
+                p.viscous_coefficient_estimate(geom, impact_velocity, max, MAX_VISCOUS_STEP)
+            }
+            _ => None,
+        };
+        let (gamma0, normal_dashpot, normal_ratio) = match (self, krijt) {
+            (Self::Jkr(p), Some(k)) => (k.c, format!("the viscous coefficient c = 2*T_vis*E*/nu^2*a of dissipation = \"{}\" at its largest in a head-on collision at {impact_velocity} m/s (at the overlap {:.4e} m), c", p.dissipation.name(), k.reach), "m_r/c"),
+            _ => (gamma0, "the viscous damping gamma0".to_string(), "m_r/gamma0"),
+        };
         // explicit viscous forces: keep γ·dt/m small (the exact decay per step is
         // exp(−γ·dt/m); the explicit update is unstable beyond γ·dt/m = 2).
-        let dashpots = std::iter::once((gamma0, mr, "the viscous damping gamma0", "m_r/gamma0"))
-            .chain(
-                self.friction_oscillators(geom, impact_velocity)
-                    .into_iter()
-                    .map(|o| (o.gamma, o.mass, o.what, "m/gamma")),
-            );
+        let dashpots = std::iter::once((gamma0, mr, normal_dashpot.as_str(), normal_ratio)).chain(
+            self.friction_oscillators(geom, impact_velocity)
+                .into_iter()
+                .map(|o| (o.gamma, o.mass, o.what, "m/gamma")),
+        );
         for (gamma, mass, name, ratio) in dashpots {
             if gamma > 0.0 {
                 let visc = MAX_VISCOUS_STEP * mass / gamma;

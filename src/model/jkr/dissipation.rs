@@ -4,7 +4,7 @@
 use super::{JkrPair, JkrParams};
 use crate::model::krijt::{self, KrijtLaw, Relaxation};
 use crate::model::params::word_enum;
-use crate::model::PairGeometry;
+use crate::model::{ContactHistory, PairGeometry};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
@@ -160,23 +160,149 @@ pub fn tsuji_beta(restitution: f64) -> f64 {
     })
 }
 
+/// The `krijt`/`stress` viscous force a collision reaches
+/// ([`JkrParams::viscous_coefficient_estimate`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ViscousEstimate {
+    /// The largest viscous coefficient c = 2·T_vis·E*·a/ν², kg/s.
+    pub c: f64,
+    /// The overlap where it was reached, m.
+    pub reach: f64,
+    /// The step the collision was integrated with, s.
+    pub dt: f64,
+}
+
+/// Rounds of [`JkrParams::viscous_coefficient_estimate`] at most (each integrates a
+/// collision).
+const VISCOUS_ROUNDS: usize = 12;
+/// A step too long is shortened to this fraction of the one its collision's c allows.
+const VISCOUS_MARGIN: f64 = 0.98;
+/// A step within this fraction of the one its collision's c allows is taken as found.
+const VISCOUS_SETTLED: f64 = 1.25;
+/// Past the turn, a c this far below its peak ends [`JkrParams::viscous_peak`]'s
+/// collision: the pair recedes, and c grows again only after a second turn.
+const VISCOUS_PAST_PEAK: f64 = 0.9;
+/// Steps of [`JkrParams::viscous_peak`]'s collision at most.
+pub const VISCOUS_STEPS: usize = 200_000;
+
 impl JkrParams {
-    /// A bound on the viscous coefficient c = 2·T_vis·E*·a/ν² of the `krijt`/`stress`
-    /// dissipations in a collision at impact speed `v` (a at the larger of δ0 and the
-    /// Hertz δmax of paper 001 eq. 15, T_vis at that radius), kg/s; 0 otherwise.
-    pub fn viscous_coefficient_estimate(&self, geom: &PairGeometry, v: f64) -> f64 {
+    /// The viscous coefficient c = 2·T_vis·E*·a/ν² of the `krijt`/`stress` dissipations
+    /// in a head-on collision at impact speed `v` (None for the other dissipations): the
+    /// largest c of the collision integrated ([`Self::viscous_peak`]) at the largest step
+    /// tried, at most `dt_trial`, with c·dt/m* ≤ `max_step`.
+    pub fn viscous_coefficient_estimate(
+        &self,
+        geom: &PairGeometry,
+        v: f64,
+        dt_trial: f64,
+        max_step: f64,
+    ) -> Option<ViscousEstimate> {
+        let mr = geom.reduced_mass;
+        let mut dt = dt_trial;
+        let (mut resolved, mut last): (Option<ViscousEstimate>, Option<ViscousEstimate>) =
+            (None, None);
+        // a step too long for the viscous force makes it oscillate and grow (a larger c):
+        // shorten it until the collision is resolved, then lengthen it towards the step
+        // its own c allows
+        for _ in 0..VISCOUS_ROUNDS {
+            let estimate = self.viscous_peak(geom, v, dt)?;
+            last = Some(estimate);
+            let fits = max_step * mr / estimate.c;
+            if fits.is_nan() || fits < dt {
+                dt = (VISCOUS_MARGIN * fits).max(0.1 * dt);
+                continue;
+            }
+            if resolved.is_none_or(|r| r.dt < dt) {
+                resolved = Some(estimate);
+            }
+            if fits < VISCOUS_SETTLED * dt || dt >= dt_trial {
+                break;
+            }
+            dt = fits.min(dt_trial);
+        }
+        // (never resolved in all the rounds: the last c, at the step it allows)
+        resolved.or(last.map(|l| ViscousEstimate {
+            dt: max_step * mr / l.c,
+            ..l
+        }))
+    }
+
+    /// The largest viscous coefficient c = 2·T_vis·E*·a/ν² (of the contact radius a the
+    /// law carries, which lags a_JKR(δ) while the crack moves) of a head-on collision at
+    /// speed `v` under the `krijt`/`stress` law, integrated with step `dt` from the touch
+    /// until the contact breaks, the pair turns back a second time (stuck: each later
+    /// compression is shallower) or c falls 10 % below its peak, and the overlap there
+    /// (None for the other dissipations). Where c still grows after [`VISCOUS_STEPS`] (a
+    /// slow creep at the deepest point), c on the JKR curve at the deepest overlap, which
+    /// the contact radius grows towards. With T_vis growing with the pressure (`stress`)
+    /// the compression stops far short of the Hertz δmax, whose T_vis would ask for a dt
+    /// thousands of times smaller.
+    pub fn viscous_peak(&self, geom: &PairGeometry, v: f64, dt: f64) -> Option<ViscousEstimate> {
+        let law = self.dissipation.krijt_law()?;
+        if self.gamma() == 0.0 {
+            return None;
+        }
+        let (r, m) = (geom.r_eff(), self.krijt_material());
+        let mut history = ContactHistory::default();
+        let (mut delta, mut speed, mut acc) = (0.0_f64, v, 0.0);
+        let mut peak = ViscousEstimate {
+            c: self.viscous_coefficient_at(self.delta0(r), r),
+            reach: self.delta0(r),
+            dt,
+        };
+        let (mut turns, mut peak_step, mut deepest) = (0, 0, 0.0_f64);
+        // velocity Verlet as the engines step, the force at the predicted velocity
+        for step in 0..=VISCOUS_STEPS {
+            if step == VISCOUS_STEPS {
+                // c still grew in the second half of the steps: a grows towards a_JKR(δ),
+                // so c at a_JKR of the deepest overlap bounds it
+                if peak_step >= VISCOUS_STEPS / 2 {
+                    let bound = self.viscous_coefficient_at(deepest, r);
+                    if bound > peak.c {
+                        (peak.c, peak.reach) = (bound, deepest);
+                    }
+                }
+                break;
+            }
+            let half = speed + 0.5 * dt * acc;
+            delta += dt * half;
+            let predicted = half + 0.5 * dt * acc;
+            let f = self.normal_force_step(delta, predicted, geom, dt, &mut history);
+            if !f.in_contact {
+                break;
+            }
+            acc = -f.force / geom.reduced_mass;
+            deepest = deepest.max(delta);
+            let before = speed;
+            speed = half + 0.5 * dt * acc;
+            let a = f.contact_radius;
+            let c = krijt::viscous_force(law.relaxation_time_at(a, r, &m), a, 1.0, &m);
+            if !c.is_finite() {
+                peak.c = f64::INFINITY;
+                break;
+            }
+            if c > peak.c {
+                (peak.c, peak.reach, peak_step) = (c, delta, step);
+            }
+            if (before > 0.0) != (speed > 0.0) {
+                turns += 1;
+            }
+            if turns >= 2 || (turns >= 1 && c < VISCOUS_PAST_PEAK * peak.c) {
+                break;
+            }
+        }
+        Some(peak)
+    }
+
+    /// c = 2·T_vis·E*·a/ν² at overlap `delta` on the JKR curve (T_vis at that contact
+    /// radius), kg/s; 0 for the dissipations without it.
+    fn viscous_coefficient_at(&self, delta: f64, r_eff: f64) -> f64 {
         let Some(law) = self.dissipation.krijt_law() else {
             return 0.0;
         };
-        if self.gamma() == 0.0 {
-            return 0.0;
-        }
-        let r = geom.r_eff();
-        let dmax = crate::model::analytic::hertz_delta_max(geom.reduced_mass, r, self.e_star(), v)
-            .max(self.delta0(r));
-        let a = self.contact_radius(dmax, r);
+        let a = self.contact_radius(delta, r_eff);
         let m = self.krijt_material();
-        let tvis = law.relaxation_time_at(a, r, &m);
+        let tvis = law.relaxation_time_at(a, r_eff, &m);
         krijt::viscous_force(tvis, a, 1.0, &m)
     }
 

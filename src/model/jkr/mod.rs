@@ -34,7 +34,7 @@ use crate::model::krijt;
 use crate::model::params::word_enum;
 use crate::model::{ContactHistory, NormalForce, PairGeometry};
 use dissipation::TSUJI_PREFACTOR;
-pub use dissipation::{tsuji_beta, Dissipation, TsujiStiffness};
+pub use dissipation::{tsuji_beta, Dissipation, TsujiStiffness, ViscousEstimate, VISCOUS_STEPS};
 pub use mindlin::Tangential;
 pub use pair::JkrPair;
 pub use radius::contact_radius_f32;
