@@ -7,19 +7,17 @@
 
 mod monitor;
 pub mod observed;
+mod outputs;
 mod servo;
 pub mod simulation;
 mod snapshot;
+mod summary;
 mod tabor;
 
 use crate::checkpoint::RunMarks;
 use crate::cpu::{ContactStats, CpuEngine, Threads};
 use crate::error::PowderError;
 use crate::gpu::{GpuContext, GpuEngine, GpuOptions};
-use crate::output::atomic::{remove_stale_temps, write_atomic};
-use crate::output::folder::{check_writable, FolderLock};
-use crate::output::series_csv::{self, SeriesCsv, SeriesMark};
-use crate::output::{contacts, vtk};
 use crate::run::observed::ObservedEnergies;
 use crate::run::simulation::{Observation, Simulation};
 use crate::scene::Scene;
@@ -30,84 +28,14 @@ use std::sync::Arc;
 
 use monitor::{energy_scale, monitor};
 pub use monitor::{MonitorReference, MAX_ENERGY_GROWTH, MAX_OVERLAP_RATIO};
+use outputs::RunOutputs;
 use servo::ServoWatch;
 pub use servo::{ServoHold, SERVO_RMS_MAX};
+use snapshot::snapshot;
 pub use snapshot::{csv_header, Snapshot};
-use snapshot::{csv_row, snapshot};
+pub use summary::RunSummary;
+use summary::{outside_domain, solid_fractions};
 pub use tabor::{tabor_pairs, TaborPair};
-
-/// What `powder run` reports at the end.
-#[derive(Clone, Debug, Serialize)]
-pub struct RunSummary {
-    /// Scene name.
-    pub scene: String,
-    /// `"cpu"` or `"gpu"`.
-    pub backend: &'static str,
-    /// The GPU adapter (GPU backend).
-    pub adapter: Option<String>,
-    /// The CPU threads the step ran on (CPU backend; the results do not depend on it).
-    pub threads: Option<usize>,
-    /// Why this backend ran (`--backend auto`: what was found), when it was chosen.
-    pub backend_reason: Option<String>,
-    /// Number of particles.
-    pub particles: usize,
-    /// Whether the run kept the energy ledger (off: `powder run --no-ledger` on the GPU;
-    /// the ledger's quantities are then left out).
-    pub ledger: bool,
-    /// Time step, s.
-    pub dt: f64,
-    /// The rule dt was checked against (the binding limit, in words).
-    pub dt_rule: String,
-    /// Steps taken at the end, in all (a resumed run includes the steps before the checkpoint).
-    pub steps: u64,
-    /// Simulated time at the end, s.
-    pub time: f64,
-    /// Wall-clock time of this run, s.
-    pub wall_seconds: f64,
-    /// Particles × steps of this run over `wall_seconds`, 1/s.
-    pub particle_steps_per_second: f64,
-    /// State at the start of this run (the checkpoint's state on resume).
-    pub initial: Snapshot,
-    /// State at the end.
-    pub last: Snapshot,
-    /// |E_total(end) − E_total(start)| relative to the run's energy scale (the largest
-    /// kinetic and stored energy, gravitational change and walls' work seen; 0 when nothing
-    /// moved); absent without the ledger.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub energy_balance_error: Option<f64>,
-    /// Particles whose centre is outside the domain box at the end.
-    pub outside_domain: usize,
-    /// Particle volume over the domain box, and over the box enclosing the particles.
-    pub solid_fraction_domain: f64,
-    /// Particle volume over the box enclosing the particles (centres ± radii).
-    pub solid_fraction_bounding_box: f64,
-    /// Force on each wall at the end, N; absent without the ledger.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub wall_forces: Option<Vec<[f64; 3]>>,
-    /// The step the run resumed from, if it did.
-    pub resumed_from: Option<u64>,
-    /// Stopped early by an interrupt (Ctrl-C) after writing a last checkpoint.
-    pub interrupted: bool,
-    /// The output directory, if outputs were written.
-    pub out_dir: Option<String>,
-    /// Whether the contact network was written with the snapshots (`contacts/`).
-    pub contact_network: bool,
-    /// Neighbour-list rebuilds so far, as the backend counts them (the GPU's initial
-    /// build included; the CPU's since this run's engine was built).
-    pub rebuilds: u64,
-    /// GPU: quiet batches kept and rolled back in this run (`gpu::quiet`); absent on the
-    /// CPU.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub quiet_batches: Option<[u64; 2]>,
-    /// Backend remarks (GPU: neighbour-list rebuilds, contacts that left the lists).
-    pub notes: Vec<String>,
-    /// The Tabor parameter of every JKR pair of materials that can meet ([`tabor_pairs`]);
-    /// empty without JKR pairs.
-    pub tabor: Vec<TaborPair>,
-    /// How each servo wall held its target over the last quarter of the run
-    /// ([`ServoHold`]); empty without servo walls or the ledger.
-    pub servo: Vec<ServoHold>,
-}
 
 /// Where and how `powder run` writes its outputs.
 #[derive(Clone, Debug, Default)]
@@ -139,36 +67,6 @@ pub struct RunOptions {
     /// Write no VTK snapshots (nor the contact network): the series, checkpoints and
     /// summary only.
     pub no_snapshots: bool,
-}
-
-/// Solid fraction of the particles in the domain box and in the box that encloses them.
-fn solid_fractions(scene: &Scene, positions: &[glam::DVec3], radii: &[f64]) -> (f64, f64) {
-    let vol: f64 = radii
-        .iter()
-        .map(|r| 4.0 / 3.0 * std::f64::consts::PI * r * r * r)
-        .sum();
-    let d = scene.domain;
-    let domain = (0..3).map(|a| d.max[a] - d.min[a]).product::<f64>();
-    let mut lo = glam::DVec3::splat(f64::INFINITY);
-    let mut hi = glam::DVec3::splat(f64::NEG_INFINITY);
-    for (p, r) in positions.iter().zip(radii) {
-        lo = lo.min(*p - *r);
-        hi = hi.max(*p + *r);
-    }
-    let b = hi - lo;
-    (vol / domain, vol / (b.x * b.y * b.z))
-}
-
-/// Particles whose centre is outside the domain box.
-fn outside_domain(scene: &Scene, positions: &[glam::DVec3]) -> usize {
-    let (lo, hi) = (
-        glam::DVec3::from_array(scene.domain.min),
-        glam::DVec3::from_array(scene.domain.max),
-    );
-    positions
-        .iter()
-        .filter(|p| p.cmplt(lo).any() || p.cmpgt(hi).any())
-        .count()
 }
 
 /// Runs `scene` on the CPU reference backend to its duration (or `opts.max_steps`),
@@ -237,194 +135,13 @@ pub fn run_with<S: Simulation>(
     }
     let total = ((scene.duration / engine.dt()).ceil() as u64).max(1);
     let total = opts.max_steps.map_or(total, |m| m.min(total));
-    let out = opts.out_dir.as_deref();
-    let csv_path = out.map(|d| d.join("series.csv"));
-    let ckpt_path = out.map(|d| d.join("checkpoint.bin"));
-    // the folder held for this run, and every output it writes checked writable before
-    // anything there changes
-    let _lock = match out {
-        Some(d) => {
-            let lock = FolderLock::take(d)?;
-            let [particles, contacts] = vtk::Series::both_unopened(d, &scene.name);
-            let replaced = [
-                d.join("checkpoint.bin"),
-                d.join("summary.json"),
-                particles.collection_path(),
-                contacts.collection_path(),
-            ];
-            check_writable(d, &replaced, &[d.join("series.csv")])?;
-            for sub in [particles.folder(), contacts.folder()] {
-                if sub.is_dir() {
-                    check_writable(&sub, &[], &[])?;
-                }
-            }
-            Some(lock)
-        }
-        None => None,
-    };
-    // the series' rows up to the checkpoint's step on resume, read (and its columns
-    // checked) before anything in the directory changes
-    let header = csv_header(&scene.walls);
-    let mut kept = match (&csv_path, resumed_from) {
-        (Some(p), Some(step)) => series_csv::rows_until(p, step, &header)?,
-        _ => Vec::new(),
-    };
-    // only the rows written before the checkpoint: Ctrl-C's row off the output cadence
-    // follows it (the straight run has none there); `late` is that row
-    let mut late = None;
-    let found = kept.len();
-    // rows beyond the marked ones that are not that late row: another run's series
-    let mut foreign = false;
-    if let (Some(m), Some(step)) = (marks.series, resumed_from) {
-        let marked = usize::try_from(m.rows).unwrap_or(usize::MAX);
-        if kept.len() > marked {
-            let beyond = kept.split_off(marked);
-            foreign = beyond.iter().any(|r| !series_csv::row_is_at(r, step));
-            late = beyond.into_iter().find(|r| series_csv::row_is_at(r, step));
-        }
-    }
-    // rows kept on resume must be those the checkpoint's run wrote (no series at all: it
-    // starts at the checkpoint's step)
-    if let (Some(ckpt), Some(p), Some(step)) = (&opts.resume, &csv_path, resumed_from) {
-        let ours = marks.series;
-        let differ = !kept.is_empty() && ours.is_some_and(|m| m != SeriesMark::of(&kept));
-        if foreign || differ {
-            return Err(PowderError::Run(format!(
-                "the series `{}` is not the one the run of checkpoint `{}` wrote (its {found} rows up to step {step} differ from that run's {}): resume into the folder that run wrote (--out), or into an empty one, where the series starts at the checkpoint's step",
-                p.display(),
-                ckpt.display(),
-                ours.map_or(0, |m| m.rows)
-            )));
-        }
-    }
-    // a branch whose cadence falls on the checkpoint's step keeps that row (its straight
-    // run has it, and a resumed run does not write its first step); otherwise the row and
-    // the snapshots of that step go
-    let drop_late = match late {
-        Some(row) if resumed_from.is_some_and(|s| s.is_multiple_of(scene.output_every)) => {
-            kept.push(row);
-            false
-        }
-        Some(_) => true,
-        None => false,
-    };
-    let mut series = match out {
-        Some(d) if !opts.no_snapshots => Some(vtk::Series::new(d, &scene.name)?),
-        _ => None,
-    };
-    let mut network = match out {
-        Some(d) if scene.writes_contacts() && !opts.no_snapshots => {
-            Some(vtk::Series::contacts(d, &scene.name)?)
-        }
-        _ => None,
-    };
-    // what writes killed before their rename left (the files they replace are intact)
-    if let Some(d) = out {
-        let stale = remove_stale_temps(d)
-            + remove_stale_temps(&d.join("snapshots"))
-            + remove_stale_temps(&d.join("contacts"));
-        if stale > 0 && opts.verbose {
-            eprintln!(
-                "removed {stale} temporary files that interrupted writes left in {}",
-                d.display()
-            );
-        }
-    }
-    if let (Some(step), Some(d)) = (resumed_from, out) {
-        // the snapshots go with the rows: none at the checkpoint's step where its row goes;
-        // both series, whether this run writes them or not (--no-snapshots)
-        let last = if drop_late {
-            step.saturating_sub(1)
-        } else {
-            step
-        };
-        let [particles, contacts] = vtk::Series::both_unopened(d, &scene.name);
-        for (opened, mut unopened) in [(series.as_mut(), particles), (network.as_mut(), contacts)] {
-            match opened {
-                Some(s) => s.keep_until(last, engine.dt())?,
-                None => unopened.keep_until(last, engine.dt())?,
-            }
-        }
-    }
-    // a fresh run replaces the series (a resume keeps its rows up to the checkpoint's step:
-    // a killed run may have written more), and the checkpoint of the run it replaces goes
-    // with it (resumed, it would continue a series that is no longer there)
-    // with its summary and its snapshots (left beside the new run's, a killed run would
-    // look finished, its folder holding two runs)
-    if let (Some(d), None) = (out, resumed_from) {
-        for c in [d.join("checkpoint.bin"), d.join("summary.json")] {
-            match std::fs::remove_file(&c) {
-                Ok(()) if opts.verbose => {
-                    eprintln!("removed the earlier run's {}", c.display())
-                }
-                Ok(()) => {}
-                Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
-                Err(e) => {
-                    return Err(PowderError::io(
-                        format!("cannot remove `{}`", c.display()),
-                        e,
-                    ))
-                }
-            }
-        }
-        // (both series, whether this run writes them or not: they are the earlier run's)
-        for mut s in vtk::Series::both_unopened(d, &scene.name) {
-            let removed = s.clear()?;
-            if removed > 0 && opts.verbose {
-                eprintln!(
-                    "removed the earlier run's {removed} snapshot files in {}",
-                    s.folder().display()
-                );
-            }
-        }
-    }
-    let mut csv = match &csv_path {
-        Some(p) => Some(SeriesCsv::start(p, &header, &kept)?),
-        None => None,
-    };
-    let radii = engine.radii().to_vec();
-    let wall_normals: Vec<glam::DVec3> = scene
-        .walls
-        .iter()
-        .map(|w| glam::DVec3::from_array(w.normal))
-        .collect();
-    let mut write_outputs = |engine: &S,
-                             obs: &Observation,
-                             snap: &Snapshot,
-                             csv: &mut Option<SeriesCsv>,
-                             series: &mut Option<vtk::Series>|
-     -> Result<(), PowderError> {
-        if let Some(c) = csv.as_mut() {
-            c.append(snap.step, &csv_row(snap, obs, &scene.walls))?;
-        }
-        if let Some(s) = series.as_mut() {
-            s.write(
-                snap.step,
-                snap.time,
-                &vtk::Particles {
-                    positions: &obs.positions,
-                    velocities: &obs.velocities,
-                    radii: &radii,
-                    angular_velocities: &obs.angular_velocities,
-                },
-            )?;
-        }
-        if let Some(n) = network.as_mut() {
-            let ends = contacts::Ends {
-                positions: &obs.positions,
-                radii: &radii,
-                wall_normals: &wall_normals,
-                periodic: scene.domain.periodic,
-                domain: (
-                    glam::DVec3::from_array(scene.domain.min),
-                    glam::DVec3::from_array(scene.domain.max),
-                ),
-            };
-            let doc = contacts::vtp(&engine.contact_network()?, &ends);
-            n.write_vtp(snap.step, snap.time, &doc)?;
-        }
-        Ok(())
-    };
+    let mut outputs = RunOutputs::open(
+        scene,
+        opts,
+        (resumed_from, &marks),
+        engine.radii().to_vec(),
+        engine.dt(),
+    )?;
 
     let bar = opts.progress_bar.then(|| {
         let bar = indicatif::ProgressBar::new(total);
@@ -449,7 +166,7 @@ pub fn run_with<S: Simulation>(
         say(&initial);
     }
     if resumed_from.is_none() {
-        write_outputs(&engine, &obs, &initial, &mut csv, &mut series)?;
+        outputs.write(scene, &engine, &obs, &initial)?;
     }
     let started = std::time::Instant::now();
     let start_steps = engine.steps();
@@ -463,21 +180,9 @@ pub fn run_with<S: Simulation>(
             initial.energies.kinetic.abs() + initial.energies.elastic.unwrap_or(0.0).abs(),
         ),
     };
-    // the rows synced, then the checkpoint they lead up to, with what the monitor measures
-    // against
-    let save = |engine: &S, csv: &mut Option<SeriesCsv>, scale: f64| -> Result<(), PowderError> {
-        if let (Some(c), Some(rows)) = (&ckpt_path, csv.as_mut()) {
-            rows.sync()?;
-            let marks = RunMarks {
-                series: Some(rows.mark()),
-                monitor: Some(MonitorReference {
-                    initial: start,
-                    scale,
-                }),
-            };
-            engine.write_checkpoint(c, scene, &marks)?;
-        }
-        Ok(())
+    let reference = |scale| MonitorReference {
+        initial: start,
+        scale,
     };
     let mut interrupted = false;
     let mut last_obs = obs;
@@ -510,8 +215,8 @@ pub fn run_with<S: Simulation>(
                 }
                 let failed_at = engine.steps();
                 engine.restore(before)?;
-                save(&engine, &mut csv, scale)?;
-                let note = match &ckpt_path {
+                outputs.checkpoint(scene, &engine, reference(scale))?;
+                let note = match outputs.checkpoint_path() {
                     Some(c) => format!(
                         "; the state at step {} (before the failure, at most 1000 steps earlier than step {failed_at}) is in {}",
                         engine.steps(),
@@ -532,12 +237,12 @@ pub fn run_with<S: Simulation>(
             if opts.verbose {
                 say(&snap);
             }
-            write_outputs(&engine, &obs, &snap, &mut csv, &mut series)?;
+            outputs.write(scene, &engine, &obs, &snap)?;
         }
         servo.record(engine.time(), obs.wall_forces.as_deref());
         last_obs = obs;
         if steps.is_multiple_of(scene.checkpoint_every) {
-            save(&engine, &mut csv, scale)?;
+            outputs.checkpoint(scene, &engine, reference(scale))?;
         }
         if opts
             .interrupt
@@ -552,14 +257,12 @@ pub fn run_with<S: Simulation>(
         b.finish_and_clear();
     }
     let last = snapshot(&engine, &last_obs);
-    save(&engine, &mut csv, scale)?;
+    outputs.checkpoint(scene, &engine, reference(scale))?;
     // Ctrl-C off the output cadence: a last row and snapshot after the checkpoint, which a
     // resume drops (the straight run has none there)
     if interrupted && !engine.steps().is_multiple_of(scene.output_every) {
-        write_outputs(&engine, &last_obs, &last, &mut csv, &mut series)?;
-        if let Some(c) = csv.as_mut() {
-            c.sync()?;
-        }
+        outputs.write(scene, &engine, &last_obs, &last)?;
+        outputs.sync_series()?;
     }
     let wall = started.elapsed().as_secs_f64();
     let drift = last
@@ -568,7 +271,7 @@ pub fn run_with<S: Simulation>(
         .zip(start.total())
         .map(|(end, start)| (end - start).abs());
     let (solid_fraction_domain, solid_fraction_bounding_box) =
-        solid_fractions(scene, &last_obs.positions, &radii);
+        solid_fractions(scene, &last_obs.positions, engine.radii());
     let servo = servo.holds(scene, start_time, engine.time());
     if opts.verbose {
         for w in servo.iter().filter_map(|h| h.warning(engine.dt())) {
@@ -602,19 +305,15 @@ pub fn run_with<S: Simulation>(
             .map(|f| f.iter().map(|f| f.to_array()).collect()),
         resumed_from,
         interrupted,
-        out_dir: out.map(|d| d.display().to_string()),
-        contact_network: network.is_some(),
+        out_dir: outputs.dir().map(|d| d.display().to_string()),
+        contact_network: outputs.writes_contacts(),
         rebuilds: engine.rebuilds()?,
         quiet_batches: engine.quiet_batches().map(|(kept, back)| [kept, back]),
         notes: engine.notes()?,
         tabor,
         servo,
     };
-    if let Some(d) = out {
-        let text = serde_json::to_string_pretty(&summary)
-            .map_err(|e| PowderError::Run(format!("cannot encode the summary: {e}")))?;
-        write_atomic(&d.join("summary.json"), text.as_bytes())?;
-    }
+    outputs.write_summary(&summary)?;
     Ok(summary)
 }
 

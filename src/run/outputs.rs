@@ -1,0 +1,303 @@
+//! A run's output folder: taken and checked before anything in it changes, trimmed to a
+//! resumed checkpoint's step (or cleared of an earlier run), then written at the scene's
+//! cadence (series rows, particle and contact snapshots), checkpointed, and summarised.
+
+use std::path::{Path, PathBuf};
+
+use crate::checkpoint::RunMarks;
+use crate::error::PowderError;
+use crate::output::atomic::{remove_stale_temps, write_atomic};
+use crate::output::folder::{check_writable, FolderLock};
+use crate::output::series_csv::{self, SeriesCsv, SeriesMark};
+use crate::output::{contacts, vtk};
+use crate::run::monitor::MonitorReference;
+use crate::run::simulation::{Observation, Simulation};
+use crate::run::snapshot::{csv_header, csv_row, Snapshot};
+use crate::run::{RunOptions, RunSummary};
+use crate::scene::Scene;
+
+/// The writers of a run's output folder (none where the run writes nothing).
+pub(super) struct RunOutputs {
+    /// The folder, held for this run.
+    dir: Option<(PathBuf, FolderLock)>,
+    /// `series.csv`.
+    csv: Option<SeriesCsv>,
+    /// The particle snapshots (`snapshots/`).
+    particles: Option<vtk::Series>,
+    /// The contact network (`contacts/`).
+    contacts: Option<vtk::Series>,
+    /// The particles' radii (the snapshots').
+    radii: Vec<f64>,
+    /// The walls' normals (the contact network's wall ends).
+    wall_normals: Vec<glam::DVec3>,
+}
+
+impl RunOutputs {
+    /// Takes `opts.out_dir` for a run of `scene` whose engine has `radii` and step `dt`:
+    /// every output it replaces checked writable, and, resuming from step `resumed_from`
+    /// with the checkpoint's `marks`, the series' rows up to that step kept (refused where
+    /// they are not the ones that run wrote) and later snapshots removed; a fresh run
+    /// removes the earlier run's checkpoint, summary and snapshots.
+    pub(super) fn open(
+        scene: &Scene,
+        opts: &RunOptions,
+        (resumed_from, marks): (Option<u64>, &RunMarks),
+        radii: Vec<f64>,
+        dt: f64,
+    ) -> Result<Self, PowderError> {
+        let wall_normals = scene
+            .walls
+            .iter()
+            .map(|w| glam::DVec3::from_array(w.normal))
+            .collect();
+        let Some(d) = opts.out_dir.as_deref() else {
+            return Ok(RunOutputs {
+                dir: None,
+                csv: None,
+                particles: None,
+                contacts: None,
+                radii,
+                wall_normals,
+            });
+        };
+        let lock = Self::take(d, scene)?;
+        let csv_path = d.join("series.csv");
+        // the series' rows up to the checkpoint's step on resume, read (and its columns
+        // checked) before anything in the directory changes
+        let header = csv_header(&scene.walls);
+        let mut kept = match resumed_from {
+            Some(step) => series_csv::rows_until(&csv_path, step, &header)?,
+            None => Vec::new(),
+        };
+        // only the rows written before the checkpoint: Ctrl-C's row off the output cadence
+        // follows it (the straight run has none there); `late` is that row
+        let mut late = None;
+        let found = kept.len();
+        // rows beyond the marked ones that are not that late row: another run's series
+        let mut foreign = false;
+        if let (Some(m), Some(step)) = (marks.series, resumed_from) {
+            let marked = usize::try_from(m.rows).unwrap_or(usize::MAX);
+            if kept.len() > marked {
+                let beyond = kept.split_off(marked);
+                foreign = beyond.iter().any(|r| !series_csv::row_is_at(r, step));
+                late = beyond.into_iter().find(|r| series_csv::row_is_at(r, step));
+            }
+        }
+        // rows kept on resume must be those the checkpoint's run wrote (no series at all: it
+        // starts at the checkpoint's step)
+        if let (Some(ckpt), Some(step)) = (&opts.resume, resumed_from) {
+            let ours = marks.series;
+            let differ = !kept.is_empty() && ours.is_some_and(|m| m != SeriesMark::of(&kept));
+            if foreign || differ {
+                return Err(PowderError::Run(format!(
+                    "the series `{}` is not the one the run of checkpoint `{}` wrote (its {found} rows up to step {step} differ from that run's {}): resume into the folder that run wrote (--out), or into an empty one, where the series starts at the checkpoint's step",
+                    csv_path.display(),
+                    ckpt.display(),
+                    ours.map_or(0, |m| m.rows)
+                )));
+            }
+        }
+        // a branch whose cadence falls on the checkpoint's step keeps that row (its straight
+        // run has it, and a resumed run does not write its first step); otherwise the row and
+        // the snapshots of that step go
+        let drop_late = match late {
+            Some(row) if resumed_from.is_some_and(|s| s.is_multiple_of(scene.output_every)) => {
+                kept.push(row);
+                false
+            }
+            Some(_) => true,
+            None => false,
+        };
+        let mut particles = match opts.no_snapshots {
+            false => Some(vtk::Series::new(d, &scene.name)?),
+            true => None,
+        };
+        let mut network = match scene.writes_contacts() && !opts.no_snapshots {
+            true => Some(vtk::Series::contacts(d, &scene.name)?),
+            false => None,
+        };
+        // what writes killed before their rename left (the files they replace are intact)
+        let stale = remove_stale_temps(d)
+            + remove_stale_temps(&d.join("snapshots"))
+            + remove_stale_temps(&d.join("contacts"));
+        if stale > 0 && opts.verbose {
+            eprintln!(
+                "removed {stale} temporary files that interrupted writes left in {}",
+                d.display()
+            );
+        }
+        match resumed_from {
+            Some(step) => {
+                // the snapshots go with the rows: none at the checkpoint's step where its row
+                // goes; both series, whether this run writes them or not (--no-snapshots)
+                let last = if drop_late {
+                    step.saturating_sub(1)
+                } else {
+                    step
+                };
+                let [p, c] = vtk::Series::both_unopened(d, &scene.name);
+                for (opened, mut unopened) in [(particles.as_mut(), p), (network.as_mut(), c)] {
+                    match opened {
+                        Some(s) => s.keep_until(last, dt)?,
+                        None => unopened.keep_until(last, dt)?,
+                    }
+                }
+            }
+            None => Self::clear_earlier_run(d, scene, opts.verbose)?,
+        }
+        Ok(RunOutputs {
+            csv: Some(SeriesCsv::start(&csv_path, &header, &kept)?),
+            dir: Some((d.to_path_buf(), lock)),
+            particles,
+            contacts: network,
+            radii,
+            wall_normals,
+        })
+    }
+
+    /// Holds the folder `d` for this run, with every output it writes checked writable
+    /// before anything there changes.
+    fn take(d: &Path, scene: &Scene) -> Result<FolderLock, PowderError> {
+        let lock = FolderLock::take(d)?;
+        let [particles, contacts] = vtk::Series::both_unopened(d, &scene.name);
+        let replaced = [
+            d.join("checkpoint.bin"),
+            d.join("summary.json"),
+            particles.collection_path(),
+            contacts.collection_path(),
+        ];
+        check_writable(d, &replaced, &[d.join("series.csv")])?;
+        for sub in [particles.folder(), contacts.folder()] {
+            if sub.is_dir() {
+                check_writable(&sub, &[], &[])?;
+            }
+        }
+        Ok(lock)
+    }
+
+    /// A fresh run replaces the series (a resume keeps its rows up to the checkpoint's
+    /// step: a killed run may have written more), and the checkpoint of the run it
+    /// replaces goes with it (resumed, it would continue a series that is no longer
+    /// there), with its summary and its snapshots (left beside the new run's, a killed run
+    /// would look finished, its folder holding two runs).
+    fn clear_earlier_run(d: &Path, scene: &Scene, verbose: bool) -> Result<(), PowderError> {
+        for c in [d.join("checkpoint.bin"), d.join("summary.json")] {
+            match std::fs::remove_file(&c) {
+                Ok(()) if verbose => eprintln!("removed the earlier run's {}", c.display()),
+                Ok(()) => {}
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+                Err(e) => {
+                    return Err(PowderError::io(
+                        format!("cannot remove `{}`", c.display()),
+                        e,
+                    ))
+                }
+            }
+        }
+        // (both series, whether this run writes them or not: they are the earlier run's)
+        for mut s in vtk::Series::both_unopened(d, &scene.name) {
+            let removed = s.clear()?;
+            if removed > 0 && verbose {
+                eprintln!(
+                    "removed the earlier run's {removed} snapshot files in {}",
+                    s.folder().display()
+                );
+            }
+        }
+        Ok(())
+    }
+
+    /// The checkpoint's path, where the run writes one.
+    pub(super) fn checkpoint_path(&self) -> Option<PathBuf> {
+        self.dir.as_ref().map(|(d, _)| d.join("checkpoint.bin"))
+    }
+
+    /// Whether the contact network is written with the snapshots.
+    pub(super) fn writes_contacts(&self) -> bool {
+        self.contacts.is_some()
+    }
+
+    /// The output folder, where the run writes one.
+    pub(super) fn dir(&self) -> Option<&Path> {
+        self.dir.as_ref().map(|(d, _)| d.as_path())
+    }
+
+    /// Writes the outputs of one step: its series row, particle snapshot and contact
+    /// network.
+    pub(super) fn write<S: Simulation>(
+        &mut self,
+        scene: &Scene,
+        engine: &S,
+        obs: &Observation,
+        snap: &Snapshot,
+    ) -> Result<(), PowderError> {
+        if let Some(c) = self.csv.as_mut() {
+            c.append(snap.step, &csv_row(snap, obs, &scene.walls))?;
+        }
+        if let Some(s) = self.particles.as_mut() {
+            s.write(
+                snap.step,
+                snap.time,
+                &vtk::Particles {
+                    positions: &obs.positions,
+                    velocities: &obs.velocities,
+                    radii: &self.radii,
+                    angular_velocities: &obs.angular_velocities,
+                },
+            )?;
+        }
+        if let Some(n) = self.contacts.as_mut() {
+            let ends = contacts::Ends {
+                positions: &obs.positions,
+                radii: &self.radii,
+                wall_normals: &self.wall_normals,
+                periodic: scene.domain.periodic,
+                domain: (
+                    glam::DVec3::from_array(scene.domain.min),
+                    glam::DVec3::from_array(scene.domain.max),
+                ),
+            };
+            let doc = contacts::vtp(&engine.contact_network()?, &ends);
+            n.write_vtp(snap.step, snap.time, &doc)?;
+        }
+        Ok(())
+    }
+
+    /// Syncs the series' rows to disk.
+    pub(super) fn sync_series(&mut self) -> Result<(), PowderError> {
+        match self.csv.as_mut() {
+            Some(c) => c.sync(),
+            None => Ok(()),
+        }
+    }
+
+    /// The rows synced, then the checkpoint they lead up to, with what the monitor
+    /// measures against.
+    pub(super) fn checkpoint<S: Simulation>(
+        &mut self,
+        scene: &Scene,
+        engine: &S,
+        monitor: MonitorReference,
+    ) -> Result<(), PowderError> {
+        let path = self.checkpoint_path();
+        if let (Some(c), Some(rows)) = (path, self.csv.as_mut()) {
+            rows.sync()?;
+            let marks = RunMarks {
+                series: Some(rows.mark()),
+                monitor: Some(monitor),
+            };
+            engine.write_checkpoint(&c, scene, &marks)?;
+        }
+        Ok(())
+    }
+
+    /// Writes `summary.json`, where the run writes a folder.
+    pub(super) fn write_summary(&self, summary: &RunSummary) -> Result<(), PowderError> {
+        if let Some(d) = self.dir() {
+            let text = serde_json::to_string_pretty(summary)
+                .map_err(|e| PowderError::Run(format!("cannot encode the summary: {e}")))?;
+            write_atomic(&d.join("summary.json"), text.as_bytes())?;
+        }
+        Ok(())
+    }
+}
