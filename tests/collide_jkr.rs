@@ -559,6 +559,17 @@ fn a_deposited_sphere_rests_below_the_rolling_yield_force_and_rolls_above() {
     .unwrap_err()
     .to_string();
     assert!(err.contains("--wall"), "{err}");
+    // a force that carries the sphere beyond f64 along the wall is named
+    let err = powder::measure::collide::collide(&CollideSpec {
+        tangential_force: 1e308,
+        ..base.clone()
+    })
+    .unwrap_err()
+    .to_string();
+    assert!(
+        err.contains("`tangential-force`") && err.contains("1e308"),
+        "{err}"
+    );
 }
 
 /// A sphere stuck to a wall by JKR adhesion under a constant force along the wall: held

@@ -506,6 +506,33 @@ pub(super) fn collide_with(
         )));
     }
     let scene = spec.scene(dt);
+    // the room along the wall for the sphere's travel: beyond f64 only by these settings
+    if !scene
+        .domain
+        .min
+        .iter()
+        .chain(&scene.domain.max)
+        .all(|v| v.is_finite())
+    {
+        let (param, what) = if spec.tangential_force != 0.0 {
+            (
+                "tangential-force",
+                format!("the tangential force {:e} N", spec.tangential_force),
+            )
+        } else if spec.settle != 0.0 {
+            ("settle", format!("the settle time {:e} s", spec.settle))
+        } else {
+            (
+                "velocity",
+                format!("the impact velocity {:e} m/s", spec.velocity),
+            )
+        };
+        return Err(crate::error::ParamError::new(
+            param,
+            format!("{what} carries the sphere beyond f64's range along the wall over the collision and the settle time: choose a smaller one"),
+        )
+        .into());
+    }
     let wall_x = scene.walls.first().map_or(0.0, |w| w.point[0]);
     let wall = spec.wall;
     let result = match backend {
