@@ -2,7 +2,7 @@
 //! CPU engine (on every core) otherwise: the software adapter is slower than the CPU
 //! engine, so it runs only when asked for (`--backend gpu`, or `POWDER_ADAPTER` set).
 
-use crate::gpu::context::{adapter_infos, ADAPTER_ENV};
+use crate::gpu::adapter::{adapter_infos, ADAPTER_ENV};
 use crate::gpu::{AdapterPreference, GpuContext};
 use crate::PowderError;
 

@@ -7,6 +7,7 @@
 //! into one command encoder, results read back only for output. What each submodule does:
 //! `docs/architecture.md`, *The crate map*; the design: *The GPU engine* there.
 
+pub mod adapter;
 pub mod composition;
 pub mod context;
 pub mod control;
@@ -20,13 +21,15 @@ pub mod permute;
 pub mod quiet;
 pub mod records;
 pub mod scan;
+mod section;
 pub mod shaders;
 pub mod state;
 pub mod timestamps;
 pub mod traffic;
 pub mod window;
 
-pub use context::{AdapterPreference, AdapterSummary, GpuContext, LimitsSummary};
+pub use adapter::{AdapterPreference, AdapterSummary, LimitsSummary};
+pub use context::GpuContext;
 pub use engine::{GpuEngine, GpuOptions, GpuSavedState, GpuState, RebuildChain};
 pub use grid::{GridSort, SortResult};
 pub use layout::{decode, encode, CellCoord, CellOffset, GridParams, PackedPosition};
