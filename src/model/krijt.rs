@@ -81,7 +81,8 @@ impl KrijtLaw {
             Relaxation::Constant { tvis } => tvis,
             Relaxation::Stress { c, b, zeta } => {
                 let t0 = c * a12;
-                if pc > 0.0 {
+                // (C = 0: no viscosity, whatever the pressure)
+                if pc > 0.0 && t0 != 0.0 {
                     t0 * (b * pc / e_star).powf(zeta).exp()
                 } else {
                     t0
@@ -405,6 +406,16 @@ mod tests {
         // p_c <= 0: C·R
         assert_relative_eq!(law.relaxation_time(-1.0, ES, a12), 2.1e-4 * 147.0);
         assert_relative_eq!(law.relaxation_time(0.0, ES, a12), 2.1e-4 * 147.0);
+        // C = 0: no viscosity at any pressure (not 0·exp(∞) = NaN)
+        let none = KrijtLaw {
+            relaxation: Relaxation::Stress {
+                c: 0.0,
+                b: 100.0,
+                zeta: 4.0,
+            },
+            sigma0: 0.0,
+        };
+        assert_eq!(none.relaxation_time(ES, ES, a12), 0.0);
         // p_c = 0.2 E*: C·R·exp(1.24⁴)
         assert_relative_eq!(
             law.relaxation_time(0.2 * ES, ES, a12),

@@ -480,7 +480,9 @@ impl ContactModel {
     /// oscillator ([`Self::friction_oscillators`]: tangential k_t with m_t = 2/7·m_r,
     /// rolling k_r and twisting k_o with 1/[ℓ²(1/I_i + 1/I_j)]; against a wall, where
     /// ℓ = 2r, the rolling period with k_r = 2/5·k is half the normal one), and every
-    /// dashpot γ within γ·dt/m ≤ [`MAX_VISCOUS_STEP`].
+    /// dashpot γ within γ·dt/m ≤ [`MAX_VISCOUS_STEP`], the `krijt`/`stress` viscous
+    /// coefficient at its largest in a head-on collision at `impact_velocity`
+    /// ([`JkrParams::viscous_coefficient_estimate`]).
     pub fn time_step(&self, geom: &PairGeometry, impact_velocity: f64) -> TimeStep {
         let mr = geom.reduced_mass;
         let (tc, what, gamma0) = match self {
@@ -540,35 +542,34 @@ impl ContactModel {
         }
         let mut max = tc / MAX_DT_FRACTION;
         let mut reason = format!("dt <= tc/{MAX_DT_FRACTION} with {what}, tc = {tc:.4e} s");
-        // the krijt/stress viscous force is explicit: a dashpot of the coefficient the
-        // compression reaches, found at the steps the rules so far allow
-        let krijt = match self {
-            Self::Jkr(p) => {
-                p.viscous_coefficient_estimate(geom, impact_velocity, max, MAX_VISCOUS_STEP)
-            }
-            _ => None,
-        };
-        let (gamma0, normal_dashpot, normal_ratio) = match (self, krijt) {
-            (Self::Jkr(p), Some(k)) => (k.c, format!("the viscous coefficient c = 2*T_vis*E*/nu^2*a of dissipation = \"{}\" at its largest in a head-on collision at {impact_velocity} m/s (at the overlap {:.4e} m), c", p.dissipation.name(), k.reach), "m_r/c"),
-            _ => (gamma0, "the viscous damping gamma0".to_string(), "m_r/gamma0"),
-        };
         // explicit viscous forces: keep γ·dt/m small (the exact decay per step is
-        // exp(−γ·dt/m); the explicit update is unstable beyond γ·dt/m = 2).
-        let dashpots = std::iter::once((gamma0, mr, normal_dashpot.as_str(), normal_ratio)).chain(
-            self.friction_oscillators(geom, impact_velocity)
-                .into_iter()
-                .map(|o| (o.gamma, o.mass, o.what, "m/gamma")),
-        );
-        for (gamma, mass, name, ratio) in dashpots {
-            if gamma > 0.0 {
-                let visc = MAX_VISCOUS_STEP * mass / gamma;
+        // exp(−γ·dt/m); with the force at the predicted velocity the update is unstable
+        // beyond γ·dt/m = 1)
+        if gamma0 > 0.0 {
+            let visc = MAX_VISCOUS_STEP * mr / gamma0;
+            if visc < max {
+                max = visc;
+                reason = format!("dt <= {MAX_VISCOUS_STEP}*m_r/gamma0 = {visc:.4e} s for the viscous damping gamma0 = {gamma0:.4e} kg/s");
+            }
+        }
+        for o in self.friction_oscillators(geom, impact_velocity) {
+            if o.gamma > 0.0 {
+                let visc = MAX_VISCOUS_STEP * o.mass / o.gamma;
                 if visc < max {
                     max = visc;
-                    reason = if name.starts_with("the viscous") {
-                        format!("dt <= {MAX_VISCOUS_STEP}*{ratio} = {visc:.4e} s for {name} = {gamma:.4e} kg/s")
-                    } else {
-                        format!("dt <= {MAX_VISCOUS_STEP}*{ratio} = {visc:.4e} s for the {name} damping {gamma:.4e} kg/s (m = {mass:.4e} kg)")
-                    };
+                    reason = format!("dt <= {MAX_VISCOUS_STEP}*m/gamma = {visc:.4e} s for the {} damping {:.4e} kg/s (m = {:.4e} kg)", o.what, o.gamma, o.mass);
+                }
+            }
+        }
+        // the krijt/stress viscous force is explicit too, its coefficient growing with the
+        // contact: the longest step that resolves a head-on collision at the impact velocity
+        if let Self::Jkr(p) = self {
+            if let Some(k) =
+                p.viscous_coefficient_estimate(geom, impact_velocity, max, MAX_VISCOUS_STEP)
+            {
+                if k.dt < max {
+                    max = k.dt;
+                    reason = format!("dt <= {:.4e} s, the longest step at which a head-on collision at {impact_velocity} m/s keeps c*dt/m_r <= {MAX_VISCOUS_STEP} for the viscous coefficient c = 2*T_vis*E*/nu^2*a of dissipation = \"{}\", largest at the overlap {:.4e} m (c = {:.4e} kg/s)", k.dt, p.dissipation.name(), k.reach, k.c);
                 }
             }
         }
@@ -605,7 +606,8 @@ pub const DEFAULT_DT_FRACTION: f64 = 50.0;
 /// Largest accepted dt without `--force`: tc/10. Velocity Verlet is stable up to
 /// tc·2/π ≈ 0.64·tc, but restitution and overlap errors grow quickly beyond tc/10.
 pub const MAX_DT_FRACTION: f64 = 10.0;
-/// Largest accepted γ0·dt/m_r.
+/// Largest accepted γ·dt/m of an explicit dashpot (the update, with the force at the
+/// predicted velocity, is unstable beyond 1).
 pub const MAX_VISCOUS_STEP: f64 = 0.2;
 
 /// The time-step rule of one pair: the default, the largest accepted value and why.

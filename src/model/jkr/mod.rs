@@ -27,6 +27,7 @@ pub(crate) mod radius;
 pub mod rolling;
 mod scaling;
 mod twisting;
+mod viscous_step;
 
 use crate::model::friction::LudingFriction;
 use crate::model::history::{HistoryField, HostField, Mirror, Shape};
@@ -34,7 +35,7 @@ use crate::model::krijt;
 use crate::model::params::word_enum;
 use crate::model::{ContactHistory, NormalForce, PairGeometry};
 use dissipation::TSUJI_PREFACTOR;
-pub use dissipation::{tsuji_beta, Dissipation, TsujiStiffness, ViscousEstimate, VISCOUS_STEPS};
+pub use dissipation::{tsuji_beta, Dissipation, TsujiStiffness};
 pub use mindlin::Tangential;
 pub use pair::JkrPair;
 pub use radius::contact_radius_f32;
@@ -43,6 +44,7 @@ pub use rolling::Rolling;
 pub use scaling::StiffnessScaling;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
+pub use viscous_step::ViscousEstimate;
 
 /// The per-contact history of the JKR normal law: touched since the pair last broke.
 pub const HISTORY: &[HistoryField] = &[HistoryField {
