@@ -636,3 +636,20 @@ fn the_stress_dissipation_step_follows_the_collision() {
         "{ts:?}"
     );
 }
+
+/// A pair overdamped by a long relaxation time creeps into the adhesive well's rest at δ0
+/// without ever turning back: stuck once it approaches slower than `REST_SPEED` of the
+/// impact (it ran out the 50 million steps a collision may take, undecided).
+#[test]
+fn an_overdamped_pair_creeps_in_and_sticks() {
+    for v in [0.01, 0.1] {
+        let r = run(krijt(30.0), v);
+        let d0 = params(Dissipation::None).delta0(geometry().r_eff());
+        // measured: 8 546 and 9 551 steps, δmax = δ0 to 1e-5
+        assert!(r.stuck && r.steps < 100_000, "v {v}: {r:?}");
+        assert!(
+            (r.delta_max / d0 - 1.0).abs() < 1e-3,
+            "v {v}: {r:?} (δ0 {d0})"
+        );
+    }
+}

@@ -9,7 +9,8 @@
 //! or dissipate energy can then never escape (it oscillates on an elastic k2 branch or in
 //! the adhesive well), so e = 0. A pair that, receding in contact, has slowed below
 //! [`REST_SPEED`] of the impact speed and of its own fastest receding has come to rest
-//! (an overdamped contact creeps back and never turns): stuck too.
+//! (an overdamped contact creeps back and never turns): stuck too, as is one that creeps
+//! in, approaching slower than [`REST_SPEED`] of the impact speed without turning back.
 
 use crate::error::PowderError;
 use crate::model::{analytic, ContactModel, Dissipation, PairGeometry};
@@ -64,7 +65,9 @@ pub struct CollideSpec {
 
 /// A pair receding inside its interaction range slower than this fraction of the impact
 /// speed, and of its fastest receding so far, has come to rest: stuck (e below it
-/// whatever follows, since the contact only slows it further).
+/// whatever follows, since the contact only slows it further). So has a pair in contact
+/// approaching slower than this fraction of the impact speed, its speed changing by less
+/// than itself a step (creeping in; a turn crosses that band in one step).
 pub const REST_SPEED: f64 = 1e-6;
 
 /// A settled sphere whose centre moved along the wall more than this many radii over the
@@ -132,7 +135,8 @@ pub struct CollideResult {
     pub e: f64,
     /// Whether the pair stuck (e = 0): the relative normal velocity turned back to approaching
     /// inside the interaction range, or, receding in it, fell below [`REST_SPEED`] of the
-    /// impact speed and of its own peak (an overdamped pair creeps to rest and never turns).
+    /// impact speed and of its own peak, or approaching crept below it (an overdamped pair
+    /// creeps to rest and never turns).
     pub stuck: bool,
     /// `"rebound"`, `"stuck"`, or after a settle time (`CollideSpec::settle`) `"resting"`
     /// (the centre moved less than [`ROLLING_TRAVEL`] radii along the wall over its last

@@ -225,6 +225,7 @@ pub(super) fn run_collision(
     let mut touched = false;
     let mut receding = false;
     let mut fastest_receding: f64 = 0.0;
+    let mut vn_before = vn0;
     let mut first_contact = None;
     let mut last_contact = 0.0;
     let mut delta_max: f64 = 0.0;
@@ -315,7 +316,16 @@ pub(super) fn run_collision(
         }
         let turned = receding && vn > 0.0;
         let crept = receding && -vn < REST_SPEED * vn0.min(fastest_receding) && contact;
-        if (turned || crept) && delta > -reach {
+        // an overdamped approach that creeps into its rest without turning back: slower
+        // than REST_SPEED of the impact and changing by less than itself a step (a turn
+        // crosses that band in one step)
+        let crept_in = !receding
+            && contact
+            && vn > 0.0
+            && vn < REST_SPEED * vn0
+            && (vn - vn_before).abs() < vn;
+        vn_before = vn;
+        if (turned || crept || crept_in) && delta > -reach {
             delta_c = Some(delta);
             break;
         }
