@@ -177,3 +177,43 @@ pub fn coordination(scene: &Scene, positions: &[DVec3], radius: &[f64]) -> f64 {
     });
     2.0 * pairs as f64 / positions.len().max(1) as f64
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn packings_do_not_overlap_and_fill_the_count() {
+        for case in [Case::Hysteretic, Case::Jkr] {
+            let s = packing(case, 130, 1.0, 3).unwrap();
+            assert_eq!(s.particles.len(), 130);
+            let pos: Vec<DVec3> = s
+                .particles
+                .iter()
+                .map(|p| DVec3::from_array(p.position))
+                .collect();
+            let r: Vec<f64> = s.particles.iter().map(|p| p.radius).collect();
+            // a 6 x 6 base: 3 full layers and 22 sites (3 rows of 6 and 4) on top; every
+            // lattice neighbour in contact and nothing else: x bonds 3·30 + 3·5 + 3,
+            // y bonds 3·30 + 4·3 + 2·2, z bonds 2·36 + 22
+            let bonds = (90 + 15 + 3) + (90 + 12 + 4) + (72 + 22);
+            let z = coordination(&s, &pos, &r);
+            assert_eq!(z, 2.0 * bonds as f64 / 130.0);
+            for (i, p) in pos.iter().enumerate() {
+                for q in &pos[i + 1..] {
+                    assert!(p.distance(*q) > 2.0 * r[i] * (1.0 - 0.003));
+                }
+            }
+            // in contact with the walls too, by at most 0.3 % of the diameter
+            for p in &s.particles {
+                for a in 0..3 {
+                    assert!(p.position[a] - p.radius > s.domain.min[a] - 0.006 * p.radius);
+                    assert!(p.position[a] + p.radius < s.domain.max[a] + 0.006 * p.radius);
+                }
+            }
+            // the same seed gives the same scene, another seed another
+            assert_eq!(packing(case, 130, 1.0, 3).unwrap(), s);
+            assert_ne!(packing(case, 130, 1.0, 4).unwrap(), s);
+        }
+    }
+}

@@ -159,3 +159,18 @@ pub fn utc_date(secs: i64) -> String {
         rem % 60
     )
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn utc_dates_are_iso() {
+        assert_eq!(utc_date(0), "1970-01-01T00:00:00Z");
+        assert_eq!(utc_date(951_827_696), "2000-02-29T12:34:56Z");
+        assert_eq!(utc_date(1_735_689_599), "2024-12-31T23:59:59Z");
+        let d = utc_now();
+        assert_eq!(d.len(), 20, "{d}");
+        assert!(d.starts_with("20") && d.ends_with('Z'), "{d}");
+    }
+}

@@ -14,16 +14,21 @@
 //! measured at the previous size predicts more than the per-case time budget; larger sizes
 //! of that case and backend are then skipped too. Timings are measured, never asserted.
 
-use crate::cpu::{CpuEngine, Threads};
+mod row;
+mod run;
+mod table;
+
+use crate::cpu::Threads;
 use crate::error::{ParamError, PowderError};
-use crate::gpu::{GpuContext, GpuEngine};
+use crate::gpu::GpuContext;
 use crate::measure::collide::Backend;
-use crate::scene::Scene;
 use serde::Serialize;
-use std::time::Instant;
 
 pub use super::packing::{coordination, packing, Case, LATTICE_OVERLAP};
 pub use super::provenance::{utc_date, utc_now, Adapter, Machine, Provenance};
+pub use row::BenchRow;
+use run::{run_cpu, run_gpu};
+pub use table::{table_header, table_line};
 
 /// The name of a backend in tables and JSON.
 pub fn backend_name(b: Backend) -> &'static str {
@@ -160,106 +165,6 @@ impl BenchOptions {
     }
 }
 
-/// One (case, backend, size) of the benchmark.
-#[derive(Clone, Debug, Serialize)]
-pub struct BenchRow {
-    /// `hysteretic` or `jkr`.
-    pub case: &'static str,
-    /// `cpu` or `gpu`.
-    pub backend: &'static str,
-    /// CPU: the threads the engine ran on.
-    pub threads: Option<usize>,
-    /// CPU: the rate over the rate of the first thread count measured (`--threads 1,2`:
-    /// the speed-up from 1 to 2 threads).
-    pub speedup: Option<f64>,
-    /// N.
-    pub particles: usize,
-    /// `ran`, `skipped` (by the time or memory budget, or after a larger size stopped) or
-    /// `failed` (the engine refused or stopped, e.g. over the adapter's storage binding
-    /// limit); the reason is in `note`.
-    pub status: &'static str,
-    /// Why a size was skipped or failed.
-    pub note: Option<String>,
-    /// Time step, s.
-    pub dt: Option<f64>,
-    /// Timed steps (after `warmup` untimed ones).
-    pub steps: u64,
-    /// Building the engine (upload, pipelines, first neighbour lists), s.
-    pub setup_seconds: Option<f64>,
-    /// Wall time of the timed steps, s.
-    pub wall_seconds: Option<f64>,
-    /// `wall_seconds / steps`, s.
-    pub seconds_per_step: Option<f64>,
-    /// `particles · steps / wall_seconds`.
-    pub particle_steps_per_second: Option<f64>,
-    /// Device buffers of the GPU engine (`GpuEngine::buffer_bytes`), bytes.
-    pub gpu_bytes: Option<u64>,
-    /// `gpu_bytes / particles`.
-    pub gpu_bytes_per_particle: Option<f64>,
-    /// GPU: the device buffers by name, bytes (`GpuEngine::buffers`: where the bytes go).
-    pub gpu_buffers: Option<Vec<(String, u64)>>,
-    /// Entries the GPU engine's neighbour lists had room for at the end (grown to 1.25×
-    /// what a rebuild needs).
-    pub list_entries: Option<u64>,
-    /// GPU: the windows the particles were blocked into (particles a window, windows;
-    /// `gpu::window`).
-    pub windows: Option<(u64, u64)>,
-    /// Neighbour-list rebuilds during the timed steps (both backends keep a Verlet list
-    /// with a skin).
-    pub rebuilds: Option<u64>,
-    /// GPU: quiet batches kept and rolled back during the timed steps (`gpu::quiet`).
-    pub quiet_batches: Option<(u64, u64)>,
-    /// GPU: batches halted for a rebuild due in a step recorded without one during the
-    /// timed steps (`RebuildChain::OnDemand`).
-    pub rebuild_halts: Option<u64>,
-    /// GPU: compute dispatches a step records, without and with a rebuild's passes
-    /// (`GpuEngine::dispatches_per_step`).
-    pub dispatches_per_step: Option<[usize; 2]>,
-    /// The particle-steps per second of every run (`--repeats`); the row is the fastest.
-    pub runs: Vec<f64>,
-    /// Particle–particle contacts per particle at the end (shows the packing is dense).
-    pub contacts_per_particle: Option<f64>,
-    /// GPU with `--profile`: the device time of each pass over as many steps again as
-    /// were timed (`GpuEngine::profile`).
-    pub passes: Option<crate::gpu::timestamps::PassProfile>,
-    /// GPU: the bytes each pass binds and the estimate of bytes moved per particle-step
-    /// with the rebuilds of the timed steps (`gpu::traffic`; an upper bound).
-    pub traffic: Option<crate::gpu::TrafficEstimate>,
-}
-
-impl BenchRow {
-    fn skipped(case: Case, backend: Backend, n: usize, steps: u64, note: String) -> Self {
-        Self {
-            case: case.name(),
-            backend: backend_name(backend),
-            threads: None,
-            speedup: None,
-            particles: n,
-            status: "skipped",
-            note: Some(note),
-            dt: None,
-            steps,
-            setup_seconds: None,
-            wall_seconds: None,
-            seconds_per_step: None,
-            particle_steps_per_second: None,
-            gpu_bytes: None,
-            gpu_buffers: None,
-            gpu_bytes_per_particle: None,
-            list_entries: None,
-            windows: None,
-            rebuilds: None,
-            quiet_batches: None,
-            rebuild_halts: None,
-            dispatches_per_step: None,
-            runs: Vec::new(),
-            contacts_per_particle: None,
-            passes: None,
-            traffic: None,
-        }
-    }
-}
-
 /// The whole benchmark, as `--json` writes it.
 #[derive(Clone, Debug, Serialize)]
 pub struct BenchReport {
@@ -280,151 +185,6 @@ pub struct BenchReport {
     pub seed: u64,
     /// One row per (case, backend, size), in that order.
     pub rows: Vec<BenchRow>,
-}
-
-fn run_cpu(
-    scene: &Scene,
-    case: Case,
-    threads: &Threads,
-    opts: &BenchOptions,
-) -> Result<BenchRow, PowderError> {
-    let n = scene.particles.len();
-    let t0 = Instant::now();
-    let mut engine = CpuEngine::with_threads(scene, threads.clone())?;
-    let setup = t0.elapsed().as_secs_f64();
-    engine.run_steps(opts.warmup)?;
-    let before = engine.rebuilds();
-    let t1 = Instant::now();
-    engine.run_steps(opts.steps)?;
-    let wall = t1.elapsed().as_secs_f64();
-    let rebuilds = engine.rebuilds() - before;
-    let z = coordination(scene, engine.positions(), engine.radii());
-    Ok(BenchRow {
-        case: case.name(),
-        backend: "cpu",
-        threads: Some(threads.count()),
-        speedup: None,
-        particles: n,
-        status: "ran",
-        note: None,
-        dt: Some(engine.dt()),
-        steps: opts.steps,
-        setup_seconds: Some(setup),
-        wall_seconds: Some(wall),
-        seconds_per_step: Some(wall / opts.steps as f64),
-        particle_steps_per_second: Some(n as f64 * opts.steps as f64 / wall.max(1e-12)),
-        gpu_bytes: None,
-        gpu_buffers: None,
-        gpu_bytes_per_particle: None,
-        list_entries: None,
-        windows: None,
-        rebuilds: Some(rebuilds),
-        quiet_batches: None,
-        rebuild_halts: None,
-        dispatches_per_step: None,
-        runs: Vec::new(),
-        contacts_per_particle: Some(z),
-        passes: None,
-        traffic: None,
-    })
-}
-
-fn run_gpu(
-    scene: &Scene,
-    case: Case,
-    ctx: GpuContext,
-    opts: &BenchOptions,
-) -> Result<BenchRow, PowderError> {
-    let n = scene.particles.len();
-    let t0 = Instant::now();
-    let mut engine = GpuEngine::with_options(
-        scene,
-        ctx,
-        crate::gpu::GpuOptions {
-            ledger: opts.ledger,
-            quiet: opts.quiet,
-            rebuild_chain: opts.rebuild_chain,
-            software_paths: opts.software_paths,
-            window_particles: opts.window_particles,
-            ..Default::default()
-        },
-    )?;
-    let setup = t0.elapsed().as_secs_f64();
-    engine.run_steps(opts.warmup)?;
-    let before = engine.rebuilds()?;
-    let quiet_before = engine.quiet_batches();
-    let halts_before = engine.rebuild_halts();
-    let t1 = Instant::now();
-    // run_steps waits for the device after every batch, so the clock sees the work done
-    engine.run_steps(opts.steps)?;
-    let wall = t1.elapsed().as_secs_f64();
-    let rebuilds = engine.rebuilds()? - before;
-    let quiet = engine.quiet_batches();
-    let halts = engine.rebuild_halts() - halts_before;
-    let quiet = (quiet.0 - quiet_before.0, quiet.1 - quiet_before.1);
-    let state = engine.state()?;
-    let z = coordination(scene, &state.positions, engine.radii());
-    let bytes = engine.buffer_bytes();
-    let buffers = engine.buffers();
-    let traffic = crate::gpu::TrafficEstimate::new(engine.traffic(), n, rebuilds, opts.steps);
-    let (dt, entries) = (engine.dt(), engine.list_entries());
-    let windows = engine.windows();
-    // after the timed steps, as many again with a timestamp after every pass (an adapter
-    // without timestamps keeps the timed row and says why it has no profile)
-    let (passes, no_profile) = match opts.profile {
-        true => match engine.profile(opts.steps) {
-            Ok(p) => (Some(p), None),
-            Err(e) => (None, Some(format!("no pass profile: {e}"))),
-        },
-        false => (None, None),
-    };
-    let pages = engine.entry_pages();
-    let mut paged = match pages.paged() {
-        true => format!(", the list entries in {} pages", pages.count),
-        false => String::new(),
-    };
-    let state_pages = engine.state_pages();
-    if state_pages.paged() {
-        paged += &format!(", the particle state in {} pages", state_pages.count);
-    }
-    let windowed = (windows.count > 1).then(|| {
-        format!(
-            "{} windows of {} particles{paged}",
-            windows.count, windows.len
-        )
-    });
-    let note = match (windowed, no_profile) {
-        (Some(w), Some(p)) => Some(format!("{w}; {p}")),
-        (w, p) => w.or(p),
-    };
-    Ok(BenchRow {
-        passes,
-        case: case.name(),
-        backend: "gpu",
-        threads: None,
-        speedup: None,
-        particles: n,
-        status: "ran",
-        note,
-        dt: Some(dt),
-        steps: opts.steps,
-        setup_seconds: Some(setup),
-        wall_seconds: Some(wall),
-        seconds_per_step: Some(wall / opts.steps as f64),
-        particle_steps_per_second: Some(n as f64 * opts.steps as f64 / wall.max(1e-12)),
-        gpu_bytes: Some(bytes),
-        gpu_buffers: Some(buffers),
-        gpu_bytes_per_particle: Some(bytes as f64 / n as f64),
-        list_entries: Some(entries),
-        windows: Some((windows.len, windows.count)),
-        rebuilds: Some(rebuilds),
-        quiet_batches: Some(quiet),
-        rebuild_halts: Some(halts),
-        dispatches_per_step: Some(engine.dispatches_per_step()),
-        runs: Vec::new(),
-        contacts_per_particle: Some(z),
-        traffic: Some(traffic),
-    })
 }
 
 /// Runs the benchmark, calling `progress` after every row. A GPU backend without an
@@ -549,8 +309,6 @@ fn speedup(rows: &[BenchRow], row: &BenchRow) -> Option<f64> {
     Some(row.particle_steps_per_second? / first.particle_steps_per_second?)
 }
 
-/// Why size `n` would exceed the time budget, predicted from the last measured size
-/// (stepping time scaled linearly in N; set-up likewise).
 /// The fastest of `repeats` runs, with every run's rate in `runs` (the first error stops).
 fn best_of(
     repeats: u32,
@@ -571,6 +329,8 @@ fn best_of(
     Ok(best)
 }
 
+/// Why size `n` would exceed the time budget, predicted from the last measured size
+/// (stepping time scaled linearly in N; set-up likewise).
 fn predicted_over_budget(
     last: Option<(usize, f64, f64, f64)>,
     n: usize,
@@ -638,104 +398,9 @@ pub fn parse_sizes(text: &str) -> Result<Vec<usize>, PowderError> {
     Ok(sizes)
 }
 
-fn opt(x: Option<f64>, f: impl Fn(f64) -> String) -> String {
-    x.map_or_else(|| "-".into(), f)
-}
-
-/// The table `powder bench` prints (one header, then [`table_line`] per row).
-pub fn table_header() -> String {
-    format!(
-        "{:<11} {:<6} {:>9} {:>6} {:>8} {:>9} {:>10} {:>12} {:>7} {:>9} {:>9} {:>8} {:>6}  note",
-        "case",
-        "back",
-        "particles",
-        "steps",
-        "setup s",
-        "wall s",
-        "s/step",
-        "p-steps/s",
-        "speedup",
-        "GPU B/p",
-        "B/p-step",
-        "rebuilds",
-        "Z"
-    )
-}
-
-/// One row of the table.
-pub fn table_line(r: &BenchRow) -> String {
-    format!(
-        "{:<11} {:<6} {:>9} {:>6} {:>8} {:>9} {:>10} {:>12} {:>7} {:>9} {:>9} {:>8} {:>6}  {}",
-        r.case,
-        match r.threads {
-            Some(t) => format!("{}×{t}", r.backend),
-            None => r.backend.to_string(),
-        },
-        r.particles,
-        r.steps,
-        opt(r.setup_seconds, |v| format!("{v:.2}")),
-        opt(r.wall_seconds, |v| format!("{v:.3}")),
-        opt(r.seconds_per_step, |v| format!("{v:.3e}")),
-        opt(r.particle_steps_per_second, |v| format!("{v:.3e}")),
-        opt(r.speedup, |v| format!("{v:.2}×")),
-        opt(r.gpu_bytes_per_particle, |v| format!("{v:.0}")),
-        opt(
-            r.traffic.as_ref().map(|t| t.bytes_per_particle_step),
-            |v| format!("{v:.0}")
-        ),
-        r.rebuilds.map_or_else(|| "-".into(), |v| v.to_string()),
-        opt(r.contacts_per_particle, |v| format!("{v:.2}")),
-        match (r.note.as_deref(), r.quiet_batches) {
-            (Some(n), _) => n.to_string(),
-            (None, Some((kept, back))) if kept + back > 0 =>
-                format!("quiet batches {kept} kept, {back} rolled back"),
-            _ => String::new(),
-        }
-    ) + &r
-        .passes
-        .as_ref()
-        .map_or(String::new(), |p| format!("\n    {}", p.summary()))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use glam::DVec3;
-
-    #[test]
-    fn packings_do_not_overlap_and_fill_the_count() {
-        for case in [Case::Hysteretic, Case::Jkr] {
-            let s = packing(case, 130, 1.0, 3).unwrap();
-            assert_eq!(s.particles.len(), 130);
-            let pos: Vec<DVec3> = s
-                .particles
-                .iter()
-                .map(|p| DVec3::from_array(p.position))
-                .collect();
-            let r: Vec<f64> = s.particles.iter().map(|p| p.radius).collect();
-            // a 6 x 6 base: 3 full layers and 22 sites (3 rows of 6 and 4) on top; every
-            // lattice neighbour in contact and nothing else: x bonds 3·30 + 3·5 + 3,
-            // y bonds 3·30 + 4·3 + 2·2, z bonds 2·36 + 22
-            let bonds = (90 + 15 + 3) + (90 + 12 + 4) + (72 + 22);
-            let z = coordination(&s, &pos, &r);
-            assert_eq!(z, 2.0 * bonds as f64 / 130.0);
-            for (i, p) in pos.iter().enumerate() {
-                for q in &pos[i + 1..] {
-                    assert!(p.distance(*q) > 2.0 * r[i] * (1.0 - 0.003));
-                }
-            }
-            // in contact with the walls too, by at most 0.3 % of the diameter
-            for p in &s.particles {
-                for a in 0..3 {
-                    assert!(p.position[a] - p.radius > s.domain.min[a] - 0.006 * p.radius);
-                    assert!(p.position[a] + p.radius < s.domain.max[a] + 0.006 * p.radius);
-                }
-            }
-            // the same seed gives the same scene, another seed another
-            assert_eq!(packing(case, 130, 1.0, 3).unwrap(), s);
-            assert_ne!(packing(case, 130, 1.0, 4).unwrap(), s);
-        }
-    }
 
     #[test]
     fn sizes_parse_and_bad_ones_are_named() {
@@ -744,16 +409,6 @@ mod tests {
             let e = parse_sizes(bad).unwrap_err().to_string();
             assert!(e.contains("sizes"), "{bad}: {e}");
         }
-    }
-
-    #[test]
-    fn utc_dates_are_iso() {
-        assert_eq!(utc_date(0), "1970-01-01T00:00:00Z");
-        assert_eq!(utc_date(951_827_696), "2000-02-29T12:34:56Z");
-        assert_eq!(utc_date(1_735_689_599), "2024-12-31T23:59:59Z");
-        let d = utc_now();
-        assert_eq!(d.len(), 20, "{d}");
-        assert!(d.starts_with("20") && d.ends_with('Z'), "{d}");
     }
 
     #[test]
