@@ -570,6 +570,18 @@ fn a_deposited_sphere_rests_below_the_rolling_yield_force_and_rolls_above() {
         err.contains("`tangential-force`") && err.contains("1e308"),
         "{err}"
     );
+    // and one that, finite, carries it where f64 no longer resolves it
+    let err = powder::measure::collide::collide(&CollideSpec {
+        tangential_force: 1e6,
+        impact_angle: 45.0,
+        ..base.clone()
+    })
+    .unwrap_err()
+    .to_string();
+    assert!(
+        err.contains("`tangential-force`") && err.contains("1e6"),
+        "{err}"
+    );
 }
 
 /// A sphere stuck to a wall by JKR adhesion under a constant force along the wall: held

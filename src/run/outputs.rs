@@ -18,8 +18,6 @@ use crate::scene::Scene;
 
 /// The writers of a run's output folder (none where the run writes nothing).
 pub(super) struct RunOutputs {
-    /// The folder, held for this run.
-    dir: Option<(PathBuf, FolderLock)>,
     /// `series.csv`.
     csv: Option<SeriesCsv>,
     /// The particle snapshots (`snapshots/`).
@@ -30,6 +28,8 @@ pub(super) struct RunOutputs {
     radii: Vec<f64>,
     /// The walls' normals (the contact network's wall ends).
     wall_normals: Vec<glam::DVec3>,
+    /// The folder, held for this run (last: released after the writers close).
+    dir: Option<(PathBuf, FolderLock)>,
 }
 
 impl RunOutputs {

@@ -66,8 +66,9 @@ pub struct CollideSpec {
 /// A pair receding inside its interaction range slower than this fraction of the impact
 /// speed, and of its fastest receding so far, has come to rest: stuck (e below it
 /// whatever follows, since the contact only slows it further). So has a pair in contact
-/// approaching slower than this fraction of the impact speed, its speed changing by less
-/// than itself a step (creeping in; a turn crosses that band in one step).
+/// approaching slower than this fraction of the impact speed whose speed decays as a creep
+/// does, its steps to a stop at the current deceleration holding for ten steps (at a turn
+/// they fall by one a step).
 pub const REST_SPEED: f64 = 1e-6;
 
 /// A settled sphere whose centre moved along the wall more than this many radii over the

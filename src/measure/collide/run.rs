@@ -196,6 +196,10 @@ fn approach_limit(gap: f64, vn: f64, dt: f64) -> u64 {
         .min(MAX_STEPS)
 }
 
+/// Consecutive steps an approach below [`REST_SPEED`] must decay as a creep to count as
+/// come to rest.
+const CREEP_STEPS: u32 = 10;
+
 /// The settle time in steps of `dt` (at least 4: its last quarter is one step or more).
 pub(super) fn settle_steps(spec: &CollideSpec, dt: f64) -> u64 {
     ((spec.settle / dt).ceil() as u64).max(4)
@@ -210,13 +214,6 @@ pub(super) fn run_collision(
     adapter: Option<String>,
     mut trace: Option<&mut Vec<TraceRow>>,
 ) -> Result<CollideResult, PowderError> {
-    if spec.settle > 0.0 && settle_steps(spec, dt) >= MAX_STEPS {
-        return Err(PowderError::Run(format!(
-            "the settle time {} s needs {} steps of {dt:e} s, over the {MAX_STEPS} a collision may take: shorten --settle or raise --dt",
-            spec.settle,
-            settle_steps(spec, dt)
-        )));
-    }
     let geom = spec.geometry();
     let reach = spec.model.reach(geom.r_eff());
     let vn0 = spec.normal_speed();
@@ -225,7 +222,7 @@ pub(super) fn run_collision(
     let mut touched = false;
     let mut receding = false;
     let mut fastest_receding: f64 = 0.0;
-    let mut vn_before = vn0;
+    let (mut vn_before, mut creeping, mut last_to_stop) = (vn0, 0, None);
     let mut first_contact = None;
     let mut last_contact = 0.0;
     let mut delta_max: f64 = 0.0;
@@ -317,14 +314,21 @@ pub(super) fn run_collision(
         let turned = receding && vn > 0.0;
         let crept = receding && -vn < REST_SPEED * vn0.min(fastest_receding) && contact;
         // an overdamped approach that creeps into its rest without turning back: slower
-        // than REST_SPEED of the impact and changing by less than itself a step (a turn
-        // crosses that band in one step)
-        let crept_in = !receding
-            && contact
-            && vn > 0.0
-            && vn < REST_SPEED * vn0
-            && (vn - vn_before).abs() < vn;
+        // than REST_SPEED of the impact, and decaying as a creep does (its steps to a stop
+        // at the current deceleration, vn/Δ, hold; at a turn they fall by one a step)
+        let slowing = vn_before - vn;
+        if !receding && contact && vn > 0.0 && vn < REST_SPEED * vn0 && slowing > 0.0 {
+            let to_stop = vn / slowing;
+            creeping = match last_to_stop {
+                Some(last) if to_stop > last - 0.5 => creeping + 1,
+                _ => 0,
+            };
+            last_to_stop = Some(to_stop);
+        } else {
+            (creeping, last_to_stop) = (0, None);
+        }
         vn_before = vn;
+        let crept_in = creeping >= CREEP_STEPS;
         if (turned || crept || crept_in) && delta > -reach {
             delta_c = Some(delta);
             break;
@@ -515,33 +519,16 @@ pub(super) fn collide_with(
             spec.velocity
         )));
     }
+    if spec.settle > 0.0 && settle_steps(spec, dt) >= MAX_STEPS {
+        return Err(PowderError::Run(format!(
+            "the settle time {:e} s needs {} steps of {dt:e} s, over the {MAX_STEPS} a collision may take: shorten --settle or raise --dt",
+            spec.settle,
+            settle_steps(spec, dt)
+        )));
+    }
     let scene = spec.scene(dt);
-    // the room along the wall for the sphere's travel: beyond f64 only by these settings
-    if !scene
-        .domain
-        .min
-        .iter()
-        .chain(&scene.domain.max)
-        .all(|v| v.is_finite())
-    {
-        let (param, what) = if spec.tangential_force != 0.0 {
-            (
-                "tangential-force",
-                format!("the tangential force {:e} N", spec.tangential_force),
-            )
-        } else if spec.settle != 0.0 {
-            ("settle", format!("the settle time {:e} s", spec.settle))
-        } else {
-            (
-                "velocity",
-                format!("the impact velocity {:e} m/s", spec.velocity),
-            )
-        };
-        return Err(crate::error::ParamError::new(
-            param,
-            format!("{what} carries the sphere beyond f64's range along the wall over the collision and the settle time: choose a smaller one"),
-        )
-        .into());
+    if let Some(e) = unresolved_domain(spec, dt, &scene) {
+        return Err(e.into());
     }
     let wall_x = scene.walls.first().map_or(0.0, |w| w.point[0]);
     let wall = spec.wall;
@@ -590,6 +577,87 @@ fn finite_result(r: CollideResult) -> Result<CollideResult, PowderError> {
         ))),
         None => Ok(r),
     }
+}
+
+/// What makes the domain a collision builds reach where f64 positions no longer resolve
+/// its spheres ([`crate::setup::POSITION_RESOLUTION`] of the smallest radius), named as
+/// the flag to change: the interaction range, else the room for the sphere's travel along
+/// the wall (the tangential force, the settle time, the impact velocity); None where it
+/// resolves them.
+fn unresolved_domain(
+    spec: &CollideSpec,
+    dt: f64,
+    scene: &Scene,
+) -> Option<crate::error::ParamError> {
+    let r_min = if spec.wall {
+        spec.radius1
+    } else {
+        spec.radius1.min(spec.radius2)
+    };
+    let resolves = |s: &Scene| {
+        s.domain.min.iter().chain(&s.domain.max).all(|v| {
+            let far = v.abs();
+            far.is_finite()
+                && f64::from_bits(far.to_bits() + 1) - far
+                    <= crate::setup::POSITION_RESOLUTION * r_min
+        })
+    };
+    if resolves(scene) {
+        return None;
+    }
+    let without = |force: bool, settle: bool| {
+        resolves(
+            &CollideSpec {
+                tangential_force: if force { 0.0 } else { spec.tangential_force },
+                settle: if settle { 0.0 } else { spec.settle },
+                ..spec.clone()
+            }
+            .scene(dt),
+        )
+    };
+    let force = spec.tangential_force;
+    let range = spec.model.range();
+    let (param, what) = if !without(true, true) && range > 0.0 {
+        // (no travel along the wall: the gap and the room around the pair, the range's)
+        (
+            "fa",
+            format!("the interaction range {range:e} m (a non-contact adhesion range fa/kc_a) needs a domain that"),
+        )
+    } else if !without(true, true) {
+        (
+            "velocity",
+            format!(
+                "the impact velocity {:e} m/s needs a gap so wide that the domain",
+                spec.velocity
+            ),
+        )
+    } else if force != 0.0 && without(true, false) {
+        (
+            "tangential-force",
+            format!("the tangential force {force:e} N carries the sphere so far along the wall that the domain"),
+        )
+    } else if spec.settle != 0.0 && without(false, true) {
+        (
+            "settle",
+            format!("the settle time {:e} s lets the sphere travel so far along the wall that the domain", spec.settle),
+        )
+    } else {
+        (
+            "tangential-force",
+            format!("the tangential force {force:e} N over the settle time {:e} s carries the sphere so far along the wall that the domain", spec.settle),
+        )
+    };
+    Some(crate::error::ParamError::new(
+        param,
+        format!(
+            "{what} reaches where f64 positions no longer resolve the spheres (radius {r_min:e} m): {}",
+            if param == "fa" {
+                "lower --fa or raise --kca"
+            } else {
+                "choose a smaller one"
+            }
+        ),
+    ))
 }
 
 #[cfg(test)]
