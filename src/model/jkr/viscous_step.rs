@@ -55,6 +55,8 @@ impl JkrParams {
         dt_trial: f64,
         max_step: f64,
     ) -> Option<ViscousEstimate> {
+        // (the other dissipations have no such force: nothing to integrate or keep)
+        self.dissipation.krijt_law()?;
         let key = [v, dt_trial, max_step];
         let hit = CACHE.with_borrow(|c| {
             c.iter()
