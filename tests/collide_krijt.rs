@@ -268,7 +268,7 @@ fn lj_example_restitution_peaks_at_low_speed_then_declines() {
     assert!(es.windows(2).all(|w| w[1] >= w[0]), "{es:?}");
 }
 
-/// The Krijt and stress dissipations on the GPU (f32, `shaders/contact/krijt.wgsl`) against
+/// The Krijt and stress dissipations on the GPU (f32, `shaders/model/krijt.wgsl`) against
 /// the CPU reference (f64): restitution, the energy ledger, the contact radius as history.
 mod gpu {
     use super::common::builder::SceneBuilder;

@@ -1,5 +1,5 @@
 //! Luding's sliding, rolling and twisting friction (`src/model/friction/`,
-//! `shaders/contact/luding_*.wgsl`) on both backends, against the closed forms of
+//! `shaders/model/friction/*.wgsl`) on both backends, against the closed forms of
 //! `docs/luding2008_laws.md` §6 and against each other: oblique elastic impacts on both
 //! branches (sticking throughout, sliding throughout), the dynamic coefficient, a sphere
 //! rolling and spinning on a floor, the incline limit of rolling friction, friction at zero

@@ -1,7 +1,7 @@
 //! The contact law of a scene's GPU step, composed from the sub-models its pairs use.
 //!
 //! A normal law (hysteretic/LSD, JKR/Hertz) or a sub-model attached to one (a dissipation,
-//! a tangential, rolling or twisting law) is one WGSL file of `shaders/contact/`, its per-contact
+//! a tangential, rolling or twisting law) is one WGSL file of `shaders/model/` (the folder mirrors `src/model/`), its per-contact
 //! history fields (declared once, in its Rust module) and, here, how it plugs in. From the
 //! set a scene uses come the pair-table row, the history layout (the stored struct, its
 //! load and store, the partner's view, its size and the host's decoder) and the dispatch

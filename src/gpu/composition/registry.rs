@@ -81,7 +81,7 @@ pub struct SubModel {
 pub const LAWS: &[NormalLaw] = &[
     NormalLaw {
         name: "hysteretic",
-        source: include_str!("../../../shaders/contact/hysteretic.wgsl"),
+        source: include_str!("../../../shaders/model/hysteretic.wgsl"),
         row: RowBlock {
             member: "hysteretic",
             wgsl_struct: HystereticPair::WGSL_NAME,
@@ -100,7 +100,7 @@ pub const LAWS: &[NormalLaw] = &[
     },
     NormalLaw {
         name: "jkr",
-        source: include_str!("../../../shaders/contact/jkr.wgsl"),
+        source: include_str!("../../../shaders/model/jkr.wgsl"),
         row: RowBlock {
             member: "jkr",
             wgsl_struct: JkrPair::WGSL_NAME,
@@ -132,7 +132,7 @@ pub const LAWS: &[NormalLaw] = &[
 pub const SUB_MODELS: &[SubModel] = &[
     SubModel {
         name: "krijt",
-        source: include_str!("../../../shaders/contact/krijt.wgsl"),
+        source: include_str!("../../../shaders/model/krijt.wgsl"),
         shared: &[],
         row: None,
         laws: &["jkr"],
@@ -151,7 +151,7 @@ pub const SUB_MODELS: &[SubModel] = &[
     },
     SubModel {
         name: "mindlin",
-        source: include_str!("../../../shaders/contact/mindlin.wgsl"),
+        source: include_str!("../../../shaders/model/jkr/mindlin.wgsl"),
         shared: &[],
         row: None,
         laws: &["jkr"],
@@ -161,7 +161,7 @@ pub const SUB_MODELS: &[SubModel] = &[
     },
     SubModel {
         name: "jkr_rolling",
-        source: include_str!("../../../shaders/contact/jkr_rolling.wgsl"),
+        source: include_str!("../../../shaders/model/jkr/rolling.wgsl"),
         shared: &[],
         row: None,
         laws: &["jkr"],
@@ -171,7 +171,7 @@ pub const SUB_MODELS: &[SubModel] = &[
     },
     SubModel {
         name: "luding_sliding",
-        source: include_str!("../../../shaders/contact/luding_sliding.wgsl"),
+        source: include_str!("../../../shaders/model/friction/sliding.wgsl"),
         shared: &[COULOMB],
         row: Some(RowBlock {
             member: "luding_sliding",
@@ -186,7 +186,7 @@ pub const SUB_MODELS: &[SubModel] = &[
     },
     SubModel {
         name: "luding_rolling",
-        source: include_str!("../../../shaders/contact/luding_rolling.wgsl"),
+        source: include_str!("../../../shaders/model/friction/rolling.wgsl"),
         shared: &[COULOMB],
         row: Some(RowBlock {
             member: "luding_rolling",
@@ -201,7 +201,7 @@ pub const SUB_MODELS: &[SubModel] = &[
     },
     SubModel {
         name: "luding_twisting",
-        source: include_str!("../../../shaders/contact/luding_twisting.wgsl"),
+        source: include_str!("../../../shaders/model/friction/twisting.wgsl"),
         shared: &[COULOMB],
         row: Some(RowBlock {
             member: "luding_twisting",
@@ -217,7 +217,7 @@ pub const SUB_MODELS: &[SubModel] = &[
 ];
 
 /// Luding's Coulomb spring, shared by his sliding, rolling and twisting laws.
-pub(super) const COULOMB: &str = include_str!("../../../shaders/contact/coulomb.wgsl");
+pub(super) const COULOMB: &str = include_str!("../../../shaders/model/friction/coulomb.wgsl");
 
 /// Luding's sliding and rolling friction of a hysteretic/LSD pair (the JKR family has its
 /// own, Mindlin and Dominik–Tielens).

@@ -5,7 +5,7 @@ use super::{wgsl_consts, wgsl_struct};
 use bytemuck::{Pod, Zeroable};
 
 wgsl_struct! {
-/// The hysteretic law's block of the pair table (`shaders/contact/hysteretic.wgsl`).
+/// The hysteretic law's block of the pair table (`shaders/model/hysteretic.wgsl`).
 /// LSD is the special case k1 = kp = k with the LSD flag.
 #[wgsl("HystereticPair")]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -96,7 +96,7 @@ impl HystereticPair {
 }
 
 wgsl_struct! {
-/// The JKR law's block of the pair table (`shaders/contact/jkr.wgsl`): the JKR
+/// The JKR law's block of the pair table (`shaders/model/jkr.wgsl`): the JKR
 /// family's parameters, derived in f64 from [`JkrParams`](crate::model::JkrParams) and
 /// rounded once. Per-contact quantities that depend on R* (a0, δ0, Fc, ξcrit) are formed in
 /// the kernel from the coefficients here, since R* varies with the particles' radii.
@@ -135,7 +135,7 @@ pub struct JkrPair {
     /// P(x_break) of [`potential_shape`](crate::model::jkr::potential_shape): the stored
     /// energy of a contact is Fc·δ0·(P(x) − P(x_break)) (energy ledger).
     pub p_break: f32,
-    /// Krijt and stress (`shaders/contact/krijt.wgsl`): 2E*/ν² of the viscous force (eq. 12).
+    /// Krijt and stress (`shaders/model/krijt.wgsl`): 2E*/ν² of the viscous force (eq. 12).
     pub visc: f32,
     /// T_vis (krijt) or C of T_vis,0 = C·R (stress, eq. 18).
     pub tvis: f32,
@@ -164,7 +164,7 @@ wgsl_consts! {
         JKR_DISSIPATION_POWER = 2,
         /// Krijt viscoelastic dissipation with a delayed contact radius, constant T_vis
         /// (paper 001 eqs. 10–12, B1–B2; the contact radius is state,
-        /// `contact/krijt.wgsl`).
+        /// `model/krijt.wgsl`).
         JKR_DISSIPATION_KRIJT = 3,
         /// Krijt dissipation with the stress-dependent T_vis of paper 001 eqs. 17–18.
         JKR_DISSIPATION_STRESS = 4,
@@ -243,7 +243,7 @@ impl JkrPair {
 }
 
 wgsl_struct! {
-/// One Luding spring's block of the pair table (`shaders/contact/coulomb.wgsl`):
+/// One Luding spring's block of the pair table (`shaders/model/friction/coulomb.wgsl`):
 /// [`CoulombSpring`](crate::model::CoulombSpring) rounded to f32; all zero (μs = 0) is off.
 #[wgsl("CoulombSpring")]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -272,7 +272,7 @@ impl CoulombSpringRow {
 }
 
 wgsl_struct! {
-/// The twisting block of the pair table (`shaders/contact/luding_twisting.wgsl`): the
+/// The twisting block of the pair table (`shaders/model/friction/twisting.wgsl`): the
 /// spring, and for the JKR family without a given k_o the stiffness per contact radius
 /// (k_o = k + k_per_a·a).
 #[wgsl("TwistingRow")]

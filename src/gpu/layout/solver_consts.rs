@@ -1,4 +1,4 @@
-//! The constants of the WGSL solvers (contact/jkr.wgsl's contact radius, contact/krijt.wgsl's
+//! The constants of the WGSL solvers (model/jkr.wgsl's contact radius, model/krijt.wgsl's
 //! crack speed), rounded from the f64 reference's, so the two languages solve one function.
 
 use super::wgsl_consts;

@@ -1,5 +1,5 @@
 //! The tangential spring of the JKR family (Mindlin with Thornton's adhesive Coulomb limit,
-//! paper 002 eqs. 14–17): the f64 reference of `shaders/contact/mindlin.wgsl`.
+//! paper 002 eqs. 14–17): the f64 reference of `shaders/model/jkr/mindlin.wgsl`.
 
 use super::{Dissipation, JkrPair, JkrParams, TSUJI_PREFACTOR};
 use crate::model::friction::rotate_into_plane;

@@ -1,5 +1,5 @@
 //! The rolling resistance of the JKR family (Dominik–Tielens/Krijt, paper 002 eqs. 18–22):
-//! the f64 reference of `shaders/contact/jkr_rolling.wgsl`.
+//! the f64 reference of `shaders/model/jkr/rolling.wgsl`.
 
 use super::JkrParams;
 use crate::model::friction::rotate_into_plane;

@@ -1,5 +1,5 @@
 //! Luding's twisting friction on a JKR/Hertz contact: the Coulomb load, lever and stiffness
-//! the family gives [`crate::model::friction::twisting`] (GPU: `luding_twisting.wgsl`).
+//! the family gives [`crate::model::friction::twisting`] (GPU: `shaders/model/friction/twisting.wgsl`).
 
 use super::JkrParams;
 use crate::model::friction;

@@ -1,4 +1,4 @@
-// contact/luding_twisting.wgsl — Luding's twisting friction in f32: the twin of
+// model/friction/twisting.wgsl — Luding's twisting friction in f32: the twin of
 // `model::friction::twisting` (and `JkrParams::twisting`). Composed in where some pair has
 // twisting friction; keeps the history field `twist` (`friction::twisting::HISTORY`), a
 // scalar along n, the same seen from both sides.

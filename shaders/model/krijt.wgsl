@@ -1,6 +1,6 @@
-// contact/krijt.wgsl — the Krijt viscoelastic JKR contact and the stress-dependent
+// model/krijt.wgsl — the Krijt viscoelastic JKR contact and the stress-dependent
 // relaxation time (paper 001 §II C, appendix B, §V A) in f32: the twin of
-// `src/model/krijt.rs`. A dissipation sub-model of contact/jkr.wgsl: it answers the JKR
+// `src/model/krijt.rs`. A dissipation sub-model of model/jkr.wgsl: it answers the JKR
 // law's hooks `jkr_radius_state` and `jkr_damping` for the pairs that use it
 // (`src/gpu/composition/`). The contact radius a is per-contact history
 // (`contact_radius`, 0 = unset), advanced by a backward-Euler step of eq. B2 solved by

@@ -1,4 +1,4 @@
-// contact/hysteretic.wgsl — the piece-wise linear hysteretic adhesive elasto-plastic model
+// model/hysteretic.wgsl — the piece-wise linear hysteretic adhesive elasto-plastic model
 // (paper 000 §2.2–2.3) and the linear spring–dashpot, in f32. The f64 reference is
 // `src/model/hysteretic.rs` / `src/model/lsd.rs`; tests tie the two together.
 //

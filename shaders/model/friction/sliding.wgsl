@@ -1,4 +1,4 @@
-// contact/luding_sliding.wgsl — Luding's sliding friction in f32: the twin of
+// model/friction/sliding.wgsl — Luding's sliding friction in f32: the twin of
 // `model::friction::sliding`. Composed in where some hysteretic/LSD pair has friction;
 // keeps the history field `spring` (`friction::sliding::HISTORY`), in the evaluator's frame.
 

@@ -1,4 +1,4 @@
-// contact/luding_rolling.wgsl — Luding's rolling friction in f32: the twin of
+// model/friction/rolling.wgsl — Luding's rolling friction in f32: the twin of
 // `model::friction::rolling`. Composed in where some hysteretic/LSD pair has rolling
 // friction; keeps the history field `xi` (`friction::rolling::HISTORY`), the same seen from
 // both sides.

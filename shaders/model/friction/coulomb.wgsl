@@ -1,4 +1,4 @@
-// contact/coulomb.wgsl — the spring–dashpot with a static and a dynamic Coulomb limit that
+// model/friction/coulomb.wgsl — the spring–dashpot with a static and a dynamic Coulomb limit that
 // Luding's sliding, rolling and twisting laws share, in f32: the twin of
 // `CoulombSpring::step_with` in `src/model/friction/coulomb.rs`. The stored spring is half
 // a step ahead of the evaluation (staggered, second order; see the Rust module).

@@ -1,4 +1,4 @@
-// contact/jkr.wgsl — the JKR family's normal law (JKR, Hertz) in f32, with contact
+// model/jkr.wgsl — the JKR family's normal law (JKR, Hertz) in f32, with contact
 // hysteresis and the Tsuji or power-law damping: the twin of `src/model/jkr/mod.rs`
 // (papers 001 §II and 002 §2–3), tied to it through whole collisions
 // (`tests/collide_jkr.rs`, `mod on_the_gpu`). The Krijt dissipations, Mindlin friction and
@@ -31,7 +31,7 @@ fn jkr_dissipation_is(p: JkrPair, d: u32) -> bool {
     return p.dissipation == d;
 }
 
-// The contact radius is state (contact/krijt.wgsl).
+// The contact radius is state (model/krijt.wgsl).
 fn jkr_radius_dynamics(p: JkrPair) -> bool {
     if (JKR_ONE_DISSIPATION != 255u) {
         return JKR_ONE_DISSIPATION >= JKR_DISSIPATION_KRIJT;

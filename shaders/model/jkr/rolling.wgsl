@@ -1,4 +1,4 @@
-// contact/jkr_rolling.wgsl — the rolling resistance of the JKR family (paper 002 eqs.
+// model/jkr/rolling.wgsl — the rolling resistance of the JKR family (paper 002 eqs.
 // 18–22, Dominik–Tielens/Krijt) in f32: the twin of `JkrParams::rolling_torque` in
 // `src/model/jkr/rolling.rs`. Composed in where some JKR pair has rolling resistance; keeps the
 // history field `xi` (`model::jkr::rolling::HISTORY`), the same seen from both sides.

@@ -1,4 +1,4 @@
-// contact/mindlin.wgsl — the tangential spring of the JKR family (paper 002 eqs. 14–17) in
+// model/jkr/mindlin.wgsl — the tangential spring of the JKR family (paper 002 eqs. 14–17) in
 // f32: the twin of `JkrParams::tangential_force` in `src/model/jkr/mindlin.rs`. Composed in where
 // some JKR/Hertz pair has friction; keeps the history field `spring`
 // (`model::jkr::mindlin::HISTORY`), in the evaluating particle's frame.
