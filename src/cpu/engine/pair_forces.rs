@@ -3,7 +3,8 @@
 
 use super::contact::{Contact, ContactRecord, StepLog};
 use super::pair_list::PairList;
-use super::{chunks_or_empty, minimum_image, CpuEngine, Partner};
+use super::step::chunks_or_empty;
+use super::{minimum_image, CpuEngine, Partner};
 use crate::cpu::threads::chunks;
 use crate::model::{ContactModel, Kinematics, PairConstants, PairGeometry};
 use glam::DVec3;

@@ -1,7 +1,7 @@
 //! Where the indirect dispatches' arguments lie in `args`: a rebuild's (the grid sort's, a
 //! per-particle pass's, the list scans') and every step's, which `decide` sets or zeroes.
 
-use super::buffers::Allocator;
+use super::allocator::Allocator;
 use crate::gpu::context::GpuContext;
 use crate::gpu::grid::GridSort;
 use crate::gpu::kernel::split_workgroups;

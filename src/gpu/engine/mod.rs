@@ -42,9 +42,11 @@ use crate::scene::{Scene, WallPhase};
 use crate::setup::Resolved;
 use glam::DVec3;
 
+mod allocator;
 mod bind;
 mod buffers;
 mod build;
+mod capacity;
 mod checkpoint;
 mod dispatch;
 mod f32_range;
@@ -53,17 +55,21 @@ mod introspection;
 mod program;
 mod readback;
 mod record;
+mod state_set;
 mod stepping;
 mod walls;
 
+use allocator::*;
 use bind::*;
 use buffers::*;
+use capacity::*;
 use dispatch::Dispatches;
 use f32_range::check_f32_range;
 use initial::*;
 use program::*;
 use readback::*;
 use record::*;
+use state_set::*;
 use stepping::*;
 use walls::*;
 
