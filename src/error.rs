@@ -59,6 +59,23 @@ impl PowderError {
 /// The library's result type, [`PowderError`] by default.
 pub type Result<T, E = PowderError> = std::result::Result<T, E>;
 
+/// `x` for a message: as written where that is short, in `e` notation beyond ~10¹⁶ and
+/// below 10⁻⁵ (where `{}` would print hundreds of digits).
+pub fn num(x: f64) -> impl std::fmt::Display {
+    struct Num(f64);
+    impl std::fmt::Display for Num {
+        fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+            let a = self.0.abs();
+            if a != 0.0 && a.is_finite() && !(1e-5..1e16).contains(&a) {
+                write!(f, "{:e}", self.0)
+            } else {
+                write!(f, "{}", self.0)
+            }
+        }
+    }
+    Num(x)
+}
+
 /// Checks that a value is finite, naming the parameter otherwise.
 pub fn require_finite(param: &'static str, value: f64) -> Result<f64, ParamError> {
     if value.is_finite() {

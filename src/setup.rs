@@ -100,14 +100,25 @@ impl Resolved {
                 *slot = Some((m, p.radius));
             }
         }
+        // the rule with the smallest limit, and the one with the smallest default step: a
+        // contact's default (a fraction of its contact time) may be shorter than that of the
+        // contact whose viscous limit binds
         let mut time_step: Option<TimeStep> = None;
+        let mut shortest: Option<TimeStep> = None;
         // (the first rule whose step is not a finite number above 0: it would stop time)
         let mut unusable: Option<TimeStep> = None;
-        let mut consider = |ts: TimeStep| {
+        // (each rule names its contact: in a scene of several materials, which to change)
+        let mut consider = |mut ts: TimeStep, contact: String| {
+            ts.reason = format!("{} [{contact}]", ts.reason);
             let usable = |t: f64| t.is_finite() && t > 0.0;
             if !(usable(ts.max) && usable(ts.default)) {
                 unusable.get_or_insert(ts);
-            } else if time_step.as_ref().is_none_or(|t| ts.max < t.max) {
+                return;
+            }
+            if shortest.as_ref().is_none_or(|t| ts.default < t.default) {
+                shortest = Some(ts.clone());
+            }
+            if time_step.as_ref().is_none_or(|t| ts.max < t.max) {
                 time_step = Some(ts);
             }
         };
@@ -127,31 +138,55 @@ impl Resolved {
                 let (Some(light), Some(heavy)) = (lightest[b], heaviest[b]) else {
                     continue;
                 };
+                let contact = match a == b {
+                    true => format!("material `{}`", scene.materials[a].name),
+                    false => format!(
+                        "materials `{}` and `{}`",
+                        scene.materials[a].name, scene.materials[b].name
+                    ),
+                };
                 for (mb, rb) in [light, heavy] {
                     let geom = PairGeometry::spheres(ra, rb, ma, mb);
-                    consider(models[a * n_materials + b].time_step(&geom, v_imp));
+                    consider(
+                        models[a * n_materials + b].time_step(&geom, v_imp),
+                        contact.clone(),
+                    );
                 }
             }
             for w in 0..scene.walls.len() {
                 let geom = PairGeometry::wall(ra, ma);
-                consider(wall_models[w * n_materials + a].time_step(&geom, v_imp));
+                consider(
+                    wall_models[w * n_materials + a].time_step(&geom, v_imp),
+                    format!("wall {w} and material `{}`", scene.materials[a].name),
+                );
             }
         }
         // the Rayleigh time of each JKR/Hertz material's smallest sphere
         for (a, material) in scene.materials.iter().enumerate() {
             if let (ContactModel::Jkr(p), Some((_, r))) = (&material.model, lightest[a]) {
                 let t_r = p.rayleigh_time(r, material.density);
-                consider(TimeStep::rayleigh(t_r, &material.name, r));
+                consider(
+                    TimeStep::rayleigh(t_r, &material.name, r),
+                    format!("material `{}`", material.name),
+                );
             }
         }
         if let Some(ts) = unusable {
             return Err(PowderError::Scene(format!(
-                "the time step comes out as {:e} s (largest stable {:e} s; {}): the parameters of that contact are beyond what a time step can resolve (a stiffness, damping, velocity or mass out of range)",
+                "the time step comes out as {:e} s (largest stable {:e} s; {}): the parameters of that contact are beyond what a time step can resolve (a stiffness, damping or velocity, or a density or radius that sets the mass, out of range)",
                 ts.default, ts.max, ts.reason
             )));
         }
         let mut time_step =
             time_step.ok_or_else(|| PowderError::Scene("the scene has no particles".into()))?;
+        if let Some(other) = shortest.filter(|o| o.default < time_step.default) {
+            time_step.default = other.default;
+            time_step.contact_time = time_step.contact_time.min(other.contact_time);
+            time_step.reason += &format!(
+                "; the default step {:.4e} s is another contact's ({})",
+                other.default, other.reason
+            );
+        }
         if v_imp > scene.impact_velocity && time_step.reason.contains("impact velocity") {
             time_step.reason += &format!(
                 " (the starting velocities close a pair at up to {v_imp:e} m/s, above simulation.impact_velocity = {:e} m/s)",
@@ -444,6 +479,36 @@ mod tests {
         );
         assert!(
             r.time_step.reason.contains("oscillator"),
+            "{}",
+            r.time_step.reason
+        );
+    }
+
+    /// The default step is the shortest contact's default, where the smallest limit is a
+    /// viscous one of another contact: a stiff undamped material `a` (default tc/50 =
+    /// 1.29e-6 s) beside a soft, damped one `b` (limit 0.2·m_r/γ0 = 4.19e-6 s, its default
+    /// too). The default used to follow the binding limit's contact: `a`'s contacts at tc/15.
+    #[test]
+    fn the_default_step_is_the_shortest_contacts_default() {
+        let text = "[domain]\nmin = [0.0, 0.0, 0.0]\nmax = [0.01, 0.01, 0.01]\n[simulation]\nduration = 1e-3\n[[material]]\nname = \"a\"\ndensity = 2000.0\nmodel = \"lsd\"\nk = 1e4\n[[material]]\nname = \"b\"\ndensity = 2000.0\nmodel = \"lsd\"\nk = 1.0\ngamma0 = 0.2\n[[interaction]]\nmaterials = [\"a\", \"b\"]\nmodel = \"lsd\"\nk = 1.0\n[[particles]]\nkind = \"list\"\nmaterial = \"a\"\npositions = [[0.003, 0.005, 0.005]]\nradius = 1e-3\n[[particles]]\nkind = \"list\"\nmaterial = \"b\"\npositions = [[0.007, 0.005, 0.005]]\nradius = 1e-3\n";
+        let r = Resolved::new(&Scene::from_toml_str(text, "t").unwrap()).unwrap();
+        let m_r = 0.5 * 2000.0 * 4.0 / 3.0 * std::f64::consts::PI * 1e-9;
+        let tc_a = std::f64::consts::PI * (m_r / 1e4f64).sqrt();
+        let limit_b = crate::model::MAX_VISCOUS_STEP * m_r / 0.2;
+        assert!(
+            (r.time_step.max / limit_b - 1.0).abs() < 1e-12,
+            "{:?}",
+            r.time_step
+        );
+        assert!(
+            (r.dt / (tc_a / crate::model::DEFAULT_DT_FRACTION) - 1.0).abs() < 1e-12,
+            "{:e}: {:?}",
+            r.dt,
+            r.time_step
+        );
+        assert!(
+            r.time_step.reason.contains("gamma0")
+                && r.time_step.reason.contains("another contact's"),
             "{}",
             r.time_step.reason
         );

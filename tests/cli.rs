@@ -261,11 +261,53 @@ fn run_prints_a_summary_and_rejects_missing_files() {
         found
     };
     assert!(snapshots(again.path()).len() >= 4);
-    let mut args = args;
+    let mut args = args.to_vec();
     args[6] = again_dir;
+    // refused unless asked to replace them, naming what is there
+    let (ok, _, err) = powder(&args);
+    assert!(
+        !ok && err.contains("an earlier run's outputs")
+            && err.contains("snapshot files")
+            && err.contains("--overwrite"),
+        "{err}"
+    );
+    assert!(snapshots(again.path()).len() >= 4);
+    args.push("--overwrite");
     let (ok, _, err) = powder(&args);
     assert!(ok, "{err}");
     assert_eq!(snapshots(again.path()), Vec::<String>::new());
+}
+
+/// Output files are checked writable before the work that fills them (a bench's rows, a
+/// collision's trace were lost after the run), and a scene path that is not a regular
+/// file is refused rather than read until memory runs out.
+#[test]
+fn unwritable_outputs_and_unreadable_scenes_are_refused_first() {
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("no/such/folder/x.json");
+    let missing = missing.to_str().unwrap();
+    let folder = dir.path().to_str().unwrap();
+    for (args, flag) in [
+        (vec!["bench", "--sizes", "1e9", "--json", missing], "--json"),
+        (
+            vec!["accuracy", "--backend", "cpu", "--plot", folder],
+            "--plot",
+        ),
+    ] {
+        let (ok, _, err) = powder(&args);
+        assert!(!ok && err.contains(flag), "{args:?}: {err}");
+        assert!(
+            err.contains("not a folder") || err.contains("is a folder"),
+            "{err}"
+        );
+    }
+    let (ok, _, err) = hysteretic(&["--velocity", "0.5", "--trace", missing]);
+    assert!(
+        !ok && err.contains("--trace") && err.contains("not a folder"),
+        "{err}"
+    );
+    let (ok, _, err) = powder(&["run", "/dev/zero"]);
+    assert!(!ok && err.contains("not a regular file"), "{err}");
 }
 
 const JKR: [&str; 13] = [
@@ -608,7 +650,15 @@ fn collide_and_run_on_the_gpu_backend() {
     assert_eq!(v["backend"], "gpu");
     assert!(v["adapter"].is_string());
     let scene = CLUSTER;
-    let (ok, out, err) = powder(&["run", scene, "--backend", "gpu", "--steps", "300"]);
+    let (ok, out, err) = powder(&[
+        "run",
+        scene,
+        "--backend",
+        "gpu",
+        "--steps",
+        "300",
+        "--no-output",
+    ]);
     assert!(ok, "{err}");
     assert!(out.contains("backend          gpu"), "{out}");
 }
@@ -1525,7 +1575,8 @@ fn inputs_in_range_that_overflow_together_are_refused() {
                 "1.5",
             ],
         ),
-        &["final_kinetic = inf, not a finite number"],
+        // (the power law's coefficient sets a step of 1.7e-310 s)
+        &["dissipation = \"powerlaw\"", "no stable dt resolves it"],
     );
     refused(
         hysteretic(&["--sweep-velocity", "0.1:1:100000000000"]),

@@ -323,14 +323,21 @@ fn an_overdamped_pair_creeps_to_rest_and_sticks() {
 /// a creep decays geometrically (a rule on the speed's change alone called these stuck).
 /// An infinite non-contact adhesion range is named as `fa`, not as the domain it needs.
 #[test]
-fn an_infinite_adhesion_range_is_named() {
-    let p = HystereticParams {
-        fa: 1e300,
-        kca: 1e-10,
-        ..params(100.0)
-    };
-    let err = collide(&spec(p, RADIUS, 0.1)).unwrap_err().to_string();
-    assert!(err.contains("`fa`") && err.contains("--kca"), "{err}");
+fn a_far_or_infinite_adhesion_range_is_named() {
+    // (an infinite range fa/kc_a, and a finite one of 1e298 m, which the approach's
+    // resolution check before it had blamed on --velocity)
+    for kca in [1e-10, 100.0] {
+        let p = HystereticParams {
+            fa: 1e300,
+            kca,
+            ..params(100.0)
+        };
+        let err = collide(&spec(p, RADIUS, 0.1)).unwrap_err().to_string();
+        assert!(
+            err.contains("`fa`") && err.contains("--kca"),
+            "kca {kca}: {err}"
+        );
+    }
 }
 
 #[test]

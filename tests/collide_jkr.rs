@@ -294,6 +294,55 @@ fn power_law_dissipation_lowers_e_with_d() {
     }
 }
 
+/// A strong power law sets the automatic step (c·dt/m* ≤ `MAX_VISCOUS_STEP` at the
+/// collision's fastest approach and widest contact). With the contact time's step alone
+/// its explicit force overshot: `collide` reported this pair stuck with an energy balance
+/// off by 156 (and e = −112.8 at D = 1e-3, α = β = 1); a result that cannot be right is
+/// now refused.
+#[test]
+fn a_strong_power_law_sets_the_step_and_an_unstable_one_is_refused() {
+    let p = JkrParams {
+        dissipation: Dissipation::PowerLaw {
+            d: 1.0,
+            alpha: 3.0,
+            beta: 1.5,
+        },
+        ..JkrParams::jkr(1e8, 0.3, 0.01)
+    };
+    let s = CollideSpec::head_on(ContactModel::Jkr(p), 5e-6, 2500.0, 0.5);
+    let ts = s.time_step();
+    assert!(ts.reason.contains("\"powerlaw\""), "{ts:?}");
+    let r = collide(&s).unwrap();
+    // measured: stuck, balance 7.4e-9, 170 714 steps of 7.76e-12 s
+    assert!(
+        r.energy.balance_error.unwrap() < 1e-6 && r.e >= 0.0,
+        "{r:?}"
+    );
+    // the step the rule gives without the dissipation (its contact time)
+    let plain = CollideSpec::head_on(
+        ContactModel::Jkr(JkrParams {
+            dissipation: Dissipation::None,
+            ..p
+        }),
+        5e-6,
+        2500.0,
+        0.5,
+    )
+    .time_step();
+    assert!(plain.default > 100.0 * ts.default, "{plain:?} {ts:?}");
+    let err = collide(&CollideSpec {
+        dt: Some(plain.default),
+        force: true,
+        ..s
+    })
+    .unwrap_err()
+    .to_string();
+    assert!(
+        err.contains("cannot be right") && err.contains("lower --dt"),
+        "{err}"
+    );
+}
+
 #[test]
 fn reduced_stiffness_keeps_the_collision_and_enlarges_dt() {
     let base = jkr();

@@ -167,13 +167,17 @@ fn outputs_are_written_and_a_resumed_run_is_bitwise_identical() {
             .unwrap();
     assert_eq!(summary["steps"], 3000);
     assert!(summary["solid_fraction_bounding_box"].as_f64().unwrap() > 0.0);
-    // a fresh run into the same folder removes that run's summary and snapshots at its
-    // start (a file of another series stays)
+    // a fresh run into the same folder, asked to replace it, removes that run's summary
+    // and snapshots at its start (a file of another series stays)
     let other = split.path().join("snapshots/other_0000000500.vtp");
     std::fs::write(&other, "another series").unwrap();
     let summary = split.path().join("summary.json");
     let mut checked = 0;
-    run_cpu_with(&scene, &options(split.path(), 1000, None), |_| {
+    let replace = RunOptions {
+        overwrite: true,
+        ..options(split.path(), 1000, None)
+    };
+    run_cpu_with(&scene, &replace, |_| {
         assert!(
             !summary.exists(),
             "the earlier run's summary is still there"
@@ -262,14 +266,15 @@ fn a_checkpoint_branches_into_wall_phases_that_follow_it() {
     moving_later.walls[1].motion = WallMotion {
         phases: vec![(t_switch, WallPhase::Velocity([0.0, 0.01, 0.0]))],
     };
+    // (asked to replace the branch's later results: the columns refuse it all the same)
     let series = std::fs::read(split.path().join("series.csv")).unwrap();
-    let err = run_cpu_with(
-        &moving_later,
-        &options(split.path(), 3000, Some(&ckpt)),
-        |_| {},
-    )
-    .unwrap_err()
-    .to_string();
+    let replace = RunOptions {
+        overwrite: true,
+        ..options(split.path(), 3000, Some(&ckpt))
+    };
+    let err = run_cpu_with(&moving_later, &replace, |_| {})
+        .unwrap_err()
+        .to_string();
     assert!(err.contains("other columns"), "{err}");
     assert_eq!(
         std::fs::read(split.path().join("series.csv")).unwrap(),
@@ -326,6 +331,89 @@ fn as_next_format(bytes: &[u8]) -> Vec<u8> {
 /// A resume keeps only the rows its checkpoint's run wrote: into a folder of another run
 /// it is refused (nothing there changes); into an empty one the series starts at the
 /// checkpoint's step.
+/// A fresh run into a folder holding an earlier run's outputs, or files of the names a run
+/// writes, is refused before anything there changes; so is a resume from an earlier
+/// checkpoint into a folder whose run finished later. `overwrite` replaces them. (A fresh
+/// run used to remove them unasked, and one that then failed left a finished run's folder
+/// with a single row.)
+#[test]
+fn an_earlier_runs_outputs_are_kept_unless_overwritten() {
+    let scene = cluster();
+    let (done, early, mine) = (
+        tempfile::tempdir().unwrap(),
+        tempfile::tempdir().unwrap(),
+        tempfile::tempdir().unwrap(),
+    );
+    run(&scene, done.path(), 1500, None);
+    let files = |d: &Path| {
+        let mut v: Vec<(String, Vec<u8>)> = ["series.csv", "summary.json", "checkpoint.bin"]
+            .iter()
+            .map(|f| (f.to_string(), std::fs::read(d.join(f)).unwrap()))
+            .collect();
+        let mut shots: Vec<_> = std::fs::read_dir(d.join("snapshots"))
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        shots.sort();
+        v.push(("snapshots".into(), shots.join(",").into_bytes()));
+        v
+    };
+    let before = files(done.path());
+    let err = run_cpu_with(&scene, &options(done.path(), 1000, None), |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("an earlier run's outputs")
+            && err.contains("`checkpoint.bin`")
+            && err.contains("snapshot files")
+            && err.contains("--resume")
+            && err.contains("--overwrite"),
+        "{err}"
+    );
+    assert!(
+        files(done.path()) == before,
+        "the refused run changed the folder"
+    );
+    // a resume from an earlier checkpoint of the same run would trim the later results
+    run(&scene, early.path(), 500, None);
+    let ckpt = mine.path().join("at_500.bin");
+    std::fs::copy(early.path().join("checkpoint.bin"), &ckpt).unwrap();
+    let err = run_cpu_with(&scene, &options(done.path(), 1000, Some(&ckpt)), |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("beyond the checkpoint's step 500")
+            && err.contains("finished at step 1500")
+            && err.contains("checkpoint at step 1500"),
+        "{err}"
+    );
+    assert!(
+        files(done.path()) == before,
+        "the refused resume changed the folder"
+    );
+    // files of a run's names that no run wrote
+    std::fs::write(mine.path().join("series.csv"), "my,own\n1,2\n").unwrap();
+    let err = run_cpu_with(&scene, &options(mine.path(), 100, None), |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("`series.csv`"), "{err}");
+    assert_eq!(
+        std::fs::read_to_string(mine.path().join("series.csv")).unwrap(),
+        "my,own\n1,2\n"
+    );
+    // asked to, both replace
+    let overwrite = |steps, resume: Option<&Path>| RunOptions {
+        overwrite: true,
+        ..options(done.path(), steps, resume)
+    };
+    let s = run_cpu_with(&scene, &overwrite(1000, Some(&ckpt)), |_| {}).unwrap();
+    assert_eq!(s.steps, 1000);
+    let s = run_cpu_with(&scene, &overwrite(500, None), |_| {}).unwrap();
+    assert_eq!(s.steps, 500);
+    let rows = std::fs::read_to_string(done.path().join("series.csv")).unwrap();
+    assert!(rows.lines().last().unwrap().starts_with("500,"), "{rows}");
+}
+
 #[test]
 fn a_resume_into_another_runs_folder_is_refused() {
     let scene = cluster();
@@ -838,11 +926,12 @@ fn killed_again_and_again_ends_as_a_straight_run(backend: &str) {
     for round in 0..100 {
         let resume = ckpt.exists().then_some(ckpt.as_path());
         let target = lines_of(&csv) + 2 + round % 3;
-        let mut child = Running(
-            cluster_command(backend, dir.path(), every, resume)
-                .spawn()
-                .unwrap(),
-        );
+        // (killed before its first checkpoint, a run is started afresh over its rows)
+        let mut cmd = cluster_command(backend, dir.path(), every, resume);
+        if resume.is_none() && round > 0 {
+            cmd.arg("--overwrite");
+        }
+        let mut child = Running(cmd.spawn().unwrap());
         let ended = loop {
             assert!(std::time::Instant::now() < deadline, "round {round}: stuck");
             if let Some(status) = child.0.try_wait().unwrap() {

@@ -461,6 +461,22 @@ fn the_gpu_monitor_stops_runs_that_go_wrong_and_keeps_the_last_good_state() {
     assert!(again.contains("step"), "{again}");
 }
 
+/// `compare` on a scene whose CPU reference itself goes wrong (a forced time step far above
+/// the limit) stops with that, not with a table of CPU/GPU deviations (it reported both
+/// engines blowing up as a disagreement).
+#[test]
+fn compare_names_an_unstable_reference_run() {
+    let Some(ctx) = gpu() else { return };
+    let s = pair_scene(DtSetting::Fixed(2e-3), true, 0.5, 0.1);
+    let err = powder::measure::compare::compare(&s, ctx, 4000, 100, Default::default())
+        .expect_err("the comparison is refused")
+        .to_string();
+    assert!(
+        err.contains("the CPU reference went wrong") && err.contains("unstable"),
+        "{err}"
+    );
+}
+
 /// Without the energy ledger (`powder run --no-ledger`) the monitor has no energy-growth
 /// check, but its device checks still stop a forced, far too large time step, a violent
 /// impact and an escape, with a checkpoint of the last good state.

@@ -232,7 +232,8 @@ def cycles(start, amplitude, half, tension):
 
 def run(powder, args, what):
     started = time.time()
-    out = svgplot.run_powder([powder, "run", *args])
+    # (the study owns its work folder: a rerun replaces its earlier runs' outputs)
+    out = svgplot.run_powder([powder, "run", *args, "--overwrite"])
     if out.returncode != 0:
         sys.exit(f"{what}: powder run {' '.join(args)}\n{out.stderr}")
     return time.time() - started

@@ -65,7 +65,7 @@ fn collect_particle(k: u32, mass: f32, store: bool) -> Collected {
     let acc = opaque(opaque(f / mass) + step.gravity);
     let rot = rot_collect(k, torque);
     if (!all_finite(acc) || !rot_finite(rot)) {
-        atomicAdd(&control[CONTROL_NON_FINITE], 1u);
+        atomicMax(&control[CONTROL_NON_FINITE], load_ids(k).x + 1u);
     }
     if (store) {
         store_acc(k, vec4<f32>(acc, 0.0));

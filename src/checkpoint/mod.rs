@@ -277,6 +277,12 @@ pub fn load_gpu(path: &Path, scene: &Scene) -> Result<(GpuSavedState, RunMarks),
     Ok((state, header.run))
 }
 
+/// The steps the run of the checkpoint at `path` had taken.
+pub fn steps_of(path: &Path) -> Result<u64, PowderError> {
+    let bytes = read(path)?;
+    Ok(header(&bytes, path)?.0.steps)
+}
+
 /// The backend (`"cpu"` or `"gpu"`) that wrote the checkpoint at `path`.
 pub fn backend_of(path: &Path) -> Result<String, PowderError> {
     let bytes = read(path)?;

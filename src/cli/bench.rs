@@ -77,6 +77,9 @@ pub(crate) struct BenchArgs {
 
 pub(crate) fn bench_cmd(a: &BenchArgs) -> Result<(), PowderError> {
     use powder::measure::bench::{self, BenchOptions, Case};
+    if let Some(path) = &a.json {
+        powder::output::folder::check_output_file(path, "--json")?;
+    }
     let opts = BenchOptions {
         sizes: bench::parse_sizes(&a.sizes)?,
         cases: match a.case {

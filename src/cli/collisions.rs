@@ -277,6 +277,11 @@ pub(crate) fn print_table(results: &[CollideResult], report: &CollideReport) {
 }
 
 pub(crate) fn collide_cmd(a: &CollideArgs) -> Result<(), PowderError> {
+    for (path, flag) in [(&a.plot, "--plot"), (&a.trace, "--trace")] {
+        if let Some(path) = path {
+            powder::output::folder::check_output_file(path, flag)?;
+        }
+    }
     let model = a.law.contact_model()?;
     let spec = CollideSpec {
         model,

@@ -26,6 +26,11 @@ pub(crate) struct RunArgs {
     /// summary.json only.
     #[arg(long, conflicts_with = "no_output")]
     no_snapshots: bool,
+    /// Replace an earlier run's outputs in the output directory (a fresh run), or the
+    /// results beyond the checkpoint's step (a resume): without it, such a run is refused
+    /// before anything there changes.
+    #[arg(long, conflicts_with = "no_output")]
+    overwrite: bool,
     /// Resume from a checkpoint of the same scene (bitwise identical continuation), or of a
     /// scene that changes only its duration, output cadences or the wall phases from the
     /// checkpoint's time on (a branch: docs/checkpoints.md).
@@ -138,6 +143,7 @@ pub(crate) fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
         threads,
         backend_reason: Some(chosen.reason),
         no_snapshots: a.no_snapshots,
+        overwrite: a.overwrite,
     };
     let summary = match gpu {
         Some(ctx) => powder::run::run_gpu_with(&scene, ctx, &opts, |_| {})?,

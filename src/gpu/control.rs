@@ -11,7 +11,7 @@ wgsl_consts! {
         CONTROL_LONGEST_LIST = 0,
         /// 1 when a rebuild found a particle's neighbours beyond its window's bindings.
         CONTROL_BEYOND_WINDOW = 1,
-        /// Particles with a non-finite acceleration.
+        /// The persistent id + 1 of a particle with a non-finite acceleration.
         CONTROL_NON_FINITE = 2,
         /// Engaged contacts a rebuild dropped (`ledger.wgsl`).
         CONTROL_DROPPED = 3,

@@ -9,10 +9,11 @@
 //! engines hold. Granular flows are chaotic, so f32 and f64 trajectories separate exponentially once collisions chain up; compare
 //! over the early steps, or judge the aggregate quantities (energy, contacts) later on.
 
-use crate::cpu::CpuEngine;
+use crate::cpu::{CpuEngine, Partner};
 use crate::error::PowderError;
 use crate::gpu::{GpuContext, GpuEngine};
 use crate::model::ContactHistory;
+use crate::run::MAX_OVERLAP_RATIO;
 use crate::scene::Scene;
 use serde::Serialize;
 use std::collections::HashMap;
@@ -188,6 +189,29 @@ fn over(deviation: f64, tolerance: f64) -> bool {
     deviation.is_nan() || deviation > tolerance
 }
 
+/// An error where the CPU reference has gone unstable as `powder run`'s monitor would stop
+/// it (a non-finite particle, a contact beyond [`MAX_OVERLAP_RATIO`]): its engines'
+/// differences then say nothing. (A particle leaving the domain is the scene's choice here.)
+fn reference_holds(cpu: &mut CpuEngine) -> Result<(), PowderError> {
+    let why = if let Some(i) = cpu.non_finite() {
+        format!("particle {i} has a non-finite position or velocity")
+    } else if let Some((ratio, i, partner)) =
+        cpu.take_peak_overlap().filter(|p| p.0 > MAX_OVERLAP_RATIO)
+    {
+        let other = match partner {
+            Partner::Particle(j) => format!("particle {j}"),
+            Partner::Wall(w) => format!("wall {w}"),
+        };
+        format!("particle {i} overlaps {other} by {ratio:.3} of the reduced radius (limit {MAX_OVERLAP_RATIO})")
+    } else {
+        return Ok(());
+    };
+    Err(PowderError::Run(format!(
+        "step {}: the CPU reference went wrong ({why}): the scene itself is unstable (a time step too large for it, or an impact too violent), so its engines are not compared; `powder run --backend cpu` stops there too, with a hint",
+        cpu.steps
+    )))
+}
+
 /// Runs `scene` on both backends for `steps` steps, sampling every `every` steps.
 pub fn compare(
     scene: &Scene,
@@ -218,6 +242,7 @@ pub fn compare(
     while done < steps {
         let chunk = every.min(steps - done);
         cpu.run_steps(chunk)?;
+        reference_holds(&mut cpu)?;
         gpu.run_steps(chunk)?;
         done += chunk;
         let g = gpu.state()?;

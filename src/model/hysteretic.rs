@@ -116,7 +116,8 @@ impl HystereticParams {
                 "kp",
                 format!(
                     "kp ({}) must be >= k1 ({}): the limit branch is the stiffest (k1 <= k2 <= kp, paper 000 eq. 5)",
-                    self.kp, self.k1
+                    crate::error::num(self.kp),
+                    crate::error::num(self.k1)
                 ),
             ));
         }

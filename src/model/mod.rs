@@ -572,6 +572,13 @@ impl ContactModel {
                     reason = format!("dt <= {:.4e} s, the longest step at which a head-on collision at {impact_velocity} m/s keeps c*dt/m_r <= {MAX_VISCOUS_STEP} for the viscous coefficient c = 2*T_vis*E*/nu^2*a of dissipation = \"{}\", largest at the overlap {:.4e} m (c = {:.4e} kg/s)", k.dt, p.dissipation.name(), k.reach, k.c);
                 }
             }
+            if let Some(k) = p.power_law_coefficient(geom, impact_velocity) {
+                let visc = MAX_VISCOUS_STEP * mr / k.c;
+                if visc < max {
+                    max = visc;
+                    reason = format!("dt <= {MAX_VISCOUS_STEP}*m_r/c = {visc:.4e} s for the coefficient c = max(alpha,1)*D*E*v^(alpha-1)*a^beta = {:.4e} kg/s of dissipation = \"powerlaw\" at the approach speed v = {:.4e} m/s (the impact velocity {impact_velocity} m/s and the adhesion speed) and contact radius a = {:.4e} m", k.c, k.speed, k.radius);
+                }
+            }
         }
         TimeStep {
             default: (tc / DEFAULT_DT_FRACTION).min(max),

@@ -152,6 +152,36 @@ pub fn check_writable(
         .map_err(|e| PowderError::io(format!("cannot write into `{}`", dir.display()), e))
 }
 
+/// Refuses, before any work, an output file the command could not write at the end: a
+/// folder at `path`, a missing folder for it, or one it may not create files in. `flag`
+/// names the option that gave it.
+pub fn check_output_file(path: &Path, flag: &str) -> Result<(), PowderError> {
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let problem = if path.is_dir() {
+        Some("is a folder: name a file".to_string())
+    } else if !dir.is_dir() {
+        Some(format!(
+            "lies in `{}`, which is not a folder",
+            dir.display()
+        ))
+    } else {
+        None
+    };
+    if let Some(p) = problem {
+        return Err(PowderError::Run(format!(
+            "`{}` ({flag}) {p}",
+            path.display()
+        )));
+    }
+    let probe = dir.join(format!(".powder-probe.{}", std::process::id()));
+    fs::File::create(&probe)
+        .and_then(|_| fs::remove_file(&probe))
+        .map_err(|e| PowderError::io(format!("cannot write `{}` ({flag})", path.display()), e))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -225,6 +225,11 @@ impl Series {
         Ok(())
     }
 
+    /// The snapshot files of this series in its folder.
+    pub fn snapshot_count(&self) -> usize {
+        self.files().len()
+    }
+
     /// Removes an earlier run's snapshots of this series (its name's `.vtp` files in the
     /// folder) and its collection (a fresh run starts its own); returns how many files.
     pub fn clear(&mut self) -> Result<usize, PowderError> {

@@ -5,6 +5,7 @@
 //! --no-ledger`) leaves what only the ledger knows absent: empty CSV cells, keys left out
 //! of the JSON, "n/a" in the progress line.
 
+mod earlier;
 mod monitor;
 pub mod observed;
 mod outputs;
@@ -67,6 +68,10 @@ pub struct RunOptions {
     /// Write no VTK snapshots (nor the contact network): the series, checkpoints and
     /// summary only.
     pub no_snapshots: bool,
+    /// Replace an earlier run's outputs in `out_dir` (a fresh run), or trim results beyond
+    /// the checkpoint's step (a resume); without it such a run is refused before anything
+    /// changes.
+    pub overwrite: bool,
 }
 
 /// Runs `scene` on the CPU reference backend to its duration (or `opts.max_steps`),

@@ -61,8 +61,12 @@ pub(super) fn monitor(
     if let Some(peak) = engine.take_peak_overlap() {
         if peak.ratio > MAX_OVERLAP_RATIO {
             return Err(PowderError::Run(format!(
-                "step {steps}: {} by {:.3} of the reduced radius (limit {MAX_OVERLAP_RATIO}); the impact is too violent for the contact stiffness or {hint}",
-                peak.who, peak.ratio
+                "step {steps}: {} by {} of the reduced radius (limit {MAX_OVERLAP_RATIO}); the impact is too violent for the contact stiffness or {hint}",
+                peak.who,
+                match peak.ratio < 1e3 {
+                    true => format!("{:.3}", peak.ratio),
+                    false => format!("{:.3e}", peak.ratio),
+                }
             )));
         }
     }

@@ -61,6 +61,7 @@ impl RunOutputs {
             });
         };
         let lock = Self::take(d, scene)?;
+        super::earlier::check(d, scene, opts, resumed_from)?;
         let csv_path = d.join("series.csv");
         // the series' rows up to the checkpoint's step on resume, read (and its columns
         // checked) before anything in the directory changes

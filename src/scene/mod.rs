@@ -159,6 +159,9 @@ pub const MAX_BLOCK_PARTICLES: u64 = 100_000_000;
 /// larger scene get large: a dense packing has about three contacts per particle).
 pub const CONTACT_OUTPUT_BELOW: usize = 100_000;
 
+/// The largest scene file read, bytes (a list of 10⁷ particles' positions is ~0.5 GB).
+pub const MAX_SCENE_BYTES: u64 = 1 << 30;
+
 /// The box the particles live in, m.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Domain {
@@ -393,9 +396,21 @@ impl Scene {
 
     /// Loads a scene file with `--set KEY=VALUE` overrides applied ([`crate::overrides`]).
     pub fn load_with(path: &Path, sets: &[String]) -> Result<Scene, PowderError> {
-        let text = std::fs::read_to_string(path).map_err(|e| {
-            PowderError::io(format!("cannot read scene file `{}`", path.display()), e)
-        })?;
+        let cannot = |e| PowderError::io(format!("cannot read scene file `{}`", path.display()), e);
+        // (a device or pipe, such as /dev/zero, would be read until memory runs out)
+        let meta = std::fs::metadata(path).map_err(cannot)?;
+        if !meta.is_file() || meta.len() > MAX_SCENE_BYTES {
+            return Err(PowderError::Scene(format!(
+                "scene file `{}` is {}: a scene is a TOML file of at most {MAX_SCENE_BYTES} bytes",
+                path.display(),
+                if meta.is_file() {
+                    format!("{} bytes long", meta.len())
+                } else {
+                    "not a regular file".to_string()
+                }
+            )));
+        }
+        let text = std::fs::read_to_string(path).map_err(cannot)?;
         let name = path
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())

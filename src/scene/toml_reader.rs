@@ -317,7 +317,11 @@ impl<'a> Tbl<'a> {
         match self.f64(key)? {
             Some(x) if x <= 0.0 => Err(self.err_key(
                 key,
-                format!("`{key}` in {} ({what}) must be > 0, got {x}", self.ctx),
+                format!(
+                    "`{key}` in {} ({what}) must be > 0, got {}",
+                    self.ctx,
+                    crate::error::num(x)
+                ),
             )),
             other => Ok(other),
         }

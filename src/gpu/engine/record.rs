@@ -338,8 +338,9 @@ impl GpuEngine {
         let non_finite = m(CONTROL_NON_FINITE);
         if non_finite != 0 {
             return Err(PowderError::Run(format!(
-                "step {}: {non_finite} particles got a non-finite acceleration (force/mass or torque/inertia beyond f32's range of ±3.4e38, or a NaN): the time step may be too large, or the scene's units put its accelerations beyond what the GPU's f32 holds (rescale the units, or run --backend cpu in f64)",
-                self.steps
+                "by step {}: particle {} got a non-finite acceleration (force/mass or torque/inertia beyond f32's range of ±3.4e38, or a NaN; the largest such id of the batch): the time step may be too large, or the scene's units put its accelerations beyond what the GPU's f32 holds (rescale the units, or run --backend cpu in f64)",
+                self.steps,
+                non_finite - 1
             )));
         }
         Ok(())

@@ -270,8 +270,21 @@ pub(super) fn run_collision(
                     approach_steps(-delta0, vn0, dt)
                 )
             };
+            // (a pair that touched and is still in contact creeps: too strongly damped for
+            // the steps, or slowly pulled apart against its adhesion)
+            let creeps = touched && (delta > 0.0 || view.in_contact.unwrap_or(false));
+            let why = if creeps {
+                format!(
+                    "the pair is still in contact, {} at {:e} m/s ({:.1e} of the impact speed): a creep slower than the steps resolve (a contact damped so strongly that it relaxes over more steps than the stable step allows); lower the dissipation, or raise --dt within the time-step rule's limit",
+                    if vn < 0.0 { "receding" } else { "approaching" },
+                    vn.abs(),
+                    vn.abs() / vn0
+                )
+            } else {
+                "the pair neither separated nor turned back; try a larger --dt or --velocity, and report it if the other backend decides it".to_string()
+            };
             return Err(PowderError::Run(format!(
-                "the collision at v = {} m/s {what} (t = {:e} s, {} backend; overlap {delta:e} m, approach speed {vn:e} m/s, contact flag {:?}): the pair neither separated nor turned back; try a larger --dt or --velocity, and report it if the other backend decides it",
+                "the collision at v = {} m/s {what} (t = {:e} s, {} backend; overlap {delta:e} m, approach speed {vn:e} m/s, contact flag {:?}): {why}",
                 spec.velocity,
                 run.time(),
                 backend,
@@ -495,6 +508,19 @@ pub(super) fn collide_with(
             spec.normal_speed() * dt
         )));
     }
+    if spec.settle > 0.0 && settle_steps(spec, dt) >= MAX_STEPS {
+        return Err(PowderError::Run(format!(
+            "the settle time {:e} s needs {} steps of {dt:e} s, over the {MAX_STEPS} a collision may take: shorten --settle or raise --dt",
+            spec.settle,
+            settle_steps(spec, dt)
+        )));
+    }
+    // (a range or travel beyond f64's resolution is named by its flag before the
+    // approach's resolution below, which it would otherwise trip)
+    let scene = spec.scene(dt);
+    if let Some(e) = unresolved_domain(spec, dt, &scene) {
+        return Err(e.into());
+    }
     // (an approach per step within f64's resolution of the positions closes the gap in
     // rounding steps: e comes out anywhere, even above 1)
     // (sphere 2 starts beyond r1 + r2 and the interaction range: the positions' scale)
@@ -512,23 +538,12 @@ pub(super) fn collide_with(
         let advice = if spec.normal_speed() * stable >= resolution {
             format!("raise --dt (the stable limit is {stable:e} s)")
         } else {
-            format!("no stable dt (at most {stable:e} s) resolves it: raise --velocity")
+            format!("no stable dt resolves it (at most {stable:e} s, by the time-step rule): change the parameter that sets that rule, or raise --velocity")
         };
         return Err(PowderError::Scene(format!(
             "at v = {:e} m/s the approach is {step:e} m a step of {dt:e} s ({rule}), within 1024 ulps of the positions ({resolution:e} m): f64 cannot resolve it; {advice}",
             spec.velocity
         )));
-    }
-    if spec.settle > 0.0 && settle_steps(spec, dt) >= MAX_STEPS {
-        return Err(PowderError::Run(format!(
-            "the settle time {:e} s needs {} steps of {dt:e} s, over the {MAX_STEPS} a collision may take: shorten --settle or raise --dt",
-            spec.settle,
-            settle_steps(spec, dt)
-        )));
-    }
-    let scene = spec.scene(dt);
-    if let Some(e) = unresolved_domain(spec, dt, &scene) {
-        return Err(e.into());
     }
     let wall_x = scene.walls.first().map_or(0.0, |w| w.point[0]);
     let wall = spec.wall;
@@ -547,7 +562,7 @@ pub(super) fn collide_with(
             run_collision(spec, run, wall_x, dt, "gpu", adapter, trace)
         }
     }?;
-    let result = finite_result(result)?;
+    let result = sound_result(finite_result(result)?, &rule)?;
     if result.delta_max > reach {
         return Err(PowderError::Run(format!(
             "the collision at v = {} m/s overlapped by {:e} m, more than the smaller radius {reach:e} m (a centre passed the other sphere's surface or the wall): the impact is too violent for the contact stiffness; lower --velocity or stiffen the contact",
@@ -555,6 +570,31 @@ pub(super) fn collide_with(
         )));
     }
     Ok(result)
+}
+
+/// Largest energy-balance error ([`CollisionEnergy::balance_error`]) a collision's result
+/// is given with: beyond it the integration went wrong (a collision the step resolves
+/// balances to ~10⁻³ or better; f32's ledger on the GPU to a few per cent over millions of
+/// steps).
+pub const MAX_BALANCE_ERROR: f64 = 0.5;
+
+/// The result, or an error where it cannot be a collision's (a pair that came out still
+/// approaching, or energy gained or lost beyond [`MAX_BALANCE_ERROR`]): the step `rule`
+/// chose is unstable for the contact.
+fn sound_result(r: CollideResult, rule: &str) -> Result<CollideResult, PowderError> {
+    let why = if r.e < 0.0 {
+        format!("the pair came out still approaching (e = {:.4e})", r.e)
+    } else if let Some(b) = r.energy.balance_error.filter(|&b| b > MAX_BALANCE_ERROR) {
+        format!(
+            "its energy balance is off by {b:.3e} of the energy in play (limit {MAX_BALANCE_ERROR})"
+        )
+    } else {
+        return Ok(r);
+    };
+    Err(PowderError::Run(format!(
+        "the collision at v = {} m/s cannot be right: {why}; the step of {:e} s ({rule}) is unstable for this contact: lower --dt, and report it where the automatic dt chose it",
+        r.velocity, r.dt
+    )))
 }
 
 /// The result, or an error where a number of it is not finite (a parameter or speed that

@@ -44,7 +44,7 @@ pub use rolling::Rolling;
 pub use scaling::StiffnessScaling;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
-pub use viscous_step::ViscousEstimate;
+pub use viscous_step::{PowerLawEstimate, ViscousEstimate};
 
 /// The per-contact history of the JKR normal law: touched since the pair last broke.
 pub const HISTORY: &[HistoryField] = &[HistoryField {

@@ -1,10 +1,12 @@
-//! The time step the explicit viscous force of the `krijt` and `stress` dissipations
-//! allows: c = 2·T_vis·E*·a/ν² taken at its largest in a head-on collision at the impact
-//! velocity, integrated with the law itself (docs/models.md, *Krijt*).
+//! The time step the explicit velocity-dependent forces of the JKR family's dissipations
+//! allow: for `krijt` and `stress`, c = 2·T_vis·E*·a/ν² taken at its largest in a head-on
+//! collision at the impact velocity, integrated with the law itself (docs/models.md,
+//! *Krijt*); for `powerlaw`, dF/dδ̇ at the collision's fastest approach and widest contact.
 
 use std::cell::RefCell;
 
-use super::JkrParams;
+use super::{Dissipation, JkrParams};
+use crate::model::analytic;
 use crate::model::krijt::{self, KrijtLaw};
 use crate::model::{ContactHistory, PairGeometry};
 
@@ -19,6 +21,19 @@ pub struct ViscousEstimate {
     /// The step the rule grants, s: the longest one whose integrated collision kept
     /// c·dt/m* within the bound (where none did, within the last round's c).
     pub dt: f64,
+}
+
+/// The `powerlaw` dissipation's largest coefficient in a head-on collision
+/// ([`JkrParams::power_law_coefficient`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PowerLawEstimate {
+    /// c = max(α, 1)·D·E*·v^(α−1)·a^β, kg/s: dF/dδ̇ for α ≥ 1, the chord F/δ̇ at v below.
+    pub c: f64,
+    /// The approach speed v it is taken at, m/s: the impact speed with the JKR well's
+    /// adhesion speed added in quadrature.
+    pub speed: f64,
+    /// The contact radius a it is taken at, m: a_JKR at the Hertz overlap of that speed.
+    pub radius: f64,
 }
 
 /// Rounds of [`JkrParams::viscous_coefficient_estimate`] at most (each integrates a
@@ -74,6 +89,24 @@ impl JkrParams {
             c.push((*self, *geom, key, found));
         });
         found
+    }
+
+    /// The largest coefficient c of the `powerlaw` dissipation F = sgn(δ̇)·D·E*·|δ̇|^α·a^β
+    /// (paper 001 eq. 19) in a head-on collision at impact speed `v` (None for the other
+    /// dissipations): both |δ̇| and a are largest where the explicit step is tested hardest
+    /// (α ≥ 1, β ≥ 0). A sub-linear law (α < 1) is taken by its chord at that speed: its
+    /// slope grows without bound as δ̇ → 0, where its force vanishes and the step only
+    /// chatters about the turn.
+    pub fn power_law_coefficient(&self, geom: &PairGeometry, v: f64) -> Option<PowerLawEstimate> {
+        let Dissipation::PowerLaw { d, alpha, beta } = self.dissipation else {
+            return None;
+        };
+        let r = geom.r_eff();
+        let speed = v.hypot(self.adhesion_speed(r, geom.reduced_mass));
+        let deepest = analytic::hertz_delta_max(geom.reduced_mass, r, self.e_star(), speed);
+        let radius = self.contact_radius(deepest, r);
+        let c = alpha.max(1.0) * d * self.e_star() * speed.powf(alpha - 1.0) * radius.powf(beta);
+        Some(PowerLawEstimate { c, speed, radius })
     }
 
     fn integrate_estimate(
@@ -151,12 +184,7 @@ impl JkrParams {
                 if turns == 0 || peak_step >= MAX_STEPS / 2 {
                     // still compressing, or c still growing while a creeps towards
                     // a_JKR(δ): c at a_JKR of the deepest overlap it can reach bounds it
-                    let hertz = crate::model::analytic::hertz_delta_max(
-                        geom.reduced_mass,
-                        r,
-                        self.e_star(),
-                        v,
-                    );
+                    let hertz = analytic::hertz_delta_max(geom.reduced_mass, r, self.e_star(), v);
                     let bound = if turns == 0 {
                         deepest.max(hertz)
                     } else {

@@ -118,7 +118,12 @@ impl Param {
         } else {
             Err(ParamError::new(
                 self.key,
-                format!("{} ({}) must be {rule}, got {value}", self.key, self.doc),
+                format!(
+                    "{} ({}) must be {rule}, got {}",
+                    self.key,
+                    self.doc,
+                    crate::error::num(value)
+                ),
             ))
         }
     }

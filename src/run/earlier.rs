@@ -1,0 +1,101 @@
+//! What an output folder already holds from an earlier run: a fresh run does not remove
+//! another run's outputs, nor a resume the results of a later step, unless asked to
+//! ([`RunOptions::overwrite`], `powder run --overwrite`).
+
+use super::*;
+use crate::output::vtk;
+use std::path::Path;
+
+/// Refuses a run of `scene` into `d` that would remove or trim what an earlier run wrote
+/// there, unless `opts.overwrite`: a fresh run where the folder holds a checkpoint, a
+/// summary, a series or this scene's snapshots; a resume from step `resumed_from` where it
+/// holds a run that finished later or a checkpoint of a later step (a killed run resumed
+/// from its own checkpoint loses only the rows it writes again). Call it before anything
+/// in the folder changes.
+pub(super) fn check(
+    d: &Path,
+    scene: &Scene,
+    opts: &RunOptions,
+    resumed_from: Option<u64>,
+) -> Result<(), PowderError> {
+    if opts.overwrite {
+        return Ok(());
+    }
+    let (found, what) = match resumed_from {
+        None => (
+            fresh_run_would_remove(d, scene),
+            "an earlier run's outputs".to_string(),
+        ),
+        Some(step) => (
+            later_results(d, opts, step),
+            format!("results beyond the checkpoint's step {step}"),
+        ),
+    };
+    if found.is_empty() {
+        return Ok(());
+    }
+    let continue_it = match resumed_from {
+        None if d.join(CHECKPOINT).is_file() => format!(
+            "continue that run (--resume {}), ",
+            d.join(CHECKPOINT).display()
+        ),
+        _ => String::new(),
+    };
+    Err(PowderError::Run(format!(
+        "`{}` holds {what} ({}), which this run would remove: {continue_it}write elsewhere (--out), or replace {} (--overwrite)",
+        d.display(),
+        found.join(", "),
+        if found.len() > 1 { "them" } else { "it" },
+    )))
+}
+
+const CHECKPOINT: &str = "checkpoint.bin";
+const SUMMARY: &str = "summary.json";
+
+/// What a fresh run of `scene` into `d` would remove or replace: the checkpoint, summary
+/// and series, and the scene's snapshot series.
+fn fresh_run_would_remove(d: &Path, scene: &Scene) -> Vec<String> {
+    let mut found: Vec<String> = [CHECKPOINT, SUMMARY, "series.csv"]
+        .into_iter()
+        .filter(|f| d.join(f).exists())
+        .map(|f| format!("`{f}`"))
+        .collect();
+    for s in vtk::Series::both_unopened(d, &scene.name) {
+        let collection = s.collection_path();
+        if collection.exists() {
+            found.push(format!("`{}`", collection.display()));
+        }
+        let n = s.snapshot_count();
+        if n > 0 {
+            found.push(format!("{n} snapshot files in `{}`", s.folder().display()));
+        }
+    }
+    found
+}
+
+/// What a resume from step `step` into `d` would trim: a run there that finished beyond
+/// that step (its `summary.json`), or a checkpoint of a later step (not the one resumed).
+fn later_results(d: &Path, opts: &RunOptions, step: u64) -> Vec<String> {
+    let mut found = Vec::new();
+    let finished = std::fs::read(d.join(SUMMARY))
+        .ok()
+        .and_then(|b| serde_json::from_slice::<serde_json::Value>(&b).ok())
+        .and_then(|v| v.get("steps").and_then(serde_json::Value::as_u64));
+    if let Some(s) = finished.filter(|&s| s > step) {
+        found.push(format!("a run that finished at step {s} (`{SUMMARY}`)"));
+    }
+    let own = d.join(CHECKPOINT);
+    let same = |a: &Path, b: &Path| match (a.canonicalize(), b.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => false,
+    };
+    let resumed = opts.resume.as_deref();
+    if own.is_file() && !resumed.is_some_and(|r| same(r, &own)) {
+        if let Ok(s) = crate::checkpoint::steps_of(&own) {
+            if s > step {
+                found.push(format!("a checkpoint at step {s} (`{CHECKPOINT}`)"));
+            }
+        }
+    }
+    found
+}
