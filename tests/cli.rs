@@ -308,6 +308,21 @@ fn unwritable_outputs_and_unreadable_scenes_are_refused_first() {
     );
     let (ok, _, err) = powder(&["run", "/dev/zero"]);
     assert!(!ok && err.contains("not a regular file"), "{err}");
+    // a GPU-only option on the CPU backend is named as having no effect
+    let (ok, _, err) = powder(&[
+        "run",
+        "--backend",
+        "cpu",
+        "--steps",
+        "1",
+        "--no-output",
+        "--window-particles",
+        "3",
+    ]);
+    assert!(
+        ok && err.contains("--window-particles 3 has no effect"),
+        "{err}"
+    );
 }
 
 const JKR: [&str; 13] = [

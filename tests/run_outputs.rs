@@ -391,6 +391,14 @@ fn an_earlier_runs_outputs_are_kept_unless_overwritten() {
         files(done.path()) == before,
         "the refused resume changed the folder"
     );
+    // a resume that would end before its checkpoint has nothing to run
+    let err = run_cpu_with(&scene, &options(early.path(), 200, Some(&ckpt)), |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("checkpoint is at step 500") && err.contains("--steps 200"),
+        "{err}"
+    );
     // files of a run's names that no run wrote
     std::fs::write(mine.path().join("series.csv"), "my,own\n1,2\n").unwrap();
     let err = run_cpu_with(&scene, &options(mine.path(), 100, None), |_| {})

@@ -152,6 +152,9 @@ pub(crate) fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
                 // accepted so one command line serves both backends (and the fallback)
                 eprintln!("notice: --no-ledger has no effect on the CPU backend, which always keeps its energy ledger (it costs little there)");
             }
+            if let Some(w) = a.window_particles {
+                eprintln!("notice: --window-particles {w} has no effect on the CPU backend (the GPU engine's windows)");
+            }
             powder::run::run_cpu_with(&scene, &opts, |_| {})?
         }
     };

@@ -140,6 +140,15 @@ pub fn run_with<S: Simulation>(
     }
     let total = ((scene.duration / engine.dt()).ceil() as u64).max(1);
     let total = opts.max_steps.map_or(total, |m| m.min(total));
+    if let Some(from) = resumed_from.filter(|&from| total < from) {
+        return Err(PowderError::Run(format!(
+            "the checkpoint is at step {from}, past this run's end at step {total} ({}): nothing to run; ask for a later end",
+            match opts.max_steps {
+                Some(m) if m < from => format!("--steps {m}"),
+                _ => format!("the scene's duration {:e} s", scene.duration),
+            }
+        )));
+    }
     let mut outputs = RunOutputs::open(
         scene,
         opts,

@@ -97,6 +97,12 @@ impl CpuEngine {
                 self.walls.len()
             )));
         }
+        if !(s.dt.is_finite() && s.dt > 0.0) {
+            return Err(PowderError::Run(format!(
+                "the checkpoint's dt is {:e} s, not a time step: the checkpoint was damaged or edited; rerun the scene, or resume an intact checkpoint",
+                s.dt
+            )));
+        }
         if s.dt.to_bits() != self.dt.to_bits() {
             return Err(PowderError::Run(format!(
                 "the checkpoint was run with dt = {:e} s but the scene gives dt = {:e} s; to continue it, set simulation.dt = {:?} (an automatic dt's rule can change between powder versions)",

@@ -10,10 +10,13 @@
 //! deterministic. How the step works and why: `docs/architecture.md`.
 //!
 //! The files: `build` (an engine for a scene) with `program` (what its shaders are
-//! compiled from), `initial` (the first state), `bind` (bind groups); `buffers` (device
-//! buffers, list sizes); `dispatch` (workgroup counts); `record` (a step's passes, a
-//! batch); `stepping` (running steps, halts, quiet batches); `walls` (walls, pouring);
-//! `readback`, `checkpoint`, `introspection` (sizes, kernels, traffic, pass profile).
+//! compiled from), `initial` (the first state), `bind` (bind groups), `f32_range` (scene
+//! values f32 cannot hold); `allocator` (buffers within the adapter's limits), `state_set`
+//! (the particle state and list entries), `buffers` (the step's other buffers, the new
+//! lists), `capacity` (the lists' size and windows, growing them); `dispatch` (workgroup
+//! counts); `record` (a step's passes, a batch); `stepping` (running steps, halts, quiet
+//! batches); `walls` (walls, pouring); `readback`, `checkpoint`, `introspection` (sizes,
+//! kernels, traffic, pass profile).
 
 use crate::cpu::{ContactStats, Energies, Partner};
 use crate::error::PowderError;
