@@ -279,8 +279,8 @@ fn run_prints_a_summary_and_rejects_missing_files() {
 }
 
 /// Output files are checked writable before the work that fills them (a bench's rows, a
-/// collision's trace were lost after the run), and a scene path that is not a regular
-/// file is refused rather than read until memory runs out.
+/// collision's trace were lost after the run), and a scene read is bounded (/dev/zero was
+/// read until memory ran out) while a pipe still reads.
 #[test]
 fn unwritable_outputs_and_unreadable_scenes_are_refused_first() {
     let dir = tempfile::tempdir().unwrap();
@@ -307,7 +307,21 @@ fn unwritable_outputs_and_unreadable_scenes_are_refused_first() {
         "{err}"
     );
     let (ok, _, err) = powder(&["run", "/dev/zero"]);
-    assert!(!ok && err.contains("not a regular file"), "{err}");
+    assert!(!ok && err.contains("longer than"), "{err}");
+    // a scene from a pipe reads as from a file
+    let out = Command::new("sh")
+        .arg("-c")
+        .arg(format!(
+            "cat {CLUSTER} | {} run /dev/stdin --steps 1 --no-output",
+            env!("CARGO_BIN_EXE_powder")
+        ))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     // a GPU-only option on the CPU backend is named as having no effect
     let (ok, _, err) = powder(&[
         "run",

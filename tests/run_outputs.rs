@@ -328,9 +328,6 @@ fn as_next_format(bytes: &[u8]) -> Vec<u8> {
     with_header(bytes, |h| h["format"] = NEXT_FORMAT.into())
 }
 
-/// A resume keeps only the rows its checkpoint's run wrote: into a folder of another run
-/// it is refused (nothing there changes); into an empty one the series starts at the
-/// checkpoint's step.
 /// A fresh run into a folder holding an earlier run's outputs, or files of the names a run
 /// writes, is refused before anything there changes; so is a resume from an earlier
 /// checkpoint into a folder whose run finished later. `overwrite` replaces them. (A fresh
@@ -373,6 +370,16 @@ fn an_earlier_runs_outputs_are_kept_unless_overwritten() {
     assert!(
         files(done.path()) == before,
         "the refused run changed the folder"
+    );
+    // another scene (a rerun after a change) is not told to resume a checkpoint it cannot
+    let mut changed = scene.clone();
+    changed.gravity[2] *= 0.5;
+    let err = run_cpu_with(&changed, &options(done.path(), 1000, None), |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("--overwrite") && !err.contains("--resume"),
+        "{err}"
     );
     // a resume from an earlier checkpoint of the same run would trim the later results
     run(&scene, early.path(), 500, None);
@@ -422,6 +429,9 @@ fn an_earlier_runs_outputs_are_kept_unless_overwritten() {
     assert!(rows.lines().last().unwrap().starts_with("500,"), "{rows}");
 }
 
+/// A resume keeps only the rows its checkpoint's run wrote: into a folder of another run
+/// it is refused (nothing there changes); into an empty one the series starts at the
+/// checkpoint's step.
 #[test]
 fn a_resume_into_another_runs_folder_is_refused() {
     let scene = cluster();

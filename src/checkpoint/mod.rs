@@ -283,6 +283,15 @@ pub fn steps_of(path: &Path) -> Result<u64, PowderError> {
     Ok(header(&bytes, path)?.0.steps)
 }
 
+/// Whether the checkpoint at `path` is intact and of `scene`'s run up to its time (what a
+/// resume of it asks of the scene; the backend aside).
+pub fn is_of(path: &Path, scene: &Scene) -> bool {
+    read(path)
+        .ok()
+        .and_then(|bytes| header(&bytes, path).ok().map(|(h, _)| h))
+        .is_some_and(|h| h.scene_digest == run_digest(scene, h.time))
+}
+
 /// The backend (`"cpu"` or `"gpu"`) that wrote the checkpoint at `path`.
 pub fn backend_of(path: &Path) -> Result<String, PowderError> {
     let bytes = read(path)?;

@@ -576,7 +576,7 @@ impl ContactModel {
                 let visc = MAX_VISCOUS_STEP * mr / k.c;
                 if visc < max {
                     max = visc;
-                    reason = format!("dt <= {MAX_VISCOUS_STEP}*m_r/c = {visc:.4e} s for the coefficient c = max(alpha,1)*D*E*v^(alpha-1)*a^beta = {:.4e} kg/s of dissipation = \"powerlaw\" at the approach speed v = {:.4e} m/s (the impact velocity {impact_velocity} m/s and the adhesion speed) and contact radius a = {:.4e} m", k.c, k.speed, k.radius);
+                    reason = format!("dt <= {MAX_VISCOUS_STEP}*m_r/c = {visc:.4e} s for the coefficient c = max(alpha,1)*D*E*v^(alpha-1)*a^beta = {:.4e} kg/s of dissipation = \"powerlaw\" at the approach speed v = {:.4e} m/s (the impact velocity {impact_velocity} m/s{}) and contact radius a = {:.4e} m", k.c, k.speed, if p.gamma() > 0.0 { " and the adhesion speed" } else { "" }, k.radius);
                 }
             }
         }

@@ -34,8 +34,11 @@ pub(super) fn check(
     if found.is_empty() {
         return Ok(());
     }
+    // (only a checkpoint this scene can resume: after a run that blew up, rerun with a
+    // smaller dt, the earlier checkpoint is another run's)
+    let own = d.join(CHECKPOINT);
     let continue_it = match resumed_from {
-        None if d.join(CHECKPOINT).is_file() => format!(
+        None if own.is_file() && crate::checkpoint::is_of(&own, scene) => format!(
             "continue that run (--resume {}), ",
             d.join(CHECKPOINT).display()
         ),
@@ -74,7 +77,8 @@ fn fresh_run_would_remove(d: &Path, scene: &Scene) -> Vec<String> {
 }
 
 /// What a resume from step `step` into `d` would trim: a run there that finished beyond
-/// that step (its `summary.json`), or a checkpoint of a later step (not the one resumed).
+/// that step (its `summary.json`), or a checkpoint of a later step. (A killed run's rows
+/// beyond its last checkpoint are not counted: resumed to its end, it writes them again.)
 fn later_results(d: &Path, opts: &RunOptions, step: u64) -> Vec<String> {
     let mut found = Vec::new();
     let finished = std::fs::read(d.join(SUMMARY))
@@ -89,6 +93,7 @@ fn later_results(d: &Path, opts: &RunOptions, step: u64) -> Vec<String> {
         (Ok(a), Ok(b)) => a == b,
         _ => false,
     };
+    // (the folder's own checkpoint, resumed, is at `step`: not read a second time)
     let resumed = opts.resume.as_deref();
     if own.is_file() && !resumed.is_some_and(|r| same(r, &own)) {
         if let Ok(s) = crate::checkpoint::steps_of(&own) {

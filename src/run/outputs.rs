@@ -37,7 +37,8 @@ impl RunOutputs {
     /// every output it replaces checked writable, and, resuming from step `resumed_from`
     /// with the checkpoint's `marks`, the series' rows up to that step kept (refused where
     /// they are not the ones that run wrote) and later snapshots removed; a fresh run
-    /// removes the earlier run's checkpoint, summary and snapshots.
+    /// removes the earlier run's checkpoint, summary and snapshots (where
+    /// `opts.overwrite` allows: otherwise `earlier::check` refuses it first).
     pub(super) fn open(
         scene: &Scene,
         opts: &RunOptions,

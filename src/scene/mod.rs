@@ -396,21 +396,27 @@ impl Scene {
 
     /// Loads a scene file with `--set KEY=VALUE` overrides applied ([`crate::overrides`]).
     pub fn load_with(path: &Path, sets: &[String]) -> Result<Scene, PowderError> {
+        use std::io::Read;
         let cannot = |e| PowderError::io(format!("cannot read scene file `{}`", path.display()), e);
-        // (a device or pipe, such as /dev/zero, would be read until memory runs out)
-        let meta = std::fs::metadata(path).map_err(cannot)?;
-        if !meta.is_file() || meta.len() > MAX_SCENE_BYTES {
+        // (read to a bound: a device such as /dev/zero would be read until memory runs out;
+        // a pipe, `<(...)` or /dev/stdin, is read as a file)
+        let mut bytes = Vec::new();
+        std::fs::File::open(path)
+            .and_then(|f| f.take(MAX_SCENE_BYTES + 1).read_to_end(&mut bytes))
+            .map_err(cannot)?;
+        if bytes.len() as u64 > MAX_SCENE_BYTES {
             return Err(PowderError::Scene(format!(
-                "scene file `{}` is {}: a scene is a TOML file of at most {MAX_SCENE_BYTES} bytes",
-                path.display(),
-                if meta.is_file() {
-                    format!("{} bytes long", meta.len())
-                } else {
-                    "not a regular file".to_string()
-                }
+                "scene file `{}` is longer than {MAX_SCENE_BYTES} bytes (a device such as /dev/zero?): a scene is a TOML file of at most that size",
+                path.display()
             )));
         }
-        let text = std::fs::read_to_string(path).map_err(cannot)?;
+        let text = String::from_utf8(bytes).map_err(|e| {
+            PowderError::Scene(format!(
+                "scene file `{}` is not UTF-8 text (byte {}): a scene is a TOML file",
+                path.display(),
+                e.utf8_error().valid_up_to()
+            ))
+        })?;
         let name = path
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())

@@ -275,7 +275,7 @@ pub(super) fn run_collision(
             let creeps = touched && (delta > 0.0 || view.in_contact.unwrap_or(false));
             let why = if creeps {
                 format!(
-                    "the pair is still in contact, {} at {:e} m/s ({:.1e} of the impact speed): a creep slower than the steps resolve (a contact damped so strongly that it relaxes over more steps than the stable step allows); lower the dissipation, or raise --dt within the time-step rule's limit",
+                    "the pair is still in contact, {} at {:e} m/s ({:.1e} of the impact speed): a creep slower than the steps resolve (a contact damped so strongly that it relaxes over more steps than the stable step allows, its step bound by that damping); lower the dissipation",
                     if vn < 0.0 { "receding" } else { "approaching" },
                     vn.abs(),
                     vn.abs() / vn0
