@@ -1052,6 +1052,17 @@ fn collide_reports_the_tabor_parameter_and_warns_below_the_jkr_range() {
     );
     let (ok, _, err) = jkr_cmd(&["--velocity", "2", "--tabor-dmin", "0"]);
     assert!(!ok && err.contains("tabor"), "{err}");
+    // in range but beyond f64 once derived: refused before the run, not written as null
+    let (ok, _, err) = jkr_cmd(&["--velocity", "2", "--tabor-dmin", "1e-300"]);
+    assert!(
+        !ok && err.contains("Tabor parameter") && err.contains("inf"),
+        "{err}"
+    );
+    let (ok, _, err) = jkr_cmd(&["--velocity", "2", "--yield-stress", "1e-300"]);
+    assert!(
+        !ok && err.contains("yield velocity") && err.contains("comes out as 0"),
+        "{err}"
+    );
 }
 
 const DEPOSITION: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/jkr_deposition.toml");

@@ -130,7 +130,10 @@ fn engines_refuse_a_scene_built_wrong_in_code() {
     refused(&s, "wall 0 needs a finite point");
     let mut s = scene();
     s.walls[0].motion = WallMotion::always(WallPhase::Velocity([0.0, 0.0, f64::NAN]));
-    refused(&s, "wall 0: the phase from t = 0 s must have finite values");
+    refused(
+        &s,
+        "wall 0: the phase from t = 0 s must start at >= 0 s and have finite values",
+    );
     let mut s = scene();
     s.walls[0].motion.phases = vec![(1e-3, WallPhase::Rest), (0.0, WallPhase::Rest)];
     refused(&s, "wall 0: its phases must start at increasing times");
@@ -148,6 +151,115 @@ fn engines_refuse_a_scene_built_wrong_in_code() {
     s.domain.periodic[2] = true;
     s.gravity = [0.0; 3];
     refused(&s, "wall 0 faces the periodic axis z");
+    // what the reader checks of placement, interactions and walls holds in code too
+    let mut s = scene();
+    s.particles[1].position[0] = 5.0;
+    refused(
+        &s,
+        "particle 1 at [5, 0.005, 0.002] with radius 0.001 is not inside the domain",
+    );
+    let mut s = scene();
+    s.particles[1].position[0] = 0.0031;
+    refused(&s, "particles 0 at [0.003, 0.005, 0.002] and 1 at");
+    let mut s = scene();
+    s.walls[0].point[2] = 5e-4;
+    s.particles[1].position[2] = 1.2e-3;
+    refused(
+        &s,
+        "particle 1 at [0.006, 0.005, 0.0012] with radius 0.001 overlaps wall 0",
+    );
+    let mut s = scene();
+    for _ in 0..2 {
+        s.interactions.push(Interaction {
+            materials: [0, 0],
+            model: ContactModel::Lsd(LsdParams::new(300.0, 1e-3)),
+        });
+    }
+    refused(&s, "interactions 0 and 1 both set materials 0 and 0");
+    let mut s = scene();
+    s.walls[0].motion = WallMotion::always(WallPhase::Servo {
+        force: -1.0,
+        gain: 1e-3,
+        max_speed: 0.01,
+    });
+    refused(&s, "a servo a force, gain and max_speed > 0");
+    let mut s = scene();
+    s.walls[0].motion.phases = vec![(-1e-3, WallPhase::Rest)];
+    refused(
+        &s,
+        "wall 0: the phase from t = -0.001 s must start at >= 0 s",
+    );
+    for name in ["", "..", "../escaped", "a/b", "/abs", "tab\there"] {
+        let mut s = scene();
+        s.name = name.into();
+        refused(&s, "cannot name files in the output folder");
+    }
+}
+
+/// An engine built from one scene and run or checkpointed with another is refused before
+/// anything is written (it indexed walls the other scene lacks, or wrote the wrong scene's
+/// checkpoint).
+#[test]
+fn an_engine_of_another_scene_is_refused() {
+    use powder::run::run_with;
+    let dir = tempfile::tempdir().unwrap();
+    let opts = RunOptions {
+        out_dir: Some(dir.path().to_path_buf()),
+        max_steps: Some(10),
+        ..Default::default()
+    };
+    let mut other = scene();
+    other.walls.clear();
+    let engine = CpuEngine::new(&other).unwrap();
+    let e = run_with(&scene(), engine, "", &opts, |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("the engine was not built from scene `library_input`: it has 2 particles and 0 walls, the scene 2 and 1"),
+        "{e}"
+    );
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    let mut bigger = scene();
+    bigger.particles[1].radius = 1.5e-3;
+    let engine = CpuEngine::new(&bigger).unwrap();
+    let path = dir.path().join("other.npz");
+    let e = powder::checkpoint::save(&path, &scene(), &engine, &Default::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("particle 1's radius is 1.5e-3 m there, 1e-3 m in the scene"),
+        "{e}"
+    );
+    assert!(!path.exists());
+}
+
+/// A scene without an end runs only with a step limit; a Tabor parameter beyond f64 is
+/// refused rather than written as `null`.
+#[test]
+fn a_run_needs_an_end_and_a_finite_tabor_parameter() {
+    let mut s = scene();
+    s.duration = f64::INFINITY;
+    let e = run_cpu_with(&s, &RunOptions::default(), |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("has an infinite duration"), "{e}");
+    let opts = RunOptions {
+        max_steps: Some(5),
+        ..Default::default()
+    };
+    assert_eq!(run_cpu_with(&s, &opts, |_| {}).unwrap().steps, 5);
+    let mut s = scene();
+    s.materials[0].model = ContactModel::Jkr(powder::model::JkrParams::jkr(1e8, 0.3, 0.01));
+    let opts = RunOptions {
+        max_steps: Some(5),
+        tabor_dmin: Some(1e-300),
+        ..Default::default()
+    };
+    let e = run_cpu_with(&s, &opts, |_| {}).unwrap_err().to_string();
+    assert!(
+        e.contains("the Tabor parameter of materials `powder`-`powder` comes out as inf"),
+        "{e}"
+    );
 }
 
 #[test]
@@ -206,4 +318,25 @@ fn a_gpu_state_of_another_time_step_is_refused() {
     let mut b = GpuEngine::new(&s, GpuContext::new().unwrap()).unwrap();
     let e = b.restore_state(saved).unwrap_err().to_string();
     assert!(e.contains("it was taken with another time step"), "{e}");
+}
+
+/// A comparison with a NaN tolerance (which every sample would pass) or no step is refused.
+#[test]
+fn a_comparison_needs_its_tolerances_and_a_step() {
+    use powder::measure::compare::{compare, Tolerances};
+    let Some(ctx) = common::gpu() else { return };
+    let tol = Tolerances {
+        kinetic: f64::NAN,
+        ..Default::default()
+    };
+    let e = compare(&scene(), ctx, 10, 5, tol).unwrap_err().to_string();
+    assert!(
+        e.contains("the kinetic tolerance must be a number >= 0, got NaN"),
+        "{e}"
+    );
+    let ctx = GpuContext::new().unwrap();
+    let e = compare(&scene(), ctx, 0, 5, Tolerances::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("at least one step"), "{e}");
 }

@@ -217,6 +217,7 @@ pub fn save(
     engine: &CpuEngine,
     run: &RunMarks,
 ) -> Result<(), PowderError> {
+    crate::run::engine_fits(scene, engine.radii(), engine.wall_count(), engine.dt())?;
     let state = engine.state();
     save_state(
         path,
@@ -259,6 +260,16 @@ pub fn save_gpu(
     state: &GpuSavedState,
     run: &RunMarks,
 ) -> Result<(), PowderError> {
+    if state.active.len() != scene.particles.len() || state.wall_points.len() != scene.walls.len() {
+        return Err(PowderError::Run(format!(
+            "the GPU state was not taken from scene `{}`: it has {} particles and {} walls, the scene {} and {}",
+            scene.name,
+            state.active.len(),
+            state.wall_points.len(),
+            scene.particles.len(),
+            scene.walls.len()
+        )));
+    }
     let arrays = gpu::arrays(state)
         .map_err(|e| PowderError::Run(format!("cannot encode the checkpoint: {}", e.0)))?;
     save_state(path, scene, "gpu", (state.steps, state.time), run, arrays)

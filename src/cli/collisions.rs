@@ -130,7 +130,13 @@ pub(crate) fn collide_report(
                 y,
                 "the yield stress (--yield-stress)",
             )?;
-            collide::yield_velocity(spec, y)
+            let v = collide::yield_velocity(spec, y);
+            derived_finite(
+                v,
+                "yield_stress",
+                "the yield velocity v_Y from --yield-stress",
+                true,
+            )?
         }
     };
     let tabor_dmin = match a.tabor_dmin {
@@ -148,11 +154,37 @@ pub(crate) fn collide_report(
         )?,
         None => powder::model::analytic::TABOR_MIN_SEPARATION,
     };
+    derived_finite(
+        collide::tabor(spec, tabor_dmin),
+        "tabor_dmin",
+        "the Tabor parameter at this --tabor-dmin",
+        false,
+    )?;
     Ok(CollideReport {
         tabor_dmin,
         v_yield,
         yield_stress: a.yield_stress,
     })
+}
+
+/// A value derived from in-range inputs that came out beyond f64 (JSON would write an
+/// infinity as null), or at 0 where it must be positive.
+fn derived_finite(
+    x: Option<f64>,
+    param: &'static str,
+    what: &str,
+    positive: bool,
+) -> Result<Option<f64>, PowderError> {
+    match x {
+        Some(v) if !v.is_finite() || (positive && v <= 0.0) => Err(ParamError::new(
+            param,
+            format!(
+                "{what} comes out as {v}: the inputs combine beyond what f64 holds; check their units"
+            ),
+        )
+        .into()),
+        _ => Ok(x),
+    }
 }
 
 /// Adds the reports to the results, warns about a pair outside the JKR range and prints.

@@ -57,6 +57,11 @@ impl CellGrid {
         Some(g)
     }
 
+    /// The cells' width (at least the cut-off; wider where cells are capped by count).
+    pub fn width(&self) -> f64 {
+        1.0 / self.inv_width
+    }
+
     fn coord(&self, p: DVec3) -> [usize; 3] {
         let c = (p - self.origin) * self.inv_width;
         let clamp = |x: f64, n: usize| {

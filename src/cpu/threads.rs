@@ -14,6 +14,8 @@ pub const CHUNK: usize = 512;
 
 /// The particle ranges of chunks of `chunk` over `n` particles.
 pub fn chunks(n: usize, chunk: usize) -> impl ExactSizeIterator<Item = Range<usize>> + Clone {
+    // (a chunk of 0 is taken as 1)
+    let chunk = chunk.max(1);
     (0..n.div_ceil(chunk)).map(move |c| c * chunk..((c + 1) * chunk).min(n))
 }
 

@@ -55,6 +55,28 @@ impl Default for Tolerances {
     }
 }
 
+impl Tolerances {
+    /// Each tolerance a number >= 0 (infinity: not checked); NaN would pass every sample.
+    pub fn validate(&self) -> Result<(), PowderError> {
+        let named = [
+            ("position", self.position),
+            ("velocity", self.velocity),
+            ("kinetic", self.kinetic),
+            ("contacts", self.contacts),
+            ("energy", self.energy),
+            ("history", self.history),
+        ];
+        match named.iter().find(|(_, v)| v.is_nan() || *v < 0.0) {
+            Some((name, v)) => Err(crate::ParamError::new(
+                "tolerance",
+                format!("the {name} tolerance must be a number >= 0, got {v}"),
+            )
+            .into()),
+            None => Ok(()),
+        }
+    }
+}
+
 /// The deviations at one sample.
 #[derive(Clone, Debug, Serialize)]
 pub struct Sample {
@@ -220,6 +242,14 @@ pub fn compare(
     every: u64,
     tol: Tolerances,
 ) -> Result<Comparison, PowderError> {
+    tol.validate()?;
+    if steps == 0 {
+        return Err(crate::ParamError::new(
+            "steps",
+            "a comparison needs at least one step (nothing would be compared)",
+        )
+        .into());
+    }
     let mut cpu = CpuEngine::new(scene)?;
     let mut gpu = GpuEngine::new(scene, ctx)?;
     let radius = cpu.radii().to_vec();

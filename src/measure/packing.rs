@@ -50,6 +50,9 @@ pub fn packing(case: Case, n: usize, velocity_scale: f64, seed: u64) -> Result<S
         return Err(ParamError::new("sizes", "a packing needs at least one particle").into());
     }
     crate::error::require_non_negative("velocity-scale", velocity_scale, "the velocity scale")?;
+    let each = std::mem::size_of::<ParticleInit>() as u64;
+    crate::memory::check_particles(n as u64, each, "the packing's particle list")
+        .map_err(|why| ParamError::new("sizes", why))?;
     let (radius, density, model, impact_velocity, v0) = match case {
         Case::Hysteretic => (
             1.1e-3,
@@ -160,7 +163,18 @@ pub fn packing(case: Case, n: usize, velocity_scale: f64, seed: u64) -> Result<S
 }
 
 /// Particle–particle contacts (δ > 0) per particle of a configuration (2·pairs/N).
-pub fn coordination(scene: &Scene, positions: &[DVec3], radius: &[f64]) -> f64 {
+pub fn coordination(
+    scene: &Scene,
+    positions: &[DVec3],
+    radius: &[f64],
+) -> Result<f64, PowderError> {
+    if positions.len() != radius.len() {
+        return Err(PowderError::Run(format!(
+            "coordination: {} positions but {} radii",
+            positions.len(),
+            radius.len()
+        )));
+    }
     let r_max = radius.iter().copied().fold(0.0, f64::max);
     let mut grid = CellGrid::new(
         DVec3::from_array(scene.domain.min),
@@ -175,7 +189,7 @@ pub fn coordination(scene: &Scene, positions: &[DVec3], radius: &[f64]) -> f64 {
             pairs += 1;
         }
     });
-    2.0 * pairs as f64 / positions.len().max(1) as f64
+    Ok(2.0 * pairs as f64 / positions.len().max(1) as f64)
 }
 
 #[cfg(test)]
@@ -197,7 +211,7 @@ mod tests {
             // lattice neighbour in contact and nothing else: x bonds 3·30 + 3·5 + 3,
             // y bonds 3·30 + 4·3 + 2·2, z bonds 2·36 + 22
             let bonds = (90 + 15 + 3) + (90 + 12 + 4) + (72 + 22);
-            let z = coordination(&s, &pos, &r);
+            let z = coordination(&s, &pos, &r).unwrap();
             assert_eq!(z, 2.0 * bonds as f64 / 130.0);
             for (i, p) in pos.iter().enumerate() {
                 for q in &pos[i + 1..] {

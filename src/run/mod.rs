@@ -6,6 +6,8 @@
 //! of the JSON, "n/a" in the progress line.
 
 mod earlier;
+mod fits;
+pub(crate) use fits::engine_fits;
 mod monitor;
 pub mod observed;
 mod outputs;
@@ -94,12 +96,12 @@ pub fn run_gpu_with(
     opts: &RunOptions,
     progress: impl FnMut(&Snapshot),
 ) -> Result<RunSummary, PowderError> {
-    let rule = crate::setup::Resolved::new(scene)?.time_step.reason;
     let options = GpuOptions {
         contacts: opts.gpu.contacts || (opts.out_dir.is_some() && scene.writes_contacts()),
         ..opts.gpu
     };
     let engine = GpuEngine::with_options(scene, ctx, options)?;
+    let rule = engine.time_step().reason.clone();
     run_with(scene, engine, &rule, opts, progress)
 }
 
@@ -111,15 +113,32 @@ pub fn run_with<S: Simulation>(
     opts: &RunOptions,
     mut progress: impl FnMut(&Snapshot),
 ) -> Result<RunSummary, PowderError> {
-    // before anything is written: a scene built in code may not have met the reader
-    scene.validate()?;
+    // before anything is written: a scene built in code may not have met the reader, an
+    // engine may have been built from another scene (whose build checked its placement)
+    scene.validate_settings()?;
+    fits::engine_fits(scene, engine.radii(), engine.wall_count(), engine.dt())?;
+    if !scene.duration.is_finite() && opts.max_steps.is_none() {
+        return Err(PowderError::Run(format!(
+            "scene `{}` has an infinite duration: a run needs a finite simulation.duration or a step limit (`RunOptions::max_steps`, `--steps`)",
+            scene.name
+        )));
+    }
     let d_min = match opts.tabor_dmin {
         Some(d) => crate::error::require_positive("tabor-dmin", d, "D_min of the Tabor parameter")?,
         None => crate::model::analytic::TABOR_MIN_SEPARATION,
     };
     let tabor = tabor_pairs(scene, d_min);
+    if let Some(t) = tabor.iter().find(|t| !t.tabor.is_finite()) {
+        return Err(PowderError::Run(format!(
+            "the Tabor parameter of materials `{}`-`{}` comes out as {} at D_min = {:e} m: D_min and the materials combine beyond what f64 holds; check D_min's units (`--tabor-dmin`, in m)",
+            t.materials[0], t.materials[1], t.tabor, d_min
+        )));
+    }
     if opts.verbose {
         for w in tabor.iter().flat_map(TaborPair::warnings) {
+            eprintln!("warning: {w}");
+        }
+        if let Some(w) = scene.late_insertions() {
             eprintln!("warning: {w}");
         }
     }

@@ -55,13 +55,13 @@ pub(super) fn monitor(
     );
     if let Some(i) = engine.non_finite() {
         return Err(PowderError::Run(format!(
-            "step {steps}: particle {i} has a non-finite position or velocity; {hint}"
+            "step {steps}: particle {i} has a non-finite position, velocity or spin; {hint}"
         )));
     }
     if let Some(peak) = engine.take_peak_overlap() {
         if peak.ratio > MAX_OVERLAP_RATIO {
             return Err(PowderError::Run(format!(
-                "step {steps}: {} by {} of the reduced radius (limit {MAX_OVERLAP_RATIO}); the impact is too violent for the contact stiffness or {hint}",
+                "step {steps}: {} by {} of the reduced radius (limit {MAX_OVERLAP_RATIO}); an impact or a load (gravity, adhesion, a wall) is too strong for the contact stiffness, or {hint}",
                 peak.who,
                 match peak.ratio < 1e3 {
                     true => format!("{:.3}", peak.ratio),

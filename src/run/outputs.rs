@@ -49,7 +49,7 @@ impl RunOutputs {
         let wall_normals = scene
             .walls
             .iter()
-            .map(|w| glam::DVec3::from_array(w.normal))
+            .map(|w| glam::DVec3::from_array(w.normal).normalize())
             .collect();
         let Some(d) = opts.out_dir.as_deref() else {
             return Ok(RunOutputs {

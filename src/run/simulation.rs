@@ -68,6 +68,8 @@ pub trait Simulation {
     }
     /// Particle radii in scene order, m.
     fn radii(&self) -> &[f64];
+    /// Number of walls.
+    fn wall_count(&self) -> usize;
     /// Whether the run keeps the energy ledger (stored and dissipated energy, contact
     /// statistics, wall forces): always on the CPU, optional on the GPU.
     fn has_ledger(&self) -> bool;
@@ -133,6 +135,9 @@ impl Simulation for CpuEngine {
     }
     fn radii(&self) -> &[f64] {
         CpuEngine::radii(self)
+    }
+    fn wall_count(&self) -> usize {
+        CpuEngine::wall_count(self)
     }
     fn has_ledger(&self) -> bool {
         true
@@ -221,6 +226,9 @@ impl Simulation for GpuEngine {
     }
     fn radii(&self) -> &[f64] {
         GpuEngine::radii(self)
+    }
+    fn wall_count(&self) -> usize {
+        GpuEngine::wall_count(self)
     }
     fn has_ledger(&self) -> bool {
         GpuEngine::has_ledger(self)

@@ -71,7 +71,8 @@ pub fn tabor_pairs(scene: &Scene, d_min: f64) -> Vec<TaborPair> {
     use crate::model::{analytic, ContactModel};
     let n = scene.materials.len();
     let (mut r_min, mut count) = (vec![f64::INFINITY; n], vec![0usize; n]);
-    for p in &scene.particles {
+    // (a material index beyond the list is `Scene::validate`'s to refuse: skipped here)
+    for p in scene.particles.iter().filter(|p| p.material < n) {
         r_min[p.material] = r_min[p.material].min(p.radius);
         count[p.material] += 1;
     }
@@ -102,7 +103,9 @@ pub fn tabor_pairs(scene: &Scene, d_min: f64) -> Vec<TaborPair> {
             }
         }
     }
-    let mut wall_materials: Vec<usize> = scene.walls.iter().map(|w| w.material).collect();
+    let mut wall_materials: Vec<usize> = (scene.walls.iter().map(|w| w.material))
+        .filter(|&m| m < n)
+        .collect();
     wall_materials.sort_unstable();
     wall_materials.dedup();
     for w in wall_materials {

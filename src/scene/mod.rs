@@ -301,7 +301,8 @@ impl WallMotion {
 pub struct Wall {
     /// A point on the plane at time 0, m.
     pub point: [f64; 3],
-    /// Unit normal pointing into the domain.
+    /// Normal pointing into the domain (the reader's is a unit vector; one of any
+    /// non-zero length is normalised where used).
     pub normal: [f64; 3],
     /// How it moves (default: fixed).
     pub motion: WallMotion,
@@ -328,7 +329,8 @@ pub struct ParticleInit {
     pub insert_at: f64,
 }
 
-/// A validated scene (see the module documentation for the file format).
+/// A scene: read from TOML (see the module documentation for the file format; checked as
+/// it is read) or built in code (checked by [`Scene::validate`], which every engine calls).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Scene {
     /// The file stem, or "default".

@@ -64,6 +64,15 @@ pub(super) fn parse_particles(root: &Tbl, names: &[&str]) -> Res<(Vec<ParticleIn
                 // each placed afresh in the region
                 let batches = t.u64("batches")?.unwrap_or(1);
                 let interval = t.f64("batch_interval")?.unwrap_or(0.0);
+                if !(interval.is_finite() && interval >= 0.0) {
+                    return Err(t.err_key(
+                        "batch_interval",
+                        format!(
+                            "`batch_interval` in {} is {interval} s: the time between batches must be a finite number >= 0",
+                            t.ctx
+                        ),
+                    ));
+                }
                 if batches == 0 || (batches > 1 && (interval.is_nan() || interval <= 0.0)) {
                     return Err(t.err_key(
                         "batches",

@@ -772,6 +772,21 @@ fn pouring_more_batches_than_particles_is_refused() {
     let block = "[[particles]]\nkind = \"random\"\ncount = 3\nbatches = 1000000000\nbatch_interval = 1e-6\nmin = [0, 0, 0]\nmax = [0.01, 0.01, 0.01]\nradius = 1e-4\n";
     let e = err(&minimal("", block));
     assert_contains(&e, &["`batches` = 1000000000", "more than `count` = 3"]);
+    // a negative interval is refused even where one batch makes it unused
+    let one = "[[particles]]\nkind = \"random\"\ncount = 3\nbatch_interval = -1e-3\nmin = [0, 0, 0]\nmax = [0.01, 0.01, 0.01]\nradius = 1e-4\n";
+    assert_contains(&err(&minimal("", one)), &["`batch_interval`", "-0.001 s"]);
+}
+
+#[test]
+fn insertions_after_the_end_are_named() {
+    let block = |at: &str| {
+        format!("[[particles]]\nkind = \"list\"\npositions = [[0.002, 0.002, 0.002]]\nradius = 1e-4\ninsert_at = {at}\n")
+    };
+    let late = parse(&minimal("", &block("2.0"))).unwrap();
+    let w = late.late_insertions().expect("a warning");
+    assert_contains(&w, &["1 of 2 particles", "particle 1", "insert_at = 2e0 s"]);
+    let early = parse(&minimal("", &block("1e-9"))).unwrap();
+    assert_eq!(early.late_insertions(), None);
 }
 
 fn parse_with(text: &str, sets: &[&str]) -> Result<Scene, String> {

@@ -44,6 +44,29 @@ impl Scene {
     /// setting. The scene reader's scenes pass; [`crate::setup::Resolved::new`] (every
     /// engine) calls it.
     pub fn validate(&self) -> Result<(), PowderError> {
+        self.validate_settings()?;
+        let wall = |w: usize| format!("wall {w}");
+        super::checks::placement(self, &|_| String::new(), &wall)
+            .map_err(|why| PowderError::Scene(format!("scene: {why}")))
+    }
+
+    /// [`Self::validate`] but for the particles' placement (inside the domain, clear of each
+    /// other and of the walls: an O(N) pass over a grid), for callers whose engine holds the
+    /// particles already (the run loop).
+    pub fn validate_settings(&self) -> Result<(), PowderError> {
+        // the name names output files inside the run's folder
+        let name = &self.name;
+        if name.is_empty()
+            || name == "."
+            || name == ".."
+            || name
+                .chars()
+                .any(|c| c == '/' || c == '\\' || c.is_control())
+        {
+            return bad(format!(
+                "the scene's name {name:?} cannot name files in the output folder: it must be non-empty, not `.` or `..`, without `/`, `\\` or control characters"
+            ));
+        }
         let n = self.materials.len();
         let d = &self.domain;
         for a in 0..3 {
@@ -107,6 +130,14 @@ impl Scene {
             it.model
                 .validate()
                 .map_err(|e| PowderError::Scene(format!("scene: interaction {k}: {e}")))?;
+            let [a, b] = it.materials;
+            if let Some(j) = (self.interactions[..k].iter())
+                .position(|x| x.materials == [a, b] || x.materials == [b, a])
+            {
+                return bad(format!(
+                    "interactions {j} and {k} both set materials {a} and {b}: give one"
+                ));
+            }
         }
         for (w, wall) in self.walls.iter().enumerate() {
             let len2: f64 = wall.normal.iter().map(|c| c * c).sum();
@@ -130,6 +161,7 @@ impl Scene {
             }
             for (from, phase) in &wall.motion.phases {
                 let ok = from.is_finite()
+                    && *from >= 0.0
                     && match *phase {
                         WallPhase::Rest => true,
                         WallPhase::Velocity(v) => finite3(&v),
@@ -139,6 +171,7 @@ impl Scene {
                             max_speed,
                         } => {
                             force.is_finite()
+                                && force > 0.0
                                 && gain.is_finite()
                                 && gain > 0.0
                                 && max_speed.is_finite()
@@ -147,7 +180,7 @@ impl Scene {
                     };
                 if !ok {
                     return bad(format!(
-                        "wall {w}: the phase from t = {from} s must have finite values (a servo a gain and max_speed > 0), got {phase:?}"
+                        "wall {w}: the phase from t = {from} s must start at >= 0 s and have finite values (a servo a force, gain and max_speed > 0), got {phase:?}"
                     ));
                 }
             }
@@ -182,5 +215,21 @@ impl Scene {
             }
         }
         Ok(())
+    }
+
+    /// A warning when particles are inserted at or after the run's end: they never appear
+    /// (valid, since a resume may run further, but rarely meant).
+    pub fn late_insertions(&self) -> Option<String> {
+        let late: Vec<usize> = (0..self.particles.len())
+            .filter(|&i| self.particles[i].insert_at >= self.duration)
+            .collect();
+        let &first = late.first()?;
+        Some(format!(
+            "{} of {} particles (the first: particle {first}, insert_at = {:e} s) are inserted at or after the run's end, duration = {:e} s: they do not appear in this run",
+            late.len(),
+            self.particles.len(),
+            self.particles[first].insert_at,
+            self.duration
+        ))
     }
 }

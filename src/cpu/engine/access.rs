@@ -50,19 +50,28 @@ impl CpuEngine {
         &self.omega
     }
 
-    /// Sets particle `i`'s angular velocity, rad/s (scenes start without spin: an initial
-    /// spin for tests and studies). Only where particles rotate (some contact model exerts
-    /// tangential forces or torques).
+    /// Sets particle `i`'s angular velocity, rad/s, at any time (a scene's initial spin is
+    /// `ParticleInit::angular_velocity`). The energy it adds or takes away from a particle
+    /// that has appeared is booked as `inserted`, so the ledger still closes. Only where
+    /// particles rotate (some contact model exerts tangential forces or torques).
     pub fn set_angular_velocity(&mut self, i: usize, omega: DVec3) -> Result<(), PowderError> {
         if self.omega.is_empty() {
             return Err(PowderError::Run(
                 "the particles do not rotate: no contact model has friction, rolling or twisting resistance".into(),
             ));
         }
+        if !omega.is_finite() {
+            return Err(PowderError::Run(format!(
+                "the angular velocity of particle {i} must be finite, got {omega}"
+            )));
+        }
         let n = self.omega.len();
         let w = self.omega.get_mut(i).ok_or_else(|| {
             PowderError::Run(format!("particle {i} does not exist ({n} particles)"))
         })?;
+        if self.active[i] {
+            self.inserted += 0.5 * self.inertia[i] * (omega.length_squared() - w.length_squared());
+        }
         *w = omega;
         Ok(())
     }
@@ -75,6 +84,11 @@ impl CpuEngine {
     /// Particle radii, m.
     pub fn radii(&self) -> &[f64] {
         &self.radius
+    }
+
+    /// Number of walls.
+    pub fn wall_count(&self) -> usize {
+        self.walls.len()
     }
 
     /// Particle masses, kg.
@@ -133,9 +147,13 @@ impl CpuEngine {
             .collect()
     }
 
-    /// The particle with a non-finite position or velocity, if any.
+    /// The particle with a non-finite position, velocity or angular velocity, if any.
     pub fn non_finite(&self) -> Option<usize> {
-        (0..self.pos.len()).find(|&i| !(self.pos[i].is_finite() && self.vel[i].is_finite()))
+        (0..self.pos.len()).find(|&i| {
+            !(self.pos[i].is_finite()
+                && self.vel[i].is_finite()
+                && self.omega.get(i).is_none_or(|w| w.is_finite()))
+        })
     }
 
     /// The deepest overlap over the reduced radius a12 reached by any contact in any step

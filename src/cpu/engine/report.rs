@@ -63,10 +63,11 @@ impl CpuEngine {
             inserted: self.inserted,
             ..Default::default()
         };
-        for i in 0..self.omega.len() {
+        // particles that have not appeared yet do not count (their energy is booked as
+        // `inserted` when they appear)
+        for i in (0..self.omega.len()).filter(|&i| self.active[i]) {
             e.kinetic += 0.5 * self.inertia[i] * self.omega[i].length_squared();
         }
-        // particles that have not appeared yet do not count
         for i in (0..self.pos.len()).filter(|&i| self.active[i]) {
             e.kinetic += 0.5 * self.mass[i] * self.vel[i].length_squared();
             e.gravitational -= self.mass[i] * self.gravity.dot(self.pos[i]);

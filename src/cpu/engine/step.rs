@@ -171,7 +171,9 @@ impl CpuEngine {
             .fold(f64::INFINITY, f64::min)
     }
 
-    /// Runs `n` steps.
+    /// Runs `n` steps. An error means a contact law failed; a state gone non-finite or
+    /// too deep is not an error here: [`Self::non_finite`] and
+    /// [`Self::take_peak_overlap`] tell (the run loop checks them after each chunk).
     pub fn run_steps(&mut self, n: u64) -> Result<(), PowderError> {
         let threads = self.threads.clone();
         threads.install(|| {

@@ -347,6 +347,7 @@ impl GpuEngine {
             time: 0.0,
             steps: 0,
             dt: r.dt,
+            time_step: r.time_step.clone(),
             n: n as u32,
             entries,
             largest_entries: largest,

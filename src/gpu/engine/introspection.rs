@@ -69,6 +69,16 @@ impl GpuEngine {
         &self.radius
     }
 
+    /// The time-step rule dt was checked against (default, largest accepted dt, reason).
+    pub fn time_step(&self) -> &crate::model::TimeStep {
+        &self.time_step
+    }
+
+    /// Number of walls.
+    pub fn wall_count(&self) -> usize {
+        self.n_walls as usize
+    }
+
     /// Particle masses in the scene's order, kg (f64).
     pub fn masses(&self) -> &[f64] {
         &self.mass

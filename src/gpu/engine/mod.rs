@@ -187,6 +187,8 @@ pub struct GpuEngine {
     /// Steps taken.
     pub steps: u64,
     dt: f64,
+    /// The time-step rule dt was checked against (default, limit, reason).
+    time_step: crate::model::TimeStep,
     n: u32,
     /// Entries the neighbour lists have room for (grown when a rebuild needs more).
     entries: u64,

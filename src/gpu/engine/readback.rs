@@ -313,7 +313,11 @@ impl GpuEngine {
         i: usize,
         j: usize,
     ) -> Result<Option<ContactHistory>, PowderError> {
-        let key = (i as u32, j as u32);
+        // (no particle beyond u32: no contact)
+        let (Ok(i), Ok(j)) = (u32::try_from(i), u32::try_from(j)) else {
+            return Ok(None);
+        };
+        let key = (i, j);
         Ok(self
             .contact_histories()?
             .into_iter()

@@ -318,7 +318,7 @@ pub fn accuracy(
             reference_steps: ref_steps,
             reference_wall_seconds: ref_wall,
             reference_kinetic: ref_ke,
-            reference_contacts_per_particle: bench::coordination(&base, &ref_pos, &radius),
+            reference_contacts_per_particle: bench::coordination(&base, &ref_pos, &radius)?,
         });
         for &backend in &backends {
             for &d in &opts.divisors {

@@ -24,7 +24,7 @@ pub(super) fn run_cpu(
     engine.run_steps(opts.steps)?;
     let wall = t1.elapsed().as_secs_f64();
     let rebuilds = engine.rebuilds() - before;
-    let z = coordination(scene, engine.positions(), engine.radii());
+    let z = coordination(scene, engine.positions(), engine.radii())?;
     Ok(BenchRow {
         case: case.name(),
         backend: "cpu",
@@ -89,7 +89,7 @@ pub(super) fn run_gpu(
     let halts = engine.rebuild_halts() - halts_before;
     let quiet = (quiet.0 - quiet_before.0, quiet.1 - quiet_before.1);
     let state = engine.state()?;
-    let z = coordination(scene, &state.positions, engine.radii());
+    let z = coordination(scene, &state.positions, engine.radii())?;
     let bytes = engine.buffer_bytes();
     let buffers = engine.buffers();
     let traffic = crate::gpu::TrafficEstimate::new(engine.traffic(), n, rebuilds, opts.steps);
