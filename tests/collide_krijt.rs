@@ -459,7 +459,9 @@ mod gpu {
             let rel = (g.contact_radius / c.contact_radius - 1.0).abs();
             eprintln!(
                 "t = {:.0}: a gpu {:.6} cpu {:.6} (rel. diff {rel:.1e})",
-                cpu.time, g.contact_radius, c.contact_radius
+                cpu.time(),
+                g.contact_radius,
+                c.contact_radius
             );
             worst = worst.max(rel);
             compared += 1;

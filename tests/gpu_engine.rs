@@ -287,7 +287,7 @@ fn growing_lists_mid_run_change_no_bit() {
             fixed.rebuilds().unwrap(),
             "{name}"
         );
-        assert_eq!(grown.time.to_bits(), fixed.time.to_bits(), "{name}");
+        assert_eq!(grown.time().to_bits(), fixed.time().to_bits(), "{name}");
         // back to the snapshot, whose lists are smaller than the grown ones, and on
         // again: the same run (no halt for counts the snapshot does not hold)
         assert!(

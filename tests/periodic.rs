@@ -71,7 +71,7 @@ fn particles_wrap_around() {
     let steps = (0.02 / cpu.dt()).round() as u64;
     cpu.run_steps(steps).unwrap();
     let x = cpu.positions()[0].x;
-    let t = cpu.time;
+    let t = cpu.time();
     let expected = 0.0015 - 0.2 * t + 0.01;
     assert!(
         (x - expected).abs() < 1e-12,

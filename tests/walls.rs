@@ -109,7 +109,7 @@ fn a_prescribed_lid_loads_and_unloads_and_the_ledger_closes() {
         );
         eprintln!(
             "t {:.3}: lid {wc:.9e} / {wg:.9e}, force {fc:e} / {fg:e}, top sphere z {:e} / {:e}",
-            c.time,
+            c.time(),
             c.positions()[2].z,
             g.state().unwrap().positions[2].z
         );
@@ -236,7 +236,7 @@ fn a_lid_program_sinters_releases_pulls_and_stops() {
         cpu.run_steps((before(0.19) - before(0.15)) / 8).unwrap();
         pull = pull.min(lid_force_z(&cpu.wall_forces()));
     }
-    cpu.run_steps(before(0.19) - cpu.steps).unwrap();
+    cpu.run_steps(before(0.19) - cpu.steps()).unwrap();
     let z1 = cpu.walls_now()[1].0.z;
     let travel = (before(0.19) - before(0.15)) as f64 * dt * 0.005;
     assert!(
@@ -259,8 +259,8 @@ fn a_lid_program_sinters_releases_pulls_and_stops() {
     let mut c = CpuEngine::new(&scene).unwrap();
     let mut g = GpuEngine::new(&scene, ctx).unwrap();
     for t in [0.05, 0.1, 0.125, 0.15, 0.17, 0.19, 0.2] {
-        c.run_steps(before(t) - c.steps).unwrap();
-        g.run_steps(before(t) - g.steps).unwrap();
+        c.run_steps(before(t) - c.steps()).unwrap();
+        g.run_steps(before(t) - g.steps()).unwrap();
         let (wc, wg) = (c.walls_now()[1].0.z, g.walls_now().unwrap()[1].0.z);
         let (fc, fg) = (
             lid_force_z(&c.wall_forces()),

@@ -86,6 +86,16 @@ impl CpuEngine {
         &self.radius
     }
 
+    /// Simulated time, s.
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// Steps taken.
+    pub fn steps(&self) -> u64 {
+        self.steps
+    }
+
     /// Number of walls.
     pub fn wall_count(&self) -> usize {
         self.walls.len()

@@ -42,10 +42,10 @@ pub const SKIN: f64 = 0.1;
 
 /// The CPU reference simulation.
 pub struct CpuEngine {
-    /// Simulated time, s.
-    pub time: f64,
+    /// Simulated time, s (read with `time()`: a checkpoint holds it with the steps).
+    pub(crate) time: f64,
     /// Steps taken.
-    pub steps: u64,
+    pub(crate) steps: u64,
     dt: f64,
     time_step: TimeStep,
     pos: Vec<DVec3>,

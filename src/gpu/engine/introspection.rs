@@ -69,6 +69,16 @@ impl GpuEngine {
         &self.radius
     }
 
+    /// Simulated time, s.
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// Steps taken.
+    pub fn steps(&self) -> u64 {
+        self.steps
+    }
+
     /// The time-step rule dt was checked against (default, largest accepted dt, reason).
     pub fn time_step(&self) -> &crate::model::TimeStep {
         &self.time_step

@@ -182,10 +182,10 @@ impl Default for GpuOptions {
 
 /// The GPU simulation of one scene.
 pub struct GpuEngine {
-    /// Simulated time, s (kept in f64 on the host).
-    pub time: f64,
+    /// Simulated time, s (kept in f64 on the host; read with `time()`).
+    pub(crate) time: f64,
     /// Steps taken.
-    pub steps: u64,
+    pub(crate) steps: u64,
     dt: f64,
     /// The time-step rule dt was checked against (default, limit, reason).
     time_step: crate::model::TimeStep,
