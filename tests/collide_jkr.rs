@@ -343,6 +343,43 @@ fn a_strong_power_law_sets_the_step_and_an_unstable_one_is_refused() {
     );
 }
 
+/// The power law's step rule holds for a sub-linear law (α < 1, taken by its chord) and
+/// on a wall (R* = R, m* = m): the automatic step follows it and the collision's energy
+/// balance closes. Such a dashpot stops the pair in finite time, not as a creep: it is
+/// found at rest (it ran out the 5·10⁷ steps undecided).
+#[test]
+fn a_sub_linear_power_law_on_a_wall_sets_a_stable_step() {
+    let p = JkrParams {
+        dissipation: Dissipation::PowerLaw {
+            d: 1e-2,
+            alpha: 0.5,
+            beta: 1.5,
+        },
+        ..JkrParams::jkr(1e8, 0.3, 0.01)
+    };
+    for wall in [false, true] {
+        let s = CollideSpec {
+            wall,
+            ..CollideSpec::head_on(ContactModel::Jkr(p), 5e-6, 2500.0, 0.5)
+        };
+        let ts = s.time_step();
+        assert!(ts.reason.contains("\"powerlaw\""), "wall {wall}: {ts:?}");
+        let r = collide(&s).unwrap();
+        eprintln!(
+            "wall {wall}: e {} stuck {} balance {:e}, {} steps of {:e} s",
+            r.e,
+            r.stuck,
+            r.energy.balance_error.unwrap(),
+            r.steps,
+            r.dt
+        );
+        assert!(
+            r.energy.balance_error.unwrap() < 1e-4 && (0.0..=1.0).contains(&r.e),
+            "wall {wall}: {r:?}"
+        );
+    }
+}
+
 #[test]
 fn reduced_stiffness_keeps_the_collision_and_enlarges_dt() {
     let base = jkr();

@@ -189,10 +189,32 @@ fn engines_refuse_a_scene_built_wrong_in_code() {
         &s,
         "wall 0: the phase from t = -0.001 s must start at >= 0 s",
     );
+}
+
+/// A scene's name names its output files: one that cannot (`../escaped` wrote outside the
+/// folder) is refused where a run writes them, and allowed where it writes none.
+#[test]
+fn a_name_that_cannot_name_files_is_refused_where_files_are_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let writes = RunOptions {
+        out_dir: Some(dir.path().join("out")),
+        max_steps: Some(10),
+        ..Default::default()
+    };
     for name in ["", "..", "../escaped", "a/b", "/abs", "tab\there"] {
         let mut s = scene();
         s.name = name.into();
-        refused(&s, "cannot name files in the output folder");
+        let e = run_cpu_with(&s, &writes, |_| {}).unwrap_err().to_string();
+        assert!(
+            e.contains("cannot name files in the output folder"),
+            "{name:?}: {e}"
+        );
+        assert!(!dir.path().join("out").exists() && !dir.path().join("escaped.pvd").exists());
+        let quiet = RunOptions {
+            max_steps: Some(10),
+            ..Default::default()
+        };
+        run_cpu_with(&s, &quiet, |_| {}).unwrap();
     }
 }
 

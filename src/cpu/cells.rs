@@ -24,10 +24,15 @@ impl CellGrid {
     /// A grid over [min, max] with cells at least `cutoff` wide, and no more cells than
     /// a few per particle (sparse scenes would otherwise pay for empty cells).
     pub fn new(min: DVec3, max: DVec3, cutoff: f64, particles: usize) -> Self {
+        Self::with_widest(min, max, cutoff, particles, f64::INFINITY)
+    }
+
+    /// As [`Self::new`] with cells no wider than `widest` (where that is above `cutoff`).
+    fn with_widest(min: DVec3, max: DVec3, cutoff: f64, particles: usize, widest: f64) -> Self {
         let extent = (max - min).max(DVec3::splat(cutoff));
         let target_cells = (4 * particles).max(64) as f64;
         let by_count = (extent.x * extent.y * extent.z / target_cells).cbrt();
-        let width = cutoff.max(by_count);
+        let width = cutoff.max(by_count.min(widest));
         let dim = |e: f64| ((e / width).floor() as usize).clamp(1, 1 << 20);
         let dims = [dim(extent.x), dim(extent.y), dim(extent.z)];
         Self {
@@ -49,7 +54,12 @@ impl CellGrid {
         particles: usize,
         periodic: [bool; 3],
     ) -> Option<Self> {
-        let mut g = Self::new(min, max, cutoff, particles);
+        // (cells widened for a sparse scene are narrowed to three along each periodic axis)
+        let widest = (0..3)
+            .filter(|&a| periodic[a])
+            .map(|a| (max[a] - min[a]) / 3.0 * (1.0 - 1e-12))
+            .fold(f64::INFINITY, f64::min);
+        let mut g = Self::with_widest(min, max, cutoff, particles, widest);
         if (0..3).any(|a| periodic[a] && g.dims[a] < 3) {
             return None;
         }
@@ -188,5 +198,17 @@ mod tests {
         found.sort();
         assert_eq!(found, brute);
         assert!(!brute.is_empty());
+    }
+
+    /// A sparse scene's cells, widened by the particle count, still give a periodic axis
+    /// three cells where three cut-offs fit (two particles in a 1 × 1 × 4 m box were
+    /// refused as "shorter than 3 interaction cut-offs" of 6 cm).
+    #[test]
+    fn sparse_periodic_grids_keep_three_cells() {
+        let (min, max) = (DVec3::ZERO, DVec3::new(1.0, 1.0, 4.0));
+        let periodic = [true, true, false];
+        let g = CellGrid::periodic(min, max, 0.06, 2, periodic).expect("three cells fit");
+        assert!(g.dims[0] >= 3 && g.dims[1] >= 3, "{:?}", g.dims);
+        assert!(CellGrid::periodic(min, max, 0.34, 2, periodic).is_none());
     }
 }

@@ -116,6 +116,9 @@ pub fn run_with<S: Simulation>(
     // before anything is written: a scene built in code may not have met the reader, an
     // engine may have been built from another scene (whose build checked its placement)
     scene.validate_settings()?;
+    if opts.out_dir.is_some() {
+        scene.check_file_name()?;
+    }
     fits::engine_fits(scene, engine.radii(), engine.wall_count(), engine.dt())?;
     if !scene.duration.is_finite() && opts.max_steps.is_none() {
         return Err(PowderError::Run(format!(
@@ -136,9 +139,6 @@ pub fn run_with<S: Simulation>(
     }
     if opts.verbose {
         for w in tabor.iter().flat_map(TaborPair::warnings) {
-            eprintln!("warning: {w}");
-        }
-        if let Some(w) = scene.late_insertions() {
             eprintln!("warning: {w}");
         }
     }
@@ -167,6 +167,12 @@ pub fn run_with<S: Simulation>(
                 _ => format!("the scene's duration {:e} s", scene.duration),
             }
         )));
+    }
+    if opts.verbose {
+        // (step k begins at k·dt)
+        if let Some(w) = scene.late_insertions((total - 1) as f64 * engine.dt()) {
+            eprintln!("warning: {w}");
+        }
     }
     let mut outputs = RunOutputs::open(
         scene,

@@ -81,13 +81,17 @@ pub(super) fn placement(
             };
             if !inside {
                 return Err(format!(
-                    "particle {i}{} at {} with radius {} is not inside the domain {} to {} on axis {}: move it, or enlarge [domain]",
+                    "particle {i}{} at {} with radius {} is not inside the domain {} to {} on axis {}: {}",
                     from(i),
                     fmt_vec(p.position),
                     p.radius,
                     fmt_vec(d.min),
                     fmt_vec(d.max),
-                    axis
+                    axis,
+                    match d.periodic[a] {
+                        true => "the axis is periodic: its centre must lie in [min, max) (wrap it by the period)",
+                        false => "move it, or enlarge [domain]",
+                    }
                 ));
             }
         }

@@ -783,10 +783,16 @@ fn insertions_after_the_end_are_named() {
         format!("[[particles]]\nkind = \"list\"\npositions = [[0.002, 0.002, 0.002]]\nradius = 1e-4\ninsert_at = {at}\n")
     };
     let late = parse(&minimal("", &block("2.0"))).unwrap();
-    let w = late.late_insertions().expect("a warning");
-    assert_contains(&w, &["1 of 2 particles", "particle 1", "insert_at = 2e0 s"]);
+    let w = late.late_insertions(0.1 - 1e-3).expect("a warning");
+    assert_contains(
+        &w,
+        &["1 of the 2 particles", "particle 1", "insert_at = 2e0 s"],
+    );
+    // after the last step begins, before the duration: never inserted either
+    let last = parse(&minimal("", &block("0.0995"))).unwrap();
+    assert!(last.late_insertions(0.1 - 1e-3).is_some());
     let early = parse(&minimal("", &block("1e-9"))).unwrap();
-    assert_eq!(early.late_insertions(), None);
+    assert_eq!(early.late_insertions(0.1 - 1e-3), None);
 }
 
 fn parse_with(text: &str, sets: &[&str]) -> Result<Scene, String> {

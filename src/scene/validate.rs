@@ -29,7 +29,12 @@ impl Scene {
                     self.gravity
                 ));
             }
-            if let Some(w) = self.walls.iter().position(|w| w.normal[a].abs() > 1e-12) {
+            // (relative to the normal's length: one built in code need not be a unit vector)
+            let across = |w: &super::Wall| {
+                let len = w.normal.iter().map(|c| c * c).sum::<f64>().sqrt();
+                w.normal[a].abs() > 1e-12 * len
+            };
+            if let Some(w) = self.walls.iter().position(across) {
                 return Some(format!(
                     "wall {w} faces the periodic axis {axis} ([[wall]] #{}, normal {:?}): a wall across a periodic axis would cut the periodic images; make the axis non-periodic or remove the wall",
                     w + 1,
@@ -54,19 +59,6 @@ impl Scene {
     /// other and of the walls: an O(N) pass over a grid), for callers whose engine holds the
     /// particles already (the run loop).
     pub fn validate_settings(&self) -> Result<(), PowderError> {
-        // the name names output files inside the run's folder
-        let name = &self.name;
-        if name.is_empty()
-            || name == "."
-            || name == ".."
-            || name
-                .chars()
-                .any(|c| c == '/' || c == '\\' || c.is_control())
-        {
-            return bad(format!(
-                "the scene's name {name:?} cannot name files in the output folder: it must be non-empty, not `.` or `..`, without `/`, `\\` or control characters"
-            ));
-        }
         let n = self.materials.len();
         let d = &self.domain;
         for a in 0..3 {
@@ -217,19 +209,37 @@ impl Scene {
         Ok(())
     }
 
-    /// A warning when particles are inserted at or after the run's end: they never appear
-    /// (valid, since a resume may run further, but rarely meant).
-    pub fn late_insertions(&self) -> Option<String> {
+    /// Refuses a name that cannot name files inside an output folder (the run's outputs
+    /// are named after the scene): empty, `.`, `..`, or with `/`, `\\` or control characters.
+    pub fn check_file_name(&self) -> Result<(), PowderError> {
+        let name = &self.name;
+        if name.is_empty()
+            || name == "."
+            || name == ".."
+            || name
+                .chars()
+                .any(|c| c == '/' || c == '\\' || c.is_control())
+        {
+            return bad(format!(
+                "the scene's name {name:?} cannot name files in the output folder: it must be non-empty, not `.` or `..`, without `/`, `\\` or control characters"
+            ));
+        }
+        Ok(())
+    }
+
+    /// A warning when particles appear only after the last step of a run begins, at
+    /// `last_start` s (particles appear at the start of a step): they never appear (valid,
+    /// since a resume may run further, but rarely meant).
+    pub fn late_insertions(&self, last_start: f64) -> Option<String> {
         let late: Vec<usize> = (0..self.particles.len())
-            .filter(|&i| self.particles[i].insert_at >= self.duration)
+            .filter(|&i| self.particles[i].insert_at > last_start)
             .collect();
         let &first = late.first()?;
         Some(format!(
-            "{} of {} particles (the first: particle {first}, insert_at = {:e} s) are inserted at or after the run's end, duration = {:e} s: they do not appear in this run",
+            "{} of the {} particles (the first: particle {first}, insert_at = {:e} s) appear after the run's last step begins at {last_start:e} s: this run ends before they appear",
             late.len(),
             self.particles.len(),
-            self.particles[first].insert_at,
-            self.duration
+            self.particles[first].insert_at
         ))
     }
 }

@@ -68,7 +68,8 @@ pub struct CollideSpec {
 /// whatever follows, since the contact only slows it further). So has a pair in contact
 /// approaching slower than this fraction of the impact speed whose speed decays as a creep
 /// does, its steps to a stop at the current deceleration holding for ten steps (at a turn
-/// they fall by one a step).
+/// they fall by one a step), and a pair in contact moving slower than it for a thousand
+/// steps.
 pub const REST_SPEED: f64 = 1e-6;
 
 /// A settled sphere whose centre moved along the wall more than this many radii over the

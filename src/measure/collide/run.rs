@@ -200,6 +200,12 @@ fn approach_limit(gap: f64, vn: f64, dt: f64) -> u64 {
 /// come to rest.
 const CREEP_STEPS: u32 = 10;
 
+/// Consecutive steps a pair in contact must move slower than [`REST_SPEED`] of the impact
+/// speed to count as at rest (a sub-linear dashpot stops it in finite time, not as a
+/// creep). A turn crosses that band within a step or a few (a collision of 5·10⁷ steps
+/// in about 60).
+const REST_STEPS: u32 = 1000;
+
 /// The settle time in steps of `dt` (at least 4: its last quarter is one step or more).
 pub(super) fn settle_steps(spec: &CollideSpec, dt: f64) -> u64 {
     ((spec.settle / dt).ceil() as u64).max(4)
@@ -223,6 +229,7 @@ pub(super) fn run_collision(
     let mut receding = false;
     let mut fastest_receding: f64 = 0.0;
     let (mut vn_before, mut creeping, mut last_to_stop) = (vn0, 0, None);
+    let mut resting = 0;
     let mut first_contact = None;
     let mut last_contact = 0.0;
     let mut delta_max: f64 = 0.0;
@@ -342,7 +349,12 @@ pub(super) fn run_collision(
         }
         vn_before = vn;
         let crept_in = creeping >= CREEP_STEPS;
-        if (turned || crept || crept_in) && delta > -reach {
+        resting = match contact && vn.abs() < REST_SPEED * vn0 {
+            true => resting + 1,
+            false => 0,
+        };
+        let at_rest = resting >= REST_STEPS;
+        if (turned || crept || crept_in || at_rest) && delta > -reach {
             delta_c = Some(delta);
             break;
         }
