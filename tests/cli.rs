@@ -1832,3 +1832,82 @@ fn run_says_when_a_servo_wall_does_not_hold_its_target() {
         assert!(err.contains(advice), "gain {gain}, speed {speed}: {err}");
     }
 }
+
+/// A sphere whose last step in contact turned it back leaves the contact still approaching:
+/// it comes back and sticks (paper 002's deposition near λ_crit at e = 0.9, Ad = 100). It
+/// was reported as a rebound with e = −6.7e-3.
+#[test]
+fn a_sphere_turned_back_at_the_break_sticks() {
+    let youngs = format!("{:?}", 303.8092290528672e5);
+    let gamma = format!("{:?}", 100.0 * 1000.0 * 0.5000000000000001 * 1e-6 / 3.0);
+    let (ok, out, err) = powder(&[
+        "collide",
+        "--wall",
+        "--impact-angle",
+        "45",
+        "--model",
+        "jkr",
+        "--youngs",
+        &youngs,
+        "--poisson",
+        "0.3",
+        "--surface-energy",
+        &gamma,
+        "--restitution",
+        "0.9",
+        "--tsuji-stiffness",
+        "hertz",
+        "--pulloff",
+        "zero",
+        "--friction",
+        "0.3",
+        "--rolling-hysteresis",
+        "0.5",
+        "--radius",
+        "1e-6",
+        "--density",
+        "1000",
+        "--velocity",
+        "1",
+        "--backend",
+        "cpu",
+        "--json",
+    ]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["stuck"], true, "{out}");
+    assert!(v["delta_c"].as_f64().unwrap() > 0.0, "{out}");
+}
+
+/// A sphere pressed deeper than its radius into the wall by adhesion, at any speed, is
+/// refused with both causes named (the message had blamed the impact alone).
+#[test]
+fn a_sphere_pressed_deeper_than_its_radius_is_refused() {
+    let (ok, _, err) = powder(&[
+        "collide",
+        "--wall",
+        "--model",
+        "jkr",
+        "--youngs",
+        "18.2",
+        "--poisson",
+        "0.3",
+        "--surface-energy",
+        "1.6666666666666666e-4",
+        "--restitution",
+        "0.3",
+        "--radius",
+        "1e-6",
+        "--density",
+        "1000",
+        "--velocity",
+        "0.1",
+        "--backend",
+        "cpu",
+    ]);
+    assert!(
+        !ok && err.contains("more than the smaller radius")
+            && err.contains("the adhesion too strong"),
+        "{err}"
+    );
+}

@@ -11,6 +11,11 @@ import sys
 POWDER = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "target", "release", "powder")
 
 
+# what `powder collide` says when it refuses a pair pressed deeper than a radius (beyond
+# the contact laws' geometry; paper 002's maps reach there at low lambda)
+TOO_DEEP = "more than the smaller radius"
+
+
 def run_powder(cmd):
     """Runs `cmd` (the powder binary first); a missing binary is said plainly."""
     try:

@@ -358,7 +358,9 @@ pub(super) fn run_collision(
             delta_c = Some(delta);
             break;
         }
-        if receding && delta <= -reach && !neck {
+        // (a pair whose last step in range turned it back leaves still approaching: it
+        // comes back, and the turn above finds it stuck)
+        if receding && vn < 0.0 && delta <= -reach && !neck {
             e = -vn / vn0;
             vt_out = vt;
             break;
@@ -574,14 +576,16 @@ pub(super) fn collide_with(
             run_collision(spec, run, wall_x, dt, "gpu", adapter, trace)
         }
     }?;
-    let result = sound_result(finite_result(result)?, &rule)?;
+    // (the geometry first: a pair pressed through each other explains a result that cannot
+    // be right)
+    let result = finite_result(result)?;
     if result.delta_max > reach {
         return Err(PowderError::Run(format!(
-            "the collision at v = {} m/s overlapped by {:e} m, more than the smaller radius {reach:e} m (a centre passed the other sphere's surface or the wall): the impact is too violent for the contact stiffness; lower --velocity or stiffen the contact",
+            "the collision at v = {} m/s overlapped by {:e} m, more than the smaller radius {reach:e} m (a centre passed the other sphere's surface or the wall), beyond the contact law's geometry: the impact is too violent, or the adhesion too strong, for the contact stiffness; lower --velocity or stiffen the contact",
             result.velocity, result.delta_max
         )));
     }
-    Ok(result)
+    sound_result(result, &rule)
 }
 
 /// Largest energy-balance error ([`CollisionEnergy::balance_error`]) a collision's result
