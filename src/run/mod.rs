@@ -170,7 +170,7 @@ pub fn run_with<S: Simulation>(
     }
     if opts.verbose {
         // (step k begins at k·dt)
-        if let Some(w) = scene.late_insertions((total - 1) as f64 * engine.dt()) {
+        if let Some(w) = scene.late_insertions(total.saturating_sub(1) as f64 * engine.dt()) {
             eprintln!("warning: {w}");
         }
     }
