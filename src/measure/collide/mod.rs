@@ -19,15 +19,17 @@ use glam::DVec3;
 use serde::Serialize;
 use std::f64::consts::PI;
 
+mod backends;
+mod collision;
 mod plot;
 mod predict;
 mod run;
 mod sweep;
 
+use collision::collide_with;
 pub use plot::{restitution_plot, trace_plot};
 use predict::predict;
 pub use predict::{add_plastic_restitution, closed_form_e, tabor, theory_warnings, yield_velocity};
-use run::collide_with;
 pub use sweep::{sweep, sweep_on, sweep_velocities};
 
 /// What to collide.
