@@ -429,6 +429,68 @@ fn an_earlier_runs_outputs_are_kept_unless_overwritten() {
     assert!(rows.lines().last().unwrap().starts_with("500,"), "{rows}");
 }
 
+/// A killed run resumed to an earlier end than the rows it wrote past its checkpoint is
+/// refused (those rows and snapshots would go); resumed to its end, it writes them again,
+/// byte for byte.
+#[test]
+fn a_killed_run_resumed_short_of_its_rows_is_refused() {
+    let scene = cluster();
+    let (done, early, killed) = (
+        tempfile::tempdir().unwrap(),
+        tempfile::tempdir().unwrap(),
+        tempfile::tempdir().unwrap(),
+    );
+    run(&scene, done.path(), 1500, None);
+    run(&scene, early.path(), 500, None);
+    // a run killed after step 1500's row and snapshot, its last checkpoint at step 500
+    let copy = |from: &Path, to: &Path| {
+        std::fs::create_dir_all(to).unwrap();
+        for e in std::fs::read_dir(from).unwrap() {
+            let e = e.unwrap();
+            if e.file_type().unwrap().is_file() {
+                std::fs::copy(e.path(), to.join(e.file_name())).unwrap();
+            }
+        }
+    };
+    copy(done.path(), killed.path());
+    copy(
+        &done.path().join("snapshots"),
+        &killed.path().join("snapshots"),
+    );
+    std::fs::remove_file(killed.path().join("summary.json")).unwrap();
+    std::fs::copy(
+        early.path().join("checkpoint.bin"),
+        killed.path().join("checkpoint.bin"),
+    )
+    .unwrap();
+    let ckpt = killed.path().join("checkpoint.bin");
+    let series = || std::fs::read(killed.path().join("series.csv")).unwrap();
+    let shots = || {
+        std::fs::read_dir(killed.path().join("snapshots"))
+            .unwrap()
+            .count()
+    };
+    let (rows, snapshots) = (series(), shots());
+    let err = run_cpu_with(&scene, &options(killed.path(), 1000, Some(&ckpt)), |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("`series.csv`'s rows to step 1500")
+            && err.contains("end at step 1000")
+            && err.contains("snapshots in")
+            && err.contains("--overwrite"),
+        "{err}"
+    );
+    assert!(
+        series() == rows && shots() == snapshots,
+        "the refused resume changed the folder"
+    );
+    // to its end it writes the same rows again
+    run(&scene, killed.path(), 1500, Some(&ckpt));
+    assert!(series() == std::fs::read(done.path().join("series.csv")).unwrap());
+    assert_eq!(shots(), snapshots);
+}
+
 /// A resume keeps only the rows its checkpoint's run wrote: into a folder of another run
 /// it is refused (nothing there changes); into an empty one the series starts at the
 /// checkpoint's step.

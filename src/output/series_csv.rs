@@ -151,6 +151,17 @@ pub fn rows_until(path: &Path, step: u64, header: &str) -> Result<Vec<String>, P
         .collect())
 }
 
+/// The step of the last whole row of the series at `path`; `None` without a file or rows.
+pub fn last_row_step(path: &Path) -> Option<u64> {
+    let text = std::fs::read(path).ok()?;
+    let text = String::from_utf8_lossy(&text);
+    text.split_inclusive('\n')
+        .skip(1)
+        .filter_map(|l| l.strip_suffix('\n'))
+        .filter_map(row_step)
+        .last()
+}
+
 /// Whether `row` is the row of `step`.
 pub fn row_is_at(row: &str, step: u64) -> bool {
     row_step(row) == Some(step)

@@ -225,6 +225,11 @@ impl Series {
         Ok(())
     }
 
+    /// The latest step of this series' snapshot files in its folder (none without any).
+    pub fn last_step(&self) -> Option<u64> {
+        self.files().into_iter().map(|(s, _)| s).max()
+    }
+
     /// The snapshot files of this series in its folder.
     pub fn snapshot_count(&self) -> usize {
         self.files().len()

@@ -9,14 +9,15 @@ use std::path::Path;
 /// Refuses a run of `scene` into `d` that would remove or trim what an earlier run wrote
 /// there, unless `opts.overwrite`: a fresh run where the folder holds a checkpoint, a
 /// summary, a series or this scene's snapshots; a resume from step `resumed_from` where it
-/// holds a run that finished later or a checkpoint of a later step (a killed run resumed
-/// from its own checkpoint loses only the rows it writes again). Call it before anything
-/// in the folder changes.
+/// holds a run that finished later, a checkpoint of a later step, or rows or snapshots
+/// beyond this run's `end` (a killed run resumed from its own checkpoint to its end loses
+/// only the rows it writes again). Call it before anything in the folder changes.
 pub(super) fn check(
     d: &Path,
     scene: &Scene,
     opts: &RunOptions,
     resumed_from: Option<u64>,
+    end: u64,
 ) -> Result<(), PowderError> {
     if opts.overwrite {
         return Ok(());
@@ -27,7 +28,7 @@ pub(super) fn check(
             "an earlier run's outputs".to_string(),
         ),
         Some(step) => (
-            later_results(d, opts, step),
+            later_results(d, scene, opts, step, end),
             format!("results beyond the checkpoint's step {step}"),
         ),
     };
@@ -54,11 +55,12 @@ pub(super) fn check(
 
 const CHECKPOINT: &str = "checkpoint.bin";
 const SUMMARY: &str = "summary.json";
+const SERIES: &str = "series.csv";
 
 /// What a fresh run of `scene` into `d` would remove or replace: the checkpoint, summary
 /// and series, and the scene's snapshot series.
 fn fresh_run_would_remove(d: &Path, scene: &Scene) -> Vec<String> {
-    let mut found: Vec<String> = [CHECKPOINT, SUMMARY, "series.csv"]
+    let mut found: Vec<String> = [CHECKPOINT, SUMMARY, SERIES]
         .into_iter()
         .filter(|f| d.join(f).exists())
         .map(|f| format!("`{f}`"))
@@ -76,10 +78,10 @@ fn fresh_run_would_remove(d: &Path, scene: &Scene) -> Vec<String> {
     found
 }
 
-/// What a resume from step `step` into `d` would trim: a run there that finished beyond
-/// that step (its `summary.json`), or a checkpoint of a later step. (A killed run's rows
-/// beyond its last checkpoint are not counted: resumed to its end, it writes them again.)
-fn later_results(d: &Path, opts: &RunOptions, step: u64) -> Vec<String> {
+/// What a resume from step `step` to step `end` into `d` would trim: a run there that
+/// finished beyond `step` (its `summary.json`), a checkpoint of a later step, or a killed
+/// run's rows or snapshots beyond `end` (those up to `end` it writes again).
+fn later_results(d: &Path, scene: &Scene, opts: &RunOptions, step: u64, end: u64) -> Vec<String> {
     let mut found = Vec::new();
     let finished = std::fs::read(d.join(SUMMARY))
         .ok()
@@ -99,6 +101,24 @@ fn later_results(d: &Path, opts: &RunOptions, step: u64) -> Vec<String> {
         if let Ok(s) = crate::checkpoint::steps_of(&own) {
             if s > step {
                 found.push(format!("a checkpoint at step {s} (`{CHECKPOINT}`)"));
+            }
+        }
+    }
+    // (a run that finished later is named above: its rows need no second mention)
+    if found.is_empty() {
+        let again = format!("past this run's end at step {end}: run on to step");
+        let last = crate::output::series_csv::last_row_step(&d.join(SERIES));
+        if let Some(s) = last.filter(|&s| s > end) {
+            found.push(format!(
+                "`{SERIES}`'s rows to step {s}, {again} {s} to write them again"
+            ));
+        }
+        for series in vtk::Series::both_unopened(d, &scene.name) {
+            if let Some(s) = series.last_step().filter(|&s| s > end) {
+                found.push(format!(
+                    "snapshots in `{}` to step {s}, {again} {s} to write them again",
+                    series.folder().display()
+                ));
             }
         }
     }

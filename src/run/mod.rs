@@ -179,7 +179,7 @@ pub fn run_with<S: Simulation>(
         opts,
         (resumed_from, &marks),
         engine.radii().to_vec(),
-        engine.dt(),
+        (engine.dt(), total),
     )?;
 
     let bar = opts.progress_bar.then(|| {

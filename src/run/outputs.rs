@@ -33,7 +33,8 @@ pub(super) struct RunOutputs {
 }
 
 impl RunOutputs {
-    /// Takes `opts.out_dir` for a run of `scene` whose engine has `radii` and step `dt`:
+    /// Takes `opts.out_dir` for a run of `scene` to step `end` whose engine has `radii` and
+    /// step `dt`:
     /// every output it replaces checked writable, and, resuming from step `resumed_from`
     /// with the checkpoint's `marks`, the series' rows up to that step kept (refused where
     /// they are not the ones that run wrote) and later snapshots removed; a fresh run
@@ -44,7 +45,7 @@ impl RunOutputs {
         opts: &RunOptions,
         (resumed_from, marks): (Option<u64>, &RunMarks),
         radii: Vec<f64>,
-        dt: f64,
+        (dt, end): (f64, u64),
     ) -> Result<Self, PowderError> {
         let wall_normals = scene
             .walls
@@ -62,7 +63,7 @@ impl RunOutputs {
             });
         };
         let lock = Self::take(d, scene)?;
-        super::earlier::check(d, scene, opts, resumed_from)?;
+        super::earlier::check(d, scene, opts, resumed_from, end)?;
         let csv_path = d.join("series.csv");
         // the series' rows up to the checkpoint's step on resume, read (and its columns
         // checked) before anything in the directory changes
