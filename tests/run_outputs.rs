@@ -491,6 +491,92 @@ fn a_killed_run_resumed_short_of_its_rows_is_refused() {
     assert_eq!(shots(), snapshots);
 }
 
+/// The files a run leaves that a resume must reproduce: the series, the checkpoint and the
+/// snapshot files' names.
+fn run_files(d: &Path) -> (Vec<u8>, Vec<u8>, Vec<String>) {
+    let mut shots: Vec<String> = std::fs::read_dir(d.join("snapshots"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    shots.sort();
+    (
+        std::fs::read(d.join("series.csv")).unwrap(),
+        std::fs::read(d.join("checkpoint.bin")).unwrap(),
+        shots,
+    )
+}
+
+/// A run that ended off the output cadence (step 1250 of 500), resumed to a later end,
+/// leaves what the straight run does: its last row and snapshot go.
+#[test]
+fn a_run_ended_off_the_cadence_and_extended_matches_the_straight_run() {
+    let scene = cluster();
+    let (straight, extended) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    run(&scene, straight.path(), 2000, None);
+    run(&scene, extended.path(), 1250, None);
+    let ckpt = extended.path().join("checkpoint.bin");
+    let rows = std::fs::read_to_string(extended.path().join("series.csv")).unwrap();
+    assert!(rows.lines().last().unwrap().starts_with("1250,"), "{rows}");
+    run(&scene, extended.path(), 2000, Some(&ckpt));
+    assert!(run_files(extended.path()) == run_files(straight.path()));
+    // resumed to the same end (nothing to run), its last row stays
+    let again = run(
+        &scene,
+        straight.path(),
+        2000,
+        Some(&straight.path().join("checkpoint.bin")),
+    );
+    assert_eq!(again.steps, 2000);
+    let rows = std::fs::read_to_string(straight.path().join("series.csv")).unwrap();
+    assert!(rows.lines().last().unwrap().starts_with("2000,"), "{rows}");
+}
+
+/// A snapshot that cannot be written (here `snapshots/` turned into a file at step 1500's
+/// output) stops the run with the state as the chunk began checkpointed: resumed once the
+/// folder is back, the run ends with the straight run's files.
+#[test]
+fn a_failed_write_checkpoints_the_state_before_it() {
+    let scene = cluster();
+    let (straight, failed) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    run(&scene, straight.path(), 2000, None);
+    let (shots, aside) = (failed.path().join("snapshots"), failed.path().join("aside"));
+    let sabotage = |s: &powder::run::Snapshot| {
+        if s.step == 1500 {
+            std::fs::rename(&shots, &aside).unwrap();
+            std::fs::write(&shots, "not a folder").unwrap();
+        }
+    };
+    let err = run_cpu_with(&scene, &options(failed.path(), 2000, None), sabotage)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("the state at step 1000 (before the failed write")
+            && err.contains("checkpoint.bin")
+            && err.contains("--resume"),
+        "{err}"
+    );
+    std::fs::remove_file(&shots).unwrap();
+    std::fs::rename(&aside, &shots).unwrap();
+    let ckpt = failed.path().join("checkpoint.bin");
+    run(&scene, failed.path(), 2000, Some(&ckpt));
+    assert!(run_files(failed.path()) == run_files(straight.path()));
+}
+
+/// Ctrl-C during the last chunk finds the run complete: it is not reported interrupted
+/// (a resume would have nothing to run).
+#[test]
+fn an_interrupt_in_the_last_chunk_leaves_a_complete_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let opts = RunOptions {
+        interrupt: Some(std::sync::Arc::new(std::sync::atomic::AtomicBool::new(
+            true,
+        ))),
+        ..options(dir.path(), 300, None)
+    };
+    let s = run_cpu_with(&cluster(), &opts, |_| {}).unwrap();
+    assert!(!s.interrupted && s.steps == 300, "{} steps", s.steps);
+}
+
 /// A resume keeps only the rows its checkpoint's run wrote: into a folder of another run
 /// it is refused (nothing there changes); into an empty one the series starts at the
 /// checkpoint's step.
@@ -1356,7 +1442,7 @@ fn a_held_or_unwritable_folder_is_refused_before_anything_changes() {
     let err = run_cpu_with(&scene, &options(dir.path(), 2000, None), |_| {})
         .unwrap_err()
         .to_string();
-    assert!(err.contains("(process 1) is writing into"), "{err}");
+    assert!(err.contains("is held by process 1 "), "{err}");
     std::fs::remove_file(&lock).unwrap();
     assert_eq!(listing(), before);
     let pvd = dir.path().join(format!("{}.pvd", scene.name));

@@ -75,11 +75,10 @@ impl FolderLock {
                         fs::remove_file(&path).map_err(cannot)?;
                         continue;
                     }
-                    let who = holder.map_or("a powder run".to_string(), |pid| {
-                        format!("powder run (process {pid})")
-                    });
+                    // (the process id may be reused by another program, as after a restart)
+                    let who = holder.map_or("a run".to_string(), |pid| format!("process {pid}"));
                     return Err(PowderError::Run(format!(
-                        "{who} is writing into `{}`: two runs in one folder would mix their outputs; wait for it to end or choose another --out (if no run is writing there, remove `{}`)",
+                        "`{}` is held by {who} (its lock `{}`): two runs in one folder would mix their outputs; wait for that run to end or choose another --out (if no powder run is writing there, remove the lock)",
                         dir.display(),
                         path.display()
                     )));
@@ -191,10 +190,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let lock = FolderLock::take(dir.path()).unwrap();
         let err = FolderLock::take(dir.path()).unwrap_err().to_string();
-        assert!(
-            err.contains("is writing into") && err.contains("--out"),
-            "{err}"
-        );
+        assert!(err.contains("is held by") && err.contains("--out"), "{err}");
         drop(lock);
         assert!(!dir.path().join(LOCK).exists());
         // a live process's lock (pid 1), and a fresh unreadable one, hold

@@ -235,6 +235,7 @@ pub fn run_with<S: Simulation>(
         // The state before the chunk: if the monitor stops the run, the checkpoint holds
         // the last state that passed it.
         let before = engine.save()?;
+        let scale_before = scale;
         let stepped = engine.run_steps(chunk).and_then(|()| {
             let obs = engine.observe()?;
             let now = obs.energies;
@@ -254,16 +255,15 @@ pub fn run_with<S: Simulation>(
                 }
                 let failed_at = engine.steps();
                 engine.restore(before)?;
-                outputs.checkpoint(scene, &engine, reference(scale))?;
-                let note = match outputs.checkpoint_path() {
-                    Some(c) => format!(
-                        "; the state at step {} (before the failure, at most 1000 steps earlier than step {failed_at}) is in {}",
-                        engine.steps(),
-                        c.display()
-                    ),
-                    None => String::new(),
-                };
-                return Err(PowderError::Run(format!("{e}{note}")));
+                let saved = outputs.checkpoint(scene, &engine, reference(scale));
+                return Err(saved_before(
+                    e,
+                    saved,
+                    &outputs,
+                    &engine,
+                    failed_at,
+                    "the failure",
+                ));
             }
         };
         if let Some(b) = &bar {
@@ -276,17 +276,37 @@ pub fn run_with<S: Simulation>(
             if opts.verbose {
                 say(&snap);
             }
-            outputs.write(scene, &engine, &obs, &snap)?;
+            // a write that fails (a full disk) leaves the state healthy: it is checkpointed
+            // as the chunk began, with the rows as of then, so only the chunk is run again
+            let rows = outputs.series_mark();
+            if let Err(e) = outputs.write(scene, &engine, &obs, &snap) {
+                if let Some(b) = &bar {
+                    b.finish_and_clear();
+                }
+                engine.restore(before)?;
+                let saved =
+                    outputs.checkpoint_marked(scene, &engine, reference(scale_before), rows);
+                return Err(saved_before(
+                    e,
+                    saved,
+                    &outputs,
+                    &engine,
+                    steps,
+                    "the failed write",
+                ));
+            }
         }
         servo.record(engine.time(), obs.wall_forces.as_deref());
         last_obs = obs;
         if steps.is_multiple_of(scene.checkpoint_every) {
             outputs.checkpoint(scene, &engine, reference(scale))?;
         }
-        if opts
-            .interrupt
-            .as_ref()
-            .is_some_and(|f| f.load(Ordering::Relaxed))
+        // (a Ctrl-C in the last chunk finds the run complete: not interrupted)
+        if steps < total
+            && opts
+                .interrupt
+                .as_ref()
+                .is_some_and(|f| f.load(Ordering::Relaxed))
         {
             interrupted = true;
             break;
@@ -354,6 +374,31 @@ pub fn run_with<S: Simulation>(
     };
     outputs.write_summary(&summary)?;
     Ok(summary)
+}
+
+/// The error `e` that stopped a run at step `failed_at`, with where the state before it
+/// went: the checkpoint `saved` wrote (the engine restored to the step before `cause`), or
+/// why it could not be written either.
+fn saved_before<S: Simulation>(
+    e: PowderError,
+    saved: Result<(), PowderError>,
+    outputs: &RunOutputs,
+    engine: &S,
+    failed_at: u64,
+    cause: &str,
+) -> PowderError {
+    let step = engine.steps();
+    let note = match (saved, outputs.checkpoint_path()) {
+        (Ok(()), Some(c)) => format!(
+            "; the state at step {step} (before {cause}, at most 1000 steps earlier than step {failed_at}) is in {}: resume it with --resume once the cause is fixed",
+            c.display()
+        ),
+        (Ok(()), None) => String::new(),
+        (Err(e2), _) => format!(
+            "; the state at step {step} (before {cause}) could not be checkpointed either ({e2}): the folder's last checkpoint is the latest state to resume"
+        ),
+    };
+    PowderError::Run(format!("{e}{note}"))
 }
 
 /// Runs `scene` on the CPU reference backend to its duration (or `max_steps`), calling

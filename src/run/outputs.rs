@@ -111,6 +111,16 @@ impl RunOutputs {
             Some(_) => true,
             None => false,
         };
+        // a run that ended off the cadence (its duration, --steps) wrote a last row and
+        // snapshots there, which the straight run to a later end has not: a resume that runs
+        // on drops them
+        let off_cadence =
+            resumed_from.is_some_and(|s| !s.is_multiple_of(scene.output_every) && end > s);
+        if let Some(s) = resumed_from.filter(|_| off_cadence) {
+            if kept.last().is_some_and(|r| series_csv::row_is_at(r, s)) {
+                kept.pop();
+            }
+        }
         let mut particles = match opts.no_snapshots {
             false => Some(vtk::Series::new(d, &scene.name)?),
             true => None,
@@ -133,7 +143,7 @@ impl RunOutputs {
             Some(step) => {
                 // the snapshots go with the rows: none at the checkpoint's step where its row
                 // goes; both series, whether this run writes them or not (--no-snapshots)
-                let last = if drop_late {
+                let last = if drop_late || off_cadence {
                     step.saturating_sub(1)
                 } else {
                     step
@@ -282,11 +292,28 @@ impl RunOutputs {
         engine: &S,
         monitor: MonitorReference,
     ) -> Result<(), PowderError> {
+        self.checkpoint_marked(scene, engine, monitor, None)
+    }
+
+    /// The series' mark now (rows written so far), where the run writes one.
+    pub(super) fn series_mark(&self) -> Option<SeriesMark> {
+        self.csv.as_ref().map(SeriesCsv::mark)
+    }
+
+    /// [`Self::checkpoint`] with the series as `series` marked it, where given: an engine
+    /// restored to an earlier step after a failed write checkpoints the rows as of then.
+    pub(super) fn checkpoint_marked<S: Simulation>(
+        &mut self,
+        scene: &Scene,
+        engine: &S,
+        monitor: MonitorReference,
+        series: Option<SeriesMark>,
+    ) -> Result<(), PowderError> {
         let path = self.checkpoint_path();
         if let (Some(c), Some(rows)) = (path, self.csv.as_mut()) {
             rows.sync()?;
             let marks = RunMarks {
-                series: Some(rows.mark()),
+                series: Some(series.unwrap_or_else(|| rows.mark())),
                 monitor: Some(monitor),
             };
             engine.write_checkpoint(&c, scene, &marks)?;
