@@ -78,13 +78,14 @@ pub(crate) const DEFAULT_SCENE: &str = include_str!("../../examples/cohesive_clu
 
 pub(crate) fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
     let threads = powder::cpu::Threads::new(a.threads)?;
-    let scene = match &a.scene {
-        Some(path) => Scene::load_with(path, &a.set)?,
+    // (the reader's placement check runs on the threads asked for)
+    let scene = threads.install_all(|| match &a.scene {
+        Some(path) => Scene::load_with(path, &a.set),
         None => {
             eprintln!("no scene given: running the built-in cohesive cluster (examples/cohesive_cluster.toml)");
-            Scene::from_toml_str_with(DEFAULT_SCENE, "cohesive_cluster", &a.set)?
+            Scene::from_toml_str_with(DEFAULT_SCENE, "cohesive_cluster", &a.set)
         }
-    };
+    })?;
     // auto resumes a checkpoint on the backend that wrote it
     let request = match (&a.resume, a.backend) {
         (Some(path), Backend::Auto) => match powder::checkpoint::backend_of(path)?.as_str() {

@@ -110,6 +110,17 @@ impl Threads {
         }
     }
 
+    /// `f` with the parallel sections it opens (rayon's, as in set-up checks outside the
+    /// step) on these threads only: with one thread, a pool of one.
+    pub fn install_all<R: Send>(&self, f: impl FnOnce() -> R + Send) -> R {
+        if self.count == 1 {
+            if let Ok(pool) = rayon::ThreadPoolBuilder::new().num_threads(1).build() {
+                return pool.install(f);
+            }
+        }
+        self.install(f)
+    }
+
     /// `f` applied to every item, results in item order: on the calling thread with one
     /// thread or one item, otherwise spread over the threads (each item whole on one).
     pub fn map<T: Send, R: Send>(&self, items: Vec<T>, f: impl Fn(T) -> R + Sync) -> Vec<R> {
@@ -162,6 +173,14 @@ impl Threads {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn install_all_keeps_rayon_to_the_threads_asked_for() {
+        for n in [1, 2, 3] {
+            let t = Threads::new(n).unwrap();
+            assert_eq!(t.install_all(rayon::current_num_threads), n);
+        }
+    }
 
     #[test]
     fn chunks_cover_every_particle_once_in_order() {

@@ -17,7 +17,7 @@ impl CpuEngine {
             r_max,
             max_reach,
             rotation,
-        } = Resolved::new(scene)?;
+        } = threads.install_all(|| Resolved::new(scene))?;
         let n = scene.particles.len();
         let pos: Vec<DVec3> = scene
             .particles
