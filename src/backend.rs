@@ -30,7 +30,10 @@ pub struct Chosen {
 /// opened is an error, with either request.
 pub fn choose(request: BackendRequest) -> Result<Chosen, PowderError> {
     let gpu = |ctx: GpuContext, why: String| Chosen {
-        reason: format!("{why}: {}", ctx.summary),
+        reason: format!(
+            "{why}: {} ({}, {}; `powder info` shows its limits)",
+            ctx.summary.name, ctx.summary.backend, ctx.summary.device_type
+        ),
         gpu: Some(ctx),
     };
     match request {

@@ -220,8 +220,27 @@ fn accuracy_json_plot_and_convergence() {
 
 #[test]
 fn bad_bench_and_accuracy_input_is_an_error_not_a_panic() {
-    let cases: [(&[&str], &str); 8] = [
+    let cases: [(&[&str], &str); 10] = [
         (&["bench", "--sizes", "0"], "sizes"),
+        (
+            &["bench", "--sizes", "10", "--window-particles", "3"],
+            "window-particles",
+        ),
+        // every size failing (here too fast to resolve) is a failed command
+        (
+            &[
+                "bench",
+                "--sizes",
+                "1e3",
+                "--steps",
+                "5",
+                "--backend",
+                "cpu",
+                "--velocity-scale",
+                "1e6",
+            ],
+            "no size ran",
+        ),
         (&["bench", "--sizes", "1e3,abc"], "sizes"),
         (&["bench", "--steps", "0", "--sizes", "10"], "steps"),
         (

@@ -223,6 +223,34 @@ fn run_prints_a_summary_and_rejects_missing_files() {
     );
     let (ok, _, err) = powder(&["run", "/nonexistent/scene.toml"]);
     assert!(!ok && err.contains("/nonexistent/scene.toml"), "{err}");
+    // --steps beyond the duration: the duration ends the run, with a notice
+    let (ok, out, err) = powder(&[
+        "run",
+        scene,
+        "--steps",
+        "3000",
+        "--no-output",
+        "--set",
+        "simulation.duration=1e-3",
+    ]);
+    assert!(ok, "{err}");
+    assert!(
+        err.contains("ends the run at step 151, before --steps 3000") && out.contains("151"),
+        "{err}"
+    );
+    // a run that fails before writing leaves no folder it created
+    let parent = tempfile::tempdir().unwrap();
+    let fresh = parent.path().join("fresh");
+    let (ok, _, err) = powder(&[
+        "run",
+        scene,
+        "--out",
+        fresh.to_str().unwrap(),
+        "--resume",
+        "/nonexistent/checkpoint.bin",
+    ]);
+    assert!(!ok && err.contains("/nonexistent/checkpoint.bin"), "{err}");
+    assert!(!fresh.exists(), "the failed run left its folder");
     // without snapshots: the series, the checkpoint and the summary only
     let dir = tempfile::tempdir().unwrap();
     let out_dir = dir.path().to_str().unwrap();
@@ -235,8 +263,13 @@ fn run_prints_a_summary_and_rejects_missing_files() {
         "--out",
         out_dir,
     ];
-    let (ok, _, err) = powder(&args);
+    let (ok, out, err) = powder(&args);
     assert!(ok, "{err}");
+    // (its summary names no ParaView collection: none was written)
+    assert!(
+        out.contains("(series.csv, checkpoint.bin") && !out.contains(".pvd"),
+        "{out}"
+    );
     let mut files: Vec<String> = std::fs::read_dir(dir.path())
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())

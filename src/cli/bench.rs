@@ -131,5 +131,17 @@ pub(crate) fn bench_cmd(a: &BenchArgs) -> Result<(), PowderError> {
     if let Some(path) = &a.json {
         write_json(path, &report)?;
     }
+    // (a size that failed beside others that ran is the benchmark's finding; none running
+    // is a failed command)
+    let failed = report.rows.iter().find(|r| r.status == "failed");
+    if let (Some(first), false) = (failed, report.rows.iter().any(|r| r.status == "ran")) {
+        return Err(PowderError::Run(format!(
+            "no size ran: every row failed (the first: {})",
+            first
+                .note
+                .as_deref()
+                .map_or("no reason given", |n| n.trim_start_matches("failed: "))
+        )));
+    }
     Ok(())
 }

@@ -67,14 +67,14 @@ pub(crate) fn compare_cmd(a: &CompareArgs) -> Result<bool, PowderError> {
             c.scene, c.particles, c.dt, c.adapter
         );
         println!(
-            "{:>7} {:>10} {:>9} {:>9} {:>9} {:>5} {:>5} {:>10} {:>10} {:>9} {:>9} {:>9}  exceeded",
+            "{:>7} {:>10} {:>9} {:>9} {:>9} {:>12} {:>12} {:>10} {:>10} {:>9} {:>9} {:>9}  exceeded",
             "step",
             "t (s)",
             "pos/rmin",
             "vel/vmax",
             "rel.Ekin",
-            "Zcpu",
-            "Zgpu",
+            "contacts cpu",
+            "contacts gpu",
             "δ cpu",
             "E_dis cpu",
             "rel.E",
@@ -83,7 +83,7 @@ pub(crate) fn compare_cmd(a: &CompareArgs) -> Result<bool, PowderError> {
         );
         for s in &c.samples {
             println!(
-                "{:>7} {:>10.3e} {:>9.2e} {:>9.2e} {:>9.2e} {:>5} {:>5} {:>10.3e} {:>10.3e} {:>9.2e} {:>9.2e} {:>9}  {}",
+                "{:>7} {:>10.3e} {:>9.2e} {:>9.2e} {:>9.2e} {:>12} {:>12} {:>10.3e} {:>10.3e} {:>9.2e} {:>9.2e} {:>9}  {}",
                 s.step,
                 s.time,
                 s.position,

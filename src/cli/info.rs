@@ -6,7 +6,8 @@ use super::*;
 pub(crate) struct InfoArgs {
     /// A scene: list the GPU kernels and buffers it uses and the bytes per particle.
     scene: Option<PathBuf>,
-    /// Print the adapter summary as JSON on stdout.
+    /// Print as JSON on stdout: the adapter summary, or with a scene its kernels and
+    /// buffers report.
     #[arg(long)]
     json: bool,
     /// With a scene: run its GPU step with a timestamp after every pass and print the
@@ -19,7 +20,7 @@ pub(crate) struct InfoArgs {
     #[arg(long, default_value_t = 0, requires = "profile")]
     after: u64,
     /// With --profile: the steps profiled.
-    #[arg(long, default_value_t = 64, requires = "profile")]
+    #[arg(long, default_value_t = 64, requires = "profile", value_parser = clap::value_parser!(u64).range(1..))]
     profile_steps: u64,
     /// Build the GPU engine without its energy ledger (as `powder run --no-ledger`).
     #[arg(long, requires = "scene")]

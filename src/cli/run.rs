@@ -9,7 +9,8 @@ pub(crate) struct RunArgs {
     scene: Option<PathBuf>,
     #[arg(long, value_enum, default_value = "auto")]
     backend: Backend,
-    /// Stop after this many steps in total (default: the scene's duration).
+    /// Stop after at most this many steps in total (the scene's duration ends the run
+    /// sooner where it comes first; default: the duration).
     #[arg(long)]
     steps: Option<u64>,
     /// CPU engine threads (0: every core); the results are bitwise the same on any count.
@@ -119,6 +120,8 @@ pub(crate) fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
                 .unwrap_or_else(|| PathBuf::from("out").join(&scene.name)),
         )
     };
+    // (a folder this command creates is removed again where the run fails before writing)
+    let created = out_dir.as_ref().filter(|d| !d.exists()).cloned();
     if let Some(d) = &out_dir {
         std::fs::create_dir_all(d).map_err(|e| {
             PowderError::io(
@@ -127,38 +130,12 @@ pub(crate) fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
             )
         })?;
     }
-    let opts = powder::run::RunOptions {
-        out_dir,
-        resume: a.resume.clone(),
-        max_steps: a.steps,
-        progress_bar: std::io::IsTerminal::is_terminal(&std::io::stderr()),
-        verbose: true,
-        interrupt: Some(interrupt),
-        gpu: powder::gpu::GpuOptions {
-            ledger: !a.no_ledger,
-            quiet: a.quiet_batches.into(),
-            window_particles: a.window_particles,
-            ..Default::default()
-        },
-        tabor_dmin: a.tabor_dmin,
-        threads,
-        backend_reason: Some(chosen.reason),
-        no_snapshots: a.no_snapshots,
-        overwrite: a.overwrite,
-    };
-    let summary = match gpu {
-        Some(ctx) => powder::run::run_gpu_with(&scene, ctx, &opts, |_| {})?,
-        None => {
-            if a.no_ledger {
-                // accepted so one command line serves both backends (and the fallback)
-                eprintln!("notice: --no-ledger has no effect on the CPU backend, which always keeps its energy ledger (it costs little there)");
-            }
-            if let Some(w) = a.window_particles {
-                eprintln!("notice: --window-particles {w} has no effect on the CPU backend (the GPU engine's windows)");
-            }
-            powder::run::run_cpu_with(&scene, &opts, |_| {})?
-        }
-    };
+    let summary = run_in(a, scene, gpu, out_dir, interrupt, threads, chosen.reason);
+    if let (Err(_), Some(d)) = (&summary, &created) {
+        // (only where empty: remove_dir refuses a folder with files)
+        let _ = std::fs::remove_dir(d);
+    }
+    let summary = summary?;
     if summary.interrupted {
         INTERRUPTED.store(true, std::sync::atomic::Ordering::Relaxed);
         eprintln!(
@@ -176,15 +153,62 @@ pub(crate) fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
         println!("{text}");
         return Ok(());
     }
-    print_summary(&summary);
+    print_summary(&summary, !a.no_snapshots);
     Ok(())
+}
+
+/// The run itself, once the scene, backend and folder are settled.
+fn run_in(
+    a: &RunArgs,
+    scene: Scene,
+    gpu: Option<powder::gpu::GpuContext>,
+    out_dir: Option<PathBuf>,
+    interrupt: std::sync::Arc<std::sync::atomic::AtomicBool>,
+    threads: powder::cpu::Threads,
+    reason: String,
+) -> Result<powder::run::RunSummary, PowderError> {
+    let opts = powder::run::RunOptions {
+        out_dir,
+        resume: a.resume.clone(),
+        max_steps: a.steps,
+        progress_bar: std::io::IsTerminal::is_terminal(&std::io::stderr()),
+        verbose: true,
+        interrupt: Some(interrupt),
+        gpu: powder::gpu::GpuOptions {
+            ledger: !a.no_ledger,
+            quiet: a.quiet_batches.into(),
+            window_particles: a.window_particles,
+            ..Default::default()
+        },
+        tabor_dmin: a.tabor_dmin,
+        threads,
+        backend_reason: Some(reason),
+        no_snapshots: a.no_snapshots,
+        overwrite: a.overwrite,
+    };
+    match gpu {
+        Some(ctx) => powder::run::run_gpu_with(&scene, ctx, &opts, |_| {}),
+        None => {
+            if a.no_ledger {
+                // accepted so one command line serves both backends (and the fallback)
+                eprintln!("notice: --no-ledger has no effect on the CPU backend, which always keeps its energy ledger (it costs little there)");
+            }
+            if let Some(w) = a.window_particles {
+                eprintln!("notice: --window-particles {w} has no effect on the CPU backend (the GPU engine's windows)");
+            }
+            if a.quiet_batches != QuietChoice::Auto {
+                eprintln!("notice: --quiet-batches has no effect on the CPU backend (the GPU engine's batches)");
+            }
+            powder::run::run_cpu_with(&scene, &opts, |_| {})
+        }
+    }
 }
 
 /// What a run without the energy ledger prints for what only the ledger knows.
 pub(crate) const NO_LEDGER: &str = "n/a (--no-ledger)";
 
-/// The human-readable summary of `powder run`.
-pub(crate) fn print_summary(summary: &powder::run::RunSummary) {
+/// The human-readable summary of `powder run` (`snapshots`: the run wrote them).
+pub(crate) fn print_summary(summary: &powder::run::RunSummary, snapshots: bool) {
     let l = &summary.last;
     println!("scene            {}", summary.scene);
     println!(
@@ -259,10 +283,12 @@ pub(crate) fn print_summary(summary: &powder::run::RunSummary) {
         } else {
             String::new()
         };
-        println!(
-            "outputs          {d}/ ({}.pvd{contacts} for ParaView, series.csv, checkpoint.bin, summary.json)",
-            summary.scene
-        );
+        let paraview = if snapshots {
+            format!("{}.pvd{contacts} for ParaView, ", summary.scene)
+        } else {
+            String::new()
+        };
+        println!("outputs          {d}/ ({paraview}series.csv, checkpoint.bin, summary.json)");
     }
     if summary.outside_domain > 0 {
         println!(

@@ -55,6 +55,17 @@ pub struct Windows {
     pub rec_shift: u32,
 }
 
+/// Whether `len` particles can be a window (a power of two from [`MIN_WINDOW`] to 2^30),
+/// else why not.
+pub fn valid_len(len: u64) -> Result<(), String> {
+    if !len.is_power_of_two() || !(MIN_WINDOW..=1 << 30).contains(&len) {
+        return Err(format!(
+            "a window holds a power of two of particles from {MIN_WINDOW} to 2^30, not {len}"
+        ));
+    }
+    Ok(())
+}
+
 impl Windows {
     /// One window holding all `n` particles: the unwindowed layout.
     pub fn one(n: u64) -> Self {
@@ -69,11 +80,7 @@ impl Windows {
     /// Windows of `len` particles (a power of two from [`MIN_WINDOW`] to 2^30) for `n`
     /// particles; one window where `len` holds them all.
     pub fn of(n: u64, len: u64) -> Result<Self, PowderError> {
-        if !len.is_power_of_two() || !(MIN_WINDOW..=1 << 30).contains(&len) {
-            return Err(PowderError::Run(format!(
-                "a window holds a power of two of particles from {MIN_WINDOW} to 2^30, not {len}"
-            )));
-        }
+        valid_len(len).map_err(PowderError::Run)?;
         if len >= particle_stride(n) {
             return Ok(Self::one(n));
         }

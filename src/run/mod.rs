@@ -49,7 +49,8 @@ pub struct RunOptions {
     /// Continue from this checkpoint (of the same powder version, and a scene whose run
     /// agrees with its own up to its time: `checkpoint::run_digest`).
     pub resume: Option<PathBuf>,
-    /// Stop after this many steps in total (default: the scene's duration).
+    /// Stop after at most this many steps in total (the scene's duration ends the run
+    /// sooner where it comes first; default: the duration).
     pub max_steps: Option<u64>,
     /// Draw a progress bar with ETA and steps/s on stderr.
     pub progress_bar: bool,
@@ -158,6 +159,12 @@ pub fn run_with<S: Simulation>(
         )));
     }
     let total = ((scene.duration / engine.dt()).ceil() as u64).max(1);
+    if let Some(m) = opts.max_steps.filter(|&m| m > total && opts.verbose) {
+        eprintln!(
+            "notice: the scene's duration {:e} s ends the run at step {total}, before --steps {m}",
+            scene.duration
+        );
+    }
     let total = opts.max_steps.map_or(total, |m| m.min(total));
     if let Some(from) = resumed_from.filter(|&from| total < from) {
         return Err(PowderError::Run(format!(

@@ -272,6 +272,11 @@ impl GpuEngine {
     /// compute passes (`gpu::timestamps::FEATURES`). On the software adapter, quiet
     /// batches that were rolled back count too (their device time was spent).
     pub fn profile(&mut self, steps: u64) -> Result<PassProfile, PowderError> {
+        if steps == 0 {
+            return Err(
+                crate::ParamError::new("profile-steps", "profile at least one step").into(),
+            );
+        }
         let before = self.rebuilds()?;
         self.clock = Some(PassClock::new(&self.ctx)?);
         let t = std::time::Instant::now();

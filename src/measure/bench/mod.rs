@@ -155,6 +155,9 @@ impl BenchOptions {
             )
             .into());
         }
+        if let Some(w) = self.window_particles {
+            crate::gpu::window::valid_len(w).map_err(|e| ParamError::new("window-particles", e))?;
+        }
         crate::error::require_positive("max-seconds", self.max_seconds, "the time budget")?;
         crate::error::require_non_negative(
             "velocity-scale",
