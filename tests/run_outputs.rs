@@ -562,6 +562,36 @@ fn a_failed_write_checkpoints_the_state_before_it() {
     assert!(run_files(failed.path()) == run_files(straight.path()));
 }
 
+/// Another scene's fresh run into a folder replaces the earlier run's snapshots too (by
+/// the scene its summary names), so the folder never mixes two scenes' outputs.
+#[test]
+fn another_scenes_run_replaces_the_earlier_runs_snapshots() {
+    let scene = cluster();
+    let mut other = scene.clone();
+    other.name = "other".into();
+    let dir = tempfile::tempdir().unwrap();
+    run(&scene, dir.path(), 600, None);
+    let err = run_cpu_with(&other, &options(dir.path(), 600, None), |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("cohesive_cluster.pvd") && err.contains("--overwrite"),
+        "{err}"
+    );
+    let opts = RunOptions {
+        overwrite: true,
+        ..options(dir.path(), 600, None)
+    };
+    run_cpu_with(&other, &opts, |_| {}).unwrap();
+    let left: Vec<String> = walk(dir.path())
+        .iter()
+        .map(|p| p.to_string_lossy().into_owned())
+        .filter(|p| p.contains("cohesive_cluster"))
+        .collect();
+    assert!(left.is_empty(), "{left:?}");
+    assert!(dir.path().join("other.pvd").exists());
+}
+
 /// Ctrl-C during the last chunk finds the run complete: it is not reported interrupted
 /// (a resume would have nothing to run).
 #[test]

@@ -294,6 +294,12 @@ pub fn steps_of(path: &Path) -> Result<u64, PowderError> {
     Ok(header(&bytes, path)?.0.steps)
 }
 
+/// The name of the scene whose run wrote the checkpoint at `path`.
+pub fn scene_of(path: &Path) -> Result<String, PowderError> {
+    let bytes = read(path)?;
+    Ok(header(&bytes, path)?.0.scene)
+}
+
 /// Whether the checkpoint at `path` is intact and of `scene`'s run up to its time (what a
 /// resume of it asks of the scene; the backend aside).
 pub fn is_of(path: &Path, scene: &Scene) -> bool {

@@ -57,15 +57,36 @@ const CHECKPOINT: &str = "checkpoint.bin";
 const SUMMARY: &str = "summary.json";
 const SERIES: &str = "series.csv";
 
+/// The scenes whose snapshot series a fresh run of `scene` into `d` replaces: its own, and
+/// that of the run whose summary or checkpoint is there (another scene's run into the same
+/// folder).
+pub(super) fn replaced_scenes(d: &Path, scene: &Scene) -> Vec<String> {
+    let summary = std::fs::read(d.join(SUMMARY))
+        .ok()
+        .and_then(|b| serde_json::from_slice::<serde_json::Value>(&b).ok())
+        .and_then(|v| v.get("scene")?.as_str().map(str::to_string));
+    let checkpoint = crate::checkpoint::scene_of(&d.join(CHECKPOINT)).ok();
+    let mut names = vec![scene.name.clone()];
+    // (only a name that can name files in the folder: no path, not hidden)
+    let plain = |n: &String| !n.is_empty() && !n.starts_with('.') && !n.contains(['/', '\\']);
+    for n in [summary, checkpoint].into_iter().flatten() {
+        if plain(&n) && !names.contains(&n) {
+            names.push(n);
+        }
+    }
+    names
+}
+
 /// What a fresh run of `scene` into `d` would remove or replace: the checkpoint, summary
-/// and series, and the scene's snapshot series.
+/// and series, and the snapshot series of this scene and of the run replaced.
 fn fresh_run_would_remove(d: &Path, scene: &Scene) -> Vec<String> {
     let mut found: Vec<String> = [CHECKPOINT, SUMMARY, SERIES]
         .into_iter()
         .filter(|f| d.join(f).exists())
         .map(|f| format!("`{f}`"))
         .collect();
-    for s in vtk::Series::both_unopened(d, &scene.name) {
+    let names = replaced_scenes(d, scene);
+    for s in names.iter().flat_map(|n| vtk::Series::both_unopened(d, n)) {
         let collection = s.collection_path();
         if collection.exists() {
             found.push(format!("`{}`", collection.display()));

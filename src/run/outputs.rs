@@ -194,6 +194,8 @@ impl RunOutputs {
     /// there), with its summary and its snapshots (left beside the new run's, a killed run
     /// would look finished, its folder holding two runs).
     fn clear_earlier_run(d: &Path, scene: &Scene, verbose: bool) -> Result<(), PowderError> {
+        // (read before the summary and checkpoint that name the earlier run's scene go)
+        let names = super::earlier::replaced_scenes(d, scene);
         for c in [d.join("checkpoint.bin"), d.join("summary.json")] {
             match std::fs::remove_file(&c) {
                 Ok(()) if verbose => eprintln!("removed the earlier run's {}", c.display()),
@@ -207,8 +209,9 @@ impl RunOutputs {
                 }
             }
         }
-        // (both series, whether this run writes them or not: they are the earlier run's)
-        for mut s in vtk::Series::both_unopened(d, &scene.name) {
+        // (both series, whether this run writes them or not: they are the earlier run's;
+        // that run's scene's too, where another scene's run wrote the folder)
+        for mut s in names.iter().flat_map(|n| vtk::Series::both_unopened(d, n)) {
             let removed = s.clear()?;
             if removed > 0 && verbose {
                 eprintln!(
