@@ -1,6 +1,7 @@
 //! `--set KEY=VALUE`: change values of a scene file from the command line (scale an example
 //! up, sweep a parameter) without editing it. Parsed here; applied to the parsed scene by
-//! [`crate::scene::Scene::from_toml_str_with`], so errors keep the file's line numbers.
+//! [`crate::scene::Scene::from_toml_str_with`], so errors keep the file's line numbers and
+//! an error in a value set names its override.
 //!
 //! KEY is a dotted path into the TOML document; `name[i]` picks the i-th (0-based) block of
 //! an array of tables such as `[[particles]]`: `simulation.duration`, `particles[0].count`,

@@ -382,12 +382,17 @@ impl Scene {
         name: &str,
         sets: &[String],
     ) -> Result<Scene, PowderError> {
+        let raw = sets;
         let sets = sets
             .iter()
             .map(|s| Override::parse(s))
             .collect::<Result<Vec<_>, _>>()?;
         let name = if name.is_empty() { "default" } else { name };
-        let src = Src { name, text };
+        let src = Src {
+            name,
+            text,
+            sets: raw,
+        };
         parse_scene(&src, &sets)
     }
 

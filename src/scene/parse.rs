@@ -24,8 +24,8 @@ pub(super) fn parse_scene(src: &Src, sets: &[Override]) -> Res<Scene> {
         src.err(e.span().as_ref(), msg)
     })?;
     let mut root_entries = convert_table(src, doc.get_ref())?;
-    for set in sets {
-        super::set::apply(&mut root_entries, &doc.span(), set)?;
+    for (k, set) in sets.iter().enumerate() {
+        super::set::apply(&mut root_entries, set, k)?;
     }
     let root = Tbl::new(src, &root_entries, None, "the top-level table".to_string());
     root.check_keys(TOP_KEYS, |k| {

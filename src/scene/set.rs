@@ -1,18 +1,19 @@
-//! `--set KEY=VALUE` applied to the parsed scene, not to its text: every value keeps its
-//! place in the file, so an error names the line the user sees (a value set takes the
-//! line of the one it replaces, a key added the line of its table).
+//! `--set KEY=VALUE` applied to the parsed scene, not to its text: the file's values keep
+//! their lines, and a value set is located at its `--set`, so an error in it names the
+//! override, not the line it replaced.
 
-use super::toml_reader::{Entry, Node, Res, Span, Val};
+use super::toml_reader::{Entry, Node, Res, Span, Val, SET_SPAN};
 use crate::error::PowderError;
 use crate::overrides::Override;
 use toml::Value;
 
-/// Applies `set` to the top-level table `root`, whose own place is `span`.
-pub(super) fn apply(root: &mut Vec<Entry>, span: &Span, set: &Override) -> Res<()> {
+/// Applies `set`, the `k`-th override, to the top-level table `root`.
+pub(super) fn apply(root: &mut Vec<Entry>, set: &Override, k: usize) -> Res<()> {
+    // (what the override places is located at it, not at the text it replaces)
+    let here = SET_SPAN + k..SET_SPAN + k;
     let key = set.key();
     let (last, parents) = set.path.split_last().expect("a path has a component");
     let mut table = root;
-    let mut table_span = span.clone();
     for (name, index) in parents {
         let entry = table
             .iter_mut()
@@ -47,7 +48,6 @@ pub(super) fn apply(root: &mut Vec<Entry>, span: &Span, set: &Override) -> Res<(
                 }
             }
         };
-        table_span = node.span.clone();
         let Val::Table(entries) = &mut node.val else {
             unreachable!("matched a table above")
         };
@@ -56,15 +56,8 @@ pub(super) fn apply(root: &mut Vec<Entry>, span: &Span, set: &Override) -> Res<(
     let (name, index) = last;
     let found = table.iter_mut().find(|e| &e.key == name);
     match (found, index) {
-        (Some(entry), None) => {
-            let at = entry.node.span.clone();
-            entry.node = node_of(&set.value, &at);
-        }
-        (None, None) => table.push(Entry::new(
-            name,
-            &table_span,
-            node_of(&set.value, &table_span),
-        )),
+        (Some(entry), None) => entry.node = node_of(&set.value, &here),
+        (None, None) => table.push(Entry::new(name, &here, node_of(&set.value, &here))),
         (
             Some(Entry {
                 node:
@@ -75,10 +68,7 @@ pub(super) fn apply(root: &mut Vec<Entry>, span: &Span, set: &Override) -> Res<(
                 ..
             }),
             Some(i),
-        ) if *i < items.len() => {
-            let at = items[*i].span.clone();
-            items[*i] = node_of(&set.value, &at);
-        }
+        ) if *i < items.len() => items[*i] = node_of(&set.value, &here),
         _ => {
             return Err(PowderError::Scene(format!(
                 "--set {key}: `{name}` has no element [{}]",

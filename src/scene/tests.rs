@@ -732,6 +732,7 @@ fn line_col_counts_characters() {
     let src = Src {
         name: "x",
         text: "ab\nçd\n",
+        sets: &[],
     };
     assert_eq!(src.line_col(0), (1, 1));
     assert_eq!(src.line_col(3), (2, 1));
@@ -835,12 +836,10 @@ fn overrides_reach_tables_blocks_and_elements() {
 fn errors_keep_the_files_line_numbers_with_overrides() {
     let text = minimal("", "");
     let line = |key: &str| 1 + text.lines().position(|l| l.starts_with(key)).unwrap();
-    // a value set takes the line of the one it replaces
+    // a value set is named by its override, not the line it replaced
     let e = parse_with(&text, &["material[0].density = 0"]).unwrap_err();
-    assert_contains(
-        &e,
-        &[&format!("line {}, column", line("density")), "density"],
-    );
+    assert_contains(&e, &["--set material[0].density = 0: ", "density", "got 0"]);
+    assert!(!e.contains("line "), "{e}");
     // an error elsewhere keeps its line, whatever was set before it
     let bad = text.replace("k = 100.0", "k = -1.0");
     let e = parse_with(
@@ -852,15 +851,13 @@ fn errors_keep_the_files_line_numbers_with_overrides() {
     )
     .unwrap_err();
     assert_contains(&e, &[&format!("line {}, column", line("k = "))]);
-    // a key added takes the line of its table
-    let e = parse_with(&text, &["simulation.durration = 1"]).unwrap_err();
-    assert_contains(
-        &e,
-        &[
-            &format!("line {}, column", line("[simulation]")),
-            "durration",
-        ],
-    );
+    // so is a key added
+    let e = parse_with(
+        &text,
+        &["simulation.duration = 0.5", "simulation.durration = 1"],
+    )
+    .unwrap_err();
+    assert_contains(&e, &["--set simulation.durration = 1: ", "durration"]);
 }
 
 #[test]

@@ -13,7 +13,13 @@ pub(super) type Res<T> = Result<T, PowderError>;
 pub(super) struct Src<'a> {
     pub(super) name: &'a str,
     pub(super) text: &'a str,
+    /// The `--set KEY=VALUE` overrides as given, which spans from [`SET_SPAN`] name.
+    pub(super) sets: &'a [String],
 }
+
+/// Spans from here on are not in the text: `SET_SPAN + k` is a value of the `k`-th `--set`,
+/// so an error in it names that override, not the line it replaced.
+pub(super) const SET_SPAN: usize = usize::MAX / 2;
 
 impl Src<'_> {
     /// 1-based line and column (in characters) of a byte offset.
@@ -30,6 +36,10 @@ impl Src<'_> {
 
     pub(super) fn err(&self, span: Option<&Span>, msg: impl Display) -> PowderError {
         match span {
+            Some(s) if s.start >= SET_SPAN => {
+                let set = self.sets.get(s.start - SET_SPAN).map_or("", String::as_str);
+                PowderError::Scene(format!("scene `{}`, --set {set}: {msg}", self.name))
+            }
             Some(s) => {
                 let (line, col) = self.line_col(s.start);
                 PowderError::Scene(format!(
