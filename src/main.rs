@@ -45,10 +45,15 @@ fn main() -> ExitCode {
         Command::Accuracy(a) => accuracy_cmd(a),
         Command::Analytic(a) => analytic::analytic_cmd(a),
         Command::Params(a) => params_cmd(a),
+        // (as `diff`: 1 where the backends differ beyond a tolerance, 2 where the
+        // comparison could not run)
         Command::Compare(a) => match compare_cmd(a) {
             Ok(true) => Ok(()),
             Ok(false) => return ExitCode::from(1),
-            Err(e) => Err(e),
+            Err(e) => {
+                eprintln!("error: {e}");
+                return ExitCode::from(2);
+            }
         },
     };
     match result {

@@ -686,8 +686,17 @@ fn compare_reports_deviations_and_fails_beyond_thresholds() {
         "beyond a threshold: exit code 1"
     );
     assert!(String::from_utf8_lossy(&out.stdout).contains("FAIL"));
-    let (ok, _, err) = powder(&["compare", scene, "--tolerance", "speed=1"]);
-    assert!(!ok && err.contains("KEY=VALUE"), "{err}");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_powder"))
+        .args(["compare", scene, "--tolerance", "speed=1"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("KEY=VALUE"), "{err}");
+    assert_eq!(
+        out.status.code(),
+        Some(2),
+        "a comparison that cannot run: exit code 2"
+    );
 }
 
 #[test]

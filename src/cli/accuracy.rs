@@ -50,11 +50,10 @@ pub(crate) struct AccuracyArgs {
 
 pub(crate) fn accuracy_cmd(a: &AccuracyArgs) -> Result<(), PowderError> {
     use powder::measure::accuracy::{self, AccuracyOptions};
-    for (path, flag) in [(&a.json, "--json"), (&a.plot, "--plot")] {
-        if let Some(path) = path {
-            powder::output::folder::check_output_file(path, flag)?;
-        }
-    }
+    powder::output::folder::check_output_files(&[
+        (a.json.as_deref(), "--json"),
+        (a.plot.as_deref(), "--plot"),
+    ])?;
     let opts = AccuracyOptions {
         divisors: accuracy::parse_divisors(&a.divisors)?,
         backends: a.backend.list()?,

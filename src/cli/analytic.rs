@@ -64,7 +64,8 @@ struct KpPrimeArgs {
     /// k1, kp and phi_f of the hysteretic law.
     #[command(flatten)]
     law: ParamArgs<HystereticStiffnesses>,
-    /// The new plasticity depth phi_f' in (0, 1] (appendix A: larger than phi_f).
+    /// The new plasticity depth phi_f' in (0, 1] (appendix A raises phi_f; eq. A.3 holds
+    /// either way).
     #[arg(long = "phi-f-new")]
     phi_f_new: f64,
     /// Print JSON on stdout.
@@ -197,7 +198,7 @@ fn kp_prime(a: &KpPrimeArgs) -> Result<(), PowderError> {
     p.validate()?;
     if !(a.phi_f_new > 0.0 && a.phi_f_new <= 1.0) {
         return Err(ParamError::new(
-            "phi_f_new",
+            "phi-f-new",
             format!(
                 "the new plasticity depth --phi-f-new must satisfy 0 < phi_f' <= 1, got {}",
                 a.phi_f_new
@@ -264,9 +265,9 @@ struct ThorntonNing {
 
 fn thornton_ning(a: &ThorntonNingArgs) -> Result<(), PowderError> {
     let v_yield = match (a.yield_velocity, a.yield_stress) {
-        (Some(v), _) => require_positive("yield_velocity", v, "the yield velocity")?,
+        (Some(v), _) => require_positive("yield-velocity", v, "the yield velocity")?,
         (None, Some(y)) => {
-            require_positive("yield_stress", y, "the yield stress")?;
+            require_positive("yield-stress", y, "the yield stress")?;
             let (e, nu, rho) = (
                 a.material.number(&declared::YOUNGS)?,
                 a.material.number(&declared::POISSON)?,
@@ -372,7 +373,7 @@ fn tabor(a: &TaborArgs) -> Result<(), PowderError> {
     );
     p.validate()?;
     let d_min = match a.tabor_dmin {
-        Some(d) => require_positive("tabor_dmin", d, "D_min of the Tabor parameter")?,
+        Some(d) => require_positive("tabor-dmin", d, "D_min of the Tabor parameter")?,
         None => analytic::TABOR_MIN_SEPARATION,
     };
     let r_eff = a.pair.geometry(1.0)?.r_eff();

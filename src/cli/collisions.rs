@@ -106,9 +106,9 @@ pub(crate) fn collide_report(
         (None, None) => None,
         _ if !family => {
             let name = if a.yield_velocity.is_some() {
-                "yield_velocity"
+                "yield-velocity"
             } else {
-                "yield_stress"
+                "yield-stress"
             };
             return Err(ParamError::new(
                 name,
@@ -120,20 +120,20 @@ pub(crate) fn collide_report(
             .into());
         }
         (Some(v), _) => Some(powder::error::require_positive(
-            "yield_velocity",
+            "yield-velocity",
             v,
             "the yield velocity (--yield-velocity)",
         )?),
         (None, Some(y)) => {
             let y = powder::error::require_positive(
-                "yield_stress",
+                "yield-stress",
                 y,
                 "the yield stress (--yield-stress)",
             )?;
             let v = collide::yield_velocity(spec, y);
             derived_finite(
                 v,
-                "yield_stress",
+                "yield-stress",
                 "the yield velocity v_Y from --yield-stress",
                 true,
             )?
@@ -142,13 +142,13 @@ pub(crate) fn collide_report(
     let tabor_dmin = match a.tabor_dmin {
         Some(_) if !jkr => {
             return Err(ParamError::new(
-                "tabor_dmin",
+                "tabor-dmin",
                 "--tabor-dmin applies to --model jkr (the Tabor parameter of a JKR pair)",
             )
             .into())
         }
         Some(d) => powder::error::require_positive(
-            "tabor_dmin",
+            "tabor-dmin",
             d,
             "D_min of the Tabor parameter (--tabor-dmin)",
         )?,
@@ -156,7 +156,7 @@ pub(crate) fn collide_report(
     };
     derived_finite(
         collide::tabor(spec, tabor_dmin),
-        "tabor_dmin",
+        "tabor-dmin",
         "the Tabor parameter at this --tabor-dmin",
         false,
     )?;
@@ -309,11 +309,10 @@ pub(crate) fn print_table(results: &[CollideResult], report: &CollideReport) {
 }
 
 pub(crate) fn collide_cmd(a: &CollideArgs) -> Result<(), PowderError> {
-    for (path, flag) in [(&a.plot, "--plot"), (&a.trace, "--trace")] {
-        if let Some(path) = path {
-            powder::output::folder::check_output_file(path, flag)?;
-        }
-    }
+    powder::output::folder::check_output_files(&[
+        (a.plot.as_deref(), "--plot"),
+        (a.trace.as_deref(), "--trace"),
+    ])?;
     let model = a.law.contact_model()?;
     let spec = CollideSpec {
         model,

@@ -181,9 +181,50 @@ pub fn check_output_file(path: &Path, flag: &str) -> Result<(), PowderError> {
         .map_err(|e| PowderError::io(format!("cannot write `{}` ({flag})", path.display()), e))
 }
 
+/// [`check_output_file`] for each of a command's output files (`(path, flag)`, `None`
+/// where not asked for), refusing two flags that name one file (the last written would
+/// replace the other).
+pub fn check_output_files(files: &[(Option<&Path>, &str)]) -> Result<(), PowderError> {
+    let mut seen: Vec<(PathBuf, &str)> = Vec::new();
+    for &(path, flag) in files {
+        let Some(path) = path else { continue };
+        check_output_file(path, flag)?;
+        // (the folder resolved: `a.svg` and `./a.svg` are one file)
+        let dir = match path.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        let key = match (dir.canonicalize(), path.file_name()) {
+            (Ok(d), Some(name)) => d.join(name),
+            _ => path.to_path_buf(),
+        };
+        if let Some((_, first)) = seen.iter().find(|(k, _)| *k == key) {
+            return Err(PowderError::Run(format!(
+                "{first} and {flag} both name `{}`: the second would replace the first; give each its own file",
+                path.display()
+            )));
+        }
+        seen.push((key, flag));
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn two_flags_naming_one_file_are_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let a = dir.path().join("a.svg");
+        let b = dir.path().join(".").join("a.svg");
+        let err = check_output_files(&[(Some(&a), "--json"), (None, "--x"), (Some(&b), "--plot")])
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("--json and --plot both name"), "{err}");
+        let c = dir.path().join("c.json");
+        assert!(check_output_files(&[(Some(&a), "--plot"), (Some(&c), "--json")]).is_ok());
+    }
 
     #[test]
     fn a_folder_is_held_by_one_run_and_a_dead_ones_lock_is_taken_over() {
