@@ -103,6 +103,21 @@ pub(crate) fn bench_cmd(a: &BenchArgs) -> Result<(), PowderError> {
         threads: parse_threads(&a.threads)?,
     };
     opts.validate()?;
+    // (GPU-only options on a CPU-only bench change nothing: said, not silently dropped)
+    if !opts
+        .backends
+        .contains(&powder::measure::collide::Backend::Gpu)
+    {
+        let gpu_only = [
+            (a.profile, "--profile"),
+            (a.ledger, "--ledger"),
+            (a.window_particles.is_some(), "--window-particles"),
+            (a.quiet_batches != QuietChoice::Auto, "--quiet-batches"),
+        ];
+        for (_, flag) in gpu_only.iter().filter(|(given, _)| *given) {
+            eprintln!("notice: {flag} has no effect on the CPU backend (a GPU engine option)");
+        }
+    }
     println!("{}", bench::table_header());
     let report = bench::bench(&opts, |row| println!("{}", bench::table_line(row)))?;
     let p = &report.provenance;
