@@ -57,20 +57,27 @@ pub fn choose(request: BackendRequest) -> Result<Chosen, PowderError> {
                 let value = std::env::var(ADAPTER_ENV).unwrap_or_default();
                 return Ok(gpu(ctx, format!("{ADAPTER_ENV}={value}")));
             }
-            let found: Vec<String> = adapter_infos()
-                .iter()
-                .map(|info| format!("{} ({:?})", info.name, info.device_type))
+            let infos = adapter_infos();
+            let found: Vec<String> = (infos.iter())
+                .map(|info| {
+                    let api = info.backend.to_str();
+                    format!("{} ({api}, {:?})", info.name, info.device_type)
+                })
                 .collect();
+            // (why a GPU did not open matters only where there is one)
+            let hardware = (infos.iter()).any(|i| i.device_type != wgpu::DeviceType::Cpu);
             match GpuContext::with_preference(&AdapterPreference::Hardware) {
                 Ok(ctx) => Ok(gpu(ctx, "--backend auto found a hardware GPU".into())),
                 Err(e) => Ok(Chosen {
                     gpu: None,
                     reason: format!(
-                        "--backend auto found no hardware GPU that opens ({}; {e}): the CPU engine, faster here than the software adapter (--backend gpu runs that)",
+                        "--backend auto found no hardware GPU{}: the CPU engine, faster here than the software adapter (--backend gpu runs that)",
                         if found.is_empty() {
-                            "no adapter at all".to_string()
+                            " (no adapter at all)".to_string()
+                        } else if hardware {
+                            format!(" that opens (adapters: {}; {e})", found.join(", "))
                         } else {
-                            format!("adapters: {}", found.join(", "))
+                            format!(" (adapters: {})", found.join(", "))
                         }
                     ),
                 }),

@@ -1875,6 +1875,55 @@ fn run_says_when_a_servo_wall_does_not_hold_its_target() {
     }
 }
 
+/// A servo phase followed by another phase is judged over its own last quarter (it was
+/// judged only where the run ended in it); one sampled too rarely to judge is named in a
+/// note, not passed over in silence.
+#[test]
+fn a_servo_phase_before_the_runs_end_is_judged_or_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = |every: u64, switch: f64| {
+        let text = format!(
+            "[domain]\nmin = [0.0, 0.0, 0.0]\nmax = [0.0066, 0.0066, 0.012]\n[simulation]\nduration = 0.15\noutput_every = {every}\ngravity = [0.0, 0.0, -9.81]\n\
+             [[material]]\nname = \"p\"\ndensity = 2000.0\nmodel = \"hysteretic\"\nk1 = 100.0\nkp = 500.0\nkc = 0.0\nphi_f = 0.05\ngamma0 = 1e-3\n\
+             [[wall]]\npoint = [0.0, 0.0, 0.0]\nnormal = [0.0, 0.0, 1.0]\n\
+             [[wall]]\npoint = [0.0, 0.0, 0.0066]\nnormal = [0.0, 0.0, -1.0]\n\
+             [[wall.phase]]\nfrom = 0.0\nservo_force = 0.02\nservo_gain = 20.0\nservo_max_speed = 1.0\n\
+             [[wall.phase]]\nfrom = {switch:?}\n\
+             [[particles]]\nkind = \"lattice\"\nmin = [0.0011, 0.0011, 0.0011]\nmax = [0.0056, 0.0056, 0.0056]\nradius = 1.0e-3\nspacing = 2.2e-3\n"
+        );
+        let path = dir.path().join(format!("phases_{every}.toml"));
+        std::fs::write(&path, text).unwrap();
+        path
+    };
+    let run = |every: u64, switch: f64| {
+        let path = scene(every, switch);
+        let (ok, out, err) = powder(&[
+            "run",
+            path.to_str().unwrap(),
+            "--backend",
+            "cpu",
+            "--no-output",
+            "--json",
+        ]);
+        assert!(ok, "{err}");
+        serde_json::from_str::<serde_json::Value>(&out).unwrap()
+    };
+    let v = run(50, 0.12);
+    let hold = &v["servo"][0];
+    assert!(hold["wall"] == 1 && hold["held"] == true, "{v}");
+    assert!(hold["samples"].as_u64().unwrap() >= 4, "{v}");
+    // a phase of 3478 steps, outputs 10⁶ steps apart: chunks of 1000 steps sample its last
+    // quarter too rarely
+    let v = run(1_000_000, 0.02);
+    assert_eq!(v["servo"].as_array().unwrap().len(), 0, "{v}");
+    let notes = v["notes"].to_string();
+    assert!(
+        notes.contains("wall 1's servo phase from t = 0e0 s was sampled")
+            && notes.contains("not judged"),
+        "{notes}"
+    );
+}
+
 /// A sphere whose last step in contact turned it back leaves the contact still approaching:
 /// it comes back and sticks (paper 002's deposition near λ_crit at e = 0.9, Ad = 100). It
 /// was reported as a rebound with e = −6.7e-3.

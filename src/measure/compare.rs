@@ -34,8 +34,8 @@ pub struct Tolerances {
     pub energy: f64,
     /// History values of the contacts with overlap both engines hold: the RMS difference
     /// of δmax over the RMS of the CPU's δmax, and likewise for the tangential spring and
-    /// the rolling displacement (vectors) and the Krijt contact radius; the largest of the
-    /// four. RMS rather than the
+    /// the rolling and twisting displacements and the Krijt contact radius; the largest of
+    /// the five. RMS rather than the
     /// worst contact: on the tensile branch δmax ∝ √δ near δ = 0, so a contact about to
     /// open turns an f32 rounding of its overlap into a large δmax difference (the worst
     /// one is reported as `history_max`).

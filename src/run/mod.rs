@@ -338,12 +338,15 @@ pub fn run_with<S: Simulation>(
         .map(|(end, start)| (end - start).abs());
     let (solid_fraction_domain, solid_fraction_bounding_box) =
         solid_fractions(scene, &last_obs.positions, engine.radii());
-    let servo = servo.holds(scene, start_time, engine.time());
+    let (servo, unjudged) = servo.holds(scene, start_time, engine.time());
     if opts.verbose {
         for w in servo.iter().filter_map(|h| h.warning(engine.dt())) {
             eprintln!("warning: {w}");
         }
     }
+    // (a servo wall left unjudged is said, in the summary's notes too)
+    let mut notes = engine.notes()?;
+    notes.extend(unjudged);
     let summary = RunSummary {
         scene: scene.name.clone(),
         backend: engine.backend(),
@@ -375,7 +378,7 @@ pub fn run_with<S: Simulation>(
         contact_network: outputs.writes_contacts(),
         rebuilds: engine.rebuilds()?,
         quiet_batches: engine.quiet_batches().map(|(kept, back)| [kept, back]),
-        notes: engine.notes()?,
+        notes,
         tabor,
         servo,
     };

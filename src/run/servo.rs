@@ -1,5 +1,5 @@
 //! How well each servo wall held its target force: the normal force on it over the last
-//! quarter of the time the run spent in the servo phase it ends in. A gain too high for the
+//! quarter of the time the run spent in its last servo phase. A gain too high for the
 //! bed (stable while gain·k_bed·dt < 1, where k_bed is the packing's) makes the wall swing
 //! about its target; a wall still travelling stays off it. `powder run` reports both.
 
@@ -14,13 +14,13 @@ pub const SERVO_RMS_MAX: f64 = 0.1;
 /// The samples a verdict needs: fewer leave the wall unjudged.
 const MIN_SAMPLES: usize = 4;
 
-/// One servo wall's normal force over the last quarter of its final servo phase in this
+/// One servo wall's normal force over the last quarter of its last servo phase in this
 /// run (a resumed run judges its own part only).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct ServoHold {
     /// The wall's index in the scene.
     pub wall: usize,
-    /// The target normal force of the servo phase it ends in, N.
+    /// The target normal force of that servo phase, N.
     pub target: f64,
     /// That phase's gain, m/s per N.
     pub gain: f64,
@@ -89,24 +89,41 @@ impl ServoWatch {
         }
     }
 
-    /// Each watched wall ending in a servo phase: its force over the last quarter of the
-    /// time this run (from `start` to `end`) spent in that phase, when sampled often enough.
-    pub(super) fn holds(&self, scene: &Scene, start: f64, end: f64) -> Vec<ServoHold> {
-        let mut out = Vec::new();
+    /// Each watched wall's last servo phase within this run (from `start` to `end`): its
+    /// force over the last quarter of the time the run spent in it; and a note for each
+    /// wall sampled too rarely there to judge.
+    pub(super) fn holds(
+        &self,
+        scene: &Scene,
+        start: f64,
+        end: f64,
+    ) -> (Vec<ServoHold>, Vec<String>) {
+        let (mut out, mut unjudged) = (Vec::new(), Vec::new());
         for (w, _, samples) in &self.walls {
-            let motion = &scene.walls[*w].motion;
-            let Some(i) = motion.index_at(end) else {
+            let phases = &scene.walls[*w].motion.phases;
+            let last = phases
+                .iter()
+                .rposition(|(from, p)| *from < end && matches!(p, WallPhase::Servo { .. }));
+            let Some(i) = last else { continue };
+            let (from, WallPhase::Servo { force, gain, .. }) = phases[i] else {
                 continue;
             };
-            let (from, WallPhase::Servo { force, gain, .. }) = motion.phases[i] else {
+            let to = phases.get(i + 1).map_or(end, |(next, _)| next.min(end));
+            // (a phase that ended before a resumed run began is the earlier run's to judge)
+            let begun = from.max(start);
+            if to <= begun {
                 continue;
-            };
-            let since = end - 0.25 * (end - from.max(start));
+            }
+            let since = to - 0.25 * (to - begun);
             let window: Vec<f64> = (samples.iter())
-                .filter(|(t, _)| *t >= since)
+                .filter(|(t, _)| *t >= since && *t <= to)
                 .map(|&(_, f)| f)
                 .collect();
             if window.len() < MIN_SAMPLES {
+                unjudged.push(format!(
+                    "wall {w}'s servo phase from t = {from:e} s was sampled {} times in the last quarter of its time in this run ({MIN_SAMPLES} needed; once every chunk of at most 1000 steps and at every output): whether it held its target {force:e} N is not judged; a smaller simulation.output_every samples it more often",
+                    window.len()
+                ));
                 continue;
             }
             let k = window.len() as f64;
@@ -123,6 +140,6 @@ impl ServoWatch {
                 held: rms <= SERVO_RMS_MAX * force.abs(),
             });
         }
-        out
+        (out, unjudged)
     }
 }

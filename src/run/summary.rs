@@ -70,7 +70,8 @@ pub struct RunSummary {
     /// CPU.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub quiet_batches: Option<[u64; 2]>,
-    /// Backend remarks (GPU: neighbour-list rebuilds, contacts that left the lists).
+    /// Remarks: the backend's (GPU: neighbour-list rebuilds, contacts that left the lists)
+    /// and servo walls sampled too rarely to judge.
     pub notes: Vec<String>,
     /// The Tabor parameter of every JKR pair of materials that can meet ([`crate::run::tabor_pairs`]);
     /// empty without JKR pairs.
