@@ -222,7 +222,7 @@ pub(crate) fn print_summary(summary: &powder::run::RunSummary, snapshots: bool) 
         summary.particles
     );
     println!(
-        "dt               {:.4e} s (the stability limit: {})",
+        "dt               {:.4e} s ({})",
         summary.dt, summary.dt_rule
     );
     println!(

@@ -85,8 +85,29 @@ pub fn run_cpu_with(
     progress: impl FnMut(&Snapshot),
 ) -> Result<RunSummary, PowderError> {
     let engine = CpuEngine::with_threads(scene, opts.threads.clone())?;
-    let rule = engine.time_step().reason.clone();
+    let rule = dt_choice(scene, engine.time_step(), engine.dt());
     run_with(scene, engine, &rule, opts, progress)
+}
+
+/// What chose the step `dt` of `scene`, and the stability limit `ts` it is checked against
+/// (the summary's `dt_rule`).
+fn dt_choice(scene: &Scene, ts: &crate::model::TimeStep, dt: f64) -> String {
+    use crate::model::DEFAULT_DT_FRACTION;
+    let chosen = match scene.dt {
+        crate::scene::DtSetting::Fixed(_) => "simulation.dt".to_string(),
+        _ if dt.to_bits() == (ts.contact_time / DEFAULT_DT_FRACTION).to_bits() => format!(
+            "the automatic step tc/{DEFAULT_DT_FRACTION} with tc = {:.4e} s",
+            ts.contact_time
+        ),
+        _ if dt.to_bits() == ts.max.to_bits() => {
+            "the automatic step, at the stability limit (below tc/50)".to_string()
+        }
+        _ => format!(
+            "the automatic step, {:.2} of the stability limit",
+            dt / ts.max
+        ),
+    };
+    format!("{chosen}; the stability limit: {}", ts.reason)
 }
 
 /// Runs `scene` on the GPU engine (with the energy ledger unless `opts.gpu` turns it off)
@@ -102,7 +123,7 @@ pub fn run_gpu_with(
         ..opts.gpu
     };
     let engine = GpuEngine::with_options(scene, ctx, options)?;
-    let rule = engine.time_step().reason.clone();
+    let rule = dt_choice(scene, engine.time_step(), engine.dt());
     run_with(scene, engine, &rule, opts, progress)
 }
 

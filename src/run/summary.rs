@@ -27,7 +27,8 @@ pub struct RunSummary {
     pub ledger: bool,
     /// Time step, s.
     pub dt: f64,
-    /// The rule dt was checked against (the binding limit, in words).
+    /// What chose dt (the scene's `simulation.dt`, or the automatic tc/50) and the
+    /// stability limit it was checked against (the binding one), in words.
     pub dt_rule: String,
     /// Steps taken at the end, in all (a resumed run includes the steps before the checkpoint).
     pub steps: u64,
