@@ -262,9 +262,15 @@ pub fn bench(
                         Ok(row) => row,
                         Err(e) => {
                             stopped = Some(format!("N = {n} failed"));
+                            // (the packing's only knob for its speeds is bench's own)
+                            let knob = if opts.velocity_scale > 1.0 {
+                                format!(" [the packing's velocities are scaled by --velocity-scale {}: lower it]", opts.velocity_scale)
+                            } else {
+                                String::new()
+                            };
                             BenchRow {
                                 status: "failed",
-                                ..skip(format!("failed: {e}"))
+                                ..skip(format!("failed: {e}{knob}"))
                             }
                         }
                     }
