@@ -244,6 +244,8 @@ fn run_prints_a_summary_and_rejects_missing_files() {
     let (ok, _, err) = powder(&[
         "run",
         scene,
+        "--backend",
+        "cpu",
         "--out",
         fresh.to_str().unwrap(),
         "--resume",

@@ -507,9 +507,10 @@ fn run_files(d: &Path) -> (Vec<u8>, Vec<u8>, Vec<String>) {
 }
 
 /// A run that ended off the output cadence (step 1250 of 500), resumed to a later end,
-/// leaves what the straight run does: its last row and snapshot go.
+/// keeps its last row and snapshot (written on that run's cadence: a resume cannot tell
+/// them from a branch's), and otherwise leaves what the straight run does.
 #[test]
-fn a_run_ended_off_the_cadence_and_extended_matches_the_straight_run() {
+fn a_run_ended_off_the_cadence_and_extended_keeps_its_last_row() {
     let scene = cluster();
     let (straight, extended) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
     run(&scene, straight.path(), 2000, None);
@@ -518,7 +519,16 @@ fn a_run_ended_off_the_cadence_and_extended_matches_the_straight_run() {
     let rows = std::fs::read_to_string(extended.path().join("series.csv")).unwrap();
     assert!(rows.lines().last().unwrap().starts_with("1250,"), "{rows}");
     run(&scene, extended.path(), 2000, Some(&ckpt));
-    assert!(run_files(extended.path()) == run_files(straight.path()));
+    let (rows, _, mut shots) = run_files(extended.path());
+    let (straight_rows, _, straight_shots) = run_files(straight.path());
+    let rows = String::from_utf8(rows).unwrap();
+    let without: String = (rows.lines())
+        .filter(|l| !l.starts_with("1250,"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    assert!(rows.contains("\n1250,") && without.as_bytes() == straight_rows);
+    shots.retain(|f| !f.ends_with("_0000001250.vtp"));
+    assert_eq!(shots, straight_shots);
     // resumed to the same end (nothing to run), its last row stays
     let again = run(
         &scene,
@@ -531,9 +541,37 @@ fn a_run_ended_off_the_cadence_and_extended_matches_the_straight_run() {
     assert!(rows.lines().last().unwrap().starts_with("2000,"), "{rows}");
 }
 
-/// A snapshot that cannot be written (here `snapshots/` turned into a file at step 1500's
-/// output) stops the run with the state as the chunk began checkpointed: resumed once the
-/// folder is back, the run ends with the straight run's files.
+/// A branch resumed with another `output_every` keeps the rows and snapshots its first run
+/// wrote on that run's cadence, the checkpoint's own step included (1500: on the cadence of
+/// 500, off that of 750), and goes on at the new cadence.
+#[test]
+fn a_branch_with_another_output_cadence_keeps_the_rows_before_it() {
+    let scene = cluster();
+    let d = tempfile::tempdir().unwrap();
+    run(&scene, d.path(), 1500, None);
+    let mut branch = scene.clone();
+    branch.output_every = 750;
+    run(
+        &branch,
+        d.path(),
+        3000,
+        Some(&d.path().join("checkpoint.bin")),
+    );
+    let (rows, _, shots) = run_files(d.path());
+    let steps: Vec<&str> = (std::str::from_utf8(&rows).unwrap().lines())
+        .filter(|l| !l.starts_with('#') && !l.starts_with("step"))
+        .map(|l| l.split(',').next().unwrap())
+        .collect();
+    assert_eq!(steps, ["0", "500", "1000", "1500", "2250", "3000"]);
+    for step in ["0000001500", "0000002250", "0000003000"] {
+        assert!(shots.iter().any(|f| f.contains(step)), "{step}: {shots:?}");
+    }
+}
+
+/// A snapshot that cannot be written (here `snapshots/` turned into a file at step 1000's
+/// output, before the first periodic checkpoint is written) stops the run with the state
+/// as the chunk began (step 500) checkpointed: resumed once the folder is back, the run
+/// ends with the straight run's files.
 #[test]
 fn a_failed_write_checkpoints_the_state_before_it() {
     let scene = cluster();
@@ -541,7 +579,7 @@ fn a_failed_write_checkpoints_the_state_before_it() {
     run(&scene, straight.path(), 2000, None);
     let (shots, aside) = (failed.path().join("snapshots"), failed.path().join("aside"));
     let sabotage = |s: &powder::run::Snapshot| {
-        if s.step == 1500 {
+        if s.step == 1000 {
             std::fs::rename(&shots, &aside).unwrap();
             std::fs::write(&shots, "not a folder").unwrap();
         }
@@ -550,7 +588,7 @@ fn a_failed_write_checkpoints_the_state_before_it() {
         .unwrap_err()
         .to_string();
     assert!(
-        err.contains("the state at step 1000 (before the failed write")
+        err.contains("the state at step 500 (before the failed write")
             && err.contains("checkpoint.bin")
             && err.contains("--resume"),
         "{err}"

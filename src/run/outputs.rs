@@ -111,16 +111,6 @@ impl RunOutputs {
             Some(_) => true,
             None => false,
         };
-        // a run that ended off the cadence (its duration, --steps) wrote a last row and
-        // snapshots there, which the straight run to a later end has not: a resume that runs
-        // on drops them
-        let off_cadence =
-            resumed_from.is_some_and(|s| !s.is_multiple_of(scene.output_every) && end > s);
-        if let Some(s) = resumed_from.filter(|_| off_cadence) {
-            if kept.last().is_some_and(|r| series_csv::row_is_at(r, s)) {
-                kept.pop();
-            }
-        }
         let mut particles = match opts.no_snapshots {
             false => Some(vtk::Series::new(d, &scene.name)?),
             true => None,
@@ -143,7 +133,7 @@ impl RunOutputs {
             Some(step) => {
                 // the snapshots go with the rows: none at the checkpoint's step where its row
                 // goes; both series, whether this run writes them or not (--no-snapshots)
-                let last = if drop_late || off_cadence {
+                let last = if drop_late {
                     step.saturating_sub(1)
                 } else {
                     step
