@@ -238,9 +238,9 @@ fn run_prints_a_summary_and_rejects_missing_files() {
         err.contains("ends the run at step 151, before --steps 3000") && out.contains("151"),
         "{err}"
     );
-    // a run that fails before writing leaves no folder it created
+    // a run that fails before writing leaves no folder it created (nor their parents)
     let parent = tempfile::tempdir().unwrap();
-    let fresh = parent.path().join("fresh");
+    let fresh = parent.path().join("fresh").join("a").join("b");
     let (ok, _, err) = powder(&[
         "run",
         scene,
@@ -252,7 +252,10 @@ fn run_prints_a_summary_and_rejects_missing_files() {
         "/nonexistent/checkpoint.bin",
     ]);
     assert!(!ok && err.contains("/nonexistent/checkpoint.bin"), "{err}");
-    assert!(!fresh.exists(), "the failed run left its folder");
+    assert!(
+        !parent.path().join("fresh").exists() && parent.path().exists(),
+        "the failed run left its folders, or removed one it did not create"
+    );
     // without snapshots: the series, the checkpoint and the summary only
     let dir = tempfile::tempdir().unwrap();
     let out_dir = dir.path().to_str().unwrap();

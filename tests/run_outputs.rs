@@ -463,6 +463,12 @@ fn a_killed_run_resumed_short_of_its_rows_is_refused() {
         killed.path().join("checkpoint.bin"),
     )
     .unwrap();
+    // (its series cut after step 1000's row: the files end at different steps)
+    let csv = killed.path().join("series.csv");
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let cut = text.trim_end().rfind('\n').unwrap() + 1;
+    assert!(text[cut..].starts_with("1500,"), "{text}");
+    std::fs::write(&csv, &text[..cut]).unwrap();
     let ckpt = killed.path().join("checkpoint.bin");
     let series = || std::fs::read(killed.path().join("series.csv")).unwrap();
     let shots = || {
@@ -471,13 +477,14 @@ fn a_killed_run_resumed_short_of_its_rows_is_refused() {
             .count()
     };
     let (rows, snapshots) = (series(), shots());
-    let err = run_cpu_with(&scene, &options(killed.path(), 1000, Some(&ckpt)), |_| {})
+    let err = run_cpu_with(&scene, &options(killed.path(), 700, Some(&ckpt)), |_| {})
         .unwrap_err()
         .to_string();
+    // one step to run on to, the latest of the files'
     assert!(
-        err.contains("`series.csv`'s rows to step 1500")
-            && err.contains("end at step 1000")
-            && err.contains("snapshots in")
+        err.contains("`series.csv`'s rows to step 1000, snapshots in")
+            && err.contains("to step 1500 past this run's end at step 700: run on to step 1500")
+            && err.matches("run on to").count() == 1
             && err.contains("--overwrite"),
         "{err}"
     );
@@ -598,6 +605,32 @@ fn a_failed_write_checkpoints_the_state_before_it() {
     let ckpt = failed.path().join("checkpoint.bin");
     run(&scene, failed.path(), 2000, Some(&ckpt));
     assert!(run_files(failed.path()) == run_files(straight.path()));
+    // where no checkpoint can be written either (a folder in its way), the error says that
+    // no state was saved: after a failed write, and at the periodic checkpoint
+    for write_fails in [true, false] {
+        let d = tempfile::tempdir().unwrap();
+        let (shots, ckpt) = (d.path().join("snapshots"), d.path().join("checkpoint.bin"));
+        let sabotage = |s: &powder::run::Snapshot| {
+            if s.step == 1000 {
+                std::fs::create_dir_all(ckpt.join("in the way")).unwrap();
+                if write_fails {
+                    std::fs::remove_dir_all(&shots).unwrap();
+                    std::fs::write(&shots, "not a folder").unwrap();
+                }
+            }
+        };
+        let err = run_cpu_with(&scene, &options(d.path(), 2000, None), sabotage)
+            .unwrap_err()
+            .to_string();
+        let said = match write_fails {
+            true => "(before the failed write) could not be checkpointed either",
+            false => "the checkpoint at step 1000 could not be written",
+        };
+        assert!(
+            err.contains(said) && err.contains("no state of this run was saved"),
+            "{err}"
+        );
+    }
 }
 
 /// Another scene's fresh run into a folder replaces the earlier run's snapshots too (by
@@ -1260,7 +1293,8 @@ fn a_full_disk_stops_the_run_and_keeps_the_last_checkpoint(backend: &str) {
     let stderr = read("stderr");
     assert!(
         stderr.contains("No space left on device")
-            && stderr.contains(full.path().to_str().unwrap()),
+            && stderr.contains(full.path().to_str().unwrap())
+            && stderr.contains("--resume"),
         "{stderr}"
     );
     let ckpt = keep.path().join("checkpoint.bin");

@@ -290,14 +290,12 @@ pub fn load_gpu(path: &Path, scene: &Scene) -> Result<(GpuSavedState, RunMarks),
 
 /// The steps the run of the checkpoint at `path` had taken.
 pub fn steps_of(path: &Path) -> Result<u64, PowderError> {
-    let bytes = read(path)?;
-    Ok(header(&bytes, path)?.0.steps)
+    Ok(peek_header(path)?.steps)
 }
 
 /// The name of the scene whose run wrote the checkpoint at `path`.
 pub fn scene_of(path: &Path) -> Result<String, PowderError> {
-    let bytes = read(path)?;
-    Ok(header(&bytes, path)?.0.scene)
+    Ok(peek_header(path)?.scene)
 }
 
 /// Whether the checkpoint at `path` is intact and of `scene`'s run up to its time (what a
@@ -311,8 +309,7 @@ pub fn is_of(path: &Path, scene: &Scene) -> bool {
 
 /// The backend (`"cpu"` or `"gpu"`) that wrote the checkpoint at `path`.
 pub fn backend_of(path: &Path) -> Result<String, PowderError> {
-    let bytes = read(path)?;
-    Ok(header(&bytes, path)?.0.backend)
+    Ok(peek_header(path)?.backend)
 }
 
 fn save_state(
@@ -407,11 +404,16 @@ fn header<'a>(bytes: &'a [u8], path: &Path) -> Result<(Header, Archive<'a>), Pow
         }
         Err(_) => return Err(not_a_checkpoint(path)),
     };
+    let raw = archive.raw(HEADER).ok_or_else(|| not_a_checkpoint(path))?;
+    Ok((parse_header(raw, path)?, archive))
+}
+
+/// The header member `raw` of the checkpoint at `path`, refused unless it is this format
+/// and version's.
+fn parse_header(raw: &[u8], path: &Path) -> Result<Header, PowderError> {
     // magic, format and version first, leniently: a later format's header may differ
-    let json: serde_json::Value = archive
-        .raw(HEADER)
-        .and_then(|b| serde_json::from_slice(b).ok())
-        .ok_or_else(|| not_a_checkpoint(path))?;
+    let json: serde_json::Value =
+        serde_json::from_slice(raw).map_err(|_| not_a_checkpoint(path))?;
     if json["magic"] != MAGIC {
         return Err(not_a_checkpoint(path));
     }
@@ -419,8 +421,22 @@ fn header<'a>(bytes: &'a [u8], path: &Path) -> Result<(Header, Archive<'a>), Pow
     if format != Some(FORMAT as u64) || version != Some(env!("CARGO_PKG_VERSION")) {
         return Err(other_format(path, version.unwrap_or("?"), format));
     }
-    let header: Header = serde_json::from_value(json).map_err(|_| not_a_checkpoint(path))?;
-    Ok((header, archive))
+    serde_json::from_value(json).map_err(|_| not_a_checkpoint(path))
+}
+
+/// The header of the checkpoint at `path`, read alone (its first member) where it can be:
+/// a large checkpoint is not read whole to learn its step, scene or backend. Otherwise the
+/// whole file is read, for the error that says what is wrong with it.
+fn peek_header(path: &Path) -> Result<Header, PowderError> {
+    let first = std::fs::metadata(path)
+        .ok()
+        .filter(|m| m.is_file())
+        .and_then(|_| std::fs::File::open(path).ok())
+        .and_then(|f| npz::first_member(std::io::BufReader::new(f), 1 << 26));
+    match first {
+        Some((name, raw)) if name == HEADER => parse_header(&raw, path),
+        _ => Ok(header(&read(path)?, path)?.0),
+    }
 }
 
 /// The archive of `bytes`, refused unless it is this format and version's checkpoint of

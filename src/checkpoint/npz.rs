@@ -233,6 +233,36 @@ fn u64_at(b: &[u8], at: usize) -> Option<u64> {
     bytes_at(b, at).map(u64::from_le_bytes)
 }
 
+/// The first member of the archive `r` reads, `(name, bytes)`, its CRC checked, without
+/// reading further (a large archive's header member); `None` where that is not a stored
+/// member of at most `limit` bytes as [`write`](fn@write) writes it.
+pub fn first_member(mut r: impl std::io::Read, limit: u64) -> Option<(String, Vec<u8>)> {
+    let mut local = [0u8; 30];
+    r.read_exact(&mut local).ok()?;
+    if u32_at(&local, 0)? != 0x0403_4b50 || u16_at(&local, 8)? != 0 {
+        return None;
+    }
+    let crc = u32_at(&local, 14)?;
+    let mut size = u32_at(&local, 22)? as u64;
+    let (name_len, extra_len) = (u16_at(&local, 26)? as usize, u16_at(&local, 28)? as usize);
+    let mut rest = vec![0u8; name_len + extra_len];
+    r.read_exact(&mut rest).ok()?;
+    let name = std::str::from_utf8(&rest[..name_len]).ok()?.to_string();
+    if size == 0xFFFF_FFFF {
+        // the ZIP64 extra field: (uncompressed, compressed)
+        if u16_at(&rest, name_len)? != 1 {
+            return None;
+        }
+        size = u64_at(&rest, name_len + 4)?;
+    }
+    if size > limit {
+        return None;
+    }
+    let mut data = vec![0u8; usize::try_from(size).ok()?];
+    r.read_exact(&mut data).ok()?;
+    (crc32fast::hash(&data) == crc).then_some((name, data))
+}
+
 /// An archive read back: each member's bytes by name, CRCs checked.
 pub struct Archive<'a> {
     members: BTreeMap<String, &'a [u8]>,
@@ -406,6 +436,28 @@ mod tests {
         );
         // the end of central directory points to the ZIP64 one
         assert_eq!(u32_at(&bytes, bytes.len() - 22 - 20), Some(0x0706_4b50));
+    }
+
+    /// The first member reads alone, plain or ZIP64, and only whole, of its CRC and within
+    /// the limit.
+    #[test]
+    fn the_first_member_reads_alone() {
+        let want = Some(("header.json".to_string(), b"{\"a\": 1}".to_vec()));
+        for bytes in [write(&sample()), write_with(&sample(), 0)] {
+            assert_eq!(first_member(&bytes[..], 1 << 20), want);
+            // (the header's 8 bytes and no further)
+            let end = bytes.windows(8).position(|w| w == b"{\"a\": 1}").unwrap() + 8;
+            assert_eq!(first_member(&bytes[..end], 1 << 20), want);
+            assert_eq!(first_member(&bytes[..end - 1], 1 << 20), None);
+            assert_eq!(first_member(&bytes[..], 7), None);
+            let mut flipped = bytes.clone();
+            flipped[end - 2] ^= 1;
+            assert_eq!(first_member(&flipped[..], 1 << 20), None);
+        }
+        assert_eq!(
+            first_member(&b"not an archive at all, 30 bytes+"[..], 1 << 20),
+            None
+        );
     }
 
     #[test]

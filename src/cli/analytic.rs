@@ -140,7 +140,8 @@ struct TaborArgs {
     material: ParamArgs<JkrMaterial>,
     #[command(flatten)]
     pair: PairArgs,
-    /// D_min of eq. 1 in the unit of --radius (default 1.65e-10 m, the paper's value).
+    /// D_min of eq. 1, in the unit of --radius (m in SI; default 1.65e-10, the paper's value
+    /// in m).
     #[arg(long = "tabor-dmin")]
     tabor_dmin: Option<f64>,
     /// Print JSON on stdout.

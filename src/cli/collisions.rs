@@ -65,8 +65,8 @@ pub(crate) struct CollideArgs {
     #[arg(long)]
     json: bool,
     // ---- reports beyond the collision ----
-    /// JKR: D_min of the Tabor parameter (paper 002 eq. 1) in the unit of --radius,
-    /// default 1.65e-10 (m, the paper's value).
+    /// JKR: D_min of the Tabor parameter (paper 002 eq. 1), in the unit of --radius (m in
+    /// SI; default 1.65e-10, the paper's value in m).
     #[arg(long = "tabor-dmin")]
     tabor_dmin: Option<f64>,
     /// JKR/Hertz: yield velocity v_Y, m/s: adds the Thornton-Ning e_TN and

@@ -59,8 +59,8 @@ pub(crate) struct RunArgs {
     #[arg(long = "quiet-batches", value_enum, default_value = "auto")]
     quiet_batches: QuietChoice,
     // ---- reports ----
-    /// D_min of the Tabor parameter (paper 002 eq. 1) in the scene's length unit, default
-    /// 1.65e-10 (m, the paper's value). The summary lists lambda_T of every JKR pair of
+    /// D_min of the Tabor parameter (paper 002 eq. 1), in the scene's length unit like every
+    /// length (m in SI; default 1.65e-10, the paper's value in m). The summary lists lambda_T of every JKR pair of
     /// materials; a pair below the JKR range (lambda_T <= 3) is warned about on stderr.
     #[arg(long = "tabor-dmin")]
     tabor_dmin: Option<f64>,
@@ -120,8 +120,15 @@ pub(crate) fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
                 .unwrap_or_else(|| PathBuf::from("out").join(&scene.name)),
         )
     };
-    // (a folder this command creates is removed again where the run fails before writing)
-    let created = out_dir.as_ref().filter(|d| !d.exists()).cloned();
+    // (the folders this command creates, the output folder up to the first that exists,
+    // are removed again where the run fails before writing)
+    let created: Vec<PathBuf> = match &out_dir {
+        Some(d) => (d.ancestors())
+            .take_while(|a| !a.as_os_str().is_empty() && !a.exists())
+            .map(std::path::Path::to_path_buf)
+            .collect(),
+        None => Vec::new(),
+    };
     if let Some(d) = &out_dir {
         std::fs::create_dir_all(d).map_err(|e| {
             PowderError::io(
@@ -131,9 +138,13 @@ pub(crate) fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
         })?;
     }
     let summary = run_in(a, scene, gpu, out_dir, interrupt, threads, chosen.reason);
-    if let (Err(_), Some(d)) = (&summary, &created) {
-        // (only where empty: remove_dir refuses a folder with files)
-        let _ = std::fs::remove_dir(d);
+    if summary.is_err() {
+        // (innermost first, each only where empty: remove_dir refuses a folder with files)
+        for d in &created {
+            if std::fs::remove_dir(d).is_err() {
+                break;
+            }
+        }
     }
     let summary = summary?;
     if summary.interrupted {

@@ -67,10 +67,9 @@ pub(super) fn replaced_scenes(d: &Path, scene: &Scene) -> Vec<String> {
         .and_then(|v| v.get("scene")?.as_str().map(str::to_string));
     let checkpoint = crate::checkpoint::scene_of(&d.join(CHECKPOINT)).ok();
     let mut names = vec![scene.name.clone()];
-    // (only a name that can name files in the folder: no path, not hidden)
-    let plain = |n: &String| !n.is_empty() && !n.starts_with('.') && !n.contains(['/', '\\']);
+    // (only a name a scene can have: one that names files in the folder, not a path)
     for n in [summary, checkpoint].into_iter().flatten() {
-        if plain(&n) && !names.contains(&n) {
+        if crate::scene::can_name_files(&n) && !names.contains(&n) {
             names.push(n);
         }
     }
@@ -126,21 +125,26 @@ fn later_results(d: &Path, scene: &Scene, opts: &RunOptions, step: u64, end: u64
         }
     }
     // (a run that finished later is named above: its rows need no second mention)
+    // (one step to run on to: the latest of the files, which may end at different steps)
     if found.is_empty() {
-        let again = format!("past this run's end at step {end}: run on to step");
+        let mut beyond = Vec::new();
         let last = crate::output::series_csv::last_row_step(&d.join(SERIES));
         if let Some(s) = last.filter(|&s| s > end) {
-            found.push(format!(
-                "`{SERIES}`'s rows to step {s}, {again} {s} to write them again"
-            ));
+            beyond.push((format!("`{SERIES}`'s rows"), s));
         }
         for series in vtk::Series::both_unopened(d, &scene.name) {
             if let Some(s) = series.last_step().filter(|&s| s > end) {
-                found.push(format!(
-                    "snapshots in `{}` to step {s}, {again} {s} to write them again",
-                    series.folder().display()
-                ));
+                beyond.push((format!("snapshots in `{}`", series.folder().display()), s));
             }
+        }
+        if let Some(latest) = beyond.iter().map(|&(_, s)| s).max() {
+            let files: Vec<String> = (beyond.iter())
+                .map(|(what, s)| format!("{what} to step {s}"))
+                .collect();
+            found.push(format!(
+                "{} past this run's end at step {end}: run on to step {latest} to write them again",
+                files.join(", ")
+            ));
         }
     }
     found

@@ -327,7 +327,7 @@ pub fn run_with<S: Simulation>(
         servo.record(engine.time(), obs.wall_forces.as_deref());
         last_obs = obs;
         if steps.is_multiple_of(scene.checkpoint_every) {
-            outputs.checkpoint(scene, &engine, reference(scale))?;
+            outputs.checkpoint_or_say(scene, &engine, reference(scale))?;
         }
         // (a Ctrl-C in the last chunk finds the run complete: not interrupted)
         if steps < total
@@ -344,7 +344,7 @@ pub fn run_with<S: Simulation>(
         b.finish_and_clear();
     }
     let last = snapshot(&engine, &last_obs);
-    outputs.checkpoint(scene, &engine, reference(scale))?;
+    outputs.checkpoint_or_say(scene, &engine, reference(scale))?;
     // Ctrl-C off the output cadence: a last row and snapshot after the checkpoint, which a
     // resume drops (the straight run has none there)
     if interrupted && !engine.steps().is_multiple_of(scene.output_every) {
@@ -426,7 +426,8 @@ fn saved_before<S: Simulation>(
         ),
         (Ok(()), None) => String::new(),
         (Err(e2), _) => format!(
-            "; the state at step {step} (before {cause}) could not be checkpointed either ({e2}): the folder's last checkpoint is the latest state to resume"
+            "; the state at step {step} (before {cause}) could not be checkpointed either ({e2}); {}",
+            outputs.latest_saved().unwrap_or_default()
         ),
     };
     PowderError::Run(format!("{e}{note}"))

@@ -28,6 +28,9 @@ pub(super) struct RunOutputs {
     radii: Vec<f64>,
     /// The walls' normals (the contact network's wall ends).
     wall_normals: Vec<glam::DVec3>,
+    /// The latest state saved for a resume (its step and checkpoint): the one this run
+    /// last wrote, or the one it resumed from.
+    latest: Option<(u64, PathBuf)>,
     /// The folder, held for this run (last: released after the writers close).
     dir: Option<(PathBuf, FolderLock)>,
 }
@@ -54,6 +57,7 @@ impl RunOutputs {
             .collect();
         let Some(d) = opts.out_dir.as_deref() else {
             return Ok(RunOutputs {
+                latest: None,
                 dir: None,
                 csv: None,
                 particles: None,
@@ -150,6 +154,7 @@ impl RunOutputs {
         }
         Ok(RunOutputs {
             csv: Some(SeriesCsv::start(&csv_path, &header, &kept)?),
+            latest: resumed_from.zip(opts.resume.clone()),
             dir: Some((d.to_path_buf(), lock)),
             particles,
             contacts: network,
@@ -310,8 +315,39 @@ impl RunOutputs {
                 monitor: Some(monitor),
             };
             engine.write_checkpoint(&c, scene, &marks)?;
+            self.latest = Some((engine.steps(), c));
         }
         Ok(())
+    }
+
+    /// Where a run stopped by an error can go on from: the latest state saved, or that
+    /// none was (nothing where the run writes no folder).
+    pub(super) fn latest_saved(&self) -> Option<String> {
+        self.dir.as_ref()?;
+        Some(match &self.latest {
+            Some((step, c)) => format!(
+                "the latest state saved is step {step}'s, in {}: resume it with --resume once the cause is fixed",
+                c.display()
+            ),
+            None => "no state of this run was saved: it has to be run again".to_string(),
+        })
+    }
+
+    /// [`Self::checkpoint`], whose failure (a full disk) says which step it was and the
+    /// latest state saved before it (the earlier checkpoint stays whole).
+    pub(super) fn checkpoint_or_say<S: Simulation>(
+        &mut self,
+        scene: &Scene,
+        engine: &S,
+        monitor: MonitorReference,
+    ) -> Result<(), PowderError> {
+        self.checkpoint(scene, engine, monitor).map_err(|e| {
+            let latest = self.latest_saved().unwrap_or_default();
+            PowderError::Run(format!(
+                "the checkpoint at step {} could not be written ({e}); {latest}",
+                engine.steps()
+            ))
+        })
     }
 
     /// Writes `summary.json`, where the run writes a folder.

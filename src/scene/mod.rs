@@ -140,6 +140,7 @@ mod set;
 mod tests;
 mod toml_reader;
 mod validate;
+pub(crate) use validate::can_name_files;
 
 use crate::error::PowderError;
 use crate::model::ContactModel;

@@ -13,6 +13,17 @@ fn finite3(v: &[f64; 3]) -> bool {
     v.iter().all(|x| x.is_finite())
 }
 
+/// Whether a scene named `name` can name files inside an output folder: non-empty, not
+/// `.` or `..`, without `/`, `\\` or control characters.
+pub(crate) fn can_name_files(name: &str) -> bool {
+    !name.is_empty()
+        && name != "."
+        && name != ".."
+        && !name
+            .chars()
+            .any(|c| c == '/' || c == '\\' || c.is_control())
+}
+
 impl Scene {
     /// Gravity along a periodic axis (particles would fall forever: the gravitational
     /// energy is unbounded) or a wall facing one (it would cut the periodic images).
@@ -213,13 +224,7 @@ impl Scene {
     /// are named after the scene): empty, `.`, `..`, or with `/`, `\\` or control characters.
     pub fn check_file_name(&self) -> Result<(), PowderError> {
         let name = &self.name;
-        if name.is_empty()
-            || name == "."
-            || name == ".."
-            || name
-                .chars()
-                .any(|c| c == '/' || c == '\\' || c.is_control())
-        {
+        if !can_name_files(name) {
             return bad(format!(
                 "the scene's name {name:?} cannot name files in the output folder: it must be non-empty, not `.` or `..`, without `/`, `\\` or control characters"
             ));
