@@ -524,4 +524,38 @@ mod tests {
             .to_string();
         assert!(e.contains("cannot read checkpoint"), "{e}");
     }
+
+    /// Every field of every particle, and their order, decides the digest and its
+    /// `particles` part; the other parts stay.
+    #[test]
+    fn every_particle_field_changes_the_digest() {
+        let text = include_str!("../../examples/cohesive_cluster.toml");
+        let scene = Scene::from_toml_str(text, "cluster").unwrap();
+        let (digest, parts) = run_digests(&scene, 0.0);
+        let edits: [&dyn Fn(&mut ParticleInit); 6] = [
+            &|p| p.position[2] = f64::from_bits(p.position[2].to_bits() + 1),
+            &|p| p.velocity[0] = -p.velocity[0] - 0.0,
+            &|p| p.angular_velocity[1] += 1e-300,
+            &|p| p.radius *= 1.0 + f64::EPSILON,
+            &|p| p.material += 1,
+            &|p| p.insert_at += 1e-9,
+        ];
+        let n = scene.particles.len();
+        for (k, edit) in edits.iter().enumerate() {
+            let mut changed = scene.clone();
+            edit(&mut changed.particles[n - 1]);
+            let (d, p) = run_digests(&changed, 0.0);
+            let differ: Vec<&str> = (parts.iter().zip(&p))
+                .filter(|(a, b)| a != b)
+                .map(|(a, _)| a.0.as_str())
+                .collect();
+            assert!(
+                d != digest && differ == ["particles"],
+                "edit {k}: {differ:?}"
+            );
+        }
+        let mut swapped = scene.clone();
+        swapped.particles.swap(0, 1);
+        assert_ne!(run_digest(&swapped, 0.0), digest);
+    }
 }

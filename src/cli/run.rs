@@ -120,11 +120,11 @@ pub(crate) fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
                 .unwrap_or_else(|| PathBuf::from("out").join(&scene.name)),
         )
     };
-    // (the folders this command creates, the output folder up to the first that exists,
-    // are removed again where the run fails before writing)
+    // (the folders this command creates, the output folder up to the first that exists or
+    // is named by `..`, are removed again where the run fails before writing)
     let created: Vec<PathBuf> = match &out_dir {
         Some(d) => (d.ancestors())
-            .take_while(|a| !a.as_os_str().is_empty() && !a.exists())
+            .take_while(|a| a.file_name().is_some() && !a.exists())
             .map(std::path::Path::to_path_buf)
             .collect(),
         None => Vec::new(),
