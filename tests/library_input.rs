@@ -241,6 +241,24 @@ fn an_engine_of_another_scene_is_refused() {
         "{e}"
     );
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    // the same particles and walls of another material, or gravity: named by the part
+    let mut stiffer = scene();
+    stiffer.materials[0].model = ContactModel::Lsd(LsdParams::new(600.0, 1e-3));
+    stiffer.gravity[2] *= 2.0;
+    let engine = CpuEngine::new(&stiffer).unwrap();
+    let e = run_with(&scene(), engine, "", &opts, |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("they differ in simulation.gravity, material 0;"),
+        "{e}"
+    );
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    // but for its name, duration and cadences
+    let mut renamed = scene();
+    (renamed.name, renamed.duration, renamed.output_every) = ("b".into(), 1.0, 7);
+    let engine = CpuEngine::new(&renamed).unwrap();
+    run_with(&scene(), engine, "", &opts, |_| {}).unwrap();
     let mut bigger = scene();
     bigger.particles[1].radius = 1.5e-3;
     let engine = CpuEngine::new(&bigger).unwrap();

@@ -240,7 +240,7 @@ pub fn save(
     engine: &CpuEngine,
     run: &RunMarks,
 ) -> Result<(), PowderError> {
-    crate::run::engine_fits(scene, engine.radii(), engine.wall_count(), engine.dt())?;
+    crate::run::engine_fits(scene, engine)?;
     let state = engine.state();
     save_state(
         path,

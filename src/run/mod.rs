@@ -141,7 +141,7 @@ pub fn run_with<S: Simulation>(
     if opts.out_dir.is_some() {
         scene.check_file_name()?;
     }
-    fits::engine_fits(scene, engine.radii(), engine.wall_count(), engine.dt())?;
+    fits::engine_fits(scene, &engine)?;
     if !scene.duration.is_finite() && opts.max_steps.is_none() {
         return Err(PowderError::Run(format!(
             "scene `{}` has an infinite duration: a run needs a finite simulation.duration or a step limit (`RunOptions::max_steps`, `--steps`)",

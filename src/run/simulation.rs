@@ -70,6 +70,9 @@ pub trait Simulation {
     fn radii(&self) -> &[f64];
     /// Number of walls.
     fn wall_count(&self) -> usize;
+    /// The digests of the parts of the scene the engine was built from
+    /// (`checkpoint::run_digests` with all wall phases): a run refuses another scene's.
+    fn scene_parts(&self) -> &[(String, u64)];
     /// Whether the run keeps the energy ledger (stored and dissipated energy, contact
     /// statistics, wall forces): always on the CPU, optional on the GPU.
     fn has_ledger(&self) -> bool;
@@ -138,6 +141,9 @@ impl Simulation for CpuEngine {
     }
     fn wall_count(&self) -> usize {
         CpuEngine::wall_count(self)
+    }
+    fn scene_parts(&self) -> &[(String, u64)] {
+        CpuEngine::scene_parts(self)
     }
     fn has_ledger(&self) -> bool {
         true
@@ -229,6 +235,9 @@ impl Simulation for GpuEngine {
     }
     fn wall_count(&self) -> usize {
         GpuEngine::wall_count(self)
+    }
+    fn scene_parts(&self) -> &[(String, u64)] {
+        GpuEngine::scene_parts(self)
     }
     fn has_ledger(&self) -> bool {
         GpuEngine::has_ledger(self)

@@ -101,6 +101,12 @@ impl CpuEngine {
         self.walls.len()
     }
 
+    /// The digests of the parts of the scene it was built from, named as in the scene
+    /// file (`checkpoint::run_digests`, all wall phases).
+    pub fn scene_parts(&self) -> &[(String, u64)] {
+        &self.scene_parts
+    }
+
     /// Particle masses, kg.
     pub fn masses(&self) -> &[f64] {
         &self.mass

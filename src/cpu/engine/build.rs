@@ -99,6 +99,7 @@ impl CpuEngine {
             steps: 0,
             dt,
             time_step,
+            scene_parts: crate::checkpoint::run_digests(scene, f64::INFINITY).1,
             acc: vec![DVec3::ZERO; n],
             force: vec![DVec3::ZERO; n],
             omega,

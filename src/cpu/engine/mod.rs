@@ -48,6 +48,8 @@ pub struct CpuEngine {
     pub(crate) steps: u64,
     dt: f64,
     time_step: TimeStep,
+    /// The digests of the scene's parts it was built from (`checkpoint::run_digests`).
+    scene_parts: Vec<(String, u64)>,
     pos: Vec<DVec3>,
     vel: Vec<DVec3>,
     acc: Vec<DVec3>,

@@ -348,6 +348,7 @@ impl GpuEngine {
             steps: 0,
             dt: r.dt,
             time_step: r.time_step.clone(),
+            scene_parts: crate::checkpoint::run_digests(scene, f64::INFINITY).1,
             n: n as u32,
             entries,
             largest_entries: largest,

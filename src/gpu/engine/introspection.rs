@@ -89,6 +89,12 @@ impl GpuEngine {
         self.n_walls as usize
     }
 
+    /// The digests of the parts of the scene it was built from, named as in the scene
+    /// file (`checkpoint::run_digests`, all wall phases).
+    pub fn scene_parts(&self) -> &[(String, u64)] {
+        &self.scene_parts
+    }
+
     /// Particle masses in the scene's order, kg (f64).
     pub fn masses(&self) -> &[f64] {
         &self.mass

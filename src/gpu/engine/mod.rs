@@ -189,6 +189,8 @@ pub struct GpuEngine {
     dt: f64,
     /// The time-step rule dt was checked against (default, limit, reason).
     time_step: crate::model::TimeStep,
+    /// The digests of the scene's parts it was built from (`checkpoint::run_digests`).
+    scene_parts: Vec<(String, u64)>,
     n: u32,
     /// Entries the neighbour lists have room for (grown when a rebuild needs more).
     entries: u64,
