@@ -31,7 +31,8 @@ enum Command {
     /// Closed forms without a simulation: kp' (paper 000 eq. A.3), Thornton-Ning e_TN and
     /// e_pl (paper 001 eqs. 13-14), the Tabor parameter (paper 002 eq. 1).
     Analytic(analytic::AnalyticArgs),
-    /// Every contact law's parameters: key, unit, default, valid values and meaning.
+    /// Every contact law's parameters (or, `params scene`, the scene's other keys): key,
+    /// unit, default, valid values and meaning.
     Params(ParamsArgs),
 }
 

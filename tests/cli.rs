@@ -1764,7 +1764,8 @@ fn collisions_that_pass_through_are_refused() {
 }
 
 /// `powder params` prints the reference docs/parameters.md holds; one law prints its own
-/// table (and the dissipations where it takes them); an unknown law lists the laws.
+/// table (and the dissipations where it takes them); an unknown law lists the laws;
+/// `params scene` prints docs/scene.md.
 #[test]
 fn params_prints_the_declared_parameters() {
     let (ok, all, _) = powder(&["params"]);
@@ -1791,8 +1792,21 @@ fn params_prints_the_declared_parameters() {
     assert!(ok && lsd.contains("| `k` | N/m | required | > 0 |") && !lsd.contains("krijt"));
     let (ok, _, err) = powder(&["params", "nosuchlaw"]);
     assert!(
-        !ok && err.contains("hysteretic") && err.contains("hertz"),
+        !ok && err.contains("hysteretic") && err.contains("hertz") && err.contains("scene"),
         "{err}"
+    );
+    // the scene's other keys, as docs/scene.md holds them
+    let (ok, scene, _) = powder(&["params", "scene"]);
+    assert!(ok);
+    let file =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/scene.md")).unwrap();
+    assert_eq!(
+        scene, file,
+        "docs/scene.md: `powder params scene > docs/scene.md`"
+    );
+    assert!(
+        scene.contains("| `output_every` | integer | steps | 1000 | >= 1 |"),
+        "{scene}"
     );
 }
 

@@ -6,135 +6,20 @@
 //! (``scene `cluster`, line 12, column 11: ...``). Unknown keys are rejected everywhere,
 //! with the nearest valid key suggested.
 //!
-//! # Schema
-//!
-//! Units are SI throughout. "required" keys have no default.
-//!
-//! ```toml
-//! [domain]                      # required: the box the particles live in, m
-//! # periodic = [true, true, false] # optional, default none: periodic axes (minimum image;
-//! #                              #   no wall may face, and no gravity point along, one)
-//! min = [0.0, 0.0, 0.0]         # required, m
-//! max = [0.01, 0.01, 0.02]      # required, m; max > min on every axis
-//!
-//! [simulation]                  # required
-//! duration = 0.05               # required, s, > 0: simulated time
-//! dt = "auto"                   # "auto" (default: from the stiffest contact) or a time step in s, > 0
-//! force_dt = false              # default false; true accepts a dt above the stability limit
-//!                               # (and starting speeds at which a pair closes more than a
-//!                               # radius in one step)
-//! jump_impulses = true          # default true (the GPU: where some contact's force can jump):
-//!                               # place the impulse of a contact force's jump (JKR touch and
-//!                               # pull-off, jump-in adhesion, a viscous first touch) inside the
-//!                               # step, second order in dt; false: plain velocity Verlet
-//! output_every = 1000           # default 1000, >= 1: steps between outputs (progress line,
-//!                               # VTK snapshot, CSV row of `powder run`)
-//! gravity = [0.0, 0.0, -9.81]   # m/s^2, default [0, 0, 0]
-//! impact_velocity = 1.0         # m/s, > 0, default 1: largest expected impact speed; sets the
-//!                               # Hertz/JKR contact time of the automatic time step (the
-//!                               # starting velocities' fastest closing where that is faster)
-//! checkpoint_every = 10000      # default 10 * output_every, >= 1: steps between checkpoints
-//! contact_output = true         # default: true under 100000 particles; with each VTK snapshot,
-//!                               # the contact network (`contacts/<name>_<step>.vtp`: one line
-//!                               # per contact with its forces, overlap, history, sliding)
-//!
-//! [[material]]                  # at least one; referred to by name
-//! name = "powder"               # required, unique
-//! density = 2000.0              # required, kg/m^3, > 0
-//! model = "hysteretic"          # required: "hysteretic", "lsd", "jkr" or "hertz"; the other keys are the
-//!                               # model's parameters and no others: `powder params`
-//!                               # (docs/parameters.md, generated from their declarations)
-//! k1 = 100.0                    # e.g. the hysteretic model's (paper 000 eqs. 5-15)
-//! kp = 500.0
-//! kc = 100.0
-//! phi_f = 0.05
-//!
-//! [[interaction]]               # optional: the model for a pair of materials
-//! materials = ["powder", "glass"]  # required: two material names (order does not matter)
-//! model = "lsd"                 # required, with that model's parameters as in [[material]]
-//! k = 300.0
-//!
-//! [[wall]]                      # optional: an infinite plane
-//! point = [0.0, 0.0, 0.0]       # required, m: a point on the plane
-//! normal = [0.0, 0.0, 1.0]      # required: points into the domain; need not be unit, non-zero
-//! material = "powder"           # default: the first [[material]]
-//! # at most one kind of motion (default: fixed); a moving wall has an infinite mass:
-//! # velocity = [0.0, 0.0, -0.01] # m/s, prescribed from t = 0; or a schedule:
-//! # velocities = [[0.0, 0.0, -0.01], [0.0, 0.0, 0.01]]  # m/s, piecewise constant,
-//! # times = [0.0, 0.05]          #   velocities[k] from times[k] s (at rest before times[0]); or
-//! # servo_force = 0.5            # N > 0: move along the normal to hold this normal force,
-//! # servo_gain = 1e-3            #   m/s per N > 0: speed = clamp(gain·(servo_force − F), ±max)
-//! # servo_max_speed = 0.01       #   m/s > 0 (stable while gain·k_bed·dt < 1)
-//! # [[wall.phase]]              # or a program: phases, each one kind of motion as above
-//! # from = 0.0                   #   (`velocity` or `servo_*`; neither: at rest) from `from`
-//! # servo_force = 0.5            #   s on (>= 0, increasing; at rest before the first); a
-//! # servo_gain = 1e-3            #   servo phase entered during the run starts at rest
-//! # servo_max_speed = 0.01
-//! # [[wall.phase]]
-//! # from = 0.02
-//! # velocity = [0.0, 0.0, 0.01]
-//!
-//! [[particles]]                 # one or more blocks, expanded in file order; particle ids
-//!                               # (0-based) follow the order of expansion
-//! kind = "list"                 # required: "list", "lattice" or "random"
-//! material = "powder"           # default: the first [[material]]
-//! insert_at = 0.0               # s, >= 0, default 0: when the block's particles appear
-//!                               # (pouring; before that they neither move nor interact)
-//!
-//! # kind = "list": explicit particles
-//! positions = [[0.005, 0.005, 0.005], [0.005, 0.005, 0.008]]   # required, m
-//! radius = 1.1e-3               # m, > 0, for all; or
-//! # radii = [1.1e-3, 1.0e-3]    # m, > 0, one per position (exactly one of radius / radii)
-//! velocities = [[0.0, 0.0, 0.0], [0.0, 0.0, -0.1]]  # m/s, optional, one per position; or
-//! # velocity = [0.0, 0.0, 0.0] # m/s for all; default zero
-//! # angular_velocity = [0.0, 0.0, 100.0]  # rad/s for all, any kind, default zero: only
-//! #                             # where a contact model makes particles rotate
-//!
-//! # kind = "lattice": simple cubic lattice, x fastest, then y, then z
-//! min = [0.0, 0.0, 0.0]         # required, m: region corner; spheres lie fully inside the region
-//! max = [0.01, 0.01, 0.01]      # required, m
-//! radius = 1e-3                 # required, m, > 0: all particles
-//! spacing = 2.1e-3              # m, >= 2*radius, default 2*radius*(1 + 1e-9)
-//! velocity = [0.0, 0.0, 0.0]    # m/s, default zero
-//! jitter = 0.0                  # default 0, 0..=1: random displacement per axis of up to
-//!                               # jitter*(spacing - 2*radius)/2, never causing overlaps
-//! seed = 1                      # default 1: seed of the jitter
-//!
-//! # kind = "random": random sequential placement without overlaps (with every particle
-//! # placed before, of all blocks, that appears at the same time), spheres fully inside the
-//! # region; up to 1000 attempts per particle. Random sequential addition jams near a solid
-//! # fraction of ~0.38.
-//! # batches = 1                 # default 1: pour `count` in this many batches, each placed
-//! # batch_interval = 0.01       #   afresh in the region (seed + k), batch k appearing at
-//! #                             #   insert_at + k·batch_interval s (> 0 with batches > 1)
-//! count = 500                   # required, >= 0
-//! min = [0.0, 0.0, 0.0]         # required, m
-//! max = [0.01, 0.01, 0.01]      # required, m
-//! seed = 1                      # default 1: seed of radii and positions (Pcg64)
-//! radius = 1e-3                 # m, > 0: a fixed radius; or a size distribution (exactly one):
-//! # size = { distribution = "uniform", min = 0.8e-3, max = 1.2e-3 }   # m, 0 < min <= max
-//! # size = { distribution = "normal", mean = 1e-3, std = 1e-4 }       # m, mean > 0, std >= 0
-//! # size = { distribution = "lognormal", median = 1e-3, sigma = 0.2 } # median m > 0, sigma >= 0
-//! # size = { distribution = "list", radii = [1e-3, 2e-3], weights = [3.0, 1.0] }
-//! #        radii m > 0; weights >= 0 with a positive sum, default all equal
-//! # (normal radii are truncated to (0, inf) by redrawing)
-//! velocity = [0.0, 0.0, 0.0]    # m/s, default zero
-//! ```
-//!
-//! # Checks at load time
-//!
-//! Besides the types and ranges above: material names are unique and every referenced
-//! name exists; there is at least one particle; every sphere lies inside the domain
-//! (within 1% of its radius); no two particles overlap by more than 1% of the smaller
-//! radius, and no particle overlaps a wall by more than 1% of its radius; every pair of
-//! different materials that can meet (particle–particle, particle–wall) has an
-//! `[[interaction]]`.
+//! Every key is declared once in [`declared`], with its unit, default, rule and meaning:
+//! the keys each table accepts follow from it, and so does the reference (`powder params
+//! scene`, `docs/scene.md`, with the checks made at load time). The contact laws'
+//! parameters are declared in `crate::model::params` (`powder params`).
 
 mod checks;
+pub mod declared;
+#[cfg(test)]
+mod declared_tests;
 mod hash_grid;
 mod keys;
 mod parse;
 mod particles;
+pub mod reference;
 mod set;
 #[cfg(test)]
 mod tests;

@@ -28,9 +28,11 @@ pub(super) fn parse_scene(src: &Src, sets: &[Override]) -> Res<Scene> {
         super::set::apply(&mut root_entries, set, k)?;
     }
     let root = Tbl::new(src, &root_entries, None, "the top-level table".to_string());
-    root.check_keys(TOP_KEYS, |k| {
-        let sections: [(&str, &[&str]); 2] =
-            [("simulation", SIMULATION_KEYS), ("domain", DOMAIN_KEYS)];
+    root.check_keys(&TOP_KEYS, |k| {
+        let sections: [(&str, &[&str]); 2] = [
+            ("simulation", &SIMULATION_KEYS[..]),
+            ("domain", &DOMAIN_KEYS[..]),
+        ];
         sections
             .iter()
             .find(|(_, keys)| keys.contains(&k))
@@ -77,7 +79,7 @@ fn parse_domain(root: &Tbl) -> Res<Domain> {
                 "missing required table [domain]: add [domain] with min = [x, y, z] and max = [x, y, z] in m",
             )
         })?;
-    t.check_keys(DOMAIN_KEYS, |_| None)?;
+    t.check_keys(&DOMAIN_KEYS, |_| None)?;
     let min = t.vec3_req("min", "the lower corner [x, y, z] of the domain in m")?;
     let max = t.vec3_req("max", "the upper corner [x, y, z] of the domain in m")?;
     for a in 0..3 {
@@ -85,7 +87,7 @@ fn parse_domain(root: &Tbl) -> Res<Domain> {
             return Err(t.err_key(
                 "max",
                 format!(
-                    "[domain] max must be > min on every axis, but on axis {} max = {} <= min = {}",
+                    "`max` in [domain] must be > `min` on every axis, but on axis {} max = {} <= min = {}",
                     AXES[a], max[a], min[a]
                 ),
             ));
@@ -131,7 +133,7 @@ fn parse_simulation(root: &Tbl) -> Res<SimSettings> {
                 "missing required table [simulation]: add [simulation] with at least duration = <s>",
             )
         })?;
-    t.check_keys(SIMULATION_KEYS, |_| None)?;
+    t.check_keys(&SIMULATION_KEYS, |_| None)?;
     let duration = t.positive_req("duration", "the simulated time in s")?;
     let dt = match t.get("dt") {
         None => DtSetting::Auto,
@@ -206,7 +208,7 @@ fn parse_materials(root: &Tbl) -> Res<Vec<Material>> {
         if let Some(Val::Str(name)) = t.get("name").map(|n| &n.val) {
             t.ctx = format!("[[material]] #{} (`{name}`)", i + 1);
         }
-        let kind = model_kind(&t, MATERIAL_KEYS)?;
+        let kind = model_kind(&t, &MATERIAL_KEYS)?;
         let name = t.str("name")?.ok_or_else(|| {
             t.missing(
                 "name",
@@ -226,7 +228,7 @@ fn parse_materials(root: &Tbl) -> Res<Vec<Material>> {
                 ),
             ));
         }
-        let model = build_model(&t, kind, MATERIAL_KEYS, &format!("material `{name}`"))?;
+        let model = build_model(&t, kind, &MATERIAL_KEYS, &format!("material `{name}`"))?;
         let density = t.positive_req("density", "the material density in kg/m^3")?;
         out.push(Material {
             name: name.to_string(),
@@ -364,7 +366,7 @@ fn parse_interactions(root: &Tbl, names: &[&str]) -> Res<Vec<Interaction>> {
             Some(span),
             format!("[[interaction]] #{}", i + 1),
         );
-        let kind = model_kind(&t, INTERACTION_KEYS)?;
+        let kind = model_kind(&t, &INTERACTION_KEYS)?;
         let expected = "an array of two material names, e.g. [\"powder\", \"glass\"]";
         let node = t
             .get("materials")
@@ -398,7 +400,7 @@ fn parse_interactions(root: &Tbl, names: &[&str]) -> Res<Vec<Interaction>> {
             ));
         }
         let owner = format!("interaction `{}`-`{}`", names[a], names[b]);
-        let model = build_model(&t, kind, INTERACTION_KEYS, &owner)?;
+        let model = build_model(&t, kind, &INTERACTION_KEYS, &owner)?;
         out.push(Interaction {
             materials: [a, b],
             model,
@@ -446,7 +448,7 @@ fn parse_wall_motion(t: &Tbl) -> Res<WallMotion> {
                 ),
             ));
         }
-        check_increasing(t, "times", &times)?;
+        check_increasing(t, "times", "`times`", &times)?;
         let phases = times.into_iter().zip(velocities);
         return Ok(WallMotion {
             phases: phases.map(|(t, v)| (t, WallPhase::Velocity(v))).collect(),
@@ -461,12 +463,12 @@ fn parse_wall_motion(t: &Tbl) -> Res<WallMotion> {
                 Some(span),
                 format!("{} phase #{}", t.ctx, i + 1),
             );
-            p.check_keys(&with_motion_keys(PHASE_KEYS), |_| None)?;
+            p.check_keys(&with_motion_keys(&PHASE_KEYS), |_| None)?;
             let from = p.f64_req("from", "the time in s from which the phase applies")?;
             phases.push((from, parse_wall_phase(&p)?));
         }
         let times: Vec<f64> = phases.iter().map(|(from, _)| *from).collect();
-        check_increasing(t, "phase", &times)?;
+        check_increasing(t, "phase", "the phases' `from`", &times)?;
         return Ok(WallMotion { phases });
     }
     Ok(match parse_wall_phase(t)? {
@@ -475,13 +477,13 @@ fn parse_wall_motion(t: &Tbl) -> Res<WallMotion> {
     })
 }
 
-/// Phase start times: at least one, from >= 0 s, strictly increasing.
-fn check_increasing(t: &Tbl, key: &str, times: &[f64]) -> Res<()> {
+/// Phase start times (`what`, at `key`): at least one, from >= 0 s, strictly increasing.
+fn check_increasing(t: &Tbl, key: &str, what: &str, times: &[f64]) -> Res<()> {
     if times.is_empty() || times[0] < 0.0 || times.windows(2).any(|w| w[1] <= w[0]) {
         return Err(t.err_key(
             key,
             format!(
-                "the start times in {} (`{key}`) must start at >= 0 s and increase strictly, got {times:?}",
+                "the start times in {} ({what}) must start at >= 0 s and increase strictly, got {times:?}",
                 t.ctx
             ),
         ));
@@ -532,7 +534,7 @@ fn parse_walls(root: &Tbl, names: &[&str]) -> Res<Vec<Wall>> {
             Some(span),
             format!("[[wall]] #{}", i + 1),
         );
-        t.check_keys(&with_motion_keys(WALL_KEYS), |_| None)?;
+        t.check_keys(&with_motion_keys(&WALL_KEYS), |_| None)?;
         let point = t.vec3_req("point", "a point [x, y, z] on the wall plane in m")?;
         let n = t.vec3_req(
             "normal",

@@ -2,7 +2,7 @@
 //! with size distributions.
 
 use super::hash_grid::{dist2, sq, Grid};
-use super::keys::{DISTRIBUTIONS, LATTICE_KEYS, LIST_KEYS, PARTICLE_KINDS, RANDOM_KEYS};
+use super::keys::{particle_keys, size_keys, DISTRIBUTIONS, PARTICLE_KINDS};
 use super::parse::material_ref;
 use super::toml_reader::{fmt_vec, Res, Tbl, AXES};
 use super::{ParticleInit, MAX_BLOCK_PARTICLES, MAX_PLACEMENT_ATTEMPTS};
@@ -51,15 +51,15 @@ pub(super) fn parse_particles(root: &Tbl, names: &[&str]) -> Res<(Vec<ParticleIn
         }
         match kind {
             "list" => {
-                t.check_keys(LIST_KEYS, |_| None)?;
+                t.check_keys(&particle_keys(kind), |_| None)?;
                 expand_list(&t, names, &mut particles)?;
             }
             "lattice" => {
-                t.check_keys(LATTICE_KEYS, |_| None)?;
+                t.check_keys(&particle_keys(kind), |_| None)?;
                 expand_lattice(&t, names, &mut particles)?;
             }
             _ => {
-                t.check_keys(RANDOM_KEYS, |_| None)?;
+                t.check_keys(&particle_keys(kind), |_| None)?;
                 // pouring: `batches` batches of count/batches, `batch_interval` s apart,
                 // each placed afresh in the region
                 let batches = t.u64("batches")?.unwrap_or(1);
@@ -153,7 +153,7 @@ fn region(t: &Tbl) -> Res<([f64; 3], [f64; 3])> {
             return Err(t.err_key(
                 "max",
                 format!(
-                    "the region of {} must have max > min on every axis, but on axis {} max = {} <= min = {}",
+                    "the region of {} must have `max` > `min` on every axis, but on axis {} max = {} <= min = {}",
                     t.ctx, AXES[a], max[a], min[a]
                 ),
             ));
@@ -408,20 +408,7 @@ fn parse_size(t: &Tbl) -> Res<SizeDist> {
         .table("size", format!("`size` of {}", t.ctx))?
         .expect("one_of checked radius or size");
     if !s.has("distribution") {
-        s.check_keys(
-            &[
-                "distribution",
-                "min",
-                "max",
-                "mean",
-                "std",
-                "median",
-                "sigma",
-                "radii",
-                "weights",
-            ],
-            |_| None,
-        )?;
+        s.check_keys(&size_keys(None), |_| None)?;
     }
     let dist = s.choice("distribution", DISTRIBUTIONS)?.ok_or_else(|| {
         s.missing(
@@ -429,13 +416,7 @@ fn parse_size(t: &Tbl) -> Res<SizeDist> {
             "\"uniform\", \"normal\", \"lognormal\" or \"list\"",
         )
     })?;
-    let keys: &[&str] = match dist {
-        "uniform" => &["distribution", "min", "max"],
-        "normal" => &["distribution", "mean", "std"],
-        "lognormal" => &["distribution", "median", "sigma"],
-        _ => &["distribution", "radii", "weights"],
-    };
-    s.check_keys(keys, |_| None)?;
+    s.check_keys(&size_keys(Some(dist)), |_| None)?;
     let non_negative = |key: &str, what: &str| -> Res<f64> {
         let x = s.f64_req(key, what)?;
         if x < 0.0 {

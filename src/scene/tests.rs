@@ -387,7 +387,7 @@ fn out_of_range_values() {
         (
             "max = [0.01, 0.01, 0.01]",
             "max = [0.01, 0.01, 0.0]",
-            &["max must be > min", "axis z"],
+            &["`max` in [domain] must be > `min`", "axis z"],
         ),
         (
             "k = 100.0",

@@ -1,0 +1,236 @@
+//! Every scene key that is not a contact law's parameter, declared once: the keys each table
+//! accepts (`keys.rs`), the scene reference (`powder params scene`, `docs/scene.md`) and the
+//! test that the reader refuses each rule's edge follow from [`SCENE_KEYS`].
+
+/// A table of the scene file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Section {
+    /// The top level: the tables themselves.
+    Top,
+    /// `[domain]`.
+    Domain,
+    /// `[simulation]`.
+    Simulation,
+    /// `[[material]]` (with its law's parameters: `powder params`).
+    Material,
+    /// `[[interaction]]` (with its law's parameters).
+    Interaction,
+    /// `[[wall]]`.
+    Wall,
+    /// One kind of motion, of a `[[wall]]` or of a `[[wall.phase]]`.
+    Motion,
+    /// `[[wall.phase]]`.
+    Phase,
+    /// `[[particles]]`.
+    Particles,
+    /// A random block's `size = { distribution = ..., ... }`.
+    Size,
+}
+
+impl Section {
+    /// Every section, in the reference's order.
+    pub const ALL: [Section; 10] = [
+        Section::Top,
+        Section::Domain,
+        Section::Simulation,
+        Section::Material,
+        Section::Interaction,
+        Section::Wall,
+        Section::Motion,
+        Section::Phase,
+        Section::Particles,
+        Section::Size,
+    ];
+
+    /// The heading and a line on what the table is.
+    pub fn title(self) -> (&'static str, &'static str) {
+        match self {
+            Section::Top => ("The tables", "the scene file's top level"),
+            Section::Domain => ("`[domain]`", "the box the particles live in (required)"),
+            Section::Simulation => ("`[simulation]`", "the run's settings (required)"),
+            Section::Material => (
+                "`[[material]]`",
+                "at least one, referred to by name; its other keys are the parameters of its `model` (`powder params`, `docs/parameters.md`)",
+            ),
+            Section::Interaction => (
+                "`[[interaction]]`",
+                "the law between two materials (every pair of different materials that can meet needs one); its other keys are the parameters of its `model`",
+            ),
+            Section::Wall => (
+                "`[[wall]]`",
+                "an infinite plane, fixed unless given one kind of motion (below) or a program of `[[wall.phase]]`; a moving wall has an infinite mass",
+            ),
+            Section::Motion => (
+                "A wall's motion",
+                "in a `[[wall]]` or a `[[wall.phase]]`: a prescribed `velocity`, or the three `servo_*` keys (a wall moving along its normal to hold a force: speed = clamp(gain·(servo_force − F), ±servo_max_speed), stable while gain·k_bed·dt < 1); neither: at rest",
+            ),
+            Section::Phase => (
+                "`[[wall.phase]]`",
+                "a wall's program: phases from increasing times, each one kind of motion (above); the wall is at rest before the first, and a servo phase entered during the run starts at rest",
+            ),
+            Section::Particles => (
+                "`[[particles]]`",
+                "one or more blocks, expanded in file order (particle ids, from 0, follow it): `list` explicit particles; `lattice` a simple cubic lattice (x fastest, then y, then z) with every sphere inside the region; `random` random sequential placement without overlaps with the particles placed before that appear at the same time (up to 1000 attempts a particle; it jams near a solid fraction of 0.38)",
+            ),
+            Section::Size => (
+                "A random block's `size`",
+                "a size distribution, `size = { distribution = \"...\", ... }`, its keys by distribution (normal radii are truncated to (0, ∞) by redrawing)",
+            ),
+        }
+    }
+}
+
+/// One key of a scene table.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SceneKey {
+    /// The table it goes in.
+    pub section: Section,
+    /// The particle kinds (or size distributions) that take it; empty: every one.
+    pub only: &'static [&'static str],
+    /// The key.
+    pub key: &'static str,
+    /// What the value is ("number", "[x, y, z]", ...).
+    pub value: &'static str,
+    /// SI unit ("" for none).
+    pub unit: &'static str,
+    /// "required", or the value when absent, in words.
+    pub default: &'static str,
+    /// The rule a value obeys beyond its type ("" for none).
+    pub valid: &'static str,
+    /// What it is, in a line.
+    pub doc: &'static str,
+    /// A value of the right type that breaks the rule: the reader must refuse it, naming
+    /// the key (a test sets each one). `None` where the rule has no such edge.
+    pub refused: Option<&'static str>,
+}
+
+const ALL: &[&str] = &[];
+const LIST: &[&str] = &["list"];
+const LATTICE: &[&str] = &["lattice"];
+const RANDOM: &[&str] = &["random"];
+const LATTICE_RANDOM: &[&str] = &["lattice", "random"];
+const LATTICE_RANDOM_LIST: &[&str] = &["list", "lattice", "random"];
+
+/// A key (`only` the kinds that take it; [`ALL`]: every one).
+#[allow(clippy::too_many_arguments)]
+const fn key(
+    section: Section,
+    only: &'static [&'static str],
+    key: &'static str,
+    value: &'static str,
+    unit: &'static str,
+    default: &'static str,
+    valid: &'static str,
+    doc: &'static str,
+    refused: Option<&'static str>,
+) -> SceneKey {
+    SceneKey {
+        section,
+        only,
+        key,
+        value,
+        unit,
+        default,
+        valid,
+        doc,
+        refused,
+    }
+}
+
+use Section::*;
+
+/// Every non-law scene key, in the reference's order.
+pub const SCENE_KEYS: &[SceneKey] = &[
+    key(Top, ALL, "domain", "table", "", "required", "", "the box the particles live in", None),
+    key(Top, ALL, "simulation", "table", "", "required", "", "the run's settings", None),
+    key(Top, ALL, "material", "array of tables", "", "required", "at least one", "the materials, each with its contact law", None),
+    key(Top, ALL, "interaction", "array of tables", "", "none", "", "the laws between pairs of materials", None),
+    key(Top, ALL, "wall", "array of tables", "", "none", "", "infinite planes", None),
+    key(Top, ALL, "particles", "array of tables", "", "required", "at least one particle in all", "the particle blocks", None),
+    // [domain]
+    key(Domain, ALL, "min", "[x, y, z]", "m", "required", "", "the lower corner", None),
+    key(Domain, ALL, "max", "[x, y, z]", "m", "required", "> min on every axis", "the upper corner", Some("[0.0, 0.0, 0.0]")),
+    key(Domain, ALL, "periodic", "[x, y, z] of booleans", "", "[false, false, false]", "no wall may face, and no gravity point along, a periodic axis", "the periodic axes (minimum image: pairs interact across the faces)", None),
+    // [simulation]
+    key(Simulation, ALL, "duration", "number", "s", "required", "> 0", "the simulated time", Some("0.0")),
+    key(Simulation, ALL, "dt", "\"auto\" or a number", "s", "\"auto\"", "> 0", "the time step; \"auto\": from the stiffest contact (tc/50)", Some("0.0")),
+    key(Simulation, ALL, "force_dt", "boolean", "", "false", "", "accept a dt above the stability limit (and starting speeds at which a pair closes more than a radius in one step)", None),
+    key(Simulation, ALL, "jump_impulses", "boolean", "", "true where some contact's force can jump", "", "place the impulse of a contact force's jump (JKR touch and pull-off, jump-in adhesion, a viscous first touch) inside the step, second order in dt; false: plain velocity Verlet", None),
+    key(Simulation, ALL, "output_every", "integer", "steps", "1000", ">= 1", "steps between outputs (`powder run`'s progress line, VTK snapshot, CSV row)", Some("0")),
+    key(Simulation, ALL, "gravity", "[x, y, z]", "m/s²", "[0, 0, 0]", "", "the gravitational acceleration", None),
+    key(Simulation, ALL, "impact_velocity", "number", "m/s", "1", "> 0", "the largest expected impact speed: sets the Hertz/JKR contact time of the automatic dt (the starting velocities' fastest closing where that is faster)", Some("0.0")),
+    key(Simulation, ALL, "checkpoint_every", "integer", "steps", "10·output_every", ">= 1", "steps between checkpoints", Some("0")),
+    key(Simulation, ALL, "contact_output", "boolean", "", "true under 100 000 particles", "", "write the contact network with each VTK snapshot (`contacts/<name>_<step>.vtp`: a line a contact with its forces, overlap, history, sliding)", None),
+    // [[material]]
+    key(Material, ALL, "name", "string", "", "required", "unique", "the name blocks, walls and interactions refer to", None),
+    key(Material, ALL, "density", "number", "kg/m³", "required", "> 0", "the particles' density", Some("0.0")),
+    key(Material, ALL, "model", "string", "", "required", "a law of `powder params`", "the contact law between two particles of the material (and with its walls)", Some("\"nope\"")),
+    // [[interaction]]
+    key(Interaction, ALL, "materials", "[string, string]", "", "required", "two material names, a pair once", "the pair of materials (order does not matter)", Some("[\"powder\", \"nope\"]")),
+    key(Interaction, ALL, "model", "string", "", "required", "a law of `powder params`", "the contact law between them", Some("\"nope\"")),
+    // [[wall]]
+    key(Wall, ALL, "point", "[x, y, z]", "m", "required", "", "a point on the plane", None),
+    key(Wall, ALL, "normal", "[x, y, z]", "", "required", "non-zero", "points into the domain (need not be unit)", Some("[0.0, 0.0, 0.0]")),
+    key(Wall, ALL, "material", "string", "", "the first [[material]]", "a material's name", "the wall's material", Some("\"nope\"")),
+    key(Wall, ALL, "velocities", "array of [x, y, z]", "m/s", "none", "with `times`, as many", "a schedule: velocities[k] from times[k] (at rest before times[0]); instead of `velocity`, the servo and phases", None),
+    key(Wall, ALL, "times", "array of numbers", "s", "none", ">= 0, increasing", "when each of `velocities` starts", Some("[-1.0]")),
+    key(Wall, ALL, "phase", "array of tables", "", "none", "", "the wall's program (`[[wall.phase]]`, below)", None),
+    // a wall's or a phase's motion
+    key(Motion, ALL, "velocity", "[x, y, z]", "m/s", "at rest", "", "a prescribed velocity (from t = 0 in a [[wall]], from `from` in a phase)", None),
+    key(Motion, ALL, "servo_force", "number", "N", "none", "> 0, with the other two servo keys", "the normal force the servo holds", Some("0.0")),
+    key(Motion, ALL, "servo_gain", "number", "m/s per N", "none", "> 0", "speed per newton of force error", Some("0.0")),
+    key(Motion, ALL, "servo_max_speed", "number", "m/s", "none", "> 0", "the servo's largest speed", Some("0.0")),
+    // [[wall.phase]]
+    key(Phase, ALL, "from", "number", "s", "required", ">= 0, increasing from phase to phase", "when the phase starts", Some("-1.0")),
+    // [[particles]]
+    key(Particles, ALL, "kind", "string", "", "required", "\"list\", \"lattice\" or \"random\"", "how the block makes its particles", Some("\"nope\"")),
+    key(Particles, ALL, "material", "string", "", "the first [[material]]", "a material's name", "the particles' material", Some("\"nope\"")),
+    key(Particles, ALL, "insert_at", "number", "s", "0", ">= 0", "when the block's particles appear (pouring; before that they neither move nor interact)", Some("-1.0")),
+    key(Particles, ALL, "velocity", "[x, y, z]", "m/s", "[0, 0, 0]", "", "every particle's starting velocity (a list: or `velocities`)", None),
+    key(Particles, ALL, "angular_velocity", "[x, y, z]", "rad/s", "[0, 0, 0]", "", "every particle's starting spin (only where a contact law turns particles)", None),
+    key(Particles, LIST, "positions", "array of [x, y, z]", "m", "required", "", "the particles' centres", None),
+    key(Particles, LATTICE_RANDOM_LIST, "radius", "number", "m", "required (list: or `radii`; random: or `size`)", "> 0", "every particle's radius", Some("0.0")),
+    key(Particles, LIST, "radii", "array of numbers", "m", "none", "> 0, one a position", "a radius a particle, instead of `radius`", Some("[0.0]")),
+    key(Particles, LIST, "velocities", "array of [x, y, z]", "m/s", "none", "one a position", "a starting velocity a particle, instead of `velocity`", Some("[[0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]")),
+    key(Particles, LATTICE_RANDOM, "min", "[x, y, z]", "m", "required", "", "the region's lower corner (every sphere lies inside the region)", None),
+    key(Particles, LATTICE_RANDOM, "max", "[x, y, z]", "m", "required", "> min on every axis", "the region's upper corner", Some("[0.0, 0.0, 0.0]")),
+    key(Particles, LATTICE, "spacing", "number", "m", "2·radius·(1 + 10⁻⁹)", ">= 2·radius", "the distance between lattice sites", Some("1e-6")),
+    key(Particles, LATTICE, "jitter", "number", "", "0", "in [0, 1]", "random shifts per axis of up to jitter·(spacing − 2·radius)/2, never causing overlaps", Some("2.0")),
+    key(Particles, LATTICE_RANDOM, "seed", "integer", "", "1", ">= 0", "the seed of the jitter (lattice) or of the radii and positions (random, Pcg64)", Some("-1")),
+    key(Particles, RANDOM, "count", "integer", "", "required", ">= 0", "how many particles", Some("-1")),
+    key(Particles, RANDOM, "size", "table", "", "none", "", "a size distribution instead of `radius` (below)", None),
+    key(Particles, RANDOM, "batches", "integer", "", "1", ">= 1", "pour `count` in this many batches, each placed afresh in the region (seed + k)", Some("0")),
+    key(Particles, RANDOM, "batch_interval", "number", "s", "0", ">= 0; > 0 with batches > 1", "batch k appears at insert_at + k·batch_interval", Some("0.0")),
+    // a random block's size distribution
+    key(Size, ALL, "distribution", "string", "", "required", "\"uniform\", \"normal\", \"lognormal\" or \"list\"", "the distribution of the radii", Some("\"nope\"")),
+    key(Size, &["uniform"], "min", "number", "m", "required", "0 < min <= max", "the smallest radius", Some("0.0")),
+    key(Size, &["uniform"], "max", "number", "m", "required", ">= min", "the largest radius", Some("1e-9")),
+    key(Size, &["normal"], "mean", "number", "m", "required", "> 0", "the mean radius", Some("0.0")),
+    key(Size, &["normal"], "std", "number", "m", "required", ">= 0", "the standard deviation", Some("-1e-4")),
+    key(Size, &["lognormal"], "median", "number", "m", "required", "> 0", "the median radius", Some("0.0")),
+    key(Size, &["lognormal"], "sigma", "number", "", "required", ">= 0", "the standard deviation of ln(radius)", Some("-0.1")),
+    key(Size, &["list"], "radii", "array of numbers", "m", "required", "> 0", "the radii drawn from", Some("[0.0]")),
+    key(Size, &["list"], "weights", "array of numbers", "", "all equal", ">= 0, a positive sum, one a radius", "each radius's weight", Some("[-1.0]")),
+];
+
+/// The keys of `section` (of particle kind or size distribution `kind` where it has
+/// them), in declaration order.
+pub(super) fn keys_of(section: Section, kind: Option<&str>) -> Vec<&'static str> {
+    SCENE_KEYS
+        .iter()
+        .filter(|k| k.section == section)
+        .filter(|k| k.only.is_empty() || kind.is_some_and(|kind| k.only.contains(&kind)))
+        .map(|k| k.key)
+        .collect()
+}
+
+/// The keys of every kind or distribution of `section`, each once.
+pub(super) fn any_keys_of(section: Section) -> Vec<&'static str> {
+    let mut keys: Vec<&'static str> = Vec::new();
+    for k in SCENE_KEYS.iter().filter(|k| k.section == section) {
+        if !keys.contains(&k.key) {
+            keys.push(k.key);
+        }
+    }
+    keys
+}
