@@ -338,6 +338,66 @@ fn the_monitor_stops_runs_that_go_wrong_and_keeps_the_last_good_state() {
     );
 }
 
+/// A run that goes wrong inside a chunk of steps names the step it went wrong at, not the
+/// chunk's end: the same error on any output cadence, on both backends (the failed chunk is
+/// run again a step at a time; before, a GPU run named the chunk's end with the overlap
+/// reached by then, ~10⁹ of the reduced radius).
+#[test]
+fn a_failure_is_named_at_its_own_step_on_any_cadence() {
+    use powder::run::run_gpu_with;
+    // a forced time step five times beyond Verlet's limit; the pair meets after ~8 steps
+    let mut s = pair_scene(DtSetting::Fixed(1e-3), true, 0.5, 0.1);
+    s.particles[0].position[0] = -5e-3;
+    s.particles[1].position[0] = 5e-3;
+    s.duration = 1.0;
+    let every = |n: u64| {
+        let mut s = s.clone();
+        (s.output_every, s.checkpoint_every) = (n, n);
+        s
+    };
+    // the error up to its note on the checkpoint
+    let named = |e: powder::PowderError| {
+        e.to_string()
+            .split("; the state")
+            .next()
+            .unwrap()
+            .to_string()
+    };
+    let step_of = |e: &str| -> u64 {
+        let digits = e.trim_start_matches("step ");
+        digits[..digits.find(':').unwrap()].parse().unwrap()
+    };
+    let run = |s: &Scene| {
+        let dir = tempfile::tempdir().unwrap();
+        let opts = RunOptions {
+            out_dir: Some(dir.path().to_path_buf()),
+            ..Default::default()
+        };
+        named(run_cpu_with(s, &opts, |_| {}).unwrap_err())
+    };
+    let (chunked, stepwise) = (run(&every(100)), run(&every(1)));
+    assert_eq!(chunked, stepwise);
+    let at = step_of(&chunked);
+    assert!((8..100).contains(&at), "{chunked}");
+    let Some(ctx) = gpu() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let opts = RunOptions {
+        out_dir: Some(dir.path().to_path_buf()),
+        ..Default::default()
+    };
+    let on_gpu = named(run_gpu_with(&every(100), ctx, &opts, |_| {}).unwrap_err());
+    let Some(ctx) = gpu() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let opts = RunOptions {
+        out_dir: Some(dir.path().to_path_buf()),
+        ..Default::default()
+    };
+    let on_gpu_stepwise = named(run_gpu_with(&every(1), ctx, &opts, |_| {}).unwrap_err());
+    assert_eq!(on_gpu, on_gpu_stepwise);
+    let gpu_at = step_of(&on_gpu);
+    assert!(gpu_at.abs_diff(at) <= 1, "{on_gpu} against {chunked}");
+}
+
 /// A settled cohesive packing held for 10⁶ steps: the energy ledger may not drift by more
 /// than 10⁻⁹ of the gravitational energy released while settling (measured 1.5·10⁻¹³).
 #[test]

@@ -29,7 +29,7 @@ use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
-use monitor::{energy_scale, monitor};
+use monitor::{energy_scale, first_failure, monitor};
 pub use monitor::{MonitorReference, MAX_ENERGY_GROWTH, MAX_OVERLAP_RATIO};
 use outputs::RunOutputs;
 use servo::ServoWatch;
@@ -281,17 +281,16 @@ pub fn run_with<S: Simulation>(
                 if let Some(b) = &bar {
                     b.finish_and_clear();
                 }
-                let failed_at = engine.steps();
+                // the chunk again a step at a time from its start, to name the step that
+                // failed (the chunk's end may be up to 1000 steps later, its values wild)
+                engine.restore(before)?;
+                let before = engine.save()?;
+                let pours = scene.pours();
+                let e = first_failure(&mut engine, chunk, dt_rule, pours, &start, scale_before)
+                    .unwrap_or(e);
                 engine.restore(before)?;
                 let saved = outputs.checkpoint(scene, &engine, reference(scale));
-                return Err(saved_before(
-                    e,
-                    saved,
-                    &outputs,
-                    &engine,
-                    failed_at,
-                    "the failure",
-                ));
+                return Err(saved_before(e, saved, &outputs, &engine, "the failure"));
             }
         };
         if let Some(b) = &bar {
@@ -319,7 +318,6 @@ pub fn run_with<S: Simulation>(
                     saved,
                     &outputs,
                     &engine,
-                    steps,
                     "the failed write",
                 ));
             }
@@ -407,7 +405,7 @@ pub fn run_with<S: Simulation>(
     Ok(summary)
 }
 
-/// The error `e` that stopped a run at step `failed_at`, with where the state before it
+/// The error `e` that stopped a run (it names its step), with where the state before it
 /// went: the checkpoint `saved` wrote (the engine restored to the step before `cause`), or
 /// why it could not be written either.
 fn saved_before<S: Simulation>(
@@ -415,13 +413,12 @@ fn saved_before<S: Simulation>(
     saved: Result<(), PowderError>,
     outputs: &RunOutputs,
     engine: &S,
-    failed_at: u64,
     cause: &str,
 ) -> PowderError {
     let step = engine.steps();
     let note = match (saved, outputs.checkpoint_path()) {
         (Ok(()), Some(c)) => format!(
-            "; the state at step {step} (before {cause}, at most 1000 steps earlier than step {failed_at}) is in {}: resume it with --resume once the cause is fixed",
+            "; the state at step {step} (before {cause}) is in {}: resume it with --resume once the cause is fixed",
             c.display()
         ),
         (Ok(()), None) => String::new(),

@@ -99,6 +99,35 @@ pub(super) fn monitor(
     Ok(())
 }
 
+/// Runs a chunk that failed again from its start, restored in `engine`, a step at a time
+/// with the monitor after each, for the first step that fails: its error (which names the
+/// step).
+/// `None` where none does (the engines are deterministic, so the failure recurs unless it
+/// was the chunk's energy check, now judged earlier with a smaller scale; the caller then
+/// keeps the chunk's own error).
+pub(super) fn first_failure(
+    engine: &mut impl Simulation,
+    steps: u64,
+    dt_rule: &str,
+    pours: bool,
+    start: &ObservedEnergies,
+    mut scale: f64,
+) -> Option<PowderError> {
+    // (the failed chunk's overlap record, which a restore may keep)
+    engine.take_peak_overlap();
+    for _ in 0..steps {
+        let stepped = engine.run_steps(1).and_then(|()| {
+            let now = engine.observe()?.energies;
+            scale = energy_scale(scale, &now, start);
+            monitor(engine, dt_rule, pours, (&now, start), scale)
+        });
+        if let Err(e) = stepped {
+            return Some(e);
+        }
+    }
+    None
+}
+
 /// The run's energy scale so far, grown by `now`: the largest kinetic and stored energy,
 /// gravitational change and work of the moving walls seen (the stored part and the walls'
 /// work only with the ledger). The ledger's integration error grows with the energy that
