@@ -1805,7 +1805,7 @@ fn params_prints_the_declared_parameters() {
         "docs/scene.md: `powder params scene > docs/scene.md`"
     );
     assert!(
-        scene.contains("| `output_every` | integer | steps | 1000 | >= 1 |"),
+        scene.contains("| `output_every` | integer | steps | 1000 | > 0 |"),
         "{scene}"
     );
 }

@@ -76,7 +76,10 @@ fn engines_refuse_a_scene_built_wrong_in_code() {
         gain: 1e-3,
         max_speed: -0.01,
     });
-    refused(&s, "wall 0: the phase from t = 0 s");
+    refused(
+        &s,
+        "wall 0, the phase from t = 0 s: `servo_max_speed` (the servo's largest speed, in m/s) must be > 0, got -0.01",
+    );
     let mut s = scene();
     s.walls[0].normal = [0.0; 3];
     refused(
@@ -91,7 +94,8 @@ fn engines_refuse_a_scene_built_wrong_in_code() {
     );
     let mut s = scene();
     s.dt = DtSetting::Fixed(0.0);
-    refused(&s, "the time step must be a finite number > 0 s, got 0");
+    refused(&s, "[simulation]: `dt` (the time step");
+    refused(&s, "must be > 0, got 0");
     let mut s = scene();
     s.domain.max[0] = -1.0;
     refused(&s, "the domain must have finite min < max");
@@ -103,7 +107,11 @@ fn engines_refuse_a_scene_built_wrong_in_code() {
     refused(&s, "material 0 (`powder`)");
     let mut s = scene();
     s.particles[0].insert_at = f64::NAN;
-    refused(&s, "insert_at must be a finite time >= 0 s");
+    refused(
+        &s,
+        "particle 0: `insert_at` (when the block's particles appear",
+    );
+    refused(&s, "must be a finite number, got NaN");
     let mut s = scene();
     s.particles[1].velocity[0] = f64::INFINITY;
     refused(
@@ -115,16 +123,15 @@ fn engines_refuse_a_scene_built_wrong_in_code() {
     refused(&s, "gravity must be finite");
     let mut s = scene();
     s.dt = DtSetting::Fixed(-1e-6);
-    refused(
-        &s,
-        "the time step must be a finite number > 0 s, got -0.000001",
-    );
+    refused(&s, "`dt` (the time step");
+    refused(&s, "must be > 0, got -1e-6");
     let mut s = scene();
     s.checkpoint_every = 0;
     refused(
         &s,
-        "output_every and checkpoint_every must be at least 1 step",
+        "[simulation]: `checkpoint_every` (steps between checkpoints",
     );
+    refused(&s, "must be > 0, got 0");
     let mut s = scene();
     s.walls[0].point[0] = f64::NAN;
     refused(&s, "wall 0 needs a finite point");
@@ -132,7 +139,7 @@ fn engines_refuse_a_scene_built_wrong_in_code() {
     s.walls[0].motion = WallMotion::always(WallPhase::Velocity([0.0, 0.0, f64::NAN]));
     refused(
         &s,
-        "wall 0: the phase from t = 0 s must start at >= 0 s and have finite values",
+        "wall 0, the phase from t = 0 s: its velocity must be finite",
     );
     let mut s = scene();
     s.walls[0].motion.phases = vec![(1e-3, WallPhase::Rest), (0.0, WallPhase::Rest)];
@@ -182,12 +189,15 @@ fn engines_refuse_a_scene_built_wrong_in_code() {
         gain: 1e-3,
         max_speed: 0.01,
     });
-    refused(&s, "a servo a force, gain and max_speed > 0");
+    refused(
+        &s,
+        "`servo_force` (the normal force the servo holds, in N) must be > 0",
+    );
     let mut s = scene();
     s.walls[0].motion.phases = vec![(-1e-3, WallPhase::Rest)];
     refused(
         &s,
-        "wall 0: the phase from t = -0.001 s must start at >= 0 s",
+        "wall 0, the phase from t = -0.001 s: `from` (when the phase starts, in s) must be >= 0",
     );
 }
 
@@ -325,7 +335,7 @@ fn a_run_refuses_a_bad_scene_before_it_touches_the_output() {
     bad.output_every = 0;
     let e = run_cpu_with(&bad, &opts, |_| {}).unwrap_err().to_string();
     assert!(
-        e.contains("output_every and checkpoint_every must be at least 1"),
+        e.contains("`output_every` (steps between outputs") && e.contains("must be > 0, got 0"),
         "{e}"
     );
     assert_eq!(listing(dir.path()), before);

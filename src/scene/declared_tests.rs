@@ -2,6 +2,7 @@
 
 use super::declared::{SceneKey, Section, SCENE_KEYS};
 use super::Scene;
+use crate::model::params::Rule;
 
 /// A scene with every table the declarations name: a servo wall (0), a plain wall (1), a
 /// wall with a phase (2); a list block with `radius` (0), a lattice (1), random blocks of a
@@ -215,6 +216,12 @@ fn every_declaration_is_complete_and_once() {
                     || o.only.iter().any(|x| k.only.contains(x)))
         });
         assert!(!clash, "{} declared twice in {:?}", k.key, k.section);
+        // a numeric refused value breaks the typed rule where that is the whole rule
+        if let Some(x) = k.refused.and_then(|r| r.parse::<f64>().ok()) {
+            if k.rule != Rule::None && k.valid.is_empty() {
+                assert!(!k.rule.holds(x), "{}: {x} obeys {:?}", k.key, k.rule);
+            }
+        }
     }
 }
 

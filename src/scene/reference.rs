@@ -46,7 +46,7 @@ pub fn markdown() -> String {
                 cell(k.value),
                 cell(k.unit),
                 cell(k.default),
-                cell(k.valid),
+                cell(&k.valid_text()),
                 cell(k.doc)
             );
         }

@@ -2,6 +2,7 @@
 //! guarantees for a file (every index in range, every number finite and in its range,
 //! every contact law valid), so a library user's mistake is an error, not a panic or NaN.
 
+use super::declared::{check, Section};
 use super::{DtSetting, Scene, WallPhase};
 use crate::error::PowderError;
 
@@ -86,39 +87,24 @@ impl Scene {
         if let Some(why) = self.periodic_conflict() {
             return Err(PowderError::Scene(format!("scene: {why}")));
         }
+        // the scalar settings by their declared rules (`declared.rs`)
+        let sim = |key: &str, x: f64| check(Section::Simulation, key, x, "[simulation]");
         if let DtSetting::Fixed(dt) = self.dt {
-            if !(dt.is_finite() && dt > 0.0) {
-                return bad(format!(
-                    "the time step must be a finite number > 0 s, got {dt}"
-                ));
-            }
+            sim("dt", dt).or_else(bad)?;
         }
         // (∞: until the caller stops, as `collide` does)
         if self.duration.is_nan() || self.duration <= 0.0 {
             return bad(format!("duration must be > 0 s, got {}", self.duration));
         }
-        if self.output_every == 0 || self.checkpoint_every == 0 {
-            return bad(format!(
-                "output_every and checkpoint_every must be at least 1 step, got {} and {}",
-                self.output_every, self.checkpoint_every
-            ));
-        }
-        if !(self.impact_velocity.is_finite() && self.impact_velocity > 0.0) {
-            return bad(format!(
-                "impact_velocity must be a finite number > 0 m/s, got {}",
-                self.impact_velocity
-            ));
-        }
+        sim("output_every", self.output_every as f64).or_else(bad)?;
+        sim("checkpoint_every", self.checkpoint_every as f64).or_else(bad)?;
+        sim("impact_velocity", self.impact_velocity).or_else(bad)?;
         if n == 0 {
             return bad("it has no materials".into());
         }
         for (m, material) in self.materials.iter().enumerate() {
-            if !(material.density.is_finite() && material.density > 0.0) {
-                return bad(format!(
-                    "material {m} (`{}`): density must be a finite number > 0, got {}",
-                    material.name, material.density
-                ));
-            }
+            let what = format!("material {m} (`{}`)", material.name);
+            check(Section::Material, "density", material.density, &what).or_else(bad)?;
             material.model.validate().map_err(|e| {
                 PowderError::Scene(format!("scene: material {m} (`{}`): {e}", material.name))
             })?;
@@ -163,28 +149,24 @@ impl Scene {
                 ));
             }
             for (from, phase) in &wall.motion.phases {
-                let ok = from.is_finite()
-                    && *from >= 0.0
-                    && match *phase {
-                        WallPhase::Rest => true,
-                        WallPhase::Velocity(v) => finite3(&v),
-                        WallPhase::Servo {
-                            force,
-                            gain,
-                            max_speed,
-                        } => {
-                            force.is_finite()
-                                && force > 0.0
-                                && gain.is_finite()
-                                && gain > 0.0
-                                && max_speed.is_finite()
-                                && max_speed > 0.0
-                        }
-                    };
-                if !ok {
-                    return bad(format!(
-                        "wall {w}: the phase from t = {from} s must start at >= 0 s and have finite values (a servo a force, gain and max_speed > 0), got {phase:?}"
-                    ));
+                let what = format!("wall {w}, the phase from t = {from} s");
+                check(Section::Phase, "from", *from, &what).or_else(bad)?;
+                match *phase {
+                    WallPhase::Rest => {}
+                    WallPhase::Velocity(v) if finite3(&v) => {}
+                    WallPhase::Velocity(v) => {
+                        return bad(format!("{what}: its velocity must be finite, got {v:?}"))
+                    }
+                    WallPhase::Servo {
+                        force,
+                        gain,
+                        max_speed,
+                    } => {
+                        let servo = |key: &str, x: f64| check(Section::Motion, key, x, &what);
+                        servo("servo_force", force).or_else(bad)?;
+                        servo("servo_gain", gain).or_else(bad)?;
+                        servo("servo_max_speed", max_speed).or_else(bad)?;
+                    }
                 }
             }
         }
@@ -198,24 +180,15 @@ impl Scene {
                     p.material
                 ));
             }
-            if !(p.radius.is_finite() && p.radius > 0.0) {
-                return bad(format!(
-                    "particle {i}: radius must be a finite number > 0 m, got {}",
-                    p.radius
-                ));
-            }
+            let what = format!("particle {i}");
+            check(Section::Particles, "radius", p.radius, &what).or_else(bad)?;
             if !(finite3(&p.position) && finite3(&p.velocity) && finite3(&p.angular_velocity)) {
                 return bad(format!(
                     "particle {i}: position, velocity and angular velocity must be finite, got {:?}, {:?}, {:?}",
                     p.position, p.velocity, p.angular_velocity
                 ));
             }
-            if !(p.insert_at.is_finite() && p.insert_at >= 0.0) {
-                return bad(format!(
-                    "particle {i}: insert_at must be a finite time >= 0 s, got {}",
-                    p.insert_at
-                ));
-            }
+            check(Section::Particles, "insert_at", p.insert_at, &what).or_else(bad)?;
         }
         Ok(())
     }

@@ -205,7 +205,7 @@ impl CpuEngine {
         self.jumps.extend(walls.jumps);
         if let Some(msg) = pairs.failure.or(walls.failure) {
             return Err(PowderError::Run(format!(
-                "step {} (t = {:e} s): {msg}; the time step may be too large for the stiffest contact ({})",
+                "step {} (t = {:.6e} s): {msg}; the time step may be too large for the stiffest contact ({})",
                 self.steps + 1,
                 self.time + self.dt,
                 self.time_step.reason

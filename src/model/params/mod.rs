@@ -52,6 +52,44 @@ pub enum Rule {
     None,
 }
 
+impl Rule {
+    /// The rule in words ("> 0", "in (0, 1]"); `None` for [`Rule::None`] and [`Rule::Finite`].
+    pub fn text(&self) -> Option<String> {
+        match self {
+            Rule::None | Rule::Finite => None,
+            Rule::PositiveOrInf => Some("> 0 (inf for none)".to_string()),
+            Rule::Positive => Some("> 0".to_string()),
+            Rule::NonNegative => Some(">= 0".to_string()),
+            Rule::LeftOpen(lo, hi) => Some(format!("in ({lo}, {hi}]")),
+            Rule::Open(lo, hi) => Some(format!("in ({lo}, {hi})")),
+        }
+    }
+
+    /// Whether `value` obeys the rule ([`Rule::None`]: always).
+    pub fn holds(&self, value: f64) -> bool {
+        match self {
+            Rule::None => true,
+            Rule::PositiveOrInf => value > 0.0,
+            _ if !value.is_finite() => false,
+            Rule::Finite => true,
+            Rule::Positive => value > 0.0,
+            Rule::NonNegative => value >= 0.0,
+            Rule::LeftOpen(lo, hi) => value > *lo && value <= *hi,
+            Rule::Open(lo, hi) => value > *lo && value < *hi,
+        }
+    }
+
+    /// What a value that breaks the rule must be instead, in words ("> 0", "a finite
+    /// number").
+    pub fn requirement(&self, value: f64) -> String {
+        match self {
+            Rule::PositiveOrInf => self.text().unwrap_or_default(),
+            _ if !value.is_finite() => "a finite number".to_string(),
+            _ => self.text().unwrap_or_default(),
+        }
+    }
+}
+
 /// One parameter of a contact law.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Param {
@@ -86,33 +124,16 @@ impl Param {
 
     /// The rule in words ("> 0", "in (0, 1]"); `None` for [`Rule::None`] and [`Rule::Finite`].
     pub fn rule_text(&self) -> Option<String> {
-        match self.rule {
-            Rule::None | Rule::Finite => None,
-            Rule::PositiveOrInf => Some("> 0 (inf for none)".to_string()),
-            Rule::Positive => Some("> 0".to_string()),
-            Rule::NonNegative => Some(">= 0".to_string()),
-            Rule::LeftOpen(lo, hi) => Some(format!("in ({lo}, {hi}]")),
-            Rule::Open(lo, hi) => Some(format!("in ({lo}, {hi})")),
-        }
+        self.rule.text()
     }
 
     /// Checks `value` against the rule; the error names the key and the rule.
     pub fn check(&self, value: f64) -> Result<(), ParamError> {
-        let ok = match self.rule {
-            Rule::None => return Ok(()),
-            Rule::PositiveOrInf => value > 0.0,
-            _ if !value.is_finite() => false,
-            Rule::Finite => true,
-            Rule::Positive => value > 0.0,
-            Rule::NonNegative => value >= 0.0,
-            Rule::LeftOpen(lo, hi) => value > lo && value <= hi,
-            Rule::Open(lo, hi) => value > lo && value < hi,
-        };
-        let rule = match self.rule {
-            Rule::PositiveOrInf => self.rule_text().unwrap_or_default(),
-            _ if !value.is_finite() => "a finite number".to_string(),
-            _ => self.rule_text().unwrap_or_default(),
-        };
+        if self.rule == Rule::None {
+            return Ok(());
+        }
+        let ok = self.rule.holds(value);
+        let rule = self.rule.requirement(value);
         if ok {
             Ok(())
         } else {
