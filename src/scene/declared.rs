@@ -159,13 +159,13 @@ pub const SCENE_KEYS: &[SceneKey] = &[
     key(Domain, ALL, "periodic", "[x, y, z] of booleans", "", "[false, false, false]", Rule::None, "no wall may face, and no gravity point along, a periodic axis", "the periodic axes (minimum image: pairs interact across the faces)", None),
     // [simulation]
     key(Simulation, ALL, "duration", "number", "s", "required", Rule::Positive, "", "the simulated time", Some("0.0")),
-    key(Simulation, ALL, "dt", "\"auto\" or a number", "s", "\"auto\"", Rule::Positive, "", "the time step; \"auto\": from the stiffest contact (tc/50)", Some("0.0")),
+    key(Simulation, ALL, "dt", "\"auto\" or a number", "s", "\"auto\"", Rule::Positive, "", "the time step (\"auto\": from the stiffest contact, tc/50)", Some("0.0")),
     key(Simulation, ALL, "force_dt", "boolean", "", "false", Rule::None, "", "accept a dt above the stability limit (and starting speeds at which a pair closes more than a radius in one step)", None),
     key(Simulation, ALL, "jump_impulses", "boolean", "", "true where some contact's force can jump", Rule::None, "", "place the impulse of a contact force's jump (JKR touch and pull-off, jump-in adhesion, a viscous first touch) inside the step, second order in dt; false: plain velocity Verlet", None),
-    key(Simulation, ALL, "output_every", "integer", "steps", "1000", Rule::Positive, "", "steps between outputs (`powder run`'s progress line, VTK snapshot, CSV row)", Some("0")),
+    key(Simulation, ALL, "output_every", "integer", "", "1000", Rule::Positive, "", "steps between outputs (`powder run`'s progress line, VTK snapshot, CSV row)", Some("0")),
     key(Simulation, ALL, "gravity", "[x, y, z]", "m/s²", "[0, 0, 0]", Rule::None, "", "the gravitational acceleration", None),
-    key(Simulation, ALL, "impact_velocity", "number", "m/s", "1", Rule::Positive, "", "the largest expected impact speed: sets the Hertz/JKR contact time of the automatic dt (the starting velocities' fastest closing where that is faster)", Some("0.0")),
-    key(Simulation, ALL, "checkpoint_every", "integer", "steps", "10·output_every", Rule::Positive, "", "steps between checkpoints", Some("0")),
+    key(Simulation, ALL, "impact_velocity", "number", "m/s", "1", Rule::Positive, "", "the largest expected impact speed (it sets the Hertz/JKR contact time of the automatic dt; the starting velocities' fastest closing where that is faster)", Some("0.0")),
+    key(Simulation, ALL, "checkpoint_every", "integer", "", "10·output_every", Rule::Positive, "", "steps between checkpoints", Some("0")),
     key(Simulation, ALL, "contact_output", "boolean", "", "true under 100 000 particles", Rule::None, "", "write the contact network with each VTK snapshot (`contacts/<name>_<step>.vtp`: a line a contact with its forces, overlap, history, sliding)", None),
     // [[material]]
     key(Material, ALL, "name", "string", "", "required", Rule::None, "unique", "the name blocks, walls and interactions refer to", None),
@@ -205,8 +205,8 @@ pub const SCENE_KEYS: &[SceneKey] = &[
     key(Particles, LATTICE_RANDOM, "seed", "integer", "", "1", Rule::NonNegative, "", "the seed of the jitter (lattice) or of the radii and positions (random, Pcg64)", Some("-1")),
     key(Particles, RANDOM, "count", "integer", "", "required", Rule::NonNegative, "", "how many particles", Some("-1")),
     key(Particles, RANDOM, "size", "table", "", "none", Rule::None, "", "a size distribution instead of `radius` (below)", None),
-    key(Particles, RANDOM, "batches", "integer", "", "1", Rule::Positive, "", "pour `count` in this many batches, each placed afresh in the region (seed + k)", Some("0")),
-    key(Particles, RANDOM, "batch_interval", "number", "s", "0", Rule::NonNegative, "> 0 with batches > 1", "batch k appears at insert_at + k·batch_interval", Some("0.0")),
+    key(Particles, RANDOM, "batches", "integer", "", "1", Rule::Positive, "", "the number of batches `count` is poured in, each placed afresh in the region (seed + k)", Some("0")),
+    key(Particles, RANDOM, "batch_interval", "number", "s", "0", Rule::NonNegative, "> 0 with batches > 1", "the time between batches (batch k appears at insert_at + k·batch_interval)", Some("0.0")),
     // a random block's size distribution
     key(Size, ALL, "distribution", "string", "", "required", Rule::None, "\"uniform\", \"normal\", \"lognormal\" or \"list\"", "the distribution of the radii", Some("\"nope\"")),
     key(Size, &["uniform"], "min", "number", "m", "required", Rule::Positive, "<= max", "the smallest radius", Some("0.0")),

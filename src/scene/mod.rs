@@ -19,6 +19,7 @@ mod hash_grid;
 mod keys;
 mod parse;
 mod particles;
+mod read_declared;
 pub mod reference;
 mod set;
 #[cfg(test)]

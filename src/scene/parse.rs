@@ -2,6 +2,7 @@
 //! interaction and wall sections.
 
 use super::checks::{check_pair_models, check_particles, check_periodic};
+use super::declared::Section;
 use super::keys::{
     with_motion_keys, DOMAIN_KEYS, INTERACTION_KEYS, MATERIAL_KEYS, PHASE_KEYS, SERVO_KEYS,
     SIMULATION_KEYS, TOP_KEYS, WALL_KEYS,
@@ -134,7 +135,7 @@ fn parse_simulation(root: &Tbl) -> Res<SimSettings> {
             )
         })?;
     t.check_keys(&SIMULATION_KEYS, |_| None)?;
-    let duration = t.positive_req("duration", "the simulated time in s")?;
+    let duration = t.number_req(Section::Simulation, "duration")?;
     let dt = match t.get("dt") {
         None => DtSetting::Auto,
         Some(node) => match &node.val {
@@ -155,27 +156,16 @@ fn parse_simulation(root: &Tbl) -> Res<SimSettings> {
     };
     let force_dt = t.bool("force_dt")?.unwrap_or(false);
     let jump_impulses = t.bool("jump_impulses")?;
-    let output_every = t.u64("output_every")?.unwrap_or(1000);
-    if output_every == 0 {
-        return Err(t.err_key(
-            "output_every",
-            "`output_every` in [simulation] must be >= 1 (steps between progress lines), got 0",
-        ));
-    }
+    let output_every = t
+        .count(Section::Simulation, "output_every")?
+        .unwrap_or(1000);
     let gravity = t.vec3("gravity")?.unwrap_or([0.0; 3]);
     let impact_velocity = t
-        .positive(
-            "impact_velocity",
-            "the largest expected impact speed in m/s",
-        )?
+        .number(Section::Simulation, "impact_velocity")?
         .unwrap_or(1.0);
-    let checkpoint_every = t.u64("checkpoint_every")?.unwrap_or(10 * output_every);
-    if checkpoint_every == 0 {
-        return Err(t.err_key(
-            "checkpoint_every",
-            "`checkpoint_every` in [simulation] must be >= 1 (steps between checkpoints), got 0",
-        ));
-    }
+    let checkpoint_every = t
+        .count(Section::Simulation, "checkpoint_every")?
+        .unwrap_or(10 * output_every);
     Ok(SimSettings {
         checkpoint_every,
         contact_output: t.bool("contact_output")?,
@@ -229,7 +219,7 @@ fn parse_materials(root: &Tbl) -> Res<Vec<Material>> {
             ));
         }
         let model = build_model(&t, kind, &MATERIAL_KEYS, &format!("material `{name}`"))?;
-        let density = t.positive_req("density", "the material density in kg/m^3")?;
+        let density = t.number_req(Section::Material, "density")?;
         out.push(Material {
             name: name.to_string(),
             density,
@@ -464,7 +454,7 @@ fn parse_wall_motion(t: &Tbl) -> Res<WallMotion> {
                 format!("{} phase #{}", t.ctx, i + 1),
             );
             p.check_keys(&with_motion_keys(&PHASE_KEYS), |_| None)?;
-            let from = p.f64_req("from", "the time in s from which the phase applies")?;
+            let from = p.number_req(Section::Phase, "from")?;
             phases.push((from, parse_wall_phase(&p)?));
         }
         let times: Vec<f64> = phases.iter().map(|(from, _)| *from).collect();
@@ -504,18 +494,9 @@ fn parse_wall_phase(t: &Tbl) -> Res<WallPhase> {
         return Ok(WallPhase::Velocity(v));
     }
     if servo {
-        let force = t.positive_req(
-            "servo_force",
-            "the normal force in N the servo-controlled wall holds",
-        )?;
-        let gain = t.positive_req(
-            "servo_gain",
-            "the servo gain in m/s per N of force error (stable while gain·k_bed·dt < 1)",
-        )?;
-        let max_speed = t.positive_req(
-            "servo_max_speed",
-            "the largest speed in m/s of the servo-controlled wall",
-        )?;
+        let force = t.number_req(Section::Motion, "servo_force")?;
+        let gain = t.number_req(Section::Motion, "servo_gain")?;
+        let max_speed = t.number_req(Section::Motion, "servo_max_speed")?;
         return Ok(WallPhase::Servo {
             force,
             gain,

@@ -1,6 +1,7 @@
 //! Particle blocks and their generators: explicit lists, lattices and random placement
 //! with size distributions.
 
+use super::declared::Section;
 use super::hash_grid::{dist2, sq, Grid};
 use super::keys::{particle_keys, size_keys, DISTRIBUTIONS, PARTICLE_KINDS};
 use super::parse::material_ref;
@@ -39,16 +40,7 @@ pub(super) fn parse_particles(root: &Tbl, names: &[&str]) -> Res<(Vec<ParticleIn
         })?;
         t.ctx = format!("[[particles]] #{block} (kind = \"{kind}\")");
         let before = particles.len();
-        let insert_at = t.f64("insert_at")?.unwrap_or(0.0);
-        if insert_at < 0.0 {
-            return Err(t.err_key(
-                "insert_at",
-                format!(
-                    "`insert_at` in {} is {insert_at} s: the time the block's particles appear must be >= 0",
-                    t.ctx
-                ),
-            ));
-        }
+        let insert_at = t.number(Section::Particles, "insert_at")?.unwrap_or(0.0);
         match kind {
             "list" => {
                 t.check_keys(&particle_keys(kind), |_| None)?;
@@ -62,22 +54,15 @@ pub(super) fn parse_particles(root: &Tbl, names: &[&str]) -> Res<(Vec<ParticleIn
                 t.check_keys(&particle_keys(kind), |_| None)?;
                 // pouring: `batches` batches of count/batches, `batch_interval` s apart,
                 // each placed afresh in the region
-                let batches = t.u64("batches")?.unwrap_or(1);
-                let interval = t.f64("batch_interval")?.unwrap_or(0.0);
-                if !(interval.is_finite() && interval >= 0.0) {
-                    return Err(t.err_key(
-                        "batch_interval",
-                        format!(
-                            "`batch_interval` in {} is {interval} s: the time between batches must be a finite number >= 0",
-                            t.ctx
-                        ),
-                    ));
-                }
-                if batches == 0 || (batches > 1 && (interval.is_nan() || interval <= 0.0)) {
+                let batches = t.count(Section::Particles, "batches")?.unwrap_or(1);
+                let interval = t
+                    .number(Section::Particles, "batch_interval")?
+                    .unwrap_or(0.0);
+                if batches > 1 && interval <= 0.0 {
                     return Err(t.err_key(
                         "batches",
                         format!(
-                            "{}: `batches` must be >= 1, and a pour of several batches needs `batch_interval` > 0 s (the time between them)",
+                            "{}: a pour of several batches needs `batch_interval` > 0 s (the time between them)",
                             t.ctx
                         ),
                     ));
@@ -188,7 +173,7 @@ fn expand_list(t: &Tbl, names: &[&str], out: &mut Vec<ParticleInit>) -> Res<()> 
         "radii",
         "one radius for all particles in m, or one per position",
     )?;
-    let radii = match t.positive("radius", "the particle radius in m")? {
+    let radii = match t.number(Section::Particles, "radius")? {
         Some(r) => vec![r; n],
         None => {
             let radii = t.f64_list("radii")?.unwrap_or_default();
@@ -256,7 +241,7 @@ fn expand_list(t: &Tbl, names: &[&str], out: &mut Vec<ParticleInit>) -> Res<()> 
 fn expand_lattice(t: &Tbl, names: &[&str], out: &mut Vec<ParticleInit>) -> Res<()> {
     let material = material_ref(t, names)?;
     let (min, max) = region(t)?;
-    let radius = t.positive_req("radius", "the particle radius in m")?;
+    let radius = t.number_req(Section::Particles, "radius")?;
     let spacing = t
         .positive("spacing", "the lattice spacing in m")?
         .unwrap_or(2.0 * radius * (1.0 + 1e-9));
@@ -401,7 +386,7 @@ impl SizeDist {
 }
 
 fn parse_size(t: &Tbl) -> Res<SizeDist> {
-    if let Some(r) = t.positive("radius", "the particle radius in m")? {
+    if let Some(r) = t.number(Section::Particles, "radius")? {
         return Ok(SizeDist::Fixed(r));
     }
     let s = t
@@ -417,19 +402,9 @@ fn parse_size(t: &Tbl) -> Res<SizeDist> {
         )
     })?;
     s.check_keys(&size_keys(Some(dist)), |_| None)?;
-    let non_negative = |key: &str, what: &str| -> Res<f64> {
-        let x = s.f64_req(key, what)?;
-        if x < 0.0 {
-            return Err(s.err_key(
-                key,
-                format!("`{key}` in {} ({what}) must be >= 0, got {x}", s.ctx),
-            ));
-        }
-        Ok(x)
-    };
     Ok(match dist {
         "uniform" => {
-            let min = s.positive_req("min", "the smallest radius in m")?;
+            let min = s.number_req(Section::Size, "min")?;
             let max = s.positive_req("max", "the largest radius in m")?;
             if max < min {
                 return Err(s.err_key(
@@ -440,12 +415,12 @@ fn parse_size(t: &Tbl) -> Res<SizeDist> {
             SizeDist::Uniform { min, max }
         }
         "normal" => SizeDist::Normal {
-            mean: s.positive_req("mean", "the mean radius in m")?,
-            std: non_negative("std", "the standard deviation of the radius in m")?,
+            mean: s.number_req(Section::Size, "mean")?,
+            std: s.number_req(Section::Size, "std")?,
         },
         "lognormal" => SizeDist::LogNormal {
-            median: s.positive_req("median", "the median radius in m")?,
-            sigma: non_negative("sigma", "the standard deviation of ln(radius)")?,
+            median: s.number_req(Section::Size, "median")?,
+            sigma: s.number_req(Section::Size, "sigma")?,
         },
         _ => {
             let radii = s

@@ -775,7 +775,10 @@ fn pouring_more_batches_than_particles_is_refused() {
     assert_contains(&e, &["`batches` = 1000000000", "more than `count` = 3"]);
     // a negative interval is refused even where one batch makes it unused
     let one = "[[particles]]\nkind = \"random\"\ncount = 3\nbatch_interval = -1e-3\nmin = [0, 0, 0]\nmax = [0.01, 0.01, 0.01]\nradius = 1e-4\n";
-    assert_contains(&err(&minimal("", one)), &["`batch_interval`", "-0.001 s"]);
+    assert_contains(
+        &err(&minimal("", one)),
+        &["`batch_interval`", "must be >= 0, got -0.001"],
+    );
 }
 
 #[test]

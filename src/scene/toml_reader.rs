@@ -318,10 +318,6 @@ impl<'a> Tbl<'a> {
         Ok(Some(x))
     }
 
-    pub(super) fn f64_req(&self, key: &str, what: &str) -> Res<f64> {
-        self.f64(key)?.ok_or_else(|| self.missing(key, what))
-    }
-
     /// `key` > 0 if present.
     pub(super) fn positive(&self, key: &str, what: &str) -> Res<Option<f64>> {
         match self.f64(key)? {

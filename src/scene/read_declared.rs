@@ -1,0 +1,57 @@
+//! Reading a number by its declaration (`declared.rs`): the rule it is checked against and
+//! the words its errors use come from there.
+
+use super::declared::{declared, SceneKey, Section};
+use super::toml_reader::{Res, Tbl};
+use crate::error::num;
+
+impl Tbl<'_> {
+    /// `key` of `section`, checked against its declared rule, if present.
+    pub(super) fn number(&self, section: Section, key: &str) -> Res<Option<f64>> {
+        let k = declared(section, key);
+        let x = self.f64(key)?;
+        match x {
+            Some(x) if !k.rule.holds(x) => Err(self.broken(k, x)),
+            other => Ok(other),
+        }
+    }
+
+    /// [`Self::number`], required.
+    pub(super) fn number_req(&self, section: Section, key: &str) -> Res<f64> {
+        self.number(section, key)?
+            .ok_or_else(|| self.missing(key, &what(declared(section, key))))
+    }
+
+    /// `key` of `section`, a non-negative integer checked against its declared rule, if
+    /// present.
+    pub(super) fn count(&self, section: Section, key: &str) -> Res<Option<u64>> {
+        let k = declared(section, key);
+        match self.u64(key)? {
+            Some(n) if !k.rule.holds(n as f64) => Err(self.broken(k, n as f64)),
+            other => Ok(other),
+        }
+    }
+
+    /// The error for `x` breaking `k`'s rule, at the key.
+    fn broken(&self, k: &SceneKey, x: f64) -> super::PowderError {
+        self.err_key(
+            k.key,
+            format!(
+                "`{}` in {} ({}) must be {}, got {}",
+                k.key,
+                self.ctx,
+                what(k),
+                k.rule.requirement(x),
+                num(x)
+            ),
+        )
+    }
+}
+
+/// What a key is, with its unit.
+fn what(k: &SceneKey) -> String {
+    match k.unit.is_empty() {
+        true => k.doc.to_string(),
+        false => format!("{}, in {}", k.doc, k.unit),
+    }
+}
