@@ -256,6 +256,26 @@ fn run_prints_a_summary_and_rejects_missing_files() {
         !parent.path().join("fresh").exists() && parent.path().exists(),
         "the failed run left its folders, or removed one it did not create"
     );
+    // `..` after a new folder: `x` is created and removed, the existing empty `y` is kept
+    std::fs::create_dir(parent.path().join("y")).unwrap();
+    let through = parent.path().join("x").join("..").join("y").join("z");
+    let (ok, _, err) = powder(&[
+        "run",
+        scene,
+        "--backend",
+        "cpu",
+        "--out",
+        through.to_str().unwrap(),
+        "--resume",
+        "/nonexistent/checkpoint.bin",
+    ]);
+    assert!(!ok, "{err}");
+    assert!(
+        parent.path().join("y").is_dir()
+            && !parent.path().join("y").join("z").exists()
+            && !parent.path().join("x").exists(),
+        "`x/../y/z`: the failed run removed `y`, which it did not create, or left `x` or `z`"
+    );
     // without snapshots: the series, the checkpoint and the summary only
     let dir = tempfile::tempdir().unwrap();
     let out_dir = dir.path().to_str().unwrap();
@@ -1805,7 +1825,7 @@ fn params_prints_the_declared_parameters() {
         "docs/scene.md: `powder params scene > docs/scene.md`"
     );
     assert!(
-        scene.contains("| `output_every` | integer | steps | 1000 | > 0 |"),
+        scene.contains("| `output_every` | integer |  | 1000 | > 0 |"),
         "{scene}"
     );
 }

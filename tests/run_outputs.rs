@@ -1575,3 +1575,31 @@ fn walk(dir: &Path) -> Vec<std::path::PathBuf> {
     }
     out
 }
+
+/// A branch under another scene name resumed from a killed run's checkpoint removes that
+/// run's snapshots beyond the checkpoint, as a branch under the same name does: they stayed,
+/// and the steps after the checkpoint appeared in both scenes' collections.
+#[test]
+fn a_renamed_branch_removes_the_killed_runs_later_snapshots() {
+    let scene = cluster();
+    let (killed, at_checkpoint) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    // a run killed after writing rows and snapshots to 1500, its checkpoint at 1000
+    run(&scene, killed.path(), 1500, None);
+    run(&scene, at_checkpoint.path(), 1000, None);
+    let ckpt = killed.path().join("checkpoint.bin");
+    std::fs::copy(at_checkpoint.path().join("checkpoint.bin"), &ckpt).unwrap();
+    std::fs::remove_file(killed.path().join("summary.json")).unwrap();
+    let mut renamed = scene.clone();
+    renamed.name = "renamed".into();
+    run(&renamed, killed.path(), 2000, Some(&ckpt));
+    let (_, _, shots) = run_files(killed.path());
+    let name = &scene.name;
+    let old: Vec<&String> = shots.iter().filter(|f| f.starts_with(name.as_str())).collect();
+    assert!(
+        old.iter().all(|f| !f.contains("1500")) && old.iter().any(|f| f.contains("1000")),
+        "{old:?}"
+    );
+    let pvd = std::fs::read_to_string(killed.path().join(format!("{name}.pvd"))).unwrap();
+    assert!(!pvd.contains("1500") && pvd.contains("1000"), "{pvd}");
+    assert!(shots.iter().any(|f| f.starts_with("renamed") && f.contains("2000")));
+}

@@ -120,23 +120,12 @@ pub(crate) fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
                 .unwrap_or_else(|| PathBuf::from("out").join(&scene.name)),
         )
     };
-    // (the folders this command creates, the output folder up to the first that exists or
-    // is named by `..`, are removed again where the run fails before writing)
-    let created: Vec<PathBuf> = match &out_dir {
-        Some(d) => (d.ancestors())
-            .take_while(|a| a.file_name().is_some() && !a.exists())
-            .map(std::path::Path::to_path_buf)
-            .collect(),
+    // (the folders this command creates are removed again where the run fails before
+    // writing)
+    let created = match &out_dir {
+        Some(d) => create_out_dir(d)?,
         None => Vec::new(),
     };
-    if let Some(d) = &out_dir {
-        std::fs::create_dir_all(d).map_err(|e| {
-            PowderError::io(
-                format!("cannot create the output directory `{}`", d.display()),
-                e,
-            )
-        })?;
-    }
     let summary = run_in(a, scene, gpu, out_dir, interrupt, threads, chosen.reason);
     if summary.is_err() {
         // (innermost first, each only where empty: remove_dir refuses a folder with files)
@@ -331,4 +320,37 @@ pub(crate) fn print_tabor(pairs: &[powder::run::TaborPair]) {
             t.d_min
         );
     }
+}
+
+/// Creates the output folder `d` a component at a time: the folders it created, innermost
+/// first (a `..` resolves against the folders as they are then: `x/../y/z` with `x` new
+/// and `y` there creates `x` and `y/z`, and only those).
+fn create_out_dir(d: &std::path::Path) -> Result<Vec<PathBuf>, PowderError> {
+    let mut created: Vec<PathBuf> = Vec::new();
+    let mut at = PathBuf::new();
+    let failed = |created: &mut Vec<PathBuf>, e: std::io::Error| {
+        for c in created.iter().rev() {
+            let _ = std::fs::remove_dir(c);
+        }
+        PowderError::io(
+            format!("cannot create the output directory `{}`", d.display()),
+            e,
+        )
+    };
+    for c in d.components() {
+        at.push(c);
+        if matches!(c, std::path::Component::Normal(_)) && !at.exists() {
+            match std::fs::create_dir(&at) {
+                Ok(()) => created.push(at.clone()),
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {}
+                Err(e) => return Err(failed(&mut created, e)),
+            }
+        }
+    }
+    if !d.is_dir() {
+        let e = std::io::Error::other("it exists and is not a folder");
+        return Err(failed(&mut created, e));
+    }
+    created.reverse();
+    Ok(created)
 }

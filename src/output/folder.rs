@@ -110,9 +110,18 @@ impl Drop for FolderLock {
 }
 
 /// Whether another process `pid` runs on this host, where `/proc` tells; without it, no
-/// (a lock is then taken over: a killed run must not block its folder for good).
+/// (a lock is then taken over: a killed run must not block its folder for good). A zombie
+/// (killed, not yet reaped by its parent) runs no more.
 pub fn process_alive(pid: u32) -> bool {
-    Path::new("/proc/self").exists() && Path::new(&format!("/proc/{pid}")).exists()
+    if !Path::new("/proc/self").exists() {
+        return false;
+    }
+    match fs::read_to_string(format!("/proc/{pid}/status")) {
+        Ok(status) => !status
+            .lines()
+            .any(|l| l.starts_with("State:") && l[6..].trim_start().starts_with('Z')),
+        Err(_) => Path::new(&format!("/proc/{pid}")).exists(),
+    }
 }
 
 /// Refuses, before anything in `dir` changes, an output the run could not write: a folder
@@ -212,6 +221,30 @@ pub fn check_output_files(files: &[(Option<&Path>, &str)]) -> Result<(), PowderE
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A killed run not yet reaped by its parent (a zombie) holds its folder no more: a
+    /// resume right after the kill was refused as "held by process N".
+    #[test]
+    fn a_killed_unreaped_process_is_not_alive() {
+        if !Path::new("/proc/self").exists() {
+            return;
+        }
+        let mut child = std::process::Command::new("sleep")
+            .arg("30")
+            .spawn()
+            .unwrap();
+        let pid = child.id();
+        assert!(process_alive(pid));
+        child.kill().unwrap();
+        // (not reaped: the entry stays, a zombie, until wait)
+        let zombie = (0..200).any(|_| {
+            std::thread::sleep(std::time::Duration::from_millis(10));
+            !process_alive(pid)
+        });
+        assert!(zombie && Path::new(&format!("/proc/{pid}")).exists());
+        child.wait().unwrap();
+        assert!(!process_alive(pid));
+    }
 
     #[test]
     fn two_flags_naming_one_file_are_refused() {

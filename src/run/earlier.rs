@@ -4,7 +4,7 @@
 
 use super::*;
 use crate::output::vtk;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Refuses a run of `scene` into `d` that would remove or trim what an earlier run wrote
 /// there, unless `opts.overwrite`: a fresh run where the folder holds a checkpoint, a
@@ -98,18 +98,17 @@ fn fresh_run_would_remove(d: &Path, scene: &Scene) -> Vec<String> {
     found
 }
 
-/// What a resume from step `step` to step `end` into `d` would trim: a run there that
-/// finished beyond `step` (its `summary.json`), a checkpoint of a later step, or a killed
-/// run's rows or snapshots beyond `end` (those up to `end` it writes again).
-fn later_results(d: &Path, scene: &Scene, opts: &RunOptions, step: u64, end: u64) -> Vec<String> {
-    let mut found = Vec::new();
-    let finished = std::fs::read(d.join(SUMMARY))
+/// The summary of a run in `d` that finished beyond `step` and a checkpoint there of a
+/// later step than `step` (not the one `opts` resumes), each with its step: a resume from
+/// `step` that cuts the folder's rows removes them first, or a kill would leave a folder
+/// whose files claim results it no longer holds.
+pub(super) fn later_files(d: &Path, opts: &RunOptions, step: u64) -> [Option<(PathBuf, u64)>; 2] {
+    let summary = d.join(SUMMARY);
+    let finished = std::fs::read(&summary)
         .ok()
         .and_then(|b| serde_json::from_slice::<serde_json::Value>(&b).ok())
-        .and_then(|v| v.get("steps").and_then(serde_json::Value::as_u64));
-    if let Some(s) = finished.filter(|&s| s > step) {
-        found.push(format!("a run that finished at step {s} (`{SUMMARY}`)"));
-    }
+        .and_then(|v| v.get("steps").and_then(serde_json::Value::as_u64))
+        .filter(|&s| s > step);
     let own = d.join(CHECKPOINT);
     let same = |a: &Path, b: &Path| match (a.canonicalize(), b.canonicalize()) {
         (Ok(a), Ok(b)) => a == b,
@@ -117,12 +116,24 @@ fn later_results(d: &Path, scene: &Scene, opts: &RunOptions, step: u64, end: u64
     };
     // (the folder's own checkpoint, resumed, is at `step`: not read a second time)
     let resumed = opts.resume.as_deref();
-    if own.is_file() && !resumed.is_some_and(|r| same(r, &own)) {
-        if let Ok(s) = crate::checkpoint::steps_of(&own) {
-            if s > step {
-                found.push(format!("a checkpoint at step {s} (`{CHECKPOINT}`)"));
-            }
-        }
+    let later = match own.is_file() && !resumed.is_some_and(|r| same(r, &own)) {
+        true => crate::checkpoint::steps_of(&own).ok().filter(|&s| s > step),
+        false => None,
+    };
+    [finished.map(|s| (summary, s)), later.map(|s| (own, s))]
+}
+
+/// What a resume from step `step` to step `end` into `d` would trim: a run there that
+/// finished beyond `step` (its `summary.json`), a checkpoint of a later step, or a killed
+/// run's rows or snapshots beyond `end` (those up to `end` it writes again).
+fn later_results(d: &Path, scene: &Scene, opts: &RunOptions, step: u64, end: u64) -> Vec<String> {
+    let mut found = Vec::new();
+    let [summary, checkpoint] = later_files(d, opts, step);
+    if let Some((_, s)) = summary {
+        found.push(format!("a run that finished at step {s} (`{SUMMARY}`)"));
+    }
+    if let Some((_, s)) = checkpoint {
+        found.push(format!("a checkpoint at step {s} (`{CHECKPOINT}`)"));
     }
     // (a run that finished later is named above: its rows need no second mention)
     // (one step to run on to: the latest of the files, which may end at different steps)
@@ -142,7 +153,7 @@ fn later_results(d: &Path, scene: &Scene, opts: &RunOptions, step: u64, end: u64
                 .map(|(what, s)| format!("{what} to step {s}"))
                 .collect();
             found.push(format!(
-                "{} past this run's end at step {end}: run on to step {latest} to write them again",
+                "{} past this run's end at step {end}: run on to step {latest} (the resume writes its own rows and snapshots after the checkpoint's step, at its own cadence, in place of the killed run's)",
                 files.join(", ")
             ));
         }

@@ -602,4 +602,57 @@ mod tests {
         let w = pairs[2].warnings().concat();
         assert!(w.contains("the wall-particle pair `lone`-`soft`"), "{w}");
     }
+
+    /// A resume from an older checkpoint with --overwrite removes the later run's
+    /// checkpoint and summary before it cuts that run's rows: killed right after the cut,
+    /// the folder held a checkpoint and summary of results it no longer had, and no resume
+    /// was accepted there.
+    #[test]
+    fn a_resume_that_cuts_a_later_run_removes_its_checkpoint_and_summary_first() {
+        let scene = Scene::load(std::path::Path::new(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/examples/cohesive_cluster.toml"
+        )))
+        .unwrap();
+        let scene = Scene {
+            output_every: 500,
+            checkpoint_every: 1000,
+            ..scene
+        };
+        let (older, later) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+        let run = |dir: &std::path::Path, steps: u64| {
+            let opts = RunOptions {
+                out_dir: Some(dir.to_path_buf()),
+                max_steps: Some(steps),
+                no_snapshots: true,
+                ..Default::default()
+            };
+            run_cpu_with(&scene, &opts, |_| {}).unwrap();
+        };
+        run(older.path(), 1000);
+        run(later.path(), 3000);
+        let old = older.path().join("checkpoint.bin");
+        let (_, marks) = crate::checkpoint::load(&old, &scene).unwrap();
+        let opts = RunOptions {
+            out_dir: Some(later.path().to_path_buf()),
+            resume: Some(old),
+            overwrite: true,
+            no_snapshots: true,
+            ..Default::default()
+        };
+        let radii = scene.particles.iter().map(|p| p.radius).collect();
+        // (opened, then dropped: a kill before the first chunk)
+        let dt = CpuEngine::new(&scene).unwrap().dt();
+        drop(RunOutputs::open(&scene, &opts, (Some(1000), &marks), radii, (dt, 3000)).unwrap());
+        let d = later.path();
+        assert!(!d.join("checkpoint.bin").exists() && !d.join("summary.json").exists());
+        let last = crate::output::series_csv::last_row_step(&d.join("series.csv"));
+        assert_eq!(last, Some(1000));
+        // the folder resumes from the older checkpoint again, as straight as before
+        let again = RunOptions {
+            overwrite: false,
+            ..opts
+        };
+        run_cpu_with(&scene, &again, |_| {}).unwrap();
+    }
 }

@@ -104,6 +104,25 @@ impl RunOutputs {
                 )));
             }
         }
+        // (the scenes whose snapshots a resume cuts: a branch under another name cuts the
+        // killed run's too; read before its summary and checkpoint may go)
+        let cut_scenes = super::earlier::replaced_scenes(d, scene);
+        // a later run's summary and checkpoint go before its rows and snapshots are cut (a
+        // kill in between left a folder whose files claimed results it no longer held;
+        // `earlier::check` has refused this without --overwrite)
+        if let Some(step) = resumed_from {
+            for (file, _) in super::earlier::later_files(d, opts, step)
+                .into_iter()
+                .flatten()
+            {
+                std::fs::remove_file(&file).map_err(|e| {
+                    PowderError::io(format!("cannot remove `{}`", file.display()), e)
+                })?;
+                if opts.verbose {
+                    eprintln!("removed the later run's {}", file.display());
+                }
+            }
+        }
         // a branch whose cadence falls on the checkpoint's step keeps that row (its straight
         // run has it, and a resumed run does not write its first step); otherwise the row and
         // the snapshots of that step go
@@ -148,6 +167,10 @@ impl RunOutputs {
                         Some(s) => s.keep_until(last, dt)?,
                         None => unopened.keep_until(last, dt)?,
                     }
+                }
+                let others = cut_scenes.iter().filter(|n| **n != scene.name);
+                for mut s in others.flat_map(|n| vtk::Series::both_unopened(d, n)) {
+                    s.keep_until(last, dt)?;
                 }
             }
             None => Self::clear_earlier_run(d, scene, opts.verbose)?,
