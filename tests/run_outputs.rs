@@ -536,7 +536,9 @@ fn a_run_ended_off_the_cadence_and_extended_keeps_its_last_row() {
     assert!(rows.contains("\n1250,") && without.as_bytes() == straight_rows);
     shots.retain(|f| !f.ends_with("_0000001250.vtp"));
     assert_eq!(shots, straight_shots);
-    // resumed to the same end (nothing to run), its last row stays
+    // resumed to the same end (nothing to run), its last row stays, and its summary (the
+    // run's start and wall time were replaced by those of no steps)
+    let summary = std::fs::read(straight.path().join("summary.json")).unwrap();
     let again = run(
         &scene,
         straight.path(),
@@ -546,6 +548,10 @@ fn a_run_ended_off_the_cadence_and_extended_keeps_its_last_row() {
     assert_eq!(again.steps, 2000);
     let rows = std::fs::read_to_string(straight.path().join("series.csv")).unwrap();
     assert!(rows.lines().last().unwrap().starts_with("2000,"), "{rows}");
+    assert_eq!(
+        std::fs::read(straight.path().join("summary.json")).unwrap(),
+        summary
+    );
 }
 
 /// A branch resumed with another `output_every` keeps the rows and snapshots its first run
@@ -1594,12 +1600,17 @@ fn a_renamed_branch_removes_the_killed_runs_later_snapshots() {
     run(&renamed, killed.path(), 2000, Some(&ckpt));
     let (_, _, shots) = run_files(killed.path());
     let name = &scene.name;
-    let old: Vec<&String> = shots.iter().filter(|f| f.starts_with(name.as_str())).collect();
+    let old: Vec<&String> = shots
+        .iter()
+        .filter(|f| f.starts_with(name.as_str()))
+        .collect();
     assert!(
         old.iter().all(|f| !f.contains("1500")) && old.iter().any(|f| f.contains("1000")),
         "{old:?}"
     );
     let pvd = std::fs::read_to_string(killed.path().join(format!("{name}.pvd"))).unwrap();
     assert!(!pvd.contains("1500") && pvd.contains("1000"), "{pvd}");
-    assert!(shots.iter().any(|f| f.starts_with("renamed") && f.contains("2000")));
+    assert!(shots
+        .iter()
+        .any(|f| f.starts_with("renamed") && f.contains("2000")));
 }

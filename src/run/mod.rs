@@ -401,7 +401,12 @@ pub fn run_with<S: Simulation>(
         tabor,
         servo,
     };
-    outputs.write_summary(&summary)?;
+    // (a resume with nothing to run keeps the summary of the run that reached its step: the
+    // run's start and wall time would go)
+    let ran_none = resumed_from.is_some() && engine.steps() == start_steps;
+    if !(ran_none && outputs.has_summary()) {
+        outputs.write_summary(&summary)?;
+    }
     Ok(summary)
 }
 

@@ -373,6 +373,11 @@ impl RunOutputs {
         })
     }
 
+    /// Whether the folder holds a `summary.json`.
+    pub(super) fn has_summary(&self) -> bool {
+        self.dir().is_some_and(|d| d.join("summary.json").is_file())
+    }
+
     /// Writes `summary.json`, where the run writes a folder.
     pub(super) fn write_summary(&self, summary: &RunSummary) -> Result<(), PowderError> {
         if let Some(d) = self.dir() {
