@@ -396,6 +396,21 @@ fn a_failure_is_named_at_its_own_step_on_any_cadence() {
     assert_eq!(on_gpu, on_gpu_stepwise);
     let gpu_at = step_of(&on_gpu);
     assert!(gpu_at.abs_diff(at) <= 1, "{on_gpu} against {chunked}");
+    // an overlap beyond the limit names the partner on both backends (the GPU's monitor
+    // keeps the particle only: the run finds the partner from the positions)
+    let violent = pair_scene(DtSetting::Auto, false, 3.0, 0.1);
+    let cpu_err = run_cpu_with(&violent, &RunOptions::default(), |_| {})
+        .unwrap_err()
+        .to_string();
+    let Some(ctx) = gpu() else { return };
+    let gpu_err = run_gpu_with(&violent, ctx, &RunOptions::default(), |_| {})
+        .unwrap_err()
+        .to_string();
+    for e in [&cpu_err, &gpu_err] {
+        let named = e.contains("particle 0 overlaps particle 1")
+            || e.contains("particle 1 overlaps particle 0");
+        assert!(named && e.contains("reduced radius"), "{e}");
+    }
 }
 
 /// A settled cohesive packing held for 10⁶ steps: the energy ledger may not drift by more

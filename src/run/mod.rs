@@ -266,9 +266,8 @@ pub fn run_with<S: Simulation>(
         let scale_before = scale;
         let stepped = engine.run_steps(chunk).and_then(|()| {
             let obs = engine.observe()?;
-            let now = obs.energies;
-            let scale = energy_scale(scale, &now, &start);
-            monitor(&mut engine, dt_rule, scene.pours(), (&now, &start), scale)?;
+            let scale = energy_scale(scale, &obs.energies, &start);
+            monitor(&mut engine, dt_rule, scene, (&obs, &start), scale)?;
             Ok((obs, scale))
         });
         let obs = match stepped {
@@ -285,8 +284,7 @@ pub fn run_with<S: Simulation>(
                 // failed (the chunk's end may be up to 1000 steps later, its values wild)
                 engine.restore(before)?;
                 let before = engine.save()?;
-                let pours = scene.pours();
-                let e = first_failure(&mut engine, chunk, dt_rule, pours, &start, scale_before)
+                let e = first_failure(&mut engine, chunk, dt_rule, scene, &start, scale_before)
                     .unwrap_or(e);
                 engine.restore(before)?;
                 let saved = outputs.checkpoint(scene, &engine, reference(scale));

@@ -39,13 +39,14 @@ pub const ROUNDING_ULPS: f64 = 16.0;
 pub(super) fn monitor(
     engine: &mut impl Simulation,
     dt_rule: &str,
-    pours: bool,
-    (now, start): (&ObservedEnergies, &ObservedEnergies),
+    scene: &Scene,
+    (obs, start): (&Observation, &ObservedEnergies),
     scale: f64,
 ) -> Result<(), PowderError> {
     let steps = engine.steps();
+    let now = &obs.energies;
     // (a batch poured onto particles still in its region overlaps them: no push aside)
-    let poured = match pours {
+    let poured = match scene.pours() {
         true => ", or particles appeared where earlier ones still were (a pour's region must have emptied before its next batch: *Pouring* in the README)",
         false => "",
     };
@@ -60,9 +61,14 @@ pub(super) fn monitor(
     }
     if let Some(peak) = engine.take_peak_overlap() {
         if peak.ratio > MAX_OVERLAP_RATIO {
+            // (a backend that knows only the particle: its partner from the positions)
+            let who = peak
+                .unnamed
+                .and_then(|i| deepest_partner(scene, obs, engine.radii(), i))
+                .unwrap_or(peak.who);
             return Err(PowderError::Run(format!(
                 "step {steps}: {} by {} of the reduced radius (limit {MAX_OVERLAP_RATIO}); an impact or a load (gravity, adhesion, a wall) is too strong for the contact stiffness, or {hint}",
-                peak.who,
+                who,
                 match peak.ratio < 1e3 {
                     true => format!("{:.3}", peak.ratio),
                     false => format!("{:.3e}", peak.ratio),
@@ -109,7 +115,7 @@ pub(super) fn first_failure(
     engine: &mut impl Simulation,
     steps: u64,
     dt_rule: &str,
-    pours: bool,
+    scene: &Scene,
     start: &ObservedEnergies,
     mut scale: f64,
 ) -> Option<PowderError> {
@@ -117,9 +123,9 @@ pub(super) fn first_failure(
     engine.take_peak_overlap();
     for _ in 0..steps {
         let stepped = engine.run_steps(1).and_then(|()| {
-            let now = engine.observe()?.energies;
-            scale = energy_scale(scale, &now, start);
-            monitor(engine, dt_rule, pours, (&now, start), scale)
+            let obs = engine.observe()?;
+            scale = energy_scale(scale, &obs.energies, start);
+            monitor(engine, dt_rule, scene, (&obs, start), scale)
         });
         if let Err(e) = stepped {
             return Some(e);
@@ -143,4 +149,28 @@ pub(super) fn energy_scale(scale: f64, now: &ObservedEnergies, initial: &Observe
         .max(now.elastic.unwrap_or(0.0).abs())
         .max((now.gravitational - initial.gravitational).abs())
         .max(walls.abs())
+}
+
+/// "particle i overlaps particle j" (or "wall w"): the partner particle `i` overlaps
+/// deepest over the pair's a12 at the positions `obs` holds (minimum image on periodic
+/// axes), for a backend whose monitor names only the particle; `None` where it overlaps
+/// nothing there.
+fn deepest_partner(scene: &Scene, obs: &Observation, radii: &[f64], i: usize) -> Option<String> {
+    let (x, r) = (*obs.positions.get(i)?, *radii.get(i)?);
+    let d = &scene.domain;
+    let domain = (
+        glam::DVec3::from_array(d.min),
+        glam::DVec3::from_array(d.max),
+    );
+    let pairs = (0..obs.positions.len()).filter(|&j| j != i).map(|j| {
+        let gap = crate::cpu::engine::minimum_image(obs.positions[j] - x, d.periodic, domain);
+        let a12 = 2.0 * r * radii[j] / (r + radii[j]);
+        ((r + radii[j] - gap.length()) / a12, format!("particle {j}"))
+    });
+    let walls = (scene.walls.iter().zip(&obs.wall_points).enumerate()).map(|(w, (wall, p))| {
+        let n = glam::DVec3::from_array(wall.normal).normalize();
+        ((r - (x - *p).dot(n)) / (2.0 * r), format!("wall {w}"))
+    });
+    let (ratio, partner) = pairs.chain(walls).max_by(|a, b| a.0.total_cmp(&b.0))?;
+    (ratio > 0.0).then(|| format!("particle {i} overlaps {partner}"))
 }

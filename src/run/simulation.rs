@@ -40,6 +40,9 @@ pub struct PeakOverlap {
     pub ratio: f64,
     /// "particle 3 overlaps particle 7", or what the backend knows.
     pub who: String,
+    /// The particle whose partner the backend does not know (the GPU's monitor keeps the
+    /// particle only): the run's monitor finds it from the positions.
+    pub unnamed: Option<usize>,
 }
 
 /// A backend as `powder run` drives it.
@@ -191,6 +194,7 @@ impl Simulation for CpuEngine {
                 Partner::Particle(j) => format!("particle {i} overlaps particle {j}"),
                 Partner::Wall(w) => format!("particle {i} overlaps wall {w}"),
             },
+            unnamed: None,
         })
     }
     fn escaped(&self, limit: usize) -> Vec<usize> {
@@ -315,6 +319,7 @@ impl Simulation for GpuEngine {
                 Some(i) => format!("particle {i} overlaps a neighbour or wall"),
                 None => "a contact overlaps".into(),
             },
+            unnamed: beyond,
         })
     }
     fn escaped(&self, _limit: usize) -> Vec<usize> {
