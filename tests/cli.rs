@@ -240,17 +240,19 @@ fn run_prints_a_summary_and_rejects_missing_files() {
     );
     // a run that fails before writing leaves no folder it created (nor their parents)
     let parent = tempfile::tempdir().unwrap();
-    let fresh = parent.path().join("fresh").join("a").join("b");
-    let (ok, _, err) = powder(&[
-        "run",
-        scene,
-        "--backend",
-        "cpu",
-        "--out",
-        fresh.to_str().unwrap(),
-        "--resume",
-        "/nonexistent/checkpoint.bin",
-    ]);
+    let fail_into = |out: &std::path::Path| {
+        powder(&[
+            "run",
+            scene,
+            "--backend",
+            "cpu",
+            "--out",
+            out.to_str().unwrap(),
+            "--resume",
+            "/nonexistent/checkpoint.bin",
+        ])
+    };
+    let (ok, _, err) = fail_into(&parent.path().join("fresh").join("a").join("b"));
     assert!(!ok && err.contains("/nonexistent/checkpoint.bin"), "{err}");
     assert!(
         !parent.path().join("fresh").exists() && parent.path().exists(),
@@ -258,17 +260,7 @@ fn run_prints_a_summary_and_rejects_missing_files() {
     );
     // `..` after a new folder: `x` is created and removed, the existing empty `y` is kept
     std::fs::create_dir(parent.path().join("y")).unwrap();
-    let through = parent.path().join("x").join("..").join("y").join("z");
-    let (ok, _, err) = powder(&[
-        "run",
-        scene,
-        "--backend",
-        "cpu",
-        "--out",
-        through.to_str().unwrap(),
-        "--resume",
-        "/nonexistent/checkpoint.bin",
-    ]);
+    let (ok, _, err) = fail_into(&parent.path().join("x").join("..").join("y").join("z"));
     assert!(!ok, "{err}");
     assert!(
         parent.path().join("y").is_dir()

@@ -2,6 +2,7 @@
 //! papers calibrate, energy growth, particles leaving the domain), with a hint.
 
 use super::*;
+use crate::model::PairGeometry;
 
 /// Largest overlap over the reduced radius a12 the run monitor accepts: beyond it the
 /// contact model is outside anything the papers calibrate (overlaps of half a radius).
@@ -164,12 +165,14 @@ fn deepest_partner(scene: &Scene, obs: &Observation, radii: &[f64], i: usize) ->
     );
     let pairs = (0..obs.positions.len()).filter(|&j| j != i).map(|j| {
         let gap = crate::cpu::engine::minimum_image(obs.positions[j] - x, d.periodic, domain);
-        let a12 = 2.0 * r * radii[j] / (r + radii[j]);
+        // (a12 alone matters: the masses are placeholders)
+        let a12 = PairGeometry::spheres(r, radii[j], 1.0, 1.0).a12;
         ((r + radii[j] - gap.length()) / a12, format!("particle {j}"))
     });
     let walls = (scene.walls.iter().zip(&obs.wall_points).enumerate()).map(|(w, (wall, p))| {
         let n = glam::DVec3::from_array(wall.normal).normalize();
-        ((r - (x - *p).dot(n)) / (2.0 * r), format!("wall {w}"))
+        let a12 = PairGeometry::wall(r, 1.0).a12;
+        ((r - (x - *p).dot(n)) / a12, format!("wall {w}"))
     });
     let (ratio, partner) = pairs.chain(walls).max_by(|a, b| a.0.total_cmp(&b.0))?;
     (ratio > 0.0).then(|| format!("particle {i} overlaps {partner}"))

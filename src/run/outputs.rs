@@ -106,7 +106,10 @@ impl RunOutputs {
         }
         // (the scenes whose snapshots a resume cuts: a branch under another name cuts the
         // killed run's too; read before its summary and checkpoint may go)
-        let cut_scenes = super::earlier::replaced_scenes(d, scene);
+        let cut_scenes = match resumed_from {
+            Some(_) => super::earlier::replaced_scenes(d, scene),
+            None => Vec::new(),
+        };
         // a later run's summary and checkpoint go before its rows and snapshots are cut (a
         // kill in between left a folder whose files claimed results it no longer held;
         // `earlier::check` has refused this without --overwrite)

@@ -230,6 +230,26 @@ impl SceneKey {
             .collect();
         parts.join(", ")
     }
+
+    /// What it is, with its unit ("the simulated time, in s").
+    pub fn what(&self) -> String {
+        match self.unit.is_empty() {
+            true => self.doc.to_string(),
+            false => format!("{}, in {}", self.doc, self.unit),
+        }
+    }
+
+    /// Why `value` breaks the rule, naming the key: "`key` (what) must be > 0, got 0"
+    /// (`place`, e.g. `" in [simulation]"`, after the key).
+    pub fn broken(&self, place: &str, value: f64) -> String {
+        format!(
+            "`{}`{place} ({}) must be {}, got {}",
+            self.key,
+            self.what(),
+            self.rule.requirement(value),
+            crate::error::num(value)
+        )
+    }
 }
 
 /// The declaration of `key` in `section`; panics where there is none (a reader's or a
@@ -247,16 +267,7 @@ pub fn check(section: Section, key: &str, value: f64, what: &str) -> Result<(), 
     let k = declared(section, key);
     match k.rule.holds(value) {
         true => Ok(()),
-        false => Err(format!(
-            "{what}: `{key}` ({}{}) must be {}, got {}",
-            k.doc,
-            match k.unit.is_empty() {
-                true => String::new(),
-                false => format!(", in {}", k.unit),
-            },
-            k.rule.requirement(value),
-            crate::error::num(value)
-        )),
+        false => Err(format!("{what}: {}", k.broken("", value))),
     }
 }
 

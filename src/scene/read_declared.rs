@@ -3,7 +3,6 @@
 
 use super::declared::{declared, SceneKey, Section};
 use super::toml_reader::{Res, Tbl};
-use crate::error::num;
 
 impl Tbl<'_> {
     /// `key` of `section`, checked against its declared rule, if present.
@@ -19,7 +18,7 @@ impl Tbl<'_> {
     /// [`Self::number`], required.
     pub(super) fn number_req(&self, section: Section, key: &str) -> Res<f64> {
         self.number(section, key)?
-            .ok_or_else(|| self.missing(key, &what(declared(section, key))))
+            .ok_or_else(|| self.missing(key, &declared(section, key).what()))
     }
 
     /// `key` of `section`, a non-negative integer checked against its declared rule, if
@@ -34,24 +33,6 @@ impl Tbl<'_> {
 
     /// The error for `x` breaking `k`'s rule, at the key.
     fn broken(&self, k: &SceneKey, x: f64) -> super::PowderError {
-        self.err_key(
-            k.key,
-            format!(
-                "`{}` in {} ({}) must be {}, got {}",
-                k.key,
-                self.ctx,
-                what(k),
-                k.rule.requirement(x),
-                num(x)
-            ),
-        )
-    }
-}
-
-/// What a key is, with its unit.
-fn what(k: &SceneKey) -> String {
-    match k.unit.is_empty() {
-        true => k.doc.to_string(),
-        false => format!("{}, in {}", k.doc, k.unit),
+        self.err_key(k.key, k.broken(&format!(" in {}", self.ctx), x))
     }
 }

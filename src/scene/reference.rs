@@ -3,6 +3,7 @@
 
 use super::declared::{Section, SCENE_KEYS};
 use super::OVERLAP_TOLERANCE;
+use crate::model::params::reference::cell;
 use std::fmt::Write;
 
 /// The reference in Markdown: every table's keys, then the checks made at load time.
@@ -73,9 +74,4 @@ fn capitalised(text: &str) -> String {
         Some(first) => first.to_uppercase().chain(chars).collect(),
         None => String::new(),
     }
-}
-
-/// Text safe in a table cell.
-fn cell(text: &str) -> String {
-    text.replace('|', "\\|")
 }

@@ -98,6 +98,6 @@ fn valid(p: &Param) -> String {
 }
 
 /// Text safe in a table cell.
-fn cell(text: &str) -> String {
+pub(crate) fn cell(text: &str) -> String {
     text.replace('|', "\\|")
 }
