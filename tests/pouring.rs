@@ -129,6 +129,83 @@ fn batches_appear_on_time_and_the_ledger_books_them() {
     }
 }
 
+/// A particle that appears next to one at rest interacts with it from the step it appears
+/// in: the lists are rebuilt then (the GPU rebuilt them only once something had moved half
+/// the skin, so a pair formed by an appearance waited, or never came, as here).
+#[test]
+fn a_particle_appearing_in_contact_is_pushed_from_its_first_step() {
+    let r = 1.0e-3;
+    let text = common::builder::SceneBuilder::new("appear", [0.0; 3], [0.01, 0.01, 0.01], 0.002)
+        .material("powder", 2000.0, common::builder::COHESIVE)
+        .particles(
+            "list",
+            &format!("positions = [[0.005, 0.005, 0.005]]\nradius = {r}"),
+        )
+        .particles(
+            "list",
+            &format!(
+                "positions = [[{}, 0.005, 0.005]]\nradius = {r}\ninsert_at = 2e-4",
+                0.005 + 1.99 * r
+            ),
+        )
+        .toml();
+    let scene = Scene::from_toml_str(&text, "appear").unwrap();
+    let mut cpu = CpuEngine::new(&scene).unwrap();
+    let n = (4e-4 / cpu.dt()).round() as u64;
+    cpu.run_steps(n).unwrap();
+    let pushed = |x: &[glam::DVec3]| (x[1].x - x[0].x) - 1.99 * r;
+    let moved = pushed(cpu.positions());
+    assert!(moved > 1e-6 * r, "the CPU pair moved apart by {moved:e} m");
+    let Some(ctx) = gpu() else { return };
+    let mut g = GpuEngine::new(&scene, ctx).unwrap();
+    g.run_steps(n).unwrap();
+    let s = g.state().unwrap();
+    let worst = common::max_distance(cpu.positions(), &s.positions);
+    assert!(
+        worst < 1e-3 * moved,
+        "the GPU pair moved apart by {:e} m, the CPU's by {moved:e} m",
+        pushed(&s.positions)
+    );
+}
+
+/// A particle poured onto one still there stops the run at the step it appears in, with
+/// that cause named (the engines do not push particles aside), on both backends.
+#[test]
+fn a_particle_appearing_inside_another_is_named_as_the_cause() {
+    use powder::run::{run_cpu_with, run_gpu_with, RunOptions};
+    let r = 1.0e-3;
+    let text = common::builder::SceneBuilder::new("onto", [0.0; 3], [0.01, 0.01, 0.01], 0.002)
+        .material("powder", 2000.0, common::builder::COHESIVE)
+        .particles(
+            "list",
+            &format!("positions = [[0.005, 0.005, 0.005]]\nradius = {r}"),
+        )
+        .particles(
+            "list",
+            &format!("positions = [[0.0058, 0.005, 0.005]]\nradius = {r}\ninsert_at = 2e-4"),
+        )
+        .toml();
+    let scene = Scene::from_toml_str(&text, "onto").unwrap();
+    let dt = CpuEngine::new(&scene).unwrap().dt();
+    // (it appears at the start of the first step whose time has reached 2e-4 s)
+    let step = (1..).find(|&k| (k - 1) as f64 * dt >= 2e-4).unwrap();
+    let expected = format!(
+        "step {step}: particle 1 appeared (insert_at = 2e-4 s) where something was already: particle 1 overlaps particle 0 by 1.200"
+    );
+    let cpu = run_cpu_with(&scene, &RunOptions::default(), |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(
+        cpu.starts_with(&expected) && cpu.contains("batch_interval"),
+        "{cpu}"
+    );
+    let Some(ctx) = gpu() else { return };
+    let on_gpu = run_gpu_with(&scene, ctx, &RunOptions::default(), |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(on_gpu.starts_with(&expected), "{on_gpu}");
+}
+
 #[test]
 fn bad_pours_are_refused() {
     let err = |t: String| Scene::from_toml_str(&t, "x").unwrap_err().to_string();

@@ -229,7 +229,7 @@ fn reference_holds(cpu: &mut CpuEngine) -> Result<(), PowderError> {
         return Ok(());
     };
     Err(PowderError::Run(format!(
-        "step {}: the CPU reference went wrong ({why}): the scene itself is unstable (a time step too large for it, or an impact too violent), so its engines are not compared; `powder run --backend cpu` stops there too, with a hint",
+        "by step {}: the CPU reference went wrong ({why}): the scene itself is unstable (a time step too large for it, an impact too violent, or particles poured onto others), so its engines are not compared; `powder run --backend cpu` stops there too, naming the step and the cause",
         cpu.steps
     )))
 }

@@ -132,6 +132,11 @@ impl GpuEngine {
         }
         if changed {
             self.write_appeared();
+            // the lists hold no pair of a particle that had not appeared: rebuild them
+            // before the next step's forces, as the CPU does
+            self.ctx
+                .queue
+                .write_buffer(&self.b.control, SKIN_OFFSET, bytemuck::bytes_of(&1u32));
         }
         next
     }
