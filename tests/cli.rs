@@ -716,6 +716,95 @@ fn compare_reports_deviations_and_fails_beyond_thresholds() {
     );
 }
 
+/// 27 cohesive spheres with friction, thrown together in a periodic box: a chaotic scene,
+/// whose f32 and f64 runs separate within a few thousand steps.
+fn chaotic_cluster() -> String {
+    let (l, mut seed) = (0.0066f64, 3u64);
+    let mut uniform = |a: f64| {
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        a * (2.0 * (seed >> 11) as f64 / (1u64 << 53) as f64 - 1.0)
+    };
+    let (mut pos, mut vel) = (Vec::new(), Vec::new());
+    for k in 0..27 {
+        let at = |c: usize| (c as f64 + 0.5) * l / 3.0;
+        let p = [at(k % 3), at(k / 3 % 3), at(k / 9)].map(|x| x + uniform(5e-5));
+        pos.push(format!("[{}, {}, {}]", p[0], p[1], p[2]));
+        let v = [(); 3].map(|_| uniform(0.3));
+        vel.push(format!("[{}, {}, {}]", v[0], v[1], v[2]));
+    }
+    format!(
+        "[domain]\nmin = [0.0, 0.0, 0.0]\nmax = [{l}, {l}, {l}]\nperiodic = [true, true, true]\n\
+         [simulation]\nduration = 0.05\n\
+         [[material]]\nname = \"p\"\ndensity = 2000.0\nmodel = \"hysteretic\"\nk1 = 100.0\n\
+         kp = 500.0\nkc = 100.0\nphi_f = 0.05\ngamma0 = 1e-3\nfriction = 0.3\n\
+         [[particles]]\nkind = \"list\"\nradius = 1e-3\npositions = [{}]\nvelocities = [{}]\n",
+        pos.join(", "),
+        vel.join(", ")
+    )
+}
+
+/// `--perturbed` runs the CPU reference a second time from positions moved by 1e-6 of the
+/// radii and judges each measure only up to the sample where that run has separated beyond
+/// a tenth of the measure's tolerance: a chaotic scene that fails a plain comparison passes,
+/// each measure judged before its horizon and named after it; a scene that stays
+/// predictable has every measure judged throughout.
+#[test]
+fn compare_judges_each_measure_up_to_its_chaos_horizon() {
+    let (ok, _, err) = powder(&["compare", CLUSTER, "--perturbed", "0.1"]);
+    assert!(
+        !ok && err.contains("perturbation") && err.contains("(0, 1e-3]"),
+        "{err}"
+    );
+    if !gpu_available() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("chaotic.toml");
+    std::fs::write(&scene, chaotic_cluster()).unwrap();
+    let scene = scene.to_str().unwrap();
+    let args = [
+        "compare", scene, "--steps", "8000", "--every", "2000", "--json",
+    ];
+    let (ok, out, err) = powder(&args);
+    assert!(!ok, "the plain comparison fails on chaos: {out}{err}");
+    let (ok, out, err) = powder(&[&args[..], &["--perturbed"]].concat());
+    assert!(ok, "{out}{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["perturbation"], 1e-6);
+    let horizon = v["horizon"].as_object().unwrap();
+    for measure in ["position", "velocity", "history"] {
+        let from = horizon[measure].as_u64().unwrap();
+        for s in v["samples"].as_array().unwrap() {
+            let past = s["chaotic"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .any(|m| m == measure);
+            assert_eq!(past, s["step"].as_u64().unwrap() >= from, "{measure}: {s}");
+            assert!(s["floor"][measure].is_number());
+        }
+    }
+    let first = &v["samples"][0];
+    assert!(first["chaotic"].as_array().unwrap().len() < 6, "{first}");
+    // the cohesive cluster's fall: nothing separates, every measure judged
+    let (ok, out, err) = powder(&[
+        "compare",
+        CLUSTER,
+        "--steps",
+        "2000",
+        "--every",
+        "500",
+        "--json",
+        "--perturbed",
+    ]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["horizon"], serde_json::json!({}));
+    assert!(v["samples"][3]["floor"]["position"].as_f64().unwrap() > 0.0);
+}
+
 #[test]
 fn info_names_the_adapter() {
     if !gpu_available() {

@@ -19,6 +19,13 @@ pub(crate) struct CompareArgs {
     /// displacement of the common contacts, relative, 1e-2); repeatable.
     #[arg(long = "tolerance", value_name = "KEY=VALUE")]
     tolerance: Vec<String>,
+    /// Also run the CPU reference from positions moved by SIZE × each radius (default 1e-6:
+    /// a force-balanced cohesive cluster separates from the reference on the GPU's f32 as
+    /// fast as with 1e-6, a falling cloud as with 1e-7) and judge each measure only until that
+    /// run separates beyond a tenth of its tolerance: the scene's chaos horizon, past which
+    /// no run that differs by rounding can follow the reference.
+    #[arg(long, value_name = "SIZE", num_args = 0..=1, default_missing_value = "1e-6")]
+    perturbed: Option<f64>,
     /// Print JSON on stdout.
     #[arg(long)]
     json: bool,
@@ -26,7 +33,7 @@ pub(crate) struct CompareArgs {
 
 /// Runs `compare`; `Ok(false)` when a threshold was exceeded.
 pub(crate) fn compare_cmd(a: &CompareArgs) -> Result<bool, PowderError> {
-    use powder::measure::compare::{compare, Tolerances};
+    use powder::measure::compare::{compare_perturbed, Tolerances, CHAOS_MARGIN};
     let mut tol = Tolerances::default();
     for t in &a.tolerance {
         let bad = || {
@@ -56,7 +63,7 @@ pub(crate) fn compare_cmd(a: &CompareArgs) -> Result<bool, PowderError> {
         .map(|r| ((scene.duration / r.dt).ceil() as u64).clamp(1, 2000))?;
     let steps = a.steps.unwrap_or(total);
     let every = a.every.unwrap_or((steps / 10).max(1));
-    let c = compare(&scene, ctx, steps, every, tol)?;
+    let c = compare_perturbed(&scene, ctx, steps, every, tol, a.perturbed)?;
     if a.json {
         let text = serde_json::to_string_pretty(&c)
             .map_err(|e| PowderError::Run(format!("cannot encode JSON: {e}")))?;
@@ -96,8 +103,30 @@ pub(crate) fn compare_cmd(a: &CompareArgs) -> Result<bool, PowderError> {
                 s.energy,
                 s.history,
                 s.history_pairs,
-                s.exceeded.join(",")
+                s.exceeded.join(","),
             );
+            // the perturbed reference's own deviations, under the GPU's
+            if let Some(f) = &s.floor {
+                println!(
+                    "{:>7} {:>10} {:>9.2e} {:>9.2e} {:>9.2e} {:>12} {:>12} {:>10} {:>10} {:>9.2e} {:>9.2e} {:>9}  {}",
+                    "",
+                    "perturbed",
+                    f["position"],
+                    f["velocity"],
+                    f["kinetic"],
+                    "",
+                    format!("Δ {:.2e}", f["contacts"]),
+                    "",
+                    "",
+                    f["energy"],
+                    f["history"],
+                    "",
+                    match s.chaotic.is_empty() {
+                        true => String::new(),
+                        false => format!("not judged: {}", s.chaotic.join(",")),
+                    }
+                );
+            }
         }
         let t = &c.tolerances;
         println!(
@@ -110,6 +139,18 @@ pub(crate) fn compare_cmd(a: &CompareArgs) -> Result<bool, PowderError> {
             t.history,
             if c.passed { "PASS" } else { "FAIL" }
         );
+        if let Some(p) = c.perturbation {
+            let from: Vec<String> = (c.horizon.iter())
+                .map(|(name, step)| format!("{name} from step {step}"))
+                .collect();
+            println!(
+                "chaos horizon (a CPU run from positions moved by {p:e} of each radius beyond 1/{CHAOS_MARGIN} of a tolerance): {}",
+                match from.is_empty() {
+                    true => "not reached; every measure judged at every sample".to_string(),
+                    false => from.join(", "),
+                }
+            );
+        }
     }
     Ok(c.passed)
 }
