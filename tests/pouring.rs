@@ -168,6 +168,44 @@ fn a_particle_appearing_in_contact_is_pushed_from_its_first_step() {
     );
 }
 
+/// A particle enters at the start of the first step k whose k·dt has reached its time, on
+/// both backends: the CPU had compared the summed time, which rounds below 1000·dt after
+/// 1000 steps of 1e-5 s, and inserted a step after the GPU (the reviewer's case).
+#[test]
+fn both_backends_insert_at_the_step_whose_start_reaches_the_time() {
+    let r = 1.0e-3;
+    let text = common::builder::SceneBuilder::new("late", [0.0; 3], [0.02, 0.02, 0.02], 0.0102)
+        .simulation("dt", "1e-5")
+        .material("powder", 2000.0, common::builder::COHESIVE)
+        .particles(
+            "list",
+            &format!("positions = [[0.005, 0.005, 0.01]]\nradius = {r}"),
+        )
+        .particles(
+            "list",
+            &format!(
+                "positions = [[0.015, 0.015, 0.01]]\nradius = {r}\ninsert_at = 0.01\n\
+                 velocity = [0.0, 0.0, -1.0]"
+            ),
+        )
+        .toml();
+    let scene = Scene::from_toml_str(&text, "late").unwrap();
+    let mut cpu = CpuEngine::new(&scene).unwrap();
+    let first = (1..)
+        .find(|&k: &u64| (k - 1) as f64 * 1e-5 >= 0.01)
+        .unwrap();
+    cpu.run_steps(first - 1).unwrap();
+    assert!(!cpu.is_active(1), "active after {} steps", first - 1);
+    cpu.run_steps(1).unwrap();
+    assert!(cpu.is_active(1), "not active after {first} steps");
+    cpu.run_steps(9).unwrap();
+    let Some(ctx) = gpu() else { return };
+    let mut g = GpuEngine::new(&scene, ctx).unwrap();
+    g.run_steps(first + 9).unwrap();
+    let d = (g.state().unwrap().positions[1] - cpu.positions()[1]).length();
+    assert!(d < 1e-6 * r, "the poured particle {d:e} m apart");
+}
+
 /// A particle poured onto one still there stops the run at the step it appears in, with
 /// that cause named (the engines do not push particles aside), on both backends.
 #[test]

@@ -145,11 +145,14 @@ impl CpuEngine {
     /// Activates the particles whose insertion time has come (at the start of a step whose
     /// time has reached it), booking the energy they bring.
     fn insert_due(&mut self) {
-        if self.time < self.next_insert {
+        // (step k starts at k·dt, as the GPU decides it, not at the summed time, which can
+        // round below it and insert a step late)
+        let now = self.steps as f64 * self.dt;
+        if now < self.next_insert {
             return;
         }
         for i in 0..self.pos.len() {
-            if !self.active[i] && self.insert_at[i] <= self.time {
+            if !self.active[i] && self.insert_at[i] <= now {
                 self.active[i] = true;
                 // the list must take the newcomer's pairs
                 self.rebuild_due = true;
