@@ -150,6 +150,12 @@ pub(crate) fn compare_cmd(a: &CompareArgs) -> Result<bool, PowderError> {
                     false => from.join(", "),
                 }
             );
+            if !c.never_judged.is_empty() {
+                println!(
+                    "never judged (past the horizon at the first sample), so no pass: {}; sample sooner (--every), or leave a measure out with --tolerance KEY=inf",
+                    c.never_judged.join(", ")
+                );
+            }
         }
     }
     Ok(c.passed)

@@ -11,6 +11,7 @@ pub(crate) use fits::engine_fits;
 mod monitor;
 pub mod observed;
 mod outputs;
+mod overlap_partner;
 mod servo;
 pub mod simulation;
 mod snapshot;

@@ -1,8 +1,8 @@
 //! The run monitor: what must stop a run (non-finite values, overlaps beyond what the
 //! papers calibrate, energy growth, particles leaving the domain), with a hint.
 
+use super::overlap_partner::{appeared_inside, deepest_partner};
 use super::*;
-use crate::model::PairGeometry;
 
 /// Largest overlap over the reduced radius a12 the run monitor accepts: beyond it the
 /// contact model is outside anything the papers calibrate (overlaps of half a radius).
@@ -62,15 +62,15 @@ pub(super) fn monitor(
     }
     if let Some(peak) = engine.take_peak_overlap() {
         if peak.ratio > MAX_OVERLAP_RATIO {
-            let (radii, time, dt) = (engine.radii(), engine.time(), engine.dt());
-            if let Some(inside) = appeared_inside(scene, obs, radii, time, dt) {
+            let (radii, dt) = (engine.radii(), engine.dt());
+            if let Some(inside) = appeared_inside(scene, obs, radii, steps, dt) {
                 return Err(PowderError::Run(format!("step {steps}: {inside}")));
             }
             // (a backend that knows only a particle beyond the limit, not necessarily the
             // deepest: its partner, and their own overlap, from the positions)
             let (ratio, who) = peak
                 .unnamed
-                .and_then(|i| deepest_partner(scene, obs, radii, i, |_| true))
+                .and_then(|i| deepest_partner(scene, obs, radii, i, steps, dt))
                 .unwrap_or((peak.ratio, peak.who));
             return Err(PowderError::Run(format!(
                 "step {steps}: {who} by {} of the reduced radius (limit {MAX_OVERLAP_RATIO}); an impact or a load (gravity, adhesion, a wall) is too strong for the contact stiffness, or {hint}",
@@ -154,64 +154,4 @@ pub(super) fn energy_scale(scale: f64, now: &ObservedEnergies, initial: &Observe
         .max(now.elastic.unwrap_or(0.0).abs())
         .max((now.gravitational - initial.gravitational).abs())
         .max(walls.abs())
-}
-
-/// Where a particle that appeared in the last few steps (pouring) overlaps an earlier one
-/// or a wall by more than [`MAX_OVERLAP_RATIO`]: the cause, named, with what to change. At `time`
-/// (after the step), a particle has appeared where `insert_at <= time - dt` (it enters at
-/// the start of the first step whose time has reached it).
-fn appeared_inside(
-    scene: &Scene,
-    obs: &Observation,
-    radii: &[f64],
-    time: f64,
-    dt: f64,
-) -> Option<String> {
-    let insert_at = |i: usize| scene.particles.get(i).map_or(0.0, |p| p.insert_at);
-    let active = |j: usize| insert_at(j) <= time - 0.5 * dt;
-    (0..obs.positions.len())
-        .filter(|&i| active(i) && insert_at(i) > 0.0 && insert_at(i) > time - 3.0 * dt)
-        .filter_map(|i| {
-            let earlier = |j: usize| active(j) && insert_at(j) < insert_at(i);
-            let (ratio, who) = deepest_partner(scene, obs, radii, i, earlier)?;
-            (ratio > MAX_OVERLAP_RATIO).then(|| format!(
-                "particle {i} appeared (insert_at = {:e} s) where something was already: {who} by {ratio:.3} of the reduced radius (limit {MAX_OVERLAP_RATIO}); the engine does not push particles aside, so a pour's region must have emptied before its next batch appears there: lengthen `batch_interval`, move the region or pour fewer particles a batch (*Pouring* in the README)",
-                insert_at(i)
-            ))
-        })
-        .next()
-}
-
-/// "particle i overlaps particle j" (or "wall w") with the ratio: the partner (one that
-/// `partner` admits, and every wall) particle `i` overlaps deepest over the pair's a12 at
-/// the positions `obs` holds (minimum image on periodic axes), for a backend whose monitor
-/// names only the particle; `None` where it overlaps nothing there.
-fn deepest_partner(
-    scene: &Scene,
-    obs: &Observation,
-    radii: &[f64],
-    i: usize,
-    partner: impl Fn(usize) -> bool,
-) -> Option<(f64, String)> {
-    let (x, r) = (*obs.positions.get(i)?, *radii.get(i)?);
-    let d = &scene.domain;
-    let domain = (
-        glam::DVec3::from_array(d.min),
-        glam::DVec3::from_array(d.max),
-    );
-    let pairs = (0..obs.positions.len())
-        .filter(|&j| j != i && partner(j))
-        .map(|j| {
-            let gap = crate::cpu::engine::minimum_image(obs.positions[j] - x, d.periodic, domain);
-            // (a12 alone matters: the masses are placeholders)
-            let a12 = PairGeometry::spheres(r, radii[j], 1.0, 1.0).a12;
-            ((r + radii[j] - gap.length()) / a12, format!("particle {j}"))
-        });
-    let walls = (scene.walls.iter().zip(&obs.wall_points).enumerate()).map(|(w, (wall, p))| {
-        let n = glam::DVec3::from_array(wall.normal).normalize();
-        let a12 = PairGeometry::wall(r, 1.0).a12;
-        ((r - (x - *p).dot(n)) / a12, format!("wall {w}"))
-    });
-    let (ratio, partner) = pairs.chain(walls).max_by(|a, b| a.0.total_cmp(&b.0))?;
-    (ratio > 0.0).then(|| (ratio, format!("particle {i} overlaps {partner}")))
 }

@@ -35,13 +35,13 @@ impl Hasher for CellHasher {
 
 type Cell = (i64, i64, i64);
 
-pub(super) struct Grid {
+pub(crate) struct Grid {
     cell: f64,
     map: HashMap<Cell, Vec<usize>, BuildHasherDefault<CellHasher>>,
 }
 
 impl Grid {
-    pub(super) fn new(cell: f64) -> Self {
+    pub(crate) fn new(cell: f64) -> Self {
         Self {
             cell: if cell > 0.0 { cell } else { 1.0 },
             map: HashMap::default(),
@@ -53,13 +53,13 @@ impl Grid {
         (c(p[0]), c(p[1]), c(p[2]))
     }
 
-    pub(super) fn insert(&mut self, i: usize, p: [f64; 3]) {
+    pub(crate) fn insert(&mut self, i: usize, p: [f64; 3]) {
         let c = self.cell_of(p);
         self.map.entry(c).or_default().push(i);
     }
 
     /// Indices of all points in cells that may hold a point within `reach` of `p`.
-    pub(super) fn neighbours(&self, p: [f64; 3], reach: f64) -> impl Iterator<Item = usize> + '_ {
+    pub(crate) fn neighbours(&self, p: [f64; 3], reach: f64) -> impl Iterator<Item = usize> + '_ {
         let lo = self.cell_of([p[0] - reach, p[1] - reach, p[2] - reach]);
         let hi = self.cell_of([p[0] + reach, p[1] + reach, p[2] + reach]);
         (lo.0..=hi.0).flat_map(move |x| {

@@ -15,7 +15,7 @@ mod checks;
 pub mod declared;
 #[cfg(test)]
 mod declared_tests;
-mod hash_grid;
+pub(crate) mod hash_grid;
 mod keys;
 mod parse;
 mod particles;

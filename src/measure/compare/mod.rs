@@ -167,6 +167,10 @@ pub struct Comparison {
     /// Each measure's chaos horizon: the first sample's step at which the perturbed
     /// reference had separated beyond a tenth of that measure's tolerance.
     pub horizon: BTreeMap<&'static str, u64>,
+    /// The measures past their horizon at the first sample, so never judged: the
+    /// comparison does not pass (sample sooner, or leave the measure out with an infinite
+    /// tolerance).
+    pub never_judged: Vec<&'static str>,
 }
 
 /// A measure is judged while the perturbed reference stays within its tolerance over this:
@@ -245,6 +249,24 @@ pub fn compare_perturbed(
         .into());
     }
     let mut cpu = CpuEngine::new(scene)?;
+    if let Some(p) = perturbation {
+        // (the perturbation alone must leave room under the position tolerance)
+        let radii = cpu.radii();
+        let r_min = radii.iter().copied().fold(f64::INFINITY, f64::min);
+        let r_max = radii.iter().copied().fold(0.0, f64::max);
+        let budget = tol.position / CHAOS_MARGIN;
+        if p * r_max / r_min > budget {
+            return Err(crate::ParamError::new(
+                "perturbed",
+                format!(
+                    "a perturbation of {p:e} moves the largest particles by {:.3e} of the smallest radius, beyond a tenth of the position tolerance ({budget:e}): position could never be judged; choose a perturbation below {:.3e}",
+                    p * r_max / r_min,
+                    budget * r_min / r_max
+                ),
+            )
+            .into());
+        }
+    }
     let mut perturbed = match perturbation {
         Some(p) => Some(CpuEngine::new(&perturbed_scene(scene, p))?),
         None => None,
@@ -265,13 +287,20 @@ pub fn compare_perturbed(
     let every = every.max(1);
     let mut samples = Vec::new();
     let mut horizon = BTreeMap::new();
+    let mut perturbed_failed = false;
     let mut done = 0;
     while done < steps {
         let chunk = every.min(steps - done);
         cpu.run_steps(chunk)?;
         reference_holds(&mut cpu)?;
+        // (a perturbed run that fails is past every horizon: its deviations are NaN)
+        let mut failed = false;
         if let Some(p) = &mut perturbed {
-            p.run_steps(chunk)?;
+            failed = p.run_steps(chunk).is_err();
+        }
+        if failed {
+            perturbed = None;
+            perturbed_failed = true;
         }
         gpu.run_steps(chunk)?;
         done += chunk;
@@ -287,10 +316,16 @@ pub fn compare_perturbed(
             histories: gpu.contact_histories()?,
         };
         let d = deviations(scene, &reference, &on_gpu, keeps_delta_max);
-        let floor = perturbed.as_ref().map(|p| {
-            let f = deviations(scene, &reference, &Other::cpu(p), keeps_delta_max);
-            BTreeMap::from(f.named())
-        });
+        let floor = match (&perturbed, perturbed_failed) {
+            (Some(p), _) => {
+                let f = deviations(scene, &reference, &Other::cpu(p), keeps_delta_max);
+                Some(BTreeMap::from(f.named()))
+            }
+            (None, true) => Some(BTreeMap::from(
+                tol.named().map(|(name, _)| (name, f64::NAN)),
+            )),
+            (None, false) => None,
+        };
         let (exceeded, chaotic) = judge(&d.named(), &tol, floor.as_ref(), &mut horizon, cpu.steps);
         let sc = &reference.stats;
         samples.push(Sample {
@@ -320,7 +355,13 @@ pub fn compare_perturbed(
             chaotic,
         });
     }
-    let passed = samples.iter().all(|s| s.exceeded.is_empty());
+    // (a measure past its horizon at the first sample was never judged: no verdict on it)
+    let first = samples.first().map_or(0, |s| s.step);
+    let never_judged: Vec<&'static str> = (horizon.iter())
+        .filter(|&(_, &step)| step == first)
+        .map(|(&name, _)| name)
+        .collect();
+    let passed = samples.iter().all(|s| s.exceeded.is_empty()) && never_judged.is_empty();
     Ok(Comparison {
         scene: scene.name.clone(),
         adapter: gpu.adapter().to_string(),
@@ -332,6 +373,7 @@ pub fn compare_perturbed(
         passed,
         perturbation,
         horizon,
+        never_judged,
     })
 }
 
@@ -376,6 +418,14 @@ fn perturbed_scene(scene: &Scene, size: f64) -> Scene {
             .unwrap_or(glam::DVec3::X);
         for (a, x) in p.position.iter_mut().enumerate() {
             *x += size * p.radius * u[a];
+            // (back into the box on a periodic axis, as the engines wrap)
+            let (lo, hi) = (scene.domain.min[a], scene.domain.max[a]);
+            if scene.domain.periodic[a] && !(lo..hi).contains(x) {
+                *x = lo + (*x - lo).rem_euclid(hi - lo);
+                if *x >= hi {
+                    *x = lo;
+                }
+            }
         }
     }
     s
@@ -440,6 +490,22 @@ mod tests {
         }
         assert!(moves.windows(2).all(|w| w[0].angle_between(w[1]) > 1e-3));
         assert_eq!(perturbed_scene(&scene, 1e-6).particles, p.particles);
+        // a particle on a periodic face stays inside the box, whichever way it moves
+        let mut on_face = scene.clone();
+        on_face.domain.periodic = [true, true, false];
+        for q in &mut on_face.particles {
+            (q.position[0], q.position[1]) = (on_face.domain.min[0], on_face.domain.min[1]);
+        }
+        let d = &on_face.domain;
+        for q in perturbed_scene(&on_face, 1e-6).particles {
+            for a in 0..2 {
+                assert!(
+                    (d.min[a]..d.max[a]).contains(&q.position[a]),
+                    "{:?}",
+                    q.position
+                );
+            }
+        }
     }
 
     #[test]

@@ -1,0 +1,123 @@
+//! Who overlaps whom, found on the host from the positions read back: the partner of a
+//! particle the GPU's monitor names alone, and a particle poured onto another, named as the
+//! cause of a run's failure.
+
+use crate::cpu::engine::minimum_image;
+use crate::model::PairGeometry;
+use crate::run::simulation::Observation;
+use crate::run::MAX_OVERLAP_RATIO;
+use crate::scene::hash_grid::Grid;
+use crate::scene::Scene;
+use glam::DVec3;
+
+/// When each particle appears, s (0: from the start).
+fn insert_at(scene: &Scene, i: usize) -> f64 {
+    scene.particles.get(i).map_or(0.0, |p| p.insert_at)
+}
+
+/// Whether particle `j` has appeared by the end of step `steps`: it enters at the start of
+/// the first step k whose k·dt has reached its time, on both engines.
+fn appeared(scene: &Scene, j: usize, steps: u64, dt: f64) -> bool {
+    let t = insert_at(scene, j);
+    t <= 0.0 || (steps > 0 && t <= (steps - 1) as f64 * dt)
+}
+
+/// Particle `i`'s deepest overlap over the pair's a12 with a particle of `partners` or a
+/// wall, at the positions `obs` holds (minimum image on periodic axes), as the ratio and
+/// "particle i overlaps particle j" (or "wall w"); `None` where it overlaps nothing.
+fn deepest_of(
+    scene: &Scene,
+    obs: &Observation,
+    radii: &[f64],
+    i: usize,
+    partners: impl Iterator<Item = usize>,
+) -> Option<(f64, String)> {
+    let (x, r) = (*obs.positions.get(i)?, *radii.get(i)?);
+    let d = &scene.domain;
+    let domain = (DVec3::from_array(d.min), DVec3::from_array(d.max));
+    let pairs = partners.filter(|&j| j != i).map(|j| {
+        let gap = minimum_image(obs.positions[j] - x, d.periodic, domain);
+        // (a12 alone matters: the masses are placeholders)
+        let a12 = PairGeometry::spheres(r, radii[j], 1.0, 1.0).a12;
+        ((r + radii[j] - gap.length()) / a12, format!("particle {j}"))
+    });
+    let walls = (scene.walls.iter().zip(&obs.wall_points).enumerate()).map(|(w, (wall, p))| {
+        let n = DVec3::from_array(wall.normal).normalize();
+        let a12 = PairGeometry::wall(r, 1.0).a12;
+        ((r - (x - *p).dot(n)) / a12, format!("wall {w}"))
+    });
+    let (ratio, partner) = pairs.chain(walls).max_by(|a, b| a.0.total_cmp(&b.0))?;
+    (ratio > 0.0).then(|| (ratio, format!("particle {i} overlaps {partner}")))
+}
+
+/// The partner (a particle that has appeared by step `steps`, or a wall) particle `i`
+/// overlaps deepest, for a backend whose monitor names only the particle.
+pub(super) fn deepest_partner(
+    scene: &Scene,
+    obs: &Observation,
+    radii: &[f64],
+    i: usize,
+    steps: u64,
+    dt: f64,
+) -> Option<(f64, String)> {
+    let partners = (0..obs.positions.len()).filter(|&j| appeared(scene, j, steps, dt));
+    deepest_of(scene, obs, radii, i, partners)
+}
+
+/// Where a particle that appeared in the last few steps (pouring) overlaps one that
+/// appeared before it, or a wall, by more than [`MAX_OVERLAP_RATIO`]: the cause, named,
+/// with what to change.
+pub(super) fn appeared_inside(
+    scene: &Scene,
+    obs: &Observation,
+    radii: &[f64],
+    steps: u64,
+    dt: f64,
+) -> Option<String> {
+    let n = obs.positions.len().min(radii.len());
+    let last_start = steps.saturating_sub(1) as f64 * dt;
+    let fresh: Vec<usize> = (0..n)
+        .filter(|&i| appeared(scene, i, steps, dt))
+        .filter(|&i| insert_at(scene, i) > 0.0 && insert_at(scene, i) > last_start - 3.0 * dt)
+        .collect();
+    if fresh.is_empty() {
+        return None;
+    }
+    // (the particles that have appeared, in cells as wide as the largest pair's reach, so a
+    // large batch costs its size, not its size times the scene's)
+    let r_max = radii.iter().copied().fold(0.0, f64::max);
+    let mut grid = Grid::new(2.0 * r_max);
+    for j in (0..n).filter(|&j| appeared(scene, j, steps, dt)) {
+        grid.insert(j, obs.positions[j].to_array());
+    }
+    let d = &scene.domain;
+    let length = DVec3::from_array(d.max) - DVec3::from_array(d.min);
+    // (the periodic images of a position: ±L on the periodic axes)
+    let shifts = |a: usize| match d.periodic[a] {
+        true => vec![-length[a], 0.0, length[a]],
+        false => vec![0.0],
+    };
+    let (sx, sy, sz) = (shifts(0), shifts(1), shifts(2));
+    fresh.into_iter().find_map(|i| {
+        let x = obs.positions[i];
+        let mut near = Vec::new();
+        for &ox in &sx {
+            for &oy in &sy {
+                for &oz in &sz {
+                    let at = x + DVec3::new(ox, oy, oz);
+                    near.extend(grid.neighbours(at.to_array(), radii[i] + r_max));
+                }
+            }
+        }
+        near.sort_unstable();
+        near.dedup();
+        let earlier = near
+            .into_iter()
+            .filter(|&j| insert_at(scene, j) < insert_at(scene, i));
+        let (ratio, who) = deepest_of(scene, obs, radii, i, earlier)?;
+        (ratio > MAX_OVERLAP_RATIO).then(|| format!(
+            "particle {i} appeared (insert_at = {:e} s) where something was already: {who} by {ratio:.3} of the reduced radius (limit {MAX_OVERLAP_RATIO}); the engine does not push particles aside, so a pour's region must have emptied before its next batch appears there: lengthen `batch_interval`, move the region or pour fewer particles a batch (*Pouring* in the README)",
+            insert_at(scene, i)
+        ))
+    })
+}
