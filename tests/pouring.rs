@@ -255,6 +255,43 @@ fn a_particle_appearing_inside_another_is_named_as_the_cause() {
     assert!(on_gpu.starts_with(&expected), "{on_gpu}");
 }
 
+/// A particle that appears overlapping another by less than the limit brings the
+/// overlap's stored energy unbooked: the energy check stops the run at that step and names
+/// the particle, not the time step, on both backends.
+#[test]
+fn a_particle_appearing_with_a_small_overlap_is_named_when_the_energy_jumps() {
+    use powder::run::{run_cpu_with, run_gpu_with, RunOptions};
+    let r = 1.0e-3;
+    let text = common::builder::SceneBuilder::new("onto", [0.0; 3], [0.01, 0.01, 0.01], 0.002)
+        .material("powder", 2000.0, common::builder::COHESIVE)
+        .particles(
+            "list",
+            &format!("positions = [[0.005, 0.005, 0.005]]\nradius = {r}"),
+        )
+        .particles(
+            "list",
+            &format!("positions = [[0.0067, 0.005, 0.005]]\nradius = {r}\ninsert_at = 2e-4"),
+        )
+        .toml();
+    let scene = Scene::from_toml_str(&text, "onto").unwrap();
+    let dt = CpuEngine::new(&scene).unwrap().dt();
+    let step = (1..).find(|&k| (k - 1) as f64 * dt >= 2e-4).unwrap();
+    let named = |e: String| {
+        e.starts_with(&format!("step {step}: the total energy grew"))
+            && e.contains("particle 1 appeared (insert_at = 2e-4 s) where something was already: particle 1 overlaps particle 0 by 0.300")
+            && e.contains("unbooked")
+    };
+    let cpu = run_cpu_with(&scene, &RunOptions::default(), |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(named(cpu.clone()), "{cpu}");
+    let Some(ctx) = gpu() else { return };
+    let on_gpu = run_gpu_with(&scene, ctx, &RunOptions::default(), |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(named(on_gpu.clone()), "{on_gpu}");
+}
+
 /// An overlap beyond the limit names a partner that has appeared: a sphere driven through
 /// the floor, where a particle due later already sits, overlaps the floor on both backends
 /// (the GPU's partner search, from the positions, had named the particle not yet there).

@@ -1,7 +1,7 @@
 //! The run monitor: what must stop a run (non-finite values, overlaps beyond what the
 //! papers calibrate, energy growth, particles leaving the domain), with a hint.
 
-use super::overlap_partner::{appeared_inside, deepest_partner};
+use super::overlap_partner::{appeared_inside, deepest_partner, POUR_ADVICE};
 use super::*;
 
 /// Largest overlap over the reduced radius a12 the run monitor accepts: beyond it the
@@ -63,8 +63,12 @@ pub(super) fn monitor(
     if let Some(peak) = engine.take_peak_overlap() {
         if peak.ratio > MAX_OVERLAP_RATIO {
             let (radii, dt) = (engine.radii(), engine.dt());
-            if let Some(inside) = appeared_inside(scene, obs, radii, steps, dt) {
-                return Err(PowderError::Run(format!("step {steps}: {inside}")));
+            if let Some(a) = appeared_inside(scene, obs, radii, (steps, dt), MAX_OVERLAP_RATIO) {
+                return Err(PowderError::Run(format!(
+                    "step {steps}: {} by {} of the reduced radius (limit {MAX_OVERLAP_RATIO}); {POUR_ADVICE}",
+                    a.what,
+                    ratio_text(a.ratio)
+                )));
             }
             // (a backend that knows only a particle beyond the limit, not necessarily the
             // deepest: its partner, and their own overlap, from the positions)
@@ -74,10 +78,7 @@ pub(super) fn monitor(
                 .unwrap_or((peak.ratio, peak.who));
             return Err(PowderError::Run(format!(
                 "step {steps}: {who} by {} of the reduced radius (limit {MAX_OVERLAP_RATIO}); an impact or a load (gravity, adhesion, a wall) is too strong for the contact stiffness, or {hint}",
-                match ratio < 1e3 {
-                    true => format!("{ratio:.3}"),
-                    false => format!("{ratio:.3e}"),
-                }
+                ratio_text(ratio)
             )));
         }
     }
@@ -101,6 +102,16 @@ pub(super) fn monitor(
         * (now.magnitude() + start.magnitude());
     let allowed = MAX_ENERGY_GROWTH * scale + rounding;
     if allowed > 0.0 && total - initial_total > allowed {
+        // (a particle poured onto another brings the overlap's stored energy unbooked)
+        let (radii, dt) = (engine.radii(), engine.dt());
+        if let Some(a) = appeared_inside(scene, obs, radii, (steps, dt), 0.0) {
+            return Err(PowderError::Run(format!(
+                "step {steps}: the total energy grew by {:.3e} J, beyond the {allowed:.3e} J allowed, as {} by {} of the reduced radius: the energy stored in that overlap enters the run unbooked; {POUR_ADVICE}",
+                total - initial_total,
+                a.what,
+                ratio_text(a.ratio)
+            )));
+        }
         return Err(PowderError::Run(format!(
             "step {steps}: the total energy grew by {:.3e} J, beyond the {allowed:.3e} J allowed ({}% of the run's energy scale {scale:.3e} J, and {rounding:.1e} J of rounding), which no contact model can inject; {hint}",
             total - initial_total,
@@ -108,6 +119,14 @@ pub(super) fn monitor(
         )));
     }
     Ok(())
+}
+
+/// An overlap over a12 in three decimals, or three digits in `e` notation far from 1.
+fn ratio_text(ratio: f64) -> String {
+    match (1e-3..1e3).contains(&ratio) {
+        true => format!("{ratio:.3}"),
+        false => format!("{ratio:.3e}"),
+    }
 }
 
 /// Runs a chunk that failed again from its start, restored in `engine`, a step at a time

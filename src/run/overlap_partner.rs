@@ -5,7 +5,6 @@
 use crate::cpu::engine::minimum_image;
 use crate::model::PairGeometry;
 use crate::run::simulation::Observation;
-use crate::run::MAX_OVERLAP_RATIO;
 use crate::scene::hash_grid::Grid;
 use crate::scene::Scene;
 use glam::DVec3;
@@ -64,16 +63,27 @@ pub(super) fn deepest_partner(
     deepest_of(scene, obs, radii, i, partners)
 }
 
+/// A particle that appeared on top of something (pouring).
+pub(super) struct Appeared {
+    /// "particle i appeared (insert_at = t s) where something was already: particle i
+    /// overlaps particle j (or wall w)".
+    pub what: String,
+    /// The overlap over the pair's a12.
+    pub ratio: f64,
+}
+
+/// What to change where particles appear on top of others.
+pub(super) const POUR_ADVICE: &str = "the engine does not push particles aside, so a pour's region must have emptied before its next batch appears there: lengthen `batch_interval`, move the region or pour fewer particles a batch (*Pouring* in the README)";
+
 /// Where a particle that appeared in the last few steps (pouring) overlaps one that
-/// appeared before it, or a wall, by more than [`MAX_OVERLAP_RATIO`]: the cause, named,
-/// with what to change.
+/// appeared before it, or a wall, by more than `min_ratio` of the pair's a12.
 pub(super) fn appeared_inside(
     scene: &Scene,
     obs: &Observation,
     radii: &[f64],
-    steps: u64,
-    dt: f64,
-) -> Option<String> {
+    (steps, dt): (u64, f64),
+    min_ratio: f64,
+) -> Option<Appeared> {
     let n = obs.positions.len().min(radii.len());
     let last_start = steps.saturating_sub(1) as f64 * dt;
     let fresh: Vec<usize> = (0..n)
@@ -115,9 +125,12 @@ pub(super) fn appeared_inside(
             .into_iter()
             .filter(|&j| insert_at(scene, j) < insert_at(scene, i));
         let (ratio, who) = deepest_of(scene, obs, radii, i, earlier)?;
-        (ratio > MAX_OVERLAP_RATIO).then(|| format!(
-            "particle {i} appeared (insert_at = {:e} s) where something was already: {who} by {ratio:.3} of the reduced radius (limit {MAX_OVERLAP_RATIO}); the engine does not push particles aside, so a pour's region must have emptied before its next batch appears there: lengthen `batch_interval`, move the region or pour fewer particles a batch (*Pouring* in the README)",
-            insert_at(scene, i)
-        ))
+        (ratio > min_ratio).then(|| Appeared {
+            what: format!(
+                "particle {i} appeared (insert_at = {:e} s) where something was already: {who}",
+                insert_at(scene, i)
+            ),
+            ratio,
+        })
     })
 }
