@@ -1831,7 +1831,8 @@ fn inputs_in_range_that_overflow_together_are_refused() {
 }
 
 /// A pour whose next batch lands on particles still in its region is stopped by the run
-/// monitor, and the message names that cause beside the time step.
+/// monitor at the step it lands, and the message names a particle that landed on another
+/// as the cause (it had named the time step and, beside it, pouring in general).
 #[test]
 fn a_batch_poured_onto_particles_is_named_as_a_cause() {
     let dir = tempfile::tempdir().unwrap();
@@ -1850,9 +1851,10 @@ fn a_batch_poured_onto_particles_is_named_as_a_cause() {
     ]);
     assert!(!ok);
     assert!(
-        err.contains(
-            "may be too large for this scene, or particles appeared where earlier ones still were"
-        ),
+        err.contains("appeared (insert_at = ")
+            && err.contains("where something was already")
+            && err.contains("lengthen `batch_interval`")
+            && !err.contains("time step"),
         "{err}"
     );
 }
