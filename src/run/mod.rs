@@ -202,6 +202,9 @@ pub fn run_with<S: Simulation>(
         if let Some(w) = scene.late_insertions(total.saturating_sub(1) as f64 * engine.dt()) {
             eprintln!("warning: {w}");
         }
+        if let Some(w) = scene.pour_onto_earlier() {
+            eprintln!("warning: {w}");
+        }
     }
     let mut outputs = RunOutputs::open(
         scene,

@@ -100,27 +100,9 @@ pub(super) fn appeared_inside(
     for j in (0..n).filter(|&j| appeared(scene, j, steps, dt)) {
         grid.insert(j, obs.positions[j].to_array());
     }
-    let d = &scene.domain;
-    let length = DVec3::from_array(d.max) - DVec3::from_array(d.min);
-    // (the periodic images of a position: ±L on the periodic axes)
-    let shifts = |a: usize| match d.periodic[a] {
-        true => vec![-length[a], 0.0, length[a]],
-        false => vec![0.0],
-    };
-    let (sx, sy, sz) = (shifts(0), shifts(1), shifts(2));
+    let periods = scene.periods();
     fresh.into_iter().find_map(|i| {
-        let x = obs.positions[i];
-        let mut near = Vec::new();
-        for &ox in &sx {
-            for &oy in &sy {
-                for &oz in &sz {
-                    let at = x + DVec3::new(ox, oy, oz);
-                    near.extend(grid.neighbours(at.to_array(), radii[i] + r_max));
-                }
-            }
-        }
-        near.sort_unstable();
-        near.dedup();
+        let near = grid.near_images(obs.positions[i].to_array(), radii[i] + r_max, periods);
         let earlier = near
             .into_iter()
             .filter(|&j| insert_at(scene, j) < insert_at(scene, i));

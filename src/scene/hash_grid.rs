@@ -75,4 +75,30 @@ impl Grid {
             })
         })
     }
+
+    /// [`Self::neighbours`] of `p` and of its images a period away on the axes with a
+    /// period (`periods[a]`: `Some(L)` on a periodic axis), each index once.
+    pub(crate) fn near_images(
+        &self,
+        p: [f64; 3],
+        reach: f64,
+        periods: [Option<f64>; 3],
+    ) -> Vec<usize> {
+        let shifts = |a: usize| match periods[a] {
+            Some(l) => vec![-l, 0.0, l],
+            None => vec![0.0],
+        };
+        let (sx, sy, sz) = (shifts(0), shifts(1), shifts(2));
+        let mut near = Vec::new();
+        for &ox in &sx {
+            for &oy in &sy {
+                for &oz in &sz {
+                    near.extend(self.neighbours([p[0] + ox, p[1] + oy, p[2] + oz], reach));
+                }
+            }
+        }
+        near.sort_unstable();
+        near.dedup();
+        near
+    }
 }

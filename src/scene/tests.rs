@@ -781,6 +781,37 @@ fn pouring_more_batches_than_particles_is_refused() {
     );
 }
 
+/// A pour whose next batch appears where the last one would still be in free flight is
+/// warned of before the run; one whose batches have fallen out of the region is not.
+#[test]
+fn a_pour_onto_the_batch_before_is_warned_of() {
+    let pour = |interval: &str| {
+        format!(
+            "[[particles]]\nkind = \"random\"\ncount = 40\nbatches = 2\nbatch_interval = {interval}\nmin = [0.0, 0.0, 0.02]\nmax = [0.01, 0.01, 0.03]\nradius = 1e-3\nseed = 3\nvelocity = [0.0, 0.0, -0.3]\n"
+        )
+    };
+    let scene = |interval: &str| {
+        let text = minimal("", &pour(interval))
+            .replace(
+                "duration = 0.1",
+                "duration = 0.1\ngravity = [0.0, 0.0, -9.81]",
+            )
+            .replace("max = [0.01, 0.01, 0.01]", "max = [0.01, 0.01, 0.04]");
+        parse(&text).unwrap()
+    };
+    let w = scene("1e-3").pour_onto_earlier().expect("a warning");
+    assert_contains(
+        &w,
+        &[
+            "appears at 1e-3 s where particle",
+            "flown freely",
+            "`batch_interval`",
+        ],
+    );
+    // 0.1 s later the first batch has fallen 7.9 cm, out of the 1 cm region
+    assert_eq!(scene("0.1").pour_onto_earlier(), None);
+}
+
 #[test]
 fn insertions_after_the_end_are_named() {
     let block = |at: &str| {

@@ -3,6 +3,7 @@
 //! every contact law valid), so a library user's mistake is an error, not a panic or NaN.
 
 use super::declared::{check, Section};
+use super::hash_grid::Grid;
 use super::{DtSetting, Scene, WallPhase};
 use crate::error::PowderError;
 
@@ -203,6 +204,66 @@ impl Scene {
             ));
         }
         Ok(())
+    }
+
+    /// The period of each periodic axis (`None` on the others).
+    pub fn periods(&self) -> [Option<f64>; 3] {
+        let d = &self.domain;
+        [0, 1, 2].map(|a| d.periodic[a].then(|| d.max[a] - d.min[a]))
+    }
+
+    /// A warning when a particle appears where one of the insertion before it would still
+    /// be, had that one flown freely since it appeared (its velocity and gravity, no
+    /// collisions): the pour's region has likely not emptied, and the run will stop there
+    /// (the engines do not push particles aside). Each insertion time is checked against
+    /// the one before it (the particles present from the start for the first).
+    pub fn pour_onto_earlier(&self) -> Option<String> {
+        let time = |i: usize| self.particles[i].insert_at.max(0.0);
+        // (the particles by insertion time: each time's a run of this order)
+        let mut order: Vec<usize> = (0..self.particles.len()).collect();
+        order.sort_by(|&a, &b| time(a).total_cmp(&time(b)));
+        let groups: Vec<&[usize]> = order.chunk_by(|&a, &b| time(a) == time(b)).collect();
+        let r_max = self.particles.iter().map(|p| p.radius).fold(0.0, f64::max);
+        let g = self.gravity;
+        let (lo, periods) = (self.domain.min, self.periods());
+        for pair in groups.windows(2) {
+            let (before, at) = (time(pair[0][0]), time(pair[1][0]));
+            let dt = at - before;
+            let mut grid = Grid::new(2.0 * r_max);
+            let mut flown = Vec::new();
+            for &j in pair[0] {
+                let p = &self.particles[j];
+                let x: [f64; 3] = std::array::from_fn(|a| {
+                    let x = p.position[a] + p.velocity[a] * dt + 0.5 * g[a] * dt * dt;
+                    match periods[a] {
+                        Some(l) => lo[a] + (x - lo[a]).rem_euclid(l),
+                        None => x,
+                    }
+                });
+                grid.insert(flown.len(), x);
+                flown.push((j, x));
+            }
+            for &i in pair[1] {
+                let p = &self.particles[i];
+                for k in grid.near_images(p.position, p.radius + r_max, periods) {
+                    let (j, x) = flown[k];
+                    let gap: f64 = (0..3)
+                        .map(|a| {
+                            let d = p.position[a] - x[a];
+                            let d = periods[a].map_or(d, |l| d - l * (d / l).round());
+                            d * d
+                        })
+                        .sum::<f64>()
+                        .sqrt();
+                    if gap < p.radius + self.particles[j].radius {
+                        return Some(format!(
+                            "particle {i} appears at {at:e} s where particle {j}, which appeared at {before:e} s, would still be had it flown freely since (its velocity and gravity, no collisions): the pour's region has likely not emptied, and the run would stop where a particle lands on another (the engines do not push particles aside); lengthen `batch_interval` or move the region"
+                        ));
+                    }
+                }
+            }
+        }
+        None
     }
 
     /// A warning when particles appear only after the last step of a run begins, at
