@@ -129,13 +129,11 @@ fn batches_appear_on_time_and_the_ledger_books_them() {
     }
 }
 
-/// A particle that appears next to one at rest interacts with it from the step it appears
-/// in: the lists are rebuilt then (the GPU rebuilt them only once something had moved half
-/// the skin, so a pair formed by an appearance waited, or never came, as here).
-#[test]
-fn a_particle_appearing_in_contact_is_pushed_from_its_first_step() {
+/// A sphere at rest at the box's centre and one of the same radius 1 mm that appears at
+/// `insert_at` s with its centre at x = `x` beside it (no gravity).
+fn arrival(name: &str, x: f64, insert_at: &str) -> Scene {
     let r = 1.0e-3;
-    let text = common::builder::SceneBuilder::new("appear", [0.0; 3], [0.01, 0.01, 0.01], 0.002)
+    let text = common::builder::SceneBuilder::new(name, [0.0; 3], [0.01, 0.01, 0.01], 0.002)
         .material("powder", 2000.0, common::builder::COHESIVE)
         .particles(
             "list",
@@ -143,13 +141,19 @@ fn a_particle_appearing_in_contact_is_pushed_from_its_first_step() {
         )
         .particles(
             "list",
-            &format!(
-                "positions = [[{}, 0.005, 0.005]]\nradius = {r}\ninsert_at = 2e-4",
-                0.005 + 1.99 * r
-            ),
+            &format!("positions = [[{x}, 0.005, 0.005]]\nradius = {r}\ninsert_at = {insert_at}"),
         )
         .toml();
-    let scene = Scene::from_toml_str(&text, "appear").unwrap();
+    Scene::from_toml_str(&text, name).unwrap()
+}
+
+/// A particle that appears next to one at rest interacts with it from the step it appears
+/// in: the lists are rebuilt then (the GPU rebuilt them only once something had moved half
+/// the skin, so a pair formed by an appearance waited, or never came, as here).
+#[test]
+fn a_particle_appearing_in_contact_is_pushed_from_its_first_step() {
+    let r = 1.0e-3;
+    let scene = arrival("appear", 0.005 + 1.99 * r, "2e-4");
     let mut cpu = CpuEngine::new(&scene).unwrap();
     let n = (4e-4 / cpu.dt()).round() as u64;
     cpu.run_steps(n).unwrap();
@@ -261,19 +265,7 @@ fn a_particle_appearing_inside_another_is_named_as_the_cause() {
 #[test]
 fn a_particle_appearing_with_a_small_overlap_is_named_when_the_energy_jumps() {
     use powder::run::{run_cpu_with, run_gpu_with, RunOptions};
-    let r = 1.0e-3;
-    let text = common::builder::SceneBuilder::new("onto", [0.0; 3], [0.01, 0.01, 0.01], 0.002)
-        .material("powder", 2000.0, common::builder::COHESIVE)
-        .particles(
-            "list",
-            &format!("positions = [[0.005, 0.005, 0.005]]\nradius = {r}"),
-        )
-        .particles(
-            "list",
-            &format!("positions = [[0.0067, 0.005, 0.005]]\nradius = {r}\ninsert_at = 2e-4"),
-        )
-        .toml();
-    let scene = Scene::from_toml_str(&text, "onto").unwrap();
+    let scene = arrival("onto", 0.0067, "2e-4");
     let dt = CpuEngine::new(&scene).unwrap().dt();
     let step = (1..).find(|&k| (k - 1) as f64 * dt >= 2e-4).unwrap();
     let named = |e: String| {

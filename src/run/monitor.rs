@@ -63,7 +63,10 @@ pub(super) fn monitor(
     if let Some(peak) = engine.take_peak_overlap() {
         if peak.ratio > MAX_OVERLAP_RATIO {
             let (radii, dt) = (engine.radii(), engine.dt());
-            if let Some(a) = appeared_inside(scene, obs, radii, (steps, dt), MAX_OVERLAP_RATIO) {
+            let appeared = |i: usize| engine.has_appeared(i);
+            if let Some(a) =
+                appeared_inside(scene, obs, radii, (steps, dt, &appeared), MAX_OVERLAP_RATIO)
+            {
                 return Err(PowderError::Run(format!(
                     "step {steps}: {} by {} of the reduced radius (limit {MAX_OVERLAP_RATIO}); {POUR_ADVICE}",
                     a.what,
@@ -74,7 +77,7 @@ pub(super) fn monitor(
             // deepest: its partner, and their own overlap, from the positions)
             let (ratio, who) = peak
                 .unnamed
-                .and_then(|i| deepest_partner(scene, obs, radii, i, steps, dt))
+                .and_then(|i| deepest_partner(scene, obs, radii, i, appeared))
                 .unwrap_or((peak.ratio, peak.who));
             return Err(PowderError::Run(format!(
                 "step {steps}: {who} by {} of the reduced radius (limit {MAX_OVERLAP_RATIO}); an impact or a load (gravity, adhesion, a wall) is too strong for the contact stiffness, or {hint}",
@@ -105,7 +108,8 @@ pub(super) fn monitor(
         // (a particle poured onto another brings the overlap's stored energy unbooked; one
         // within the 1 % a scene's placement allows is not blamed)
         let (radii, dt) = (engine.radii(), engine.dt());
-        if let Some(a) = appeared_inside(scene, obs, radii, (steps, dt), 0.01) {
+        let appeared = |i: usize| engine.has_appeared(i);
+        if let Some(a) = appeared_inside(scene, obs, radii, (steps, dt, &appeared), 0.01) {
             return Err(PowderError::Run(format!(
                 "step {steps}: the total energy grew by {:.3e} J, beyond the {allowed:.3e} J allowed, as {} by {} of the reduced radius: the energy stored in that overlap enters the run unbooked; {POUR_ADVICE}",
                 total - initial_total,

@@ -14,13 +14,6 @@ fn insert_at(scene: &Scene, i: usize) -> f64 {
     scene.particles.get(i).map_or(0.0, |p| p.insert_at)
 }
 
-/// Whether particle `j` has appeared by the end of step `steps`: it enters at the start of
-/// the first step k whose k·dt has reached its time, on both engines.
-fn appeared(scene: &Scene, j: usize, steps: u64, dt: f64) -> bool {
-    let t = insert_at(scene, j);
-    t <= 0.0 || (steps > 0 && t <= (steps - 1) as f64 * dt)
-}
-
 /// Particle `i`'s deepest overlap over the pair's a12 with a particle of `partners` or a
 /// wall, at the positions `obs` holds (minimum image on periodic axes), as the ratio and
 /// "particle i overlaps particle j" (or "wall w"); `None` where it overlaps nothing.
@@ -49,17 +42,16 @@ fn deepest_of(
     (ratio > 0.0).then(|| (ratio, format!("particle {i} overlaps {partner}")))
 }
 
-/// The partner (a particle that has appeared by step `steps`, or a wall) particle `i`
-/// overlaps deepest, for a backend whose monitor names only the particle.
+/// The partner (a particle that has `appeared`, or a wall) particle `i` overlaps deepest,
+/// for a backend whose monitor names only the particle.
 pub(super) fn deepest_partner(
     scene: &Scene,
     obs: &Observation,
     radii: &[f64],
     i: usize,
-    steps: u64,
-    dt: f64,
+    appeared: impl Fn(usize) -> bool,
 ) -> Option<(f64, String)> {
-    let partners = (0..obs.positions.len()).filter(|&j| appeared(scene, j, steps, dt));
+    let partners = (0..obs.positions.len()).filter(|&j| appeared(j));
     deepest_of(scene, obs, radii, i, partners)
 }
 
@@ -75,19 +67,20 @@ pub(super) struct Appeared {
 /// What to change where particles appear on top of others.
 pub(super) const POUR_ADVICE: &str = "the engine does not push particles aside, so a pour's region must have emptied before its next batch appears there: lengthen `batch_interval`, move the region or pour fewer particles a batch (*Pouring* in the README)";
 
-/// Where a particle that appeared in the last few steps (pouring) overlaps one that
-/// appeared before it, or a wall, by more than `min_ratio` of the pair's a12.
+/// Where a particle that appeared (`appeared`, by the engine) in the last few steps of the
+/// `steps` taken (pouring) overlaps one that appeared before it, or a wall, by more than
+/// `min_ratio` of the pair's a12.
 pub(super) fn appeared_inside(
     scene: &Scene,
     obs: &Observation,
     radii: &[f64],
-    (steps, dt): (u64, f64),
+    (steps, dt, appeared): (u64, f64, &dyn Fn(usize) -> bool),
     min_ratio: f64,
 ) -> Option<Appeared> {
     let n = obs.positions.len().min(radii.len());
     let last_start = steps.saturating_sub(1) as f64 * dt;
     let fresh: Vec<usize> = (0..n)
-        .filter(|&i| appeared(scene, i, steps, dt))
+        .filter(|&i| appeared(i))
         .filter(|&i| insert_at(scene, i) > 0.0 && insert_at(scene, i) > last_start - 3.0 * dt)
         .collect();
     if fresh.is_empty() {
@@ -97,7 +90,7 @@ pub(super) fn appeared_inside(
     // large batch costs its size, not its size times the scene's)
     let r_max = radii.iter().copied().fold(0.0, f64::max);
     let mut grid = Grid::new(2.0 * r_max);
-    for j in (0..n).filter(|&j| appeared(scene, j, steps, dt)) {
+    for j in (0..n).filter(|&j| appeared(j)) {
         grid.insert(j, obs.positions[j].to_array());
     }
     let periods = scene.periods();

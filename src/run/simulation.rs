@@ -79,6 +79,9 @@ pub trait Simulation {
     /// Whether the run keeps the energy ledger (stored and dissipated energy, contact
     /// statistics, wall forces): always on the CPU, optional on the GPU.
     fn has_ledger(&self) -> bool;
+    /// Whether particle `i` has appeared (pouring; every particle of a scene that does not
+    /// pour).
+    fn has_appeared(&self, i: usize) -> bool;
     /// Advances `n` steps.
     fn run_steps(&mut self, n: u64) -> Result<(), PowderError>;
     /// Reads the state, energies, contact statistics and wall forces (without the ledger:
@@ -150,6 +153,9 @@ impl Simulation for CpuEngine {
     }
     fn has_ledger(&self) -> bool {
         true
+    }
+    fn has_appeared(&self, i: usize) -> bool {
+        i < self.len() && self.is_active(i)
     }
     fn run_steps(&mut self, n: u64) -> Result<(), PowderError> {
         CpuEngine::run_steps(self, n)
@@ -245,6 +251,9 @@ impl Simulation for GpuEngine {
     }
     fn has_ledger(&self) -> bool {
         GpuEngine::has_ledger(self)
+    }
+    fn has_appeared(&self, i: usize) -> bool {
+        GpuEngine::has_appeared(self, i)
     }
     fn run_steps(&mut self, n: u64) -> Result<(), PowderError> {
         GpuEngine::run_steps(self, n)

@@ -112,6 +112,11 @@ impl GpuEngine {
         self.ctx.queue.submit([encoder.finish()]);
     }
 
+    /// Whether particle `i` (the scene's order) has appeared (pouring).
+    pub fn has_appeared(&self, i: usize) -> bool {
+        self.active.get(i).copied().unwrap_or(false)
+    }
+
     /// Activates the particles whose insertion time has come (at the start of a step whose
     /// time has reached it, as on the CPU), writing the device's flags when they change;
     /// returns how many steps until the next insertion (at least 1).

@@ -62,16 +62,17 @@ pub(super) struct Deviations {
 }
 
 impl Deviations {
-    /// The six measures by the names of their tolerances, in [`super::Tolerances::named`]'s order.
+    /// The six measures by name, in [`super::MEASURES`]' order.
     pub fn named(&self) -> [(&'static str, f64); 6] {
-        [
-            ("position", self.position),
-            ("velocity", self.velocity),
-            ("kinetic", self.kinetic),
-            ("contacts", self.contacts),
-            ("energy", self.energy),
-            ("history", self.history.rms),
-        ]
+        let d = [
+            self.position,
+            self.velocity,
+            self.kinetic,
+            self.contacts,
+            self.energy,
+            self.history.rms,
+        ];
+        std::array::from_fn(|k| (super::MEASURES[k], d[k]))
     }
 }
 

@@ -58,17 +58,23 @@ impl Default for Tolerances {
     }
 }
 
+/// The six measures, by the names of their tolerances (and `--tolerance` keys).
+pub const MEASURES: [&str; 6] = [
+    "position", "velocity", "kinetic", "contacts", "energy", "history",
+];
+
 impl Tolerances {
-    /// The six tolerances by name.
+    /// The six tolerances by name, in [`MEASURES`]' order.
     pub fn named(&self) -> [(&'static str, f64); 6] {
-        [
-            ("position", self.position),
-            ("velocity", self.velocity),
-            ("kinetic", self.kinetic),
-            ("contacts", self.contacts),
-            ("energy", self.energy),
-            ("history", self.history),
-        ]
+        let t = [
+            self.position,
+            self.velocity,
+            self.kinetic,
+            self.contacts,
+            self.energy,
+            self.history,
+        ];
+        std::array::from_fn(|k| (MEASURES[k], t[k]))
     }
 
     /// Each tolerance a number >= 0 (infinity: not checked); NaN would pass every sample.
