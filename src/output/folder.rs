@@ -148,7 +148,7 @@ pub fn check_writable(
                     .open(f)
                     .map_err(|e| PowderError::io(format!("cannot write `{}`", f.display()), e))?;
             }
-            Ok(_) => {}
+            Ok(_) => refuse_immutable(f)?,
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
             Err(e) => return Err(PowderError::io(format!("cannot read `{}`", f.display()), e)),
         }
@@ -158,6 +158,23 @@ pub fn check_writable(
     fs::File::create(&probe)
         .and_then(|_| fs::remove_file(&probe))
         .map_err(|e| PowderError::io(format!("cannot write into `{}`", dir.display()), e))
+}
+
+/// Refuses an existing file that no rename may replace nor unlink remove: one marked
+/// immutable or append-only (`chattr +i`, `+a`), which opening it for writing finds (EPERM,
+/// where a file's mode, which a rename ignores, gives EACCES). Nothing is written.
+fn refuse_immutable(f: &Path) -> Result<(), PowderError> {
+    const EPERM: i32 = 1;
+    match fs::OpenOptions::new().write(true).open(f) {
+        Err(e) if e.raw_os_error() == Some(EPERM) => Err(PowderError::io(
+            format!(
+                "`{}` cannot be replaced or removed (immutable or append-only: `lsattr` shows which, `chattr -i` or `-a` clears it)",
+                f.display()
+            ),
+            e,
+        )),
+        _ => Ok(()),
+    }
 }
 
 /// Refuses, before any work, an output file the command could not write at the end: a
@@ -183,6 +200,9 @@ pub fn check_output_file(path: &Path, flag: &str) -> Result<(), PowderError> {
             "`{}` ({flag}) {p}",
             path.display()
         )));
+    }
+    if path.is_file() {
+        refuse_immutable(path)?;
     }
     let probe = dir.join(format!(".powder-probe.{}", std::process::id()));
     fs::File::create(&probe)
@@ -301,5 +321,49 @@ mod tests {
             err.contains("is a folder where the run writes a file"),
             "{err}"
         );
+    }
+
+    /// A file the run would replace or remove, marked immutable or append-only, is refused
+    /// by name before anything changes; one whose mode forbids writing is not (a rename
+    /// ignores the mode). Needs `chattr` and the right to use it (root on ext4, as CI).
+    #[test]
+    fn an_immutable_file_the_run_replaces_is_refused_first() {
+        let dir = tempfile::tempdir().unwrap();
+        let checkpoint = dir.path().join("checkpoint.bin");
+        fs::write(&checkpoint, b"earlier").unwrap();
+        use std::os::unix::fs::PermissionsExt;
+        let mode = |m| fs::set_permissions(&checkpoint, fs::Permissions::from_mode(m)).unwrap();
+        mode(0o444);
+        check_writable(dir.path(), std::slice::from_ref(&checkpoint), &[]).unwrap();
+        mode(0o644);
+        /// Clears the flags again, whatever the test does (a flagged file outlives its folder).
+        struct Flags<'a>(&'a Path);
+        impl Drop for Flags<'_> {
+            fn drop(&mut self) {
+                let _ = std::process::Command::new("chattr")
+                    .arg("-ia")
+                    .arg(self.0)
+                    .status();
+            }
+        }
+        for flag in ["+i", "+a"] {
+            let set = std::process::Command::new("chattr")
+                .args([flag, checkpoint.to_str().unwrap()])
+                .output();
+            if !set.as_ref().is_ok_and(|o| o.status.success()) {
+                return eprintln!("skipping: `chattr {flag}` is not available here ({set:?})");
+            }
+            let _clear = Flags(&checkpoint);
+            let err = check_writable(dir.path(), std::slice::from_ref(&checkpoint), &[])
+                .unwrap_err()
+                .to_string();
+            assert!(
+                err.contains(
+                    "checkpoint.bin` cannot be replaced or removed (immutable or append-only"
+                ),
+                "{err}"
+            );
+            assert_eq!(fs::read(&checkpoint).unwrap(), b"earlier");
+        }
     }
 }

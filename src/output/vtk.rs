@@ -235,6 +235,11 @@ impl Series {
         self.files().len()
     }
 
+    /// The paths of this series' snapshot files in its folder.
+    pub fn snapshot_paths(&self) -> Vec<PathBuf> {
+        self.files().into_iter().map(|(_, path)| path).collect()
+    }
+
     /// Removes an earlier run's snapshots of this series (its name's `.vtp` files in the
     /// folder) and its collection (a fresh run starts its own); returns how many files.
     pub fn clear(&mut self) -> Result<usize, PowderError> {

@@ -201,9 +201,10 @@ impl RunOutputs {
             contacts.collection_path(),
         ];
         check_writable(d, &replaced, &[d.join("series.csv")])?;
-        for sub in [particles.folder(), contacts.folder()] {
+        for series in [&particles, &contacts] {
+            let sub = series.folder();
             if sub.is_dir() {
-                check_writable(&sub, &[], &[])?;
+                check_writable(&sub, &series.snapshot_paths(), &[])?;
             }
         }
         Ok(lock)
