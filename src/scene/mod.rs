@@ -216,6 +216,47 @@ pub struct ParticleInit {
     pub insert_at: f64,
 }
 
+/// Whether a particle inserted at `insert_at` (s) is due at the start of step `step` of
+/// `dt`: both engines insert it at the first step k with insert_at ≤ k·dt (k·dt as f64, not
+/// a summed time, which rounds low).
+pub fn insert_due_at(insert_at: f64, step: u64, dt: f64) -> bool {
+    insert_at <= step as f64 * dt
+}
+
+/// Whether a state saved after `steps` steps of `dt` may hold a particle inserted at
+/// `insert_at` as `appeared` (a checkpoint's flag checked against the scene): it must have
+/// appeared if due at step 0 or at the last step run, and must not have if not yet due at
+/// step `steps` (a state taken between steps may hold one due then either way).
+pub fn appearance_fits(insert_at: f64, steps: u64, dt: f64, appeared: bool) -> bool {
+    let surely = insert_due_at(insert_at, steps.saturating_sub(1), dt);
+    let maybe = insert_due_at(insert_at, steps, dt);
+    (appeared || !surely) && (!appeared || maybe)
+}
+
+/// Where a saved state's appeared flags (`appeared[i]` after `steps` steps of `dt`) do not
+/// fit the particles' `insert_at` ([`appearance_fits`]): a message naming the first one.
+pub fn misfit_appearance(
+    insert_at: &[f64],
+    appeared: &[bool],
+    steps: u64,
+    dt: f64,
+) -> Option<String> {
+    if insert_at.len() != appeared.len() {
+        return Some(format!(
+            "it holds {} appeared flags for {} particles",
+            appeared.len(),
+            insert_at.len()
+        ));
+    }
+    let i =
+        (0..appeared.len()).find(|&i| !appearance_fits(insert_at[i], steps, dt, appeared[i]))?;
+    Some(format!(
+        "it has particle {i} {} after {steps} steps of dt = {dt:e} s, but the scene inserts it at t = {:e} s",
+        if appeared[i] { "appeared" } else { "not yet appeared" },
+        insert_at[i]
+    ))
+}
+
 /// A scene: read from TOML (see the module documentation for the file format; checked as
 /// it is read) or built in code (checked by [`Scene::validate`], which every engine calls).
 #[derive(Clone, Debug, PartialEq)]

@@ -926,3 +926,29 @@ fn a_wall_normal_too_long_to_square_is_normalised() {
     ));
     assert_contains(&e, &["must be a non-zero vector", "got [0, 0, 0]"]);
 }
+
+/// A saved state's appeared flag fits the pouring exactly outside the step its particle is
+/// due at; a state taken as that step began may hold it either way.
+#[test]
+fn an_appeared_flag_fits_the_step_its_particle_is_due_at() {
+    let dt = 1e-5;
+    // due at step 10 (10·dt), and at the start (0)
+    let at = 10.0 * dt;
+    for (steps, must) in [(0, Some(false)), (9, Some(false)), (11, Some(true))] {
+        for appeared in [false, true] {
+            let fits = appearance_fits(at, steps, dt, appeared);
+            assert_eq!(
+                fits,
+                must == Some(appeared),
+                "after {steps} steps: {appeared}"
+            );
+        }
+    }
+    // (after 10 steps: step 10, which inserts it, may have begun)
+    assert!(appearance_fits(at, 10, dt, true) && appearance_fits(at, 10, dt, false));
+    assert!(appearance_fits(0.0, 0, dt, true) && !appearance_fits(0.0, 0, dt, false));
+    let why = misfit_appearance(&[0.0, at], &[true, true], 5, dt).unwrap();
+    assert!(why.contains("particle 1 appeared after 5 steps"), "{why}");
+    assert!(misfit_appearance(&[0.0, at], &[true], 5, dt).is_some());
+    assert!(misfit_appearance(&[0.0, at], &[true, false], 5, dt).is_none());
+}

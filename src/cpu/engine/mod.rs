@@ -24,7 +24,7 @@ mod report;
 mod state;
 mod step;
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;
 mod walls;
 
 pub(crate) use contact::ContactRecord;

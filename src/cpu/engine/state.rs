@@ -147,6 +147,13 @@ impl CpuEngine {
                 )));
             }
         }
+        if let Some(why) =
+            crate::scene::misfit_appearance(&self.insert_at, &s.active, s.steps, self.dt)
+        {
+            return Err(PowderError::Run(format!(
+                "the checkpoint does not fit the scene's pouring: {why} (the checkpoint is damaged or was edited)"
+            )));
+        }
         // contact keys: pairs i < j < n and walls (w, i) with i < n, each once
         let mut pair_keys: Vec<(u32, u32)> = s.contacts.iter().map(|(k, _)| *k).collect();
         let mut wall_keys: Vec<(u32, u32)> = s.wall_contacts.iter().map(|(k, _)| *k).collect();

@@ -3,6 +3,7 @@
 
 use super::*;
 use crate::cpu::threads::chunks;
+use crate::scene::insert_due_at;
 
 /// A particle's acceleration from its force, mass and gravity: one expression for the
 /// constructor and the step, so both give the same bits.
@@ -145,14 +146,11 @@ impl CpuEngine {
     /// Activates the particles whose insertion time has come (at the start of a step whose
     /// time has reached it), booking the energy they bring.
     fn insert_due(&mut self) {
-        // (step k starts at k·dt, as the GPU decides it, not at the summed time, which can
-        // round below it and insert a step late)
-        let now = self.steps as f64 * self.dt;
-        if now < self.next_insert {
+        if !insert_due_at(self.next_insert, self.steps, self.dt) {
             return;
         }
         for i in 0..self.pos.len() {
-            if !self.active[i] && self.insert_at[i] <= now {
+            if !self.active[i] && insert_due_at(self.insert_at[i], self.steps, self.dt) {
                 self.active[i] = true;
                 // the list must take the newcomer's pairs
                 self.rebuild_due = true;

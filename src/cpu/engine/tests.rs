@@ -113,6 +113,54 @@ fn results_do_not_depend_on_the_skin_periodic_and_pouring() {
     same_without_skin(&scene, 300);
 }
 
+/// A JKR packing with every seventh particle poured later, raised clear of the rest: at
+/// steps 10 to 100 (`dt` its time step).
+pub(crate) fn poured_packing() -> (Scene, f64) {
+    let mut scene = packing(Case::Jkr, 64, 20.0, 5).unwrap();
+    let dt = CpuEngine::new(&scene).unwrap().dt();
+    for (k, p) in scene.particles.iter_mut().enumerate() {
+        if k % 7 == 3 {
+            p.insert_at = (k % 10 + 1) as f64 * 10.0 * dt;
+            p.position[2] += 4.0 * p.radius;
+        }
+    }
+    (scene, dt)
+}
+
+/// A state whose appeared flags do not fit the scene's pouring (an edited checkpoint) is
+/// refused by particle, and the engine left as it was.
+#[test]
+fn a_state_whose_appearances_do_not_fit_the_pouring_is_refused() {
+    let (scene, dt) = poured_packing();
+    let mut a = CpuEngine::new(&scene).unwrap();
+    a.run_steps(45).unwrap();
+    let mut b = CpuEngine::new(&scene).unwrap();
+    let early = (0..a.len())
+        .find(|&i| scene.particles[i].insert_at > 50.0 * dt)
+        .unwrap();
+    let late = (0..a.len()).find(|&i| scene.particles[i].insert_at > 0.0 && a.is_active(i));
+    let mut bad = a.state();
+    bad.active[early] = true;
+    let err = b.restore(bad).unwrap_err().to_string();
+    assert!(
+        err.contains(&format!("particle {early} appeared after 45 steps")),
+        "{err}"
+    );
+    let mut bad = a.state();
+    bad.active.iter_mut().for_each(|x| *x = false);
+    let err = b.restore(bad).unwrap_err().to_string();
+    assert!(
+        err.contains("particle 0 not yet appeared after 45 steps"),
+        "{err}"
+    );
+    let mut bad = a.state();
+    bad.active[late.unwrap()] = false;
+    assert!(b.restore(bad).is_err());
+    assert_eq!(b.steps(), 0);
+    b.restore(a.state()).unwrap();
+    same_bits(&mut a, &mut b, 60);
+}
+
 /// A wall contact that leaves without a visit is booked once: the ledger closes. (Its
 /// particle is taken off the wall candidates by hand: they hold every contact
 /// otherwise, so only a particle the list no longer visits leaves this way.)

@@ -203,6 +203,20 @@ impl GpuEngine {
                 self.saved_layout()
             )));
         }
+        if let Some(why) =
+            crate::scene::misfit_appearance(&self.insert_at, &saved.active, saved.steps, self.dt)
+        {
+            return Err(PowderError::Run(format!(
+                "the saved GPU state does not fit the scene's pouring: {why} (the checkpoint is damaged or was edited)"
+            )));
+        }
+        if saved.wall_points.len() != self.wall_points.len() {
+            return Err(PowderError::Run(format!(
+                "the saved GPU state holds {} walls but the scene has {}",
+                saved.wall_points.len(),
+                self.wall_points.len()
+            )));
+        }
         if let Some(i) = saved.wall_points.iter().position(|p| !p.is_finite()) {
             return Err(PowderError::Run(format!(
                 "the saved GPU state's wall point {i} is {:?}, not finite: the checkpoint is damaged or was edited",
@@ -248,16 +262,12 @@ impl GpuEngine {
             let bufs: Vec<wgpu::Buffer> = bufs.iter().map(|&b| b.clone()).collect();
             write_pages(&self.ctx.queue, &bufs, bytes);
         }
-        if saved.wall_points.len() == self.wall_points.len() {
-            self.wall_points = saved.wall_points;
-        }
+        self.wall_points = saved.wall_points;
         // the device's walls are in the phase of the last step run
         let last = saved.steps.saturating_sub(1) as f64 * self.dt;
         self.wall_phase = self.wall_motion.iter().map(|m| m.index_at(last)).collect();
-        if saved.active.len() == self.active.len() {
-            self.active = saved.active;
-            self.write_appeared();
-        }
+        self.active = saved.active;
+        self.write_appeared();
         if let Some(q) = &mut self.quiet {
             q.forecast.forget();
             q.rebuilds = u64::MAX;

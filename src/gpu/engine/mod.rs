@@ -326,4 +326,44 @@ mod tests {
         let ok = engine.save_state().unwrap();
         engine.restore_state(ok).unwrap();
     }
+
+    /// A saved state whose appeared flags do not fit the scene's pouring (an edited
+    /// checkpoint), or with another number of walls, is refused before anything changes.
+    #[test]
+    fn gpu_a_state_whose_appearances_do_not_fit_the_pouring_is_refused() {
+        let ctx = match GpuContext::new() {
+            Ok(ctx) => ctx,
+            Err(e) if std::env::var_os("CI").is_none() => return eprintln!("skipping: {e}"),
+            Err(e) => panic!("CI needs a GPU adapter (lavapipe): {e}"),
+        };
+        let (scene, dt) = crate::cpu::engine::tests::poured_packing();
+        let mut a = GpuEngine::new(&scene, ctx.clone()).unwrap();
+        a.run_steps(45).unwrap();
+        let mut b = GpuEngine::new(&scene, ctx).unwrap();
+        let early = (0..scene.particles.len())
+            .find(|&i| scene.particles[i].insert_at > 50.0 * dt)
+            .unwrap();
+        let mut bad = a.save_state().unwrap();
+        bad.active[early] = true;
+        let err = b.restore_state(bad).unwrap_err().to_string();
+        assert!(
+            err.contains(&format!("particle {early} appeared after 45 steps")),
+            "{err}"
+        );
+        let mut bad = a.save_state().unwrap();
+        bad.active.iter_mut().for_each(|x| *x = false);
+        let err = b.restore_state(bad).unwrap_err().to_string();
+        assert!(err.contains("particle 0 not yet appeared"), "{err}");
+        let mut bad = a.save_state().unwrap();
+        bad.wall_points.pop();
+        let err = b.restore_state(bad).unwrap_err().to_string();
+        assert!(err.contains("walls but the scene has"), "{err}");
+        assert_eq!(b.steps(), 0);
+        b.restore_state(a.save_state().unwrap()).unwrap();
+        a.run_steps(60).unwrap();
+        b.run_steps(60).unwrap();
+        let (sa, sb) = (a.state().unwrap(), b.state().unwrap());
+        assert_eq!(sa.positions, sb.positions);
+        assert_eq!(sa.velocities, sb.velocities);
+    }
 }

@@ -1,6 +1,7 @@
 //! What changes at batch boundaries: prescribed and servo walls, wall programs' phases, and pouring.
 
 use super::*;
+use crate::scene::insert_due_at;
 
 /// How many steps from step `steps` on start before time `t` (step k starts at k·dt, the
 /// time the phases and insertions are decided at), at least 1: a batch of that many ends
@@ -127,7 +128,7 @@ impl GpuEngine {
             if self.active[i] {
                 continue;
             }
-            if self.insert_at[i] <= self.time {
+            if insert_due_at(self.insert_at[i], self.steps, self.dt) {
                 self.active[i] = true;
                 self.inserted += self.insert_energy[i];
                 changed = true;
