@@ -296,7 +296,22 @@ fn expand_lattice(t: &Tbl, names: &[&str], out: &mut Vec<ParticleInit>) -> Res<(
             ),
         ));
     }
-    let counts = counts.map(|c| c as u64);
+    let mut counts = counts.map(|c| c as u64);
+    // A last site the count's tolerance admitted lies up to 10⁻⁶ of the spacing beyond the
+    // region: the sites are spread evenly over it instead (clamped, it overlapped its
+    // neighbour), or, where that would bring neighbours closer than 2·radius, dropped.
+    let mut step = [spacing; 3];
+    for a in 0..3 {
+        let last = min[a] + radius + (counts[a] - 1) as f64 * spacing;
+        if counts[a] > 1 && last > max[a] - radius {
+            let even = (max[a] - min[a] - 2.0 * radius) / (counts[a] - 1) as f64;
+            if even >= 2.0 * radius * (1.0 - 1e-12) {
+                step[a] = even;
+            } else {
+                counts[a] -= 1;
+            }
+        }
+    }
     let total = counts[0] * counts[1] * counts[2];
     crate::memory::check_particles(
         total + out.len() as u64,
@@ -304,8 +319,9 @@ fn expand_lattice(t: &Tbl, names: &[&str], out: &mut Vec<ParticleInit>) -> Res<(
         "this scene",
     )
     .map_err(|m| t.err_key("spacing", format!("{}: {m}", t.ctx)))?;
-    let gap = spacing - 2.0 * radius;
-    let amp = 0.5 * jitter * gap;
+    let amp = step.map(|h| 0.5 * jitter * (h - 2.0 * radius).max(0.0));
+    // (drawn wherever the spacing leaves a gap, so the sequence follows the spacing alone)
+    let draws = jitter > 0.0 && spacing > 2.0 * radius;
     let mut rng = Pcg64::seed_from_u64(seed);
     out.reserve(total as usize);
     for iz in 0..counts[2] {
@@ -314,11 +330,12 @@ fn expand_lattice(t: &Tbl, names: &[&str], out: &mut Vec<ParticleInit>) -> Res<(
                 let idx = [ix, iy, iz];
                 let mut p = [0.0; 3];
                 for a in 0..3 {
-                    let mut x = min[a] + radius + idx[a] as f64 * spacing;
-                    if amp > 0.0 {
-                        x += amp * (2.0 * rng.random::<f64>() - 1.0);
+                    let mut x = min[a] + radius + idx[a] as f64 * step[a];
+                    if draws {
+                        x += amp[a] * (2.0 * rng.random::<f64>() - 1.0);
                     }
-                    // clamping only shortens a displacement, so it cannot create overlaps
+                    // (every site lies in [min + r, max − r]: clamping only shortens a
+                    // jitter displacement, so it cannot create overlaps)
                     p[a] = x.clamp(min[a] + radius, max[a] - radius);
                 }
                 out.push(ParticleInit {

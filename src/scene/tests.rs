@@ -588,10 +588,42 @@ fn lattice_counts_and_jitter() {
             "[domain]\nmin = [0, 0, 0]\nmax = [1, 1, 1]\n[simulation]\nduration = 1.0\n[[material]]\nname = \"p\"\ndensity = 1.0\nmodel = \"lsd\"\nk = 1.0\n[[particles]]\nkind = \"lattice\"\nmin = [0.0, 0.0, 0.0]\nmax = [0.1, 0.2, 0.3]\nradius = 0.01\n{extra}"
         )
     };
-    // 5 x 10 x 15 diameters fit exactly
-    let s = parse(&scene("")).unwrap();
-    assert_eq!(s.particles.len(), 5 * 10 * 15);
-    assert!(s.particles[1].position[0] - s.particles[0].position[0] > 0.02 - 1e-12);
+    // 5 x 10 x 15 diameters fit exactly, and no two spheres overlap beyond rounding (the
+    // default spacing's last site lies 10⁻⁹ of the spacing beyond the region: clamped, it
+    // overlapped its neighbour by 4·10⁻¹⁰ of the radius)
+    let closest = |s: &Scene| {
+        let p = &s.particles;
+        let mut d: f64 = f64::INFINITY;
+        for i in 0..p.len() {
+            for j in i + 1..p.len() {
+                d = d.min(dist2(p[i].position, p[j].position).sqrt());
+            }
+        }
+        d
+    };
+    for extra in [
+        "",
+        "jitter = 1.0",
+        "spacing = 0.0200000001",
+        "spacing = 0.02",
+    ] {
+        let s = parse(&scene(extra)).unwrap();
+        assert_eq!(s.particles.len(), 5 * 10 * 15, "{extra}");
+        assert!(
+            closest(&s) >= 0.02 * (1.0 - 1e-14),
+            "{extra}: {:e}",
+            closest(&s)
+        );
+        let last = s
+            .particles
+            .iter()
+            .map(|p| p.position[2])
+            .fold(0.0, f64::max);
+        assert!(last <= 0.29 + 1e-15, "{extra}: {last}");
+    }
+    // a spacing whose last site would need neighbours closer than 2·radius drops it
+    let s = parse(&scene("spacing = 0.0200001")).unwrap();
+    assert_eq!(s.particles.len(), 4 * 9 * 14);
     let s = parse(&scene("spacing = 0.03")).unwrap();
     // floor((0.1-0.02)/0.03)+1 = 3, floor(0.18/0.03)+1 = 7, floor(0.28/0.03)+1 = 10
     assert_eq!(s.particles.len(), 3 * 7 * 10);
