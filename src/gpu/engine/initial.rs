@@ -124,6 +124,8 @@ impl InitialState {
             // persistent id; the lists and wall entries come with the first rebuild
             "ids" => Some(self.order.iter().map(|&i| [i as u32, 0, 0, 0]).collect()),
             "omega" => Some(words(&self.omega)),
+            // (the initial forces' spin: ω, the angular acceleration being 0 until they are in)
+            "wpred" => Some(words(&self.omega)),
             _ => None,
         }
     }
