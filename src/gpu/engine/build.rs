@@ -197,7 +197,7 @@ impl GpuEngine {
         );
         let (kind, pairs) = pair_table(&all_models);
         debug_assert_eq!(kind.rotation(), r.rotation);
-        check_f32_range(scene, &r, (&pairs, &kind))?;
+        check_f32_range(scene, &r, (&pairs, &kind), ledger)?;
         let r_min = scene
             .particles
             .iter()

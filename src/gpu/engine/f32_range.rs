@@ -4,13 +4,19 @@
 
 use super::*;
 
+/// The energies the GPU's ledger sums in f32 per particle, J: a step's increments reach
+/// some 10⁻⁸ of them and the sums grow with the run, so 10⁸ of room on either side.
+const LEDGER_ENERGIES: (f64, f64) = (1e-30, 1e30);
+
 /// Refuses a scene value the GPU's f32 cannot hold, naming the particle, pair or setting.
 /// `rows`: the pair table of composition `kind` (`pair_table`), the pairs of materials
-/// first and then each wall's with every material.
+/// first and then each wall's with every material; `ledger`: the run keeps the energy
+/// ledger, whose energies must fit too.
 pub(super) fn check_f32_range(
     scene: &Scene,
     r: &Resolved,
     (rows, kind): (&[u8], &Composition),
+    ledger: bool,
 ) -> Result<(), PowderError> {
     let row_bytes = kind.row_bytes();
     // (f32's normal numbers: a subnormal loses its digits, 0 divides)
@@ -80,6 +86,23 @@ pub(super) fn check_f32_range(
             ));
         }
     }
+    if ledger {
+        // a particle's energy scale: ½·m·v² at the larger of its speed and the expected
+        // impact speed, or its weight over its radius where that is more
+        let g = DVec3::from_array(scene.gravity).length();
+        for (i, (p, &m)) in scene.particles.iter().zip(&r.mass).enumerate() {
+            let v = DVec3::from_array(p.velocity)
+                .length()
+                .max(scene.impact_velocity);
+            let e = (0.5 * m * v * v).max(m * g * p.radius);
+            if !(LEDGER_ENERGIES.0..=LEDGER_ENERGIES.1).contains(&e) {
+                return Err(PowderError::Scene(format!(
+                    "particle {i}'s energy scale is {e:.3e} J (½·m·v² at {v:e} m/s, the larger of its speed and simulation.impact_velocity), which the GPU engine holds in f32 in its energy ledger: it takes {:e} to {:e} J a particle (f32's 1.2e-38 to 3.4e38 with room for a step's increments and a run's sums); run on the CPU (--backend cpu), without the ledger (--no-ledger), or in other units",
+                    LEDGER_ENERGIES.0, LEDGER_ENERGIES.1
+                )));
+            }
+        }
+    }
     let n = scene.materials.len();
     let name = |m: usize| &scene.materials[m].name;
     for (k, row) in rows.chunks(row_bytes.max(1)).enumerate() {
@@ -118,7 +141,7 @@ mod tests {
         let r = Resolved::new(&scene).unwrap();
         let models: Vec<ContactModel> = r.models.iter().chain(&r.wall_models).copied().collect();
         let (kind, rows) = pair_table(&models);
-        check_f32_range(&scene, &r, (&rows, &kind)).map_err(|e| e.to_string())
+        check_f32_range(&scene, &r, (&rows, &kind), true).map_err(|e| e.to_string())
     }
 
     fn refused(material: &str, gravity: &str, domain_max: &str, part: &str) {
@@ -158,5 +181,12 @@ mod tests {
         let soft =
             "density = 2000.0\nmodel = \"jkr\"\nyoungs = 1e8\npoisson = 0.3\nsurface_energy = 1e40";
         refused(soft, g, max, "`jkr.gamma` of its GPU pair row");
+        // a parameter below f32's normal numbers (it flushed to 0: particles passed through)
+        let limp = "density = 2000.0\nmodel = \"lsd\"\nk = 1e-46";
+        refused(limp, g, max, "`hysteretic.k1` of its GPU pair row");
+        // energies the ledger cannot sum in f32, though the mass fits
+        for (density, scale) in [("1e-22", "2.094e-31 J"), ("1e40", "2.094e31 J")] {
+            refused(&LSD.replace("2000.0", density), g, max, scale);
+        }
     }
 }

@@ -4,6 +4,18 @@
 use super::{wgsl_consts, wgsl_struct};
 use bytemuck::{Pod, Zeroable};
 
+/// `x` in f32, or NaN where a non-zero `x` has no normal f32 (it would round to 0 or lose
+/// its digits as a subnormal): `check_f32_range` refuses the row by member, as it does a
+/// value beyond f32's largest.
+fn narrow(x: f64) -> f32 {
+    let y = x as f32;
+    if x != 0.0 && (y == 0.0 || y.is_subnormal()) {
+        f32::NAN
+    } else {
+        y
+    }
+}
+
 wgsl_struct! {
 /// The hysteretic law's block of the pair table (`shaders/model/hysteretic.wgsl`).
 /// LSD is the special case k1 = kp = k with the LSD flag.
@@ -66,29 +78,33 @@ impl HystereticPair {
             flags |= HYST_SQRT_RULE;
         }
         Self {
-            k1: p.k1 as f32,
-            kp: p.kp as f32,
-            kc: p.kc as f32,
-            dmaxp_per_a12: dmaxp as f32,
-            phi_f: p.phi_f as f32,
-            fa: p.fa as f32,
-            kca: if p.kca.is_finite() { p.kca as f32 } else { 0.0 },
-            gamma0: p.gamma0 as f32,
+            k1: narrow(p.k1),
+            kp: narrow(p.kp),
+            kc: narrow(p.kc),
+            dmaxp_per_a12: narrow(dmaxp),
+            phi_f: narrow(p.phi_f),
+            fa: narrow(p.fa),
+            kca: if p.kca.is_finite() {
+                narrow(p.kca)
+            } else {
+                0.0
+            },
+            gamma0: narrow(p.gamma0),
             flags,
-            inv_dmaxp_per_a12: (1.0 / dmaxp) as f32,
-            tensile_c: p.tensile_coefficient() as f32,
-            tensile_limit_per_a12: p.tensile_limit(1.0) as f32,
+            inv_dmaxp_per_a12: narrow(1.0 / dmaxp),
+            tensile_c: narrow(p.tensile_coefficient()),
+            tensile_limit_per_a12: narrow(p.tensile_limit(1.0)),
         }
     }
 
     /// The row of an LSD pair: k1 = kp = k, the [`HYST_LSD`] flag.
     pub fn lsd(p: &crate::model::LsdParams) -> Self {
         Self {
-            k1: p.k as f32,
-            kp: p.k as f32,
+            k1: narrow(p.k),
+            kp: narrow(p.k),
             dmaxp_per_a12: 1e30,
             inv_dmaxp_per_a12: 1e-30,
-            gamma0: p.gamma0 as f32,
+            gamma0: narrow(p.gamma0),
             flags: HYST_LSD,
             ..Default::default()
         }
@@ -178,16 +194,18 @@ impl JkrPair {
         use crate::model::Dissipation;
         // the coefficients of R*: the law's scales at R* = 1 m
         let mut row = Self {
-            e_star: p.e_star() as f32,
-            g_star: p.g_star() as f32,
-            gamma: p.gamma() as f32,
-            a0_coef: p.a0(1.0) as f32,
-            break_ratio: p.pulloff.break_overlap_ratio() as f32,
-            friction: p.friction as f32,
-            rolling_hysteresis: p.rolling_hysteresis as f32,
-            fc_unscaled_per_r: p.fc_unscaled(1.0) as f32,
-            a0_unscaled_coef: p.a0_unscaled(1.0) as f32,
-            p_break: crate::model::jkr::potential_shape(p.pulloff.break_radius_ratio()) as f32,
+            e_star: narrow(p.e_star()),
+            g_star: narrow(p.g_star()),
+            gamma: narrow(p.gamma()),
+            a0_coef: narrow(p.a0(1.0)),
+            break_ratio: narrow(p.pulloff.break_overlap_ratio()),
+            friction: narrow(p.friction),
+            rolling_hysteresis: narrow(p.rolling_hysteresis),
+            fc_unscaled_per_r: narrow(p.fc_unscaled(1.0)),
+            a0_unscaled_coef: narrow(p.a0_unscaled(1.0)),
+            p_break: narrow(crate::model::jkr::potential_shape(
+                p.pulloff.break_radius_ratio(),
+            )),
             ..Default::default()
         };
         match p.dissipation {
@@ -198,18 +216,18 @@ impl JkrPair {
             } => {
                 row.dissipation = JKR_DISSIPATION_TSUJI;
                 // 2·√(5/6)·(−β): the prefactor of paper 002 eqs. 11 and 16
-                row.tsuji = (-2.0 * (5.0f64 / 6.0).sqrt() * tsuji_beta(restitution)) as f32;
+                row.tsuji = narrow(-2.0 * (5.0f64 / 6.0).sqrt() * tsuji_beta(restitution));
                 row.tsuji_hertz = u32::from(stiffness == crate::model::TsujiStiffness::Hertz);
             }
             Dissipation::PowerLaw { d, alpha, beta } => {
                 row.dissipation = JKR_DISSIPATION_POWER;
-                row.power_d = d as f32;
-                row.power_alpha = alpha as f32;
-                row.power_beta = beta as f32;
+                row.power_d = narrow(d);
+                row.power_alpha = narrow(alpha);
+                row.power_beta = narrow(beta);
             }
             Dissipation::Krijt { tvis, sigma0 } => {
                 row.dissipation = JKR_DISSIPATION_KRIJT;
-                row.tvis = tvis as f32;
+                row.tvis = narrow(tvis);
                 row.set_krijt(p, sigma0);
             }
             Dissipation::Stress {
@@ -219,9 +237,9 @@ impl JkrPair {
                 sigma0,
             } => {
                 row.dissipation = JKR_DISSIPATION_STRESS;
-                row.tvis = tvis0_per_radius as f32;
-                row.stress_b = b as f32;
-                row.stress_zeta = zeta as f32;
+                row.tvis = narrow(tvis0_per_radius);
+                row.stress_b = narrow(b);
+                row.stress_zeta = narrow(zeta);
                 row.set_krijt(p, sigma0);
             }
         }
@@ -233,9 +251,9 @@ impl JkrPair {
     /// the crack that long is no delay at all).
     fn set_krijt(&mut self, p: &crate::model::JkrParams, sigma0: f64) {
         let m = p.krijt_material();
-        self.visc = (2.0 * m.e_star / (m.poisson * m.poisson)) as f32;
+        self.visc = narrow(2.0 * m.e_star / (m.poisson * m.poisson));
         self.crack = if sigma0 > 0.0 {
-            (2.0 * m.e_star * m.gamma / (sigma0 * sigma0)).min(f32::MAX as f64) as f32
+            narrow((2.0 * m.e_star * m.gamma / (sigma0 * sigma0)).min(f32::MAX as f64))
         } else {
             0.0
         };
@@ -263,10 +281,10 @@ impl CoulombSpringRow {
     /// The block of a spring.
     pub fn new(s: &crate::model::CoulombSpring) -> Self {
         Self {
-            mu_s: s.mu_s as f32,
-            mu_d: s.mu_d as f32,
-            k: s.k as f32,
-            gamma: s.gamma as f32,
+            mu_s: narrow(s.mu_s),
+            mu_d: narrow(s.mu_d),
+            k: narrow(s.k),
+            gamma: narrow(s.gamma),
         }
     }
 }
@@ -298,7 +316,7 @@ impl TwistingRow {
         };
         spring.is_on().then(|| Self {
             spring: CoulombSpringRow::new(&spring),
-            k_per_a: k_per_a as f32,
+            k_per_a: narrow(k_per_a),
         })
     }
 }

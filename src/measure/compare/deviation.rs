@@ -93,18 +93,23 @@ pub(super) fn deviations(
         .map(|(a, b)| minimum_image(*a - *b, d.periodic, box_).length())
         .fold(0.0, f64::max)
         / r_min;
+    // (the floors, for a scene at rest, scale with the scene: 10⁻¹² of its expected impact
+    // speed and the square of that of its particles' energy at that speed)
+    let v_ref = scene.impact_velocity;
+    let e_floor = 1e-24 * 0.5 * v_ref * v_ref * cpu.masses().iter().sum::<f64>();
     let v_scale = (cpu.velocities().iter())
         .map(|v| v.length())
         .fold(0.0, f64::max)
-        + 1e-12;
+        + 1e-12 * v_ref;
     let velocity = (cpu.velocities().iter().zip(other.velocities))
         .map(|(a, b)| a.distance(*b))
         .fold(0.0, f64::max)
         / v_scale;
     let ec = cpu.energies();
     let [kinetic_o, elastic_o, dissipated_o] = other.energies;
-    let kinetic = (ec.kinetic - kinetic_o).abs() / ec.kinetic.abs().max(kinetic_o.abs()).max(1e-30);
-    let in_play = (ec.kinetic + ec.elastic.abs() + ec.dissipated).max(1e-30);
+    let kinetic =
+        (ec.kinetic - kinetic_o).abs() / ec.kinetic.abs().max(kinetic_o.abs()).max(e_floor);
+    let in_play = (ec.kinetic + ec.elastic.abs() + ec.dissipated).max(e_floor);
     let energy = (ec.elastic - elastic_o)
         .abs()
         .max((ec.dissipated - dissipated_o).abs())
@@ -179,5 +184,28 @@ fn history_deviation(
         missing,
         rms: of(&|x| (x[2] / x[3]).sqrt()),
         max: of(&|x| x[0] / x[1]),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// In a scene of tiny units, an engine whose particles move the other way, with half
+    /// the kinetic energy, deviates by order one: the floors of a scene at rest scale with
+    /// the scene (they were 1e-12 m/s and 1e-30 J, and passed such an engine).
+    #[test]
+    fn the_floors_scale_with_the_scene() {
+        let text = "[domain]\nmin = [0.0, 0.0, 0.0]\nmax = [1e-10, 1e-10, 1e-10]\n[simulation]\nduration = 1e-3\nimpact_velocity = 6e-19\n[[material]]\nname = \"m\"\ndensity = 1.0\nmodel = \"lsd\"\nk = 1e-46\n[[particles]]\nkind = \"list\"\npositions = [[3e-11, 5e-11, 5e-11], [7e-11, 5e-11, 5e-11]]\nradius = 1e-11\nvelocities = [[3e-19, 0.0, 0.0], [-3e-19, 0.0, 0.0]]\n";
+        let scene = Scene::from_toml_str(text, "tiny").unwrap();
+        let cpu = CpuEngine::new(&scene).unwrap();
+        let reference = Reference::of(&cpu);
+        let back: Vec<DVec3> = cpu.velocities().iter().map(|v| -*v).collect();
+        let mut other = Other::cpu(&cpu);
+        other.velocities = &back;
+        other.energies[0] *= 0.5;
+        let d = deviations(&scene, &reference, &other, |_, _| false);
+        assert!((d.velocity - 2.0).abs() < 1e-9, "{}", d.velocity);
+        assert!((d.kinetic - 0.5).abs() < 1e-9, "{}", d.kinetic);
     }
 }

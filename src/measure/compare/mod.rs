@@ -26,14 +26,16 @@ use std::collections::BTreeMap;
 pub struct Tolerances {
     /// Position difference over the smallest radius.
     pub position: f64,
-    /// Velocity difference over the largest CPU speed (plus 1e-12 m/s).
+    /// Velocity difference over the largest CPU speed (plus 10⁻¹² of the scene's
+    /// `impact_velocity`).
     pub velocity: f64,
-    /// Relative kinetic-energy difference (over the largest of the two and 1e-30 J).
+    /// Relative kinetic-energy difference (over the largest of the two and 10⁻²⁴ of the
+    /// particles' energy ½·Σm·v² at the scene's `impact_velocity`).
     pub kinetic: f64,
     /// Difference in the number of contacts, relative to the CPU count (at least 1).
     pub contacts: f64,
     /// Stored and dissipated energy differences over the energy in play (the CPU's
-    /// kinetic + |stored| + dissipated, at least 1e-30 J).
+    /// kinetic + |stored| + dissipated, at least 10⁻²⁴ of ½·Σm·v² at `impact_velocity`).
     pub energy: f64,
     /// History values of the contacts with overlap both engines hold: the RMS difference
     /// of δmax over the RMS of the CPU's δmax, and likewise for the tangential spring and
@@ -103,13 +105,15 @@ pub struct Sample {
     pub time: f64,
     /// Largest particle position difference |x_cpu − x_gpu| over the smallest radius.
     pub position: f64,
-    /// Largest velocity difference |v_cpu − v_gpu| over the largest CPU speed (plus 1e-12 m/s).
+    /// Largest velocity difference |v_cpu − v_gpu| over the largest CPU speed (plus 10⁻¹² of
+    /// the scene's `impact_velocity`).
     pub velocity: f64,
     /// CPU kinetic energy (translational + rotational), J.
     pub kinetic_cpu: f64,
     /// GPU kinetic energy (translational + rotational), J.
     pub kinetic_gpu: f64,
-    /// |kinetic_cpu − kinetic_gpu| over the larger of the two (at least 1e-30 J).
+    /// |kinetic_cpu − kinetic_gpu| over the larger of the two (at least 10⁻²⁴ of ½·Σm·v² at
+    /// the scene's `impact_velocity`).
     pub kinetic: f64,
     /// CPU mechanical contacts (δ > 0), particle–particle plus particle–wall.
     pub contacts_cpu: usize,
