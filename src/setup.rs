@@ -66,11 +66,7 @@ impl Resolved {
         let mass: Vec<f64> = scene
             .particles
             .iter()
-            .map(|p| {
-                scene.materials[p.material].density * 4.0 / 3.0
-                    * std::f64::consts::PI
-                    * p.radius.powi(3)
-            })
+            .map(|p| crate::scene::sphere_mass(scene.materials[p.material].density, p.radius))
             .collect();
         // (a radius and density each in range can still give a mass of 0 or ∞ in f64)
         if let Some((i, m)) = mass

@@ -15,7 +15,8 @@ pub(crate) struct CollideArgs {
     #[arg(long)]
     wall: bool,
     /// A constant force on the sphere along the wall, N, in the direction of its
-    /// tangential approach (paper 002 §5.3's F_ext; with --wall).
+    /// tangential approach (+y, which a head-on impact also takes; paper 002 §5.3's F_ext;
+    /// with --wall).
     #[arg(long = "tangential-force", default_value_t = 0.0)]
     tangential_force: f64,
     /// Seconds to go on after the sphere sticks, then tell whether it rests or rolls

@@ -205,6 +205,12 @@ pub fn run_with<S: Simulation>(
         if let Some(w) = scene.pour_onto_earlier() {
             eprintln!("warning: {w}");
         }
+        if let Some(w) = scene.touching_at_start() {
+            eprintln!("warning: {w}");
+        }
+        for w in servo::unstable_gains(scene, engine.dt()) {
+            eprintln!("warning: {w}");
+        }
     }
     let mut outputs = RunOutputs::open(
         scene,

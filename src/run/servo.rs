@@ -59,6 +59,49 @@ impl ServoHold {
     }
 }
 
+/// A warning for each servo wall whose gain makes it unstable as soon as one particle
+/// touches it: gain·k·dt ≥ 1, k the stiffness of that particle's contact with the wall
+/// (k = m·(π/tc)², tc its undamped contact time at the scene's impact speed; a bed under the
+/// wall is stiffer still). Such a wall chatters at its largest speed, a step each way,
+/// which samples taken every chunk of an even number of steps do not see.
+pub fn unstable_gains(scene: &Scene, dt: f64) -> Vec<String> {
+    let mut out = Vec::new();
+    for (w, wall) in scene.walls.iter().enumerate() {
+        let gains = (wall.motion.phases.iter()).filter_map(|(_, p)| match p {
+            WallPhase::Servo { gain, .. } => Some(*gain),
+            _ => None,
+        });
+        let Some(gain) = gains.fold(None, |g: Option<f64>, x| Some(g.map_or(x, |g| g.max(x))))
+        else {
+            continue;
+        };
+        // the stiffest contact a particle of the scene makes with the wall (each material's
+        // largest sphere: a Hertz contact stiffens with the radius, a linear one does not)
+        let mut largest = vec![0.0f64; scene.materials.len()];
+        for p in &scene.particles {
+            largest[p.material] = largest[p.material].max(p.radius);
+        }
+        let stiffest = (largest.iter().enumerate())
+            .filter(|(_, &r)| r > 0.0)
+            .filter_map(|(a, &r)| {
+                let model = scene.pair_model(wall.material, a).ok()?;
+                let m = crate::scene::sphere_mass(scene.materials[a].density, r);
+                let geom = crate::model::PairGeometry::wall(r, m);
+                let tc = model.time_step(&geom, scene.impact_velocity).contact_time;
+                (tc > 0.0).then(|| m * (std::f64::consts::PI / tc).powi(2))
+            })
+            .fold(0.0, f64::max);
+        let margin = gain * stiffest * dt;
+        if margin >= 1.0 {
+            out.push(format!(
+                "wall {w}'s servo_gain {gain:e} m/s per N is unstable as soon as one particle touches it: gain·k·dt = {margin:.3} ≥ 1 with k = {stiffest:.4e} N/m (a particle's contact with the wall) and dt = {dt:e} s; the wall would swing at servo_max_speed a step each way instead of holding its force: a gain below {:.4e} m/s per N is stable for one contact (a bed under the wall is stiffer: less still)",
+                1.0 / (stiffest * dt)
+            ));
+        }
+    }
+    out
+}
+
 /// One watched wall: its index, its unit normal and its samples (time, normal force the
 /// particles push on it).
 type Watched = (usize, DVec3, Vec<(f64, f64)>);
@@ -141,5 +184,29 @@ impl ServoWatch {
             });
         }
         (out, unjudged)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A lid on one sphere (k = 100 N/m, dt = 1.29e-5 s): a gain of 1000 m/s per N is
+    /// unstable with that one contact (gain·k·dt = 1.29; it chattered a step each way and
+    /// was judged held), 100 is not; the warning names the wall and a stable gain.
+    #[test]
+    fn a_gain_unstable_with_one_contact_is_warned_of() {
+        let scene = |gain: f64| {
+            let text = format!(
+                "[domain]\nmin = [0.0, 0.0, 0.0]\nmax = [0.01, 0.01, 0.01]\n[simulation]\nduration = 0.05\n[[material]]\nname = \"m\"\ndensity = 2000.0\nmodel = \"lsd\"\nk = 100.0\ngamma0 = 1e-3\n[[wall]]\npoint = [0.0, 0.0, 0.0]\nnormal = [0.0, 0.0, 1.0]\n[[wall]]\npoint = [0.0, 0.0, 0.003]\nnormal = [0.0, 0.0, -1.0]\nservo_force = 0.01\nservo_gain = {gain:?}\nservo_max_speed = 0.5\n[[particles]]\nkind = \"list\"\npositions = [[0.005, 0.005, 0.001]]\nradius = 1e-3\n"
+            );
+            Scene::from_toml_str(&text, "servo").unwrap()
+        };
+        let dt = crate::setup::Resolved::new(&scene(1.0)).unwrap().dt;
+        let w = unstable_gains(&scene(1000.0), dt);
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert!(w[0].starts_with("wall 1's servo_gain 1e3"), "{}", w[0]);
+        assert!(w[0].contains("k = 1.0000e2 N/m"), "{}", w[0]);
+        assert!(unstable_gains(&scene(100.0), dt).is_empty());
     }
 }

@@ -216,6 +216,11 @@ pub struct ParticleInit {
     pub insert_at: f64,
 }
 
+/// The mass of a sphere of `radius` (m) and `density` (kg/m³), kg.
+pub fn sphere_mass(density: f64, radius: f64) -> f64 {
+    density * 4.0 / 3.0 * std::f64::consts::PI * radius.powi(3)
+}
+
 /// Whether a particle inserted at `insert_at` (s) is due at the start of step `step` of
 /// `dt`: both engines insert it at the first step k with insert_at ≤ k·dt (k·dt as f64, not
 /// a summed time, which rounds low).

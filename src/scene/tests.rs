@@ -984,3 +984,26 @@ fn an_appeared_flag_fits_the_step_its_particle_is_due_at() {
     assert!(misfit_appearance(&[0.0, at], &[true], 5, dt).is_some());
     assert!(misfit_appearance(&[0.0, at], &[true, false], 5, dt).is_none());
 }
+
+/// Neighbours touching to within rounding are warned of where the law's force jumps at
+/// the touch (jump-in adhesion), not where it is continuous (a linear spring) nor where
+/// a gap separates them; across a periodic seam too.
+#[test]
+fn pairs_touching_at_the_start_under_a_jumping_law_are_warned_of() {
+    let scene = |law: &str, spacing: &str| {
+        let text = format!(
+            "[domain]\nmin = [0.0, 0.0, 0.0]\nmax = [0.012, 0.012, 0.006]\nperiodic = [true, true, false]\n[simulation]\nduration = 1.0\n[[material]]\nname = \"p\"\ndensity = 2000.0\n{law}\n[[particles]]\nkind = \"lattice\"\nmin = [0.0, 0.0, 0.0]\nmax = [0.012, 0.012, 0.002]\nradius = 1e-3\n{spacing}"
+        );
+        Scene::from_toml_str(&text, "t").unwrap()
+    };
+    let sticky = "model = \"hysteretic\"\nk1 = 100.0\nkp = 500.0\nkc = 100.0\nphi_f = 0.05\nfa = 1e-5\nkca = 50.0";
+    let w = scene(sticky, "").touching_at_start().expect("a warning");
+    // 6 × 6 spheres, each touching its +x and +y neighbour (the seam's included)
+    assert!(w.starts_with("72 pairs of particles start touching"), "{w}");
+    assert!(w.contains("materials `p` and `p`"), "{w}");
+    assert_eq!(scene(sticky, "spacing = 2.2e-3").touching_at_start(), None);
+    assert_eq!(
+        scene("model = \"lsd\"\nk = 100.0", "").touching_at_start(),
+        None
+    );
+}

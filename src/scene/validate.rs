@@ -4,8 +4,9 @@
 
 use super::declared::{check, Section};
 use super::hash_grid::Grid;
-use super::{DtSetting, Scene, WallPhase};
+use super::{sphere_mass, DtSetting, Scene, WallPhase};
 use crate::error::PowderError;
+use std::collections::HashMap;
 
 fn bad(what: String) -> Result<(), PowderError> {
     Err(PowderError::Scene(format!("scene: {what}")))
@@ -264,6 +265,72 @@ impl Scene {
             }
         }
         None
+    }
+
+    /// A warning when particles that appear together start touching to within rounding
+    /// (|gap| ≤ 10⁻¹² of their radii, or a few ulps of the domain's coordinates) under a law
+    /// whose force jumps at the touch (JKR with adhesion, jump-in adhesion): whether each
+    /// such pair starts in contact, and so bonds, is decided by the last bits of its
+    /// positions, and the two engines decide differently. O(N) through a hash grid.
+    pub fn touching_at_start(&self) -> Option<String> {
+        let time = |i: usize| self.particles[i].insert_at.max(0.0);
+        let mut order: Vec<usize> = (0..self.particles.len()).collect();
+        order.sort_by(|&a, &b| time(a).total_cmp(&time(b)));
+        let r_max = self.particles.iter().map(|p| p.radius).fold(0.0, f64::max);
+        let periods = self.periods();
+        let d = &self.domain;
+        let coords = (0..3).fold(0.0f64, |m, a| m.max(d.min[a].abs()).max(d.max[a].abs()));
+        let mut jumps: HashMap<(usize, usize), bool> = HashMap::new();
+        let (mut count, mut first) = (0usize, None);
+        for group in order.chunk_by(|&a, &b| time(a) == time(b)) {
+            let mut grid = Grid::new(2.0 * r_max);
+            for &i in group {
+                grid.insert(i, self.particles[i].position);
+            }
+            for &i in group {
+                let p = &self.particles[i];
+                for j in grid.near_images(p.position, p.radius + r_max, periods) {
+                    if j <= i {
+                        continue;
+                    }
+                    let q = &self.particles[j];
+                    let dist = (0..3)
+                        .map(|a| {
+                            let x = p.position[a] - q.position[a];
+                            let x = periods[a].map_or(x, |l| x - l * (x / l).round());
+                            x * x
+                        })
+                        .sum::<f64>()
+                        .sqrt();
+                    let gap = dist - p.radius - q.radius;
+                    let tol = 1e-12 * (p.radius + q.radius) + 8.0 * f64::EPSILON * coords;
+                    if gap.abs() > tol {
+                        continue;
+                    }
+                    let key = (p.material.min(q.material), p.material.max(q.material));
+                    let jump = *jumps.entry(key).or_insert_with(|| {
+                        let mass = |r: f64, m: usize| sphere_mass(self.materials[m].density, r);
+                        let geom = crate::model::PairGeometry::spheres(
+                            p.radius,
+                            q.radius,
+                            mass(p.radius, p.material),
+                            mass(q.radius, q.material),
+                        );
+                        self.pair_model(key.0, key.1)
+                            .is_ok_and(|m| m.edges(&geom, 0.0)[0].1 != 0.0)
+                    });
+                    if jump {
+                        count += 1;
+                        first.get_or_insert((i, j, gap, key));
+                    }
+                }
+            }
+        }
+        let (i, j, gap, (a, b)) = first?;
+        Some(format!(
+            "{count} pairs of particles start touching to within rounding (the first: particles {i} and {j}, gap {gap:e} m) under a law whose force jumps at the touch (materials `{}` and `{}`: JKR with adhesion, or jump-in adhesion): whether each such pair starts in contact, and so bonds, is decided by the last bits of its positions, and the CPU and GPU decide differently; leave a clear gap (a lattice: a region that holds its spacing above 2·radius) or a clear overlap",
+            self.materials[a].name, self.materials[b].name
+        ))
     }
 
     /// A warning when particles appear only after the last step of a run begins, at

@@ -58,7 +58,8 @@ pub struct CollideSpec {
     /// `None`: the engine's default (yes, where the law's force can jump).
     pub jump_impulses: Option<bool>,
     /// A constant force on the sphere along the wall, N, in the direction of its tangential
-    /// approach (+y), from the start (paper 002 §5.3's F_ext); wall impacts only.
+    /// approach (+y; along +y too for a head-on impact), from the start (paper 002 §5.3's
+    /// F_ext); wall impacts only.
     pub tangential_force: f64,
     /// Seconds to go on after the sphere stuck before telling whether it rests or rolls
     /// ([`CollideResult::outcome`]); 0: the run ends when it sticks.
@@ -107,9 +108,9 @@ pub struct CollisionEnergy {
     pub final_kinetic: f64,
     /// From the energy ledger (both backends; the GPU keeps it on the device in f32).
     pub dissipated: Option<f64>,
-    /// |E_total(end) − E_total(start)| over the larger of E_kinetic(start) and the energy
-    /// dissipated (a stuck adhesive pair dissipates its well's depth, which can dwarf the
-    /// impact's kinetic energy).
+    /// |E_total(end) − E_total(start)| over the largest of E_kinetic(start), E_kinetic(end)
+    /// and the energy dissipated (a stuck adhesive pair dissipates its well's depth, which
+    /// can dwarf the impact's kinetic energy; a tangential force's work can dwarf both).
     pub balance_error: Option<f64>,
 }
 

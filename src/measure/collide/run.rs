@@ -255,7 +255,7 @@ pub(super) fn run_collision(
             dissipated,
             balance_error: total0
                 .zip(total1)
-                .map(|(a, b)| (b - a).abs() / ke0.max(dissipated.map_or(0.0, f64::abs))),
+                .map(|(a, b)| (b - a).abs() / ke0.max(ke1).max(dissipated.map_or(0.0, f64::abs))),
         },
     };
     predict(spec, &geom, &mut result);
