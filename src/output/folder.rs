@@ -142,6 +142,12 @@ pub fn check_writable(
                     f.display()
                 )))
             }
+            Ok(m) if !m.is_file() => {
+                return Err(PowderError::Run(format!(
+                    "`{}` is not a regular file (a FIFO, socket or device) where the run writes a file: move it away or choose another --out",
+                    f.display()
+                )))
+            }
             Ok(_) if append => {
                 fs::OpenOptions::new()
                     .append(true)
@@ -160,9 +166,9 @@ pub fn check_writable(
         .map_err(|e| PowderError::io(format!("cannot write into `{}`", dir.display()), e))
 }
 
-/// Refuses an existing file that no rename may replace nor unlink remove: one marked
-/// immutable or append-only (`chattr +i`, `+a`), which opening it for writing finds (EPERM,
-/// where a file's mode, which a rename ignores, gives EACCES). Nothing is written.
+/// Refuses an existing regular file that no rename may replace nor unlink remove: one
+/// marked immutable or append-only (`chattr +i`, `+a`), which opening it for writing finds
+/// (EPERM, where a file's mode, which a rename ignores, gives EACCES). Nothing is written.
 fn refuse_immutable(f: &Path) -> Result<(), PowderError> {
     const EPERM: i32 = 1;
     match fs::OpenOptions::new().write(true).open(f) {
@@ -364,6 +370,40 @@ mod tests {
                 "{err}"
             );
             assert_eq!(fs::read(&checkpoint).unwrap(), b"earlier");
+        }
+        // a file both appended to and replaced (`series.csv`), append-only
+        let csv = dir.path().join("series.csv");
+        fs::write(&csv, b"rows").unwrap();
+        if std::process::Command::new("chattr")
+            .arg("+a")
+            .arg(&csv)
+            .status()
+            .is_ok_and(|s| s.success())
+        {
+            let _clear = Flags(&csv);
+            let both = std::slice::from_ref(&csv);
+            let err = check_writable(dir.path(), both, both)
+                .unwrap_err()
+                .to_string();
+            assert!(err.contains("series.csv` cannot be replaced"), "{err}");
+        }
+    }
+
+    /// A FIFO where the run writes a file is refused, not opened (which would wait for a
+    /// reader for ever).
+    #[test]
+    fn a_fifo_where_an_output_goes_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let fifo = dir.path().join("summary.json");
+        let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+        if !made.is_ok_and(|s| s.success()) {
+            return eprintln!("skipping: mkfifo is not available here");
+        }
+        for (replaced, appended) in [(vec![fifo.clone()], vec![]), (vec![], vec![fifo.clone()])] {
+            let err = check_writable(dir.path(), &replaced, &appended)
+                .unwrap_err()
+                .to_string();
+            assert!(err.contains("is not a regular file"), "{err}");
         }
     }
 }

@@ -193,18 +193,23 @@ impl RunOutputs {
     /// before anything there changes.
     fn take(d: &Path, scene: &Scene) -> Result<FolderLock, PowderError> {
         let lock = FolderLock::take(d)?;
-        let [particles, contacts] = vtk::Series::both_unopened(d, &scene.name);
-        let replaced = [
+        // (`series.csv` is appended to and, at the start, replaced whole; the series of the
+        // run replaced or cut are another scene's where another scene's run wrote the folder)
+        let csv = d.join("series.csv");
+        let series: Vec<vtk::Series> = (super::earlier::replaced_scenes(d, scene).iter())
+            .flat_map(|n| vtk::Series::both_unopened(d, n))
+            .collect();
+        let mut replaced = vec![
             d.join("checkpoint.bin"),
             d.join("summary.json"),
-            particles.collection_path(),
-            contacts.collection_path(),
+            csv.clone(),
         ];
-        check_writable(d, &replaced, &[d.join("series.csv")])?;
-        for series in [&particles, &contacts] {
-            let sub = series.folder();
+        replaced.extend(series.iter().map(vtk::Series::collection_path));
+        check_writable(d, &replaced, &[csv])?;
+        for s in &series {
+            let sub = s.folder();
             if sub.is_dir() {
-                check_writable(&sub, &series.snapshot_paths(), &[])?;
+                check_writable(&sub, &s.snapshot_paths(), &[])?;
             }
         }
         Ok(lock)

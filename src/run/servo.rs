@@ -59,47 +59,57 @@ impl ServoHold {
     }
 }
 
-/// A warning for each servo wall whose gain makes it unstable as soon as one particle
-/// touches it: gain·k·dt ≥ 1, k the stiffness of that particle's contact with the wall
-/// (k = m·(π/tc)², tc its undamped contact time at the scene's impact speed; a bed under the
-/// wall is stiffer still). Such a wall chatters at its largest speed, a step each way,
-/// which samples taken every chunk of an even number of steps do not see.
+/// A warning for each servo wall whose gain makes it overshoot as soon as one particle
+/// touches it: gain·k·dt ≥ 1 (the documented bound), k the normal stiffness of that
+/// particle's contact with the wall under the servo's force (a bed under the wall is
+/// stiffer still). Such a wall moves at its largest speed a step each way, which samples
+/// taken at the end of chunks of an even number of steps do not see.
 pub fn unstable_gains(scene: &Scene, dt: f64) -> Vec<String> {
+    let mut largest = vec![0.0f64; scene.materials.len()];
+    for p in &scene.particles {
+        largest[p.material] = largest[p.material].max(p.radius);
+    }
     let mut out = Vec::new();
     for (w, wall) in scene.walls.iter().enumerate() {
-        let gains = (wall.motion.phases.iter()).filter_map(|(_, p)| match p {
-            WallPhase::Servo { gain, .. } => Some(*gain),
-            _ => None,
-        });
-        let Some(gain) = gains.fold(None, |g: Option<f64>, x| Some(g.map_or(x, |g| g.max(x))))
-        else {
-            continue;
-        };
-        // the stiffest contact a particle of the scene makes with the wall (each material's
-        // largest sphere: a Hertz contact stiffens with the radius, a linear one does not)
-        let mut largest = vec![0.0f64; scene.materials.len()];
-        for p in &scene.particles {
-            largest[p.material] = largest[p.material].max(p.radius);
-        }
-        let stiffest = (largest.iter().enumerate())
-            .filter(|(_, &r)| r > 0.0)
-            .filter_map(|(a, &r)| {
-                let model = scene.pair_model(wall.material, a).ok()?;
-                let m = crate::scene::sphere_mass(scene.materials[a].density, r);
-                let geom = crate::model::PairGeometry::wall(r, m);
-                let tc = model.time_step(&geom, scene.impact_velocity).contact_time;
-                (tc > 0.0).then(|| m * (std::f64::consts::PI / tc).powi(2))
-            })
-            .fold(0.0, f64::max);
-        let margin = gain * stiffest * dt;
-        if margin >= 1.0 {
-            out.push(format!(
-                "wall {w}'s servo_gain {gain:e} m/s per N is unstable as soon as one particle touches it: gain·k·dt = {margin:.3} ≥ 1 with k = {stiffest:.4e} N/m (a particle's contact with the wall) and dt = {dt:e} s; the wall would swing at servo_max_speed a step each way instead of holding its force: a gain below {:.4e} m/s per N is stable for one contact (a bed under the wall is stiffer: less still)",
-                1.0 / (stiffest * dt)
-            ));
+        for (from, phase) in &wall.motion.phases {
+            let WallPhase::Servo { force, gain, .. } = *phase else {
+                continue;
+            };
+            // each material's largest sphere: a Hertz contact stiffens with the radius
+            let stiffest = (largest.iter().enumerate())
+                .filter(|(_, &r)| r > 0.0)
+                .filter_map(|(a, &r)| {
+                    let model = scene.pair_model(wall.material, a).ok()?;
+                    Some(normal_stiffness(&model, r, force.abs()))
+                })
+                .fold(0.0, f64::max);
+            let margin = gain * stiffest * dt;
+            if margin >= 1.0 {
+                out.push(format!(
+                    "wall {w}'s servo phase from t = {from:e} s: servo_gain {gain:e} m/s per N overshoots as soon as one particle touches the wall: gain·k·dt = {margin:.3} ≥ 1 with k = {stiffest:.4e} N/m (the normal stiffness of a particle's contact with the wall under the servo force) and dt = {dt:e} s; the wall would swing at servo_max_speed a step each way instead of holding its force; a gain below {:.4e} m/s per N holds with one contact (a bed under the wall is stiffer: less still)",
+                    1.0 / (stiffest * dt)
+                ));
+                break;
+            }
         }
     }
     out
+}
+
+/// The normal stiffness dF/dδ of a contact with a wall (effective radius `r`) at the
+/// normal force `load`: the linear laws' spring (the hysteretic model's un-/reloading kp,
+/// its stiffest under compression); Hertz's (6·E*²·r·F)^(1/3), and for JKR at least its
+/// stiffness about the equilibrium overlap.
+fn normal_stiffness(model: &crate::model::ContactModel, r: f64, load: f64) -> f64 {
+    use crate::model::ContactModel;
+    match model {
+        ContactModel::Lsd(p) => p.k,
+        ContactModel::Hysteretic(p) => p.kp,
+        ContactModel::Jkr(p) => {
+            let hertz = (6.0 * p.e_star() * p.e_star() * r * load).cbrt();
+            hertz.max(p.equilibrium_stiffness(r))
+        }
+    }
 }
 
 /// One watched wall: its index, its unit normal and its samples (time, normal force the
@@ -196,17 +206,33 @@ mod tests {
     /// was judged held), 100 is not; the warning names the wall and a stable gain.
     #[test]
     fn a_gain_unstable_with_one_contact_is_warned_of() {
-        let scene = |gain: f64| {
+        let rough = |gain: f64, friction: &str| {
             let text = format!(
-                "[domain]\nmin = [0.0, 0.0, 0.0]\nmax = [0.01, 0.01, 0.01]\n[simulation]\nduration = 0.05\n[[material]]\nname = \"m\"\ndensity = 2000.0\nmodel = \"lsd\"\nk = 100.0\ngamma0 = 1e-3\n[[wall]]\npoint = [0.0, 0.0, 0.0]\nnormal = [0.0, 0.0, 1.0]\n[[wall]]\npoint = [0.0, 0.0, 0.003]\nnormal = [0.0, 0.0, -1.0]\nservo_force = 0.01\nservo_gain = {gain:?}\nservo_max_speed = 0.5\n[[particles]]\nkind = \"list\"\npositions = [[0.005, 0.005, 0.001]]\nradius = 1e-3\n"
+                "[domain]\nmin = [0.0, 0.0, 0.0]\nmax = [0.01, 0.01, 0.01]\n[simulation]\nduration = 0.05\n[[material]]\nname = \"m\"\ndensity = 2000.0\nmodel = \"lsd\"\nk = 100.0\ngamma0 = 1e-3\n{friction}\n[[wall]]\npoint = [0.0, 0.0, 0.0]\nnormal = [0.0, 0.0, 1.0]\n[[wall]]\npoint = [0.0, 0.0, 0.003]\nnormal = [0.0, 0.0, -1.0]\nservo_force = 0.01\nservo_gain = {gain:?}\nservo_max_speed = 0.5\n[[particles]]\nkind = \"list\"\npositions = [[0.005, 0.005, 0.001]]\nradius = 1e-3\n"
             );
             Scene::from_toml_str(&text, "servo").unwrap()
         };
+        let scene = |gain: f64| rough(gain, "");
         let dt = crate::setup::Resolved::new(&scene(1.0)).unwrap().dt;
         let w = unstable_gains(&scene(1000.0), dt);
         assert_eq!(w.len(), 1, "{w:?}");
-        assert!(w[0].starts_with("wall 1's servo_gain 1e3"), "{}", w[0]);
+        assert!(
+            w[0].starts_with("wall 1's servo phase from t = 0e0 s: servo_gain 1e3"),
+            "{}",
+            w[0]
+        );
         assert!(w[0].contains("k = 1.0000e2 N/m"), "{}", w[0]);
         assert!(unstable_gains(&scene(100.0), dt).is_empty());
+        // a stiff tangential spring shortens the time step, not the normal stiffness: a gain
+        // at half the bound is not warned of (the contact time of the tangential
+        // oscillator, taken for the normal one, overstated k)
+        let stiff = rough(1.0, "friction = 0.5\nkt = 1e4");
+        let dt = crate::setup::Resolved::new(&stiff).unwrap().dt;
+        let half = 0.5 / (100.0 * dt);
+        assert!(unstable_gains(&rough(half, "friction = 0.5\nkt = 1e4"), dt).is_empty());
+        assert_eq!(
+            unstable_gains(&rough(2.5 * half, "friction = 0.5\nkt = 1e4"), dt).len(),
+            1
+        );
     }
 }

@@ -336,7 +336,13 @@ fn expand_lattice(t: &Tbl, names: &[&str], out: &mut Vec<ParticleInit>) -> Res<(
                     }
                     // (every site lies in [min + r, max − r]: clamping only shortens a
                     // jitter displacement, so it cannot create overlaps)
-                    p[a] = x.clamp(min[a] + radius, max[a] - radius);
+                    // (a region narrower than a diameter by rounding: its one site centred)
+                    let (lo, hi) = (min[a] + radius, max[a] - radius);
+                    p[a] = if lo <= hi {
+                        x.clamp(lo, hi)
+                    } else {
+                        0.5 * (min[a] + max[a])
+                    };
                 }
                 out.push(ParticleInit {
                     position: p,

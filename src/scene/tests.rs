@@ -621,9 +621,22 @@ fn lattice_counts_and_jitter() {
             .fold(0.0, f64::max);
         assert!(last <= 0.29 + 1e-15, "{extra}: {last}");
     }
-    // a spacing whose last site would need neighbours closer than 2·radius drops it
-    let s = parse(&scene("spacing = 0.0200001")).unwrap();
-    assert_eq!(s.particles.len(), 4 * 9 * 14);
+    // a region whose last site would need neighbours closer than 2·radius drops it (the
+    // default spacing's site lies 10⁻⁹ beyond; spread, they would overlap by 10⁻⁸)
+    let block = |lo: &str, hi: &str| {
+        scene("").replace(
+            "min = [0.0, 0.0, 0.0]\nmax = [0.1, 0.2, 0.3]",
+            &format!("min = {lo}\nmax = {hi}"),
+        )
+    };
+    let s = parse(&block("[0.0, 0.0, 0.0]", "[0.0999999990, 0.2, 0.3]")).unwrap();
+    assert_eq!(s.particles.len(), 4 * 10 * 15);
+    assert!(closest(&s) >= 0.02 * (1.0 - 1e-14), "{:e}", closest(&s));
+    // a region one diameter wide, whose site's bounds cross by rounding (0.04 + 0.01 >
+    // 0.06 − 0.01), holds its site centred (the clamp to an empty interval panicked)
+    let s = parse(&block("[0.04, 0.0, 0.0]", "[0.06, 0.2, 0.3]")).unwrap();
+    assert_eq!(s.particles.len(), 10 * 15);
+    assert!((s.particles[0].position[0] - 0.05).abs() < 1e-15);
     let s = parse(&scene("spacing = 0.03")).unwrap();
     // floor((0.1-0.02)/0.03)+1 = 3, floor(0.18/0.03)+1 = 7, floor(0.28/0.03)+1 = 10
     assert_eq!(s.particles.len(), 3 * 7 * 10);
@@ -999,11 +1012,26 @@ fn pairs_touching_at_the_start_under_a_jumping_law_are_warned_of() {
     let sticky = "model = \"hysteretic\"\nk1 = 100.0\nkp = 500.0\nkc = 100.0\nphi_f = 0.05\nfa = 1e-5\nkca = 50.0";
     let w = scene(sticky, "").touching_at_start().expect("a warning");
     // 6 × 6 spheres, each touching its +x and +y neighbour (the seam's included)
-    assert!(w.starts_with("72 pairs of particles start touching"), "{w}");
+    assert!(w.starts_with("72 pairs start touching"), "{w}");
+    assert!(w.contains("(the first: particles 0 and 1, gap"), "{w}");
     assert!(w.contains("materials `p` and `p`"), "{w}");
+    // a floor under the lattice's region: the 36 spheres resting on it exactly
+    let floored = |law: &str| {
+        let mut s = scene(law, "");
+        s.walls.push(crate::scene::Wall {
+            point: [0.0; 3],
+            normal: [0.0, 0.0, 1.0],
+            motion: Default::default(),
+            material: 0,
+        });
+        s
+    };
+    let w = floored(sticky).touching_at_start().expect("a warning");
+    assert!(w.starts_with("108 pairs start touching"), "{w}");
+    assert!(w.contains("(the first: particle 0 and wall 0, gap"), "{w}");
     assert_eq!(scene(sticky, "spacing = 2.2e-3").touching_at_start(), None);
     assert_eq!(
-        scene("model = \"lsd\"\nk = 100.0", "").touching_at_start(),
+        floored("model = \"lsd\"\nk = 100.0").touching_at_start(),
         None
     );
 }

@@ -6,7 +6,6 @@ use super::declared::{check, Section};
 use super::hash_grid::Grid;
 use super::{sphere_mass, DtSetting, Scene, WallPhase};
 use crate::error::PowderError;
-use std::collections::HashMap;
 
 fn bad(what: String) -> Result<(), PowderError> {
     Err(PowderError::Scene(format!("scene: {what}")))
@@ -248,14 +247,7 @@ impl Scene {
                 let p = &self.particles[i];
                 for k in grid.near_images(p.position, p.radius + r_max, periods) {
                     let (j, x) = flown[k];
-                    let gap: f64 = (0..3)
-                        .map(|a| {
-                            let d = p.position[a] - x[a];
-                            let d = periods[a].map_or(d, |l| d - l * (d / l).round());
-                            d * d
-                        })
-                        .sum::<f64>()
-                        .sqrt();
+                    let gap = image_distance(p.position, x, periods);
                     if gap < p.radius + self.particles[j].radius {
                         return Some(format!(
                             "particle {i} appears at {at:e} s where particle {j}, which appeared at {before:e} s, would still be had it flown freely since (its velocity and gravity, no collisions): the pour's region has likely not emptied, and the run would stop where a particle lands on another (the engines do not push particles aside); lengthen `batch_interval` or move the region"
@@ -267,21 +259,69 @@ impl Scene {
         None
     }
 
-    /// A warning when particles that appear together start touching to within rounding
-    /// (|gap| ≤ 10⁻¹² of their radii, or a few ulps of the domain's coordinates) under a law
-    /// whose force jumps at the touch (JKR with adhesion, jump-in adhesion): whether each
-    /// such pair starts in contact, and so bonds, is decided by the last bits of its
-    /// positions, and the two engines decide differently. O(N) through a hash grid.
+    /// A warning when particles that appear together, or a particle and a wall, start
+    /// touching to within rounding (|gap| ≤ 10⁻¹² of their radii, or a few ulps of the
+    /// domain's coordinates) under a law whose force jumps at the touch (JKR with adhesion,
+    /// jump-in adhesion): whether each such pair starts in contact, and so bonds, is decided
+    /// by the last bits of its positions, and the two engines decide differently. O(N)
+    /// through a hash grid, and nothing where no law of the scene jumps at the touch.
     pub fn touching_at_start(&self) -> Option<String> {
+        let n = self.materials.len();
+        let r_max = self.particles.iter().map(|p| p.radius).fold(0.0, f64::max);
+        // (whether a law's force jumps at the touch does not depend on the radii)
+        let jumps =
+            |model: Result<crate::model::ContactModel, PowderError>, wall: bool, a: usize| {
+                let m = sphere_mass(self.materials[a].density, r_max);
+                let geom = if wall {
+                    crate::model::PairGeometry::wall(r_max, m)
+                } else {
+                    crate::model::PairGeometry::spheres(r_max, r_max, m, m)
+                };
+                model.is_ok_and(|m| m.edges(&geom, 0.0)[0].1 != 0.0)
+            };
+        let pairs: Vec<bool> = (0..n * n)
+            .map(|k| jumps(self.pair_model(k / n, k % n), false, k % n))
+            .collect();
+        let walls: Vec<bool> = (0..self.walls.len() * n)
+            .map(|k| {
+                jumps(
+                    self.pair_model(self.walls[k / n].material, k % n),
+                    true,
+                    k % n,
+                )
+            })
+            .collect();
+        if !pairs.iter().chain(&walls).any(|&j| j) {
+            return None;
+        }
+        let d = &self.domain;
+        let coords = (0..3).fold(0.0f64, |m, a| m.max(d.min[a].abs()).max(d.max[a].abs()));
+        let tol = |r: f64| 1e-12 * r + 8.0 * f64::EPSILON * coords;
+        let (mut count, mut first) = (0usize, None::<String>);
+        let mut found = |what: String| {
+            count += 1;
+            first.get_or_insert(what);
+        };
+        for (w, wall) in self.walls.iter().enumerate() {
+            let normal = glam::DVec3::from_array(wall.normal).normalize();
+            let point = glam::DVec3::from_array(wall.point);
+            for (i, p) in self.particles.iter().enumerate() {
+                if !walls[w * n + p.material] {
+                    continue;
+                }
+                let gap = normal.dot(glam::DVec3::from_array(p.position) - point) - p.radius;
+                if gap.abs() <= tol(p.radius) {
+                    found(format!(
+                        "particle {i} and wall {w}, gap {gap:e} m: materials `{}` and `{}`",
+                        self.materials[p.material].name, self.materials[wall.material].name
+                    ));
+                }
+            }
+        }
         let time = |i: usize| self.particles[i].insert_at.max(0.0);
         let mut order: Vec<usize> = (0..self.particles.len()).collect();
         order.sort_by(|&a, &b| time(a).total_cmp(&time(b)));
-        let r_max = self.particles.iter().map(|p| p.radius).fold(0.0, f64::max);
         let periods = self.periods();
-        let d = &self.domain;
-        let coords = (0..3).fold(0.0f64, |m, a| m.max(d.min[a].abs()).max(d.max[a].abs()));
-        let mut jumps: HashMap<(usize, usize), bool> = HashMap::new();
-        let (mut count, mut first) = (0usize, None);
         for group in order.chunk_by(|&a, &b| time(a) == time(b)) {
             let mut grid = Grid::new(2.0 * r_max);
             for &i in group {
@@ -290,46 +330,23 @@ impl Scene {
             for &i in group {
                 let p = &self.particles[i];
                 for j in grid.near_images(p.position, p.radius + r_max, periods) {
-                    if j <= i {
-                        continue;
-                    }
                     let q = &self.particles[j];
-                    let dist = (0..3)
-                        .map(|a| {
-                            let x = p.position[a] - q.position[a];
-                            let x = periods[a].map_or(x, |l| x - l * (x / l).round());
-                            x * x
-                        })
-                        .sum::<f64>()
-                        .sqrt();
-                    let gap = dist - p.radius - q.radius;
-                    let tol = 1e-12 * (p.radius + q.radius) + 8.0 * f64::EPSILON * coords;
-                    if gap.abs() > tol {
+                    if j <= i || !pairs[p.material * n + q.material] {
                         continue;
                     }
-                    let key = (p.material.min(q.material), p.material.max(q.material));
-                    let jump = *jumps.entry(key).or_insert_with(|| {
-                        let mass = |r: f64, m: usize| sphere_mass(self.materials[m].density, r);
-                        let geom = crate::model::PairGeometry::spheres(
-                            p.radius,
-                            q.radius,
-                            mass(p.radius, p.material),
-                            mass(q.radius, q.material),
-                        );
-                        self.pair_model(key.0, key.1)
-                            .is_ok_and(|m| m.edges(&geom, 0.0)[0].1 != 0.0)
-                    });
-                    if jump {
-                        count += 1;
-                        first.get_or_insert((i, j, gap, key));
+                    let gap = image_distance(p.position, q.position, periods) - p.radius - q.radius;
+                    if gap.abs() <= tol(p.radius + q.radius) {
+                        found(format!(
+                            "particles {i} and {j}, gap {gap:e} m: materials `{}` and `{}`",
+                            self.materials[p.material].name, self.materials[q.material].name
+                        ));
                     }
                 }
             }
         }
-        let (i, j, gap, (a, b)) = first?;
         Some(format!(
-            "{count} pairs of particles start touching to within rounding (the first: particles {i} and {j}, gap {gap:e} m) under a law whose force jumps at the touch (materials `{}` and `{}`: JKR with adhesion, or jump-in adhesion): whether each such pair starts in contact, and so bonds, is decided by the last bits of its positions, and the CPU and GPU decide differently; leave a clear gap (a lattice: a region that holds its spacing above 2·radius) or a clear overlap",
-            self.materials[a].name, self.materials[b].name
+            "{count} pairs start touching to within rounding (the first: {}) under a law whose force jumps at the touch (JKR with adhesion, or jump-in adhesion): whether each such pair starts in contact, and so bonds, is decided by the last bits of its positions, and the CPU and GPU decide differently; leave a clear gap (a lattice: a region that holds its spacing above 2·radius) or a clear overlap",
+            first?
         ))
     }
 
@@ -348,4 +365,17 @@ impl Scene {
             self.particles[first].insert_at
         ))
     }
+}
+
+/// The distance from `a` to the nearest image of `b` (`periods[a]`: `Some(L)` on a periodic
+/// axis).
+fn image_distance(a: [f64; 3], b: [f64; 3], periods: [Option<f64>; 3]) -> f64 {
+    (0..3)
+        .map(|k| {
+            let d = a[k] - b[k];
+            let d = periods[k].map_or(d, |l| d - l * (d / l).round());
+            d * d
+        })
+        .sum::<f64>()
+        .sqrt()
 }

@@ -94,10 +94,16 @@ pub(super) fn check_f32_range(
             let v = DVec3::from_array(p.velocity)
                 .length()
                 .max(scene.impact_velocity);
-            let e = (0.5 * m * v * v).max(m * g * p.radius);
+            let (kinetic, weight) = (0.5 * m * v * v, m * g * p.radius);
+            let e = kinetic.max(weight);
             if !(LEDGER_ENERGIES.0..=LEDGER_ENERGIES.1).contains(&e) {
+                let term = if kinetic >= weight {
+                    format!("½·m·v² at {v:e} m/s, the larger of its speed and simulation.impact_velocity")
+                } else {
+                    "m·g·r, its weight over its radius".into()
+                };
                 return Err(PowderError::Scene(format!(
-                    "particle {i}'s energy scale is {e:.3e} J (½·m·v² at {v:e} m/s, the larger of its speed and simulation.impact_velocity), which the GPU engine holds in f32 in its energy ledger: it takes {:e} to {:e} J a particle (f32's 1.2e-38 to 3.4e38 with room for a step's increments and a run's sums); run on the CPU (--backend cpu), without the ledger (--no-ledger), or in other units",
+                    "particle {i}'s energy scale is {e:.3e} J ({term}), which the GPU engine holds in f32 in its energy ledger: it takes {:e} to {:e} J a particle (f32's 1.2e-38 to 3.4e38 with room for a step's increments and a run's sums); run on the CPU (--backend cpu), without the ledger (--no-ledger), or in other units",
                     LEDGER_ENERGIES.0, LEDGER_ENERGIES.1
                 )));
             }
