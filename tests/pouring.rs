@@ -325,3 +325,36 @@ fn bad_pours_are_refused() {
     let e = err(pour_text("insert_at = -1.0"));
     assert!(e.contains("insert_at") && e.contains(">= 0"), "{e}");
 }
+
+/// The coordination counts the particles that have appeared (as the energies do): a
+/// touching pair and a third particle still to come is 1, not 2/3. And both engines' clocks
+/// are k·dt to the bit (the CPU's was a sum, 1e-11 off after 10⁶ steps).
+#[test]
+fn coordination_counts_the_particles_that_have_appeared() {
+    let r = 1.0e-3;
+    let text = common::builder::SceneBuilder::new("coord", [0.0; 3], [0.01, 0.01, 0.01], 0.002)
+        .material("powder", 2000.0, common::builder::COHESIVE)
+        .particles(
+            "list",
+            &format!("positions = [[0.004, 0.005, 0.005], [0.005995, 0.005, 0.005]]\nradius = {r}"),
+        )
+        .particles(
+            "list",
+            &format!("positions = [[0.005, 0.005, 0.008]]\nradius = {r}\ninsert_at = 1.0"),
+        )
+        .toml();
+    let scene = Scene::from_toml_str(&text, "coord").unwrap();
+    let mut cpu = CpuEngine::new(&scene).unwrap();
+    cpu.run_steps(3).unwrap();
+    let c = cpu.contact_stats();
+    assert_eq!((c.contacts, c.wall_contacts), (1, 0));
+    assert_eq!(c.coordination, 1.0);
+    cpu.run_steps(9997).unwrap();
+    assert_eq!(cpu.time().to_bits(), (10000.0 * cpu.dt()).to_bits());
+    let Some(ctx) = gpu() else { return };
+    let mut g = GpuEngine::new(&scene, ctx).unwrap();
+    g.run_steps(3).unwrap();
+    assert_eq!(g.contact_stats().unwrap().coordination, 1.0);
+    g.run_steps(9997).unwrap();
+    assert_eq!(g.time().to_bits(), cpu.time().to_bits());
+}

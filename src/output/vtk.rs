@@ -18,6 +18,9 @@ pub struct Particles<'a> {
     pub radii: &'a [f64],
     /// Empty when the scene has no rotation.
     pub angular_velocities: &'a [DVec3],
+    /// Whether each particle has appeared (it neither moves nor interacts before; its
+    /// velocity is the one it will enter with); empty when the scene does not pour.
+    pub appeared: &'a [bool],
 }
 
 fn vector_array(out: &mut String, name: &str, v: &[DVec3]) {
@@ -59,6 +62,13 @@ pub fn vtp(p: &Particles) -> String {
     vector_array(&mut s, "velocity", p.velocities);
     if !p.angular_velocities.is_empty() {
         vector_array(&mut s, "angular_velocity", p.angular_velocities);
+    }
+    if !p.appeared.is_empty() {
+        s.push_str("        <DataArray type=\"UInt8\" Name=\"appeared\" format=\"ascii\">\n");
+        for &a in p.appeared {
+            let _ = writeln!(s, "          {}", u8::from(a));
+        }
+        s.push_str("        </DataArray>\n");
     }
     s.push_str("      </PointData>\n");
     s.push_str("      <Verts>\n");
@@ -335,12 +345,22 @@ mod tests {
             velocities: &vel,
             radii: &[0.5, 0.25],
             angular_velocities: &[],
+            appeared: &[],
         });
         assert!(text.contains(r#"NumberOfPoints="2""#));
         assert!(text.contains("1e0 2e0 3e0"));
         assert!(text.contains(r#"Name="radius""#) && text.contains(r#"Name="velocity""#));
-        assert!(!text.contains("angular_velocity"));
+        assert!(!text.contains("angular_velocity") && !text.contains("appeared"));
         assert!(text.contains(r#"Name="offsets""#));
+        // a pouring scene marks the particles that have appeared
+        let text = vtp(&Particles {
+            positions: &pos,
+            velocities: &vel,
+            radii: &[0.5, 0.25],
+            angular_velocities: &[],
+            appeared: &[true, false],
+        });
+        assert!(text.contains("Name=\"appeared\" format=\"ascii\">\n          1\n          0\n"));
     }
 
     /// One sphere at rest at the origin.
@@ -351,6 +371,7 @@ mod tests {
             velocities: &AT_REST,
             radii: &[1.0],
             angular_velocities: &[],
+            appeared: &[],
         }
     }
 

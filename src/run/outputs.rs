@@ -278,6 +278,12 @@ impl RunOutputs {
             c.append(snap.step, &csv_row(snap, obs, &scene.walls))?;
         }
         if let Some(s) = self.particles.as_mut() {
+            let appeared: Vec<bool> = match scene.pours() {
+                true => (0..self.radii.len())
+                    .map(|i| engine.has_appeared(i))
+                    .collect(),
+                false => Vec::new(),
+            };
             s.write(
                 snap.step,
                 snap.time,
@@ -286,6 +292,7 @@ impl RunOutputs {
                     velocities: &obs.velocities,
                     radii: &self.radii,
                     angular_velocities: &obs.angular_velocities,
+                    appeared: &appeared,
                 },
             )?;
         }

@@ -136,8 +136,9 @@ impl ServoWatch {
         let Some(forces) = forces else { return };
         for (w, n, samples) in &mut self.walls {
             if let Some(f) = forces.get(*w) {
-                // (the particles push against the wall's normal)
-                samples.push((t, -f.dot(*n)));
+                // (the particles push against the wall's normal; + 0.0: no wall without
+                // contacts reports −0)
+                samples.push((t, -f.dot(*n) + 0.0));
             }
         }
     }

@@ -43,7 +43,8 @@ pub struct ContactStats {
     /// Contacts engaged without overlap (δ ≤ 0): inside the non-contact adhesion range, or
     /// a JKR neck stretched to negative overlap (particle–particle and particle–wall).
     pub non_contact: usize,
-    /// Mean number of mechanical contacts per particle (walls included), 2·C/N + W/N.
+    /// Mean number of mechanical contacts per particle (walls included), 2·C/N + W/N, N
+    /// the particles that have appeared (pouring).
     pub coordination: f64,
     /// Largest overlap, m.
     pub max_overlap: f64,
@@ -170,7 +171,8 @@ impl CpuEngine {
                 s.non_contact += 1;
             }
         }
-        let n = self.pos.len().max(1) as f64;
+        // (per particle that has appeared: the energies count no other)
+        let n = self.active.iter().filter(|&&a| a).count().max(1) as f64;
         s.coordination = (2 * s.contacts + s.wall_contacts) as f64 / n;
         let touching = s.contacts + s.wall_contacts;
         if touching > 0 {

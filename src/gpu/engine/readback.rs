@@ -176,7 +176,8 @@ impl GpuEngine {
         s.contacts = (counts[0] / 2.0).round() as usize;
         s.wall_contacts = counts[1].round() as usize;
         s.non_contact = (counts[2] / 2.0 + counts[3]).round() as usize;
-        let n = (self.n as f64).max(1.0);
+        // (per particle that has appeared: the energies count no other)
+        let n = self.active.iter().filter(|&&a| a).count().max(1) as f64;
         s.coordination = (2 * s.contacts + s.wall_contacts) as f64 / n;
         let touching = s.contacts + s.wall_contacts;
         if touching > 0 {

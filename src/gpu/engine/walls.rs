@@ -171,11 +171,21 @@ impl GpuEngine {
         Ok(walls
             .iter()
             .take(self.wall_normals.len())
-            .map(|w| {
-                // the stored point less its residual along the normal (`WallGpu::offset`)
+            .enumerate()
+            .map(|(i, w)| {
+                // the host's exact point but where a servo moves the wall (the device's then:
+                // the stored point less its residual along the normal, `WallGpu::offset`)
+                let servo = (self.wall_phase[i]).is_some_and(|k| {
+                    matches!(self.wall_motion[i].phases[k].1, WallPhase::Servo { .. })
+                });
                 let n = DVec3::new(w.normal[0] as f64, w.normal[1] as f64, w.normal[2] as f64);
-                let p = crate::gpu::layout::decode3(w.cell, w.offset, self.origin, self.h)
-                    - w.offset[3] as f64 * n;
+                let p = match servo {
+                    true => {
+                        crate::gpu::layout::decode3(w.cell, w.offset, self.origin, self.h)
+                            - w.offset[3] as f64 * n
+                    }
+                    false => self.wall_points[i],
+                };
                 let v = DVec3::new(
                     w.velocity[0] as f64,
                     w.velocity[1] as f64,
