@@ -676,6 +676,7 @@ fn compare_reports_deviations_and_fails_beyond_thresholds() {
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
     assert_eq!(v["passed"], true);
     assert_eq!(v["samples"].as_array().unwrap().len(), 4);
+    assert_eq!(v["unchecked"], serde_json::json!([]));
     for key in [
         "position",
         "velocity",
@@ -703,6 +704,20 @@ fn compare_reports_deviations_and_fails_beyond_thresholds() {
         "beyond a threshold: exit code 1"
     );
     assert!(String::from_utf8_lossy(&out.stdout).contains("FAIL"));
+    // a measure left out: its tolerance is null in JSON, and it is named as unchecked
+    let (ok, out, err) = powder(&[
+        "compare",
+        scene,
+        "--steps",
+        "500",
+        "--tolerance",
+        "position=inf",
+        "--json",
+    ]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert!(v["tolerances"]["position"].is_null());
+    assert_eq!(v["unchecked"], serde_json::json!(["position"]));
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_powder"))
         .args(["compare", scene, "--tolerance", "speed=1"])
         .output()

@@ -181,6 +181,9 @@ pub struct Comparison {
     /// comparison does not pass (sample sooner, or leave the measure out with an infinite
     /// tolerance).
     pub never_judged: Vec<&'static str>,
+    /// The measures left out with an infinite tolerance (JSON has no infinity: their
+    /// `tolerances` entry is written `null`).
+    pub unchecked: Vec<&'static str>,
 }
 
 /// A measure is judged while the perturbed reference stays within its tolerance over this:
@@ -384,6 +387,10 @@ pub fn compare_perturbed(
         perturbation,
         horizon,
         never_judged,
+        unchecked: (tol.named().into_iter())
+            .filter(|(_, t)| t.is_infinite())
+            .map(|(name, _)| name)
+            .collect(),
     })
 }
 
