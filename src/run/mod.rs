@@ -330,7 +330,11 @@ pub fn run_with<S: Simulation>(
                 ));
             }
         }
-        servo.record(engine.time(), obs.wall_forces.as_deref());
+        servo.record(
+            engine.time(),
+            obs.wall_forces.as_deref(),
+            &obs.wall_velocities,
+        );
         last_obs = obs;
         if steps.is_multiple_of(scene.checkpoint_every) {
             outputs.checkpoint_or_say(scene, &engine, reference(scale))?;

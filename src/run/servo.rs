@@ -35,17 +35,35 @@ pub struct ServoHold {
     pub rms: f64,
     /// How many samples.
     pub samples: usize,
-    /// Whether `rms` is within [`SERVO_RMS_MAX`] of the target.
+    /// How many of the samples found the wall moving at its phase's `servo_max_speed`
+    /// (within 1 %): a wall holding its force moves slower; one pinned there at most samples
+    /// swings a step each way, however small its force's ripple.
+    pub at_speed_limit: usize,
+    /// Whether `rms` is within [`SERVO_RMS_MAX`] of the target and the wall was at its
+    /// speed limit at no more than half the samples.
     pub held: bool,
 }
 
 impl ServoHold {
+    /// Whether the wall was at its speed limit at more than half the samples.
+    fn pinned(&self) -> bool {
+        2 * self.at_speed_limit > self.samples
+    }
+
     /// The warning when the wall did not hold its target: swinging about it, or off it.
     pub fn warning(&self, dt: f64) -> Option<String> {
         let what = format!(
             "wall {}'s servo did not hold its target {:e} N: the normal force on it ranged from {:e} to {:e} N (mean {:e} N) over the last quarter of its servo phase",
             self.wall, self.target, self.min, self.max, self.mean
         );
+        // (at its speed limit and crossing the target: swinging a step each way; at its
+        // limit on one side of it: still travelling, said below)
+        if self.pinned() && self.min <= self.target && self.target <= self.max {
+            return (!self.held).then(|| format!(
+                "wall {}'s servo did not hold its target {:e} N: it moved at servo_max_speed at {} of its {} samples over the last quarter of its servo phase, a step each way about the target (the force ranged from {:e} to {:e} N); lower servo_gain ({:e} m/s per N; it is stable while gain·k_bed·dt < 1 with dt = {dt:e} s and k_bed the packing's stiffness under the wall)",
+                self.wall, self.target, self.at_speed_limit, self.samples, self.min, self.max, self.gain
+            ));
+        }
         // (swinging about the target crosses it; a wall short of it never does)
         let advice = if self.min <= self.target && self.target <= self.max {
             format!(
@@ -113,8 +131,8 @@ fn normal_stiffness(model: &crate::model::ContactModel, r: f64, load: f64) -> f6
 }
 
 /// One watched wall: its index, its unit normal and its samples (time, normal force the
-/// particles push on it).
-type Watched = (usize, DVec3, Vec<(f64, f64)>);
+/// particles push on it, its speed along the normal).
+type Watched = (usize, DVec3, Vec<(f64, f64, f64)>);
 
 /// The normal forces on the servo walls, sampled after every chunk of a run.
 pub(super) struct ServoWatch {
@@ -131,14 +149,14 @@ impl ServoWatch {
         Self { walls }
     }
 
-    /// Samples the walls' forces at time `t` (none without the ledger).
-    pub(super) fn record(&mut self, t: f64, forces: Option<&[DVec3]>) {
+    /// Samples the walls' forces and speeds at time `t` (none without the ledger).
+    pub(super) fn record(&mut self, t: f64, forces: Option<&[DVec3]>, velocities: &[DVec3]) {
         let Some(forces) = forces else { return };
         for (w, n, samples) in &mut self.walls {
-            if let Some(f) = forces.get(*w) {
+            if let (Some(f), Some(v)) = (forces.get(*w), velocities.get(*w)) {
                 // (the particles push against the wall's normal; + 0.0: no wall without
                 // contacts reports −0)
-                samples.push((t, -f.dot(*n) + 0.0));
+                samples.push((t, -f.dot(*n) + 0.0, v.dot(*n).abs()));
             }
         }
     }
@@ -159,7 +177,15 @@ impl ServoWatch {
                 .iter()
                 .rposition(|(from, p)| *from < end && matches!(p, WallPhase::Servo { .. }));
             let Some(i) = last else { continue };
-            let (from, WallPhase::Servo { force, gain, .. }) = phases[i] else {
+            let (
+                from,
+                WallPhase::Servo {
+                    force,
+                    gain,
+                    max_speed,
+                },
+            ) = phases[i]
+            else {
                 continue;
             };
             let to = phases.get(i + 1).map_or(end, |(next, _)| next.min(end));
@@ -169,10 +195,14 @@ impl ServoWatch {
                 continue;
             }
             let since = to - 0.25 * (to - begun);
-            let window: Vec<f64> = (samples.iter())
-                .filter(|(t, _)| *t >= since && *t <= to)
-                .map(|&(_, f)| f)
+            let sampled: Vec<(f64, f64)> = (samples.iter())
+                .filter(|(t, _, _)| *t >= since && *t <= to)
+                .map(|&(_, f, v)| (f, v))
                 .collect();
+            let window: Vec<f64> = sampled.iter().map(|s| s.0).collect();
+            let at_speed_limit = (sampled.iter())
+                .filter(|s| s.1 >= 0.99 * max_speed.abs())
+                .count();
             if window.len() < MIN_SAMPLES {
                 unjudged.push(format!(
                     "wall {w}'s servo phase from t = {from:e} s was sampled {} times in the last quarter of its time in this run ({MIN_SAMPLES} needed; once every chunk of at most 1000 steps and at every output): whether it held its target {force:e} N is not judged; a smaller simulation.output_every samples it more often",
@@ -191,7 +221,8 @@ impl ServoWatch {
                 mean: window.iter().sum::<f64>() / k,
                 rms,
                 samples: window.len(),
-                held: rms <= SERVO_RMS_MAX * force.abs(),
+                at_speed_limit,
+                held: rms <= SERVO_RMS_MAX * force.abs() && 2 * at_speed_limit <= window.len(),
             });
         }
         (out, unjudged)
@@ -235,5 +266,28 @@ mod tests {
             unstable_gains(&rough(2.5 * half, "friction = 0.5\nkt = 1e4"), dt).len(),
             1
         );
+        // a wall at its speed limit at most samples swings a step each way: not held, though
+        // its force's ripple (8 %, as that lid's) is within the 10 % allowed
+        let held = |speed: f64| {
+            let s = scene(1000.0);
+            let mut watch = ServoWatch::new(&s);
+            for k in 0..10 {
+                let f = if k % 2 == 0 { 0.0092 } else { 0.0108 };
+                let forces = [DVec3::ZERO, DVec3::new(0.0, 0.0, f)];
+                let velocities = [DVec3::ZERO, DVec3::new(0.0, 0.0, speed)];
+                watch.record(0.04 + 0.001 * k as f64, Some(&forces), &velocities);
+            }
+            let (holds, _) = watch.holds(&s, 0.0, 0.05);
+            holds[0].clone()
+        };
+        let chatter = held(0.5);
+        assert_eq!((chatter.at_speed_limit, chatter.held), (10, false));
+        let w = chatter.warning(dt).unwrap();
+        assert!(
+            w.contains("it moved at servo_max_speed at 10 of its 10 samples"),
+            "{w}"
+        );
+        let steady = held(0.01);
+        assert_eq!((steady.at_speed_limit, steady.held), (0, true));
     }
 }

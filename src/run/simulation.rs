@@ -31,6 +31,8 @@ pub struct Observation {
     pub wall_forces: Option<Vec<DVec3>>,
     /// Where each wall's plane passes now (its scene point, moved with the wall), m.
     pub wall_points: Vec<DVec3>,
+    /// Each wall's velocity over the last step, m/s.
+    pub wall_velocities: Vec<DVec3>,
 }
 
 /// A deepest overlap the run monitor found: the ratio over a12 and who it involves.
@@ -169,6 +171,7 @@ impl Simulation for CpuEngine {
             contacts: Some(self.contact_stats()),
             wall_forces: Some(self.wall_forces()),
             wall_points: self.walls_now().iter().map(|w| w.0).collect(),
+            wall_velocities: self.walls_now().iter().map(|w| w.1).collect(),
         })
     }
     fn save(&self) -> Result<CpuState, PowderError> {
@@ -273,11 +276,13 @@ impl Simulation for GpuEngine {
             };
             (known, None, None)
         };
+        let walls = self.walls_now()?;
         Ok(Observation {
             energies,
             contacts,
             wall_forces,
-            wall_points: self.walls_now()?.iter().map(|w| w.0).collect(),
+            wall_points: walls.iter().map(|w| w.0).collect(),
+            wall_velocities: walls.iter().map(|w| w.1).collect(),
             positions: s.positions,
             velocities: s.velocities,
             angular_velocities: s.angular_velocities,
