@@ -466,6 +466,21 @@ impl ContactModel {
         }
     }
 
+    /// The normal stiffness dF/dδ of a contact of effective radius `r_eff` carrying the
+    /// normal force `load` (N): the linear laws' spring (the hysteretic model's un-/reloading
+    /// kp, its stiffest under compression), Hertz's (6·E*²·r·F)^(1/3), and for JKR at least
+    /// its stiffness about the equilibrium overlap (a servo's stability, `run::servo`).
+    pub fn normal_stiffness(&self, r_eff: f64, load: f64) -> f64 {
+        match self {
+            Self::Lsd(p) => p.k,
+            Self::Hysteretic(p) => p.kp,
+            Self::Jkr(p) => {
+                let hertz = (6.0 * p.e_star() * p.e_star() * r_eff * load).cbrt();
+                hertz.max(p.equilibrium_stiffness(r_eff))
+            }
+        }
+    }
+
     /// Time-step limits for a pair of geometry `geom` meeting at up to `impact_velocity`.
     ///
     /// The contact time tc is π·√(m_r/k_max) on the stiffest linear branch (the largest of

@@ -52,20 +52,20 @@ impl ServoHold {
 
     /// The warning when the wall did not hold its target: swinging about it, or off it.
     pub fn warning(&self, dt: f64) -> Option<String> {
-        let what = format!(
-            "wall {}'s servo did not hold its target {:e} N: the normal force on it ranged from {:e} to {:e} N (mean {:e} N) over the last quarter of its servo phase",
-            self.wall, self.target, self.min, self.max, self.mean
-        );
-        // (at its speed limit and crossing the target: swinging a step each way; at its
-        // limit on one side of it: still travelling, said below)
-        if self.pinned() && self.min <= self.target && self.target <= self.max {
-            return (!self.held).then(|| format!(
-                "wall {}'s servo did not hold its target {:e} N: it moved at servo_max_speed at {} of its {} samples over the last quarter of its servo phase, a step each way about the target (the force ranged from {:e} to {:e} N); lower servo_gain ({:e} m/s per N; it is stable while gain·k_bed·dt < 1 with dt = {dt:e} s and k_bed the packing's stiffness under the wall)",
-                self.wall, self.target, self.at_speed_limit, self.samples, self.min, self.max, self.gain
-            ));
-        }
-        // (swinging about the target crosses it; a wall short of it never does)
-        let advice = if self.min <= self.target && self.target <= self.max {
+        // (swinging about the target crosses it, at its speed limit a step each way; a wall
+        // short of it never crosses it)
+        let crosses = self.min <= self.target && self.target <= self.max;
+        let what = match self.pinned() && crosses {
+            true => format!(
+                "wall {}'s servo did not hold its target {:e} N: it moved at servo_max_speed at {} of its {} samples over the last quarter of its servo phase, a step each way about the target (the force ranged from {:e} to {:e} N)",
+                self.wall, self.target, self.at_speed_limit, self.samples, self.min, self.max
+            ),
+            false => format!(
+                "wall {}'s servo did not hold its target {:e} N: the normal force on it ranged from {:e} to {:e} N (mean {:e} N) over the last quarter of its servo phase",
+                self.wall, self.target, self.min, self.max, self.mean
+            ),
+        };
+        let advice = if crosses {
             format!(
                 "lower servo_gain ({:e} m/s per N; it is stable while gain·k_bed·dt < 1 with dt = {dt:e} s and k_bed the packing's stiffness under the wall)",
                 self.gain
@@ -80,8 +80,7 @@ impl ServoHold {
 /// A warning for each servo wall whose gain makes it overshoot as soon as one particle
 /// touches it: gain·k·dt ≥ 1 (the documented bound), k the normal stiffness of that
 /// particle's contact with the wall under the servo's force (a bed under the wall is
-/// stiffer still). Such a wall moves at its largest speed a step each way, which samples
-/// taken at the end of chunks of an even number of steps do not see.
+/// stiffer still). Such a wall moves at its largest speed a step each way.
 pub fn unstable_gains(scene: &Scene, dt: f64) -> Vec<String> {
     let mut largest = vec![0.0f64; scene.materials.len()];
     for p in &scene.particles {
@@ -98,7 +97,7 @@ pub fn unstable_gains(scene: &Scene, dt: f64) -> Vec<String> {
                 .filter(|(_, &r)| r > 0.0)
                 .filter_map(|(a, &r)| {
                     let model = scene.pair_model(wall.material, a).ok()?;
-                    Some(normal_stiffness(&model, r, force.abs()))
+                    Some(model.normal_stiffness(r, force.abs()))
                 })
                 .fold(0.0, f64::max);
             let margin = gain * stiffest * dt;
@@ -112,22 +111,6 @@ pub fn unstable_gains(scene: &Scene, dt: f64) -> Vec<String> {
         }
     }
     out
-}
-
-/// The normal stiffness dF/dδ of a contact with a wall (effective radius `r`) at the
-/// normal force `load`: the linear laws' spring (the hysteretic model's un-/reloading kp,
-/// its stiffest under compression); Hertz's (6·E*²·r·F)^(1/3), and for JKR at least its
-/// stiffness about the equilibrium overlap.
-fn normal_stiffness(model: &crate::model::ContactModel, r: f64, load: f64) -> f64 {
-    use crate::model::ContactModel;
-    match model {
-        ContactModel::Lsd(p) => p.k,
-        ContactModel::Hysteretic(p) => p.kp,
-        ContactModel::Jkr(p) => {
-            let hertz = (6.0 * p.e_star() * p.e_star() * r * load).cbrt();
-            hertz.max(p.equilibrium_stiffness(r))
-        }
-    }
 }
 
 /// One watched wall: its index, its unit normal and its samples (time, normal force the

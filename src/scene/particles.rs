@@ -335,8 +335,8 @@ fn expand_lattice(t: &Tbl, names: &[&str], out: &mut Vec<ParticleInit>) -> Res<(
                         x += amp[a] * (2.0 * rng.random::<f64>() - 1.0);
                     }
                     // (every site lies in [min + r, max − r]: clamping only shortens a
-                    // jitter displacement, so it cannot create overlaps)
-                    // (a region narrower than a diameter by rounding: its one site centred)
+                    // jitter displacement, so it cannot create overlaps; a region narrower
+                    // than a diameter by rounding has its one site centred)
                     let (lo, hi) = (min[a] + radius, max[a] - radius);
                     p[a] = if lo <= hi {
                         x.clamp(lo, hi)

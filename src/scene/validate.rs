@@ -5,7 +5,9 @@
 use super::declared::{check, Section};
 use super::hash_grid::Grid;
 use super::{sphere_mass, DtSetting, Scene, WallPhase};
+use crate::cpu::engine::minimum_image;
 use crate::error::PowderError;
+use glam::DVec3;
 
 fn bad(what: String) -> Result<(), PowderError> {
     Err(PowderError::Scene(format!("scene: {what}")))
@@ -212,6 +214,18 @@ impl Scene {
         [0, 1, 2].map(|a| d.periodic[a].then(|| d.max[a] - d.min[a]))
     }
 
+    /// The particles by insertion time (the ones present from the start first), one group
+    /// for each time.
+    fn insertion_groups(&self) -> Vec<Vec<usize>> {
+        let time = |i: usize| self.particles[i].insert_at.max(0.0);
+        let mut order: Vec<usize> = (0..self.particles.len()).collect();
+        order.sort_by(|&a, &b| time(a).total_cmp(&time(b)));
+        order
+            .chunk_by(|&a, &b| time(a) == time(b))
+            .map(<[usize]>::to_vec)
+            .collect()
+    }
+
     /// A warning when a particle appears where one of the insertion before it would still
     /// be, had that one flown freely since it appeared (its velocity and gravity, no
     /// collisions): the pour's region has likely not emptied, and the run will stop there
@@ -219,10 +233,7 @@ impl Scene {
     /// the one before it (the particles present from the start for the first).
     pub fn pour_onto_earlier(&self) -> Option<String> {
         let time = |i: usize| self.particles[i].insert_at.max(0.0);
-        // (the particles by insertion time: each time's a run of this order)
-        let mut order: Vec<usize> = (0..self.particles.len()).collect();
-        order.sort_by(|&a, &b| time(a).total_cmp(&time(b)));
-        let groups: Vec<&[usize]> = order.chunk_by(|&a, &b| time(a) == time(b)).collect();
+        let groups = self.insertion_groups();
         let r_max = self.particles.iter().map(|p| p.radius).fold(0.0, f64::max);
         let g = self.gravity;
         let (lo, periods) = (self.domain.min, self.periods());
@@ -231,7 +242,7 @@ impl Scene {
             let dt = at - before;
             let mut grid = Grid::new(2.0 * r_max);
             let mut flown = Vec::new();
-            for &j in pair[0] {
+            for &j in &pair[0] {
                 let p = &self.particles[j];
                 let x: [f64; 3] = std::array::from_fn(|a| {
                     let x = p.position[a] + p.velocity[a] * dt + 0.5 * g[a] * dt * dt;
@@ -243,11 +254,11 @@ impl Scene {
                 grid.insert(flown.len(), x);
                 flown.push((j, x));
             }
-            for &i in pair[1] {
+            for &i in &pair[1] {
                 let p = &self.particles[i];
                 for k in grid.near_images(p.position, p.radius + r_max, periods) {
                     let (j, x) = flown[k];
-                    let gap = image_distance(p.position, x, periods);
+                    let gap = image_distance(self, p.position, x);
                     if gap < p.radius + self.particles[j].radius {
                         return Some(format!(
                             "particle {i} appears at {at:e} s where particle {j}, which appeared at {before:e} s, would still be had it flown freely since (its velocity and gravity, no collisions): the pour's region has likely not emptied, and the run would stop where a particle lands on another (the engines do not push particles aside); lengthen `batch_interval` or move the region"
@@ -303,13 +314,13 @@ impl Scene {
             first.get_or_insert(what);
         };
         for (w, wall) in self.walls.iter().enumerate() {
-            let normal = glam::DVec3::from_array(wall.normal).normalize();
-            let point = glam::DVec3::from_array(wall.point);
+            let normal = DVec3::from_array(wall.normal).normalize();
+            let point = DVec3::from_array(wall.point);
             for (i, p) in self.particles.iter().enumerate() {
                 if !walls[w * n + p.material] {
                     continue;
                 }
-                let gap = normal.dot(glam::DVec3::from_array(p.position) - point) - p.radius;
+                let gap = normal.dot(DVec3::from_array(p.position) - point) - p.radius;
                 if gap.abs() <= tol(p.radius) {
                     found(format!(
                         "particle {i} and wall {w}, gap {gap:e} m: materials `{}` and `{}`",
@@ -318,23 +329,20 @@ impl Scene {
                 }
             }
         }
-        let time = |i: usize| self.particles[i].insert_at.max(0.0);
-        let mut order: Vec<usize> = (0..self.particles.len()).collect();
-        order.sort_by(|&a, &b| time(a).total_cmp(&time(b)));
         let periods = self.periods();
-        for group in order.chunk_by(|&a, &b| time(a) == time(b)) {
+        for group in self.insertion_groups() {
             let mut grid = Grid::new(2.0 * r_max);
-            for &i in group {
+            for &i in &group {
                 grid.insert(i, self.particles[i].position);
             }
-            for &i in group {
+            for &i in &group {
                 let p = &self.particles[i];
                 for j in grid.near_images(p.position, p.radius + r_max, periods) {
                     let q = &self.particles[j];
                     if j <= i || !pairs[p.material * n + q.material] {
                         continue;
                     }
-                    let gap = image_distance(p.position, q.position, periods) - p.radius - q.radius;
+                    let gap = image_distance(self, p.position, q.position) - p.radius - q.radius;
                     if gap.abs() <= tol(p.radius + q.radius) {
                         found(format!(
                             "particles {i} and {j}, gap {gap:e} m: materials `{}` and `{}`",
@@ -367,15 +375,14 @@ impl Scene {
     }
 }
 
-/// The distance from `a` to the nearest image of `b` (`periods[a]`: `Some(L)` on a periodic
-/// axis).
-fn image_distance(a: [f64; 3], b: [f64; 3], periods: [Option<f64>; 3]) -> f64 {
-    (0..3)
-        .map(|k| {
-            let d = a[k] - b[k];
-            let d = periods[k].map_or(d, |l| d - l * (d / l).round());
-            d * d
-        })
-        .sum::<f64>()
-        .sqrt()
+/// The distance from `a` to the nearest image of `b` in `scene`'s domain.
+fn image_distance(scene: &Scene, a: [f64; 3], b: [f64; 3]) -> f64 {
+    let d = &scene.domain;
+    let domain = (DVec3::from_array(d.min), DVec3::from_array(d.max));
+    minimum_image(
+        DVec3::from_array(a) - DVec3::from_array(b),
+        d.periodic,
+        domain,
+    )
+    .length()
 }

@@ -303,13 +303,22 @@ mod tests {
 
     /// A state saved before the ledger's rows joined the particle state (a
     /// `particle_ledger` buffer of its own) is refused by name, before anything changes.
+    /// The software adapter's context, or `None` outside CI where there is none (CI needs
+    /// one: lavapipe).
+    fn context() -> Option<GpuContext> {
+        match GpuContext::new() {
+            Ok(ctx) => Some(ctx),
+            Err(e) if std::env::var_os("CI").is_none() => {
+                eprintln!("skipping: {e}");
+                None
+            }
+            Err(e) => panic!("CI needs a GPU adapter (lavapipe): {e}"),
+        }
+    }
+
     #[test]
     fn gpu_a_state_with_the_old_ledger_buffer_is_refused() {
-        let ctx = match GpuContext::new() {
-            Ok(ctx) => ctx,
-            Err(e) if std::env::var_os("CI").is_none() => return eprintln!("skipping: {e}"),
-            Err(e) => panic!("CI needs a GPU adapter (lavapipe): {e}"),
-        };
+        let Some(ctx) = context() else { return };
         let scene =
             crate::measure::bench::packing(crate::measure::bench::Case::Hysteretic, 64, 1.0, 1)
                 .unwrap();
@@ -331,11 +340,7 @@ mod tests {
     /// checkpoint), or with another number of walls, is refused before anything changes.
     #[test]
     fn gpu_a_state_whose_appearances_do_not_fit_the_pouring_is_refused() {
-        let ctx = match GpuContext::new() {
-            Ok(ctx) => ctx,
-            Err(e) if std::env::var_os("CI").is_none() => return eprintln!("skipping: {e}"),
-            Err(e) => panic!("CI needs a GPU adapter (lavapipe): {e}"),
-        };
+        let Some(ctx) = context() else { return };
         let (scene, dt) = crate::cpu::engine::tests::poured_packing();
         let mut a = GpuEngine::new(&scene, ctx.clone()).unwrap();
         a.run_steps(45).unwrap();

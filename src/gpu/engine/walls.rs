@@ -67,25 +67,27 @@ impl GpuEngine {
         let changed: Vec<usize> = (0..self.wall_motion.len())
             .filter(|&w| self.wall_motion[w].index_at(self.time) != self.wall_phase[w])
             .collect();
-        let phase_of = |w: usize, i: Option<usize>| {
-            i.map_or(WallPhase::Rest, |i| self.wall_motion[w].phases[i].1)
-        };
-        let servo_before = changed
-            .iter()
-            .any(|&w| matches!(phase_of(w, self.wall_phase[w]), WallPhase::Servo { .. }));
+        let servo_before = changed.iter().any(|&w| self.servo_now(w));
         let now = if servo_before {
             self.walls_now()?
         } else {
             Vec::new()
         };
         for w in changed {
-            if matches!(phase_of(w, self.wall_phase[w]), WallPhase::Servo { .. }) {
+            if self.servo_now(w) {
                 self.wall_points[w] = now[w].0;
             }
             self.write_wall(w, [0.0; 4]);
             self.wall_phase[w] = self.wall_motion[w].index_at(self.time);
         }
         Ok(())
+    }
+
+    /// Whether wall `w` is in a servo phase on the device (the phase of the last step run):
+    /// its point is then the device's, not the host's.
+    fn servo_now(&self, w: usize) -> bool {
+        (self.wall_phase[w])
+            .is_some_and(|i| matches!(self.wall_motion[w].phases[i].1, WallPhase::Servo { .. }))
     }
 
     /// Writes which particles have appeared to the device and into the state (`appear`:
@@ -175,11 +177,8 @@ impl GpuEngine {
             .map(|(i, w)| {
                 // the host's exact point but where a servo moves the wall (the device's then:
                 // the stored point less its residual along the normal, `WallGpu::offset`)
-                let servo = (self.wall_phase[i]).is_some_and(|k| {
-                    matches!(self.wall_motion[i].phases[k].1, WallPhase::Servo { .. })
-                });
                 let n = DVec3::new(w.normal[0] as f64, w.normal[1] as f64, w.normal[2] as f64);
-                let p = match servo {
+                let p = match self.servo_now(i) {
                     true => {
                         crate::gpu::layout::decode3(w.cell, w.offset, self.origin, self.h)
                             - w.offset[3] as f64 * n
