@@ -483,7 +483,7 @@ mod tests {
     /// The default step is the shortest contact's default, where the smallest limit is a
     /// viscous one of another contact: a stiff undamped material `a` (default tc/50 =
     /// 1.29e-6 s) beside a soft, damped one `b` (limit 0.2·m_r/γ0 = 4.19e-6 s, its default
-    /// too). The default used to follow the binding limit's contact: `a`'s contacts at tc/15.
+    /// too), not the binding limit's contact's default.
     #[test]
     fn the_default_step_is_the_shortest_contacts_default() {
         let text = "[domain]\nmin = [0.0, 0.0, 0.0]\nmax = [0.01, 0.01, 0.01]\n[simulation]\nduration = 1e-3\n[[material]]\nname = \"a\"\ndensity = 2000.0\nmodel = \"lsd\"\nk = 1e4\n[[material]]\nname = \"b\"\ndensity = 2000.0\nmodel = \"lsd\"\nk = 1.0\ngamma0 = 0.2\n[[interaction]]\nmaterials = [\"a\", \"b\"]\nmodel = \"lsd\"\nk = 1.0\n[[particles]]\nkind = \"list\"\nmaterial = \"a\"\npositions = [[0.003, 0.005, 0.005]]\nradius = 1e-3\n[[particles]]\nkind = \"list\"\nmaterial = \"b\"\npositions = [[0.007, 0.005, 0.005]]\nradius = 1e-3\n";

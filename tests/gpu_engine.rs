@@ -421,7 +421,7 @@ fn software_and_gpu_paths_give_the_same_bits() {
         };
         let mut soft = GpuEngine::with_options(&scene, ctx, path(true)).unwrap();
         let mut hard = GpuEngine::with_options(&scene, context().unwrap(), path(false)).unwrap();
-        assert!(soft.adapter_is_software() && !hard.adapter_is_software());
+        assert!(soft.software_paths() && !hard.software_paths());
         assert!(soft.variant_name().ends_with("_mirrors"), "{name}");
         let names: Vec<String> = hard.buffers().into_iter().map(|(n, _)| n).collect();
         assert!(

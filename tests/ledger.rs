@@ -255,7 +255,7 @@ fn gpu_without_ledger_allocates_none_and_moves_the_same() {
     .unwrap();
     assert!(with.has_ledger() && !without.has_ledger());
     // (`_mirrors`: the software adapter's path, which the tests' lavapipe takes)
-    let m = if with.adapter_is_software() {
+    let m = if with.software_paths() {
         "_mirrors"
     } else {
         ""

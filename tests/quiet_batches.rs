@@ -49,7 +49,7 @@ fn quiet_batches_give_the_same_bits_kept_or_rolled_back() {
             "{case:?}: {kept} kept, {back} rolled back"
         );
         // `auto` runs quiet batches only on the software path, chosen by the adapter kind
-        if auto.adapter_is_software() {
+        if auto.software_paths() {
             assert!(
                 auto.quiet_batches().0 > 0,
                 "{case:?}: {:?}",

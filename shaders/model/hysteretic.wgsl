@@ -5,8 +5,8 @@
 // Sign convention as in Rust: delta > 0 is overlap, delta_dot the approach speed, a
 // positive force is repulsive.
 
-// A pair's parameters: `HystereticPair` and the `HYST_*` flags (`gpu::layout`). LSD is
-// the special case k1 = kp = k (no plasticity), kc = fa = 0: the same code path.
+// A pair's parameters: `HystereticPair` and the `HYST_*` flags (`gpu::layout`). LSD shares
+// the row and takes its own branch (`HYST_LSD`): a spring-dashpot only while overlapping.
 
 // Set per pipeline (`gpu::engine`) when every hysteretic/LSD row of the scene has the same
 // flags (0xffffffff: they differ, each pair reads its own): the compiler then drops the

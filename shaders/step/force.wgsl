@@ -76,9 +76,9 @@ fn touch_crossed(p: PairRow, k: Kin, old: vec4<f32>, is_in: bool, edges: vec4<f3
 @compute @workgroup_size(WG_SIZE)
 fn force(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let k = particle_index(wid, nwg, lid);
-    // Loaded here, outside any branch: lavapipe loads a uniform address as one scalar only
-    // where invocation 0 is known to be active; inside the pair loop each word was a loop
-    // over the SIMD lanes (docs/design_log.md). Dead, and dropped, unless ONE_MATERIAL.
+    // Loaded once, outside any branch and the pair loop: a uniform load every invocation
+    // takes together (a SIMD adapter otherwise loops over the lanes for it, docs/design_log.md).
+    // Dead, and dropped, unless ONE_MATERIAL.
     let row0 = pairs[0];
     if (k < particle_end()) {
         particle_forces(k, row0);
@@ -126,13 +126,11 @@ fn particle_forces(k: u32, row0: PairRow) {
         let d = dd.hi;
         let dist = length(d);
         let delta = precise_overlap(dd, rk, rj, comp_k.w, comp_j.w);
-        // (one division, not one per component: on a SIMD adapter every division in the
-        // code runs for every pair)
+        // (one division, not one per component: a division costs several multiplies)
         let inv_dist = 1.0 / dist;
         // A list candidate (within the skin) out of every model's range gets no force and
         // the history a pair out of range has (the models reset it there too). One store
-        // site per buffer for both cases: on a SIMD adapter (lavapipe) every store in the
-        // code costs a loop over the lanes, whether any lane takes its branch or not.
+        // site per buffer for both cases: no divergent branch around the stores.
         let old = load_prior(slot);
         let was_in = old.w > 0.0;
         // (an engaged contact that broke beyond the reach within the step is evaluated, so
@@ -205,8 +203,8 @@ fn particle_forces(k: u32, row0: PairRow) {
             }
         }
         // stored only where it changed: most of a packing's list entries are candidates
-        // out of contact whose history stays zero, and a masked store skips the idle
-        // lanes' work on lavapipe
+        // out of contact whose history stays zero, so this saves most of the word's writes
+        // in a pass bound by memory traffic
         if (!hist_same(h, h0)) {
             store_hist(slot, h);
         }

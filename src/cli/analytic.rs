@@ -94,7 +94,7 @@ impl PairArgs {
             PowderError::from(ParamError::new("radius", "--radius is required here"))
         })?;
         require_positive("radius", r1, "the radius")?;
-        let m = |r: f64| density * 4.0 / 3.0 * std::f64::consts::PI * r.powi(3);
+        let m = |r: f64| powder::scene::sphere_mass(density, r);
         if self.wall {
             return Ok(PairGeometry::wall(r1, m(r1)));
         }
@@ -197,12 +197,13 @@ fn kp_prime(a: &KpPrimeArgs) -> Result<(), PowderError> {
         ..HystereticParams::paper_figure()
     };
     p.validate()?;
-    if !(a.phi_f_new > 0.0 && a.phi_f_new <= 1.0) {
+    if !declared::PHI_F.rule.holds(a.phi_f_new) {
         return Err(ParamError::new(
             "phi-f-new",
             format!(
-                "the new plasticity depth --phi-f-new must satisfy 0 < phi_f' <= 1, got {}",
-                a.phi_f_new
+                "the new plasticity depth --phi-f-new must be {}, got {}",
+                declared::PHI_F.rule.requirement(a.phi_f_new),
+                powder::error::num(a.phi_f_new)
             ),
         )
         .into());

@@ -101,8 +101,8 @@ impl GpuContext {
             }
             Limits::WebGpuDefault => limits = wgpu::Limits::default(),
         }
-        // only a profile asks for the timestamps: plain runs and tests open devices as the
-        // first hardware run did (why: docs/gpu_rebuild.md, *The second hardware run*)
+        // only a profile asks for the timestamps: plain runs open devices without features
+        // (why: docs/gpu_rebuild.md, *The second hardware run*)
         let features = match timestamps {
             true => adapter.features() & crate::gpu::timestamps::FEATURES,
             false => wgpu::Features::empty(),

@@ -310,6 +310,25 @@ mod tests {
         );
     }
 
+    /// Eq. D.2 against the model's √-rule k2 (eq. D.1): without adhesion e_n = √(k1/k2)
+    /// (eq. 6) at δmax = χ·δmax^p, which the asymptote approaches for ηχ ≫ 1.
+    #[test]
+    fn the_sqrt_rule_asymptote_approaches_the_models_restitution() {
+        let eta = 500.0;
+        let p = HystereticParams {
+            kp: (1.0 + eta) * 100.0,
+            k1: 100.0,
+            kc: 0.0,
+            k2_rule: crate::model::K2Rule::Sqrt,
+            ..HystereticParams::paper_figure()
+        };
+        let a12 = 1e-3;
+        for chi in [0.2, 0.5, 0.9] {
+            let en = walton_braun(p.k1, p.k2(chi * p.delta_max_p(a12), a12));
+            assert_relative_eq!(en, en_asymptote_sqrt_rule(eta, chi), max_relative = 3e-3);
+        }
+    }
+
     #[test]
     fn asymptotes_approach_the_full_form() {
         let eta = 500.0;
@@ -505,7 +524,7 @@ pub fn luding_elastic_sliding(model: &ContactModel) -> Option<f64> {
         _ => return None,
     };
     let s = &luding.sliding;
-    let kt = 2.0 / 7.0 * k;
+    let kt = crate::model::friction::TANGENTIAL_SHARE * k;
     (s.is_on()
         && s.mu_d == s.mu_s
         && (s.k - kt).abs() <= 1e-12 * kt

@@ -9,6 +9,13 @@ use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use std::time::{Duration, SystemTime};
 
+/// The run's checkpoint in its folder.
+pub const CHECKPOINT: &str = "checkpoint.bin";
+/// The run's summary in its folder.
+pub const SUMMARY: &str = "summary.json";
+/// The run's time series in its folder.
+pub const SERIES: &str = "series.csv";
+
 /// The lock file's name in an output folder.
 pub const LOCK: &str = ".powder.lock";
 

@@ -120,16 +120,6 @@ impl Series {
         ]
     }
 
-    /// Snapshots `dir/<folder>/<name>_<step>.vtp`, collected in `dir/<collection>`.
-    pub fn in_folder(
-        dir: &Path,
-        folder: &str,
-        name: &str,
-        collection: &str,
-    ) -> Result<Self, PowderError> {
-        Self::unopened(dir, folder, name, collection).created()
-    }
-
     /// The series with its folder created.
     fn created(self) -> Result<Self, PowderError> {
         let snaps = self.folder();
@@ -147,7 +137,7 @@ impl Series {
         self.dir.join(&self.collection)
     }
 
-    /// The series as [`Self::in_folder`] names it, its folder not created (to clear an
+    /// Snapshots `dir/<folder>/<name>_<step>.vtp`, collected in `dir/<collection>`, the folder not created (to clear an
     /// earlier run's where this run writes none).
     pub fn unopened(dir: &Path, folder: &str, name: &str, collection: &str) -> Self {
         Self {

@@ -3,6 +3,7 @@
 //! ([`RunOptions::overwrite`], `powder run --overwrite`).
 
 use super::*;
+use crate::output::folder::{CHECKPOINT, SERIES, SUMMARY};
 use crate::output::vtk;
 use std::path::{Path, PathBuf};
 
@@ -52,10 +53,6 @@ pub(super) fn check(
         if found.len() > 1 { "them" } else { "it" },
     )))
 }
-
-const CHECKPOINT: &str = "checkpoint.bin";
-const SUMMARY: &str = "summary.json";
-const SERIES: &str = "series.csv";
 
 /// The scenes whose snapshot series a fresh run of `scene` into `d` replaces: its own, and
 /// that of the run whose summary or checkpoint is there (another scene's run into the same

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use crate::checkpoint::RunMarks;
 use crate::error::PowderError;
 use crate::output::atomic::{remove_stale_temps, write_atomic};
-use crate::output::folder::{check_writable, FolderLock};
+use crate::output::folder::{check_writable, FolderLock, CHECKPOINT, SERIES, SUMMARY};
 use crate::output::series_csv::{self, SeriesCsv, SeriesMark};
 use crate::output::{contacts, vtk};
 use crate::run::monitor::MonitorReference;
@@ -68,7 +68,7 @@ impl RunOutputs {
         };
         let lock = Self::take(d, scene)?;
         super::earlier::check(d, scene, opts, resumed_from, end)?;
-        let csv_path = d.join("series.csv");
+        let csv_path = d.join(SERIES);
         // the series' rows up to the checkpoint's step on resume, read (and its columns
         // checked) before anything in the directory changes
         let header = csv_header(&scene.walls);
@@ -195,15 +195,11 @@ impl RunOutputs {
         let lock = FolderLock::take(d)?;
         // (`series.csv` is appended to and, at the start, replaced whole; the series of the
         // run replaced or cut are another scene's where another scene's run wrote the folder)
-        let csv = d.join("series.csv");
+        let csv = d.join(SERIES);
         let series: Vec<vtk::Series> = (super::earlier::replaced_scenes(d, scene).iter())
             .flat_map(|n| vtk::Series::both_unopened(d, n))
             .collect();
-        let mut replaced = vec![
-            d.join("checkpoint.bin"),
-            d.join("summary.json"),
-            csv.clone(),
-        ];
+        let mut replaced = vec![d.join(CHECKPOINT), d.join(SUMMARY), csv.clone()];
         replaced.extend(series.iter().map(vtk::Series::collection_path));
         check_writable(d, &replaced, &[csv])?;
         for s in &series {
@@ -223,7 +219,7 @@ impl RunOutputs {
     fn clear_earlier_run(d: &Path, scene: &Scene, verbose: bool) -> Result<(), PowderError> {
         // (read before the summary and checkpoint that name the earlier run's scene go)
         let names = super::earlier::replaced_scenes(d, scene);
-        for c in [d.join("checkpoint.bin"), d.join("summary.json")] {
+        for c in [d.join(CHECKPOINT), d.join(SUMMARY)] {
             match std::fs::remove_file(&c) {
                 Ok(()) if verbose => eprintln!("removed the earlier run's {}", c.display()),
                 Ok(()) => {}
@@ -252,7 +248,7 @@ impl RunOutputs {
 
     /// The checkpoint's path, where the run writes one.
     pub(super) fn checkpoint_path(&self) -> Option<PathBuf> {
-        self.dir.as_ref().map(|(d, _)| d.join("checkpoint.bin"))
+        self.dir.as_ref().map(|(d, _)| d.join(CHECKPOINT))
     }
 
     /// Whether the contact network is written with the snapshots.
@@ -391,7 +387,7 @@ impl RunOutputs {
 
     /// Whether the folder holds a `summary.json`.
     pub(super) fn has_summary(&self) -> bool {
-        self.dir().is_some_and(|d| d.join("summary.json").is_file())
+        self.dir().is_some_and(|d| d.join(SUMMARY).is_file())
     }
 
     /// Writes `summary.json`, where the run writes a folder.
@@ -399,7 +395,7 @@ impl RunOutputs {
         if let Some(d) = self.dir() {
             let text = serde_json::to_string_pretty(summary)
                 .map_err(|e| PowderError::Run(format!("cannot encode the summary: {e}")))?;
-            write_atomic(&d.join("summary.json"), text.as_bytes())?;
+            write_atomic(&d.join(SUMMARY), text.as_bytes())?;
         }
         Ok(())
     }

@@ -88,10 +88,7 @@ pub(super) fn solid_fractions(
     positions: &[glam::DVec3],
     radii: &[f64],
 ) -> (f64, f64) {
-    let vol: f64 = radii
-        .iter()
-        .map(|r| 4.0 / 3.0 * std::f64::consts::PI * r * r * r)
-        .sum();
+    let vol: f64 = radii.iter().map(|&r| crate::scene::sphere_volume(r)).sum();
     let d = scene.domain;
     let domain = (0..3).map(|a| d.max[a] - d.min[a]).product::<f64>();
     let mut lo = glam::DVec3::splat(f64::INFINITY);

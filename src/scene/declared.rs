@@ -82,6 +82,28 @@ impl Section {
     }
 }
 
+/// What a scene key is when the file leaves it out.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Absent {
+    /// It must be given.
+    Required,
+    /// This number: the reader takes it from here.
+    Number(f64),
+    /// As the words say (derived from other keys, or not a number).
+    Words(&'static str),
+}
+
+impl Absent {
+    /// In words, for the reference ("required", "1000", ...).
+    pub fn text(self) -> String {
+        match self {
+            Absent::Required => "required".to_string(),
+            Absent::Number(x) => format!("{x}"),
+            Absent::Words(w) => w.to_string(),
+        }
+    }
+}
+
 /// One key of a scene table.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SceneKey {
@@ -95,8 +117,8 @@ pub struct SceneKey {
     pub value: &'static str,
     /// SI unit ("" for none).
     pub unit: &'static str,
-    /// "required", or the value when absent, in words.
-    pub default: &'static str,
+    /// What it is when absent.
+    pub default: Absent,
     /// The rule a number obeys ([`Rule::None`]: none, or one [`Self::valid`] states).
     pub rule: Rule,
     /// More of the rule in words, beyond [`Self::rule`] ("" for nothing more).
@@ -123,7 +145,7 @@ const fn key(
     key: &'static str,
     value: &'static str,
     unit: &'static str,
-    default: &'static str,
+    default: Absent,
     rule: Rule,
     valid: &'static str,
     doc: &'static str,
@@ -147,76 +169,76 @@ use Section::*;
 
 /// Every non-law scene key, in the reference's order.
 pub const SCENE_KEYS: &[SceneKey] = &[
-    key(Top, ALL, "domain", "table", "", "required", Rule::None, "", "the box the particles live in", None),
-    key(Top, ALL, "simulation", "table", "", "required", Rule::None, "", "the run's settings", None),
-    key(Top, ALL, "material", "array of tables", "", "required", Rule::None, "at least one", "the materials, each with its contact law", None),
-    key(Top, ALL, "interaction", "array of tables", "", "none", Rule::None, "", "the laws between pairs of materials", None),
-    key(Top, ALL, "wall", "array of tables", "", "none", Rule::None, "", "infinite planes", None),
-    key(Top, ALL, "particles", "array of tables", "", "required", Rule::None, "at least one particle in all", "the particle blocks", None),
+    key(Top, ALL, "domain", "table", "", Absent::Required, Rule::None, "", "the box the particles live in", None),
+    key(Top, ALL, "simulation", "table", "", Absent::Required, Rule::None, "", "the run's settings", None),
+    key(Top, ALL, "material", "array of tables", "", Absent::Required, Rule::None, "at least one", "the materials, each with its contact law", None),
+    key(Top, ALL, "interaction", "array of tables", "", Absent::Words("none"), Rule::None, "", "the laws between pairs of materials", None),
+    key(Top, ALL, "wall", "array of tables", "", Absent::Words("none"), Rule::None, "", "infinite planes", None),
+    key(Top, ALL, "particles", "array of tables", "", Absent::Required, Rule::None, "at least one particle in all", "the particle blocks", None),
     // [domain]
-    key(Domain, ALL, "min", "[x, y, z]", "m", "required", Rule::None, "", "the lower corner", None),
-    key(Domain, ALL, "max", "[x, y, z]", "m", "required", Rule::None, "> min on every axis", "the upper corner", Some("[0.0, 0.0, 0.0]")),
-    key(Domain, ALL, "periodic", "[x, y, z] of booleans", "", "[false, false, false]", Rule::None, "no wall may face, and no gravity point along, a periodic axis", "the periodic axes (minimum image: pairs interact across the faces)", None),
+    key(Domain, ALL, "min", "[x, y, z]", "m", Absent::Required, Rule::None, "", "the lower corner", None),
+    key(Domain, ALL, "max", "[x, y, z]", "m", Absent::Required, Rule::None, "> min on every axis", "the upper corner", Some("[0.0, 0.0, 0.0]")),
+    key(Domain, ALL, "periodic", "[x, y, z] of booleans", "", Absent::Words("[false, false, false]"), Rule::None, "no wall may face, and no gravity point along, a periodic axis", "the periodic axes (minimum image: pairs interact across the faces)", None),
     // [simulation]
-    key(Simulation, ALL, "duration", "number", "s", "required", Rule::Positive, "", "the simulated time", Some("0.0")),
-    key(Simulation, ALL, "dt", "\"auto\" or a number", "s", "\"auto\"", Rule::Positive, "", "the time step (\"auto\": from the stiffest contact, tc/50)", Some("0.0")),
-    key(Simulation, ALL, "force_dt", "boolean", "", "false", Rule::None, "", "accept a dt above the stability limit (and starting speeds at which a pair closes more than a radius in one step)", None),
-    key(Simulation, ALL, "jump_impulses", "boolean", "", "true where some contact's force can jump", Rule::None, "", "place the impulse of a contact force's jump (JKR touch and pull-off, jump-in adhesion, a viscous first touch) inside the step, second order in dt; false: plain velocity Verlet", None),
-    key(Simulation, ALL, "output_every", "integer", "", "1000", Rule::Positive, "", "steps between outputs (`powder run`'s progress line, VTK snapshot, CSV row)", Some("0")),
-    key(Simulation, ALL, "gravity", "[x, y, z]", "m/s²", "[0, 0, 0]", Rule::None, "", "the gravitational acceleration", None),
-    key(Simulation, ALL, "impact_velocity", "number", "m/s", "1", Rule::Positive, "", "the largest expected impact speed (it sets the Hertz/JKR contact time of the automatic dt; the starting velocities' fastest closing where that is faster)", Some("0.0")),
-    key(Simulation, ALL, "checkpoint_every", "integer", "", "10·output_every", Rule::Positive, "", "steps between checkpoints", Some("0")),
-    key(Simulation, ALL, "contact_output", "boolean", "", "true under 100 000 particles", Rule::None, "", "write the contact network with each VTK snapshot (`contacts/<name>_<step>.vtp`: a line a contact with its forces, overlap, history, sliding)", None),
+    key(Simulation, ALL, "duration", "number", "s", Absent::Required, Rule::Positive, "", "the simulated time", Some("0.0")),
+    key(Simulation, ALL, "dt", "\"auto\" or a number", "s", Absent::Words("\"auto\""), Rule::Positive, "", "the time step (\"auto\": from the stiffest contact, tc/50)", Some("0.0")),
+    key(Simulation, ALL, "force_dt", "boolean", "", Absent::Words("false"), Rule::None, "", "accept a dt above the stability limit (and starting speeds at which a pair closes more than a radius in one step)", None),
+    key(Simulation, ALL, "jump_impulses", "boolean", "", Absent::Words("true where some contact's force can jump"), Rule::None, "", "place the impulse of a contact force's jump (JKR touch and pull-off, jump-in adhesion, a viscous first touch) inside the step, second order in dt; false: plain velocity Verlet", None),
+    key(Simulation, ALL, "output_every", "integer", "", Absent::Number(1000.0), Rule::Positive, "", "steps between outputs (`powder run`'s progress line, VTK snapshot, CSV row)", Some("0")),
+    key(Simulation, ALL, "gravity", "[x, y, z]", "m/s²", Absent::Words("[0, 0, 0]"), Rule::None, "", "the gravitational acceleration", None),
+    key(Simulation, ALL, "impact_velocity", "number", "m/s", Absent::Number(1.0), Rule::Positive, "", "the largest expected impact speed (it sets the Hertz/JKR contact time of the automatic dt; the starting velocities' fastest closing where that is faster)", Some("0.0")),
+    key(Simulation, ALL, "checkpoint_every", "integer", "", Absent::Words("10·output_every"), Rule::Positive, "", "steps between checkpoints", Some("0")),
+    key(Simulation, ALL, "contact_output", "boolean", "", Absent::Words("true under 100 000 particles"), Rule::None, "", "write the contact network with each VTK snapshot (`contacts/<name>_<step>.vtp`: a line a contact with its forces, overlap, history, sliding)", None),
     // [[material]]
-    key(Material, ALL, "name", "string", "", "required", Rule::None, "unique", "the name blocks, walls and interactions refer to", None),
-    key(Material, ALL, "density", "number", "kg/m³", "required", Rule::Positive, "", "the particles' density", Some("0.0")),
-    key(Material, ALL, "model", "string", "", "required", Rule::None, "a law of `powder params`", "the contact law between two particles of the material (and with its walls)", Some("\"nope\"")),
+    key(Material, ALL, "name", "string", "", Absent::Required, Rule::None, "unique", "the name blocks, walls and interactions refer to", None),
+    key(Material, ALL, "density", "number", "kg/m³", Absent::Required, Rule::Positive, "", "the particles' density", Some("0.0")),
+    key(Material, ALL, "model", "string", "", Absent::Required, Rule::None, "a law of `powder params`", "the contact law between two particles of the material (and with its walls)", Some("\"nope\"")),
     // [[interaction]]
-    key(Interaction, ALL, "materials", "[string, string]", "", "required", Rule::None, "two material names, a pair once", "the pair of materials (order does not matter)", Some("[\"powder\", \"nope\"]")),
-    key(Interaction, ALL, "model", "string", "", "required", Rule::None, "a law of `powder params`", "the contact law between them", Some("\"nope\"")),
+    key(Interaction, ALL, "materials", "[string, string]", "", Absent::Required, Rule::None, "two material names, a pair once", "the pair of materials (order does not matter)", Some("[\"powder\", \"nope\"]")),
+    key(Interaction, ALL, "model", "string", "", Absent::Required, Rule::None, "a law of `powder params`", "the contact law between them", Some("\"nope\"")),
     // [[wall]]
-    key(Wall, ALL, "point", "[x, y, z]", "m", "required", Rule::None, "", "a point on the plane", None),
-    key(Wall, ALL, "normal", "[x, y, z]", "", "required", Rule::None, "non-zero", "points into the domain (need not be unit)", Some("[0.0, 0.0, 0.0]")),
-    key(Wall, ALL, "material", "string", "", "the first [[material]]", Rule::None, "a material's name", "the wall's material", Some("\"nope\"")),
-    key(Wall, ALL, "velocities", "array of [x, y, z]", "m/s", "none", Rule::None, "with `times`, as many", "a schedule: velocities[k] from times[k] (at rest before times[0]); instead of `velocity`, the servo and phases", None),
-    key(Wall, ALL, "times", "array of numbers", "s", "none", Rule::None, ">= 0, increasing", "when each of `velocities` starts", Some("[-1.0]")),
-    key(Wall, ALL, "phase", "array of tables", "", "none", Rule::None, "", "the wall's program (`[[wall.phase]]`, below)", None),
+    key(Wall, ALL, "point", "[x, y, z]", "m", Absent::Required, Rule::None, "", "a point on the plane", None),
+    key(Wall, ALL, "normal", "[x, y, z]", "", Absent::Required, Rule::None, "non-zero", "points into the domain (need not be unit)", Some("[0.0, 0.0, 0.0]")),
+    key(Wall, ALL, "material", "string", "", Absent::Words("the first [[material]]"), Rule::None, "a material's name", "the wall's material", Some("\"nope\"")),
+    key(Wall, ALL, "velocities", "array of [x, y, z]", "m/s", Absent::Words("none"), Rule::None, "with `times`, as many", "a schedule: velocities[k] from times[k] (at rest before times[0]); instead of `velocity`, the servo and phases", None),
+    key(Wall, ALL, "times", "array of numbers", "s", Absent::Words("none"), Rule::None, ">= 0, increasing", "when each of `velocities` starts", Some("[-1.0]")),
+    key(Wall, ALL, "phase", "array of tables", "", Absent::Words("none"), Rule::None, "", "the wall's program (`[[wall.phase]]`, below)", None),
     // a wall's or a phase's motion
-    key(Motion, ALL, "velocity", "[x, y, z]", "m/s", "at rest", Rule::None, "", "a prescribed velocity (from t = 0 in a [[wall]], from `from` in a phase)", None),
-    key(Motion, ALL, "servo_force", "number", "N", "none", Rule::Positive, "with the other two servo keys", "the normal force the servo holds", Some("0.0")),
-    key(Motion, ALL, "servo_gain", "number", "m/s per N", "none", Rule::Positive, "", "speed per newton of force error", Some("0.0")),
-    key(Motion, ALL, "servo_max_speed", "number", "m/s", "none", Rule::Positive, "", "the servo's largest speed", Some("0.0")),
+    key(Motion, ALL, "velocity", "[x, y, z]", "m/s", Absent::Words("at rest"), Rule::None, "", "a prescribed velocity (from t = 0 in a [[wall]], from `from` in a phase)", None),
+    key(Motion, ALL, "servo_force", "number", "N", Absent::Words("none"), Rule::Positive, "with the other two servo keys", "the normal force the servo holds", Some("0.0")),
+    key(Motion, ALL, "servo_gain", "number", "m/s per N", Absent::Words("none"), Rule::Positive, "", "speed per newton of force error", Some("0.0")),
+    key(Motion, ALL, "servo_max_speed", "number", "m/s", Absent::Words("none"), Rule::Positive, "", "the servo's largest speed", Some("0.0")),
     // [[wall.phase]]
-    key(Phase, ALL, "from", "number", "s", "required", Rule::NonNegative, "increasing from phase to phase", "when the phase starts", Some("-1.0")),
+    key(Phase, ALL, "from", "number", "s", Absent::Required, Rule::NonNegative, "increasing from phase to phase", "when the phase starts", Some("-1.0")),
     // [[particles]]
-    key(Particles, ALL, "kind", "string", "", "required", Rule::None, "\"list\", \"lattice\" or \"random\"", "how the block makes its particles", Some("\"nope\"")),
-    key(Particles, ALL, "material", "string", "", "the first [[material]]", Rule::None, "a material's name", "the particles' material", Some("\"nope\"")),
-    key(Particles, ALL, "insert_at", "number", "s", "0", Rule::NonNegative, "", "when the block's particles appear (pouring; before that they neither move nor interact)", Some("-1.0")),
-    key(Particles, ALL, "velocity", "[x, y, z]", "m/s", "[0, 0, 0]", Rule::None, "", "every particle's starting velocity (a list: or `velocities`)", None),
-    key(Particles, ALL, "angular_velocity", "[x, y, z]", "rad/s", "[0, 0, 0]", Rule::None, "", "every particle's starting spin (only where a contact law turns particles)", None),
-    key(Particles, LIST, "positions", "array of [x, y, z]", "m", "required", Rule::None, "", "the particles' centres", None),
-    key(Particles, LATTICE_RANDOM_LIST, "radius", "number", "m", "required (list: or `radii`; random: or `size`)", Rule::Positive, "", "every particle's radius", Some("0.0")),
-    key(Particles, LIST, "radii", "array of numbers", "m", "none", Rule::None, "> 0, one a position", "a radius a particle, instead of `radius`", Some("[0.0]")),
-    key(Particles, LIST, "velocities", "array of [x, y, z]", "m/s", "none", Rule::None, "one a position", "a starting velocity a particle, instead of `velocity`", Some("[[0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]")),
-    key(Particles, LATTICE_RANDOM, "min", "[x, y, z]", "m", "required", Rule::None, "", "the region's lower corner (every sphere lies inside the region)", None),
-    key(Particles, LATTICE_RANDOM, "max", "[x, y, z]", "m", "required", Rule::None, "> min on every axis", "the region's upper corner", Some("[0.0, 0.0, 0.0]")),
-    key(Particles, LATTICE, "spacing", "number", "m", "2·radius·(1 + 10⁻⁹)", Rule::None, ">= 2·radius", "the distance between lattice sites; a region a little short of its sites (by up to 10⁻⁶ of the spacing, as a region of exactly n diameters is for the default) holds them spread evenly, so neighbours touch exactly there: where a law's force jumps at the touch (JKR, jump-in adhesion), whether each such pair starts in contact is then decided by rounding, differently on the two engines; leave a clear gap where the network at the start matters", Some("1e-6")),
-    key(Particles, LATTICE, "jitter", "number", "", "0", Rule::None, "in [0, 1]", "random shifts per axis of up to jitter·(spacing − 2·radius)/2, never causing overlaps", Some("2.0")),
-    key(Particles, LATTICE_RANDOM, "seed", "integer", "", "1", Rule::NonNegative, "", "the seed of the jitter (lattice) or of the radii and positions (random, Pcg64)", Some("-1")),
-    key(Particles, RANDOM, "count", "integer", "", "required", Rule::NonNegative, "", "how many particles", Some("-1")),
-    key(Particles, RANDOM, "size", "table", "", "none", Rule::None, "", "a size distribution instead of `radius` (below)", None),
-    key(Particles, RANDOM, "batches", "integer", "", "1", Rule::Positive, "", "the number of batches `count` is poured in, each placed afresh in the region (seed + k)", Some("0")),
-    key(Particles, RANDOM, "batch_interval", "number", "s", "0", Rule::NonNegative, "> 0 with batches > 1", "the time between batches (batch k appears at insert_at + k·batch_interval)", Some("0.0")),
+    key(Particles, ALL, "kind", "string", "", Absent::Required, Rule::None, "\"list\", \"lattice\" or \"random\"", "how the block makes its particles", Some("\"nope\"")),
+    key(Particles, ALL, "material", "string", "", Absent::Words("the first [[material]]"), Rule::None, "a material's name", "the particles' material", Some("\"nope\"")),
+    key(Particles, ALL, "insert_at", "number", "s", Absent::Number(0.0), Rule::NonNegative, "", "when the block's particles appear (pouring; before that they neither move nor interact)", Some("-1.0")),
+    key(Particles, ALL, "velocity", "[x, y, z]", "m/s", Absent::Words("[0, 0, 0]"), Rule::None, "", "every particle's starting velocity (a list: or `velocities`)", None),
+    key(Particles, ALL, "angular_velocity", "[x, y, z]", "rad/s", Absent::Words("[0, 0, 0]"), Rule::None, "", "every particle's starting spin (only where a contact law turns particles)", None),
+    key(Particles, LIST, "positions", "array of [x, y, z]", "m", Absent::Required, Rule::None, "", "the particles' centres", None),
+    key(Particles, LATTICE_RANDOM_LIST, "radius", "number", "m", Absent::Words("required (list: or `radii`; random: or `size`)"), Rule::Positive, "", "every particle's radius", Some("0.0")),
+    key(Particles, LIST, "radii", "array of numbers", "m", Absent::Words("none"), Rule::None, "> 0, one a position", "a radius a particle, instead of `radius`", Some("[0.0]")),
+    key(Particles, LIST, "velocities", "array of [x, y, z]", "m/s", Absent::Words("none"), Rule::None, "one a position", "a starting velocity a particle, instead of `velocity`", Some("[[0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]")),
+    key(Particles, LATTICE_RANDOM, "min", "[x, y, z]", "m", Absent::Required, Rule::None, "", "the region's lower corner (every sphere lies inside the region)", None),
+    key(Particles, LATTICE_RANDOM, "max", "[x, y, z]", "m", Absent::Required, Rule::None, "> min on every axis", "the region's upper corner", Some("[0.0, 0.0, 0.0]")),
+    key(Particles, LATTICE, "spacing", "number", "m", Absent::Words("2·radius·(1 + 10⁻⁹)"), Rule::None, ">= 2·radius", "the distance between lattice sites; a region a little short of its sites (by up to 10⁻⁶ of the spacing, as a region of exactly n diameters is for the default) holds them spread evenly, so neighbours touch exactly there: where a law's force jumps at the touch (JKR, jump-in adhesion), whether each such pair starts in contact is then decided by rounding, differently on the two engines; leave a clear gap where the network at the start matters", Some("1e-6")),
+    key(Particles, LATTICE, "jitter", "number", "", Absent::Number(0.0), Rule::Closed(0.0, 1.0), "", "random shifts per axis of up to jitter·(spacing − 2·radius)/2, never causing overlaps", Some("2.0")),
+    key(Particles, LATTICE_RANDOM, "seed", "integer", "", Absent::Number(1.0), Rule::NonNegative, "", "the seed of the jitter (lattice) or of the radii and positions (random, Pcg64)", Some("-1")),
+    key(Particles, RANDOM, "count", "integer", "", Absent::Required, Rule::NonNegative, "", "how many particles", Some("-1")),
+    key(Particles, RANDOM, "size", "table", "", Absent::Words("none"), Rule::None, "", "a size distribution instead of `radius` (below)", None),
+    key(Particles, RANDOM, "batches", "integer", "", Absent::Number(1.0), Rule::Positive, "", "the number of batches `count` is poured in, each placed afresh in the region (seed + k)", Some("0")),
+    key(Particles, RANDOM, "batch_interval", "number", "s", Absent::Number(0.0), Rule::NonNegative, "> 0 with batches > 1", "the time between batches (batch k appears at insert_at + k·batch_interval)", Some("0.0")),
     // a random block's size distribution
-    key(Size, ALL, "distribution", "string", "", "required", Rule::None, "\"uniform\", \"normal\", \"lognormal\" or \"list\"", "the distribution of the radii", Some("\"nope\"")),
-    key(Size, &["uniform"], "min", "number", "m", "required", Rule::Positive, "<= max", "the smallest radius", Some("0.0")),
-    key(Size, &["uniform"], "max", "number", "m", "required", Rule::None, ">= min", "the largest radius", Some("1e-9")),
-    key(Size, &["normal"], "mean", "number", "m", "required", Rule::Positive, "", "the mean radius", Some("0.0")),
-    key(Size, &["normal"], "std", "number", "m", "required", Rule::NonNegative, "", "the standard deviation", Some("-1e-4")),
-    key(Size, &["lognormal"], "median", "number", "m", "required", Rule::Positive, "", "the median radius", Some("0.0")),
-    key(Size, &["lognormal"], "sigma", "number", "", "required", Rule::NonNegative, "", "the standard deviation of ln(radius)", Some("-0.1")),
-    key(Size, &["list"], "radii", "array of numbers", "m", "required", Rule::None, "> 0", "the radii drawn from", Some("[0.0]")),
-    key(Size, &["list"], "weights", "array of numbers", "", "all equal", Rule::None, ">= 0, a positive sum, one a radius", "each radius's weight", Some("[-1.0]")),
+    key(Size, ALL, "distribution", "string", "", Absent::Required, Rule::None, "\"uniform\", \"normal\", \"lognormal\" or \"list\"", "the distribution of the radii", Some("\"nope\"")),
+    key(Size, &["uniform"], "min", "number", "m", Absent::Required, Rule::Positive, "<= max", "the smallest radius", Some("0.0")),
+    key(Size, &["uniform"], "max", "number", "m", Absent::Required, Rule::None, ">= min", "the largest radius", Some("1e-9")),
+    key(Size, &["normal"], "mean", "number", "m", Absent::Required, Rule::Positive, "", "the mean radius", Some("0.0")),
+    key(Size, &["normal"], "std", "number", "m", Absent::Required, Rule::NonNegative, "", "the standard deviation", Some("-1e-4")),
+    key(Size, &["lognormal"], "median", "number", "m", Absent::Required, Rule::Positive, "", "the median radius", Some("0.0")),
+    key(Size, &["lognormal"], "sigma", "number", "", Absent::Required, Rule::NonNegative, "", "the standard deviation of ln(radius)", Some("-0.1")),
+    key(Size, &["list"], "radii", "array of numbers", "m", Absent::Required, Rule::None, "> 0", "the radii drawn from", Some("[0.0]")),
+    key(Size, &["list"], "weights", "array of numbers", "", Absent::Words("all equal"), Rule::None, ">= 0, a positive sum, one a radius", "each radius's weight", Some("[-1.0]")),
 ];
 
 impl SceneKey {
@@ -259,6 +281,15 @@ pub fn declared(section: Section, key: &str) -> &'static SceneKey {
         .iter()
         .find(|k| k.section == section && k.key == key)
         .unwrap_or_else(|| panic!("`{key}` is not declared in {section:?}"))
+}
+
+/// The number `key` of `section` is when absent; panics where its declaration states none
+/// (a reader asks only for keys declared with a number: the declarations' tests keep it so).
+pub fn default_number(section: Section, key: &str) -> f64 {
+    match declared(section, key).default {
+        Absent::Number(x) => x,
+        other => panic!("`{key}` in {section:?} has no number when absent: {other:?}"),
+    }
 }
 
 /// Checks `value` of `key` in `section` against its declared rule: the error names the

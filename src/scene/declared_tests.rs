@@ -199,13 +199,34 @@ fn the_settings_beside_a_refused_value_read() {
     }
 }
 
+/// A number a key takes when absent obeys the key's own rule, and a scene that leaves the
+/// key out reads it.
+#[test]
+fn a_declared_default_number_obeys_its_rule_and_is_read() {
+    for k in SCENE_KEYS {
+        if let super::declared::Absent::Number(x) = k.default {
+            assert!(k.rule.holds(x), "{}: {x} breaks {:?}", k.key, k.rule);
+        }
+    }
+    let scene = Scene::from_toml_str_with(TEMPLATE, "template", &[]).unwrap();
+    let n = |s, k| super::declared::default_number(s, k);
+    assert_eq!(
+        scene.output_every as f64,
+        n(Section::Simulation, "output_every")
+    );
+    assert_eq!(
+        scene.impact_velocity,
+        n(Section::Simulation, "impact_velocity")
+    );
+}
+
 /// Every key has a doc, a value and a default in words, and each (section, kind) holds a
 /// key once.
 #[test]
 fn every_declaration_is_complete_and_once() {
     for (i, k) in SCENE_KEYS.iter().enumerate() {
         assert!(
-            !k.doc.is_empty() && !k.value.is_empty() && !k.default.is_empty(),
+            !k.doc.is_empty() && !k.value.is_empty() && !k.default.text().is_empty(),
             "{k:?}"
         );
         let clash = SCENE_KEYS[..i].iter().any(|o| {
@@ -241,7 +262,10 @@ fn the_declared_numbers_are_the_readers() {
         &below[..below.len() - 3],
         &below[below.len() - 3..]
     );
-    assert_eq!(output.default, format!("true under {below} particles"));
+    assert_eq!(
+        output.default.text(),
+        format!("true under {below} particles")
+    );
 }
 
 /// docs/scene.md is the reference the declarations generate.

@@ -216,9 +216,20 @@ pub struct ParticleInit {
     pub insert_at: f64,
 }
 
+/// The volume of a sphere of `radius` (m), m³.
+pub fn sphere_volume(radius: f64) -> f64 {
+    4.0 / 3.0 * std::f64::consts::PI * radius.powi(3)
+}
+
 /// The mass of a sphere of `radius` (m) and `density` (kg/m³), kg.
 pub fn sphere_mass(density: f64, radius: f64) -> f64 {
-    density * 4.0 / 3.0 * std::f64::consts::PI * radius.powi(3)
+    density * sphere_volume(radius)
+}
+
+/// The moment of inertia of a solid sphere of `mass` (kg) and `radius` (m) about a
+/// diameter, 2/5·m·r², kg·m².
+pub fn sphere_inertia(mass: f64, radius: f64) -> f64 {
+    0.4 * mass * radius * radius
 }
 
 /// Whether a particle inserted at `insert_at` (s) is due at the start of step `step` of
@@ -284,7 +295,7 @@ pub struct Scene {
     pub duration: f64,
     /// Steps between progress/summary lines.
     pub output_every: u64,
-    /// Largest expected impact speed, m/s (default 1): sets the Hertz/JKR contact time
+    /// Largest expected impact speed, m/s: sets the Hertz/JKR contact time
     /// for the automatic time step.
     pub impact_velocity: f64,
     /// Steps between checkpoints of `powder run` (default 10 × output_every).

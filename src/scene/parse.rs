@@ -156,13 +156,9 @@ fn parse_simulation(root: &Tbl) -> Res<SimSettings> {
     };
     let force_dt = t.bool("force_dt")?.unwrap_or(false);
     let jump_impulses = t.bool("jump_impulses")?;
-    let output_every = t
-        .count(Section::Simulation, "output_every")?
-        .unwrap_or(1000);
+    let output_every = t.count_or_default(Section::Simulation, "output_every")?;
     let gravity = t.vec3("gravity")?.unwrap_or([0.0; 3]);
-    let impact_velocity = t
-        .number(Section::Simulation, "impact_velocity")?
-        .unwrap_or(1.0);
+    let impact_velocity = t.number_or_default(Section::Simulation, "impact_velocity")?;
     let checkpoint_every = t
         .count(Section::Simulation, "checkpoint_every")?
         .unwrap_or(10 * output_every);

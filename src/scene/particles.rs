@@ -40,7 +40,7 @@ pub(super) fn parse_particles(root: &Tbl, names: &[&str]) -> Res<(Vec<ParticleIn
         })?;
         t.ctx = format!("[[particles]] #{block} (kind = \"{kind}\")");
         let before = particles.len();
-        let insert_at = t.number(Section::Particles, "insert_at")?.unwrap_or(0.0);
+        let insert_at = t.number_or_default(Section::Particles, "insert_at")?;
         match kind {
             "list" => {
                 t.check_keys(&particle_keys(kind), |_| None)?;
@@ -54,10 +54,8 @@ pub(super) fn parse_particles(root: &Tbl, names: &[&str]) -> Res<(Vec<ParticleIn
                 t.check_keys(&particle_keys(kind), |_| None)?;
                 // pouring: `batches` batches of count/batches, `batch_interval` s apart,
                 // each placed afresh in the region
-                let batches = t.count(Section::Particles, "batches")?.unwrap_or(1);
-                let interval = t
-                    .number(Section::Particles, "batch_interval")?
-                    .unwrap_or(0.0);
+                let batches = t.count_or_default(Section::Particles, "batches")?;
+                let interval = t.number_or_default(Section::Particles, "batch_interval")?;
                 if batches > 1 && interval <= 0.0 {
                     return Err(t.err_key(
                         "batches",
@@ -255,17 +253,8 @@ fn expand_lattice(t: &Tbl, names: &[&str], out: &mut Vec<ParticleInit>) -> Res<(
             ),
         ));
     }
-    let jitter = t.f64("jitter")?.unwrap_or(0.0);
-    if !(0.0..=1.0).contains(&jitter) {
-        return Err(t.err_key(
-            "jitter",
-            format!(
-                "`jitter` in {} must be between 0 and 1 (a fraction of the gap between neighbours), got {jitter}",
-                t.ctx
-            ),
-        ));
-    }
-    let seed = t.u64("seed")?.unwrap_or(1);
+    let jitter = t.number_or_default(Section::Particles, "jitter")?;
+    let seed = t.count_or_default(Section::Particles, "seed")?;
     let velocity = block_velocity(t)?;
     let angular_velocity = block_angular_velocity(t)?;
     // (in f64: a count beyond u64, e.g. a radius of 1e-22 m, is refused, not wrapped)
@@ -525,7 +514,9 @@ fn expand_random(
     )
     .map_err(|m| t.err_key("count", format!("{}: {m}", t.ctx)))?;
     let (min, max) = region(t)?;
-    let seed = t.u64("seed")?.unwrap_or(1).wrapping_add(batch.0);
+    let seed = t
+        .count_or_default(Section::Particles, "seed")?
+        .wrapping_add(batch.0);
     one_of(
         t,
         "radius",

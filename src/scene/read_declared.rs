@@ -1,7 +1,7 @@
 //! Reading a number by its declaration (`declared.rs`): the rule it is checked against and
 //! the words its errors use come from there.
 
-use super::declared::{declared, SceneKey, Section};
+use super::declared::{declared, default_number, SceneKey, Section};
 use super::toml_reader::{Res, Tbl};
 
 impl Tbl<'_> {
@@ -29,6 +29,20 @@ impl Tbl<'_> {
             Some(n) if !k.rule.holds(n as f64) => Err(self.broken(k, n as f64)),
             other => Ok(other),
         }
+    }
+
+    /// [`Self::number`], or its declared number when absent.
+    pub(super) fn number_or_default(&self, section: Section, key: &str) -> Res<f64> {
+        Ok(self
+            .number(section, key)?
+            .unwrap_or_else(|| default_number(section, key)))
+    }
+
+    /// [`Self::count`], or its declared number when absent.
+    pub(super) fn count_or_default(&self, section: Section, key: &str) -> Res<u64> {
+        Ok(self
+            .count(section, key)?
+            .unwrap_or_else(|| default_number(section, key) as u64))
     }
 
     /// The error for `x` breaking `k`'s rule, at the key.

@@ -46,7 +46,7 @@ pub fn markdown() -> String {
                 " {} | {} | {} | {} | {} |",
                 cell(k.value),
                 cell(k.unit),
-                cell(k.default),
+                cell(&k.default.text()),
                 cell(&k.valid_text()),
                 cell(k.doc)
             );

@@ -657,7 +657,7 @@ fn lattice_counts_and_jitter() {
     let e = err(&scene("spacing = 0.015"));
     assert_contains(&e, &["`spacing`", "must be >= 2*radius"]);
     let e = err(&scene("jitter = 2.0"));
-    assert_contains(&e, &["`jitter`", "between 0 and 1"]);
+    assert_contains(&e, &["`jitter`", "must be in [0, 1], got 2"]);
 }
 
 #[test]

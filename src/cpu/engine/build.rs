@@ -88,7 +88,7 @@ impl CpuEngine {
                 vec![DVec3::ZERO; n],
                 mass.iter()
                     .zip(&radius)
-                    .map(|(m, r)| 0.4 * m * r * r)
+                    .map(|(&m, &r)| crate::scene::sphere_inertia(m, r))
                     .collect(),
             )
         } else {

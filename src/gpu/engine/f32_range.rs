@@ -70,7 +70,7 @@ pub(super) fn check_f32_range(
         if !normal(p.radius) {
             return refuse(format!("particle {i}'s radius is {:e} m", p.radius));
         }
-        let inertia = 0.4 * m * p.radius * p.radius;
+        let inertia = crate::scene::sphere_inertia(m, p.radius);
         if r.rotation && !normal(inertia) {
             return refuse(format!(
                 "particle {i}'s moment of inertia is {inertia:e} kg m^2"

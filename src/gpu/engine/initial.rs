@@ -87,7 +87,7 @@ impl InitialState {
             .zip(&r.mass)
             .map(|(p, m)| {
                 let [x, y, z] = p.angular_velocity.map(|c| c as f32);
-                [x, y, z, (0.4 * m * p.radius * p.radius) as f32]
+                [x, y, z, crate::scene::sphere_inertia(*m, p.radius) as f32]
             })
             .collect();
         Self {

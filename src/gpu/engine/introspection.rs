@@ -55,7 +55,7 @@ impl GpuEngine {
 
     /// Whether the engine takes the software adapter's paths (texture mirrors, quiet
     /// batches; `GpuOptions::software_paths`).
-    pub fn adapter_is_software(&self) -> bool {
+    pub fn software_paths(&self) -> bool {
         !self.mirrors.is_empty()
     }
 

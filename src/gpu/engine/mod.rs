@@ -301,8 +301,6 @@ mod tests {
         );
     }
 
-    /// A state saved before the ledger's rows joined the particle state (a
-    /// `particle_ledger` buffer of its own) is refused by name, before anything changes.
     /// The software adapter's context, or `None` outside CI where there is none (CI needs
     /// one: lavapipe).
     fn context() -> Option<GpuContext> {
@@ -316,6 +314,8 @@ mod tests {
         }
     }
 
+    /// A state saved before the ledger's rows joined the particle state (a
+    /// `particle_ledger` buffer of its own) is refused by name, before anything changes.
     #[test]
     fn gpu_a_state_with_the_old_ledger_buffer_is_refused() {
         let Some(ctx) = context() else { return };

@@ -48,7 +48,7 @@ impl GpuEngine {
     }
 
     /// The deepest overlap over a12 of any contact in any step since the last call, and a
-    /// particle with a contact beyond `run::MAX_OVERLAP_RATIO` (0.5) if there was one.
+    /// particle with a contact beyond `run::MAX_OVERLAP_RATIO` if there was one.
     /// Resets the record. Measured on the device every step (a workgroup maximum, then one
     /// atomic per workgroup), read back once per batch of steps.
     pub fn take_peak_overlap(&mut self) -> Option<(f64, Option<usize>)> {
@@ -295,7 +295,7 @@ impl GpuEngine {
             .zip(self.mass.iter().zip(&self.radius))
             .zip(&self.active)
             .filter(|(_, &a)| a)
-            .map(|((w, (m, r)), _)| 0.5 * 0.4 * m * r * r * w.length_squared())
+            .map(|((w, (&m, &r)), _)| 0.5 * crate::scene::sphere_inertia(m, r) * w.length_squared())
             .sum();
         translational + rotational
     }

@@ -215,8 +215,7 @@ impl JkrPair {
                 stiffness,
             } => {
                 row.dissipation = JKR_DISSIPATION_TSUJI;
-                // 2·√(5/6)·(−β): the prefactor of paper 002 eqs. 11 and 16
-                row.tsuji = narrow(-2.0 * (5.0f64 / 6.0).sqrt() * tsuji_beta(restitution));
+                row.tsuji = narrow(-crate::model::jkr::TSUJI_PREFACTOR * tsuji_beta(restitution));
                 row.tsuji_hertz = u32::from(stiffness == crate::model::TsujiStiffness::Hertz);
             }
             Dissipation::PowerLaw { d, alpha, beta } => {

@@ -17,7 +17,6 @@ use crate::model::{analytic, ContactModel, Dissipation, PairGeometry};
 use crate::scene::{Domain, DtSetting, Material, ParticleInit, Scene, Wall};
 use glam::DVec3;
 use serde::Serialize;
-use std::f64::consts::PI;
 
 mod backends;
 mod collision;
@@ -211,7 +210,7 @@ pub struct CollideResult {
 
 impl CollideSpec {
     fn masses(&self) -> (f64, f64) {
-        let m = |r: f64| self.density * 4.0 / 3.0 * PI * r.powi(3);
+        let m = |r: f64| crate::scene::sphere_mass(self.density, r);
         (m(self.radius1), m(self.radius2))
     }
 

@@ -89,9 +89,7 @@ pub(super) fn predict_head_on(spec: &CollideSpec, geom: &PairGeometry, result: &
                 result.contact_duration_analytic =
                     Some(analytic::hertz_contact_time(mr, r, e_star, v));
                 if undamped {
-                    // ½m*v² = 8/15·E*·√R*·δ^(5/2)
-                    result.delta_max_analytic =
-                        Some((15.0 * mr * v * v / (16.0 * e_star * r.sqrt())).powf(0.4));
+                    result.delta_max_analytic = Some(analytic::hertz_delta_max(mr, r, e_star, v));
                 }
             } else {
                 result.tabor = tabor(spec, analytic::TABOR_MIN_SEPARATION);

@@ -32,6 +32,14 @@ use crate::model::{ContactHistory, Kinematics, PairGeometry};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
+/// The tangential spring's and dashpot's default share of the normal ones (2/7: the
+/// tangential oscillator of two solid spheres then has the normal period; MercuryDPM's).
+pub const TANGENTIAL_SHARE: f64 = 2.0 / 7.0;
+
+/// The rolling and twisting springs' and dashpots' default share of the normal ones (2/5:
+/// their oscillators then have the normal period for two equal spheres).
+pub const ROTATIONAL_SHARE: f64 = 0.4;
+
 /// Luding's three friction sub-models of one pair, with their parameters after the
 /// defaults are derived. A sub-model with μs = 0 is off.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -241,9 +249,9 @@ mod tests {
             gamma: share * gamma,
         };
         LudingFriction {
-            sliding: s(mu, 2.0 / 7.0),
-            rolling: s(mu_r, 0.4),
-            twisting: s(mu_o, 0.4),
+            sliding: s(mu, TANGENTIAL_SHARE),
+            rolling: s(mu_r, ROTATIONAL_SHARE),
+            twisting: s(mu_o, ROTATIONAL_SHARE),
         }
     }
 

@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
 /// 2·√(5/6), the prefactor of the Tsuji damping (paper 002 eqs. 11 and 16).
-pub(super) const TSUJI_PREFACTOR: f64 = 1.8257418583505538;
+pub(crate) const TSUJI_PREFACTOR: f64 = 1.8257418583505538;
 
 /// Normal (and tangential) dissipation of the JKR family.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]

@@ -34,7 +34,7 @@ use crate::model::history::{HistoryField, HostField, Mirror, Shape};
 use crate::model::krijt;
 use crate::model::params::word_enum;
 use crate::model::{ContactHistory, NormalForce, PairGeometry};
-use dissipation::TSUJI_PREFACTOR;
+pub(crate) use dissipation::TSUJI_PREFACTOR;
 pub use dissipation::{tsuji_beta, Dissipation, TsujiStiffness};
 pub use mindlin::Tangential;
 pub use pair::JkrPair;

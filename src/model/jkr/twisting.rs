@@ -17,7 +17,7 @@ impl JkrParams {
         if k > 0.0 {
             k
         } else {
-            0.4 * 8.0 * self.g_star() * a
+            crate::model::friction::ROTATIONAL_SHARE * 8.0 * self.g_star() * a
         }
     }
 
@@ -61,9 +61,7 @@ impl JkrParams {
             return None;
         }
         let r = geom.r_eff();
-        // the undamped Hertz overlap: ½m*v² = 8/15·E*·√R*·δ^(5/2)
-        let es = self.e_star();
-        let delta = (15.0 * geom.reduced_mass * v * v / (16.0 * es * r.sqrt())).powf(0.4);
+        let delta = crate::model::analytic::hertz_delta_max(geom.reduced_mass, r, self.e_star(), v);
         let hertz = (r * delta).sqrt();
         let a = if self.gamma() > 0.0 {
             hertz.max(self.a0(r))

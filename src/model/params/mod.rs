@@ -46,6 +46,8 @@ pub enum Rule {
     LeftOpen(f64, f64),
     /// lo < x < hi.
     Open(f64, f64),
+    /// lo ≤ x ≤ hi.
+    Closed(f64, f64),
     /// > 0, or infinite.
     PositiveOrInf,
     /// Checked with the other parameters by the model.
@@ -62,6 +64,7 @@ impl Rule {
             Rule::NonNegative => Some(">= 0".to_string()),
             Rule::LeftOpen(lo, hi) => Some(format!("in ({lo}, {hi}]")),
             Rule::Open(lo, hi) => Some(format!("in ({lo}, {hi})")),
+            Rule::Closed(lo, hi) => Some(format!("in [{lo}, {hi}]")),
         }
     }
 
@@ -76,6 +79,7 @@ impl Rule {
             Rule::NonNegative => value >= 0.0,
             Rule::LeftOpen(lo, hi) => value > *lo && value <= *hi,
             Rule::Open(lo, hi) => value > *lo && value < *hi,
+            Rule::Closed(lo, hi) => value >= *lo && value <= *hi,
         }
     }
 

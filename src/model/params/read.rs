@@ -291,7 +291,6 @@ fn luding_given(law: &Law, v: &Values) -> Result<(), ParamError> {
 /// the normal one), k_r = k_o = 2/5·k, γ_r = γ_o = 2/5·γ0 (equal periods for two equal
 /// spheres with the lever a12). A sub-model that is off (μ = 0) is all zero.
 fn luding(v: &Values, k: f64, gamma0: f64) -> LudingFriction {
-    // a sub-model that is off stays all zero: a frictionless model is the one of before
     let spring = |mu: f64, mu_d: f64, kp: &Param, gp: &Param, share: f64| {
         if mu > 0.0 {
             CoulombSpring {
@@ -313,10 +312,22 @@ fn luding(v: &Values, k: f64, gamma0: f64) -> LudingFriction {
             v.opt(&FRICTION_DYNAMIC).unwrap_or(mu),
             &KT,
             &GAMMA_T,
-            2.0 / 7.0,
+            crate::model::friction::TANGENTIAL_SHARE,
         ),
-        rolling: spring(mu_r, mu_r, &KR, &GAMMA_R, 0.4),
-        twisting: spring(mu_o, mu_o, &KO, &GAMMA_O, 0.4),
+        rolling: spring(
+            mu_r,
+            mu_r,
+            &KR,
+            &GAMMA_R,
+            crate::model::friction::ROTATIONAL_SHARE,
+        ),
+        twisting: spring(
+            mu_o,
+            mu_o,
+            &KO,
+            &GAMMA_O,
+            crate::model::friction::ROTATIONAL_SHARE,
+        ),
     }
 }
 

@@ -85,7 +85,9 @@ impl ParamSource for Given {
 fn sample(p: &Param) -> Raw {
     match (p.kind, p.rule) {
         (Kind::Choice(words), _) => Raw::Text(words[0].to_string()),
-        (_, Rule::LeftOpen(lo, hi) | Rule::Open(lo, hi)) => Raw::Number(0.5 * (lo + hi)),
+        (_, Rule::LeftOpen(lo, hi) | Rule::Open(lo, hi) | Rule::Closed(lo, hi)) => {
+            Raw::Number(0.5 * (lo + hi))
+        }
         _ => Raw::Number(0.5),
     }
 }
