@@ -221,9 +221,10 @@ pub fn sphere_volume(radius: f64) -> f64 {
     4.0 / 3.0 * std::f64::consts::PI * radius.powi(3)
 }
 
-/// The mass of a sphere of `radius` (m) and `density` (kg/m³), kg.
+/// The mass of a sphere of `radius` (m) and `density` (kg/m³), kg (ρ·4/3·π·r³ in this
+/// order: the engines' masses, bitwise).
 pub fn sphere_mass(density: f64, radius: f64) -> f64 {
-    density * sphere_volume(radius)
+    density * 4.0 / 3.0 * std::f64::consts::PI * radius.powi(3)
 }
 
 /// The moment of inertia of a solid sphere of `mass` (kg) and `radius` (m) about a
