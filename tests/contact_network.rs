@@ -28,9 +28,14 @@ fn summary(n: &ContactNetwork) -> [usize; 4] {
 }
 
 /// Runs `scene` on both engines and compares their networks after each of `chunks` steps:
-/// the same contacts (pairs by (i, j), then walls), touched and sliding flags, and forces,
-/// overlaps and springs to f32 accuracy. Returns the last sample's [`summary`].
-fn same_networks(scene: &powder::scene::Scene, chunks: &[u64]) -> Option<[usize; 4]> {
+/// the same contacts (pairs by (i, j), then walls), touched and sliding flags, and forces
+/// (relative to the largest, `tol[0]`), overlaps (`tol[1]`, m) and springs to f32 accuracy.
+/// Returns the last sample's [`summary`] and the largest sideways floor force seen.
+fn same_networks(
+    scene: &powder::scene::Scene,
+    chunks: &[u64],
+    tol: [f64; 2],
+) -> Option<([usize; 4], f64)> {
     let options = GpuOptions {
         ledger: false,
         contacts: true,
@@ -87,11 +92,9 @@ fn same_networks(scene: &powder::scene::Scene, chunks: &[u64]) -> Option<[usize;
             flags_differ <= cn.lines.len() / 50,
             "{flags_differ} flags differ"
         );
-        // measured (1 mm spheres): up to 1.2e-4 of the largest force, 1.8e-9 m overlap,
-        // 8.4e-9 m springs
-        assert!(worst[0] < 1e-3 && worst[1] < 1e-3, "{worst:?}");
+        assert!(worst[0] < tol[0] && worst[1] < tol[0], "{worst:?}");
         assert!(
-            worst[2] < 1e-8 && worst[3] < 3e-8 && worst[4] < 3e-8,
+            worst[2] < tol[1] && worst[3] < 3e-8 && worst[4] < 3e-8,
             "{worst:?}"
         );
         last = summary(&cn);
@@ -102,29 +105,45 @@ fn same_networks(scene: &powder::scene::Scene, chunks: &[u64]) -> Option<[usize;
         assert!(off < 1e-3, "{} vs {}", gw[0], cw[0]);
         sideways = sideways.max(cw[0].truncate().length());
     }
-    // (friction pushes the floor sideways: the part only the tangential forces give)
-    assert!(sideways > 1e-6, "{sideways}");
-    Some(last)
+    Some((last, sideways))
 }
 
-/// Rough adhesive elasto-plastic spheres (Luding's sliding with μs > μd, rolling and
-/// twisting friction) thrown onto a floor, with a low sliding coefficient so that some
-/// contacts slide: pairs and wall contacts, sliding and sticking, in the compared networks.
+/// What [`same_networks`] allows where the trajectories stay close (measured, 1 mm spheres:
+/// up to 1.2e-4 of the largest force, 1.8e-9 m overlap, 8.4e-9 m springs).
+const CLOSE: [f64; 2] = [1e-3, 1e-8];
+
+/// Rough adhesive elasto-plastic spheres (Luding's sliding, rolling and twisting friction)
+/// thrown onto a floor, with a low sliding coefficient so that some contacts slide: pairs
+/// and wall contacts, sliding and sticking, in the compared networks.
 #[test]
 fn the_gpu_network_is_the_cpu_network_with_luding_friction() {
-    let slippery = ROUGH.replace(
-        "friction = 0.5\nfriction_dynamic = 0.4",
-        "friction = 0.05\nfriction_dynamic = 0.04",
-    );
-    assert_ne!(slippery, ROUGH);
-    let materials = |b: common::SceneBuilder| b.material("rough", 2000.0, &slippery);
-    let Some(last) = same_networks(&packing(materials, "rough"), &[1500, 500, 400]) else {
+    let scene = |mu_d: &str| {
+        let keys = ROUGH.replace(
+            "friction = 0.5\nfriction_dynamic = 0.4",
+            &format!("friction = 0.05\nfriction_dynamic = {mu_d}"),
+        );
+        assert_ne!(keys, ROUGH);
+        packing(
+            |b: common::SceneBuilder| b.material("rough", 2000.0, &keys),
+            "rough",
+        )
+    };
+    let Some((last, sideways)) = same_networks(&scene("0.05"), &[1500, 500, 400], CLOSE) else {
         return;
     };
     assert!(
         last[0] > 50 && last[1] > 5 && last[2] > 10 && last[2] < last[0] && last[3] > 0,
         "{last:?}"
     );
+    // (friction pushes the floor sideways: the part only the tangential forces give)
+    assert!(sideways > 1e-6, "{sideways}");
+    // μs > μd: a slip stays at μd until the contact sticks, and any force between μd and μs
+    // is stable, so a slip's onset decided by rounding lasts and the engines part sooner
+    // (measured over these steps: 2.3e-3 of the largest force, 2.5e-8 m overlap, 1.5e-8 m
+    // springs; the CPU perturbed by 1e-10 m a particle parts by 1.6e-4, with μs = μd by
+    // 5e-5; by step 2400 the engines differ by 1.5e-2)
+    let (last, _) = same_networks(&scene("0.04"), &[1000, 150, 150], [5e-3, 5e-8]).unwrap();
+    assert!(last[0] > 30 && last[2] > 10, "{last:?}");
 }
 
 /// The same with JKR spheres, Mindlin friction (its own Coulomb limit) and rolling
@@ -135,13 +154,15 @@ fn the_gpu_network_is_the_cpu_network_with_jkr_friction() {
     let slippery = STICKY.replace("friction = 0.3", "friction = 0.05");
     assert_ne!(slippery, STICKY);
     let jkr = |b: common::SceneBuilder| b.material("rough", 2000.0, &slippery);
-    let Some(last) = same_networks(&packing(jkr, "rough"), &[1500, 500, 400]) else {
+    let Some((last, sideways)) = same_networks(&packing(jkr, "rough"), &[1500, 500, 400], CLOSE)
+    else {
         return;
     };
     assert!(
         last[0] > 50 && last[1] > 5 && last[2] > 5 && last[2] < last[0],
         "{last:?}"
     );
+    assert!(sideways > 1e-6, "{sideways}");
 }
 
 /// One data array of a contact network file, as f64.

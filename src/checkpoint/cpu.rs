@@ -316,6 +316,7 @@ mod tests {
             rolling: DVec3::new(-4e-8, 5e-8, 6e-8),
             contact_radius: 7e-5,
             twist: -8e-9,
+            slipping: true,
         };
         let record = ContactRecord {
             history,
@@ -330,12 +331,14 @@ mod tests {
         let list = [((3, 7), record), ((0, 2), ContactRecord::default())];
         let back = contacts_of(&contacts_array(&list), "contacts").unwrap();
         assert_eq!(back, list);
-        // the columns are the ones checkpoints have always had
+        // the columns (the order of HostField::ALL, then the record's); format 21 added
+        // `slipping`
         let names: Vec<&str> = contact_columns().map(|c| c.name).collect();
         assert_eq!(
             names.join(" "),
             "i j delta_max touched tangential_spring rolling_displacement contact_radius twist \
-             overlap normal_force tangential_force potential friction_power couple_power sliding"
+             slipping overlap normal_force tangential_force potential friction_power \
+             couple_power sliding"
         );
     }
 }

@@ -35,8 +35,9 @@ const BINCODE_PREFIX: &[u8; 8] = b"POWDERCK";
 /// `docs/checkpoints.md`; 17: a `.npz` archive of named arrays (16 and before: bincode); 18:
 /// the digest covers the run up to the checkpoint ([`run_digest`]); 19: the GPU books the
 /// work of a wall sliding along its face, and the header names the scene's parts; 20: the
-/// particles' digest is of their bits, not their text.
-pub const FORMAT: u32 = 20;
+/// particles' digest is of their bits, not their text; 21: a contact's history keeps
+/// whether Luding's sliding law slipped (`slipping`).
+pub const FORMAT: u32 = 21;
 
 /// The checkpoint's header (`powder.json`).
 #[derive(Debug, Serialize, Deserialize)]

@@ -41,6 +41,8 @@ pub enum HostField {
     ContactRadius,
     /// `twist` (Luding's twisting spring, a scalar along n).
     Twist,
+    /// `slipping` (Luding's sliding law slipped in the last step).
+    Slipping,
 }
 
 /// One per-contact history field of a sub-model.
@@ -81,18 +83,19 @@ pub const ROLLING_DISPLACEMENT: HistoryField = HistoryField {
 
 impl HostField {
     /// Every field of [`ContactHistory`], in the order checkpoints store them.
-    pub const ALL: [HostField; 6] = [
+    pub const ALL: [HostField; 7] = [
         HostField::DeltaMaxTouched,
         HostField::Touched,
         HostField::Tangential,
         HostField::Rolling,
         HostField::ContactRadius,
         HostField::Twist,
+        HostField::Slipping,
     ];
 
     /// Whether the field is a flag (its one value 0 or 1).
     pub const fn is_flag(self) -> bool {
-        matches!(self, HostField::Touched)
+        matches!(self, HostField::Touched | HostField::Slipping)
     }
 
     /// The name of the field's values in the contact network output and how many
@@ -105,6 +108,7 @@ impl HostField {
             HostField::Rolling => ("rolling_displacement", 3),
             HostField::ContactRadius => ("contact_radius", 1),
             HostField::Twist => ("twist", 1),
+            HostField::Slipping => ("slipping", 1),
         }
     }
 
@@ -118,6 +122,7 @@ impl HostField {
             HostField::Rolling => v(h.rolling),
             HostField::ContactRadius => [h.contact_radius, 0.0, 0.0],
             HostField::Twist => [h.twist, 0.0, 0.0],
+            HostField::Slipping => [f64::from(u8::from(h.slipping)), 0.0, 0.0],
         }
     }
 
@@ -132,6 +137,7 @@ impl HostField {
             HostField::Rolling => h.rolling = d,
             HostField::ContactRadius => h.contact_radius = v[0],
             HostField::Twist => h.twist = v[0],
+            HostField::Slipping => h.slipping = v[0] != 0.0,
         }
     }
 }
@@ -158,6 +164,7 @@ impl HistoryField {
             HostField::Rolling => h.rolling = v(),
             HostField::ContactRadius => h.contact_radius = w[0] as f64,
             HostField::Twist => h.twist = w[0] as f64,
+            HostField::Slipping => h.slipping = w[0] != 0.0,
         }
     }
 
@@ -169,7 +176,7 @@ impl HistoryField {
                 HostField::Rolling => h.rolling = -h.rolling,
                 HostField::ContactRadius => h.contact_radius = -h.contact_radius,
                 HostField::Twist => h.twist = -h.twist,
-                HostField::DeltaMaxTouched | HostField::Touched => {}
+                HostField::DeltaMaxTouched | HostField::Touched | HostField::Slipping => {}
             }
         }
     }

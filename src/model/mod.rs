@@ -44,6 +44,10 @@ pub struct ContactHistory {
     /// [`friction::twisting`]): the same seen from either particle.
     #[serde(default)]
     pub twist: f64,
+    /// Whether Luding's sliding spring slipped in the contact's last step: its Coulomb
+    /// limit is then μd, not μs, until it sticks ([`friction::coulomb`]).
+    #[serde(default)]
+    pub slipping: bool,
 }
 
 /// The normal force of one contact and what the energy bookkeeping needs.

@@ -70,12 +70,14 @@ impl Ends<'_> {
 }
 
 /// The history values output per contact: the scene's fields, each output name once, the
-/// touched flag (which every law keeps) left to its own array.
+/// touched flag (which every law keeps) left to its own array and the slipping flag to
+/// `sliding` (the step's, which it stores).
 fn history_outputs(fields: &[&'static HistoryField]) -> Vec<HostField> {
     let mut out: Vec<HostField> = Vec::new();
     for f in fields {
         let name = f.host.output().0;
-        if f.host != HostField::Touched && !out.iter().any(|h| h.output().0 == name) {
+        let own_array = matches!(f.host, HostField::Touched | HostField::Slipping);
+        if !own_array && !out.iter().any(|h| h.output().0 == name) {
             out.push(f.host);
         }
     }

@@ -15,14 +15,15 @@ struct Coulomb3 {
     sliding: bool,
 }
 
-// Test force f0 = −k·ξ − γ·v with ξ = stored + ½·v·dt; stick while |f0| <= mu_s·load,
-// else slip at mu_d·load along f0 with the spring reset to the force's length.
-fn coulomb3(s: CoulombSpring, k: f32, stored: vec3<f32>, v: vec3<f32>, load: f32, dt: f32) -> Coulomb3 {
+// Test force f0 = −k·ξ − γ·v with ξ = stored + ½·v·dt; stick while |f0| <= limit·load
+// (mu_s, or mu_d after a slip where the law remembers it), else slip at mu_d·load along f0
+// with the spring reset to the force's length.
+fn coulomb3(s: CoulombSpring, k: f32, stored: vec3<f32>, v: vec3<f32>, load: f32, limit: f32, dt: f32) -> Coulomb3 {
     let half = v * (0.5 * dt);
     let spring = stored + half;
     let f0 = -k * spring - s.gamma * v;
     let magnitude = length(f0);
-    if (magnitude <= s.mu_s * load) {
+    if (magnitude <= limit * load) {
         return Coulomb3(f0, spring, spring + half, false);
     }
     let force = f0 * (s.mu_d * load / magnitude);

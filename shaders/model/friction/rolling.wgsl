@@ -12,7 +12,7 @@ fn luding_rolling_apply(row: PairRow, k: Kin, nf: Normal, h: ptr<function, Histo
     }
     let lever = 2.0 * k.r_eff;
     let v = -lever * cross(k.n, k.w_rel);
-    let st = coulomb3(s, s.k, rotate_into_plane((*h).xi, k.n), v, nf.coulomb, k.dt);
+    let st = coulomb3(s, s.k, rotate_into_plane((*h).xi, k.n), v, nf.coulomb, s.mu_s, k.dt);
     (*h).xi = st.stored;
     (*c).rolling += lever * cross(k.n, st.force);
     (*c).potential += 0.5 * s.k * dot(st.spring, st.spring);

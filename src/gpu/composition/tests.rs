@@ -153,8 +153,8 @@ fn luding_friction_adds_its_blocks_and_springs() {
         "step_hysteretic+luding_sliding+luding_rolling+luding_twisting"
     );
     assert!(c.rotation());
-    // hyst_state, spring, xi, twist
-    assert_eq!(c.history_bytes(), 4 * (1 + 3 + 3 + 1));
+    // hyst_state, spring, slipping, xi, twist
+    assert_eq!(c.history_bytes(), 4 * (1 + 3 + 1 + 3 + 1));
     let hyst = std::mem::size_of::<HystereticPair>();
     assert_eq!(c.row_bytes(), hyst + 16 + 16 + 20);
     let row = c.pair_row(&rough(0.0));
@@ -162,13 +162,13 @@ fn luding_friction_adds_its_blocks_and_springs() {
     assert_eq!(rolling, &[0.0; 4]);
     let sliding: &[f32] = bytemuck::cast_slice(&row[hyst..hyst + 16]);
     assert_eq!(sliding, &[0.5, 0.5, 2.0, 0.0]);
-    let words: [f32; 8] = [1.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, -7.0];
+    let words: [f32; 9] = [1.0, 1.0, 2.0, 3.0, 1.0, 4.0, 5.0, 6.0, -7.0];
     let h = c.decode_history(bytemuck::cast_slice(&words));
-    assert_eq!(h.twist, -7.0);
+    assert_eq!((h.twist, h.slipping), (-7.0, true));
     let m = c.mirror_history(h);
     assert_eq!(
-        (m.tangential, m.rolling, m.twist),
-        (-h.tangential, h.rolling, h.twist)
+        (m.tangential, m.rolling, m.twist, m.slipping),
+        (-h.tangential, h.rolling, h.twist, true)
     );
     // JKR twisting: the stiffness per contact radius where k_o is not given
     let mut j = jkr(0.0, 0.0, Dissipation::None);

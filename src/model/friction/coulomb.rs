@@ -6,9 +6,15 @@
 //! rolling v_r, twisting v_o), ξ its spring and f_N* the Coulomb load:
 //!
 //! * test force f0 = −k·ξ − γ·v;
-//! * **stick** if |f0| ≤ μs·f_N*: f = f0 and the spring grows by v·dt;
+//! * **stick** if |f0| ≤ μ·f_N*: f = f0 and the spring grows by v·dt;
 //! * **slip** otherwise: f = μd·f_N*·t̂ with t̂ = f0/|f0|, and the spring is reset to the
 //!   length that gives that force, ξ = −(f + γ·v)/k.
+//!
+//! The limit μ is μs, or μd where the contact slipped in its last step (the sliding law's
+//! `slipping` flag, [`CoulombSpring::step_slipping`]): a slipping contact keeps slipping at
+//! μd·f_N* until its test force falls to that, at any dt. Without the flag it would count as
+//! sticking again after each reset until the spring grew back to μs, a saw-tooth whose mean
+//! tends to (μs + μd)/2 as dt → 0 (`docs/luding2008_laws.md` §1).
 //!
 //! **Staggered spring.** The stored spring ξ_s is half a step ahead of the last force: the
 //! force at the step's end uses ξ_n = ξ_s + ½·v_n·dt (v_n the predicted velocity), then
@@ -86,11 +92,40 @@ impl CoulombSpring {
         load: f64,
         dt: f64,
     ) -> Step<V> {
+        self.step_limit(k, stored, v, load, dt, self.mu_s)
+    }
+
+    /// [`Self::step`] of a spring whose limit remembers slipping: μd where the contact
+    /// slipped in its last step (`slipping`, updated), μs otherwise.
+    pub fn step_slipping<V: Displacement>(
+        &self,
+        stored: &mut V,
+        v: V,
+        load: f64,
+        dt: f64,
+        slipping: &mut bool,
+    ) -> Step<V> {
+        let limit = if *slipping { self.mu_d } else { self.mu_s };
+        let st = self.step_limit(self.k, stored, v, load, dt, limit);
+        *slipping = st.sliding;
+        st
+    }
+
+    /// One step that sticks while |f0| ≤ `limit`·f_N*.
+    fn step_limit<V: Displacement>(
+        &self,
+        k: f64,
+        stored: &mut V,
+        v: V,
+        load: f64,
+        dt: f64,
+        limit: f64,
+    ) -> Step<V> {
         let half = v * (0.5 * dt);
         let spring = *stored + half;
         let f0 = -(spring * k) - v * self.gamma;
         let magnitude = f0.norm();
-        if magnitude <= self.mu_s * load {
+        if magnitude <= limit * load {
             *stored = spring + half;
             return Step {
                 force: f0,
@@ -98,7 +133,7 @@ impl CoulombSpring {
                 sliding: false,
             };
         }
-        // |f0| > μs·f_N* ≥ 0, so t̂ exists
+        // |f0| > μ·f_N* ≥ 0, so t̂ exists
         let force = f0 * (self.mu_d * load / magnitude);
         let spring = -(force + v * self.gamma) * (1.0 / k);
         *stored = spring + half;
@@ -161,6 +196,38 @@ mod tests {
         let mut x = -0.006; // 0.6 > μs
         let st = S.step(&mut x, 0.0, 1.0, 0.0);
         assert!(st.sliding && (st.force - 0.3).abs() < 1e-15);
+    }
+
+    /// A contact driven at a steady slip speed keeps the dynamic force μd·f_N* at every
+    /// step once it slips, whatever dt (without the flag it saw-toothed up to μs), and
+    /// sticks again, needing μs, once the drive stops.
+    #[test]
+    fn a_slipping_contact_keeps_the_dynamic_force_at_any_step() {
+        for dt in [1e-3, 1e-5, 1e-7] {
+            // from just below the static limit, k·v·dt = 1e-4 ≪ (μs − μd)·f_N* a step
+            let (mut xi, mut slipping) = (0.00499, false);
+            let mut slipped = false;
+            for _ in 0..20_000 {
+                let st = S.step_slipping(&mut xi, 1e-6 / dt, 1.0, dt, &mut slipping);
+                if slipped {
+                    assert!(
+                        st.sliding && (st.force + 0.3).abs() < 1e-12,
+                        "dt {dt}: {st:?}"
+                    );
+                }
+                slipped |= st.sliding;
+            }
+            assert!(slipped, "dt {dt}");
+            // turned back, the test force falls below μd·f_N*: it sticks, and then a push
+            // between μd and μs holds
+            let st = S.step_slipping(&mut xi, -2e-6 / dt, 1.0, dt, &mut slipping);
+            assert!(!st.sliding && !slipping, "dt {dt}: {st:?}");
+            let mut x = -0.004;
+            assert!(
+                !S.step_slipping(&mut x, 0.0, 1.0, 0.0, &mut slipping)
+                    .sliding
+            );
+        }
     }
 
     #[test]

@@ -151,7 +151,15 @@ impl LudingFriction {
         }
         let lever = geom.a12;
         if self.sliding.is_on() {
-            let st = sliding::step(&self.sliding, k.n, k.v_t, load, dt, &mut history.tangential);
+            let st = sliding::step(
+                &self.sliding,
+                k.n,
+                k.v_t,
+                load,
+                dt,
+                &mut history.tangential,
+                &mut history.slipping,
+            );
             r.tangential = st.force;
             r.sliding = st.sliding;
             r.potential += 0.5 * self.sliding.k * st.spring.length_squared();
@@ -211,6 +219,7 @@ impl LudingFriction {
 /// Forgets the three springs (the contact opened).
 pub fn reset(history: &mut ContactHistory) {
     history.tangential = DVec3::ZERO;
+    history.slipping = false;
     history.rolling = DVec3::ZERO;
     history.twist = 0.0;
 }
@@ -307,6 +316,7 @@ mod tests {
             tangential: DVec3::X,
             rolling: DVec3::Y,
             twist: 1.0,
+            slipping: true,
             ..Default::default()
         };
         let kin = Kinematics {
@@ -317,8 +327,8 @@ mod tests {
         let r = l.respond(&kin, &geom, false, 1.0, 1e-6, &mut h);
         assert_eq!(r, FrictionResponse::default());
         assert_eq!(
-            (h.tangential, h.rolling, h.twist),
-            (DVec3::ZERO, DVec3::ZERO, 0.0)
+            (h.tangential, h.rolling, h.twist, h.slipping),
+            (DVec3::ZERO, DVec3::ZERO, 0.0, false)
         );
         // in contact: the springs' energy is stored
         let kin = Kinematics {

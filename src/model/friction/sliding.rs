@@ -11,14 +11,25 @@
 
 use super::coulomb::{CoulombSpring, Step};
 use super::rotate_into_plane;
-use crate::model::history::{HistoryField, TANGENTIAL_SPRING};
+use crate::model::history::{HistoryField, HostField, Mirror, Shape, TANGENTIAL_SPRING};
 use glam::DVec3;
 
-/// The per-contact history of Luding's sliding spring (staggered, in the evaluator's frame:
-/// the partner sees it negated).
-pub const HISTORY: &[HistoryField] = &[TANGENTIAL_SPRING];
+/// The per-contact history of Luding's sliding law: the staggered spring (in the
+/// evaluator's frame: the partner sees it negated) and whether it slipped in the last step
+/// (its limit is then μd, [`super::coulomb`]).
+pub const HISTORY: &[HistoryField] = &[
+    TANGENTIAL_SPRING,
+    HistoryField {
+        name: "slipping",
+        shape: Shape::Flag,
+        mirror: Mirror::Same,
+        host: HostField::Slipping,
+        doc: "the sliding spring slipped in the last step",
+    },
+];
 
-/// One step of the sliding law: `stored` is the staggered spring (history `tangential`).
+/// One step of the sliding law: `stored` is the staggered spring (history `tangential`),
+/// `slipping` the flag (history `slipping`).
 pub fn step(
     spring: &CoulombSpring,
     n: DVec3,
@@ -26,9 +37,10 @@ pub fn step(
     load: f64,
     dt: f64,
     stored: &mut DVec3,
+    slipping: &mut bool,
 ) -> Step<DVec3> {
     *stored = rotate_into_plane(*stored, n);
-    spring.step(stored, v_t, load, dt)
+    spring.step_slipping(stored, v_t, load, dt, slipping)
 }
 
 #[cfg(test)]
@@ -46,7 +58,7 @@ mod tests {
         let mut xi = DVec3::new(0.0, 1e-3, 0.0);
         // the normal turned from x towards y by 0.1 rad
         let n = DVec3::new(0.1f64.cos(), 0.1f64.sin(), 0.0);
-        let st = step(&s, n, DVec3::ZERO, 1.0, 1e-3, &mut xi);
+        let st = step(&s, n, DVec3::ZERO, 1.0, 1e-3, &mut xi, &mut false);
         assert!(xi.dot(n).abs() < 1e-18);
         assert!((xi.length() - 1e-3).abs() < 1e-15);
         assert!((st.force.length() - 1e-2).abs() < 1e-14);
