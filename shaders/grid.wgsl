@@ -17,7 +17,7 @@
 const SMALL_CELL: u32 = 32u;
 // Elements scanned per workgroup by scan_blocks (WG_SIZE invocations x SCAN_ITEMS).
 const SCAN_ITEMS: u32 = 4u;
-const SCAN_BLOCK: u32 = 1024u; // WG_SIZE * SCAN_ITEMS
+const SCAN_BLOCK: u32 = WG_SIZE * SCAN_ITEMS;
 
 // Integer cell of each particle (xyz; w = material and `NOT_APPEARED`, unused here): the state's
 // first field, blocked by window (`state_blocked`).

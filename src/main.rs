@@ -37,6 +37,13 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    // A reader that closes the pipe (`powder params | head`) ends the program as it ends
+    // other tools, by SIGPIPE, not with a panic at the next print (Rust ignores SIGPIPE).
+    #[cfg(unix)]
+    // SAFETY: sets a signal's disposition to its default at start-up, before any thread.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Run(a) => run_cmd(a),

@@ -2155,3 +2155,33 @@ fn a_sphere_pressed_deeper_than_its_radius_is_refused() {
         "{err}"
     );
 }
+
+/// A reader that closes the pipe early ends powder quietly (SIGPIPE, as `head` expects),
+/// not with a panic on stderr.
+#[cfg(unix)]
+#[test]
+fn a_closed_pipe_ends_powder_quietly() {
+    use std::io::Read;
+    use std::os::unix::process::ExitStatusExt;
+    let speeds = vec!["0.5"; 20_000].join(",");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_powder"))
+        .args([
+            "analytic",
+            "thornton-ning",
+            "--yield-velocity",
+            "0.1",
+            "--velocity",
+        ])
+        .arg(&speeds)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut first = [0u8; 16];
+    child.stdout.take().unwrap().read_exact(&mut first).unwrap();
+    // (the reader is dropped: the pipe is closed)
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(out.status.signal(), Some(libc::SIGPIPE), "{:?}", out.status);
+}

@@ -1,6 +1,7 @@
 //! `powder accuracy`: error against run time over the time step.
 
 use super::*;
+use powder::measure::accuracy::AccuracyOptions;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub(crate) enum AccuracyCase {
@@ -21,24 +22,24 @@ pub(crate) enum AccuracyCase {
 #[command(allow_negative_numbers = true)]
 pub(crate) struct AccuracyArgs {
     /// Time steps as divisors of the contact time tc: dt = tc/D, comma-separated (D >= 10).
-    #[arg(long, default_value = "10,20,50,100,200,400")]
+    #[arg(long, default_value_t = list_text(&AccuracyOptions::default().divisors))]
     divisors: String,
     #[arg(long, value_enum, default_value = "both")]
     backend: BackendChoice,
     #[arg(long = "case", value_enum, default_value = "all")]
     case: AccuracyCase,
     /// Packing: the reference's divisor (CPU, f64, dt = tc/D); above every --divisors.
-    #[arg(long = "reference-divisor", default_value_t = 800.0)]
+    #[arg(long = "reference-divisor", default_value_t = AccuracyOptions::default().reference_divisor)]
     reference_divisor: f64,
     /// Packing: particles (a lattice with random jitter and velocities).
-    #[arg(long, default_value_t = 216)]
+    #[arg(long, default_value_t = AccuracyOptions::default().particles)]
     particles: usize,
     /// Packing: the physical time compared, in units of tc.
-    #[arg(long = "packing-time", default_value_t = 20)]
+    #[arg(long = "packing-time", default_value_t = AccuracyOptions::default().packing_time)]
     packing_time: u64,
     /// Pair: points of the chi sweep (log-spaced over chi = 0.1 ... 5); jkr: of the
     /// velocity sweep (log-spaced over 1.05 ... 5 times the sticking speed).
-    #[arg(long = "chi-points", default_value_t = 8)]
+    #[arg(long = "chi-points", default_value_t = AccuracyOptions::default().chi_points)]
     chi_points: usize,
     /// Write the report as JSON.
     #[arg(long)]
@@ -49,7 +50,7 @@ pub(crate) struct AccuracyArgs {
 }
 
 pub(crate) fn accuracy_cmd(a: &AccuracyArgs) -> Result<(), PowderError> {
-    use powder::measure::accuracy::{self, AccuracyOptions};
+    use powder::measure::accuracy;
     powder::output::folder::check_output_files(&[
         (a.json.as_deref(), "--json"),
         (a.plot.as_deref(), "--plot"),

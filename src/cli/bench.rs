@@ -1,6 +1,7 @@
 //! `powder bench`: throughput and GPU memory against N.
 
 use super::*;
+use powder::measure::bench::BenchOptions;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub(crate) enum BenchCase {
@@ -15,13 +16,13 @@ pub(crate) enum BenchCase {
 #[command(allow_negative_numbers = true)]
 pub(crate) struct BenchArgs {
     /// Particle counts, comma-separated (e.g. 1e3,1e4,1e5,1e6).
-    #[arg(long, default_value = "1e3,1e4,1e5,1e6")]
+    #[arg(long, default_value_t = list_text(&BenchOptions::default().sizes))]
     sizes: String,
     /// Timed steps per size.
-    #[arg(long, default_value_t = 128)]
+    #[arg(long, default_value_t = BenchOptions::default().steps)]
     steps: u64,
     /// Untimed warm-up steps before the timed ones.
-    #[arg(long, default_value_t = 32)]
+    #[arg(long, default_value_t = BenchOptions::default().warmup)]
     warmup: u64,
     /// `auto`: a hardware GPU if there is one, else the CPU engine; `both` measures the CPU
     /// engine and the GPU engine (the software adapter where there is no GPU).
@@ -31,13 +32,13 @@ pub(crate) struct BenchArgs {
     case: BenchCase,
     /// Time budget per case and backend, s: a size predicted (from the previous size's
     /// rate) to take longer is skipped, and so are the larger ones.
-    #[arg(long = "max-seconds", default_value_t = 120.0)]
+    #[arg(long = "max-seconds", default_value_t = BenchOptions::default().max_seconds)]
     max_seconds: f64,
     /// Multiplies the packing's random velocities (more neighbour-list rebuilds).
-    #[arg(long = "velocity-scale", default_value_t = 1.0)]
+    #[arg(long = "velocity-scale", default_value_t = BenchOptions::default().velocity_scale)]
     velocity_scale: f64,
     /// Seed of the packing's jitter and velocities.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = BenchOptions::default().seed)]
     seed: u64,
     /// Keep the GPU energy ledger during the timed steps (off: the step's own cost).
     #[arg(long)]
@@ -64,11 +65,11 @@ pub(crate) struct BenchArgs {
     window_particles: Option<u64>,
     /// Runs per case, backend and size (fresh engines); the table shows the fastest, the
     /// JSON every run's rate.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = BenchOptions::default().repeats)]
     repeats: u32,
     /// CPU thread counts, comma-separated, each measured (0: every core); `1,2` shows the
     /// speed-up from 1 to 2 threads.
-    #[arg(long, default_value = "0")]
+    #[arg(long, default_value_t = list_text(&BenchOptions::default().threads))]
     threads: String,
     /// Write the report (rows, machine, adapter, version, commit, date) as JSON.
     #[arg(long)]
@@ -76,7 +77,7 @@ pub(crate) struct BenchArgs {
 }
 
 pub(crate) fn bench_cmd(a: &BenchArgs) -> Result<(), PowderError> {
-    use powder::measure::bench::{self, BenchOptions, Case};
+    use powder::measure::bench::{self, Case};
     if let Some(path) = &a.json {
         powder::output::folder::check_output_file(path, "--json")?;
     }

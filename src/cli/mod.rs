@@ -26,3 +26,9 @@ pub(crate) use compare::*;
 pub(crate) use info::*;
 pub(crate) use params::*;
 pub(crate) use run::*;
+
+/// A default list as its flag's comma-separated text.
+pub(crate) fn list_text<T: std::fmt::Display>(items: &[T]) -> String {
+    let words: Vec<String> = items.iter().map(|x| x.to_string()).collect();
+    words.join(",")
+}
