@@ -120,6 +120,24 @@ fn elastic_oblique_impacts_follow_the_closed_form_on_both_branches() {
         let expect = r.e_tangential_analytic.unwrap();
         assert!((r.e_tangential.unwrap() - expect).abs() < 1e-3, "{r:?}");
     }
+    // μs > μd: a contact slipping from the touch (its Coulomb limit starts at 0) keeps μd
+    // while it slips, so a sliding impact follows the closed form with μd (before the
+    // `slipping` flag the contact re-stuck after each reset: e_t 0.005 here, not 0.236)
+    let two = law(
+        "lsd",
+        &[("k", 100.0), ("friction", 0.5), ("friction_dynamic", mu)],
+    );
+    let psi = 20.0f64.to_radians();
+    let expect = analytic::luding_tangential_restitution(mu, psi.sin(), psi.cos());
+    for engine in collide_engines() {
+        let r = collide_on(&oblique(two, 20.0, true), engine).unwrap();
+        let et = r.e_tangential.unwrap();
+        assert!(
+            (et - expect).abs() < 1e-3,
+            "{}: e_t {et} vs {expect}",
+            r.backend
+        );
+    }
     // damping or rolling friction: no closed form
     let damped = law(
         "hysteretic",
