@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Reads a powder checkpoint (format 20: a NumPy .npz archive) and prints what it holds.
+"""Reads a powder checkpoint (format 21: a NumPy .npz archive) and prints what it holds.
 
     python3 tools/read_checkpoint.py out/cohesive_cluster/checkpoint.bin [--array NAME]
 
@@ -15,7 +15,7 @@ import zipfile
 
 import numpy as np
 
-FORMAT = 20
+FORMAT = 21
 
 
 def load(path):

@@ -218,7 +218,7 @@ pub struct ParticleInit {
 
 /// The volume of a sphere of `radius` (m), m³.
 pub fn sphere_volume(radius: f64) -> f64 {
-    4.0 / 3.0 * std::f64::consts::PI * radius.powi(3)
+    4.0 / 3.0 * std::f64::consts::PI * radius * radius * radius
 }
 
 /// The mass of a sphere of `radius` (m) and `density` (kg/m³), kg (ρ·4/3·π·r³ in this

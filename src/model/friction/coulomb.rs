@@ -51,7 +51,8 @@ impl Displacement for f64 {
 /// One Luding spring–dashpot with its Coulomb limits. Off when μs = 0.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct CoulombSpring {
-    /// Static coefficient μs ≥ 0 (0 = off): stick while |f0| ≤ μs·f_N*.
+    /// Static coefficient μs ≥ 0 (0 = off): stick while |f0| ≤ μs·f_N* (μd·f_N* after a
+    /// slip, where the law keeps the flag: [`Self::step_slipping`]).
     pub mu_s: f64,
     /// Dynamic coefficient 0 ≤ μd ≤ μs: the force while slipping is μd·f_N*.
     pub mu_d: f64,
