@@ -54,7 +54,7 @@ pub struct CoulombSpring {
     /// Static coefficient μs ≥ 0 (0 = off): stick while |f0| ≤ μs·f_N* (μd·f_N* after a
     /// slip, where the law keeps the flag: [`Self::step_slipping`]).
     pub mu_s: f64,
-    /// Dynamic coefficient 0 ≤ μd ≤ μs: the force while slipping is μd·f_N*.
+    /// Dynamic coefficient 0 < μd ≤ μs (0 where off): the force while slipping is μd·f_N*.
     pub mu_d: f64,
     /// Spring stiffness k > 0, N/m (a pseudo-force stiffness for rolling and twisting: the
     /// torque stiffness is k·ℓ² per radian). The JKR family's twisting stores 0 for the

@@ -95,7 +95,7 @@ impl LudingFriction {
         let (s, r, o) = (&self.sliding, &self.rolling, &self.twisting);
         let checks = [
             (&FRICTION, s.mu_s, true),
-            (&FRICTION_DYNAMIC, s.mu_d, true),
+            (&FRICTION_DYNAMIC, s.mu_d, s.is_on()),
             (&KT, s.k, s.is_on()),
             (&GAMMA_T, s.gamma, true),
             (&ROLLING_FRICTION, r.mu_s, true),
@@ -357,6 +357,8 @@ mod tests {
         };
         assert_eq!(bad(|l| l.sliding.mu_s = -0.1), "friction");
         assert_eq!(bad(|l| l.sliding.mu_d = 0.6), "friction_dynamic");
+        // μd = 0 would never end a slip: the test force never falls below 0
+        assert_eq!(bad(|l| l.sliding.mu_d = 0.0), "friction_dynamic");
         assert_eq!(bad(|l| l.sliding.k = 0.0), "kt");
         assert_eq!(bad(|l| l.rolling.gamma = -1.0), "gamma_r");
         assert_eq!(bad(|l| l.twisting.k = f64::NAN), "ko");

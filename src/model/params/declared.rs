@@ -157,8 +157,8 @@ param!(
     NUM,
     "",
     Derived("friction (mu_d = mu_s)"),
-    Rule::NonNegative,
-    "the dynamic sliding friction coefficient mu_d <= mu_s, the force while slipping (Luding 2008)"
+    Rule::Positive,
+    "the dynamic sliding friction coefficient mu_d <= mu_s, the force while slipping, which lasts until the test force falls to mu_d f_N* (Luding 2008)"
 );
 param!(
     KT,
