@@ -47,6 +47,20 @@ fn jkr_packing_with_rotation_and_walls_is_bitwise_the_same_on_any_thread_count()
     same_on_1_2_and_3_threads(&scene, 120);
 }
 
+/// The thread count changed between steps (`CpuEngine::set_threads`) changes no bit.
+#[test]
+fn threads_changed_mid_run_change_no_bit() {
+    let scene = packing(Case::Hysteretic, 2500, 20.0, 4).unwrap();
+    let mut e = CpuEngine::with_threads(&scene, Threads::new(1).unwrap()).unwrap();
+    e.run_steps(100).unwrap();
+    e.set_threads(Threads::new(3).unwrap());
+    assert_eq!(e.threads(), 3);
+    e.run_steps(100).unwrap();
+    let mut bytes = powder::checkpoint::npz::write(&powder::checkpoint::cpu::arrays(&e.state()));
+    bytes.extend(serde_json::to_vec(&e.energies()).unwrap());
+    assert!(bytes == state_after(&scene, 1, 200));
+}
+
 #[test]
 fn hysteretic_packing_is_bitwise_the_same_on_any_thread_count() {
     let scene = packing(Case::Hysteretic, 2500, 20.0, 4).unwrap();
