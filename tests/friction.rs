@@ -81,7 +81,7 @@ fn elastic_oblique_impacts_follow_the_closed_form_on_both_branches() {
         for angle in [60.0f64, 32.0, 20.0] {
             let s = oblique(elastic(k, mu), angle, wall);
             let psi = angle.to_radians();
-            let expect = analytic::luding_tangential_restitution(mu, psi.sin(), psi.cos());
+            let expect = analytic::luding_tangential_restitution(mu, mu, psi.sin(), psi.cos());
             let tc = s.time_step().contact_time;
             let ut = 0.1 * psi.cos();
             let tol = if wall {
@@ -120,23 +120,28 @@ fn elastic_oblique_impacts_follow_the_closed_form_on_both_branches() {
         let expect = r.e_tangential_analytic.unwrap();
         assert!((r.e_tangential.unwrap() - expect).abs() < 1e-3, "{r:?}");
     }
-    // μs > μd: a contact slipping from the touch (its Coulomb limit starts at 0) keeps μd
-    // while it slips, so a sliding impact follows the closed form with μd (before the
-    // `slipping` flag the contact re-stuck after each reset: e_t 0.005 here, not 0.236)
+    // μs > μd: μs decides whether the contact sticks throughout (32°: u_t = 1.6·v_n ≤
+    // 3.5·μs·v_n, where μd alone would slide), and a contact that slips from the touch keeps
+    // μd while it slips, so a sliding impact (20°) follows the closed form with μd (before
+    // the `slipping` flag it re-stuck after each reset: e_t 0.005 there, not 0.236)
     let two = law(
         "lsd",
         &[("k", 100.0), ("friction", 0.5), ("friction_dynamic", mu)],
     );
-    let psi = 20.0f64.to_radians();
-    let expect = analytic::luding_tangential_restitution(mu, psi.sin(), psi.cos());
-    for engine in collide_engines() {
-        let r = collide_on(&oblique(two, 20.0, true), engine).unwrap();
-        let et = r.e_tangential.unwrap();
-        assert!(
-            (et - expect).abs() < 1e-3,
-            "{}: e_t {et} vs {expect}",
-            r.backend
-        );
+    for (angle, branch) in [(32.0f64, -1.0), (20.0, 0.2356625)] {
+        let psi = angle.to_radians();
+        let expect = analytic::luding_tangential_restitution(0.5, mu, psi.sin(), psi.cos());
+        assert!((expect - branch).abs() < 1e-7, "{angle}°: {expect}");
+        for engine in collide_engines() {
+            let r = collide_on(&oblique(two, angle, true), engine).unwrap();
+            assert_eq!(r.e_tangential_analytic, Some(expect));
+            let et = r.e_tangential.unwrap();
+            assert!(
+                (et - expect).abs() < 1e-3,
+                "{}, {angle}°: e_t {et} vs {expect}",
+                r.backend
+            );
+        }
     }
     // damping or rolling friction: no closed form
     let damped = law(

@@ -496,24 +496,25 @@ pub fn jkr_centre_pressure(a: f64, r_eff: f64, e_star: f64, gamma: f64) -> f64 {
 
 /// Tangential restitution e_t = u_t'/u_t of an elastic oblique impact of solid spheres with
 /// Luding's sliding friction, k_t = 2/7·k (the tangential oscillator has the normal
-/// period), no damping and μs = μd = μ, at normal approach speed `vn` and tangential
-/// contact-point speed `ut` (docs/luding2008_laws.md §6a; sphere–sphere and sphere–wall
-/// alike): the spring's ξ(t) = (u_t/ω)·sin ωt is in phase with δ(t), so the contact **sticks
-/// throughout** iff u_t ≤ 3.5·μ·v_n, and then reverses, e_t = −1; otherwise it **slides
-/// throughout** and e_t = 1 − 7·μ·v_n/u_t (the rigid-body 1 − 3.5·μ·(1 + e_n)·v_n/u_t with
-/// e_n = 1). The two branches meet at −1.
-pub fn luding_tangential_restitution(mu: f64, vn: f64, ut: f64) -> f64 {
-    if ut <= 3.5 * mu * vn {
+/// period) and no damping, at normal approach speed `vn` and tangential contact-point speed
+/// `ut` (docs/luding2008_laws.md §6a; sphere–sphere and sphere–wall alike): the spring's
+/// ξ(t) = (u_t/ω)·sin ωt is in phase with δ(t), so f_t/f_N = (2/7)·u_t/v_n throughout, and
+/// the contact **sticks throughout** iff u_t ≤ 3.5·μs·v_n, and then reverses, e_t = −1;
+/// otherwise it slips from the touch, keeps μd while it slips (the `slipping` flag), and
+/// **slides throughout** since u_t > 3.5·μd·v_n too: e_t = 1 − 7·μd·v_n/u_t (the rigid-body
+/// 1 − 3.5·μd·(1 + e_n)·v_n/u_t with e_n = 1). With μs = μd the branches meet at −1.
+pub fn luding_tangential_restitution(mu_s: f64, mu_d: f64, vn: f64, ut: f64) -> f64 {
+    if ut <= 3.5 * mu_s * vn {
         -1.0
     } else {
-        1.0 - 7.0 * mu * vn / ut
+        1.0 - 7.0 * mu_d * vn / ut
     }
 }
 
-/// μ when [`luding_tangential_restitution`] applies to the model: an elastic hysteretic
-/// (k1 = kp, kc = fa = 0, γ0 = 0) or undamped LSD pair with Luding's sliding friction only,
-/// μs = μd > 0, k_t = 2/7·k (to 1e-12) and γ_t = 0; `None` otherwise.
-pub fn luding_elastic_sliding(model: &ContactModel) -> Option<f64> {
+/// (μs, μd) when [`luding_tangential_restitution`] applies to the model: an elastic
+/// hysteretic (k1 = kp, kc = fa = 0, γ0 = 0) or undamped LSD pair with Luding's sliding
+/// friction only, k_t = 2/7·k (to 1e-12) and γ_t = 0; `None` otherwise.
+pub fn luding_elastic_sliding(model: &ContactModel) -> Option<(f64, f64)> {
     let (k, luding) = match model {
         ContactModel::Hysteretic(p)
             if p.k1 == p.kp && p.kc == 0.0 && p.fa == 0.0 && p.gamma0 == 0.0 =>
@@ -526,12 +527,11 @@ pub fn luding_elastic_sliding(model: &ContactModel) -> Option<f64> {
     let s = &luding.sliding;
     let kt = crate::model::friction::TANGENTIAL_SHARE * k;
     (s.is_on()
-        && s.mu_d == s.mu_s
         && (s.k - kt).abs() <= 1e-12 * kt
         && s.gamma == 0.0
         && !luding.rolling.is_on()
         && !luding.twisting.is_on())
-    .then_some(s.mu_s)
+    .then_some((s.mu_s, s.mu_d))
 }
 
 /// Largest overlap of an undamped Hertz collision, δmax = (15·m*·v²/(16·E*·√R*))^(2/5):

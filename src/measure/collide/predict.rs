@@ -44,8 +44,10 @@ pub(super) fn predict(spec: &CollideSpec, geom: &PairGeometry, result: &mut Coll
         result.delta_c_analytic = None;
         result.contact_duration_analytic = None;
         let psi = spec.impact_angle.to_radians();
-        result.e_tangential_analytic = analytic::luding_elastic_sliding(&spec.model)
-            .map(|mu| analytic::luding_tangential_restitution(mu, psi.sin(), psi.cos()));
+        result.e_tangential_analytic =
+            analytic::luding_elastic_sliding(&spec.model).map(|(mu_s, mu_d)| {
+                analytic::luding_tangential_restitution(mu_s, mu_d, psi.sin(), psi.cos())
+            });
     }
 }
 
