@@ -34,7 +34,7 @@ pub(crate) struct AccuracyArgs {
     /// Packing: particles (a lattice with random jitter and velocities).
     #[arg(long, default_value_t = AccuracyOptions::default().particles)]
     particles: usize,
-    /// Packing: the physical time compared, in units of tc.
+    /// Packing: the physical time compared, a whole number of tc.
     #[arg(long = "packing-time", default_value_t = AccuracyOptions::default().packing_time)]
     packing_time: u64,
     /// Pair: points of the chi sweep (log-spaced over chi = 0.1 ... 5); jkr: of the
@@ -74,6 +74,14 @@ pub(crate) fn accuracy_cmd(a: &AccuracyArgs) -> Result<(), PowderError> {
         seed: 1,
     };
     opts.validate()?;
+    if let Some(plot) = &a.plot {
+        if plot
+            .extension()
+            .is_none_or(|x| !x.eq_ignore_ascii_case("svg"))
+        {
+            eprintln!("notice: --plot {} is written as SVG", plot.display());
+        }
+    }
     println!(
         "{:<23} {:<4} {:>6} {:>11} {:>8} {:>10} {:>10} {:>10} {:>10}",
         "case", "back", "dt/tc", "dt (s)", "steps", "wall s", "error", "max dx/r", "dE_kin"

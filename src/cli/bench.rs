@@ -101,7 +101,7 @@ pub(crate) fn bench_cmd(a: &BenchArgs) -> Result<(), PowderError> {
         window_particles: a.window_particles,
         profile: a.profile,
         repeats: a.repeats,
-        threads: parse_threads(&a.threads)?,
+        threads: bench_threads(&a.threads)?,
     };
     opts.validate()?;
     // (GPU-only options on a CPU-only bench change nothing: said, not silently dropped)
@@ -118,6 +118,20 @@ pub(crate) fn bench_cmd(a: &BenchArgs) -> Result<(), PowderError> {
         for (_, flag) in gpu_only.iter().filter(|(given, _)| *given) {
             eprintln!("notice: {flag} has no effect on the CPU backend (a GPU engine option)");
         }
+        let cpu_unused = [
+            (a.rebuild_chain != ChainChoice::OnDemand, "--rebuild-chain"),
+            (a.software_paths != SoftwarePaths::Auto, "--software-paths"),
+        ];
+        for (_, flag) in cpu_unused.iter().filter(|(given, _)| *given) {
+            eprintln!("notice: {flag} has no effect on the CPU backend (a GPU engine option)");
+        }
+    }
+    if !opts
+        .backends
+        .contains(&powder::measure::collide::Backend::Cpu)
+        && opts.threads != BenchOptions::default().threads
+    {
+        eprintln!("notice: --threads has no effect on the GPU backend (a CPU engine option)");
     }
     println!("{}", bench::table_header());
     let report = bench::bench(&opts, |row| println!("{}", bench::table_line(row)))?;
@@ -147,17 +161,36 @@ pub(crate) fn bench_cmd(a: &BenchArgs) -> Result<(), PowderError> {
     if let Some(path) = &a.json {
         write_json(path, &report)?;
     }
-    // (a size that failed beside others that ran is the benchmark's finding; none running
-    // is a failed command)
-    let failed = report.rows.iter().find(|r| r.status == "failed");
-    if let (Some(first), false) = (failed, report.rows.iter().any(|r| r.status == "ran")) {
+    // (a size that failed or was skipped beside others that ran is the benchmark's finding;
+    // none running is a failed command)
+    if !report.rows.iter().any(|r| r.status == "ran") {
+        let first = report.rows.first().and_then(|r| r.note.as_deref());
         return Err(PowderError::Run(format!(
-            "no size ran: every row failed (the first: {})",
-            first
-                .note
-                .as_deref()
-                .map_or("no reason given", |n| n.trim_start_matches("failed: "))
+            "no size ran: every row was skipped or failed (the first: {})",
+            first.unwrap_or("no reason given")
         )));
     }
     Ok(())
+}
+
+/// `--threads` as distinct counts in the given order, 0 (every core) resolved to the count
+/// it means here, so that no count is measured twice and each row's speed-up is over the
+/// first; a count above the usable cores is measured, with a notice.
+fn bench_threads(text: &str) -> Result<Vec<usize>, PowderError> {
+    let usable = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let mut out: Vec<usize> = Vec::new();
+    for t in parse_threads(text)? {
+        let t = if t == 0 { usable } else { t };
+        if t > usable {
+            eprintln!(
+                "notice: --threads {t} is more than the {usable} usable here (measured as asked)"
+            );
+        }
+        if out.contains(&t) {
+            eprintln!("notice: --threads {t} is given twice (0 is every core, {usable} here): measured once");
+        } else {
+            out.push(t);
+        }
+    }
+    Ok(out)
 }

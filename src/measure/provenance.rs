@@ -98,6 +98,8 @@ pub struct Provenance {
     pub date: String,
     /// Where it ran.
     pub machine: Machine,
+    /// The command line of the process that measured (its options decide the numbers).
+    pub command: Vec<String>,
 }
 
 impl Provenance {
@@ -108,6 +110,7 @@ impl Provenance {
             git_commit: git_commit(),
             date: utc_now(),
             machine: Machine::detect(),
+            command: std::env::args().collect(),
         }
     }
 }

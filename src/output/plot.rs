@@ -50,6 +50,9 @@ pub struct Series {
     pub points: Vec<(f64, f64)>,
     /// How the series is drawn.
     pub style: Style,
+    /// Index into the palette; `None`: the series' own index (several series may share a
+    /// colour, told apart by their style).
+    pub colour: Option<usize>,
 }
 
 /// A 2-D plot of one or more series.
@@ -248,7 +251,7 @@ impl Plot {
 
         let mut any_label = false;
         for (i, (series, pts)) in self.series.iter().zip(points).enumerate() {
-            let colour = COLOURS[i % COLOURS.len()];
+            let colour = COLOURS[series.colour.unwrap_or(i) % COLOURS.len()];
             let line = colour.stroke_width(2);
             let marker = colour.filled();
 
@@ -497,6 +500,7 @@ mod tests {
             label: label.to_string(),
             points,
             style,
+            colour: None,
         }
     }
 

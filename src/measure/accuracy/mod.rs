@@ -175,11 +175,12 @@ pub const MAX_CHI_POINTS: usize = 10_000;
 /// One (case, backend, dt) measurement.
 #[derive(Clone, Debug, Serialize)]
 pub struct AccuracyPoint {
-    /// `pair` or `packing`.
+    /// `pair`, `jkr-displacement`, `jkr-force` (and their `-verlet` forms) or `packing`.
     pub case: &'static str,
     /// `cpu` or `gpu`.
     pub backend: &'static str,
-    /// dt = tc/divisor.
+    /// dt = tc/divisor (packing: the divisor its whole number of steps gives, which the
+    /// one asked for rounds to).
     pub divisor: f64,
     /// The time step, s.
     pub dt: f64,
@@ -313,7 +314,7 @@ pub fn accuracy(
             seed: opts.seed,
             tc,
             time,
-            reference_divisor: opts.reference_divisor,
+            reference_divisor: ref_steps as f64 / opts.packing_time as f64,
             reference_dt: time / ref_steps as f64,
             reference_steps: ref_steps,
             reference_wall_seconds: ref_wall,
@@ -335,7 +336,8 @@ pub fn accuracy(
                 let p = AccuracyPoint {
                     case: "packing",
                     backend: bench::backend_name(backend),
-                    divisor: d,
+                    // (the steps are whole: dt = T/steps, tc/dt = steps/packing_time)
+                    divisor: steps as f64 / opts.packing_time as f64,
                     dt: time / steps as f64,
                     steps,
                     wall_seconds: wall,
@@ -375,6 +377,9 @@ pub fn parse_divisors(text: &str) -> Result<Vec<f64>, PowderError> {
     if out.is_empty() {
         return Err(ParamError::new("divisors", "give at least one divisor, e.g. 10,20,50").into());
     }
+    // (coarse to fine, each once: the table's, the JSON's and the plot's order)
+    out.sort_by(f64::total_cmp);
+    out.dedup();
     Ok(out)
 }
 

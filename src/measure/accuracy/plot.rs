@@ -2,15 +2,15 @@
 
 use super::*;
 
-/// The work–precision diagram: error against wall time, log-log, one line per case and
-/// backend (the packing's kinetic-energy error dashed).
+/// The work–precision diagram: error against wall time, log-log, one colour per measure,
+/// the CPU's lines solid and the GPU's dashed; the legend in a band below the data.
 pub fn work_precision_plot(report: &AccuracyReport) -> Plot {
     let mut series = Vec::new();
     let adapter = report.adapter.as_ref().map_or_else(
         || "GPU f32".to_string(),
         |a| format!("GPU f32, {}", a.name.split(" (").next().unwrap_or(&a.name)),
     );
-    for (case, label) in [
+    for (measure, (case, label)) in [
         ("pair", "pair, max |e - e_closed| over chi"),
         (
             "jkr-displacement",
@@ -26,7 +26,10 @@ pub fn work_precision_plot(report: &AccuracyReport) -> Plot {
             "JKR force pull-off, jumps left to Verlet",
         ),
         ("packing", "packing, RMS |x - x_ref|/r"),
-    ] {
+    ]
+    .into_iter()
+    .enumerate()
+    {
         for backend in ["cpu", "gpu"] {
             let pts: Vec<&AccuracyPoint> = report
                 .points
@@ -41,10 +44,15 @@ pub fn work_precision_plot(report: &AccuracyReport) -> Plot {
             } else {
                 adapter.clone()
             };
+            let style = match backend {
+                "cpu" => Style::Line,
+                _ => Style::DashedLine,
+            };
             series.push(Series {
                 label: format!("{label} ({who})"),
                 points: pts.iter().map(|p| (p.wall_seconds, p.error)).collect(),
-                style: Style::Line,
+                style,
+                colour: Some(measure),
             });
             if case == "packing" {
                 series.push(Series {
@@ -53,7 +61,8 @@ pub fn work_precision_plot(report: &AccuracyReport) -> Plot {
                         .iter()
                         .filter_map(|p| p.kinetic_error.map(|k| (p.wall_seconds, k)))
                         .collect(),
-                    style: Style::DashedLine,
+                    style,
+                    colour: Some(measure + 1),
                 });
             }
         }
@@ -70,11 +79,22 @@ pub fn work_precision_plot(report: &AccuracyReport) -> Plot {
         y_label: "error".into(),
         log_x: true,
         log_y: true,
+        y_range: lowest_error(report)
+            .map(|lo| legend_band(lo, highest_error(report), series.len())),
         series,
-        // a band below the data for the legend
-        y_range: lowest_error(report).map(|lo| (lo * 3e-3, highest_error(report) * 3.0)),
         legend: Legend::LowerRight,
     }
+}
+
+/// The y range: the data (`lo` … `hi`, with a margin above) over a band below it as tall
+/// as a legend of `entries` lines (about 20 px each of the plot's ~480), so the legend in
+/// the lower corner covers no point.
+fn legend_band(lo: f64, hi: f64, entries: usize) -> (f64, f64) {
+    let top = hi * 3.0;
+    let data = (top / lo).log10().max(1.0);
+    let share = ((entries as f64 * 20.0 + 24.0) / 480.0).min(0.8);
+    let band = data * share / (1.0 - share) + 0.15;
+    (lo / 10f64.powf(band), top)
 }
 
 pub(super) fn errors(report: &AccuracyReport) -> impl Iterator<Item = f64> + '_ {

@@ -186,6 +186,9 @@ pub struct BenchReport {
     pub velocity_scale: f64,
     /// Seed of the packings.
     pub seed: u64,
+    /// Whether the GPU kept its energy ledger during the timed steps (its rows are in the
+    /// bytes per particle).
+    pub ledger: bool,
     /// One row per (case, backend, size), in that order.
     pub rows: Vec<BenchRow>,
 }
@@ -299,6 +302,7 @@ pub fn bench(
         max_seconds: opts.max_seconds,
         velocity_scale: opts.velocity_scale,
         seed: opts.seed,
+        ledger: opts.ledger,
         rows,
     })
 }
@@ -351,8 +355,9 @@ fn predicted_over_budget(
         * ((opts.warmup + opts.steps) as f64 * per_particle_step + setup_per_particle);
     (predicted > opts.max_seconds).then(|| {
         format!(
-            "skipped: predicted {predicted:.0} s from the rate at N = {n_prev}, over the budget of {} s per case (--max-seconds)",
-            opts.max_seconds
+            "skipped: predicted {} s from the rate at N = {n_prev}, over the budget of {} s per case (--max-seconds)",
+            crate::error::num(predicted),
+            crate::error::num(opts.max_seconds)
         )
     })
 }

@@ -30,6 +30,7 @@ pub fn trace_plot(spec: &CollideSpec, result: &CollideResult, rows: &[TraceRow])
             label: "F/Fc, JKR equilibrium (paper 001 eq. 6)".into(),
             points: curve.iter().map(|c| (c.0, c.1)).collect(),
             style: Style::DashedLine,
+            colour: None,
         },
         Series {
             label: format!("F/Fc, powder collide ({})", p.dissipation.name()),
@@ -38,11 +39,13 @@ pub fn trace_plot(spec: &CollideSpec, result: &CollideResult, rows: &[TraceRow])
                 .map(|row| (row.delta / d0, row.force / fc))
                 .collect(),
             style: Style::Line,
+            colour: None,
         },
         Series {
             label: "a/a0, JKR equilibrium (paper 001 eq. 5)".into(),
             points: curve.iter().map(|c| (c.0, c.2)).collect(),
             style: Style::DashedLine,
+            colour: None,
         },
         Series {
             label: format!("a/a0, powder collide ({})", p.dissipation.name()),
@@ -51,6 +54,7 @@ pub fn trace_plot(spec: &CollideSpec, result: &CollideResult, rows: &[TraceRow])
                 .map(|row| (row.delta / d0, row.a / a0))
                 .collect(),
             style: Style::Line,
+            colour: None,
         },
     ];
     Some(Plot {
@@ -114,6 +118,7 @@ pub fn restitution_plot(spec: &CollideSpec, results: &[CollideResult], log: bool
             },
             points: curve,
             style: Style::Line,
+            colour: None,
         });
     }
     // a dissipative JKR model: the undamped JKR closed form for reference
@@ -145,6 +150,7 @@ pub fn restitution_plot(spec: &CollideSpec, results: &[CollideResult], log: bool
                 label: "JKR without dissipation (closed form, loss 0.7722 Fc d0)".into(),
                 points,
                 style: Style::DashedLine,
+                colour: None,
             });
         }
     }
@@ -159,6 +165,7 @@ pub fn restitution_plot(spec: &CollideSpec, results: &[CollideResult], log: bool
         ),
         points: results.iter().map(|r| (x_of(r.velocity), r.e)).collect(),
         style: Style::Markers,
+        colour: None,
     });
     let x_label = match scale {
         Some(vp) => format!("scaled impact velocity chi = v/vp  (vp = {vp:.4} m/s)"),
