@@ -355,6 +355,8 @@ fn bench_profile_reports_every_pass() {
         }
         let (ok, out, err) = powder(&args);
         assert!(ok, "{err}");
+        // (no CPU option was given: none is noticed)
+        assert!(!err.contains("--threads"), "{err}");
         assert!(out.contains("passes (µs a step over 4 steps"), "{out}");
         let v = read_json(&json);
         let row = &v["rows"][0];

@@ -129,7 +129,7 @@ pub(crate) fn bench_cmd(a: &BenchArgs) -> Result<(), PowderError> {
     if !opts
         .backends
         .contains(&powder::measure::collide::Backend::Cpu)
-        && opts.threads != BenchOptions::default().threads
+        && a.threads != list_text(&BenchOptions::default().threads)
     {
         eprintln!("notice: --threads has no effect on the GPU backend (a CPU engine option)");
     }
@@ -173,20 +173,20 @@ pub(crate) fn bench_cmd(a: &BenchArgs) -> Result<(), PowderError> {
     Ok(())
 }
 
-/// `--threads` as distinct counts in the given order, 0 (every core) resolved to the count
-/// it means here, so that no count is measured twice and each row's speed-up is over the
-/// first; a count above the usable cores is measured, with a notice.
+/// `--threads` in the given order, a count that means one given before (0 is every core)
+/// left out, so that no count is measured twice and each row's speed-up is over the first;
+/// a count above the usable cores is measured, with a notice.
 fn bench_threads(text: &str) -> Result<Vec<usize>, PowderError> {
     let usable = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let resolved = |t: usize| if t == 0 { usable } else { t };
     let mut out: Vec<usize> = Vec::new();
     for t in parse_threads(text)? {
-        let t = if t == 0 { usable } else { t };
         if t > usable {
             eprintln!(
                 "notice: --threads {t} is more than the {usable} usable here (measured as asked)"
             );
         }
-        if out.contains(&t) {
+        if out.iter().any(|&o| resolved(o) == resolved(t)) {
             eprintln!("notice: --threads {t} is given twice (0 is every core, {usable} here): measured once");
         } else {
             out.push(t);
