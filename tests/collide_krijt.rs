@@ -6,7 +6,7 @@ mod common;
 
 use common::builder::SceneBuilder;
 use powder::measure::collide::{collide, collide_traced, CollideResult, CollideSpec, TraceRow};
-use powder::model::{analytic, krijt, ContactModel, Dissipation, JkrParams, PairGeometry};
+use powder::model::{analytic, krijt, ContactModel, Dissipation, JkrParams, PairGeometry, Pulloff};
 
 const GAMMA: f64 = 3.17;
 const NU: f64 = 0.25;
@@ -275,7 +275,7 @@ mod gpu {
     use super::{krijt, lj_law, params, spec, stress, R, RHO, SIGMA0, TVIS};
     use powder::gpu::GpuEngine;
     use powder::measure::collide::{collide_on, Backend, CollideResult, CollideSpec};
-    use powder::model::{Dissipation, JkrParams};
+    use powder::model::{Dissipation, JkrParams, Pulloff};
 
     use super::common::gpu as context;
 
@@ -358,6 +358,50 @@ mod gpu {
             }
         }
         eprintln!("krijt/stress: worst |e_gpu - e_cpu| = {worst:.2e}");
+    }
+
+    #[test]
+    fn gpu_crack_pulloff_matches_the_cpu() {
+        if context().is_none() {
+            return;
+        }
+        // measured on lavapipe: |Δe| ≤ 2.8e-7, dissipated within 5e-7 (σ0 = 0 closes at the
+        // turning point, as displacement pull-off)
+        for sigma0 in [10.0 * SIGMA0, SIGMA0, 0.0] {
+            let p = JkrParams {
+                pulloff: Pulloff::Crack,
+                ..params(Dissipation::Krijt { tvis: TVIS, sigma0 })
+            };
+            for v in [0.04, 0.1] {
+                check("krijt crack", &spec(p, v), 2e-4);
+            }
+        }
+        // the stress law, and a wall hit obliquely with friction and rolling resistance
+        let stress_crack = JkrParams {
+            pulloff: Pulloff::Crack,
+            ..params(Dissipation::Stress {
+                tvis0_per_radius: 2.1e-4,
+                b: 6.2,
+                zeta: 4.0,
+                sigma0: 10.0 * SIGMA0,
+            })
+        };
+        check("stress crack", &spec(stress_crack, 0.06), 2e-4);
+        let rough = JkrParams {
+            pulloff: Pulloff::Crack,
+            friction: 0.3,
+            rolling_hysteresis: 0.5,
+            ..params(Dissipation::Krijt {
+                tvis: TVIS,
+                sigma0: 10.0 * SIGMA0,
+            })
+        };
+        let wall = CollideSpec {
+            impact_angle: 45.0,
+            wall: true,
+            ..spec(rough, 0.1)
+        };
+        check("krijt crack, oblique wall", &wall, 2e-4);
     }
 
     #[test]
@@ -581,6 +625,105 @@ fn scene_keys_parse_and_errors_name_the_key() {
     assert!(e.contains("zeta") && e.contains("> 0"), "{e}");
     let e = err("dissipation = \"krijt\"\ntvis = -1.0");
     assert!(e.contains("tvis") && e.contains(">= 0"), "{e}");
+    // the crack pull-off needs a contact radius that moves with the crack law
+    let s = scene("dissipation = \"krijt\"\ntvis = 0.075\npulloff = \"crack\"").unwrap();
+    assert!(matches!(s.materials[0].model, ContactModel::Jkr(p) if p.pulloff == Pulloff::Crack));
+    let e = err("dissipation = \"tsuji\"\nrestitution = 0.5\npulloff = \"crack\"");
+    assert!(e.contains("pulloff") && e.contains("\"krijt\""), "{e}");
+}
+
+/// A head-on collision of the LJ Krijt pair under the crack pull-off, integrated here on
+/// its own: RK4 on (δ, δ̇, a) from the touch (δ = 0, a = a_JKR(0)) with the forces of
+/// paper 001 eqs. 11–12 and the crack speed of eq. B2, step halved wherever the crack
+/// reaches its limiting speed, until a = 0. Returns e.
+fn crack_collision_rk4(sigma0: f64, v: f64) -> f64 {
+    let r_eff = R / 2.0;
+    let m_eff = 0.5 * RHO * 4.0 / 3.0 * std::f64::consts::PI * R.powi(3);
+    let vc = 2.0 * E_STAR * GAMMA / (sigma0 * sigma0 * TVIS);
+    let viscous = 2.0 * TVIS * E_STAR / (NU * NU);
+    let rate = |y: [f64; 3]| -> Option<[f64; 3]> {
+        let [delta, w, a] = y;
+        if a <= 0.0 {
+            return None;
+        }
+        let u = a * a - delta * r_eff;
+        let g = E_STAR * u * u / (4.0 * std::f64::consts::PI * a * r_eff * r_eff) / GAMMA;
+        let f = krijt::crack_speed_shape(if u >= 0.0 { g } else { -g });
+        if !f.is_finite() {
+            return None;
+        }
+        let elastic = 2.0 * E_STAR * a * delta - 2.0 / 3.0 * E_STAR * a.powi(3) / r_eff;
+        Some([w, -(elastic + viscous * a * w) / m_eff, vc * f])
+    };
+    let a_touch = (4.0 * std::f64::consts::PI * GAMMA * r_eff * r_eff / E_STAR).cbrt();
+    let mut y = [0.0, v, a_touch];
+    let mut h = 0.01;
+    let add =
+        |y: [f64; 3], k: [f64; 3], s: f64| [y[0] + s * k[0], y[1] + s * k[1], y[2] + s * k[2]];
+    while h > 1e-12 {
+        let next = (|| {
+            let k1 = rate(y)?;
+            let k2 = rate(add(y, k1, h / 2.0))?;
+            let k3 = rate(add(y, k2, h / 2.0))?;
+            let k4 = rate(add(y, k3, h))?;
+            let n = std::array::from_fn(|i| {
+                y[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+            });
+            rate(n).map(|_| n)
+        })();
+        match next {
+            Some(n) => y = n,
+            None => h /= 2.0,
+        }
+        assert!(y[0] > -20.0 * R, "no break");
+    }
+    -y[1] / v
+}
+
+/// The crack pull-off against an independent integration: the contact lasts until the
+/// crack law has closed the neck. Measured at the default dt (e, independent RK4):
+/// 0.300057 vs 0.300500 (σ0 = 29.056) and 0.539341 vs 0.539340 (σ0 = 2.906). Ending at the
+/// JKR turning point instead gives 0.375 and 0.543.
+#[test]
+fn crack_pulloff_matches_an_independent_integration() {
+    for (sigma0, v) in [(10.0 * SIGMA0, 0.04), (SIGMA0, 0.04)] {
+        let krijt = |pulloff| JkrParams {
+            pulloff,
+            ..params(Dissipation::Krijt { tvis: TVIS, sigma0 })
+        };
+        let crack = run(krijt(Pulloff::Crack), v);
+        let turning = run(krijt(Pulloff::Displacement), v);
+        let independent = crack_collision_rk4(sigma0, v);
+        eprintln!(
+            "σ0 {sigma0}: e {} (crack), {} (turning point), independent {independent}",
+            crack.e, turning.e
+        );
+        assert!(
+            (crack.e - independent).abs() < 1e-3,
+            "{} vs {independent}",
+            crack.e
+        );
+        assert!(turning.e - crack.e > 3e-3);
+        assert!(
+            crack.energy.balance_error.unwrap() < 1e-5,
+            "{:?}",
+            crack.energy
+        );
+    }
+    // without delay the crack closes at the turning point: displacement pull-off, exactly
+    let instant = |pulloff| {
+        let p = JkrParams {
+            pulloff,
+            ..params(Dissipation::Krijt {
+                tvis: TVIS,
+                sigma0: 0.0,
+            })
+        };
+        run(p, 0.04)
+    };
+    let (crack, turning) = (instant(Pulloff::Crack), instant(Pulloff::Displacement));
+    assert_eq!(crack.e, turning.e);
+    assert_eq!(crack.energy.dissipated, turning.energy.dissipated);
 }
 
 /// The automatic dt of the stress dissipation follows the collision it resolves: its

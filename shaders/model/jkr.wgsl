@@ -109,8 +109,9 @@ fn jkr_dissipation(p: JkrPair, a: f32, delta: f32, a0: f32, delta_dot: f32, m: f
 // Normal force with the JKR contact hysteresis (`JkrParams::normal_force`):
 // * no force before the first touch (delta <= 0, not touched);
 // * from delta > 0 the contact persists (also at negative overlap) until delta falls to
-//   break_ratio·delta0, where it breaks and the whole history is forgotten (the
-//   composition clears the other sub-models' fields when a pair is out of contact);
+//   break_ratio·delta0, or with `crack_break` until the Krijt crack has closed (x = 0),
+//   where it breaks and the whole history is forgotten (the composition clears the other
+//   sub-models' fields when a pair is out of contact);
 // * Hertz (gamma = 0): contact only while delta > 0.
 // The elastic force is evaluated in the normalised form F = 4·Fc·(x³ − x^(3/2)), x = a/a0
 // = s², which equals 4E*a³/(3R*) − 4·sqrt(pi·gamma·E*·a³) (a0³ = 9·pi·gamma·R*²/E*) and
@@ -147,6 +148,11 @@ fn jkr_normal(p: JkrPair, k: Kin, h: ptr<function, History>) -> Normal {
         fc = 3.0 * JKR_PI * p.gamma * r;
         let state = jkr_radius_state(p, k, a0, d0, fc, x, h);
         if (state.w != 0.0) {
+            if (state.x <= 0.0) {
+                // the crack has closed the neck (`crack_break`): the contact breaks
+                (*h).touched = false;
+                return out;
+            }
             x = state.x;
             elastic = state.y;
             out.potential = state.z;
@@ -194,6 +200,10 @@ fn jkr_edges(p: JkrPair, k: Kin) -> vec4<f32> {
     let s_in = jkr_solve_s(0.0, d0);
     let x_in = s_in * s_in;
     let f_in = 4.0 * fc * (x_in * x_in * x_in - x_in * s_in) + jkr_damping(p, a0 * x_in, a0, jkr_at_edge(k, 0.0));
+    if (p.crack_break != 0u) {
+        // the crack closed with a = 0 and no force where the step ends
+        return vec4<f32>(0.0, f_in, k.delta, 0.0);
+    }
     let d_out = p.break_ratio * d0;
     let s_out = jkr_solve_s(d_out, d0);
     let x_out = s_out * s_out;

@@ -89,6 +89,26 @@ fn krijt_advance(x_old: f32, x_eq: f32, d: f32, c: f32) -> f32 {
     return 0.5 * (lo + hi);
 }
 
+// A step of a crack that recedes with no equilibrium below x_old (`krijt::recede_radius`),
+// 0 where it closes: the backward-Euler root above x_min = sqrt(−d)/3, where G_eff is
+// smallest at this overlap, where one exists; else it runs at the slowest speed of its
+// path, f(beta) at max(x_min, x_old).
+fn krijt_recede(x_old: f32, d: f32, c: f32) -> f32 {
+    let x_min = sqrt(max(-d, 0.0)) / 3.0;
+    var at = x_old;
+    if (x_old > x_min) {
+        if (krijt_residual(x_min, x_old, d, c) <= 0.0) {
+            return krijt_advance(x_old, x_min, d, c);
+        }
+        at = x_min;
+    }
+    let beta = krijt_ratio(at, d);
+    if (beta >= KRIJT_BETA_MAX) {
+        return 0.0;
+    }
+    return max(x_old + c * krijt_shape(beta), 0.0);
+}
+
 // T_vis at x = a/a0 (`KrijtLaw::relaxation_time_at`): constant, or
 // C·R·exp[(B·p_c/E*)^zeta] for p_c > 0 (C·R otherwise) with R = 2R* and p_c of eq. 9.
 fn krijt_tvis(p: JkrPair, x: f32, a0: f32, r: f32) -> f32 {
@@ -107,7 +127,8 @@ fn krijt_tvis(p: JkrPair, x: f32, a0: f32, r: f32) -> f32 {
 // The contact of a touched Krijt pair at overlap delta (`JkrParams::normal_force_step`):
 // a_old the stored radius (0 at the first touch: a_JKR(0)), x_eq the JKR root a(delta)/a0.
 // Returns (x = a/a0 after the step, the elastic force F_E, the stored energy from the JKR
-// break point Fc·delta0·(U(x, d) − P(x_break))).
+// break point Fc·delta0·(U(x, d) − P(x_break))); x = 0 where a `crack_break` contact has
+// closed (receding beyond the turning point d < JKR_D_MIN, or below the unstable root).
 fn krijt_normal(p: JkrPair, k: Kin, a0: f32, d0: f32, fc: f32, x_eq: f32, a_old: f32) -> vec3<f32> {
     let d = k.delta / d0;
     var x_old = KRIJT_X_TOUCH;
@@ -117,13 +138,22 @@ fn krijt_normal(p: JkrPair, k: Kin, a0: f32, d0: f32, fc: f32, x_eq: f32, a_old:
     // T_vis at the start of the step drives the crack; v_c·dt/a0 = crack/a0·dt/T_vis,
     // crack = 2E*·gamma/sigma0² (0: sigma0 = 0, a follows the JKR curve instantly)
     let tvis = krijt_tvis(p, x_old, a0, k.r_eff);
+    let recede = p.crack_break != 0u
+        && (d < JKR_D_MIN || (x_old < x_eq && krijt_ratio(x_old, d) > 1.0));
     var x = x_eq;
+    if (recede) {
+        x = 0.0;
+    }
     if (p.crack > 0.0 && tvis > 0.0) {
         let c = (p.crack / a0) * (k.dt / tvis);
         if (c <= 0.0) {
             x = x_old;
         } else if (c < 1e30) {
-            x = krijt_advance(x_old, x_eq, d, c);
+            if (recede) {
+                x = krijt_recede(x_old, d, c);
+            } else {
+                x = krijt_advance(x_old, x_eq, d, c);
+            }
         }
     }
     let x2 = x * x;

@@ -456,9 +456,14 @@ pub fn hertz_contact_time(m_eff: f64, r_eff: f64, e_star: f64, v: f64) -> f64 {
 /// Energy lost in one undamped JKR touch/pull-off cycle, W/(Fc·δ0) = P(x_break) − P(x_touch)
 /// with P(x) = (24/5)x⁵ − 8x^(7/2) + 2x², x_touch = (2/3)^(2/3):
 /// ≈ 0.7722 for displacement pull-off (x_break = 6^(−2/3); paper 001 quotes ≈ 0.773) and
-/// ≈ 0.3814 for force pull-off (x_break = 2^(−2/3)).
+/// ≈ 0.3814 for force pull-off (x_break = 2^(−2/3)). `crack` without delay (σ0 = 0) breaks
+/// at the turning point, as displacement pull-off.
 pub fn jkr_loss(pulloff: Pulloff) -> f64 {
-    jkr::potential_shape(pulloff.break_radius_ratio()) - jkr::potential_shape(jkr::X_TOUCH)
+    let rule = match pulloff {
+        Pulloff::Crack => Pulloff::Displacement,
+        other => other,
+    };
+    jkr::potential_shape(rule.break_radius_ratio()) - jkr::potential_shape(jkr::X_TOUCH)
 }
 
 /// Restitution of an undamped JKR collision that loses `w` (J) at reduced mass `m_eff` and

@@ -124,11 +124,55 @@ impl KrijtLaw {
         r_eff: f64,
         m: &Material,
     ) -> f64 {
-        let tvis = self.relaxation_time_at(a_old, r_eff, m);
-        let vc = self.crack_speed_scale(tvis, m);
-        advance_radius(a_old, a_eq, dt * vc, |a| {
+        let vc_dt = self.crack_travel(a_old, dt, r_eff, m);
+        advance_radius(a_old, a_eq, vc_dt, |a| {
             energy_release_ratio(a, delta, r_eff, m.e_star, m.gamma)
         })
+    }
+
+    /// [`Self::step_radius`] where the crack may close the contact (`pulloff = "crack"`):
+    /// `a_eq` is None beyond the JKR turning point, where no root exists. A crack that
+    /// recedes with no equilibrium below `a_old` takes [`recede_radius`]'s step; 0 = the
+    /// contact has broken.
+    pub fn step_radius_to_zero(
+        &self,
+        a_old: f64,
+        a_eq: Option<f64>,
+        delta: f64,
+        dt: f64,
+        r_eff: f64,
+        m: &Material,
+    ) -> f64 {
+        let vc_dt = self.crack_travel(a_old, dt, r_eff, m);
+        let beta = |a: f64| energy_release_ratio(a, delta, r_eff, m.e_star, m.gamma);
+        match a_eq {
+            Some(a_eq) if a_eq <= a_old || beta(a_old) <= 1.0 => {
+                advance_radius(a_old, a_eq, vc_dt, beta)
+            }
+            _ => recede_radius(a_old, least_release_radius(delta, r_eff), vc_dt, beta),
+        }
+    }
+
+    /// Whether the contact radius lags the JKR curve at all: σ0 > 0 and a T_vis that is not
+    /// 0 everywhere (else v_c is infinite).
+    pub fn delays_radius(&self) -> bool {
+        let tvis = match self.relaxation {
+            Relaxation::Constant { tvis } => tvis,
+            Relaxation::Stress { c, .. } => c,
+        };
+        self.sigma0 > 0.0 && tvis > 0.0
+    }
+
+    /// v_c·dt with T_vis at the start of the step (at `a_old`), m; infinite without delay
+    /// (also at dt = 0: a follows the JKR curve instantly).
+    fn crack_travel(&self, a_old: f64, dt: f64, r_eff: f64, m: &Material) -> f64 {
+        let tvis = self.relaxation_time_at(a_old, r_eff, m);
+        let vc = self.crack_speed_scale(tvis, m);
+        if vc.is_infinite() {
+            vc
+        } else {
+            dt * vc
+        }
     }
 }
 
@@ -171,9 +215,42 @@ pub fn energy_release_ratio(a: f64, delta: f64, r_eff: f64, e_star: f64, gamma: 
     }
 }
 
+/// The contact radius √(−δR*/3) where G_eff is smallest at a negative overlap δ (0 for
+/// δ ≥ 0): G_eff grows with a above it (the stable side) and falls with a below it.
+pub fn least_release_radius(delta: f64, r_eff: f64) -> f64 {
+    (-delta * r_eff / 3.0).max(0.0).sqrt()
+}
+
+/// A step of a crack that recedes with no equilibrium below `a_old` (beyond the JKR
+/// turning point, or below the unstable root), 0 where it closes: the backward-Euler root
+/// above `a_min` ([`least_release_radius`]) where one exists. Else the crack passes a_min
+/// within the step; below a_min it speeds up as it recedes (nothing there for an implicit
+/// step to damp), so it runs at the slowest speed of its path, f(β) at max(a_min, a_old),
+/// a first-order explicit step. `vc_dt` infinite (σ0 = 0): 0 at once.
+pub fn recede_radius(a_old: f64, a_min: f64, vc_dt: f64, beta: impl Fn(f64) -> f64) -> f64 {
+    if vc_dt.is_infinite() {
+        return 0.0;
+    }
+    if vc_dt <= 0.0 {
+        return a_old;
+    }
+    let slowest = if a_old > a_min {
+        let f = crack_speed_shape(beta(a_min));
+        if a_min - a_old - vc_dt * f <= 0.0 {
+            return advance_radius(a_old, a_min, vc_dt, beta);
+        }
+        f
+    } else {
+        crack_speed_shape(beta(a_old))
+    };
+    (a_old + vc_dt * slowest).max(0.0)
+}
+
 /// Backward-Euler step of ȧ = v_c·f(β(a)): the root of a − a_old − `vc_dt`·f(β(a)) between
-/// a_old and the equilibrium `a_eq` (where β = 1), by bisection. `vc_dt` = v_c·dt ≥ 0
-/// (infinite: a_eq). `beta` must increase with a on that interval (the stable JKR branch).
+/// a_old and `a_eq`, by bisection: the equilibrium (where β = 1), or any radius where the
+/// residual has the sign opposite to a_old's. `vc_dt` = v_c·dt ≥ 0 (infinite: a_eq).
+/// `beta` must increase with a on that interval (the stable JKR branch) for the root to be
+/// unique.
 pub fn advance_radius(a_old: f64, a_eq: f64, vc_dt: f64, beta: impl Fn(f64) -> f64) -> f64 {
     if vc_dt.is_infinite() || a_old == a_eq {
         return a_eq;
@@ -389,6 +466,105 @@ mod tests {
         assert_eq!(
             law.step_radius(0.5 * a_eq, a_eq, delta, 0.0, R_EFF, &m),
             0.5 * a_eq
+        );
+    }
+
+    #[test]
+    fn least_release_radius_is_where_g_eff_is_smallest() {
+        for d in [-0.5, -0.9, -3.0] {
+            let delta = d * a0() * a0() / (3.0 * R_EFF);
+            let am = least_release_radius(delta, R_EFF);
+            let g = |a: f64| effective_surface_energy(a, delta, R_EFF, ES);
+            assert!(g(am) < g(0.99 * am) && g(am) < g(1.01 * am), "d = {d}");
+            // (4/3)|d|^(3/2) in units of γ
+            assert_relative_eq!(
+                g(am) / GAMMA,
+                4.0 / 3.0 * (-d).powf(1.5),
+                max_relative = 1e-12
+            );
+        }
+        assert_eq!(least_release_radius(0.5, R_EFF), 0.0);
+    }
+
+    #[test]
+    fn a_receding_crack_closes_at_its_slowest_speed_or_the_implicit_root() {
+        // beyond the turning point (δ/δ0 = −1): G_eff > γ at every radius
+        let delta = -a0() * a0() / (3.0 * R_EFF);
+        let beta = |a: f64| energy_release_ratio(a, delta, R_EFF, ES, GAMMA);
+        let am = least_release_radius(delta, R_EFF);
+        let a_old = 0.5 * a0();
+        assert!(a_old > am && beta(am) > 1.0);
+        // a short step: the backward-Euler root on the stable side, below a_old
+        let vc_dt = 1e-3 * a0();
+        let a = recede_radius(a_old, am, vc_dt, beta);
+        assert!(am < a && a < a_old);
+        assert_relative_eq!(
+            a - a_old,
+            vc_dt * crack_speed_shape(beta(a)),
+            max_relative = 1e-9
+        );
+        // a step that passes a_min: the slowest speed of the path, f(β(a_min))
+        let vc_dt = 1.35 * (a_old - am) / -crack_speed_shape(beta(am));
+        let a = recede_radius(a_old, am, vc_dt, beta);
+        assert_relative_eq!(
+            a,
+            a_old + vc_dt * crack_speed_shape(beta(am)),
+            max_relative = 1e-12
+        );
+        assert!(0.0 < a && a < am);
+        // below a_min it speeds up: explicit from a_old, and 0 once it would pass 0
+        let low = 0.5 * am;
+        let slow = 1e-3 * low;
+        assert_relative_eq!(
+            recede_radius(low, am, slow, beta),
+            low + slow * crack_speed_shape(beta(low)),
+            max_relative = 1e-12
+        );
+        assert_eq!(recede_radius(low, am, 1e3 * a0(), beta), 0.0);
+        // no delay closes at once; dt = 0 keeps the radius
+        assert_eq!(recede_radius(a_old, am, f64::INFINITY, beta), 0.0);
+        assert_eq!(recede_radius(a_old, am, 0.0, beta), a_old);
+        // far beyond the turning point β ≥ BETA_MAX everywhere: the crack runs at once
+        let far = 1.01 * crate::model::jkr::D_PULLOFF_CRACK * a0() * a0() / (3.0 * R_EFF);
+        let beta_far = |a: f64| energy_release_ratio(a, far, R_EFF, ES, GAMMA);
+        let am_far = least_release_radius(far, R_EFF);
+        assert!(beta_far(am_far) > BETA_MAX);
+        assert_eq!(recede_radius(a_old, am_far, 1e-9, beta_far), 0.0);
+    }
+
+    #[test]
+    fn step_radius_to_zero_recedes_only_without_an_equilibrium_below() {
+        let law = KrijtLaw {
+            relaxation: Relaxation::Constant { tvis: 0.075 },
+            sigma0: 10.0 * GAMMA,
+        };
+        let m = mat();
+        let a_eq = a0();
+        let delta = jkr_delta(a_eq);
+        // with an equilibrium: the same step as step_radius, from either side
+        for start in [0.7, 1.4] {
+            let a = start * a_eq;
+            assert_eq!(
+                law.step_radius_to_zero(a, Some(a_eq), delta, 0.1, R_EFF, &m),
+                law.step_radius(a, a_eq, delta, 0.1, R_EFF, &m)
+            );
+        }
+        // below the unstable root (G_eff > γ although a JKR root exists above): recedes
+        let d = -0.5 * a0() * a0() / (3.0 * R_EFF);
+        let x_eq = crate::model::jkr::JkrParams::jkr(2.0 * 0.9375 * ES, 0.25, GAMMA)
+            .contact_radius(d, R_EFF);
+        let tiny = 0.01 * a0();
+        assert!(energy_release_ratio(tiny, d, R_EFF, ES, GAMMA) > 1.0);
+        let next = law.step_radius_to_zero(tiny, Some(x_eq), d, 0.1, R_EFF, &m);
+        assert!(next < tiny, "{next}");
+        // without an equilibrium (beyond the turning point) it recedes; σ0 = 0 closes
+        let past = -a0() * a0() / (3.0 * R_EFF);
+        let next = law.step_radius_to_zero(0.5 * a0(), None, past, 0.1, R_EFF, &m);
+        assert!(0.0 < next && next < 0.5 * a0());
+        let instant = KrijtLaw { sigma0: 0.0, ..law };
+        assert_eq!(
+            instant.step_radius_to_zero(0.5 * a0(), None, past, 0.1, R_EFF, &m),
+            0.0
         );
     }
 

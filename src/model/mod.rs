@@ -396,7 +396,9 @@ impl ContactModel {
     /// Where the contact starts and ends and the force just inside those edges:
     /// `[(entry δ, entry force), (exit δ, exit force)]`. The forces can jump there (JKR at
     /// touch and pull-off, −fa of jump-in adhesion, a viscous force γ0·δ̇ at first touch).
-    pub fn edges(&self, geom: &PairGeometry, delta_dot: f64) -> [(f64, f64); 2] {
+    /// `delta` is the overlap at the end of the step (a delayed JKR `crack` contact ends
+    /// there).
+    pub fn edges(&self, geom: &PairGeometry, delta: f64, delta_dot: f64) -> [(f64, f64); 2] {
         match self {
             Self::Hysteretic(p) => {
                 let range = p.range();
@@ -416,7 +418,7 @@ impl ContactModel {
                 let f = p.gamma0 * delta_dot;
                 [(0.0, f), (0.0, f)]
             }
-            Self::Jkr(p) => p.edge_forces(geom, delta_dot),
+            Self::Jkr(p) => p.edge_forces(geom, delta, delta_dot),
         }
     }
 
@@ -448,7 +450,7 @@ impl ContactModel {
     /// ([`Self::touch_jump`]), so a step crossing one misplaces an impulse.
     pub fn has_force_jumps(&self, geom: &PairGeometry) -> bool {
         [-1.0, 1.0].iter().any(|&v| {
-            self.touch_jump(v) != 0.0 || self.edges(geom, v).iter().any(|&(_, f)| f != 0.0)
+            self.touch_jump(v) != 0.0 || self.edges(geom, 0.0, v).iter().any(|&(_, f)| f != 0.0)
         })
     }
 

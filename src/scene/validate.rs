@@ -288,7 +288,7 @@ impl Scene {
                 } else {
                     crate::model::PairGeometry::spheres(r_max, r_max, m, m)
                 };
-                model.is_ok_and(|m| m.edges(&geom, 0.0)[0].1 != 0.0)
+                model.is_ok_and(|m| m.edges(&geom, 0.0, 0.0)[0].1 != 0.0)
             };
         let pairs: Vec<bool> = (0..n * n)
             .map(|k| jumps(self.pair_model(k / n, k % n), false, k % n))

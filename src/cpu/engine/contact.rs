@@ -171,7 +171,7 @@ impl StepLog {
         let is_in = record.engaged();
         // the edges only where the step crosses one (JKR's cost a contact-radius solve each)
         let edges = if was_in != is_in {
-            c.model.edges(geom, kin.delta_dot)
+            c.model.edges(geom, kin.delta, kin.delta_dot)
         } else {
             [(0.0, 0.0); 2]
         };

@@ -165,6 +165,10 @@ pub struct JkrPair {
     /// Sn = 2E*·ρ and St = 8G*·ρ; 0 for the contact radius a
     /// ([`TsujiStiffness`](crate::model::TsujiStiffness)).
     pub tsuji_hertz: u32,
+    /// 1 where a contact ends as the Krijt crack closes its delayed radius
+    /// ([`JkrParams::pulloff_rule`](crate::model::JkrParams::pulloff_rule) `crack`); 0 at
+    /// `break_ratio`.
+    pub crack_break: u32,
 }
 }
 
@@ -198,14 +202,15 @@ impl JkrPair {
             g_star: narrow(p.g_star()),
             gamma: narrow(p.gamma()),
             a0_coef: narrow(p.a0(1.0)),
-            break_ratio: narrow(p.pulloff.break_overlap_ratio()),
+            break_ratio: narrow(p.pulloff_rule().break_overlap_ratio()),
             friction: narrow(p.friction),
             rolling_hysteresis: narrow(p.rolling_hysteresis),
             fc_unscaled_per_r: narrow(p.fc_unscaled(1.0)),
             a0_unscaled_coef: narrow(p.a0_unscaled(1.0)),
             p_break: narrow(crate::model::jkr::potential_shape(
-                p.pulloff.break_radius_ratio(),
+                p.pulloff_rule().break_radius_ratio(),
             )),
+            crack_break: u32::from(p.pulloff_rule() == crate::model::Pulloff::Crack),
             ..Default::default()
         };
         match p.dissipation {

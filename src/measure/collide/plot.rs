@@ -16,7 +16,11 @@ pub fn trace_plot(spec: &CollideSpec, result: &CollideResult, rows: &[TraceRow])
     let (fc, a0, d0) = (p.fc(r), p.a0(r), p.delta0(r));
     let inside: Vec<&TraceRow> = rows.iter().filter(|row| row.a > 0.0).collect();
     let dmax = inside.iter().fold(1.0f64, |m, row| m.max(row.delta / d0));
-    let dmin = p.pulloff_overlap(r) / d0;
+    // (the equilibrium curve ends at the turning point; a `crack` contact reaches beyond)
+    let dmin = p
+        .pulloff_overlap(r)
+        .max(crate::model::jkr::D_PULLOFF_DISPLACEMENT * d0)
+        / d0;
     let samples = 400;
     let curve: Vec<(f64, f64, f64)> = (0..=samples)
         .map(|k| {

@@ -62,6 +62,10 @@ pub const S_MIN: f64 = 0.5503212081491045;
 pub const D_PULLOFF_DISPLACEMENT: f64 = -0.8254818122236567;
 /// δ/δ0 where the JKR force reaches −Fc (force-controlled pull-off): −2^(−4/3).
 pub const D_PULLOFF_FORCE: f64 = -0.3968502629920499;
+/// δ/δ0 beyond which no contact radius holds against the crack law of paper 001 eq. B2:
+/// min over a of G_eff/γ = (4/3)·|δ/δ0|^(3/2) reaches [`krijt::BETA_MAX`], where the crack
+/// runs at infinite speed, at −(0.75·50)^(2/3). The farthest a `crack` contact reaches.
+pub const D_PULLOFF_CRACK: f64 = -11.20351186639291;
 /// a/a0 at the displacement-controlled pull-off, 6^(−2/3).
 pub const X_PULLOFF_DISPLACEMENT: f64 = 0.30285343213869;
 /// a/a0 at the force-controlled pull-off, 2^(−2/3).
@@ -97,16 +101,22 @@ pub enum Pulloff {
     /// Paper 002's rule: the contact breaks as soon as the overlap turns negative on
     /// separation, where F = −8/9·Fc as at the touch, so the JKR curve itself loses nothing.
     Zero = "zero",
+    /// The Krijt dissipations only: the contact lasts until the crack law (paper 001
+    /// eq. B2) has shrunk its contact radius to 0, where F and U reach 0 continuously;
+    /// beyond the turning point the neck recedes at the crack speed. With σ0 = 0 it
+    /// breaks at the turning point, as `displacement`.
+    Crack = "crack",
 }
 }
 
 impl Pulloff {
-    /// δ/δ0 at which the contact breaks.
+    /// δ/δ0 at which the contact breaks (`crack`: at the latest, [`D_PULLOFF_CRACK`]).
     pub fn break_overlap_ratio(self) -> f64 {
         match self {
             Self::Displacement => D_PULLOFF_DISPLACEMENT,
             Self::Force => D_PULLOFF_FORCE,
             Self::Zero => 0.0,
+            Self::Crack => D_PULLOFF_CRACK,
         }
     }
 
@@ -116,6 +126,7 @@ impl Pulloff {
             Self::Displacement => X_PULLOFF_DISPLACEMENT,
             Self::Force => X_PULLOFF_FORCE,
             Self::Zero => X_TOUCH,
+            Self::Crack => 0.0,
         }
     }
 
@@ -125,6 +136,7 @@ impl Pulloff {
             Self::Displacement => P_PULLOFF_DISPLACEMENT,
             Self::Force => P_PULLOFF_FORCE,
             Self::Zero => P_TOUCH,
+            Self::Crack => 0.0,
         }
     }
 }
@@ -290,6 +302,15 @@ impl JkrParams {
                 ),
             ));
         }
+        if self.pulloff == Pulloff::Crack && self.dissipation.krijt_law().is_none() {
+            return Err(ParamError::new(
+                "pulloff",
+                format!(
+                    "pulloff = \"crack\" ends a contact where the Krijt crack law (paper 001 eq. B2) closes its contact radius: it needs dissipation = \"krijt\" or \"stress\", not \"{}\"; use pulloff = \"displacement\", \"force\" or \"zero\"",
+                    self.dissipation.name()
+                ),
+            ));
+        }
         if self.dissipation.krijt_law().is_some() {
             if self.surface_energy <= 0.0 {
                 return Err(ParamError::new(
@@ -406,13 +427,23 @@ impl JkrParams {
         memo_cbrt(9.0 * PI * self.surface_energy * r_eff * r_eff / self.e_star_unscaled())
     }
 
-    /// The (negative) overlap at which a touching contact breaks, per [`Pulloff`]; 0 for
-    /// Hertz.
+    /// The pull-off rule in effect: `crack` without a delayed contact radius (σ0 = 0, or
+    /// T_vis = 0) closes at the turning point, which is `displacement`.
+    pub fn pulloff_rule(&self) -> Pulloff {
+        match (self.pulloff, self.dissipation.krijt_law()) {
+            (Pulloff::Crack, Some(law)) if law.delays_radius() => Pulloff::Crack,
+            (Pulloff::Crack, _) => Pulloff::Displacement,
+            (rule, _) => rule,
+        }
+    }
+
+    /// The (negative) overlap at which a touching contact breaks (at the latest, with a
+    /// delayed `crack`), per [`Self::pulloff_rule`]; 0 for Hertz.
     pub fn pulloff_overlap(&self, r_eff: f64) -> f64 {
         if self.gamma() == 0.0 {
             0.0
         } else {
-            self.pulloff.break_overlap_ratio() * self.delta0(r_eff)
+            self.pulloff_rule().break_overlap_ratio() * self.delta0(r_eff)
         }
     }
 
@@ -462,16 +493,23 @@ impl JkrParams {
     /// The normal force just inside the contact's two edges, where it jumps: at the touch
     /// (δ = 0, ≈ −8/9·Fc for JKR) and at the break (δ = pull-off overlap, −5/9·Fc or −Fc),
     /// each with the dissipative force at that contact radius. The energy ledger integrates
-    /// the work of a step that crosses an edge from there rather than from zero.
-    pub fn edge_forces(&self, geom: &PairGeometry, delta_dot: f64) -> [(f64, f64); 2] {
+    /// the work of a step that crosses an edge from there rather than from zero. A `crack`
+    /// contact ([`Self::pulloff_rule`]) ends with a = 0 and no force at `delta`, the overlap
+    /// at the end of the step (where within the step its crack closed is not resolved: the
+    /// trapezoid is the unbiased choice, `docs/models.md`).
+    pub fn edge_forces(&self, geom: &PairGeometry, delta: f64, delta_dot: f64) -> [(f64, f64); 2] {
         let r = 0.5 * geom.a12;
         let pair = self.pair(r);
         let at = |delta: f64| {
             let a = self.contact_radius(delta, r);
             self.elastic_force(a, r) + self.normal_dissipation(a, delta, delta_dot, geom, &pair)
         };
+        let entry = (0.0, at(0.0));
+        if self.pulloff_rule() == Pulloff::Crack {
+            return [entry, (delta, 0.0)];
+        }
         let exit = self.pulloff_overlap(r);
-        [(0.0, at(0.0)), (exit, at(exit))]
+        [entry, (exit, at(exit))]
     }
 
     /// Normal force for overlap `delta` and approach speed `delta_dot`, with the JKR
@@ -512,7 +550,8 @@ impl JkrParams {
     /// F_E(a, δ) = 4E*a³/(3R*) − 2E*a(a²/R* − δ), the stored energy the JKR energy of
     /// eq. 7 at (a, δ) from its value at the break point, and the dissipative force
     /// (2·T_vis·E*/ν²)·a·δ̇ (eq. 12). See [`crate::model::krijt`]. The contact breaks at
-    /// the same overlap as JKR ([`Pulloff`]). The other dissipations ignore dt.
+    /// the same overlap as JKR ([`Pulloff`]), or with `crack` where the crack has closed
+    /// (a = 0). The other dissipations ignore dt.
     pub fn normal_force_step(
         &self,
         delta: f64,
@@ -540,7 +579,8 @@ impl JkrParams {
     /// Whether an adhesive contact is on its JKR branch at `delta`: touched before or
     /// overlapping, and short of its break (else it exerts nothing and forgets its history).
     fn bound(&self, pair: &JkrPair, delta: f64, touched: bool) -> bool {
-        (touched || delta > 0.0) && delta > self.pulloff.break_overlap_ratio() * pair.scales.d0
+        (touched || delta > 0.0)
+            && delta > self.pulloff_rule().break_overlap_ratio() * pair.scales.d0
     }
 
     /// s = √(a/a0) at `delta` where [`Self::normal_force_of_pair`] solves it (an adhesive
@@ -586,12 +626,23 @@ impl JkrParams {
                 } else {
                     X_TOUCH * a0
                 };
-                let a = law.step_radius(a_old, a_eq, delta, dt, r, &mat);
+                let rule = self.pulloff_rule();
+                let a = if rule == Pulloff::Crack {
+                    let a_eq = (delta / d0 >= D_PULLOFF_DISPLACEMENT).then_some(a_eq);
+                    law.step_radius_to_zero(a_old, a_eq, delta, dt, r, &mat)
+                } else {
+                    law.step_radius(a_old, a_eq, delta, dt, r, &mat)
+                };
+                if a <= 0.0 {
+                    // the crack has closed the neck: the contact breaks
+                    *history = ContactHistory::default();
+                    return NormalForce::default();
+                }
                 history.contact_radius = a;
                 let es = mat.e_star;
                 let reference = krijt::stored_energy(
-                    self.pulloff.break_radius_ratio() * a0,
-                    self.pulloff.break_overlap_ratio() * d0,
+                    rule.break_radius_ratio() * a0,
+                    rule.break_overlap_ratio() * d0,
                     r,
                     es,
                     gamma,

@@ -110,6 +110,12 @@ fn landmarks_of_the_normalised_curve() {
         max_relative = 1e-15
     );
     assert_relative_eq!(X_PULLOFF_DISPLACEMENT, S_MIN * S_MIN, max_relative = 1e-15);
+    // where the least G_eff/γ over a, (4/3)·|δ/δ0|^(3/2), reaches the crack law's limit
+    assert_relative_eq!(
+        D_PULLOFF_CRACK,
+        -(0.75 * crate::model::krijt::BETA_MAX).powf(2.0 / 3.0),
+        max_relative = 1e-15
+    );
     assert_relative_eq!(
         X_PULLOFF_FORCE,
         0.5f64.powf(2.0 / 3.0),
@@ -695,7 +701,7 @@ fn tsuji_hertz_stiffness_rule() {
     let tq = q.tangential_force(&kin(DVec3::X, v, delta), &fq, &g, 1e-12, &mut sq);
     assert!((tq.force + tq.stiffness * sq).length() <= 1e-15 * tq.force.length());
     // no damping at the contact's edges (δ = 0 and the pull-off overlap)
-    for (delta, f) in q.edge_forces(&g, 1.0) {
+    for (delta, f) in q.edge_forces(&g, -1.0, 1.0) {
         let a = q.contact_radius(delta, r);
         assert_eq!(f, q.elastic_force(a, r), "edge at {delta}");
     }

@@ -128,7 +128,7 @@ param!(
     Rule::NonNegative,
     "the surface energy gamma per surface (Fc = 3 pi gamma R*)"
 );
-param!(PULLOFF, "pulloff", Choice(Pulloff::WORDS), "", Word(Pulloff::Displacement.word()), Rule::None, "where a stretched JKR contact breaks: at the turning point, at -Fc, or at zero overlap (paper 002)");
+param!(PULLOFF, "pulloff", Choice(Pulloff::WORDS), "", Word(Pulloff::Displacement.word()), Rule::None, "where a stretched JKR contact breaks: at the turning point, at -Fc, at zero overlap (paper 002), or where the Krijt crack law closes the contact radius (crack; krijt and stress only)");
 param!(
     STIFFNESS_SCALE,
     "stiffness_scale",
