@@ -65,7 +65,9 @@ fn main() -> ExitCode {
         },
     };
     match result {
-        Ok(()) if INTERRUPTED.load(std::sync::atomic::Ordering::Relaxed) => ExitCode::from(130),
+        Ok(()) if INTERRUPTED.load(std::sync::atomic::Ordering::Relaxed) => {
+            ExitCode::from(exit_status())
+        }
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e}");

@@ -288,6 +288,19 @@ impl Resolved {
                 p.radius
             )));
         }
+        // a wall's later phases, which the starting spread does not see
+        let r_min = (scene.particles.iter().map(|p| p.radius)).fold(f64::INFINITY, f64::min);
+        for (w, wall) in scene.walls.iter().enumerate() {
+            for (k, (from, phase)) in wall.motion.phases.iter().enumerate() {
+                let speed = wall_normal_velocity(wall, phase).length();
+                if !scene.force_dt && *from > 0.0 && speed * dt > r_min {
+                    return Err(PowderError::Scene(format!(
+                        "wall {w}'s phase {k} (from t = {from:e} s) moves it at up to {speed:e} m/s along its normal: it closes {:e} m in a step of {dt:e} s, more than the smallest particle radius {r_min:e} m, and particles can pass through it between two steps; slow the phase or set a smaller simulation.dt, or force_dt = true to run it anyway",
+                        speed * dt
+                    )));
+                }
+            }
+        }
         let r_max = scene.particles.iter().map(|p| p.radius).fold(0.0, f64::max);
         let max_reach = models
             .iter()
@@ -340,28 +353,32 @@ fn starting_closing_speed(scene: &Scene) -> f64 {
     velocity_spread(scene)
 }
 
+/// The velocity along its normal a wall moves with in `phase` (under servo control the
+/// largest it starts with), m/s.
+fn wall_normal_velocity(w: &crate::scene::Wall, phase: &crate::scene::WallPhase) -> glam::DVec3 {
+    use crate::scene::WallPhase;
+    use glam::DVec3;
+    let n = DVec3::from_array(w.normal).normalize_or_zero();
+    match *phase {
+        WallPhase::Rest => DVec3::ZERO,
+        WallPhase::Velocity(v) => n * DVec3::from_array(v).dot(n),
+        WallPhase::Servo {
+            force,
+            gain,
+            max_speed,
+        } => n * (gain * force).min(max_speed),
+    }
+}
+
 /// A bound on every relative speed at the start: the diagonal of the bounding box of the
 /// particles' starting velocities and the walls' along their normals (a prescribed one, or
 /// a servo's first step, min(gain·force, max_speed)); particles moving together close
 /// nothing.
 fn velocity_spread(scene: &Scene) -> f64 {
-    use crate::scene::{Wall, WallPhase};
     use glam::DVec3;
-    let wall = |w: &Wall| {
-        let n = DVec3::from_array(w.normal).normalize_or_zero();
-        match w.motion.at(0.0) {
-            WallPhase::Rest => DVec3::ZERO,
-            WallPhase::Velocity(v) => n * DVec3::from_array(v).dot(n),
-            WallPhase::Servo {
-                force,
-                gain,
-                max_speed,
-            } => n * (gain * force).min(max_speed),
-        }
-    };
     let velocities = (scene.particles.iter())
         .map(|p| DVec3::from_array(p.velocity))
-        .chain(scene.walls.iter().map(wall));
+        .chain((scene.walls.iter()).map(|w| wall_normal_velocity(w, &w.motion.at(0.0))));
     let (lo, hi) = velocities.fold(
         (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
         |(lo, hi), v| (lo.min(v), hi.max(v)),
@@ -406,6 +423,25 @@ mod tests {
         );
         assert!(Resolved::new(&scene([1.0, -1.0])).is_ok());
         assert!(Resolved::new(&scene([1000.0, 1000.0])).is_ok());
+    }
+
+    /// A wall whose later phase moves it a radius in a step is refused before the run,
+    /// naming the phase (at t = 0 the starting spread sees it); force_dt accepts it.
+    #[test]
+    fn a_wall_phase_that_can_pass_particles_in_one_step_is_refused() {
+        let scene = |speed: f64, force: bool| {
+            let text = format!(
+                "[domain]\nmin = [0.0, 0.0, 0.0]\nmax = [1.0, 0.01, 0.01]\n[simulation]\nduration = 0.1\nforce_dt = {force}\n[[material]]\nname = \"m\"\ndensity = 2000.0\nmodel = \"lsd\"\nk = 100.0\n[[wall]]\npoint = [0.0, 0.0, 0.0]\nnormal = [1.0, 0.0, 0.0]\n[[wall.phase]]\nfrom = 1e-3\nvelocity = [{speed:?}, 0.0, 0.0]\n[[particles]]\nkind = \"list\"\npositions = [[0.45, 0.005, 0.005]]\nradius = 1e-3\n"
+            );
+            Scene::from_toml_str(&text, "t").unwrap()
+        };
+        let e = refused(&scene(1e5, false));
+        assert!(
+            e.contains("wall 0's phase 0") && e.contains("1e5 m/s") && e.contains("force_dt"),
+            "{e}"
+        );
+        assert!(Resolved::new(&scene(1.0, false)).is_ok());
+        assert!(Resolved::new(&scene(1e5, true)).is_ok());
     }
 
     /// Hertz spheres starting at ±50 m/s (impact_velocity left at 1 m/s): the automatic dt

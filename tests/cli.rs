@@ -1755,6 +1755,9 @@ fn collide_adds_thornton_ning_with_a_yield_velocity() {
         "1e8",
     ]);
     assert!(!ok && err.contains("cannot be used with"), "{err}");
+    // a wall has no second radius: refused rather than ignored
+    let (ok, _, err) = jkr_cmd(&["--velocity", "1", "--wall", "--radius2", "2e-6"]);
+    assert!(!ok && err.contains("cannot be used with"), "{err}");
 }
 
 /// Inputs each within its rule whose combination overflows f64 (a time step of 0, a

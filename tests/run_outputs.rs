@@ -831,35 +831,45 @@ fn foreign_or_broken_checkpoints_are_refused() {
     assert!(err.contains("/dev/null/cannot"), "{err}");
 }
 
+/// Ctrl-C, and the SIGTERM and SIGHUP that schedulers, `timeout` and a closed terminal
+/// send, each write a checkpoint and exit with 128 + the signal's number.
 #[test]
-fn ctrl_c_writes_a_checkpoint_and_exits_130() {
-    let dir = tempfile::tempdir().unwrap();
+fn a_stop_signal_writes_a_checkpoint_and_exits_with_its_status() {
     let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/jkr_deposition.toml");
-    let child = std::process::Command::new(env!("CARGO_BIN_EXE_powder"))
-        .args(["run", scene, "--out", dir.path().to_str().unwrap()])
-        .stderr(std::process::Stdio::piped())
-        .stdout(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
+    let runs: Vec<_> = [("INT", 130), ("TERM", 143), ("HUP", 129)]
+        .into_iter()
+        .map(|(signal, status)| {
+            let dir = tempfile::tempdir().unwrap();
+            let child = std::process::Command::new(env!("CARGO_BIN_EXE_powder"))
+                .args(["run", scene, "--out", dir.path().to_str().unwrap()])
+                .stderr(std::process::Stdio::piped())
+                .stdout(std::process::Stdio::piped())
+                .spawn()
+                .unwrap();
+            (signal, status, dir, child)
+        })
+        .collect();
     std::thread::sleep(std::time::Duration::from_millis(1500));
-    let ok = std::process::Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(ok.success());
-    let out = child.wait_with_output().unwrap();
-    assert_eq!(
-        out.status.code(),
-        Some(130),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    assert!(String::from_utf8_lossy(&out.stderr).contains("interrupted at step"));
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.path().join("summary.json")).unwrap())
+    for (signal, status, dir, child) in runs {
+        let ok = std::process::Command::new("kill")
+            .args([format!("-{signal}"), child.id().to_string()])
+            .status()
             .unwrap();
-    assert_eq!(summary["interrupted"], true);
-    assert!(dir.path().join("checkpoint.bin").exists());
+        assert!(ok.success());
+        let out = child.wait_with_output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(status), "SIG{signal}: {stderr}");
+        assert!(
+            stderr.contains("interrupted at step"),
+            "SIG{signal}: {stderr}"
+        );
+        let summary: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(dir.path().join("summary.json")).unwrap(),
+        )
+        .unwrap();
+        assert_eq!(summary["interrupted"], true);
+        assert!(dir.path().join("checkpoint.bin").exists());
+    }
 }
 
 /// Ctrl-C off the output cadence (here after the first chunk of 1000 steps, with rows

@@ -130,38 +130,55 @@ pub fn write(members: &[(String, Member)]) -> Vec<u8> {
 /// [`write`] with ZIP64 records for every size or offset from `limit` on (4 GiB − 1; the
 /// tests force them with 0).
 fn write_with(members: &[(String, Member)], limit: u64) -> Vec<u8> {
-    let mut out = Vec::new();
-    let mut central = Vec::new();
-    let mut count = 0u64;
-    for (name, member) in members {
-        let (name, bytes) = match member {
+    let items: Vec<(String, Vec<u8>)> = members
+        .iter()
+        .map(|(name, member)| match member {
             Member::Array(a) => (format!("{name}.npy"), a.npy()),
             Member::Raw(b) => (name.clone(), b.clone()),
-        };
-        let crc = crc32fast::hash(&bytes);
-        let offset = out.len() as u64;
-        let size = bytes.len() as u64;
+        })
+        .collect();
+    let entries: Vec<(&str, u64, u32)> = (items.iter())
+        .map(|(name, bytes)| (name.as_str(), bytes.len() as u64, crc32fast::hash(bytes)))
+        .collect();
+    let (locals, tail) = frame(&entries, limit);
+    let mut out = Vec::new();
+    for (local, (_, bytes)) in locals.iter().zip(&items) {
+        out.extend(local);
+        out.extend(bytes);
+    }
+    out.extend(tail);
+    out
+}
+
+/// The bytes [`write_with`] puts around the members' data, for members (name, size, CRC)
+/// in order: each one's local header (its data follow it), then the central directory and
+/// the end records.
+fn frame(entries: &[(&str, u64, u32)], limit: u64) -> (Vec<Vec<u8>>, Vec<u8>) {
+    let mut locals = Vec::new();
+    let mut central = Vec::new();
+    let mut offset = 0u64;
+    for &(name, size, crc) in entries {
         let zip64 = size >= limit || offset >= limit;
+        let mut local = Vec::new();
         // local header: sizes in a ZIP64 extra field where they do not fit
-        out.extend(0x0403_4b50u32.to_le_bytes());
-        out.extend(if zip64 { 45u16 } else { 20u16 }.to_le_bytes());
-        out.extend([0u8; 2]); // flags
-        out.extend([0u8; 2]); // stored
-        out.extend([0u8, 0, 0x21, 0]); // 1980-01-01 00:00: no time, for reproducible bytes
-        out.extend(crc.to_le_bytes());
+        local.extend(0x0403_4b50u32.to_le_bytes());
+        local.extend(if zip64 { 45u16 } else { 20u16 }.to_le_bytes());
+        local.extend([0u8; 2]); // flags
+        local.extend([0u8; 2]); // stored
+        local.extend([0u8, 0, 0x21, 0]); // 1980-01-01 00:00: no time, for reproducible bytes
+        local.extend(crc.to_le_bytes());
         let small = |v: u64| if zip64 { 0xFFFF_FFFFu32 } else { v as u32 };
-        out.extend(small(size).to_le_bytes());
-        out.extend(small(size).to_le_bytes());
-        out.extend((name.len() as u16).to_le_bytes());
-        out.extend(if zip64 { 20u16 } else { 0u16 }.to_le_bytes());
-        out.extend(name.as_bytes());
+        local.extend(small(size).to_le_bytes());
+        local.extend(small(size).to_le_bytes());
+        local.extend((name.len() as u16).to_le_bytes());
+        local.extend(if zip64 { 20u16 } else { 0u16 }.to_le_bytes());
+        local.extend(name.as_bytes());
         if zip64 {
-            out.extend(1u16.to_le_bytes());
-            out.extend(16u16.to_le_bytes());
-            out.extend(size.to_le_bytes());
-            out.extend(size.to_le_bytes());
+            local.extend(1u16.to_le_bytes());
+            local.extend(16u16.to_le_bytes());
+            local.extend(size.to_le_bytes());
+            local.extend(size.to_le_bytes());
         }
-        out.extend(&bytes);
         // its central directory record
         central.extend(0x0201_4b50u32.to_le_bytes());
         central.extend(if zip64 { 45u16 } else { 20u16 }.to_le_bytes());
@@ -183,13 +200,15 @@ fn write_with(members: &[(String, Member)], limit: u64) -> Vec<u8> {
             central.extend(size.to_le_bytes());
             central.extend(offset.to_le_bytes());
         }
-        count += 1;
+        offset += local.len() as u64 + size;
+        locals.push(local);
     }
-    let (cd_offset, cd_size) = (out.len() as u64, central.len() as u64);
-    out.extend(central);
+    let count = entries.len() as u64;
+    let (cd_offset, cd_size) = (offset, central.len() as u64);
+    let mut out = central;
     let zip64 = cd_offset >= limit || count >= 0xFFFF;
     if zip64 {
-        let record = out.len() as u64;
+        let record = cd_offset + cd_size;
         out.extend(0x0606_4b50u32.to_le_bytes());
         out.extend(44u64.to_le_bytes());
         out.extend(45u16.to_le_bytes());
@@ -213,7 +232,27 @@ fn write_with(members: &[(String, Member)], limit: u64) -> Vec<u8> {
     out.extend(small32(cd_size).to_le_bytes());
     out.extend(small32(cd_offset).to_le_bytes());
     out.extend(0u16.to_le_bytes());
-    out
+    (locals, out)
+}
+
+/// Whether `b` holds exactly what [`write_with`] writes for `members` (name, data, CRC) in
+/// order, at the default or the forced ZIP64 limit: the data are checked by their CRCs,
+/// every other byte here.
+fn framed_as_written(b: &[u8], members: &[(&str, &[u8], u32)]) -> bool {
+    let entries: Vec<(&str, u64, u32)> = (members.iter())
+        .map(|&(name, data, crc)| (name, data.len() as u64, crc))
+        .collect();
+    [0xFFFF_FFFF, 0].into_iter().any(|limit| {
+        let (locals, tail) = frame(&entries, limit);
+        let mut at = 0usize;
+        for (local, (_, data, _)) in locals.iter().zip(members) {
+            if b.get(at..at + local.len()) != Some(&local[..]) {
+                return false;
+            }
+            at += local.len() + data.len();
+        }
+        b.get(at..) == Some(&tail[..])
+    })
 }
 
 /// The `N` bytes at `at` (none past the end, or where `at + N` overflows).
@@ -310,6 +349,7 @@ impl<'a> Archive<'a> {
         // members one after the other, as written (so no byte is checked twice)
         let mut free = 0usize;
         let mut members = BTreeMap::new();
+        let mut in_order = Vec::new();
         for _ in 0..count {
             if u32_at(b, at)? != 0x0201_4b50 || u16_at(b, at + 10)? != 0 {
                 return None;
@@ -352,9 +392,11 @@ impl<'a> Archive<'a> {
                 return Some(Err(NpzError::Damaged(name.to_string())));
             }
             members.insert(name.to_string(), data);
+            in_order.push((name, data, crc));
             at += 46 + name_len + extra_len + comment_len;
         }
-        Some(Ok(Self { members }))
+        // (a directory field the reading above does not use is checked here)
+        framed_as_written(b, &in_order).then_some(Ok(Self { members }))
     }
 
     /// The raw member `name`.
@@ -481,5 +523,22 @@ mod tests {
             Archive::read(&flipped).err(),
             Some(NpzError::Damaged("x.npy".into()))
         );
+        // any bit of the headers and directories, plain or ZIP64
+        for bytes in [write(&sample()), write_with(&sample(), 0)] {
+            let data: Vec<std::ops::Range<usize>> = (Archive::read(&bytes).unwrap().members)
+                .values()
+                .map(|d| {
+                    let start = d.as_ptr() as usize - bytes.as_ptr() as usize;
+                    start..start + d.len()
+                })
+                .collect();
+            for at in (0..bytes.len()).filter(|i| !data.iter().any(|r| r.contains(i))) {
+                for bit in 0..8 {
+                    let mut flipped = bytes.clone();
+                    flipped[at] ^= 1 << bit;
+                    assert!(Archive::read(&flipped).is_err(), "byte {at} bit {bit}");
+                }
+            }
+        }
     }
 }

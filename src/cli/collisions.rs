@@ -31,7 +31,7 @@ pub(crate) struct CollideArgs {
     #[arg(long)]
     radius: f64,
     /// Radius of sphere 2, m (default: --radius).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "wall")]
     radius2: Option<f64>,
     /// Density, kg/m^3.
     #[arg(long)]

@@ -17,6 +17,7 @@ mod compare;
 mod info;
 mod params;
 mod run;
+mod stop_signals;
 
 pub(crate) use accuracy::*;
 pub(crate) use bench::*;
@@ -26,6 +27,7 @@ pub(crate) use compare::*;
 pub(crate) use info::*;
 pub(crate) use params::*;
 pub(crate) use run::*;
+pub(crate) use stop_signals::exit_status;
 
 /// A default list as its flag's comma-separated text.
 pub(crate) fn list_text<T: std::fmt::Display>(items: &[T]) -> String {

@@ -70,7 +70,7 @@ pub(crate) struct RunArgs {
     window_particles: Option<u64>,
 }
 
-/// Set when `run` stopped on Ctrl-C (exit status 130, as shells report SIGINT).
+/// Set when `run` stopped on a signal (exit status [`super::exit_status`]).
 pub(crate) static INTERRUPTED: std::sync::atomic::AtomicBool =
     std::sync::atomic::AtomicBool::new(false);
 
@@ -105,12 +105,7 @@ pub(crate) fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
     eprintln!("backend: {}", chosen.reason);
     let gpu = chosen.gpu;
     let interrupt = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
-    {
-        let flag = interrupt.clone();
-        // a second Ctrl-C while the first is being handled is ignored: the checkpoint
-        // being written must not be cut
-        let _ = ctrlc::set_handler(move || flag.store(true, std::sync::atomic::Ordering::Relaxed));
-    }
+    super::stop_signals::install(interrupt.clone());
     let out_dir = if a.no_output {
         None
     } else {

@@ -84,7 +84,7 @@ pub(super) fn placement(
                     "particle {i}{} at {} with radius {} is not inside the domain {} to {} on axis {}: {}",
                     from(i),
                     fmt_vec(p.position),
-                    p.radius,
+                    crate::error::num(p.radius),
                     fmt_vec(d.min),
                     fmt_vec(d.max),
                     axis,

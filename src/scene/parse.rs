@@ -21,7 +21,12 @@ use toml::de::DeTable;
 /// Parses `src` with the `--set` overrides `sets` applied in order.
 pub(super) fn parse_scene(src: &Src, sets: &[Override]) -> Res<Scene> {
     let doc = DeTable::parse(src.text).map_err(|e| {
-        let msg = format!("TOML syntax error: {}", e.message().trim_end());
+        // (the text at the error where it is short, e.g. the key a duplicate repeats)
+        let at = (e.span().and_then(|r| src.text.get(r)).map(str::trim))
+            .filter(|t| !t.is_empty() && t.len() <= 60 && !t.contains('\n'))
+            .map(|t| format!(" at `{t}`"))
+            .unwrap_or_default();
+        let msg = format!("TOML syntax error{at}: {}", e.message().trim_end());
         src.err(e.span().as_ref(), msg)
     })?;
     let mut root_entries = convert_table(src, doc.get_ref())?;

@@ -2,7 +2,7 @@
 //! the words its errors use come from there.
 
 use super::declared::{declared, default_number, SceneKey, Section};
-use super::toml_reader::{Res, Tbl};
+use super::toml_reader::{Res, Tbl, Val};
 
 impl Tbl<'_> {
     /// `key` of `section`, checked against its declared rule, if present.
@@ -25,6 +25,12 @@ impl Tbl<'_> {
     /// present.
     pub(super) fn count(&self, section: Section, key: &str) -> Res<Option<u64>> {
         let k = declared(section, key);
+        // (a negative integer breaks the rule, which says more than "non-negative integer")
+        if let Some(Val::Int(i)) = self.get(key).map(|n| &n.val) {
+            if *i < 0 && !k.rule.holds(*i as f64) {
+                return Err(self.broken(k, *i as f64));
+            }
+        }
         match self.u64(key)? {
             Some(n) if !k.rule.holds(n as f64) => Err(self.broken(k, n as f64)),
             other => Ok(other),

@@ -227,7 +227,9 @@ fn malformed_toml_has_line_and_column() {
         &["scene `test`", "line 3", "column", "TOML syntax error"],
     );
     let e = err("[simulation]\nduration = 0.1\nduration = 0.2\n");
-    assert_contains(&e, &["line 3"]);
+    assert_contains(&e, &["line 3", "`duration`", "duplicate key"]);
+    let e = err("[simulation]\nduration = 0.1\n[simulation]\n");
+    assert_contains(&e, &["line 3", "simulation", "duplicate"]);
 }
 
 #[test]
@@ -341,15 +343,24 @@ fn missing_keys_and_wrong_types() {
         &e,
         &["`output_every` in [simulation] must be a non-negative integer"],
     );
+    // a negative count is told its rule
+    let e = err(&minimal("", "").replace("duration = 0.1", "duration = 0.1\noutput_every = -5"));
+    assert_contains(&e, &["`output_every`", "must be > 0", "-5"]);
     let e = err(&minimal("", "").replace("min = [0.0, 0.0, 0.0]", "min = [0.0, 0.0]"));
     assert_contains(
         &e,
         &[
             "`min` in [domain] must be an array of 3 numbers",
-            "2 element(s)",
+            "2 element(s): the number 0, the number 0",
             "line 2",
         ],
     );
+    // the right length of the wrong kind names the kind
+    let e = err(&minimal("", "").replace(
+        "min = [0.0, 0.0, 0.0]",
+        "min = [0.0, 0.0, 0.0]\nperiodic = [1, 0, 0]",
+    ));
+    assert_contains(&e, &["`periodic`", "the integer 1, the integer 0"]);
     let e = err(&minimal("", "").replace("[domain]", "[[domain]]"));
     assert_contains(&e, &["`domain` in the top-level table must be a table"]);
     let e = err(&minimal("", "").replace("kind = \"list\"", ""));

@@ -151,7 +151,18 @@ pub(super) fn describe(node: &Node) -> String {
         Val::Float(f) => format!("the number {f}"),
         Val::Bool(b) => format!("the boolean {b}"),
         Val::Datetime => "a date-time".to_string(),
-        Val::Array(a) => format!("an array of {} element(s)", a.len()),
+        // (the elements named where few: a right length of the wrong kind says so)
+        Val::Array(a) if a.is_empty() => "an empty array".to_string(),
+        Val::Array(a) if a.len() <= 4 => format!(
+            "an array of {} element(s): {}",
+            a.len(),
+            a.iter().map(describe).collect::<Vec<_>>().join(", ")
+        ),
+        Val::Array(a) => format!(
+            "an array of {} element(s), the first {}",
+            a.len(),
+            describe(&a[0])
+        ),
         Val::Table(_) => "a table".to_string(),
     }
 }
@@ -200,8 +211,10 @@ pub(super) fn one_of_strings(options: &[&str]) -> String {
     }
 }
 
+/// `[x, y, z]`, each as [`crate::error::num`] writes it (no 300 zeros for 1e-300).
 pub(super) fn fmt_vec(v: [f64; 3]) -> String {
-    format!("[{}, {}, {}]", v[0], v[1], v[2])
+    use crate::error::num;
+    format!("[{}, {}, {}]", num(v[0]), num(v[1]), num(v[2]))
 }
 
 pub(super) const AXES: [&str; 3] = ["x", "y", "z"];
