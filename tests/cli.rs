@@ -2188,3 +2188,10 @@ fn a_closed_pipe_ends_powder_quietly() {
     assert!(!stderr.contains("panicked"), "{stderr}");
     assert_eq!(out.status.signal(), Some(libc::SIGPIPE), "{:?}", out.status);
 }
+
+/// `run --steps 0` would run nothing: refused, as `compare`'s is.
+#[test]
+fn run_refuses_zero_steps() {
+    let (ok, _, err) = powder(&["run", "--steps", "0", "--no-output", "--backend", "cpu"]);
+    assert!(!ok && err.contains("--steps") && err.contains("'0'"), "{err}");
+}

@@ -10,8 +10,8 @@ pub(crate) struct RunArgs {
     #[arg(long, value_enum, default_value = "auto")]
     backend: Backend,
     /// Stop after at most this many steps in total (the scene's duration ends the run
-    /// sooner where it comes first; default: the duration).
-    #[arg(long)]
+    /// sooner where it comes first; default: the duration), >= 1.
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
     steps: Option<u64>,
     /// CPU engine threads (0: every core); the results are bitwise the same on any count.
     #[arg(long, default_value_t = 0)]
