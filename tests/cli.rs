@@ -2193,5 +2193,8 @@ fn a_closed_pipe_ends_powder_quietly() {
 #[test]
 fn run_refuses_zero_steps() {
     let (ok, _, err) = powder(&["run", "--steps", "0", "--no-output", "--backend", "cpu"]);
-    assert!(!ok && err.contains("--steps") && err.contains("'0'"), "{err}");
+    assert!(
+        !ok && err.contains("--steps") && err.contains("'0'"),
+        "{err}"
+    );
 }

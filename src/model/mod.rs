@@ -511,13 +511,18 @@ impl ContactModel {
                 let k = p.stiffest();
                 (
                     std::f64::consts::PI * (mr / k).sqrt(),
-                    format!("tc = pi*sqrt(m_r/k) on the stiffest branch k = {k:.4e} N/m"),
+                    format!(
+                        "tc = pi*sqrt(m_r/k) on the stiffest branch k = {k:.4e} N/m, m_r = {mr:.4e} kg"
+                    ),
                     p.gamma0,
                 )
             }
             Self::Lsd(p) => (
                 std::f64::consts::PI * (mr / p.k).sqrt(),
-                format!("tc = pi*sqrt(m_r/k) with k = {:.4e} N/m", p.k),
+                format!(
+                    "tc = pi*sqrt(m_r/k) with k = {:.4e} N/m, m_r = {mr:.4e} kg",
+                    p.k
+                ),
                 p.gamma0,
             ),
             Self::Jkr(p) => {
