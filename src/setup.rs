@@ -2,7 +2,7 @@
 //! particle masses, the time step and the largest interaction reach. One place, so the
 //! CPU and GPU engines run exactly the same physics set-up.
 
-use crate::error::PowderError;
+use crate::error::{num, PowderError};
 use crate::model::{ContactModel, PairGeometry, TimeStep};
 use crate::scene::{DtSetting, MaterialUse, Scene};
 
@@ -293,10 +293,13 @@ impl Resolved {
         for (w, wall) in scene.walls.iter().enumerate() {
             for (k, (from, phase)) in wall.motion.phases.iter().enumerate() {
                 let speed = wall_normal_velocity(wall, phase).length();
-                if !scene.force_dt && *from > 0.0 && speed * dt > r_min {
+                let during = *from > 0.0 && *from < scene.duration;
+                if !scene.force_dt && during && speed * dt > r_min {
                     return Err(PowderError::Scene(format!(
-                        "wall {w}'s phase {k} (from t = {from:e} s) moves it at up to {speed:e} m/s along its normal: it closes {:e} m in a step of {dt:e} s, more than the smallest particle radius {r_min:e} m, and particles can pass through it between two steps; slow the phase or set a smaller simulation.dt, or force_dt = true to run it anyway",
-                        speed * dt
+                        "wall {w}'s motion from t = {} s (its phase or schedule entry {k}) moves it at up to {speed:.4e} m/s along its normal: it closes {:.4e} m in a step of {dt:.4e} s, more than the smallest particle radius {} m, and particles can pass through it between two steps; slow that motion or set a smaller simulation.dt, or force_dt = true to run it anyway",
+                        num(*from),
+                        speed * dt,
+                        num(r_min)
                     )));
                 }
             }
@@ -437,7 +440,9 @@ mod tests {
         };
         let e = refused(&scene(1e5, false));
         assert!(
-            e.contains("wall 0's phase 0") && e.contains("1e5 m/s") && e.contains("force_dt"),
+            e.contains("wall 0's motion from t = 0.001 s (its phase or schedule entry 0)")
+                && e.contains("1.0000e5 m/s")
+                && e.contains("force_dt"),
             "{e}"
         );
         assert!(Resolved::new(&scene(1.0, false)).is_ok());

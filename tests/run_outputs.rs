@@ -1624,3 +1624,43 @@ fn a_renamed_branch_removes_the_killed_runs_later_snapshots() {
         .iter()
         .any(|f| f.starts_with("renamed") && f.contains("2000")));
 }
+
+/// A run started with SIGHUP ignored (`nohup`) keeps it ignored: a closed terminal does not
+/// stop it, SIGTERM still does.
+#[cfg(unix)]
+#[test]
+fn a_run_under_nohup_ignores_sighup() {
+    use std::os::unix::process::CommandExt;
+    let dir = tempfile::tempdir().unwrap();
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/jkr_deposition.toml");
+    let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_powder"));
+    command
+        .args(["run", scene, "--out", dir.path().to_str().unwrap()])
+        .stderr(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped());
+    // SAFETY: only async-signal-safe calls between fork and exec.
+    unsafe {
+        command.pre_exec(|| {
+            libc::signal(libc::SIGHUP, libc::SIG_IGN);
+            Ok(())
+        });
+    }
+    let mut child = command.spawn().unwrap();
+    let kill = |signal: &str, pid: u32| {
+        let ok = std::process::Command::new("kill")
+            .args([format!("-{signal}"), pid.to_string()])
+            .status()
+            .unwrap();
+        assert!(ok.success());
+    };
+    std::thread::sleep(std::time::Duration::from_millis(1000));
+    kill("HUP", child.id());
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    assert!(
+        child.try_wait().unwrap().is_none(),
+        "SIGHUP stopped a nohup run"
+    );
+    kill("TERM", child.id());
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(out.status.code(), Some(143));
+}

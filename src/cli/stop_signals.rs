@@ -23,16 +23,28 @@ extern "C" fn on_signal(sig: libc::c_int) {
     }
 }
 
-/// Routes the stop signals to `flag`, which the run loop reads after each chunk.
+/// Routes the stop signals to `flag`, which the run loop reads after each chunk. A
+/// signal the process was started ignoring (SIGHUP under `nohup`, SIGINT in a background
+/// job) stays ignored.
 pub(crate) fn install(flag: Arc<AtomicBool>) {
     if FLAG.set(flag).is_err() {
         return;
     }
     #[cfg(unix)]
     for sig in [libc::SIGINT, libc::SIGTERM, libc::SIGHUP] {
-        // SAFETY: the handler touches atomics only.
+        // SAFETY: sigaction with valid pointers; the handler touches atomics only.
         unsafe {
-            libc::signal(sig, on_signal as *const () as libc::sighandler_t);
+            let mut old: libc::sigaction = std::mem::zeroed();
+            if libc::sigaction(sig, std::ptr::null(), &mut old) != 0
+                || old.sa_sigaction == libc::SIG_IGN
+            {
+                continue;
+            }
+            let mut action: libc::sigaction = std::mem::zeroed();
+            action.sa_sigaction = on_signal as *const () as libc::sighandler_t;
+            action.sa_flags = libc::SA_RESTART;
+            libc::sigemptyset(&mut action.sa_mask);
+            libc::sigaction(sig, &action, std::ptr::null_mut());
         }
     }
     #[cfg(not(unix))]

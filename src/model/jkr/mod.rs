@@ -501,9 +501,8 @@ impl JkrParams {
     /// (δ = 0, ≈ −8/9·Fc for JKR) and at the break (δ = pull-off overlap, −5/9·Fc or −Fc),
     /// each with the dissipative force at that contact radius. The energy ledger integrates
     /// the work of a step that crosses an edge from there rather than from zero. A `crack`
-    /// contact ([`Self::pulloff_rule`]) ends with a = 0 and no force at `delta`, the overlap
-    /// at the end of the step (where within the step its crack closed is not resolved: the
-    /// trapezoid is the unbiased choice, `docs/models.md`).
+    /// contact ([`Self::pulloff_rule`]) ends with a = 0 and no force at `delta`, the end of
+    /// the step (`docs/models.md`, *Krijt*).
     pub fn edge_forces(&self, geom: &PairGeometry, delta: f64, delta_dot: f64) -> [(f64, f64); 2] {
         let r = 0.5 * geom.a12;
         let pair = self.pair(r);
