@@ -2198,3 +2198,35 @@ fn run_refuses_zero_steps() {
         "{err}"
     );
 }
+
+/// The LJ Krijt pair with the crack pull-off through the run engines: `compare` passes, and
+/// the neck held in tension past the turning point is in the GPU's stored energy as in the
+/// CPU's.
+#[test]
+fn compare_passes_the_krijt_pair_with_the_crack_pulloff() {
+    if !gpu_available() {
+        return;
+    }
+    let example = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/lj_krijt_pair.toml");
+    let text = std::fs::read_to_string(example).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("lj_crack.toml");
+    let with = text.replace("\n# pulloff = \"crack\"", "\npulloff = \"crack\"");
+    assert_ne!(with, text, "the example's commented crack line");
+    std::fs::write(&scene, with).unwrap();
+    let (ok, out, err) = powder(&["compare", scene.to_str().unwrap(), "--json"]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["passed"], true, "{out}");
+    // a sample with the neck stretched: no overlap, energy stored in tension
+    let stretched = v["samples"].as_array().unwrap().iter().any(|s| {
+        s["contacts_cpu"] == 0 && s["elastic_cpu"].as_f64().unwrap() < 0.0 && {
+            let (c, g) = (
+                s["elastic_cpu"].as_f64().unwrap(),
+                s["elastic_gpu"].as_f64().unwrap(),
+            );
+            (c - g).abs() < 1e-4 * c.abs()
+        }
+    });
+    assert!(stretched, "{out}");
+}
