@@ -143,13 +143,15 @@ impl KrijtLaw {
         r_eff: f64,
         m: &Material,
     ) -> f64 {
-        let vc_dt = self.crack_travel(a_old, dt, r_eff, m);
         let beta = |a: f64| energy_release_ratio(a, delta, r_eff, m.e_star, m.gamma);
         match a_eq {
             Some(a_eq) if a_eq <= a_old || beta(a_old) <= 1.0 => {
-                advance_radius(a_old, a_eq, vc_dt, beta)
+                self.step_radius(a_old, a_eq, delta, dt, r_eff, m)
             }
-            _ => recede_radius(a_old, least_release_radius(delta, r_eff), vc_dt, beta),
+            _ => {
+                let vc_dt = self.crack_travel(a_old, dt, r_eff, m);
+                recede_radius(a_old, least_release_radius(delta, r_eff), vc_dt, beta)
+            }
         }
     }
 

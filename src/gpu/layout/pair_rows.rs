@@ -197,20 +197,21 @@ impl JkrPair {
         use crate::model::jkr::tsuji_beta;
         use crate::model::Dissipation;
         // the coefficients of R*: the law's scales at R* = 1 m
+        let rule = p.pulloff_rule();
         let mut row = Self {
             e_star: narrow(p.e_star()),
             g_star: narrow(p.g_star()),
             gamma: narrow(p.gamma()),
             a0_coef: narrow(p.a0(1.0)),
-            break_ratio: narrow(p.pulloff_rule().break_overlap_ratio()),
+            break_ratio: narrow(rule.break_overlap_ratio()),
             friction: narrow(p.friction),
             rolling_hysteresis: narrow(p.rolling_hysteresis),
             fc_unscaled_per_r: narrow(p.fc_unscaled(1.0)),
             a0_unscaled_coef: narrow(p.a0_unscaled(1.0)),
             p_break: narrow(crate::model::jkr::potential_shape(
-                p.pulloff_rule().break_radius_ratio(),
+                rule.break_radius_ratio(),
             )),
-            crack_break: u32::from(p.pulloff_rule() == crate::model::Pulloff::Crack),
+            crack_break: u32::from(rule == crate::model::Pulloff::Crack),
             ..Default::default()
         };
         match p.dissipation {
