@@ -282,9 +282,14 @@ impl Resolved {
             .enumerate()
             .find(|(_, p)| !scene.force_dt && closing * dt > p.radius)
         {
+            // (velocities of opposite signs near f64's limit differ by more than it holds)
+            let spread = if (closing * dt).is_finite() {
+                format!("by up to {closing:e} m/s: a pair (or a particle and a wall) closes {:e} m in a step of {dt:e} s", closing * dt)
+            } else {
+                format!("by more than f64 holds: a pair (or a particle and a wall) closes more than {:e} m in a step of {dt:e} s", f64::MAX)
+            };
             return Err(PowderError::Scene(format!(
-                "the starting velocities differ by up to {closing:e} m/s: a pair (or a particle and a wall) closes {:e} m in a step of {dt:e} s, more than the radius {:e} m of particle {i}, and can pass through each other between two steps; lower the velocities or set a smaller simulation.dt (the automatic one follows simulation.impact_velocity for Hertz and JKR contacts), or force_dt = true to run it anyway",
-                closing * dt,
+                "the starting velocities differ {spread}, more than the radius {:e} m of particle {i}, and can pass through each other between two steps; lower the velocities or set a smaller simulation.dt (the automatic one follows simulation.impact_velocity for Hertz and JKR contacts), or force_dt = true to run it anyway",
                 p.radius
             )));
         }
@@ -426,6 +431,12 @@ mod tests {
         );
         assert!(Resolved::new(&scene([1.0, -1.0])).is_ok());
         assert!(Resolved::new(&scene([1000.0, 1000.0])).is_ok());
+        // a spread beyond f64 is said so, not printed as inf
+        let e = refused(&scene([1e308, -1e308]));
+        assert!(
+            e.contains("more than f64 holds") && !e.contains("inf"),
+            "{e}"
+        );
     }
 
     /// A wall whose later phase moves it a radius in a step is refused before the run,

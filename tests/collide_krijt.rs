@@ -780,6 +780,30 @@ fn the_stress_dissipation_step_follows_the_collision() {
     );
 }
 
+/// A creep whose exponential decay needs more steps to come to rest than a collision may
+/// take is named as soon as its e-folding holds (B = 10³⁰ stretched T_vis so far that this
+/// pair ran out the 5·10⁷ steps, 160 s, before the same error).
+#[test]
+fn a_creep_too_slow_for_the_step_limit_is_named_early() {
+    let p = params(Dissipation::Stress {
+        tvis0_per_radius: 100.0,
+        b: 1e30,
+        zeta: 1e-300,
+        sigma0: SIGMA0,
+    });
+    let err = collide(&spec(p, 0.1)).unwrap_err().to_string();
+    let after = err
+        .split("steps: after ")
+        .nth(1)
+        .unwrap_or_else(|| panic!("{err}"));
+    let steps: u64 = after.split(' ').next().unwrap().parse().unwrap();
+    // measured: after 12 049 steps, needing about 3e9 more
+    assert!(
+        steps < 100_000 && err.contains("lower the dissipation"),
+        "{err}"
+    );
+}
+
 /// A pair overdamped by a long relaxation time creeps into the adhesive well's rest at δ0
 /// without ever turning back: stuck once it approaches slower than `REST_SPEED` of the
 /// impact (it ran out the 50 million steps a collision may take, undecided).

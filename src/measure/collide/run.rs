@@ -22,6 +22,50 @@ fn approach_limit(gap: f64, vn: f64, dt: f64) -> u64 {
 /// come to rest.
 const CREEP_STEPS: u32 = 10;
 
+/// A creep slower than this fraction of the impact speed, decaying exponentially, is
+/// projected to its rest ([`SlowCreep`]).
+const SLOW_CREEP: f64 = 1e-2;
+
+/// An approach in contact that decays exponentially, its e-folding measured over blocks of
+/// [`SlowCreep::BLOCK`] steps: where the e-folding holds, the steps it needs to slow to
+/// rest are known long before the step limit finds them out.
+#[derive(Default)]
+struct SlowCreep {
+    /// Steps and approach speed at the start of the current block.
+    start: Option<(u64, f64)>,
+    /// The last block's e-folding, steps.
+    tau: Option<f64>,
+    /// Consecutive blocks whose e-folding held within [`SlowCreep::HOLD`].
+    steady: u32,
+}
+
+impl SlowCreep {
+    const BLOCK: u64 = 1000;
+    const HOLD: f64 = 0.1;
+    const STEADY: u32 = 10;
+
+    /// After `steps`, approaching at `vn`: the steps to slow to `rest` once the e-folding
+    /// has held for [`Self::STEADY`] blocks.
+    fn steps_to_rest(&mut self, steps: u64, vn: f64, rest: f64) -> Option<f64> {
+        let Some((from, vn_from)) = self.start else {
+            self.start = Some((steps, vn));
+            return None;
+        };
+        if steps - from < Self::BLOCK {
+            return None;
+        }
+        if vn >= vn_from {
+            *self = Self::default();
+            return None;
+        }
+        let tau = (steps - from) as f64 / (vn_from / vn).ln();
+        let held = self.tau.is_some_and(|t| (tau / t - 1.0).abs() < Self::HOLD);
+        self.steady = if held { self.steady + 1 } else { 0 };
+        (self.start, self.tau) = (Some((steps, vn)), Some(tau));
+        (self.steady >= Self::STEADY).then(|| tau * (vn / rest).ln().max(0.0))
+    }
+}
+
 /// Consecutive steps a pair in contact must move slower than [`REST_SPEED`] of the impact
 /// speed to count as at rest (a sub-linear dashpot stops it in finite time, not as a
 /// creep). A turn crosses that band within a step or a few (a collision of 5·10⁷ steps
@@ -51,6 +95,7 @@ pub(super) fn run_collision(
     let mut receding = false;
     let mut fastest_receding: f64 = 0.0;
     let (mut vn_before, mut creeping, mut last_to_stop) = (vn0, 0, None);
+    let mut slow_creep = SlowCreep::default();
     let mut resting = 0;
     let mut first_contact = None;
     let mut last_contact = 0.0;
@@ -70,6 +115,7 @@ pub(super) fn run_collision(
         )));
     }
     let approach = approach_limit(-delta0, vn0, dt);
+    let mut hopeless = None;
     let mut last;
     loop {
         run.step()?;
@@ -87,9 +133,14 @@ pub(super) fn run_collision(
                 run.steps()
             )));
         }
-        if unmet || run.steps() >= MAX_STEPS {
+        if unmet || run.steps() >= MAX_STEPS || hopeless.is_some() {
             // (no force outside contact pushes the pair apart: it closes at vn0 or faster)
-            let what = if touched {
+            let what = if let Some(needs) = hopeless {
+                format!(
+                    "cannot be decided within {MAX_STEPS} steps: after {} its approach decays so slowly that it needs about {needs:.1e} more to come to rest",
+                    run.steps()
+                )
+            } else if touched {
                 format!("was not decided after {} steps", run.steps())
             } else {
                 format!(
@@ -170,6 +221,12 @@ pub(super) fn run_collision(
             (creeping, last_to_stop) = (0, None);
         }
         vn_before = vn;
+        if !receding && contact && vn > 0.0 && vn < SLOW_CREEP * vn0 {
+            hopeless = slow_creep.steps_to_rest(run.steps(), vn, REST_SPEED * vn0);
+            hopeless = hopeless.filter(|&needs| needs > 2.0 * (MAX_STEPS - run.steps()) as f64);
+        } else {
+            slow_creep = SlowCreep::default();
+        }
         let crept_in = creeping >= CREEP_STEPS;
         resting = match contact && vn.abs() < REST_SPEED * vn0 {
             true => resting + 1,
