@@ -781,8 +781,9 @@ fn the_stress_dissipation_step_follows_the_collision() {
 }
 
 /// A creep whose exponential decay needs more steps to come to rest than a collision may
-/// take is named as soon as its e-folding holds (B = 10³⁰ stretched T_vis so far that this
-/// pair ran out the 5·10⁷ steps, 160 s, before the same error).
+/// take is named as soon as its e-folding holds (T_vis = e·C·R = 4·10⁴ here: ζ = 10⁻³⁰⁰
+/// makes eq. 17's pressure factor e whatever B; this pair ran out the 5·10⁷ steps, 160 s,
+/// before the same error).
 #[test]
 fn a_creep_too_slow_for_the_step_limit_is_named_early() {
     let p = params(Dissipation::Stress {

@@ -51,5 +51,10 @@ pub(super) fn velocity_spread(scene: &Scene) -> f64 {
         (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
         |(lo, hi), v| (lo.min(v), hi.max(v)),
     );
-    (hi - lo).max(DVec3::ZERO).length()
+    let d = (hi - lo).max(DVec3::ZERO);
+    // (components beyond 1.3e154 overflow the squares of a length f64 holds)
+    match (d.length(), d.max_element()) {
+        (length, m) if length.is_infinite() && m.is_finite() => (d / m).length() * m,
+        (length, _) => length,
+    }
 }

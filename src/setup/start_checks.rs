@@ -78,10 +78,10 @@ fn no_pass_through(scene: &Scene, dt: f64, r_min: f64) -> Result<(), PowderError
         .find(|(_, p)| !scene.force_dt && closing * dt > p.radius)
     {
         // (velocities of opposite signs near f64's limit differ by more than it holds)
-        let spread = if (closing * dt).is_finite() {
-            format!("by up to {closing:e} m/s: a pair (or a particle and a wall) closes {:e} m in a step of {dt:e} s", closing * dt)
-        } else {
-            format!("by more than f64 holds: a pair (or a particle and a wall) closes more than {:e} m in a step of {dt:e} s", f64::MAX)
+        let spread = match (closing.is_finite(), (closing * dt).is_finite()) {
+            (true, true) => format!("by up to {closing:e} m/s: a pair (or a particle and a wall) closes {:e} m in a step of {dt:e} s", closing * dt),
+            (true, false) => format!("by up to {closing:e} m/s: a pair (or a particle and a wall) closes more than {:e} m in a step of {dt:e} s", f64::MAX),
+            _ => format!("by more than f64 holds: a pair (or a particle and a wall) closes farther than f64 measures in a step of {dt:e} s"),
         };
         return Err(PowderError::Scene(format!(
             "the starting velocities differ {spread}, more than the radius {:e} m of particle {i}, and can pass through each other between two steps; lower the velocities or set a smaller simulation.dt (the automatic one follows simulation.impact_velocity for Hertz and JKR contacts), or force_dt = true to run it anyway",

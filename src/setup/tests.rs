@@ -35,12 +35,15 @@ fn a_pair_that_can_pass_through_in_one_step_is_refused() {
     );
     assert!(Resolved::new(&scene([1.0, -1.0])).is_ok());
     assert!(Resolved::new(&scene([1000.0, 1000.0])).is_ok());
-    // a spread beyond f64 is said so, not printed as inf
+    // a spread beyond f64 is said so, not printed as inf; one whose squares overflow but
+    // whose length f64 holds is given
     let e = refused(&scene([1e308, -1e308]));
     assert!(
         e.contains("more than f64 holds") && !e.contains("inf"),
         "{e}"
     );
+    let e = refused(&scene([1e200, -1e200]));
+    assert!(e.contains("differ by up to 2e200 m/s"), "{e}");
 }
 
 /// A wall whose later phase moves it a radius in a step is refused before the run,

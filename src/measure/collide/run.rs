@@ -26,9 +26,9 @@ const CREEP_STEPS: u32 = 10;
 /// projected to its rest ([`SlowCreep`]).
 const SLOW_CREEP: f64 = 1e-2;
 
-/// An approach in contact that decays exponentially, its e-folding measured over blocks of
-/// [`SlowCreep::BLOCK`] steps: where the e-folding holds, the steps it needs to slow to
-/// rest are known long before the step limit finds them out.
+/// An approach in contact that slows as a creep, its e-folding τ measured over blocks of
+/// [`SlowCreep::BLOCK`] steps: where τ has held for [`SlowCreep::STEADY`] blocks, the steps
+/// it needs to slow to rest are known long before the step limit finds them out.
 #[derive(Default)]
 struct SlowCreep {
     /// Steps and approach speed at the start of the current block.
@@ -37,6 +37,8 @@ struct SlowCreep {
     tau: Option<f64>,
     /// Consecutive blocks whose e-folding held within [`SlowCreep::HOLD`].
     steady: u32,
+    /// Steps and e-folding where the blocks began to hold.
+    since: Option<(u64, f64)>,
 }
 
 impl SlowCreep {
@@ -44,8 +46,11 @@ impl SlowCreep {
     const HOLD: f64 = 0.1;
     const STEADY: u32 = 10;
 
-    /// After `steps`, approaching at `vn`: the steps to slow to `rest` once the e-folding
-    /// has held for [`Self::STEADY`] blocks.
+    /// After `steps`, approaching at `vn`: the steps to slow to `rest` once τ has held.
+    /// Where τ falls over the blocks at r steps a step, the decay speeds up: the speed
+    /// reaches rest after τ·(1 − e^(−r·L))/r steps (L = ln(vn/rest); τ·L where it holds
+    /// still), which a linear stop (r = 1: τ, the steps to the turn) and a power-law one
+    /// (r = 1/q) meet exactly, and noise in r only shortens.
     fn steps_to_rest(&mut self, steps: u64, vn: f64, rest: f64) -> Option<f64> {
         let Some((from, vn_from)) = self.start else {
             self.start = Some((steps, vn));
@@ -61,8 +66,20 @@ impl SlowCreep {
         let tau = (steps - from) as f64 / (vn_from / vn).ln();
         let held = self.tau.is_some_and(|t| (tau / t - 1.0).abs() < Self::HOLD);
         self.steady = if held { self.steady + 1 } else { 0 };
+        if !held {
+            self.since = Some((steps, tau));
+        }
         (self.start, self.tau) = (Some((steps, vn)), Some(tau));
-        (self.steady >= Self::STEADY).then(|| tau * (vn / rest).ln().max(0.0))
+        let (since, tau_since) = self.since?;
+        if self.steady < Self::STEADY {
+            return None;
+        }
+        let falls = ((tau_since - tau) / (steps - since) as f64).max(0.0);
+        let l = (vn / rest).ln().max(0.0);
+        Some(match falls > 0.0 {
+            true => tau * -(-falls * l).exp_m1() / falls,
+            false => tau * l,
+        })
     }
 }
 
@@ -466,5 +483,53 @@ mod tests {
         let err = collide_on(&spec, Backend::Cpu).unwrap_err().to_string();
         assert!(err.contains("passed each other without touching"), "{err}");
         assert!(err.contains("--impact-angle"), "{err}");
+    }
+
+    /// Feeds `speed(step)` to the creep rule from step 0 until it projects: the step and
+    /// its projection.
+    fn projected(speed: impl Fn(f64) -> f64, rest: f64) -> (u64, f64) {
+        let mut creep = SlowCreep::default();
+        (0..1_000_000u64)
+            .find_map(|k| {
+                creep
+                    .steps_to_rest(k, speed(k as f64), rest)
+                    .map(|n| (k, n))
+            })
+            .expect("no projection")
+    }
+
+    /// The projection is the steps to rest of an exponential creep, and of a linear and a
+    /// power-law stop, whose e-folding falls (projected as exponential, a linear stop 3e5
+    /// steps ahead was taken for 9 times as far and stopped as undecidable).
+    #[test]
+    fn the_creep_projection_follows_how_the_speed_falls() {
+        let (v0, rest, t) = (1e-3, 1e-6, 3e5);
+        type Curve = Box<dyn Fn(f64) -> f64>;
+        // (the speed at step k, and the steps from k to rest)
+        let cases: [(&str, Curve, Curve); 3] = [
+            (
+                "exponential",
+                Box::new(move |k| v0 * (-k / 1e9).exp()),
+                Box::new(move |k| 1e9 * (v0 * (-k / 1e9).exp() / rest).ln()),
+            ),
+            (
+                "linear",
+                Box::new(move |k| v0 * (1.0 - k / t)),
+                Box::new(move |k| t * (1.0 - rest / v0) - k),
+            ),
+            (
+                "power law",
+                Box::new(move |k| v0 * (1.0 - k / t).powi(2)),
+                Box::new(move |k| (t - k) - t * (rest / v0).sqrt()),
+            ),
+        ];
+        for (name, speed, steps_left) in cases {
+            let (k, n) = projected(speed, rest);
+            let truth = steps_left(k as f64);
+            assert!(
+                (n / truth - 1.0).abs() < 0.02,
+                "{name}: {n:e} at step {k}, not {truth:e}"
+            );
+        }
     }
 }
