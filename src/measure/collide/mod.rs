@@ -23,6 +23,7 @@ mod collision;
 mod plot;
 mod predict;
 mod run;
+mod stop_rules;
 mod sweep;
 
 use collision::collide_with;

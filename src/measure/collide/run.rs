@@ -3,6 +3,7 @@
 
 use super::*;
 use backends::CollisionRun;
+use stop_rules::StopRules;
 
 /// Steps that close a gap of `gap` m at `vn` m/s (at least 1; saturating).
 fn approach_steps(gap: f64, vn: f64, dt: f64) -> u64 {
@@ -17,77 +18,6 @@ fn approach_limit(gap: f64, vn: f64, dt: f64) -> u64 {
         .saturating_add(100)
         .min(MAX_STEPS)
 }
-
-/// Consecutive steps an approach below [`REST_SPEED`] must decay as a creep to count as
-/// come to rest.
-const CREEP_STEPS: u32 = 10;
-
-/// A creep slower than this fraction of the impact speed, decaying exponentially, is
-/// projected to its rest ([`SlowCreep`]).
-const SLOW_CREEP: f64 = 1e-2;
-
-/// An approach in contact that slows as a creep, its e-folding τ measured over blocks of
-/// [`SlowCreep::BLOCK`] steps: where τ has held for [`SlowCreep::STEADY`] blocks, the steps
-/// it needs to slow to rest are known long before the step limit finds them out.
-#[derive(Default)]
-struct SlowCreep {
-    /// Steps and approach speed at the start of the current block.
-    start: Option<(u64, f64)>,
-    /// The last block's e-folding, steps.
-    tau: Option<f64>,
-    /// Consecutive blocks whose e-folding held within [`SlowCreep::HOLD`].
-    steady: u32,
-    /// Steps and e-folding where the blocks began to hold.
-    since: Option<(u64, f64)>,
-}
-
-impl SlowCreep {
-    const BLOCK: u64 = 1000;
-    const HOLD: f64 = 0.1;
-    const STEADY: u32 = 10;
-
-    /// After `steps`, approaching at `vn`: the steps to slow to `rest` once τ has held.
-    /// Where τ falls over the blocks at r steps a step, the decay speeds up: the speed
-    /// reaches rest after τ·(1 − e^(−r·L))/r steps (L = ln(vn/rest); τ·L where it holds
-    /// still), which a linear stop (r = 1: τ, the steps to the turn) and a power-law one
-    /// (r = 1/q) meet exactly, and noise in r only shortens.
-    fn steps_to_rest(&mut self, steps: u64, vn: f64, rest: f64) -> Option<f64> {
-        let Some((from, vn_from)) = self.start else {
-            self.start = Some((steps, vn));
-            return None;
-        };
-        if steps - from < Self::BLOCK {
-            return None;
-        }
-        if vn >= vn_from {
-            *self = Self::default();
-            return None;
-        }
-        let tau = (steps - from) as f64 / (vn_from / vn).ln();
-        let held = self.tau.is_some_and(|t| (tau / t - 1.0).abs() < Self::HOLD);
-        self.steady = if held { self.steady + 1 } else { 0 };
-        if !held {
-            self.since = Some((steps, tau));
-        }
-        (self.start, self.tau) = (Some((steps, vn)), Some(tau));
-        let (since, tau_since) = self.since?;
-        if self.steady < Self::STEADY {
-            return None;
-        }
-        let falls = ((tau_since - tau) / (steps - since) as f64).max(0.0);
-        let l = (vn / rest).ln().max(0.0);
-        Some(match falls > 0.0 {
-            true => tau * -(-falls * l).exp_m1() / falls,
-            false => tau * l,
-        })
-    }
-}
-
-/// Consecutive steps a pair in contact must move slower than [`REST_SPEED`] of the impact
-/// speed to count as at rest (a sub-linear dashpot stops it in finite time, not as a
-/// creep). A turn crosses that band within a step or a few (a collision of 5·10⁷ steps
-/// in about 60).
-const REST_STEPS: u32 = 1000;
 
 /// The settle time in steps of `dt` (at least 4: its last quarter is one step or more).
 pub(super) fn settle_steps(spec: &CollideSpec, dt: f64) -> u64 {
@@ -109,11 +39,7 @@ pub(super) fn run_collision(
     let view0 = run.view()?;
     let (ke0, total0, _) = run.energy(&view0);
     let mut touched = false;
-    let mut receding = false;
-    let mut fastest_receding: f64 = 0.0;
-    let (mut vn_before, mut creeping, mut last_to_stop) = (vn0, 0, None);
-    let mut slow_creep = SlowCreep::default();
-    let mut resting = 0;
+    let mut rules = StopRules::new(vn0);
     let mut first_contact = None;
     let mut last_contact = 0.0;
     let mut delta_max: f64 = 0.0;
@@ -217,46 +143,15 @@ pub(super) fn run_collision(
         if !touched {
             continue;
         }
-        if vn < 0.0 {
-            receding = true;
-            fastest_receding = fastest_receding.max(-vn);
-        }
-        let turned = receding && vn > 0.0;
-        let crept = receding && -vn < REST_SPEED * vn0.min(fastest_receding) && contact;
-        // an overdamped approach that creeps into its rest without turning back: slower
-        // than REST_SPEED of the impact, and decaying as a creep does (its steps to a stop
-        // at the current deceleration, vn/Δ, hold; at a turn they fall by one a step)
-        let slowing = vn_before - vn;
-        if !receding && contact && vn > 0.0 && vn < REST_SPEED * vn0 && slowing > 0.0 {
-            let to_stop = vn / slowing;
-            creeping = match last_to_stop {
-                Some(last) if to_stop > last - 0.5 => creeping + 1,
-                _ => 0,
-            };
-            last_to_stop = Some(to_stop);
-        } else {
-            (creeping, last_to_stop) = (0, None);
-        }
-        vn_before = vn;
-        if !receding && contact && vn > 0.0 && vn < SLOW_CREEP * vn0 {
-            hopeless = slow_creep.steps_to_rest(run.steps(), vn, REST_SPEED * vn0);
-            hopeless = hopeless.filter(|&needs| needs > 2.0 * (MAX_STEPS - run.steps()) as f64);
-        } else {
-            slow_creep = SlowCreep::default();
-        }
-        let crept_in = creeping >= CREEP_STEPS;
-        resting = match contact && vn.abs() < REST_SPEED * vn0 {
-            true => resting + 1,
-            false => 0,
-        };
-        let at_rest = resting >= REST_STEPS;
-        if (turned || crept || crept_in || at_rest) && delta > -reach {
+        let stop;
+        (stop, hopeless) = rules.after_step(run.steps(), vn, contact);
+        if stop && delta > -reach {
             delta_c = Some(delta);
             break;
         }
         // (a pair whose last step in range turned it back leaves still approaching: it
         // comes back, and the turn above finds it stuck)
-        if receding && vn < 0.0 && delta <= -reach && !neck {
+        if rules.receding && vn < 0.0 && delta <= -reach && !neck {
             e = -vn / vn0;
             vt_out = vt;
             break;
@@ -483,53 +378,5 @@ mod tests {
         let err = collide_on(&spec, Backend::Cpu).unwrap_err().to_string();
         assert!(err.contains("passed each other without touching"), "{err}");
         assert!(err.contains("--impact-angle"), "{err}");
-    }
-
-    /// Feeds `speed(step)` to the creep rule from step 0 until it projects: the step and
-    /// its projection.
-    fn projected(speed: impl Fn(f64) -> f64, rest: f64) -> (u64, f64) {
-        let mut creep = SlowCreep::default();
-        (0..1_000_000u64)
-            .find_map(|k| {
-                creep
-                    .steps_to_rest(k, speed(k as f64), rest)
-                    .map(|n| (k, n))
-            })
-            .expect("no projection")
-    }
-
-    /// The projection is the steps to rest of an exponential creep, and of a linear and a
-    /// power-law stop, whose e-folding falls (projected as exponential, a linear stop 3e5
-    /// steps ahead was taken for 9 times as far and stopped as undecidable).
-    #[test]
-    fn the_creep_projection_follows_how_the_speed_falls() {
-        let (v0, rest, t) = (1e-3, 1e-6, 3e5);
-        type Curve = Box<dyn Fn(f64) -> f64>;
-        // (the speed at step k, and the steps from k to rest)
-        let cases: [(&str, Curve, Curve); 3] = [
-            (
-                "exponential",
-                Box::new(move |k| v0 * (-k / 1e9).exp()),
-                Box::new(move |k| 1e9 * (v0 * (-k / 1e9).exp() / rest).ln()),
-            ),
-            (
-                "linear",
-                Box::new(move |k| v0 * (1.0 - k / t)),
-                Box::new(move |k| t * (1.0 - rest / v0) - k),
-            ),
-            (
-                "power law",
-                Box::new(move |k| v0 * (1.0 - k / t).powi(2)),
-                Box::new(move |k| (t - k) - t * (rest / v0).sqrt()),
-            ),
-        ];
-        for (name, speed, steps_left) in cases {
-            let (k, n) = projected(speed, rest);
-            let truth = steps_left(k as f64);
-            assert!(
-                (n / truth - 1.0).abs() < 0.02,
-                "{name}: {n:e} at step {k}, not {truth:e}"
-            );
-        }
     }
 }
