@@ -7,8 +7,8 @@ use super::{MAX_STEPS, REST_SPEED};
 /// come to rest.
 const CREEP_STEPS: u32 = 10;
 
-/// A creep slower than this fraction of the impact speed, decaying exponentially, is
-/// projected to its rest ([`SlowCreep`]).
+/// An approach in contact slower than this fraction of the impact speed is projected to its
+/// rest ([`SlowCreep`]).
 const SLOW_CREEP: f64 = 1e-2;
 
 /// An approach in contact that slows as a creep, its e-folding τ measured over blocks of
@@ -74,7 +74,7 @@ impl SlowCreep {
 /// in about 60).
 const REST_STEPS: u32 = 1000;
 
-/// The stop rules' state over a collision's steps in contact.
+/// The stop rules' state over a collision's steps since the first touch.
 pub(super) struct StopRules {
     /// The impact's normal speed, m/s.
     vn0: f64,
@@ -82,7 +82,7 @@ pub(super) struct StopRules {
     pub receding: bool,
     /// Its fastest receding speed so far, m/s.
     fastest_receding: f64,
-    /// The last step's approach speed, m/s.
+    /// The last touched step's approach speed (the impact's before), m/s.
     vn_before: f64,
     /// Consecutive steps an approach below [`REST_SPEED`] has decayed as a creep.
     creeping: u32,
