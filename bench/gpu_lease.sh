@@ -22,7 +22,7 @@ set -u
 cd "$(dirname "$0")/.."
 # every test binary that runs the GPU engine, the most telling first (those after the
 # deadline are not run)
-TESTS=(gpu_engine sticking ledger mixed_materials friction force_jumps gpu_default_limits
+TESTS=(gpu_engine sticking ledger mixed_materials friction compare_scenes force_jumps gpu_default_limits
        gpu_grid gpu_pages gpu_rebuild_chain walls periodic stability collide_jkr run_outputs
        contact_network pouring run_no_ledger collide_krijt quiet_batches cli bench library_input
        collide_hysteretic)
