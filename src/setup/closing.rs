@@ -1,13 +1,13 @@
 //! How fast particles and walls can close at the start: what the time step and the
 //! pass-through checks bound.
 
-use crate::scene::Scene;
+use crate::scene::{Scene, Wall, WallPhase};
+use glam::DVec3;
 
 /// The fastest a pair (or a particle and a wall) can close at the start, m/s: with two
 /// particles moving on straight lines (no walls, periodic axes or pours) their approach
 /// along the line of centres (0 when they part), otherwise [`velocity_spread`].
 pub(super) fn starting_closing_speed(scene: &Scene) -> f64 {
-    use glam::DVec3;
     let v = |i: usize| DVec3::from_array(scene.particles[i].velocity);
     let alone = scene.walls.is_empty() && !scene.domain.any_periodic() && !scene.pours();
     if scene.particles.len() == 2 && alone {
@@ -20,12 +20,7 @@ pub(super) fn starting_closing_speed(scene: &Scene) -> f64 {
 
 /// The velocity along its normal a wall moves with in `phase` (under servo control the
 /// largest it starts with), m/s.
-pub(super) fn wall_normal_velocity(
-    w: &crate::scene::Wall,
-    phase: &crate::scene::WallPhase,
-) -> glam::DVec3 {
-    use crate::scene::WallPhase;
-    use glam::DVec3;
+pub(super) fn wall_normal_velocity(w: &Wall, phase: &WallPhase) -> DVec3 {
     let n = DVec3::from_array(w.normal).normalize_or_zero();
     match *phase {
         WallPhase::Rest => DVec3::ZERO,
@@ -43,7 +38,6 @@ pub(super) fn wall_normal_velocity(
 /// a servo's first step, min(gain·force, max_speed)); particles moving together close
 /// nothing.
 pub(super) fn velocity_spread(scene: &Scene) -> f64 {
-    use glam::DVec3;
     let velocities = (scene.particles.iter())
         .map(|p| DVec3::from_array(p.velocity))
         .chain((scene.walls.iter()).map(|w| wall_normal_velocity(w, &w.motion.at(0.0))));

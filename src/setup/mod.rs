@@ -68,17 +68,7 @@ impl Resolved {
             .chain(&wall_models)
             .any(ContactModel::needs_rotation);
         if !rotation {
-            if let Some((i, p)) = scene
-                .particles
-                .iter()
-                .enumerate()
-                .find(|(_, p)| p.angular_velocity != [0.0; 3])
-            {
-                return Err(PowderError::Scene(format!(
-                    "particle {i} starts with angular_velocity = {:?} rad/s, but no contact model of the scene has friction, rolling or twisting resistance, so particles do not rotate: remove angular_velocity or give the model friction",
-                    p.angular_velocity
-                )));
-            }
+            no_spin(scene)?;
         }
         Ok(Self {
             n_materials,
@@ -198,4 +188,17 @@ fn chosen_dt(scene: &Scene, time_step: &TimeStep) -> Result<f64, PowderError> {
             dt
         }
     })
+}
+
+/// A scene whose laws do not turn particles may not start one spinning.
+fn no_spin(scene: &Scene) -> Result<(), PowderError> {
+    let spinning =
+        (scene.particles.iter().enumerate()).find(|(_, p)| p.angular_velocity != [0.0; 3]);
+    if let Some((i, p)) = spinning {
+        return Err(PowderError::Scene(format!(
+            "particle {i} starts with angular_velocity = {:?} rad/s, but no contact model of the scene has friction, rolling or twisting resistance, so particles do not rotate: remove angular_velocity or give the model friction",
+            p.angular_velocity
+        )));
+    }
+    Ok(())
 }
