@@ -143,8 +143,8 @@ pub(super) fn run_collision(
         if !touched {
             continue;
         }
-        let stop;
-        (stop, hopeless) = rules.after_step(run.steps(), vn, contact);
+        let (stop, needs) = rules.after_step(run.steps(), vn, contact);
+        hopeless = needs;
         if stop && delta > -reach {
             delta_c = Some(delta);
             break;

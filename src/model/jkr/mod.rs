@@ -430,17 +430,10 @@ impl JkrParams {
     /// The pull-off rule in effect: `crack` without a delayed contact radius (σ0 = 0, or
     /// T_vis = 0) closes at the turning point, which is `displacement`.
     pub fn pulloff_rule(&self) -> Pulloff {
-        match self.pulloff {
-            Pulloff::Crack
-                if self
-                    .dissipation
-                    .krijt_law()
-                    .is_some_and(|l| l.delays_radius()) =>
-            {
-                Pulloff::Crack
-            }
-            Pulloff::Crack => Pulloff::Displacement,
-            rule => rule,
+        match (self.pulloff, self.dissipation.krijt_law()) {
+            (Pulloff::Crack, Some(law)) if law.delays_radius() => Pulloff::Crack,
+            (Pulloff::Crack, _) => Pulloff::Displacement,
+            (rule, _) => rule,
         }
     }
 
