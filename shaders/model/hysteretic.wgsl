@@ -193,7 +193,7 @@ fn hyst_normal(p: HystereticPair, k: Kin, h: ptr<function, History>) -> Normal {
     let r = hyst_force(p, k.delta, k.delta_dot, 2.0 * k.r_eff, k.inv_a12, hyst_history_in((*h).hyst_state));
     (*h).hyst_state = hyst_history_out(r.history);
     let coulomb = max(0.0, r.force + p.kc * k.delta + p.fa);
-    return Normal(k.delta > 0.0, r.history.touched, r.force, r.potential, 0.0, 0.0, coulomb);
+    return Normal(k.delta > 0.0, r.history.touched, r.force, r.potential, 0.0, 0.0, coulomb, vec2<f32>(-1.0, 0.0));
 }
 
 // Where a contact starts and ends and the force just inside those edges, for the energy

@@ -119,7 +119,7 @@ fn jkr_dissipation(p: JkrPair, a: f32, delta: f32, a0: f32, delta_dot: f32, m: f
 // state (the Krijt dissipations) `jkr_radius_state` gives x, the force and the energy.
 // The friction laws' Coulomb load is |F_el + 2Fc| (paper 002 eq. 17).
 fn jkr_normal(p: JkrPair, k: Kin, h: ptr<function, History>) -> Normal {
-    var out = Normal(false, false, 0.0, 0.0, 0.0, 0.0, 0.0);
+    var out = Normal(false, false, 0.0, 0.0, 0.0, 0.0, 0.0, vec2<f32>(-1.0, 0.0));
     let r = k.r_eff;
     var a0 = 0.0;
     var elastic = 0.0;
@@ -149,8 +149,10 @@ fn jkr_normal(p: JkrPair, k: Kin, h: ptr<function, History>) -> Normal {
         let state = jkr_radius_state(p, k, a0, d0, fc, x, h);
         if (state.w != 0.0) {
             if (state.x <= 0.0) {
-                // the crack has closed the neck (`crack_break`): the contact breaks
+                // the crack has closed the neck (`crack_break`): the contact breaks, where
+                // within the step the state says (fraction, force just before)
                 (*h).touched = false;
+                out.broke = state.zy;
                 return out;
             }
             x = state.x;

@@ -124,20 +124,13 @@ fn krijt_tvis(p: JkrPair, x: f32, a0: f32, r: f32) -> f32 {
     return t0;
 }
 
-// The contact of a touched Krijt pair at overlap delta (`JkrParams::normal_force_step`):
-// a_old the stored radius (0 at the first touch: a_JKR(0)), x_eq the JKR root a(delta)/a0.
-// Returns (x = a/a0 after the step, the elastic force F_E, the stored energy from the JKR
-// break point Fc·delta0·(U(x, d) − P(x_break))); x = 0 where a `crack_break` contact has
-// closed (receding beyond the turning point d < JKR_D_MIN, or below the unstable root).
-fn krijt_normal(p: JkrPair, k: Kin, a0: f32, d0: f32, fc: f32, x_eq: f32, a_old: f32) -> vec3<f32> {
-    let d = k.delta / d0;
-    var x_old = KRIJT_X_TOUCH;
-    if (a_old > 0.0) {
-        x_old = a_old / a0;
-    }
+// One step dt of the contact radius x = a/a0 from x_old at d = delta/delta0, x_eq the JKR
+// root there (`KrijtLaw::step_radius_to_zero`): 0 where a `crack_break` contact has closed
+// (receding beyond the turning point d < JKR_D_MIN, or below the unstable root).
+fn krijt_step(p: JkrPair, x_old: f32, x_eq: f32, d: f32, dt: f32, a0: f32, r: f32) -> f32 {
     // T_vis at the start of the step drives the crack; v_c·dt/a0 = crack/a0·dt/T_vis,
     // crack = 2E*·gamma/sigma0² (0: sigma0 = 0, a follows the JKR curve instantly)
-    let tvis = krijt_tvis(p, x_old, a0, k.r_eff);
+    let tvis = krijt_tvis(p, x_old, a0, r);
     let recede = p.crack_break != 0u
         && (d < JKR_D_MIN || (x_old < x_eq && krijt_ratio(x_old, d) > 1.0));
     var x = x_eq;
@@ -145,7 +138,7 @@ fn krijt_normal(p: JkrPair, k: Kin, a0: f32, d0: f32, fc: f32, x_eq: f32, a_old:
         x = 0.0;
     }
     if (p.crack > 0.0 && tvis > 0.0) {
-        let c = (p.crack / a0) * (k.dt / tvis);
+        let c = (p.crack / a0) * (dt / tvis);
         if (c <= 0.0) {
             x = x_old;
         } else if (c < 1e30) {
@@ -156,10 +149,48 @@ fn krijt_normal(p: JkrPair, k: Kin, a0: f32, d0: f32, fc: f32, x_eq: f32, a_old:
             }
         }
     }
+    return x;
+}
+
+// The contact of a touched Krijt pair at overlap delta (`JkrParams::normal_force_step`):
+// a_old the stored radius (0 at the first touch: a_JKR(0)), x_eq the JKR root a(delta)/a0.
+// Returns (x = a/a0 after the step, the elastic force F_E, the stored energy from the JKR
+// break point Fc·delta0·(U(x, d) − P(x_break)), −1). A `crack_break` contact whose step
+// ends at negative overlap takes KRIJT_NECK_SUBSTEPS sub-steps along delta linear in time
+// (`KrijtLaw::step_neck`); where its neck closes it returns (0, the force just before,
+// the fraction of the step, 1).
+fn krijt_normal(p: JkrPair, k: Kin, a0: f32, d0: f32, fc: f32, x_eq: f32, a_old: f32) -> vec4<f32> {
+    let d = k.delta / d0;
+    var x_old = KRIJT_X_TOUCH;
+    if (a_old > 0.0) {
+        x_old = a_old / a0;
+    }
+    var x = x_old;
+    if (p.crack_break != 0u && k.delta < 0.0 && k.dt > 0.0) {
+        let n = f32(KRIJT_NECK_SUBSTEPS);
+        for (var j = 1; j <= KRIJT_NECK_SUBSTEPS; j++) {
+            var dj = d;
+            if (j < KRIJT_NECK_SUBSTEPS) {
+                dj = (k.delta - k.delta_dot * k.dt * (1.0 - f32(j) / n)) / d0;
+            }
+            let sj = jkr_solve_s(dj * d0, d0);
+            let next = krijt_step(p, x, sj * sj, dj, k.dt / n, a0, k.r_eff);
+            if (next <= 0.0) {
+                // (closed in sub-step j: at its middle, with the radius before it)
+                let t = (f32(j) - 0.5) / n;
+                let dx = (k.delta - k.delta_dot * k.dt * (1.0 - t)) / d0;
+                let force = 2.0 * fc * x * (dx - x * x) + krijt_viscous(p, a0 * x, a0, k.r_eff, k.delta_dot);
+                return vec4<f32>(0.0, force, t, 1.0);
+            }
+            x = next;
+        }
+    } else {
+        x = krijt_step(p, x_old, x_eq, d, k.dt, a0, k.r_eff);
+    }
     let x2 = x * x;
     let elastic = 2.0 * fc * x * (d - x2);
     let u = x * (1.8 * x2 * x2 - 2.0 * x2 * d + d * d - 2.0 * x);
-    return vec3<f32>(x, elastic, fc * d0 * (u - p.p_break));
+    return vec4<f32>(x, elastic, fc * d0 * (u - p.p_break), -1.0);
 }
 
 // The viscous force of eq. 12, (2·T_vis·E*/nu²)·a·delta_dot with T_vis at a, repulsive
@@ -172,5 +203,9 @@ fn krijt_viscous(p: JkrPair, a: f32, a0: f32, r: f32, delta_dot: f32) -> f32 {
 fn krijt_state(p: JkrPair, k: Kin, a0: f32, d0: f32, fc: f32, x_eq: f32, h: ptr<function, History>) -> vec4<f32> {
     let kn = krijt_normal(p, k, a0, d0, fc, x_eq, (*h).contact_radius);
     (*h).contact_radius = a0 * kn.x;
-    return vec4<f32>(kn, 1.0);
+    if (kn.x <= 0.0 && kn.w < 0.0) {
+        // (closed at the end of the step: no place within it)
+        return vec4<f32>(0.0, 0.0, -1.0, 1.0);
+    }
+    return vec4<f32>(kn.xyz, 1.0);
 }

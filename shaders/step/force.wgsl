@@ -34,6 +34,8 @@ struct Contact {
     engaged: bool,
     // Whether the tangential force slid at the Coulomb limit (`Response::sliding`).
     sliding: bool,
+    // Where within the step the contact broke, if its law resolves it (`Normal::broke`).
+    broke: vec2<f32>,
 }
 
 // Whether a contact is engaged after the step (the ledger's and the force jumps' "in"):
@@ -56,6 +58,21 @@ fn prior_of(k: Kin, c: Contact, power: f32, is_in: bool) -> vec4<f32> {
 // a contact the last step did not see (a slot a rebuild just made).
 fn overlap_before(old: vec4<f32>, k: Kin) -> f32 {
     return select(k.delta - k.delta_dot * k.dt, old.x, old.w != 0.0);
+}
+
+// The law's (entry δ, F, exit δ, F) where the step entered or left the contact (for the
+// ledger and the force jumps), the exit where the law placed a break within the step.
+fn step_edges(row: PairRow, k: Kin, old: vec4<f32>, c: Contact, is_in: bool) -> vec4<f32> {
+    var edges = vec4<f32>(0.0);
+    if ((LEDGER || JUMPS) && (old.w > 0.0) != is_in) {
+        edges = pair_edges(row, k);
+        if (c.broke.x >= 0.0) {
+            let before = overlap_before(old, k);
+            edges.z = before + c.broke.x * (k.delta - before);
+            edges.w = c.broke.y;
+        }
+    }
+    return edges;
 }
 
 // The force that switched on or off at δ = 0 within the step (`pair_touch_jump`) where
@@ -180,10 +197,7 @@ fn particle_forces(k: u32, row0: PairRow) {
         } else {
             peak = max(peak, delta * inv_a12);
             let power = dot(c.tangential, v_t) + dot(c.rolling, wk - wj);
-            var edges = vec4<f32>(0.0);
-            if ((LEDGER || JUMPS) && was_in != is_in) {
-                edges = pair_edges(row, kin);
-            }
+            let edges = step_edges(row, kin, old, c, is_in);
             let touch = touch_crossed(row, kin, old, is_in, edges);
             ledger_pair(&ledger_acc, old, kin, c, power, is_in, edges, touch);
             prior = prior_of(kin, c, power, is_in);
@@ -242,10 +256,7 @@ fn particle_forces(k: u32, row0: PairRow) {
         peak = max(peak, delta * inv_a12);
         let is_in = contact_is_in(c);
         let power = dot(c.tangential, v_t) + dot(c.rolling, wk);
-        var edges = vec4<f32>(0.0);
-        if ((LEDGER || JUMPS) && (old.w > 0.0) != is_in) {
-            edges = pair_edges(row, kin);
-        }
+        let edges = step_edges(row, kin, old, c, is_in);
         let touch = touch_crossed(row, kin, old, is_in, edges);
         let jump = contact_jump(old, kin, c, is_in, edges, touch);
         impulse += jump * n;

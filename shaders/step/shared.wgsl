@@ -306,4 +306,8 @@ struct Normal {
     // The load of the Coulomb limits (>= 0): |F_el + 2Fc| for JKR, Luding's
     // f_n + kc·delta + fa for the hysteretic law.
     coulomb: f32,
+    // A contact that broke within the step at a time the law resolves (a `crack` neck
+    // closing; `NormalForce::broke_within`): the fraction of the step and the normal force
+    // just before; x < 0: none.
+    broke: vec2<f32>,
 }

@@ -333,6 +333,7 @@ impl HystereticParams {
                 potential,
                 in_contact: true,
                 contact_radius: 0.0,
+                broke_within: None,
             }
         } else if delta > -range {
             // Non-contact range: a later mechanical contact starts afresh (paper 000 §2.2.5),
@@ -353,6 +354,7 @@ impl HystereticParams {
                 potential,
                 in_contact: false,
                 contact_radius: 0.0,
+                broke_within: None,
             }
         } else {
             // Beyond the interaction range the pair forgets its contact (paper 000, footnote 3).

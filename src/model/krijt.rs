@@ -31,6 +31,10 @@ pub const HISTORY: &[HistoryField] = &[HistoryField {
 pub const BETA_MIN: f64 = 0.02;
 /// β above which the crack speed of eq. B2 diverges (ln(0.98/(1 − 1/β)) = 0).
 pub const BETA_MAX: f64 = 50.0;
+/// Sub-steps of the crack law in a step of a `crack` contact that ends at negative overlap
+/// ([`KrijtLaw::step_neck`]): there the neck recedes and closes, and the first-order
+/// crack step's error and the closing time are resolved to dt/16.
+pub const NECK_SUBSTEPS: u32 = 16;
 /// Bisection iterations of [`advance_radius`] at most (it stops earlier once the bracket
 /// is below 1e-13 of a).
 pub const BISECTION_ITERATIONS: usize = 64;
@@ -155,6 +159,44 @@ impl KrijtLaw {
         }
     }
 
+    /// [`Self::step_radius_to_zero`] over a step of length `dt` that ends at overlap `delta`,
+    /// in [`NECK_SUBSTEPS`] sub-steps along an overlap linear in time (from
+    /// delta − delta_dot·dt); `a_eq` gives the JKR root at an overlap (None beyond the
+    /// turning point). Where the neck closes, the sub-step it closes in places it.
+    #[allow(clippy::too_many_arguments)]
+    pub fn step_neck(
+        &self,
+        a_old: f64,
+        (delta, delta_dot): (f64, f64),
+        dt: f64,
+        r_eff: f64,
+        m: &Material,
+        a_eq: impl Fn(f64) -> Option<f64>,
+    ) -> NeckStep {
+        let n = f64::from(NECK_SUBSTEPS);
+        let overlap = |t: f64| delta - delta_dot * dt * (1.0 - t);
+        let mut a = a_old;
+        for j in 1..=NECK_SUBSTEPS {
+            let d = if j == NECK_SUBSTEPS {
+                delta
+            } else {
+                overlap(f64::from(j) / n)
+            };
+            let next = self.step_radius_to_zero(a, a_eq(d), d, dt / n, r_eff, m);
+            if next <= 0.0 {
+                // (closed somewhere in sub-step j: its middle, with the radius before it)
+                let fraction = (f64::from(j) - 0.5) / n;
+                return NeckStep::Closed {
+                    fraction,
+                    radius: a,
+                    overlap: overlap(fraction),
+                };
+            }
+            a = next;
+        }
+        NeckStep::Open(a)
+    }
+
     /// Whether the contact radius lags the JKR curve at all: σ0 > 0 and a T_vis that is not
     /// 0 everywhere (else v_c is infinite).
     pub fn delays_radius(&self) -> bool {
@@ -166,7 +208,7 @@ impl KrijtLaw {
     }
 
     /// v_c·dt with T_vis at the start of the step (at `a_old`), m; infinite without delay
-    /// (also at dt = 0: a follows the JKR curve instantly).
+    /// (a follows the JKR curve instantly), 0 at dt = 0 with a delay (a is kept).
     fn crack_travel(&self, a_old: f64, dt: f64, r_eff: f64, m: &Material) -> f64 {
         let tvis = self.relaxation_time_at(a_old, r_eff, m);
         let vc = self.crack_speed_scale(tvis, m);
@@ -176,6 +218,22 @@ impl KrijtLaw {
             dt * vc
         }
     }
+}
+
+/// How a step of a receding neck ended ([`KrijtLaw::step_neck`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum NeckStep {
+    /// Still open, with this contact radius at the end of the step, m.
+    Open(f64),
+    /// Closed within the step.
+    Closed {
+        /// The fraction of the step at which it closed, in (0, 1).
+        fraction: f64,
+        /// The contact radius just before, m.
+        radius: f64,
+        /// The overlap there, m.
+        overlap: f64,
+    },
 }
 
 /// The dimensionless crack speed f(β) = σ0²·T_vis·ȧ/(2E*γ) of eq. B2: +∞ for β ≤ 0.02,
@@ -568,6 +626,50 @@ mod tests {
             instant.step_radius_to_zero(0.5 * a0(), None, past, 0.1, R_EFF, &m),
             0.0
         );
+    }
+
+    #[test]
+    fn a_fast_neck_closes_in_the_sub_step_that_passes_the_turning_point() {
+        let jkr = crate::model::jkr::JkrParams::jkr(2.0 * 0.9375 * ES, 0.25, GAMMA);
+        let d0 = a0() * a0() / (3.0 * R_EFF);
+        let a_eq = |d: f64| {
+            (d / d0 >= crate::model::jkr::D_PULLOFF_DISPLACEMENT)
+                .then(|| jkr.contact_radius(d, R_EFF))
+        };
+        // one step from −0.80·δ0 to −0.90·δ0, on the JKR curve at its start
+        let (start, end, dt) = (-0.8 * d0, -0.9 * d0, 1.0);
+        let crossing = (crate::model::jkr::D_PULLOFF_DISPLACEMENT * d0 - start) / (end - start);
+        let step = |sigma0: f64| {
+            let law = KrijtLaw {
+                relaxation: Relaxation::Constant { tvis: 0.075 },
+                sigma0,
+            };
+            let a_old = jkr.contact_radius(start, R_EFF);
+            law.step_neck(a_old, (end, (end - start) / dt), dt, R_EFF, &mat(), a_eq)
+        };
+        // a crack fast enough to follow the JKR curve closes within a sub-step of δc
+        match step(0.01) {
+            NeckStep::Closed {
+                fraction,
+                radius,
+                overlap,
+            } => {
+                let sub = 1.0 / f64::from(NECK_SUBSTEPS);
+                assert!(
+                    crossing < fraction && fraction < crossing + 1.5 * sub,
+                    "{fraction} vs {crossing}"
+                );
+                assert_eq!(overlap, end - (end - start) * (1.0 - fraction));
+                // the neck just before: near the turning point's radius (1/6)^(2/3)·a0
+                assert_relative_eq!(radius, 6f64.powf(-2.0 / 3.0) * a0(), max_relative = 0.05);
+            }
+            open => panic!("{open:?}"),
+        }
+        // the paper's σ0 lingers past δc: the neck closes later, or not in this step
+        match step(GAMMA / 1.091) {
+            NeckStep::Closed { fraction, .. } => assert!(fraction > crossing + 0.25),
+            NeckStep::Open(a) => assert!(a > 0.0),
+        }
     }
 
     #[test]

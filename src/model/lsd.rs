@@ -53,6 +53,7 @@ impl LsdParams {
                 potential: 0.5 * self.k * delta * delta,
                 in_contact: true,
                 contact_radius: 0.0,
+                broke_within: None,
             }
         } else {
             NormalForce::default()

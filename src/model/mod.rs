@@ -64,6 +64,9 @@ pub struct NormalForce {
     pub in_contact: bool,
     /// Contact radius a, m (JKR/Hertz; 0 for the piece-wise linear models).
     pub contact_radius: f64,
+    /// A contact that broke within the step at a time it resolves (a `crack` neck closing):
+    /// the fraction of the step and the normal force just before, N. None: at the end.
+    pub broke_within: Option<(f64, f64)>,
 }
 
 /// Pair properties the normal force laws need.

@@ -169,16 +169,20 @@ impl StepLog {
         let record = ContactRecord::new(history, kin.delta, &r, &motion);
         let was_in = prior.is_some_and(ContactRecord::engaged);
         let is_in = record.engaged();
+        // the overlap at the start of the step: the prior record's, or back along δ̇
+        let before = prior.map_or(kin.delta - kin.delta_dot * self.dt, |p| p.delta);
+        let after = kin.delta;
         // the edges only where the step crosses one (JKR's cost a contact-radius solve each)
-        let edges = if was_in != is_in {
+        let mut edges = if was_in != is_in {
             c.model.edges(geom, kin.delta, kin.delta_dot)
         } else {
             [(0.0, 0.0); 2]
         };
+        // a break the law placed within the step leaves there
+        if let (true, Some((fraction, force))) = (was_in && !is_in, r.normal.broke_within) {
+            edges[1] = (before + fraction * (after - before), force);
+        }
         self.dissipated += book(prior, &record, &motion, self.dt, edges);
-        // the overlap at the start of the step: the prior record's, or back along δ̇
-        let before = prior.map_or(kin.delta - kin.delta_dot * self.dt, |p| p.delta);
-        let after = kin.delta;
         // δ = 0 crossed with the contact side engaged (inside the contact, or with an edge
         // in the same step): the trapezoid the ledger booked spans the edge it used
         let contact_side_in = if after > 0.0 { is_in } else { was_in };

@@ -134,7 +134,7 @@ impl Composition {
         for l in self.laws() {
             let own: Vec<&str> = l.history.iter().map(|f| f.name).collect();
             w.push_str(&format!(
-                "fn contact_{0}(p: PairRow, k: Kin, h: ptr<function, History>) -> Contact {{\n    let nf = {1}(p.{0}, k, h);\n    var c = Contact(nf.force, vec3<f32>(0.0), vec3<f32>(0.0), nf.potential, nf.engaged, false);\n",
+                "fn contact_{0}(p: PairRow, k: Kin, h: ptr<function, History>) -> Contact {{\n    let nf = {1}(p.{0}, k, h);\n    var c = Contact(nf.force, vec3<f32>(0.0), vec3<f32>(0.0), nf.potential, nf.engaged, false, nf.broke);\n",
                 l.row.member, l.normal
             ));
             let applies: Vec<&str> = self

@@ -45,6 +45,9 @@ wgsl_consts! {
         /// Bisection steps of the Krijt backward-Euler solve at most (it stops once the
         /// bracket has no f32 inside; 30 halvings take a bracket of 2^6·a to one ulp of a).
         KRIJT_BISECTION_ITERATIONS = 30,
+        /// Sub-steps of the crack law in a step of a `crack` contact's neck
+        /// (`krijt::NECK_SUBSTEPS`).
+        KRIJT_NECK_SUBSTEPS = crate::model::krijt::NECK_SUBSTEPS as i32,
     }
 }
 

@@ -495,7 +495,8 @@ impl JkrParams {
     /// each with the dissipative force at that contact radius. The energy ledger integrates
     /// the work of a step that crosses an edge from there rather than from zero. A `crack`
     /// contact ([`Self::pulloff_rule`]) ends with a = 0 and no force at `delta`, the end of
-    /// the step (`docs/models.md`, *Krijt*).
+    /// the step, unless the step placed its break ([`NormalForce::broke_within`],
+    /// `docs/models.md`, *Krijt*).
     pub fn edge_forces(&self, geom: &PairGeometry, delta: f64, delta_dot: f64) -> [(f64, f64); 2] {
         let r = 0.5 * geom.a12;
         let pair = self.pair(r);
@@ -626,7 +627,31 @@ impl JkrParams {
                     X_TOUCH * a0
                 };
                 let rule = self.pulloff_rule();
-                let a = if rule == Pulloff::Crack {
+                let a = if rule == Pulloff::Crack && delta < 0.0 && dt > 0.0 {
+                    let root = |d: f64| {
+                        (d / d0 >= D_PULLOFF_DISPLACEMENT).then(|| {
+                            let s = sc.root(d);
+                            a0 * s * s
+                        })
+                    };
+                    match law.step_neck(a_old, (delta, delta_dot), dt, r, &mat, root) {
+                        krijt::NeckStep::Open(a) => a,
+                        krijt::NeckStep::Closed {
+                            fraction,
+                            radius,
+                            overlap,
+                        } => {
+                            // the neck closed within the step: the contact breaks there
+                            let force = krijt::elastic_force(radius, overlap, r, mat.e_star)
+                                + self.normal_dissipation(radius, overlap, delta_dot, geom, pair);
+                            *history = ContactHistory::default();
+                            return NormalForce {
+                                broke_within: Some((fraction, force)),
+                                ..NormalForce::default()
+                            };
+                        }
+                    }
+                } else if rule == Pulloff::Crack {
                     let a_eq = (delta / d0 >= D_PULLOFF_DISPLACEMENT).then_some(a_eq);
                     law.step_radius_to_zero(a_old, a_eq, delta, dt, r, &mat)
                 } else {
@@ -666,6 +691,7 @@ impl JkrParams {
             potential,
             in_contact: true,
             contact_radius: a,
+            broke_within: None,
         }
     }
 
