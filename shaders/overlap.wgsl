@@ -59,7 +59,8 @@ fn image_shift(image: vec3<i32>, raw: vec3<i32>) -> vec3<f32> {
 // offsets and the compensations (xyz of `ci`, `cj`): the f32 separation the kernels form
 // (cell difference·h + (o_i − o_j)) with its rounding recovered exactly, the
 // compensations subtracted and, across a periodic seam, the scene's period instead of
-// dims·h.
+// dims·h; then renormalised, so hi is the separation to f32 precision (the normals
+// and tangential kinematics take it).
 fn precise_separation(dc: vec3<f32>, shift: vec3<f32>, oi: vec3<f32>, oj: vec3<f32>, ci: vec3<f32>, cj: vec3<f32>) -> Df3 {
     var hi = vec3<f32>(0.0);
     var lo = vec3<f32>(0.0);
@@ -69,8 +70,12 @@ fn precise_separation(dc: vec3<f32>, shift: vec3<f32>, oi: vec3<f32>, oj: vec3<f
         let o = two_sum(oi[a], -oj[a]);
         let cells = two_prod(dc[a], grid.cell_width[a]);
         let s = two_sum(cells.hi, o.hi);
-        hi[a] = s.hi;
-        lo[a] = s.lo + o.lo + cells.lo - (ci[a] - cj[a]) + shift[a] * step.period_lo[a];
+        // renormalised: hi the nearest f32 to the compensated separation, |lo| within half
+        // its ulp (in sparse scenes the compensations reach an ulp of a wide cell's
+        // offsets, mm at 1e5 m cells, as large as the separation itself)
+        let x = two_sum(s.hi, opaque1(s.lo + o.lo + cells.lo - (ci[a] - cj[a]) + shift[a] * step.period_lo[a]));
+        hi[a] = x.hi;
+        lo[a] = x.lo;
     }
     return Df3(hi, lo);
 }

@@ -76,6 +76,38 @@ pub fn num(x: f64) -> impl std::fmt::Display {
     Num(x)
 }
 
+/// `x` for a message with `decimals` digits after the point: fixed where that is short,
+/// in `e` notation beyond 10⁶ and below 10⁻³ (where `{:.4}` prints hundreds of digits, or
+/// 0.0000).
+pub fn fixed(x: f64, decimals: usize) -> String {
+    let a = x.abs();
+    if a != 0.0 && a.is_finite() && !(1e-3..1e6).contains(&a) {
+        format!("{x:.decimals$e}")
+    } else {
+        format!("{x:.decimals$}")
+    }
+}
+
+/// A limit `x` in `e` notation with `decimals` digits after the point, rounded down, so that
+/// a value typed from the advice "use dt <= ..." is within the limit.
+pub fn sci_at_most(x: f64, decimals: usize) -> String {
+    let s = format!("{x:.decimals$e}");
+    match s.parse::<f64>() {
+        Ok(y) if y > x && x > 0.0 && x.is_finite() => {
+            // x cut to its digits (the unit of the last one at x's own exponent), one unit
+            // lower where the quotient's rounding left it above x
+            let unit = 10f64.powi(x.log10().floor() as i32 - decimals as i32);
+            let cut = (x / unit).floor();
+            let t = format!("{:.decimals$e}", cut * unit);
+            match t.parse::<f64>() {
+                Ok(z) if z > x => format!("{:.decimals$e}", (cut - 1.0) * unit),
+                _ => t,
+            }
+        }
+        _ => s,
+    }
+}
+
 /// Checks that a value is finite, naming the parameter otherwise.
 pub fn require_finite(param: &'static str, value: f64) -> Result<f64, ParamError> {
     if value.is_finite() {
@@ -115,5 +147,31 @@ pub fn require_non_negative(
             param,
             format!("{what} must be >= 0, got {value}"),
         ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The advice's limit, typed back, is within the limit, and at most one unit of its last
+    /// digit below it (`{:.3e}` rounds 1.93974e-10 up to 1.940e-10).
+    #[test]
+    fn a_limit_printed_as_advice_is_rounded_down() {
+        assert_eq!(sci_at_most(1.93974e-10, 3), "1.939e-10");
+        assert_eq!(fixed(2.5, 3), "2.500");
+        assert_eq!(fixed(3.3e300, 3), "3.300e300");
+        assert_eq!(fixed(1e-300, 4), "1.0000e-300");
+        assert_eq!(sci_at_most(1.93944e-10, 3), "1.939e-10");
+        assert_eq!(sci_at_most(9.99996e-5, 4), "9.9999e-5");
+        let mut x = 1.0e-12;
+        while x < 1e3 {
+            for d in [3, 4] {
+                let y: f64 = sci_at_most(x, d).parse().unwrap();
+                let unit = 10f64.powi(x.log10().floor() as i32 - d as i32);
+                assert!(y <= x && x - y <= 1.000001 * unit, "{x:e} -> {y:e}");
+            }
+            x *= 1.0137;
+        }
     }
 }

@@ -318,6 +318,34 @@ fn bad_bench_and_accuracy_input_is_an_error_not_a_panic() {
     }
 }
 
+/// A bench in which no size ran is a failed command: it leaves an existing `--json` file as
+/// it was (it used to replace it with the failed rows).
+#[test]
+fn a_failed_bench_keeps_the_json_file_it_was_given() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("earlier.json");
+    std::fs::write(&json, "{\"kept\": true}").unwrap();
+    let (ok, _, err) = powder(&[
+        "bench",
+        "--sizes",
+        "100",
+        "--steps",
+        "4",
+        "--backend",
+        "cpu",
+        "--velocity-scale",
+        "1e6",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(!ok);
+    assert!(
+        err.contains("no size ran") && err.contains("not written"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read_to_string(&json).unwrap(), "{\"kept\": true}");
+}
+
 /// `--profile` runs as many steps again with a GPU timestamp after every pass and reports
 /// each pass's device time in the table and the JSON, windowed runs too.
 #[test]

@@ -704,6 +704,20 @@ fn compare_reports_deviations_and_fails_beyond_thresholds() {
         "beyond a threshold: exit code 1"
     );
     assert!(String::from_utf8_lossy(&out.stdout).contains("FAIL"));
+    // a comparison that never saw a contact says so (it passed on free flight alone)
+    let pair = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/examples/compare/sparse_pair.toml"
+    );
+    for (steps, contacts) in [("500", false), ("3000", true)] {
+        let (ok, out, err) = powder(&["compare", pair, "--steps", steps, "--every", "250"]);
+        assert!(ok, "{err}");
+        assert_eq!(
+            !out.contains("no sample held a contact"),
+            contacts,
+            "{steps} steps: {out}"
+        );
+    }
     // a measure left out: its tolerance is null in JSON, and it is named as unchecked
     let (ok, out, err) = powder(&[
         "compare",
@@ -1235,6 +1249,28 @@ fn collide_reports_the_tabor_parameter_and_warns_below_the_jkr_range() {
     let (ok, _, err) = jkr_cmd(&["--velocity", "2", "--tabor-dmin", "1e-300"]);
     assert!(
         !ok && err.contains("Tabor parameter") && err.contains("inf"),
+        "{err}"
+    );
+    // without --tabor-dmin the message names the inputs that overflowed, not the flag
+    let (ok, _, err) = powder(&[
+        "collide",
+        "--model",
+        "jkr",
+        "--youngs",
+        "1e8",
+        "--poisson",
+        "0.3",
+        "--density",
+        "2000",
+        "--radius",
+        "1e-5",
+        "--velocity",
+        "0.1",
+        "--surface-energy",
+        "1e300",
+    ]);
+    assert!(
+        !ok && err.contains("`surface-energy`") && !err.contains("tabor-dmin"),
         "{err}"
     );
     let (ok, _, err) = jkr_cmd(&["--velocity", "2", "--yield-stress", "1e-300"]);
@@ -2229,4 +2265,45 @@ fn compare_passes_the_krijt_pair_with_the_crack_pulloff() {
         }
     });
     assert!(stretched, "{out}");
+}
+
+/// Counts and radii beyond f64 or u64 are said as such: a settle time of 1e308 s needs
+/// ~1e313 steps (printed as 2^64 − 1 before), and radii whose R* underflows to 0 are
+/// refused (the Tabor parameter was printed as 0 at R* = 0).
+#[test]
+fn counts_and_radii_beyond_what_numbers_hold_are_named() {
+    let (ok, _, err) = hysteretic(&["--velocity", "0.1", "--wall", "--settle", "1e308"]);
+    assert!(
+        !ok && err.contains("steps of") && !err.contains("18446744073709551615"),
+        "{err}"
+    );
+    let (ok, _, err) = powder(&[
+        "analytic",
+        "tabor",
+        "--youngs",
+        "1e8",
+        "--poisson",
+        "0.3",
+        "--surface-energy",
+        "0.01",
+        "--radius",
+        "1e-5",
+        "--radius2",
+        "1e-320",
+    ]);
+    assert!(!ok && err.contains("reduced radius"), "{err}");
+    // a subnormal stiffness is printed as one, not as 0.000000
+    let (ok, out, err) = powder(&[
+        "analytic",
+        "kp-prime",
+        "--k1",
+        "1e-320",
+        "--kp",
+        "500",
+        "--phi-f",
+        "0.05",
+        "--phi-f-new",
+        "0.1",
+    ]);
+    assert!(ok && out.contains("k1 = 1e-320"), "{out}{err}");
 }

@@ -783,6 +783,37 @@ mod on_the_gpu {
         analytic::jkr_sticking_velocity(w, g.reduced_mass)
     }
 
+    /// A creep too slow for the step limit is named as early on the GPU, whose f32 speeds
+    /// move by ~1e-6 from sample to sample while the creep slows by less a block (silica
+    /// micro-spheres with a strong power-law dissipation; it ran the 5e7 steps out, hours
+    /// on lavapipe; measured: named after 12 084 steps, ~13 s, as on the CPU).
+    #[test]
+    fn gpu_names_a_creep_too_slow_for_the_step_limit_early() {
+        if context().is_none() {
+            return;
+        }
+        let p = JkrParams {
+            dissipation: Dissipation::PowerLaw {
+                d: 1e-3,
+                alpha: 1.0,
+                beta: 1.2,
+            },
+            ..JkrParams::jkr(7e10, 0.3, 0.025)
+        };
+        let s = CollideSpec::head_on(powder::model::ContactModel::Jkr(p), 1e-6, 2500.0, 1.0);
+        let err = collide_on(&s, Backend::Gpu).unwrap_err().to_string();
+        let steps: u64 = err
+            .split("steps: after ")
+            .nth(1)
+            .and_then(|a| a.split(' ').next())
+            .and_then(|n| n.parse().ok())
+            .unwrap_or_else(|| panic!("{err}"));
+        assert!(
+            steps < 100_000 && err.contains("at least") && err.contains("gpu backend"),
+            "{err}"
+        );
+    }
+
     #[test]
     fn gpu_jkr_collisions_match_the_cpu_for_both_pulloff_rules() {
         if context().is_none() {

@@ -872,6 +872,32 @@ fn a_stop_signal_writes_a_checkpoint_and_exits_with_its_status() {
     }
 }
 
+/// A stopped `--no-output` run says that it wrote no checkpoint (it used to name one in
+/// "(no output directory)").
+#[test]
+fn a_stopped_run_without_outputs_says_it_wrote_no_checkpoint() {
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/jkr_deposition.toml");
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_powder"))
+        .args(["run", scene, "--no-output"])
+        .stderr(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    let ok = std::process::Command::new("kill")
+        .args(["-INT".to_string(), child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(ok.success());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(130), "{stderr}");
+    assert!(
+        stderr.contains("no checkpoint (--no-output") && !stderr.contains("checkpoint.bin"),
+        "{stderr}"
+    );
+}
+
 /// Ctrl-C off the output cadence (here after the first chunk of 1000 steps, with rows
 /// every 1500) writes a last row and snapshot after its checkpoint; the run resumed from
 /// that checkpoint drops them and ends with the straight run's bytes, on both backends.

@@ -2,7 +2,7 @@
 //! collision (a module of the binary; the formulas live in `powder::model::analytic`).
 
 use clap::{Arg, Args, Subcommand};
-use powder::error::require_positive;
+use powder::error::{fixed, num, require_positive};
 use powder::model::flags::{ParamArgs, ParamSet};
 use powder::model::params::{self as declared, Param};
 use powder::model::{analytic, HystereticParams, JkrParams, PairGeometry};
@@ -99,7 +99,20 @@ impl PairArgs {
             return Ok(PairGeometry::wall(r1, m(r1)));
         }
         let r2 = require_positive("radius2", self.radius2.unwrap_or(r1), "the second radius")?;
-        Ok(PairGeometry::spheres(r1, r2, m(r1), m(r2)))
+        let g = PairGeometry::spheres(r1, r2, m(r1), m(r2));
+        // (radii of subnormal size: R* = r1·r2/(r1 + r2) underflows; an overflow is named
+        // by the result it makes infinite)
+        if g.r_eff().is_nan() || g.r_eff() <= 0.0 {
+            return Err(ParamError::new(
+                "radius2",
+                format!(
+                    "the reduced radius R* = r1·r2/(r1 + r2) of --radius {r1:e} and --radius2 {r2:e} comes out as {:e}, below what f64 holds; check their units",
+                    g.r_eff()
+                ),
+            )
+            .into());
+        }
+        Ok(g)
     }
 }
 
@@ -240,12 +253,17 @@ fn kp_prime(a: &KpPrimeArgs) -> Result<(), PowderError> {
         return print_json(&out);
     }
     println!(
-        "kp' = {kp_prime:.6} N/m (paper 000 eq. A.3: k1 = {}, kp = {} N/m, phi_f = {} -> {})",
-        p.k1, p.kp, p.phi_f, a.phi_f_new
+        "kp' = {} N/m (paper 000 eq. A.3: k1 = {}, kp = {} N/m, phi_f = {} -> {})",
+        fixed(kp_prime, 6),
+        num(p.k1),
+        num(p.kp),
+        num(p.phi_f),
+        num(a.phi_f_new)
     );
     println!(
-        "plastic limit overlap delta_max^p/a12 (eq. 10): {:.6} -> {:.6}",
-        out.delta_max_p_over_a12[0], out.delta_max_p_over_a12[1]
+        "plastic limit overlap delta_max^p/a12 (eq. 10): {} -> {}",
+        fixed(out.delta_max_p_over_a12[0], 6),
+        fixed(out.delta_max_p_over_a12[1], 6)
     );
     Ok(())
 }

@@ -158,17 +158,21 @@ pub(crate) fn bench_cmd(a: &BenchArgs) -> Result<(), PowderError> {
             ad.name, ad.backend, ad.device_type, ad.driver, ad.driver_info
         );
     }
-    if let Some(path) = &a.json {
-        write_json(path, &report)?;
-    }
     // (a size that failed or was skipped beside others that ran is the benchmark's finding;
-    // none running is a failed command)
+    // none running is a failed command, which leaves an existing --json file as it was)
     if !report.rows.iter().any(|r| r.status == "ran") {
         let first = report.rows.first().and_then(|r| r.note.as_deref());
+        let kept = a
+            .json
+            .as_ref()
+            .map_or_else(String::new, |p| format!("; {} not written", p.display()));
         return Err(PowderError::Run(format!(
-            "no size ran: every row was skipped or failed (the first: {})",
+            "no size ran: every row was skipped or failed (the first: {}){kept}",
             first.unwrap_or("no reason given")
         )));
+    }
+    if let Some(path) = &a.json {
+        write_json(path, &report)?;
     }
     Ok(())
 }

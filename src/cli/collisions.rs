@@ -155,12 +155,16 @@ pub(crate) fn collide_report(
         )?,
         None => powder::model::analytic::TABOR_MIN_SEPARATION,
     };
-    derived_finite(
-        collide::tabor(spec, tabor_dmin),
-        "tabor-dmin",
-        "the Tabor parameter at this --tabor-dmin",
-        false,
-    )?;
+    // (the flag the user gave, else the inputs of (R*·γ²/(E*²·D_min³))^(1/3))
+    let (param, what) = if a.tabor_dmin.is_some() {
+        ("tabor-dmin", "the Tabor parameter at this --tabor-dmin")
+    } else {
+        (
+            "surface-energy",
+            "the Tabor parameter (R*·γ²/(E*²·D_min³))^(1/3) of --surface-energy, --youngs and --radius",
+        )
+    };
+    derived_finite(collide::tabor(spec, tabor_dmin), param, what, false)?;
     Ok(CollideReport {
         tabor_dmin,
         v_yield,

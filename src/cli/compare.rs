@@ -139,6 +139,11 @@ pub(crate) fn compare_cmd(a: &CompareArgs) -> Result<bool, PowderError> {
             t.history,
             if c.passed { "PASS" } else { "FAIL" }
         );
+        if (c.samples.iter()).all(|s| s.contacts_cpu == 0 && s.contacts_gpu == 0) {
+            println!(
+                "note: no sample held a contact on either engine: only free flight was compared; run more --steps (or sample with --every) to compare the contact laws"
+            );
+        }
         if let Some(p) = c.perturbation {
             let from: Vec<String> = (c.horizon.iter())
                 .map(|(name, step)| format!("{name} from step {step}"))

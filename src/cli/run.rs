@@ -133,14 +133,16 @@ pub(crate) fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
     let summary = summary?;
     if summary.interrupted {
         INTERRUPTED.store(true, std::sync::atomic::Ordering::Relaxed);
-        eprintln!(
-            "interrupted at step {}: checkpoint written to {}/checkpoint.bin; resume with --resume",
-            summary.steps,
-            summary
-                .out_dir
-                .as_deref()
-                .unwrap_or("(no output directory)")
-        );
+        match summary.out_dir.as_deref() {
+            Some(dir) => eprintln!(
+                "interrupted at step {}: checkpoint written to {dir}/checkpoint.bin; resume with --resume",
+                summary.steps
+            ),
+            None => eprintln!(
+                "interrupted at step {}: no checkpoint (--no-output writes none)",
+                summary.steps
+            ),
+        }
     }
     if a.json {
         let text = serde_json::to_string_pretty(&summary)

@@ -540,17 +540,25 @@ impl ContactModel {
                     let v_zone = impact_velocity.min(p.adhesion_speed(r, mr));
                     let zone = p.delta0(r) / v_zone;
                     if zone < eq.min(hertz) {
-                        (zone, format!("tc = delta0/v, the time to cross the JKR adhesive zone delta0 = {:.4e} m at {v_zone:.4e} m/s (the impact velocity {impact_velocity} m/s, at most the adhesion speed)", p.delta0(r)), 0.0)
+                        (zone, format!("tc = delta0/v, the time to cross the JKR adhesive zone delta0 = {:.4e} m at {v_zone:.4e} m/s (the impact velocity {} m/s, at most the adhesion speed)", p.delta0(r), crate::error::num(impact_velocity)), 0.0)
                     } else if eq < hertz {
                         (eq, format!("tc = pi*sqrt(m*/k_eq), the JKR oscillation about the equilibrium overlap (k_eq = {:.4e} N/m)", p.equilibrium_stiffness(r)), 0.0)
                     } else {
-                        (hertz, format!("tc = Hertz contact time at the impact velocity {impact_velocity} m/s"), 0.0)
+                        (
+                            hertz,
+                            format!(
+                                "tc = Hertz contact time at the impact velocity {} m/s",
+                                crate::error::num(impact_velocity)
+                            ),
+                            0.0,
+                        )
                     }
                 } else {
                     (
                         hertz,
                         format!(
-                            "tc = Hertz contact time at the impact velocity {impact_velocity} m/s"
+                            "tc = Hertz contact time at the impact velocity {} m/s",
+                            crate::error::num(impact_velocity)
                         ),
                         0.0,
                     )

@@ -11,6 +11,7 @@ pub(crate) use fits::engine_fits;
 mod monitor;
 pub mod observed;
 mod outputs;
+mod overdamped;
 mod overlap_partner;
 mod plan;
 mod servo;

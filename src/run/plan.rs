@@ -105,6 +105,9 @@ pub(super) fn plan<S: Simulation>(
         for w in servo::unstable_gains(scene, engine.dt()) {
             eprintln!("warning: {w}");
         }
+        for w in super::overdamped::overdamped_friction(scene) {
+            eprintln!("warning: {w}");
+        }
     }
     Ok(RunPlan {
         tabor,

@@ -103,7 +103,8 @@ pub fn unstable_gains(scene: &Scene, dt: f64) -> Vec<String> {
             let margin = gain * stiffest * dt;
             if margin >= 1.0 {
                 out.push(format!(
-                    "wall {w}'s servo phase from t = {from:e} s: servo_gain {gain:e} m/s per N overshoots as soon as one particle touches the wall: gain·k·dt = {margin:.3} ≥ 1 with k = {stiffest:.4e} N/m (the normal stiffness of a particle's contact with the wall under the servo force) and dt = {dt:e} s; the wall would swing at servo_max_speed a step each way instead of holding its force; a gain below {:.4e} m/s per N holds with one contact (a bed under the wall is stiffer: less still)",
+                    "wall {w}'s servo phase from t = {from:e} s: servo_gain {gain:e} m/s per N overshoots as soon as one particle touches the wall: gain·k·dt = {} ≥ 1 with k = {stiffest:.4e} N/m (the normal stiffness of a particle's contact with the wall under the servo force) and dt = {dt:e} s; the wall would swing at servo_max_speed a step each way instead of holding its force; a gain below {:.4e} m/s per N holds with one contact (a bed under the wall is stiffer: less still)",
+                    crate::error::fixed(margin, 3),
                     1.0 / (stiffest * dt)
                 ));
                 break;

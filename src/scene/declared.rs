@@ -194,7 +194,7 @@ pub const SCENE_KEYS: &[SceneKey] = &[
     key(Material, ALL, "density", "number", "kg/m³", Absent::Required, Rule::Positive, "", "the particles' density", Some("0.0")),
     key(Material, ALL, "model", "string", "", Absent::Required, Rule::None, "a law of `powder params`", "the contact law between two particles of the material (and with its walls)", Some("\"nope\"")),
     // [[interaction]]
-    key(Interaction, ALL, "materials", "[string, string]", "", Absent::Required, Rule::None, "two material names, a pair once", "the pair of materials (order does not matter)", Some("[\"powder\", \"nope\"]")),
+    key(Interaction, ALL, "materials", "[string, string]", "", Absent::Required, Rule::None, "two different material names, a pair once", "the pair of materials (order does not matter)", Some("[\"powder\", \"nope\"]")),
     key(Interaction, ALL, "model", "string", "", Absent::Required, Rule::None, "a law of `powder params`", "the contact law between them", Some("\"nope\"")),
     // [[wall]]
     key(Wall, ALL, "point", "[x, y, z]", "m", Absent::Required, Rule::None, "", "a point on the plane", None),

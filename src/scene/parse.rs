@@ -375,6 +375,15 @@ fn parse_interactions(root: &Tbl, names: &[&str]) -> Res<Vec<Interaction>> {
         let a = material_index(&t, node, "materials", pair[0], names)?;
         let b = material_index(&t, node, "materials", pair[1], names)?;
         t.ctx = format!("[[interaction]] #{} (`{}`-`{}`)", i + 1, names[a], names[b]);
+        if a == b {
+            return Err(t.err_key(
+                "materials",
+                format!(
+                    "{} pairs `{}` with itself: a material's law with itself is its [[material]]'s `model`; an interaction is between two different materials",
+                    t.ctx, names[a]
+                ),
+            ));
+        }
         if let Some(j) = out
             .iter()
             .position(|x| x.materials == [a, b] || x.materials == [b, a])

@@ -538,8 +538,8 @@ fn expand_random(
                     "the region of {} is narrower on axis {} ({}) than the largest particle diameter drawn ({}): enlarge the region or use smaller particles",
                     t.ctx,
                     AXES[a],
-                    max[a] - min[a],
-                    2.0 * block_rmax
+                    crate::error::num(max[a] - min[a]),
+                    crate::error::num(2.0 * block_rmax)
                 ),
             ));
         }

@@ -457,6 +457,23 @@ fn out_of_range_values() {
     );
     let e = err(&minimal("", "").replace("radius = 1e-3", "radius = 1e-3\nradii = [1e-3]"));
     assert_contains(&e, &["has both `radius` and `radii`"]);
+    // a material's law with itself is its own, not an interaction's (it used to override it)
+    let e = err(&minimal(
+        "",
+        "[[interaction]]\nmaterials = [\"powder\", \"powder\"]\nmodel = \"lsd\"\nk = 1.0\n",
+    ));
+    assert_contains(
+        &e,
+        &[
+            "`powder` with itself",
+            "[[interaction]] #1",
+            "two different materials",
+        ],
+    );
+    let mut s = parse(FULL).unwrap();
+    s.interactions[0].materials = [1, 1];
+    let e = s.validate().unwrap_err().to_string();
+    assert!(e.contains("with itself"), "{e}");
 }
 
 #[test]

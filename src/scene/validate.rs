@@ -123,6 +123,11 @@ impl Scene {
                 .validate()
                 .map_err(|e| PowderError::Scene(format!("scene: interaction {k}: {e}")))?;
             let [a, b] = it.materials;
+            if a == b {
+                return bad(format!(
+                    "interaction {k} pairs material {a} with itself: a material's own law is its model; an interaction is between two different materials"
+                ));
+            }
             if let Some(j) = (self.interactions[..k].iter())
                 .position(|x| x.materials == [a, b] || x.materials == [b, a])
             {

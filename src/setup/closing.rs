@@ -33,22 +33,29 @@ pub(super) fn wall_normal_velocity(w: &Wall, phase: &WallPhase) -> DVec3 {
     }
 }
 
-/// A bound on every relative speed at the start: the diagonal of the bounding box of the
-/// particles' starting velocities and the walls' along their normals (a prescribed one, or
-/// a servo's first step, min(gain·force, max_speed)); particles moving together close
-/// nothing.
+/// A bound on every closing speed at the start: the diagonal of the bounding box of the
+/// particles' starting velocities, or a wall's speed along its normal (a prescribed one,
+/// or a servo's first step, min(gain·force, max_speed)) less the slowest particle's there,
+/// the larger; particles moving together close nothing, nor does a wall moving away.
 pub(super) fn velocity_spread(scene: &Scene) -> f64 {
-    let velocities = (scene.particles.iter())
-        .map(|p| DVec3::from_array(p.velocity))
-        .chain((scene.walls.iter()).map(|w| wall_normal_velocity(w, &w.motion.at(0.0))));
-    let (lo, hi) = velocities.fold(
+    let particles = || (scene.particles.iter()).map(|p| DVec3::from_array(p.velocity));
+    let (lo, hi) = particles().fold(
         (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
         |(lo, hi), v| (lo.min(v), hi.max(v)),
     );
     let d = (hi - lo).max(DVec3::ZERO);
     // (components beyond 1.3e154 overflow the squares of a length f64 holds)
-    match (d.length(), d.max_element()) {
+    let pairs = match (d.length(), d.max_element()) {
         (length, m) if length.is_infinite() && m.is_finite() => (d / m).length() * m,
         (length, _) => length,
-    }
+    };
+    // a wall closes at its speed toward the particles' side less the slowest particle's
+    // along its normal (a receding wall closes on none)
+    let walls = scene.walls.iter().map(|w| {
+        let n = DVec3::from_array(w.normal).normalize_or_zero();
+        let wall = wall_normal_velocity(w, &w.motion.at(0.0)).dot(n);
+        let slowest = particles().map(|v| v.dot(n)).fold(f64::INFINITY, f64::min);
+        (wall - slowest).max(0.0)
+    });
+    walls.fold(pairs, f64::max)
 }

@@ -181,8 +181,10 @@ fn chosen_dt(scene: &Scene, time_step: &TimeStep) -> Result<f64, PowderError> {
         DtSetting::Fixed(dt) => {
             if dt > time_step.max && !scene.force_dt {
                 return Err(PowderError::Scene(format!(
-                    "dt = {dt:e} s is above the stable limit {:.4e} s ({}); use dt <= {:.4e} s or set force_dt = true",
-                    time_step.max, time_step.reason, time_step.max
+                    "dt = {dt:e} s is above the stable limit {:.4e} s ({}); use dt <= {} s or set force_dt = true",
+                    time_step.max,
+                    time_step.reason,
+                    crate::error::sci_at_most(time_step.max, 4)
                 )));
             }
             dt

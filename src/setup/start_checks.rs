@@ -91,11 +91,13 @@ fn no_pass_through(scene: &Scene, dt: f64, r_min: f64) -> Result<(), PowderError
     // a wall's later phases, which the starting spread does not see
     for (w, wall) in scene.walls.iter().enumerate() {
         for (k, (from, phase)) in wall.motion.phases.iter().enumerate() {
-            let speed = wall_normal_velocity(wall, phase).length();
+            // (toward the particles' side: one moving away cannot pass them)
+            let n = glam::DVec3::from_array(wall.normal).normalize_or_zero();
+            let speed = wall_normal_velocity(wall, phase).dot(n).max(0.0);
             let during = *from > 0.0 && *from < scene.duration;
             if !scene.force_dt && during && speed * dt > r_min {
                 return Err(PowderError::Scene(format!(
-                    "wall {w}'s motion from t = {} s (its phase or schedule entry {k}) moves it at up to {speed:.4e} m/s along its normal: it closes {:.4e} m in a step of {dt:.4e} s, more than the smallest particle radius {} m, and particles can pass through it between two steps; slow that motion or set a smaller simulation.dt, or force_dt = true to run it anyway",
+                    "wall {w}'s motion from t = {} s (its phase or schedule entry {k}) moves it at up to {speed:.4e} m/s toward the particles' side: it closes {:.4e} m in a step of {dt:.4e} s, more than the smallest particle radius {} m, and particles can pass through it between two steps; slow that motion or set a smaller simulation.dt, or force_dt = true to run it anyway",
                     num(*from),
                     speed * dt,
                     num(r_min)

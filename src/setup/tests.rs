@@ -65,6 +65,46 @@ fn a_wall_phase_that_can_pass_particles_in_one_step_is_refused() {
     );
     assert!(Resolved::new(&scene(1.0, false)).is_ok());
     assert!(Resolved::new(&scene(1e5, true)).is_ok());
+    // moving away from the particles' side it passes none (it used to be refused)
+    assert!(Resolved::new(&scene(-1e5, false)).is_ok());
+}
+
+/// The dt a refusal advises, typed back, is accepted (rounded to 4 digits it could lie
+/// just above the limit and be refused in turn).
+#[test]
+fn the_advised_time_step_is_accepted() {
+    for k in 0..40 {
+        let radius = 1.0e-3 * (1.0 + 0.00731 * f64::from(k));
+        let mut s = scene("model = \"lsd\"\nk = 100.0", &radius.to_string());
+        s.dt = DtSetting::Fixed(1.0);
+        let e = refused(&s);
+        let advised: f64 = e
+            .split("use dt <= ")
+            .nth(1)
+            .and_then(|r| r.split(' ').next())
+            .and_then(|x| x.parse().ok())
+            .unwrap_or_else(|| panic!("{e}"));
+        s.dt = DtSetting::Fixed(advised);
+        assert!(Resolved::new(&s).is_ok(), "radius {radius}: {e}");
+    }
+}
+
+/// A wall moving at the start away from the particles' side closes on none: accepted,
+/// with the dt of the particles (it used to be refused as a closing of 6.6e-3 m a step);
+/// moving toward them as fast, refused.
+#[test]
+fn a_wall_receding_at_the_start_closes_on_no_particle() {
+    let scene = |speed: f64| {
+        let text = format!(
+            "[domain]\nmin = [0.0, 0.0, 0.0]\nmax = [1.0, 0.01, 0.01]\n[simulation]\nduration = 0.1\n[[material]]\nname = \"m\"\ndensity = 2000.0\nmodel = \"lsd\"\nk = 100.0\n[[wall]]\npoint = [0.0, 0.0, 0.0]\nnormal = [1.0, 0.0, 0.0]\nvelocity = [{speed:?}, 0.0, 0.0]\n[[particles]]\nkind = \"list\"\npositions = [[0.45, 0.005, 0.005]]\nradius = 1e-3\n"
+        );
+        Scene::from_toml_str(&text, "t").unwrap()
+    };
+    let at_rest = Resolved::new(&scene(0.0)).unwrap();
+    let receding = Resolved::new(&scene(-1e3)).unwrap();
+    assert_eq!(receding.dt, at_rest.dt);
+    let e = refused(&scene(1e3));
+    assert!(e.contains("pass through each other"), "{e}");
 }
 
 /// Hertz spheres starting at ±50 m/s (impact_velocity left at 1 m/s): the automatic dt

@@ -419,6 +419,18 @@ impl GpuEngine {
     }
 }
 
+/// How far the neighbour search's separations may be off: it forms them in f32 from the
+/// offsets without their compensations, each component within a few ulp of the cell's
+/// width (an 8 mm ulp at 1e5 m cells, in a sparse scene), so pairs that close within
+/// reach + skin are listed however wide the cells, m.
+fn search_slack(h: DVec3) -> f64 {
+    let ulp = |w: f64| {
+        let w = w as f32;
+        f64::from(f32::from_bits(w.to_bits() + 1) - w)
+    };
+    4.0 * DVec3::new(ulp(h.x), ulp(h.y), ulp(h.z)).length()
+}
+
 /// The step's uniform parameters for a scene (`r` resolved from it; the cell grid's origin
 /// offset `extent`, widths `h` and `dims`; the lists' `entries` a window and the `skin`).
 fn step_params(
@@ -437,7 +449,7 @@ fn step_params(
         list_capacity: entries as u32,
         n_materials: r.n_materials as u32,
         n_walls: n_walls as u32,
-        reach: r.max_reach as f32,
+        reach: (r.max_reach + search_slack(h)) as f32,
         extent_cells: [
             (extent.x / h.x) as f32,
             (extent.y / h.y) as f32,

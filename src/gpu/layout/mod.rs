@@ -77,7 +77,8 @@ pub struct StepParams {
     /// *Measurements moved out of the code*).
     pub gravity: [f32; 3],
     /// Largest distance beyond touching at which any pair interacts (non-contact range or
-    /// JKR neck), m; pairs farther apart than r_i + r_j + reach exert no force.
+    /// JKR neck), m, plus the f32 slack of the neighbour search's separations (a few ulp
+    /// of the cell width); pairs farther apart than r_i + r_j + reach exert no force.
     pub reach: f32,
     /// The domain box's extent in cells (the run monitor's escape check).
     pub extent_cells: [f32; 3],

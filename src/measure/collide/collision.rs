@@ -60,10 +60,11 @@ pub(super) fn collide_with(
         )));
     }
     if spec.settle > 0.0 && settle_steps(spec, dt) >= MAX_STEPS {
+        // (the count in f64: beyond u64 the cast saturates)
         return Err(PowderError::Run(format!(
-            "the settle time {:e} s needs {} steps of {dt:e} s, over the {MAX_STEPS} a collision may take: shorten --settle or raise --dt",
+            "the settle time {:e} s needs {:.3e} steps of {dt:e} s, over the {MAX_STEPS} a collision may take: shorten --settle or raise --dt",
             spec.settle,
-            settle_steps(spec, dt)
+            (spec.settle / dt).ceil()
         )));
     }
     // (a range or travel beyond f64's resolution is named by its flag before the

@@ -289,8 +289,10 @@ impl CollideSpec {
                 return Err(ParamError::new(
                     "dt",
                     format!(
-                        "dt = {dt:e} s is above the stable limit {:.4e} s ({}); use --dt {:.3e} or less, or --force",
-                        ts.max, ts.reason, ts.max
+                        "dt = {dt:e} s is above the stable limit {:.4e} s ({}); use --dt {} or less, or --force",
+                        ts.max,
+                        ts.reason,
+                        crate::error::sci_at_most(ts.max, 3)
                     ),
                 )
                 .into());

@@ -39,7 +39,7 @@ pub(super) fn run_collision(
     let view0 = run.view()?;
     let (ke0, total0, _) = run.energy(&view0);
     let mut touched = false;
-    let mut rules = StopRules::new(vn0);
+    let mut rules = StopRules::new(vn0, run.speed_noise());
     let mut first_contact = None;
     let mut last_contact = 0.0;
     let mut delta_max: f64 = 0.0;
@@ -79,8 +79,13 @@ pub(super) fn run_collision(
         if unmet || run.steps() >= MAX_STEPS || hopeless.is_some() {
             // (no force outside contact pushes the pair apart: it closes at vn0 or faster)
             let what = if let Some(needs) = hopeless {
+                // (where f32 speeds floor the decay's measured rate, the count is a bound)
+                let about = match run.speed_noise() > 0.0 {
+                    true => "at least",
+                    false => "about",
+                };
                 format!(
-                    "cannot be decided within {MAX_STEPS} steps: after {} its approach decays so slowly that it needs about {needs:.1e} more to come to rest",
+                    "cannot be decided within {MAX_STEPS} steps: after {} its approach decays so slowly that it needs {about} {needs:.1e} more to come to rest",
                     run.steps()
                 )
             } else if touched {

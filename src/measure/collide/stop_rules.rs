@@ -24,9 +24,20 @@ struct SlowCreep {
     steady: u32,
     /// Steps and e-folding where the blocks began to hold.
     since: Option<(u64, f64)>,
+    /// The relative change of the speed over a block that the backend's state resolves
+    /// (0: f64; a smaller drop counts as this one, a lower bound on the decay's e-folding).
+    noise: f64,
 }
 
 impl SlowCreep {
+    /// A fresh rule over a backend whose speeds resolve relative changes of `noise`.
+    fn restart(noise: f64) -> Self {
+        Self {
+            noise,
+            ..Self::default()
+        }
+    }
+
     const BLOCK: u64 = 1000;
     const HOLD: f64 = 0.1;
     const STEADY: u32 = 10;
@@ -44,11 +55,13 @@ impl SlowCreep {
         if steps - from < Self::BLOCK {
             return None;
         }
-        if vn >= vn_from {
-            *self = Self::default();
+        // (a speed that rises beyond the noise is no creep)
+        let drop = (vn_from / vn).ln();
+        if drop <= -self.noise {
+            *self = Self::restart(self.noise);
             return None;
         }
-        let tau = (steps - from) as f64 / (vn_from / vn).ln();
+        let tau = (steps - from) as f64 / drop.max(self.noise);
         let held = self.tau.is_some_and(|t| (tau / t - 1.0).abs() < Self::HOLD);
         self.steady = if held { self.steady + 1 } else { 0 };
         if !held {
@@ -95,8 +108,9 @@ pub(super) struct StopRules {
 }
 
 impl StopRules {
-    /// The rules of a collision at normal speed `vn0`.
-    pub(super) fn new(vn0: f64) -> Self {
+    /// The rules of a collision at normal speed `vn0`, on a backend whose speeds resolve
+    /// a relative change of `speed_noise` from one block of steps to the next.
+    pub(super) fn new(vn0: f64, speed_noise: f64) -> Self {
         Self {
             vn0,
             receding: false,
@@ -104,7 +118,7 @@ impl StopRules {
             vn_before: vn0,
             creeping: 0,
             last_to_stop: None,
-            slow_creep: SlowCreep::default(),
+            slow_creep: SlowCreep::restart(speed_noise),
             resting: 0,
         }
     }
@@ -141,7 +155,7 @@ impl StopRules {
             hopeless = self.slow_creep.steps_to_rest(steps, vn, REST_SPEED * vn0);
             hopeless = hopeless.filter(|&needs| needs > 2.0 * (MAX_STEPS - steps) as f64);
         } else {
-            self.slow_creep = SlowCreep::default();
+            self.slow_creep = SlowCreep::restart(self.slow_creep.noise);
         }
         let crept_in = self.creeping >= CREEP_STEPS;
         self.resting = match contact && vn.abs() < REST_SPEED * vn0 {
@@ -160,7 +174,12 @@ mod tests {
     /// Feeds `speed(step)` to the creep rule from step 0 until it projects: the step and
     /// its projection.
     fn projected(speed: impl Fn(f64) -> f64, rest: f64) -> (u64, f64) {
-        let mut creep = SlowCreep::default();
+        projected_over(speed, rest, 0.0)
+    }
+
+    /// [`projected`] on a backend whose speeds resolve relative changes of `noise`.
+    fn projected_over(speed: impl Fn(f64) -> f64, rest: f64, noise: f64) -> (u64, f64) {
+        let mut creep = SlowCreep::restart(noise);
         (0..1_000_000u64)
             .find_map(|k| {
                 creep
@@ -203,5 +222,19 @@ mod tests {
                 "{name}: {n:e} at step {k}, not {truth:e}"
             );
         }
+    }
+
+    /// A creep slower than the f32 state resolves (5e-7 a block under a sample-to-sample
+    /// rounding of 1e-6, as on the GPU) is projected from the noise floor's e-folding, a
+    /// lower bound, within a few blocks more than the rule needs in f64 (it used to reset at
+    /// every rise and run the 5e7 steps out).
+    #[test]
+    fn a_creep_below_the_speed_noise_is_projected_from_its_floor() {
+        let (v0, rest, tau) = (1e-3, 1e-6, 2e9);
+        let speed = move |k: f64| v0 * (-k / tau).exp() * (1.0 + 1e-6 * (0.7 * k).sin());
+        let (k, n) = projected_over(speed, rest, 1e-5);
+        let truth = tau * (speed(k as f64) / rest).ln();
+        assert!(k < 15_000, "projected at step {k}");
+        assert!(n <= truth && n > 2.0 * 5e7, "{n:e} against {truth:e}");
     }
 }

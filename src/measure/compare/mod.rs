@@ -257,7 +257,10 @@ pub fn compare_perturbed(
     if let Some(p) = perturbation.filter(|p| !(p.is_finite() && *p > 0.0 && *p <= 1e-3)) {
         return Err(crate::ParamError::new(
             "perturbed",
-            format!("the perturbation must be a number in (0, 1e-3] of each radius, got {p}"),
+            format!(
+                "the perturbation must be a number in (0, 1e-3] of each radius, got {}",
+                crate::error::num(p)
+            ),
         )
         .into());
     }

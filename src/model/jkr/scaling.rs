@@ -1,6 +1,7 @@
 //! The reduced-stiffness rule of paper 002 (§3, §6.2): what a stiffness scale S ≠ 1 changes.
 
 use super::JkrParams;
+use crate::error::fixed;
 use std::fmt;
 
 /// What a reduced stiffness S ≠ 1 changes (paper 002 §3, §6.2).
@@ -23,15 +24,15 @@ impl fmt::Display for StiffnessScaling {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "stiffness_scale S = {:.4e}: E -> S*E and surface_energy -> surface_energy*S^(2/5) = {:.4}*surface_energy (paper 002 eq. 24); \
-             collisions last S^(-2/5) = {:.4} times longer, so dt can grow by the same factor {:.4} (paper 002 sec. 6.2). \
-             Warning: the pull-off force Fc = 3*pi*gamma*R* drops by S^(2/5) = {:.4}; keep external separating forces \
+            "stiffness_scale S = {:.4e}: E -> S*E and surface_energy -> surface_energy*S^(2/5) = {}*surface_energy (paper 002 eq. 24); \
+             collisions last S^(-2/5) = {} times longer, so dt can grow by the same factor {} (paper 002 sec. 6.2). \
+             Warning: the pull-off force Fc = 3*pi*gamma*R* drops by S^(2/5) = {}; keep external separating forces \
              (drag, shear) well below Fc,mod (paper 002 sec. 6.2)",
             self.scale,
-            self.surface_energy_factor,
-            self.collision_time_factor,
-            self.dt_gain,
-            self.pulloff_force_factor
+            fixed(self.surface_energy_factor, 4),
+            fixed(self.collision_time_factor, 4),
+            fixed(self.dt_gain, 4),
+            fixed(self.pulloff_force_factor, 4)
         )?;
         if self.scale < 1e-3 {
             write!(
