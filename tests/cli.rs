@@ -2307,3 +2307,26 @@ fn counts_and_radii_beyond_what_numbers_hold_are_named() {
     ]);
     assert!(ok && out.contains("k1 = 1e-320"), "{out}{err}");
 }
+
+/// A friction dashpot far above the critical damping of its spring is warned of (Luding's
+/// slip reset then makes the friction fade); the default one is not.
+#[test]
+fn collide_warns_of_an_overdamped_friction_dashpot() {
+    let args = [
+        "--velocity",
+        "0.1",
+        "--impact-angle",
+        "30",
+        "--friction",
+        "0.5",
+    ];
+    let (ok, _, err) = hysteretic(&args);
+    assert!(ok && !err.contains("critical damping"), "{err}");
+    let mut strong = args.to_vec();
+    strong.extend(["--gamma-t", "1"]);
+    let (ok, _, err) = hysteretic(&strong);
+    assert!(
+        ok && err.contains("gamma_t = 1e0 kg/s") && err.contains("critical damping"),
+        "{err}"
+    );
+}

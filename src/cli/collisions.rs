@@ -211,6 +211,9 @@ pub(crate) fn finish_collide(
             eprintln!("warning: {w}");
         }
     }
+    for w in collide::friction_warnings(spec) {
+        eprintln!("warning: {w}");
+    }
     // no contact law here adds energy: e above 1 on a dissipative law is the integrator's
     // error (beyond rounding: f32 on the GPU); an elastic law's e sits on either side of 1
     let rounding = |r: &CollideResult| if r.backend == "gpu" { 1e-6 } else { 1e-9 };

@@ -11,7 +11,7 @@ pub(crate) use fits::engine_fits;
 mod monitor;
 pub mod observed;
 mod outputs;
-mod overdamped;
+pub(crate) mod overdamped;
 mod overlap_partner;
 mod plan;
 mod servo;

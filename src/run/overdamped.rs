@@ -33,16 +33,23 @@ pub(super) fn overdamped_friction(scene: &Scene) -> Vec<String> {
     });
     own.chain(between)
         .filter_map(|([a, b], model, who)| {
+            let who = format!("{who} (its lightest pair)");
             let ((ma, ra), (mb, rb)) = (lightest[a]?, lightest[b]?);
             let geom = PairGeometry::spheres(ra, rb, ma, mb);
-            Some(warnings(model, &geom, scene.impact_velocity, &who))
+            Some(law_warnings(model, &geom, scene.impact_velocity, &who))
         })
         .flatten()
         .collect()
 }
 
-/// The warnings of one law on one pair.
-fn warnings(model: &ContactModel, geom: &PairGeometry, v: f64, who: &str) -> Vec<String> {
+/// The warnings of one law on one pair (`who`: how the warning names it), at impact speed
+/// `v` (the JKR twisting stiffness follows it).
+pub(crate) fn law_warnings(
+    model: &ContactModel,
+    geom: &PairGeometry,
+    v: f64,
+    who: &str,
+) -> Vec<String> {
     (model.friction_oscillators(geom, v).into_iter())
         .filter_map(|o| {
             let critical = 2.0 * (o.k * o.mass).sqrt();
@@ -53,7 +60,7 @@ fn warnings(model: &ContactModel, geom: &PairGeometry, v: f64, who: &str) -> Vec
             };
             (o.gamma > OVERDAMPED * critical).then(|| {
                 format!(
-                    "{who}: {key} = {:e} kg/s is {:.0} times the critical damping 2*sqrt(k*m) = {critical:.3e} kg/s of its {} spring on the lightest pair: Luding's slip reset (eq. 20) stores the dashpot's force in the spring, and the friction the contact transmits fades (docs/models.md, *An overdamped tangential dashpot*); lower {key}",
+                    "{who}: {key} = {:e} kg/s is {:.0} times the critical damping 2*sqrt(k*m) = {critical:.3e} kg/s of its {} spring: Luding's slip reset (eq. 20) stores the dashpot's force in the spring, and the friction the contact transmits fades (docs/models.md, *An overdamped tangential dashpot*); lower {key}",
                     o.gamma,
                     o.gamma / critical,
                     o.what
@@ -81,7 +88,8 @@ mod tests {
         assert!(overdamped_friction(&scene(0.03)).is_empty());
         let w = overdamped_friction(&scene(0.1)).concat();
         assert!(
-            w.contains("material `m`: gamma_t = 1e-1 kg/s is 9 times") && w.contains("1.17"),
+            w.contains("material `m` (its lightest pair): gamma_t = 1e-1 kg/s is 9 times")
+                && w.contains("1.17"),
             "{w}"
         );
     }

@@ -29,7 +29,10 @@ mod sweep;
 use collision::collide_with;
 pub use plot::{restitution_plot, trace_plot};
 use predict::predict;
-pub use predict::{add_plastic_restitution, closed_form_e, tabor, theory_warnings, yield_velocity};
+pub use predict::{
+    add_plastic_restitution, closed_form_e, friction_warnings, tabor, theory_warnings,
+    yield_velocity,
+};
 pub use sweep::{sweep, sweep_on, sweep_velocities};
 
 /// What to collide.

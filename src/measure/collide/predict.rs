@@ -118,6 +118,13 @@ pub fn tabor(spec: &CollideSpec, d_min: f64) -> Option<f64> {
     }
 }
 
+/// The warnings on the pair's friction laws: a dashpot overdamping its spring, where
+/// Luding's slip reset makes the friction fade (`docs/models.md`).
+pub fn friction_warnings(spec: &CollideSpec) -> Vec<String> {
+    let g = spec.geometry();
+    crate::run::overdamped::law_warnings(&spec.model, &g, spec.velocity, "the pair")
+}
+
 /// The warnings on the pair's contact theory: λT below the JKR range, a0 beyond the
 /// small-contact range ([`analytic::small_contact_warning`]), naming the pair by its radii.
 pub fn theory_warnings(spec: &CollideSpec, tabor: f64, d_min: f64) -> Vec<String> {
