@@ -176,13 +176,23 @@ fn engines_refuse_a_scene_built_wrong_in_code() {
         "particle 1 at [0.006, 0.005, 0.0012] with radius 0.001 overlaps wall 0",
     );
     let mut s = scene();
+    s.interactions.push(Interaction {
+        materials: [0, 0],
+        model: ContactModel::Lsd(LsdParams::new(300.0, 1e-3)),
+    });
+    refused(&s, "interaction 0 pairs material 0 with itself");
+    let mut s = scene();
+    s.materials.push(Material {
+        name: "glass".into(),
+        ..s.materials[0].clone()
+    });
     for _ in 0..2 {
         s.interactions.push(Interaction {
-            materials: [0, 0],
+            materials: [0, 1],
             model: ContactModel::Lsd(LsdParams::new(300.0, 1e-3)),
         });
     }
-    refused(&s, "interactions 0 and 1 both set materials 0 and 0");
+    refused(&s, "interactions 0 and 1 both set materials 0 and 1");
     let mut s = scene();
     s.walls[0].motion = WallMotion::always(WallPhase::Servo {
         force: -1.0,
