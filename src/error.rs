@@ -94,9 +94,11 @@ pub fn sci_at_most(x: f64, decimals: usize) -> String {
     let s = format!("{x:.decimals$e}");
     match s.parse::<f64>() {
         Ok(y) if y > x && x > 0.0 && x.is_finite() => {
-            // x cut to its digits (the unit of the last one at x's own exponent), one unit
+            // x cut to its digits (the unit of the last one at x's own exponent, read from
+            // its shortest `e` form: log10 rounds up just below a power of ten), one unit
             // lower where the quotient's rounding left it above x
-            let unit = 10f64.powi(x.log10().floor() as i32 - decimals as i32);
+            let exponent = exponent_of(x);
+            let unit = 10f64.powi(exponent - decimals as i32);
             let cut = (x / unit).floor();
             let t = format!("{:.decimals$e}", cut * unit);
             match t.parse::<f64>() {
@@ -106,6 +108,14 @@ pub fn sci_at_most(x: f64, decimals: usize) -> String {
         }
         _ => s,
     }
+}
+
+/// The decimal exponent of `x` as `{:e}` writes it.
+fn exponent_of(x: f64) -> i32 {
+    let s = format!("{x:e}");
+    s.split_once('e')
+        .and_then(|(_, e)| e.parse().ok())
+        .unwrap_or(0)
 }
 
 /// Checks that a value is finite, naming the parameter otherwise.
@@ -164,11 +174,15 @@ mod tests {
         assert_eq!(fixed(1e-300, 4), "1.0000e-300");
         assert_eq!(sci_at_most(1.93944e-10, 3), "1.939e-10");
         assert_eq!(sci_at_most(9.99996e-5, 4), "9.9999e-5");
+        // just below a power of ten (log10 rounds to the power there)
+        let below = 0.0009999999999999998;
+        assert_eq!(sci_at_most(below, 3), "9.999e-4");
+        assert_eq!(sci_at_most(below, 0), "9e-4");
         let mut x = 1.0e-12;
         while x < 1e3 {
-            for d in [3, 4] {
+            for d in [0, 3, 4] {
                 let y: f64 = sci_at_most(x, d).parse().unwrap();
-                let unit = 10f64.powi(x.log10().floor() as i32 - d as i32);
+                let unit = 10f64.powi(exponent_of(x) - d as i32);
                 assert!(y <= x && x - y <= 1.000001 * unit, "{x:e} -> {y:e}");
             }
             x *= 1.0137;

@@ -365,7 +365,7 @@ mod gpu {
         if context().is_none() {
             return;
         }
-        // measured on lavapipe: |Δe| ≤ 6e-7, dissipated within 5e-7 (σ0 = 0 closes at the
+        // measured on lavapipe: |Δe| ≤ 7e-7, dissipated within 5e-7 (σ0 = 0 closes at the
         // turning point, as displacement pull-off)
         for sigma0 in [10.0 * SIGMA0, SIGMA0, 0.01, 0.0] {
             let p = JkrParams {

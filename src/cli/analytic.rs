@@ -100,9 +100,9 @@ impl PairArgs {
         }
         let r2 = require_positive("radius2", self.radius2.unwrap_or(r1), "the second radius")?;
         let g = PairGeometry::spheres(r1, r2, m(r1), m(r2));
-        // (radii of subnormal size: R* = r1·r2/(r1 + r2) underflows; an overflow is named
-        // by the result it makes infinite)
-        if g.r_eff().is_nan() || g.r_eff() <= 0.0 {
+        // (radii of subnormal size: R* = r1·r2/(r1 + r2) underflows or loses its digits; an
+        // overflow is named by the result it makes infinite)
+        if g.r_eff().is_nan() || g.r_eff() < f64::MIN_POSITIVE {
             return Err(ParamError::new(
                 "radius2",
                 format!(
@@ -409,7 +409,8 @@ fn tabor(a: &TaborArgs) -> Result<(), PowderError> {
         return print_json(&out);
     }
     println!(
-        "Tabor parameter {t:.6} at R* = {r_eff:e}, D_min = {d_min:e}: {} regime (paper 002 eq. 1; JKR above 3, DMT below 0.1)",
+        "Tabor parameter {} at R* = {r_eff:e}, D_min = {d_min:e}: {} regime (paper 002 eq. 1; JKR above 3, DMT below 0.1)",
+        fixed(t, 6),
         out.regime
     );
     Ok(())

@@ -302,7 +302,8 @@ pub(crate) fn print_table(results: &[CollideResult], report: &CollideReport) {
         }
         if let Some(t) = r.tabor {
             println!(
-                "Tabor parameter {t:.4}: {} regime (paper 002 eq. 1, D_min = {:e}; JKR holds above 3)",
+                "Tabor parameter {}: {} regime (paper 002 eq. 1, D_min = {:e}; JKR holds above 3)",
+                powder::error::fixed(t, 4),
                 powder::model::analytic::tabor_regime(t),
                 report.tabor_dmin
             );

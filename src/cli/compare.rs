@@ -139,7 +139,9 @@ pub(crate) fn compare_cmd(a: &CompareArgs) -> Result<bool, PowderError> {
             t.history,
             if c.passed { "PASS" } else { "FAIL" }
         );
-        if (c.samples.iter()).all(|s| s.contacts_cpu == 0 && s.contacts_gpu == 0) {
+        let no_contact =
+            |s: &powder::measure::compare::Sample| s.contacts_cpu + s.contacts_gpu == 0;
+        if !c.samples.is_empty() && c.samples.iter().all(no_contact) {
             println!(
                 "note: no sample held a contact on either engine: only free flight was compared; run more --steps (or sample with --every) to compare the contact laws"
             );

@@ -618,7 +618,8 @@ pub fn tabor_regime(tabor: f64) -> &'static str {
 pub fn tabor_warning(pair: &str, tabor: f64, d_min: f64) -> Option<String> {
     (tabor <= TABOR_JKR_MIN).then(|| {
         format!(
-            "{pair} has Tabor parameter {tabor:.3} (paper 002 eq. 1, D_min = {d_min:e}), below the JKR range (> {TABOR_JKR_MIN}): the {} regime, where the JKR contact law does not hold",
+            "{pair} has Tabor parameter {} (paper 002 eq. 1, D_min = {d_min:e}), below the JKR range (> {TABOR_JKR_MIN}): the {} regime, where the JKR contact law does not hold",
+            crate::error::fixed(tabor, 3),
             tabor_regime(tabor)
         )
     })

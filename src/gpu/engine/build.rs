@@ -421,14 +421,16 @@ impl GpuEngine {
 
 /// How far the neighbour search's separations may be off: it forms them in f32 from the
 /// offsets without their compensations, each component within a few ulp of the cell's
-/// width (an 8 mm ulp at 1e5 m cells, in a sparse scene), so pairs that close within
-/// reach + skin are listed however wide the cells, m.
-fn search_slack(h: DVec3) -> f64 {
+/// width (an 8 mm ulp at 1e5 m cells, in a sparse scene), and across a periodic seam with
+/// the device's period dims·h, `period_lo` short of the scene's; so pairs that close
+/// within reach + skin are listed however wide the cells, m.
+fn search_slack(h: DVec3, period_lo: [f32; 3]) -> f64 {
     let ulp = |w: f64| {
         let w = w as f32;
         f64::from(f32::from_bits(w.to_bits() + 1) - w)
     };
-    4.0 * DVec3::new(ulp(h.x), ulp(h.y), ulp(h.z)).length()
+    let seam = DVec3::from_array(period_lo.map(|p| f64::from(p).abs())).length();
+    4.0 * DVec3::new(ulp(h.x), ulp(h.y), ulp(h.z)).length() + seam
 }
 
 /// The step's uniform parameters for a scene (`r` resolved from it; the cell grid's origin
@@ -443,13 +445,20 @@ fn step_params(
     let periodic = scene.domain.periodic;
     let n_walls = scene.walls.len();
     let servo_walls = scene.walls.iter().any(|w| w.motion.servo());
+    let period_lo = [0, 1, 2].map(|a| {
+        if periodic[a] {
+            (extent[a] - dims[a] as f64 * h[a]) as f32
+        } else {
+            0.0
+        }
+    });
     StepParams {
         gravity: [g[0] as f32, g[1] as f32, g[2] as f32],
         dt: r.dt as f32,
         list_capacity: entries as u32,
         n_materials: r.n_materials as u32,
         n_walls: n_walls as u32,
-        reach: (r.max_reach + search_slack(h)) as f32,
+        reach: (r.max_reach + search_slack(h, period_lo)) as f32,
         extent_cells: [
             (extent.x / h.x) as f32,
             (extent.y / h.y) as f32,
@@ -462,13 +471,7 @@ fn step_params(
         // on once the initial forces are in (`initial_forces`)
         jumps: 0,
         _pad: crate::gpu::layout::Pad::ZERO,
-        period_lo: [0, 1, 2].map(|a| {
-            if periodic[a] {
-                (extent[a] - dims[a] as f64 * h[a]) as f32
-            } else {
-                0.0
-            }
-        }),
+        period_lo,
         _pad_end: 0,
     }
 }

@@ -80,7 +80,7 @@ pub(super) fn run_collision(
             // (no force outside contact pushes the pair apart: it closes at vn0 or faster)
             let what = if let Some(needs) = hopeless {
                 // (where f32 speeds floor the decay's measured rate, the count is a bound)
-                let about = match run.speed_noise() > 0.0 {
+                let about = match rules.projection_is_a_bound() {
                     true => "at least",
                     false => "about",
                 };

@@ -27,6 +27,9 @@ struct SlowCreep {
     /// The relative change of the speed over a block that the backend's state resolves
     /// (0: f64; a smaller drop counts as this one, a lower bound on the decay's e-folding).
     noise: f64,
+    /// Whether a block since `since` dropped by less than `noise`: the projection is then
+    /// a lower bound.
+    floored: bool,
 }
 
 impl SlowCreep {
@@ -55,9 +58,9 @@ impl SlowCreep {
         if steps - from < Self::BLOCK {
             return None;
         }
-        // (a speed that rises beyond the noise is no creep)
+        // (a speed that rises, beyond the noise, is no creep)
         let drop = (vn_from / vn).ln();
-        if drop <= -self.noise {
+        if vn >= vn_from && drop <= -self.noise {
             *self = Self::restart(self.noise);
             return None;
         }
@@ -65,8 +68,9 @@ impl SlowCreep {
         let held = self.tau.is_some_and(|t| (tau / t - 1.0).abs() < Self::HOLD);
         self.steady = if held { self.steady + 1 } else { 0 };
         if !held {
-            self.since = Some((steps, tau));
+            (self.since, self.floored) = (Some((steps, tau)), false);
         }
+        self.floored |= drop < self.noise;
         (self.start, self.tau) = (Some((steps, vn)), Some(tau));
         let (since, tau_since) = self.since?;
         if self.steady < Self::STEADY {
@@ -121,6 +125,11 @@ impl StopRules {
             slow_creep: SlowCreep::restart(speed_noise),
             resting: 0,
         }
+    }
+
+    /// Whether the last projection rests on the backend's speed noise: a lower bound.
+    pub(super) fn projection_is_a_bound(&self) -> bool {
+        self.slow_creep.floored
     }
 
     /// After `steps` (the pair has touched), approaching at `vn` (< 0: receding), in
