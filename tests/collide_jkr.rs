@@ -802,12 +802,7 @@ mod on_the_gpu {
         };
         let s = CollideSpec::head_on(powder::model::ContactModel::Jkr(p), 1e-6, 2500.0, 1.0);
         let err = collide_on(&s, Backend::Gpu).unwrap_err().to_string();
-        let steps: u64 = err
-            .split("steps: after ")
-            .nth(1)
-            .and_then(|a| a.split(' ').next())
-            .and_then(|n| n.parse().ok())
-            .unwrap_or_else(|| panic!("{err}"));
+        let steps: u64 = super::common::number_after(&err, "steps: after ");
         assert!(
             steps < 100_000 && err.contains("at least") && err.contains("gpu backend"),
             "{err}"

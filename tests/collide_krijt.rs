@@ -830,11 +830,7 @@ fn a_creep_too_slow_for_the_step_limit_is_named_early() {
         sigma0: SIGMA0,
     });
     let err = collide(&spec(p, 0.1)).unwrap_err().to_string();
-    let after = err
-        .split("steps: after ")
-        .nth(1)
-        .unwrap_or_else(|| panic!("{err}"));
-    let steps: u64 = after.split(' ').next().unwrap().parse().unwrap();
+    let steps: u64 = common::number_after(&err, "steps: after ");
     // measured: after 12 049 steps, needing about 3e9 more
     assert!(
         steps < 100_000 && err.contains("lower the dissipation"),

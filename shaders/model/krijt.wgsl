@@ -169,12 +169,16 @@ fn krijt_normal(p: JkrPair, k: Kin, a0: f32, d0: f32, fc: f32, x_eq: f32, a_old:
     if (p.crack_break != 0u && k.delta < 0.0 && k.dt > 0.0) {
         let n = f32(KRIJT_NECK_SUBSTEPS);
         for (var j = 1; j <= KRIJT_NECK_SUBSTEPS; j++) {
+            // (the last sub-step ends at delta, whose JKR root x_eq is known)
             var dj = d;
+            var xj = x_eq;
             if (j < KRIJT_NECK_SUBSTEPS) {
-                dj = (k.delta - k.delta_dot * k.dt * (1.0 - f32(j) / n)) / d0;
+                let delta_j = k.delta - k.delta_dot * k.dt * (1.0 - f32(j) / n);
+                dj = delta_j / d0;
+                let sj = jkr_solve_s(delta_j, d0);
+                xj = sj * sj;
             }
-            let sj = jkr_solve_s(dj * d0, d0);
-            let next = krijt_step(p, x, sj * sj, dj, k.dt / n, a0, k.r_eff);
+            let next = krijt_step(p, x, xj, dj, k.dt / n, a0, k.r_eff);
             if (next <= 0.0) {
                 // (closed in sub-step j: at its middle, with the radius before it)
                 let t = (f32(j) - 0.5) / n;

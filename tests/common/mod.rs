@@ -267,3 +267,14 @@ pub fn report(c: &powder::measure::compare::Comparison) {
         );
     }
 }
+
+/// The number that follows `phrase` in a message (up to the next space), or a panic that
+/// shows the message.
+#[allow(dead_code)]
+pub fn number_after<T: std::str::FromStr>(text: &str, phrase: &str) -> T {
+    text.split(phrase)
+        .nth(1)
+        .and_then(|rest| rest.split(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no number after {phrase:?} in {text}"))
+}
