@@ -78,6 +78,10 @@ pub(crate) static INTERRUPTED: std::sync::atomic::AtomicBool =
 pub(crate) const DEFAULT_SCENE: &str = include_str!("../../examples/cohesive_cluster.toml");
 
 pub(crate) fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
+    // (first: every thread started after this blocks the stop signals; one taken during
+    // set-up stops the run after its first chunk)
+    let interrupt = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    super::stop_signals::install(interrupt.clone());
     let threads = powder::cpu::Threads::new(a.threads)?;
     // (the reader's placement check runs on the threads asked for)
     let scene = threads.install_all(|| match &a.scene {
@@ -104,8 +108,6 @@ pub(crate) fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
     }
     eprintln!("backend: {}", chosen.reason);
     let gpu = chosen.gpu;
-    let interrupt = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
-    super::stop_signals::install(interrupt.clone());
     let out_dir = if a.no_output {
         None
     } else {

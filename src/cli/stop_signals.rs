@@ -5,7 +5,7 @@
 use std::sync::atomic::{AtomicBool, AtomicI32, Ordering::Relaxed};
 use std::sync::{Arc, OnceLock};
 
-/// The run loop's stop flag, set by the handler.
+/// The run loop's stop flag, set by the thread that takes the signals.
 static FLAG: OnceLock<Arc<AtomicBool>> = OnceLock::new();
 /// The first stop signal received (0: none).
 static SIGNAL: AtomicI32 = AtomicI32::new(0);
@@ -13,38 +13,45 @@ static SIGNAL: AtomicI32 = AtomicI32::new(0);
 /// SIGINT's number where the platform has no others: the status a stopped run exits with.
 const SIGINT: i32 = 2;
 
-#[cfg(unix)]
-extern "C" fn on_signal(sig: libc::c_int) {
-    // (atomics only: async-signal-safe; a second signal while the checkpoint is written
-    // changes nothing)
-    let _ = SIGNAL.compare_exchange(0, sig, Relaxed, Relaxed);
-    if let Some(flag) = FLAG.get() {
-        flag.store(true, Relaxed);
-    }
-}
-
-/// Routes the stop signals to `flag`, which the run loop reads after each chunk. A
-/// signal the process was started ignoring (SIGHUP under `nohup`, SIGINT in a background
-/// job) stays ignored.
+/// Routes the stop signals to `flag`, which the run loop reads after each chunk. Called
+/// before any other thread exists: the signals are blocked in every thread (the pools' and
+/// the GPU driver's inherit the mask), so none is ever interrupted in a system call, and
+/// one thread takes them with `sigwait`. A signal the process was started ignoring (SIGHUP
+/// under `nohup`, SIGINT in a background job) stays ignored.
 pub(crate) fn install(flag: Arc<AtomicBool>) {
     if FLAG.set(flag).is_err() {
         return;
     }
     #[cfg(unix)]
-    for sig in [libc::SIGINT, libc::SIGTERM, libc::SIGHUP] {
-        // SAFETY: sigaction with valid pointers; the handler touches atomics only.
-        unsafe {
+    // SAFETY: sigaction, sigset and pthread_sigmask calls with valid pointers.
+    unsafe {
+        let mut set: libc::sigset_t = std::mem::zeroed();
+        libc::sigemptyset(&mut set);
+        for sig in [libc::SIGINT, libc::SIGTERM, libc::SIGHUP] {
             let mut old: libc::sigaction = std::mem::zeroed();
-            if libc::sigaction(sig, std::ptr::null(), &mut old) != 0
-                || old.sa_sigaction == libc::SIG_IGN
+            if libc::sigaction(sig, std::ptr::null(), &mut old) == 0
+                && old.sa_sigaction != libc::SIG_IGN
             {
-                continue;
+                libc::sigaddset(&mut set, sig);
             }
-            let mut action: libc::sigaction = std::mem::zeroed();
-            action.sa_sigaction = on_signal as *const () as libc::sighandler_t;
-            action.sa_flags = libc::SA_RESTART;
-            libc::sigemptyset(&mut action.sa_mask);
-            libc::sigaction(sig, &action, std::ptr::null_mut());
+        }
+        if libc::pthread_sigmask(libc::SIG_BLOCK, &set, std::ptr::null_mut()) != 0 {
+            return;
+        }
+        let taker = std::thread::Builder::new().name("stop-signals".into());
+        let taken = taker.spawn(move || loop {
+            let mut sig: libc::c_int = 0;
+            // (a second signal while the checkpoint is written changes nothing)
+            if libc::sigwait(&set, &mut sig) == 0 {
+                let _ = SIGNAL.compare_exchange(0, sig, Relaxed, Relaxed);
+                if let Some(flag) = FLAG.get() {
+                    flag.store(true, Relaxed);
+                }
+            }
+        });
+        if taken.is_err() {
+            // (no thread to take them: the signals keep their default action)
+            libc::pthread_sigmask(libc::SIG_UNBLOCK, &set, std::ptr::null_mut());
         }
     }
     #[cfg(not(unix))]
