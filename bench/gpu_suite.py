@@ -8,6 +8,8 @@ Standard library only. On a machine with a GPU it runs
     with "at most M particles fit" is retried once at M rounded down to two digits), each
     size in its own process, without the energy ledger (the step's own cost), then with it
     at 1e6 where time is left;
+  * `powder bench --backend both` at N = 1e2, 1e3, 1e4 (both packings, one process): where
+    the CPU engine (every core) and the GPU cross over, for `--backend auto`'s choice;
   * the packing example (`examples/packing.toml`, hysteretic with adhesion, periodic in x
     and y) scaled to 1e6 spheres with `--set` (the lattice and the box widened in x and y,
     nothing else changed: no file is edited or copied), `powder run --no-ledger --steps S`,
@@ -22,7 +24,8 @@ nothing is asserted.
 
 Time: the whole suite keeps inside --budget seconds (540 by default, so a 10-minute call of
 a lent machine has a minute to spare): each phase has a deadline (hysteretic by 32 % of the
-budget, JKR by 64 %, the packing example by 86 %, the ledger rows by 97 %), a size runs only
+budget, JKR by 64 %, the packing example by 86 %, the ledger rows by 97 %; the small scenes
+first, by 6 %), a size runs only
 if its time predicted from the previous size fits before its phase's deadline, each process
 is killed at that deadline, and the JSON is rewritten after every run, so whatever ran is
 kept even if the suite is stopped.
@@ -74,14 +77,16 @@ GL_PACKAGES = ["libvulkan1", "libegl1", "libglvnd0", "libopengl0", "libgl1", "li
 NVIDIA_ICD = "/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json"
 NVIDIA_EGL = "/usr/local/nvidia/share/glvnd/egl_vendor.d/10_nvidia.json"
 PACKING_SCENE = os.path.join(ROOT, "examples", "packing.toml")
-SUITE_VERSION = 3
+SUITE_VERSION = 4
 
 # phase deadlines as fractions of the budget
-PHASES = {"hysteretic": 0.32, "jkr": 0.64, "packing": 0.86, "ledger": 0.97}
+PHASES = {"small": 0.06, "hysteretic": 0.32, "jkr": 0.64, "packing": 0.86, "ledger": 0.97}
 
 MODES = {
     "full": dict(
         sizes=[100_000, 1_000_000, 10_000_000],
+        small_sizes=[100, 1_000, 10_000],
+        small_steps=1000,
         ledger_size=1_000_000,
         packing_particles=1_000_000,
         budget=540.0,
@@ -96,6 +101,8 @@ MODES = {
     ),
     "quick": dict(
         sizes=[1_000, 4_000],
+        small_sizes=[100, 1_000],
+        small_steps=50,
         ledger_size=1_000,
         packing_particles=10_000,
         budget=240.0,
@@ -647,6 +654,39 @@ class Suite:
         self.report["bench"].append(row)
         self.save()
 
+    def run_small(self):
+        """Both packings at the small sizes on both engines in one process (`--backend
+        both`: the CPU engine on every core, then the GPU): a GPU step has a floor of launch
+        and read-back latency that the CPU engine undercuts below some N, which these rows
+        locate for `--backend auto`."""
+        c = self.cfg
+        sizes = ",".join(str(n) for n in c["small_sizes"])
+        with tempfile.TemporaryDirectory() as tmp:
+            out = os.path.join(tmp, "bench.json")
+            cmd = [
+                "bench", "--backend", "both", "--case", "both", "--sizes", sizes,
+                "--steps", str(c["small_steps"]), "--warmup", str(max(c["small_steps"] // 10, 4)),
+                "--repeats", "3", "--max-seconds", "1e9", "--json", out,
+            ]
+            rc, _, stderr, wall = self.runner.run(cmd, self.timeout("small"))
+            entry = {
+                "command": "powder " + " ".join(x if x != out else "FILE" for x in cmd),
+                "process_seconds": round(wall, 2),
+            }
+            if rc is None or rc != 0 or not os.path.exists(out):
+                entry.update(status="timeout" if rc is None else "failed",
+                             note=(stderr.strip().splitlines() or ["killed at the phase's deadline"])[-1])
+                self.report["small"] = entry
+                self.save()
+                return
+            with open(out) as f:
+                rep = json.load(f)
+        keep = ("case", "backend", "threads", "particles", "status", "steps",
+                "seconds_per_step", "particle_steps_per_second", "contacts_per_particle")
+        entry.update(status="ran", rows=[{k: r.get(k) for k in keep} for r in rep["rows"]])
+        self.report["small"] = entry
+        self.save()
+
     # -- the packing example -----------------------------------------------------------------
 
     def packing_sets(self, target):
@@ -876,6 +916,7 @@ class Suite:
             },
             "notes": notes,
             "calibration": [],
+            "small": None,
             "bench": [],
             "packing": None,
         }
@@ -883,6 +924,8 @@ class Suite:
         log(f"adapter: {summary['name']} ({summary['backend']}, {summary['device_type']}, "
             f"{summary['driver']} {summary['driver_info']}); budget {self.budget:.0f} s; "
             f"writing {self.path}")
+        log("small scenes, the CPU engine and the GPU:")
+        self.run_small()
         for case in ("hysteretic", "jkr"):
             log(f"{case}:")
             self.run_case(case)
@@ -896,9 +939,26 @@ class Suite:
         if self.report.get("machine") is None:
             self.report["machine"] = machine_info()
         self.save()
+        self.small_table()
         self.table()
         log(f"wrote {self.path} ({self.elapsed():.0f} s)")
         return self.path
+
+    def small_table(self):
+        small = self.report.get("small") or {}
+        if small.get("status") != "ran":
+            log(f"small scenes: {small.get('status')} ({small.get('note')})")
+            return
+        log("small scenes (s a step, CPU on every core / GPU):")
+        rows = small["rows"]
+        for case in ("hysteretic", "jkr"):
+            for n in sorted({r["particles"] for r in rows if r["case"] == case}):
+                by = {r["backend"]: r for r in rows if r["case"] == case and r["particles"] == n}
+                cpu, gpu = by.get("cpu", {}), by.get("gpu", {})
+                a, b = cpu.get("seconds_per_step"), gpu.get("seconds_per_step")
+                ratio = f"{a / b:.2f}" if a and b else "-"
+                log(f"  {case:<11} {n:>6}: cpu x{cpu.get('threads')} {a if a is None else format(a, '.2e')}"
+                    f"  gpu {b if b is None else format(b, '.2e')}  cpu/gpu {ratio}")
 
     def table(self):
         log("")
