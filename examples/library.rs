@@ -55,9 +55,8 @@ fn scene() -> Scene {
         materials: vec![Material {
             name: "powder".into(),
             density: 2000.0,
-            // paper 000's figure parameters with kc = 100 N/m and a little viscosity
+            // paper 003's figure parameters (kc = 100 N/m) and a little viscosity
             model: ContactModel::Hysteretic(HystereticParams {
-                kc: 100.0,
                 gamma0: 1e-3,
                 ..HystereticParams::paper_figure()
             }),

@@ -293,6 +293,17 @@ fn run_prints_a_summary_and_rejects_missing_files() {
         .collect();
     files.sort();
     assert_eq!(files, ["checkpoint.bin", "series.csv", "summary.json"]);
+    // resumed at its end: nothing to run, said, and the summary stays the run's
+    let summary = std::fs::read(dir.path().join("summary.json")).unwrap();
+    let checkpoint = format!("{out_dir}/checkpoint.bin");
+    let mut resume = args.to_vec();
+    resume.extend(["--resume", &checkpoint]);
+    let (ok, _, err) = powder(&resume);
+    assert!(ok && err.contains("nothing left to run"), "{err}");
+    assert_eq!(
+        std::fs::read(dir.path().join("summary.json")).unwrap(),
+        summary
+    );
     // into a folder with an earlier run's snapshots: they go with that run's series
     let again = tempfile::tempdir().unwrap();
     let again_dir = again.path().to_str().unwrap();
@@ -310,7 +321,8 @@ fn run_prints_a_summary_and_rejects_missing_files() {
         }
         found
     };
-    assert!(snapshots(again.path()).len() >= 4);
+    let snapshots_before = snapshots(again.path()).len();
+    assert!(snapshots_before >= 4);
     let mut args = args.to_vec();
     args[6] = again_dir;
     // refused unless asked to replace them, naming what is there
@@ -326,6 +338,24 @@ fn run_prints_a_summary_and_rejects_missing_files() {
     let (ok, _, err) = powder(&args);
     assert!(ok, "{err}");
     assert_eq!(snapshots(again.path()), Vec::<String>::new());
+    // (each series' snapshots counted, its collection named apart)
+    let series: Vec<usize> = err
+        .lines()
+        .filter(|l| l.contains(" snapshot files in ") && l.ends_with(".pvd"))
+        .filter_map(|l| {
+            l.split("removed the earlier run's ")
+                .nth(1)?
+                .split(' ')
+                .next()?
+                .parse()
+                .ok()
+        })
+        .collect();
+    assert_eq!(
+        series.iter().sum::<usize>() + series.len(),
+        snapshots_before,
+        "{err}"
+    );
 }
 
 /// Output files are checked writable before the work that fills them (a bench's rows, a

@@ -1151,6 +1151,38 @@ mod on_the_gpu {
         );
     }
 
+    /// The CPU engine's `contact_history(i, j)` is `i`'s side, as the GPU's is: seen from
+    /// the two sides a contact has the same flag and ξ and the tangential spring negated.
+    #[test]
+    fn cpu_contact_histories_are_seen_from_their_first_particle() {
+        let scene = sticky_pile(0.3, 0.5);
+        let mut cpu = powder::cpu::CpuEngine::new(&scene).unwrap();
+        cpu.run_steps(800).unwrap();
+        let mut sliding = 0;
+        for i in 0..scene.particles.len() {
+            for j in i + 1..scene.particles.len() {
+                let (Some(hi), Some(hj)) = (cpu.contact_history(i, j), cpu.contact_history(j, i))
+                else {
+                    continue;
+                };
+                assert_eq!(hj.tangential, -hi.tangential, "{i}-{j}");
+                assert_eq!(
+                    powder::model::ContactHistory {
+                        tangential: hi.tangential,
+                        ..hj
+                    },
+                    hi,
+                    "{i}-{j}"
+                );
+                sliding += usize::from(hi.tangential.length() > 0.0);
+            }
+        }
+        assert!(
+            sliding > 0,
+            "the pile has contacts with a tangential spring"
+        );
+    }
+
     #[test]
     fn gpu_sticky_pile_follows_the_cpu_at_first() {
         let Some(ctx) = context() else { return };

@@ -241,15 +241,16 @@ impl Series {
     }
 
     /// Removes an earlier run's snapshots of this series (its name's `.vtp` files in the
-    /// folder) and its collection (a fresh run starts its own); returns how many files.
-    pub fn clear(&mut self) -> Result<usize, PowderError> {
-        let files = self.files().into_iter().map(|(_, path)| path);
+    /// folder) and its collection (a fresh run starts its own); returns how many snapshots,
+    /// and whether there was a collection.
+    pub fn clear(&mut self) -> Result<(usize, bool), PowderError> {
         let mut removed = 0;
-        for path in files.chain([self.dir.join(&self.collection)]) {
+        for (_, path) in self.files() {
             removed += usize::from(remove_if_there(&path, "the earlier run's")?);
         }
+        let collection = remove_if_there(&self.collection_path(), "the earlier run's")?;
         self.entries.clear();
-        Ok(removed)
+        Ok((removed, collection))
     }
 
     /// The folder the snapshots go to.

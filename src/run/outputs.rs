@@ -235,11 +235,15 @@ impl RunOutputs {
         // (both series, whether this run writes them or not: they are the earlier run's;
         // that run's scene's too, where another scene's run wrote the folder)
         for mut s in names.iter().flat_map(|n| vtk::Series::both_unopened(d, n)) {
-            let removed = s.clear()?;
-            if removed > 0 && verbose {
+            let (removed, collection) = s.clear()?;
+            if (removed > 0 || collection) && verbose {
                 eprintln!(
-                    "removed the earlier run's {removed} snapshot files in {}",
-                    s.folder().display()
+                    "removed the earlier run's {removed} snapshot files in {}{}",
+                    s.folder().display(),
+                    match collection {
+                        true => format!(" and {}", s.collection_path().display()),
+                        false => String::new(),
+                    }
                 );
             }
         }

@@ -91,6 +91,12 @@ pub(super) fn plan<S: Simulation>(
             }
         )));
     }
+    if resumed_from == Some(total) && opts.verbose {
+        // (not an error: a script that resumes until done may resume once more)
+        eprintln!(
+            "notice: the checkpoint is at this run's end, step {total}: nothing left to run; the outputs stay as that run wrote them"
+        );
+    }
     if opts.verbose {
         // (step k begins at k·dt)
         if let Some(w) = scene.late_insertions(total.saturating_sub(1) as f64 * engine.dt()) {

@@ -294,7 +294,7 @@ pub struct Scene {
     pub jump_impulses: Option<bool>,
     /// Simulated time, s.
     pub duration: f64,
-    /// Steps between progress/summary lines.
+    /// Steps between outputs: `powder run`'s progress line, VTK snapshot and CSV row.
     pub output_every: u64,
     /// Largest expected impact speed, m/s: sets the Hertz/JKR contact time
     /// for the automatic time step.

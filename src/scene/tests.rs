@@ -474,6 +474,14 @@ fn out_of_range_values() {
     s.interactions[0].materials = [1, 1];
     let e = s.validate().unwrap_err().to_string();
     assert!(e.contains("with itself"), "{e}");
+    // a scene built in code is held to the reader's naming rules
+    let mut s = parse(FULL).unwrap();
+    s.materials[1].name = s.materials[0].name.clone();
+    let e = s.validate().unwrap_err().to_string();
+    assert!(e.contains("materials 0 and 1 are both named"), "{e}");
+    s.materials[1].name = " ".into();
+    let e = s.validate().unwrap_err().to_string();
+    assert!(e.contains("material 1 has an empty name"), "{e}");
 }
 
 #[test]

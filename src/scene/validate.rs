@@ -106,6 +106,19 @@ impl Scene {
             return bad("it has no materials".into());
         }
         for (m, material) in self.materials.iter().enumerate() {
+            // (names label the warnings, the time step's reason and the summary)
+            if material.name.trim().is_empty() {
+                return bad(format!("material {m} has an empty name: give each a name"));
+            }
+            if let Some(j) = self.materials[..m]
+                .iter()
+                .position(|x| x.name == material.name)
+            {
+                return bad(format!(
+                    "materials {j} and {m} are both named `{}`: names must be unique",
+                    material.name
+                ));
+            }
             let what = format!("material {m} (`{}`)", material.name);
             check(Section::Material, "density", material.density, &what).or_else(bad)?;
             material.model.validate().map_err(|e| {

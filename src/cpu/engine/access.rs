@@ -1,6 +1,7 @@
 //! What the CPU engine answers about its particles and contacts, and its thread count.
 
 use super::*;
+use crate::gpu::composition::Composition;
 use crate::model::ContactHistory;
 
 impl CpuEngine {
@@ -117,10 +118,19 @@ impl CpuEngine {
         &self.force
     }
 
-    /// History of the contact between particles `i` and `j` (persistent ids), if any.
+    /// History of the contact between particles `i` and `j` (persistent ids), if any, as
+    /// `i` sees it (as `GpuEngine::contact_history` gives it): `contact_history(j, i)` has
+    /// the same flags and ξ, and each field its declaration mirrors (the tangential spring)
+    /// negated.
     pub fn contact_history(&self, i: usize, j: usize) -> Option<ContactHistory> {
         let k = self.pairs.find(i.min(j), i.max(j))?;
-        self.pairs.live[k].then(|| self.pairs.record[k].history)
+        // (stored as the lower id sees it)
+        let h = self.pairs.live[k].then(|| self.pairs.record[k].history)?;
+        if i < j {
+            return Some(h);
+        }
+        let model = self.models[self.material[i] * self.n_materials + self.material[j]];
+        Some(Composition::of(&[model]).mirror_history(h))
     }
 
     /// History of the contact between particle `i` and wall `w`, if any.
