@@ -827,6 +827,8 @@ class Suite:
             steps=done,
             simulated_seconds=s.get("time"),
             wall_seconds=s.get("wall_seconds"),
+            # (the rest of the wall time read the state back after each chunk and checked it)
+            stepping_seconds=s.get("stepping_seconds"),
             seconds_per_step=s["wall_seconds"] / done if done else None,
             particle_steps_per_second=rate,
             rebuilds=rebuilds,
@@ -838,6 +840,9 @@ class Suite:
             "energy ledger, no output files",
         )
         self.save()
+        if s.get("stepping_seconds") and s.get("wall_seconds"):
+            log(f"    -> {s['stepping_seconds']:.2f} of {s['wall_seconds']:.2f} s stepping (the rest: "
+                "the state read back and checked after each chunk)")
 
     # -- the whole suite ----------------------------------------------------------------------
 

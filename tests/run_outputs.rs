@@ -130,6 +130,13 @@ fn outputs_are_written_and_a_resumed_run_is_bitwise_identical() {
     let whole = run(&scene, straight.path(), 3000, None);
     let first = run(&scene, split.path(), 1500, None);
     assert_eq!(first.steps, 1500);
+    // (the wall time splits into the steps and the work around them)
+    assert!(
+        whole.stepping_seconds > 0.0 && whole.stepping_seconds <= whole.wall_seconds,
+        "{} of {} s",
+        whole.stepping_seconds,
+        whole.wall_seconds
+    );
     let ckpt = split.path().join("checkpoint.bin");
     let resumed = run(&scene, split.path(), 3000, Some(&ckpt));
     assert_eq!(resumed.resumed_from, Some(1500));

@@ -229,8 +229,8 @@ pub(crate) fn print_summary(summary: &powder::run::RunSummary, snapshots: bool) 
         summary.steps, summary.time
     );
     println!(
-        "wall time        {:.2} s ({:.3e} particle-steps/s)",
-        summary.wall_seconds, summary.particle_steps_per_second
+        "wall time        {:.2} s ({:.3e} particle-steps/s; {:.2} s stepping, the rest reading back, checking and writing)",
+        summary.wall_seconds, summary.particle_steps_per_second, summary.stepping_seconds
     );
     let e = &l.energies;
     let ledger = |v: Option<f64>| v.map_or(NO_LEDGER.to_string(), |v| format!("{v:.4e}"));

@@ -195,6 +195,9 @@ pub fn run_with<S: Simulation>(
         scale,
     };
     let mut interrupted = false;
+    // (the time inside the engine's steps; the rest of the wall time reads the state back,
+    // checks it and writes)
+    let mut stepping = std::time::Duration::ZERO;
     let mut last_obs = obs;
     // Chunks end at outputs, checkpoints and at most 1000 steps apart (for Ctrl-C and the
     // monitor).
@@ -207,7 +210,10 @@ pub fn run_with<S: Simulation>(
         // the last state that passed it.
         let before = engine.save()?;
         let scale_before = scale;
-        let stepped = engine.run_steps(chunk).and_then(|()| {
+        let stepping_from = std::time::Instant::now();
+        let ran = engine.run_steps(chunk);
+        stepping += stepping_from.elapsed();
+        let stepped = ran.and_then(|()| {
             let obs = engine.observe()?;
             let scale = energy_scale(scale, &obs.energies, &start);
             monitor(&mut engine, dt_rule, scene, (&obs, &start), scale)?;
@@ -324,6 +330,7 @@ pub fn run_with<S: Simulation>(
         steps: engine.steps(),
         time: engine.time(),
         wall_seconds: wall,
+        stepping_seconds: stepping.as_secs_f64(),
         particle_steps_per_second: engine.len() as f64 * (engine.steps() - start_steps) as f64
             / wall.max(1e-9),
         initial,

@@ -36,6 +36,9 @@ pub struct RunSummary {
     pub time: f64,
     /// Wall-clock time of this run, s.
     pub wall_seconds: f64,
+    /// The part of `wall_seconds` spent inside the engine's steps; the rest went to reading
+    /// the state back after each chunk, the monitor's checks and the outputs, s.
+    pub stepping_seconds: f64,
     /// Particles × steps of this run over `wall_seconds`, 1/s.
     pub particle_steps_per_second: f64,
     /// State at the start of this run (the checkpoint's state on resume).
