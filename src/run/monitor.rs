@@ -30,8 +30,10 @@ pub struct MonitorReference {
 pub const ROUNDING_ULPS: f64 = 16.0;
 
 /// The run monitor: what must stop a run, with the step, the particles and a hint.
-/// `energies` are the energies now and at the start; without the ledger (no total) the
-/// energy-growth check is skipped. What that loses: a slow blow-up (a time step a
+/// `obs` is the observation now (`None` where the run took none: without the ledger it
+/// needs only the engine's own watch, and observes where a check fails) and `start` the
+/// energies at the start; without the ledger (no total) the energy-growth check is
+/// skipped. What that loses: a slow blow-up (a time step a
 /// little too large for the stiffest contact, pumping energy in a few per cent per
 /// chunk) is caught only once it shows as a non-finite value, an overlap beyond
 /// [`MAX_OVERLAP_RATIO`] or a particle leaving the domain, which the other checks watch
@@ -41,11 +43,10 @@ pub(super) fn monitor(
     engine: &mut impl Simulation,
     dt_rule: &str,
     scene: &Scene,
-    (obs, start): (&Observation, &ObservedEnergies),
+    (obs, start): (Option<&Observation>, &ObservedEnergies),
     scale: f64,
 ) -> Result<(), PowderError> {
     let steps = engine.steps();
-    let now = &obs.energies;
     // (a batch poured onto particles still in its region overlaps them: no push aside)
     let poured = match scene.pours() {
         true => ", or particles appeared where earlier ones still were (a pour's region must have emptied before its next batch: *Pouring* in the README)",
@@ -62,6 +63,14 @@ pub(super) fn monitor(
     }
     if let Some(peak) = engine.take_peak_overlap() {
         if peak.ratio > MAX_OVERLAP_RATIO {
+            let taken;
+            let obs = match obs {
+                Some(obs) => obs,
+                None => {
+                    taken = engine.observe()?;
+                    &taken
+                }
+            };
             let (radii, dt) = (engine.radii(), engine.dt());
             let appeared = |i: usize| engine.has_appeared(i);
             if let Some(a) =
@@ -85,7 +94,7 @@ pub(super) fn monitor(
             )));
         }
     }
-    if let Some((name, value)) = now.non_finite() {
+    if let Some((name, value)) = obs.and_then(|o| o.energies.non_finite()) {
         return Err(PowderError::Run(format!(
             "step {steps}: the {name} energy is {value} (beyond f64's range: a velocity, spin or wall speed far too large for the scene?); {hint}"
         )));
@@ -96,6 +105,10 @@ pub(super) fn monitor(
             "step {steps}: particles {escaped:?} left the domain box; enlarge [domain] or add walls (or {hint})"
         )));
     }
+    let Some(obs) = obs else {
+        return Ok(());
+    };
+    let now = &obs.energies;
     let Some((total, initial_total)) = now.total().zip(start.total()) else {
         return Ok(());
     };
@@ -154,7 +167,7 @@ pub(super) fn first_failure(
         let stepped = engine.run_steps(1).and_then(|()| {
             let obs = engine.observe()?;
             scale = energy_scale(scale, &obs.energies, start);
-            monitor(engine, dt_rule, scene, (&obs, start), scale)
+            monitor(engine, dt_rule, scene, (Some(&obs), start), scale)
         });
         if let Err(e) = stepped {
             return Some(e);
