@@ -338,6 +338,54 @@ fn the_monitor_stops_runs_that_go_wrong_and_keeps_the_last_good_state() {
     );
 }
 
+/// A failing chunk stepped again from a copy of the state taken chunks before it (as a
+/// GPU run at 10^7 particles copies its state seldom) gives the same error and the same
+/// checkpoint of the chunk's start as one copied just before it, on both backends.
+#[test]
+fn a_failing_chunk_is_found_from_an_older_copy_of_the_state() {
+    use powder::run::run_gpu_with;
+    // the pair flies apart and leaves the domain after some 360 steps: chunks of 100
+    let mut s = pair_scene(DtSetting::Auto, false, -0.5, 3e-3);
+    s.duration = 0.05;
+    type Run = fn(&Scene, &RunOptions) -> Option<String>;
+    let backends: [(&str, Run); 2] = [
+        ("cpu", |s, o| {
+            Some(run_cpu_with(s, o, |_| {}).unwrap_err().to_string())
+        }),
+        ("gpu", |s, o| {
+            Some(run_gpu_with(s, gpu()?, o, |_| {}).unwrap_err().to_string())
+        }),
+    ];
+    for (backend, run) in backends {
+        let outcome = |every: u64| {
+            let dir = tempfile::tempdir().unwrap();
+            let opts = RunOptions {
+                out_dir: Some(dir.path().to_path_buf()),
+                copy_every: Some(every),
+                ..Default::default()
+            };
+            let err = run(&s, &opts)?;
+            let ckpt = std::fs::read(dir.path().join("checkpoint.bin")).unwrap();
+            Some((err.replace(dir.path().to_str().unwrap(), "DIR"), ckpt))
+        };
+        let Some((err, ckpt)) = outcome(1) else {
+            continue;
+        };
+        let step: u64 = err
+            .strip_prefix("step ")
+            .and_then(|r| r.split(':').next())
+            .and_then(|n| n.parse().ok())
+            .unwrap_or_else(|| panic!("{backend}: {err}"));
+        assert!(
+            step > 200 && err.contains("left the domain"),
+            "{backend}: {err}"
+        );
+        let (err_old, ckpt_old) = outcome(u64::MAX).unwrap();
+        assert_eq!(err_old, err, "{backend}");
+        assert!(ckpt_old == ckpt, "{backend}: the checkpoints differ");
+    }
+}
+
 /// A run that goes wrong inside a chunk of steps names the step it went wrong at, not the
 /// chunk's end: the same error on any output cadence, on both backends (the failed chunk is
 /// run again a step at a time; before, a GPU run named the chunk's end with the overlap

@@ -184,6 +184,7 @@ fn run_in(
         backend_reason: Some(reason),
         no_snapshots: a.no_snapshots,
         overwrite: a.overwrite,
+        copy_every: None,
     };
     match gpu {
         Some(ctx) => powder::run::run_gpu_with(&scene, ctx, &opts, |_| {}),

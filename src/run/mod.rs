@@ -14,6 +14,7 @@ mod outputs;
 pub(crate) mod overdamped;
 mod overlap_partner;
 mod plan;
+mod recovery;
 mod servo;
 pub mod simulation;
 mod snapshot;
@@ -35,6 +36,7 @@ use monitor::{energy_scale, first_failure, monitor};
 pub use monitor::{MonitorReference, MAX_ENERGY_GROWTH, MAX_OVERLAP_RATIO};
 use outputs::RunOutputs;
 use plan::RunPlan;
+use recovery::RecoveryCopy;
 use servo::ServoWatch;
 pub use servo::{ServoHold, SERVO_RMS_MAX};
 use snapshot::snapshot;
@@ -78,6 +80,11 @@ pub struct RunOptions {
     /// the checkpoint's step (a resume); without it such a run is refused before anything
     /// changes.
     pub overwrite: bool,
+    /// Steps between the copies of the state that a failing chunk is stepped again from
+    /// (to name its failing step and checkpoint its start); `None`: as often as keeps the
+    /// copies under 5 % of the stepping time (every chunk where a copy is cheap; on a GPU
+    /// at 10^7 particles, where one reads the whole device state back, far fewer).
+    pub copy_every: Option<u64>,
 }
 
 /// Runs `scene` on the CPU reference backend to its duration (or `opts.max_steps`),
@@ -205,6 +212,7 @@ pub fn run_with<S: Simulation>(
     let light = !engine.has_ledger() && !scene.walls.iter().any(|w| w.motion.servo());
     let mut last_obs = obs;
     let mut last_obs_step = engine.steps();
+    let mut copy = RecoveryCopy::take(&engine, opts.copy_every)?;
     // Chunks end at outputs, checkpoints and at most 1000 steps apart (for Ctrl-C and the
     // monitor).
     while engine.steps() < total {
@@ -212,13 +220,15 @@ pub fn run_with<S: Simulation>(
         let to_output = scene.output_every - steps % scene.output_every;
         let to_ckpt = scene.checkpoint_every - steps % scene.checkpoint_every;
         let chunk = to_output.min(to_ckpt).min(1000).min(total - steps);
-        // The state before the chunk: if the monitor stops the run, the checkpoint holds
-        // the last state that passed it.
-        let before = engine.save()?;
+        // The state before the chunk, or one before it to step again from: if the monitor
+        // stops the run, the checkpoint holds the last state that passed it.
+        copy.refresh(&engine)?;
         let scale_before = scale;
         let stepping_from = std::time::Instant::now();
         let ran = engine.run_steps(chunk);
-        stepping += stepping_from.elapsed();
+        let took = stepping_from.elapsed();
+        stepping += took;
+        copy.stepped(took);
         let writes = {
             let now = engine.steps();
             now.is_multiple_of(scene.output_every) || now == total
@@ -244,7 +254,7 @@ pub fn run_with<S: Simulation>(
                 }
                 // the chunk again a step at a time from its start, to name the step that
                 // failed (the chunk's end may be up to 1000 steps later, its values wild)
-                engine.restore(before)?;
+                copy.restore_to(&mut engine, steps)?;
                 let before = engine.save()?;
                 let e = first_failure(&mut engine, chunk, dt_rule, scene, &start, scale_before)
                     .unwrap_or(e);
@@ -270,7 +280,7 @@ pub fn run_with<S: Simulation>(
                 if let Some(b) = &bar {
                     b.finish_and_clear();
                 }
-                engine.restore(before)?;
+                copy.restore_to(&mut engine, steps - chunk)?;
                 let saved =
                     outputs.checkpoint_marked(scene, &engine, reference(scale_before), rows);
                 return Err(saved_before(
