@@ -42,7 +42,9 @@ watched() {
     : >"$log"
     local launch=()
     command -v setsid >/dev/null && launch=(setsid)
-    "${launch[@]}" "$@" >>"$log" 2>&1 &
+    # (a background job of a non-interactive shell ignores SIGINT and SIGQUIT, and so
+    # would every run the tests signal: restored to the default first)
+    ( trap - INT QUIT; exec "${launch[@]}" "$@" ) >>"$log" 2>&1 &
     local pid=$! end=$((SECONDS + limit))
     while kill -0 "$pid" 2>/dev/null && [ "$SECONDS" -lt "$end" ]; do
         sleep 0.2

@@ -79,7 +79,7 @@ pub(crate) const DEFAULT_SCENE: &str = include_str!("../../examples/cohesive_clu
 
 pub(crate) fn run_cmd(a: &RunArgs) -> Result<(), PowderError> {
     // (first: every thread started after this blocks the stop signals; one taken during
-    // set-up stops the run after its first chunk)
+    // set-up ends the process at once, as it would have by default)
     let interrupt = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
     super::stop_signals::install(interrupt.clone());
     let threads = powder::cpu::Threads::new(a.threads)?;
@@ -186,8 +186,11 @@ fn run_in(
         overwrite: a.overwrite,
         copy_every: None,
     };
+    // (the first progress call comes when the set-up is done: stop signals stop the run
+    // gracefully from then on)
+    let begun = |_: &powder::run::Snapshot| super::stop_signals::running();
     match gpu {
-        Some(ctx) => powder::run::run_gpu_with(&scene, ctx, &opts, |_| {}),
+        Some(ctx) => powder::run::run_gpu_with(&scene, ctx, &opts, begun),
         None => {
             if a.no_ledger {
                 // accepted so one command line serves both backends (and the fallback)
@@ -199,7 +202,7 @@ fn run_in(
             if a.quiet_batches != QuietChoice::Auto {
                 eprintln!("notice: --quiet-batches has no effect on the CPU backend (the GPU engine's batches)");
             }
-            powder::run::run_cpu_with(&scene, &opts, |_| {})
+            powder::run::run_cpu_with(&scene, &opts, begun)
         }
     }
 }

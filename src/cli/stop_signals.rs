@@ -9,15 +9,19 @@ use std::sync::{Arc, OnceLock};
 static FLAG: OnceLock<Arc<AtomicBool>> = OnceLock::new();
 /// The first stop signal received (0: none).
 static SIGNAL: AtomicI32 = AtomicI32::new(0);
+/// Whether the run has begun (its set-up done): before, a stop signal ends the process at
+/// once, as it would without powder's handling (nothing has run that a checkpoint keeps).
+static RUNNING: AtomicBool = AtomicBool::new(false);
 
 /// SIGINT's number where the platform has no others: the status a stopped run exits with.
 const SIGINT: i32 = 2;
 
-/// Routes the stop signals to `flag`, which the run loop reads after each chunk. Called
-/// before any other thread exists: the signals are blocked in every thread (the pools' and
-/// the GPU driver's inherit the mask), so none is ever interrupted in a system call, and
-/// one thread takes them with `sigwait`. A signal the process was started ignoring (SIGHUP
-/// under `nohup`, SIGINT in a background job) stays ignored.
+/// Routes the stop signals to `flag`, which the run loop reads after each chunk, once the
+/// run has begun ([`running`]); before, a signal takes its default action. Called before
+/// any other thread exists: the signals are blocked in every thread (the pools' and the GPU
+/// driver's inherit the mask), so none is interrupted in a system call, and one thread
+/// takes them with `sigwait`. A signal the process was started ignoring (SIGHUP under
+/// `nohup`, SIGINT in a background job of a script) stays ignored.
 pub(crate) fn install(flag: Arc<AtomicBool>) {
     if FLAG.set(flag).is_err() {
         return;
@@ -43,6 +47,9 @@ pub(crate) fn install(flag: Arc<AtomicBool>) {
             let mut sig: libc::c_int = 0;
             // (a second signal while the checkpoint is written changes nothing)
             if libc::sigwait(&set, &mut sig) == 0 {
+                if !RUNNING.load(Relaxed) {
+                    end_by(sig);
+                }
                 let _ = SIGNAL.compare_exchange(0, sig, Relaxed, Relaxed);
                 if let Some(flag) = FLAG.get() {
                     flag.store(true, Relaxed);
@@ -60,6 +67,26 @@ pub(crate) fn install(flag: Arc<AtomicBool>) {
             let _ = SIGNAL.compare_exchange(0, SIGINT, Relaxed, Relaxed);
             flag.store(true, Relaxed);
         });
+    }
+}
+
+/// Marks the run begun: from now on a stop signal stops it after the current chunk.
+pub(crate) fn running() {
+    RUNNING.store(true, Relaxed);
+}
+
+/// Ends the process by `sig`'s default action, from the thread that takes the signals.
+#[cfg(unix)]
+fn end_by(sig: libc::c_int) {
+    // SAFETY: signal, sigset and pthread_sigmask calls with valid pointers; raise on this
+    // thread, where the signal is then unblocked.
+    unsafe {
+        libc::signal(sig, libc::SIG_DFL);
+        let mut one: libc::sigset_t = std::mem::zeroed();
+        libc::sigemptyset(&mut one);
+        libc::sigaddset(&mut one, sig);
+        libc::pthread_sigmask(libc::SIG_UNBLOCK, &one, std::ptr::null_mut());
+        libc::raise(sig);
     }
 }
 

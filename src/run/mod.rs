@@ -205,14 +205,15 @@ pub fn run_with<S: Simulation>(
     // (the time inside the engine's steps; the rest of the wall time reads the state back,
     // checks it and writes)
     let mut stepping = std::time::Duration::ZERO;
-    // Without the ledger the monitor needs nothing on the host (the engine watches
-    // non-finite values, overlaps and escapes itself; there is no energy check), so a chunk
-    // that writes nothing observes nothing: on the GPU reading the state back and decoding
-    // it costs about as much as the steps at 10^7 (servo walls are judged every chunk).
+    // Without the ledger the monitor needs little on the host (the engine watches its
+    // overlaps, escapes and non-finite values — the GPU its accelerations —; there is no
+    // energy check, so the energy scale stays as it began), so a chunk that writes nothing
+    // observes nothing: on the GPU reading the state back and decoding it costs about as
+    // much as the steps at 10^7 (servo walls are judged every chunk).
     let light = !engine.has_ledger() && !scene.walls.iter().any(|w| w.motion.servo());
     let mut last_obs = obs;
     let mut last_obs_step = engine.steps();
-    let mut copy = RecoveryCopy::take(&engine, opts.copy_every)?;
+    let mut copy = RecoveryCopy::new(opts.copy_every);
     // Chunks end at outputs, checkpoints and at most 1000 steps apart (for Ctrl-C and the
     // monitor).
     while engine.steps() < total {
@@ -238,7 +239,10 @@ pub fn run_with<S: Simulation>(
                 true => None,
                 false => Some(engine.observe()?),
             };
-            let scale = (obs.as_ref()).map_or(scale, |o| energy_scale(scale, &o.energies, &start));
+            let scale = match (&obs, light) {
+                (Some(o), false) => energy_scale(scale, &o.energies, &start),
+                _ => scale,
+            };
             monitor(&mut engine, dt_rule, scene, (obs.as_ref(), &start), scale)?;
             Ok((obs, scale))
         });

@@ -23,20 +23,21 @@ pub(super) struct RecoveryCopy<S: Simulation> {
 }
 
 impl<S: Simulation> RecoveryCopy<S> {
-    /// A copy of the state now; the next ones every `every` steps (`None`: by their cost).
-    pub(super) fn take(engine: &S, every: Option<u64>) -> Result<Self, PowderError> {
-        let mut copy = Self {
+    /// No copy yet: the first chunk takes one; the next ones every `every` steps (`None`:
+    /// by their cost).
+    pub(super) fn new(every: Option<u64>) -> Self {
+        Self {
             saved: None,
             step: 0,
             cost: Duration::ZERO,
             since: Duration::ZERO,
             every,
-        };
-        copy.copy(engine)?;
-        Ok(copy)
+        }
     }
 
     fn copy(&mut self, engine: &S) -> Result<(), PowderError> {
+        // (the old copy goes first: never two of a large state at once)
+        self.saved = None;
         let started = Instant::now();
         self.saved = Some(engine.save()?);
         self.cost = started.elapsed();
@@ -45,14 +46,14 @@ impl<S: Simulation> RecoveryCopy<S> {
         Ok(())
     }
 
-    /// Before a chunk: a new copy where one is due.
+    /// Before a chunk: a new copy where one is due (the first always).
     pub(super) fn refresh(&mut self, engine: &S) -> Result<(), PowderError> {
         let now = engine.steps();
         let due = match self.every {
             Some(n) => now >= self.step.saturating_add(n),
             None => self.since.as_secs_f64() * COPY_SHARE >= self.cost.as_secs_f64(),
         };
-        if due && now != self.step {
+        if self.saved.is_none() || (due && now != self.step) {
             self.copy(engine)?;
         }
         Ok(())
