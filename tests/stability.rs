@@ -442,6 +442,19 @@ fn a_failure_is_named_at_its_own_step_on_any_cadence() {
     };
     let on_gpu_stepwise = named(run_gpu_with(&every(1), ctx, &opts, |_| {}).unwrap_err());
     assert_eq!(on_gpu, on_gpu_stepwise);
+    // without the ledger the chunk is searched without observing each step: the same error
+    let Some(ctx) = gpu() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let opts = RunOptions {
+        out_dir: Some(dir.path().to_path_buf()),
+        gpu: powder::gpu::GpuOptions {
+            ledger: false,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let without_ledger = named(run_gpu_with(&every(100), ctx, &opts, |_| {}).unwrap_err());
+    assert_eq!(without_ledger, on_gpu);
     let gpu_at = step_of(&on_gpu);
     assert!(gpu_at.abs_diff(at) <= 1, "{on_gpu} against {chunked}");
     // an overlap beyond the limit names the partner on both backends (the GPU's monitor

@@ -260,8 +260,15 @@ pub fn run_with<S: Simulation>(
                 // failed (the chunk's end may be up to 1000 steps later, its values wild)
                 copy.restore_to(&mut engine, steps)?;
                 let before = engine.save()?;
-                let e = first_failure(&mut engine, chunk, dt_rule, scene, &start, scale_before)
-                    .unwrap_or(e);
+                let e = first_failure(
+                    &mut engine,
+                    chunk,
+                    (dt_rule, scene),
+                    &start,
+                    scale_before,
+                    light,
+                )
+                .unwrap_or(e);
                 engine.restore(before)?;
                 let saved = outputs.checkpoint(scene, &engine, reference(scale));
                 return Err(saved_before(e, saved, &outputs, &engine, "the failure"));

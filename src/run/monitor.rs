@@ -152,19 +152,23 @@ fn ratio_text(ratio: f64) -> String {
 /// step).
 /// `None` where none does (the engines are deterministic, so the failure recurs unless it
 /// was the chunk's energy check, now judged earlier with a smaller scale; the caller then
-/// keeps the chunk's own error).
+/// keeps the chunk's own error). `light`: as the run, without the ledger, observing only
+/// where a check fails (each step's full observation reads a GPU's state back).
 pub(super) fn first_failure(
     engine: &mut impl Simulation,
     steps: u64,
-    dt_rule: &str,
-    scene: &Scene,
+    (dt_rule, scene): (&str, &Scene),
     start: &ObservedEnergies,
     mut scale: f64,
+    light: bool,
 ) -> Option<PowderError> {
     // (the failed chunk's overlap record, which a restore may keep)
     engine.take_peak_overlap();
     for _ in 0..steps {
         let stepped = engine.run_steps(1).and_then(|()| {
+            if light {
+                return monitor(engine, dt_rule, scene, (None, start), scale);
+            }
             let obs = engine.observe()?;
             scale = energy_scale(scale, &obs.energies, start);
             monitor(engine, dt_rule, scene, (Some(&obs), start), scale)
