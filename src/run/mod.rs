@@ -210,7 +210,8 @@ pub fn run_with<S: Simulation>(
     // energy check, so the energy scale stays as it began), so a chunk that writes nothing
     // observes nothing: on the GPU reading the state back and decoding it costs about as
     // much as the steps at 10^7 (servo walls are judged every chunk).
-    let light = !engine.has_ledger() && !scene.walls.iter().any(|w| w.motion.servo());
+    let servo_walls = scene.walls.iter().any(|w| w.motion.servo());
+    let light = !engine.has_ledger() && !servo_walls;
     let mut last_obs = obs;
     let mut last_obs_step = engine.steps();
     let mut copy = RecoveryCopy::new(opts.copy_every);
@@ -235,15 +236,19 @@ pub fn run_with<S: Simulation>(
             now.is_multiple_of(scene.output_every) || now == total
         };
         let stepped = ran.and_then(|()| {
-            let obs = match light && !writes {
-                true => None,
-                false => Some(engine.observe()?),
+            // (between outputs the monitor's checks need no wall forces, unless servo
+            // walls are judged)
+            let obs = match (writes || servo_walls, light) {
+                (true, _) => Some((engine.observe()?, true)),
+                (false, false) => Some((engine.observe_for_checks()?, false)),
+                (false, true) => None,
             };
             let scale = match (&obs, light) {
-                (Some(o), false) => energy_scale(scale, &o.energies, &start),
+                (Some((o, _)), false) => energy_scale(scale, &o.energies, &start),
                 _ => scale,
             };
-            monitor(&mut engine, dt_rule, scene, (obs.as_ref(), &start), scale)?;
+            let checked = obs.as_ref().map(|(o, _)| o);
+            monitor(&mut engine, dt_rule, scene, (checked, &start), scale)?;
             Ok((obs, scale))
         });
         let obs = match stepped {
@@ -278,7 +283,7 @@ pub fn run_with<S: Simulation>(
             b.set_position(engine.steps());
         }
         let steps = engine.steps();
-        if let Some(obs) = obs.as_ref().filter(|_| writes) {
+        if let Some((obs, _)) = obs.as_ref().filter(|_| writes) {
             let snap = snapshot(&engine, obs);
             progress(&snap);
             if opts.verbose {
@@ -303,7 +308,8 @@ pub fn run_with<S: Simulation>(
                 ));
             }
         }
-        if let Some(obs) = obs {
+        // (only a full observation is the run's last: its row may be written at the end)
+        if let Some((obs, true)) = obs {
             servo.record(
                 engine.time(),
                 obs.wall_forces.as_deref(),
