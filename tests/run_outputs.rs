@@ -840,13 +840,16 @@ fn foreign_or_broken_checkpoints_are_refused() {
 
 /// A `powder run` whose stderr is read on a thread as it comes, its stop signals at their
 /// defaults (a test runner started in the background of a script ignores SIGINT, and so
-/// would the run it starts: the lease script's did on the H200).
+/// would the run it starts: the lease script's did on the H200). Killed if dropped
+/// unfinished (a failed assertion leaves no run behind).
+#[cfg(unix)]
 struct SignalledRun {
     child: std::process::Child,
     lines: std::sync::mpsc::Receiver<String>,
     seen: String,
 }
 
+#[cfg(unix)]
 impl SignalledRun {
     fn start(args: &[&str]) -> Self {
         use std::io::BufRead;
@@ -898,44 +901,65 @@ impl SignalledRun {
                 Err(_) => break,
             }
         }
-        let _ = self.child.kill();
         panic!("no line starting {text:?} within a minute: {}", self.seen);
     }
 
-    fn signal(&self, name: &str) {
-        let sent = std::process::Command::new("kill")
-            .args([format!("-{name}"), self.child.id().to_string()])
-            .status()
-            .unwrap();
-        assert!(sent.success());
+    fn signal(&self, sig: libc::c_int) {
+        // SAFETY: kill with the child's pid, which it keeps until it is waited for.
+        let sent = unsafe { libc::kill(self.child.id() as libc::pid_t, sig) };
+        assert_eq!(sent, 0, "kill({sig}) failed");
     }
 
-    /// Waits for the process; its status and all it wrote to stderr.
+    /// Waits (at most a minute) for the process; its status and all it wrote to stderr.
     fn finish(mut self) -> (std::process::ExitStatus, String) {
-        let status = self.child.wait().unwrap();
+        let end = std::time::Instant::now() + std::time::Duration::from_secs(60);
+        let status = loop {
+            if let Some(status) = self.child.try_wait().unwrap() {
+                break status;
+            }
+            if std::time::Instant::now() > end {
+                panic!("the run did not end within a minute: {}", self.seen);
+            }
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        };
         while let Ok(line) = self.lines.recv_timeout(std::time::Duration::from_secs(10)) {
             self.seen.push_str(&line);
             self.seen.push('\n');
         }
-        (status, self.seen)
+        (status, std::mem::take(&mut self.seen))
+    }
+}
+
+#[cfg(unix)]
+impl Drop for SignalledRun {
+    fn drop(&mut self) {
+        if let Ok(None) = self.child.try_wait() {
+            let _ = self.child.kill();
+            let _ = self.child.wait();
+        }
     }
 }
 
 /// Ctrl-C, and the SIGTERM and SIGHUP that schedulers, `timeout` and a closed terminal
 /// send, each write a checkpoint and exit with 128 + the signal's number; no thread but the
-/// one that takes them can be interrupted by them.
+/// one that takes them can be interrupted by them (Linux: read from /proc).
+#[cfg(unix)]
 #[test]
 fn a_stop_signal_writes_a_checkpoint_and_exits_with_its_status() {
     let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/jkr_deposition.toml");
-    let runs: Vec<_> = [("INT", 130), ("TERM", 143), ("HUP", 129)]
-        .into_iter()
-        .map(|(signal, status)| {
-            let dir = tempfile::tempdir().unwrap();
-            let run = SignalledRun::start(&["run", scene, "--out", dir.path().to_str().unwrap()]);
-            (signal, status, dir, run)
-        })
-        .collect();
-    for (signal, status, dir, mut run) in runs {
+    let runs: Vec<_> = [
+        ("INT", libc::SIGINT, 130),
+        ("TERM", libc::SIGTERM, 143),
+        ("HUP", libc::SIGHUP, 129),
+    ]
+    .into_iter()
+    .map(|(signal, number, status)| {
+        let dir = tempfile::tempdir().unwrap();
+        let run = SignalledRun::start(&["run", scene, "--out", dir.path().to_str().unwrap()]);
+        (signal, number, status, dir, run)
+    })
+    .collect();
+    for (signal, number, status, dir, mut run) in runs {
         // (the first progress line: the run has begun)
         run.wait_for("step ");
         let open: Vec<_> = threads_of(run.child.id())
@@ -944,11 +968,11 @@ fn a_stop_signal_writes_a_checkpoint_and_exits_with_its_status() {
                 name != "stop-signals" && blocked & STOP_SIGNALS != STOP_SIGNALS
             })
             .collect();
-        if !open.is_empty() {
-            let _ = run.child.kill();
-            panic!("SIG{signal}: threads that take stop signals: {open:?}");
-        }
-        run.signal(signal);
+        assert!(
+            open.is_empty(),
+            "SIG{signal}: threads that take stop signals: {open:?}"
+        );
+        run.signal(number);
         let (code, stderr) = run.finish();
         assert_eq!(code.code(), Some(status), "SIG{signal}: {stderr}");
         assert!(
@@ -965,9 +989,11 @@ fn a_stop_signal_writes_a_checkpoint_and_exits_with_its_status() {
 }
 
 /// SIGHUP, SIGINT and SIGTERM as bits of a /proc signal mask.
+#[cfg(unix)]
 const STOP_SIGNALS: u64 = 1 << 0 | 1 << 1 | 1 << 14;
 
 /// Each thread of a process: its id, name and blocked-signal mask (Linux; none elsewhere).
+#[cfg(unix)]
 fn threads_of(pid: u32) -> Vec<(u32, String, u64)> {
     let Ok(tasks) = std::fs::read_dir(format!("/proc/{pid}/task")) else {
         return Vec::new();
@@ -988,13 +1014,14 @@ fn threads_of(pid: u32) -> Vec<(u32, String, u64)> {
 /// A stop signal during set-up (here as soon as the process takes the signals, long before
 /// a 96 100-sphere packing is built) ends the process at once, by the signal, as it would
 /// without powder's handling: nothing has run that a checkpoint would keep.
+#[cfg(target_os = "linux")]
 #[test]
 fn a_stop_signal_during_set_up_ends_the_process_at_once() {
     use std::os::unix::process::ExitStatusExt;
     let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/packing.toml");
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
-    let mut run = SignalledRun::start(&[
+    let run = SignalledRun::start(&[
         "run",
         scene,
         "--set",
@@ -1011,13 +1038,13 @@ fn a_stop_signal_during_set_up_ends_the_process_at_once() {
         main.is_some_and(|(_, _, m)| m & STOP_SIGNALS == STOP_SIGNALS)
     };
     while !taken(&run) {
-        if start.elapsed().as_secs() > 20 {
-            let _ = run.child.kill();
-            panic!("the run never blocked the stop signals");
-        }
+        assert!(
+            start.elapsed().as_secs() < 20,
+            "the run never blocked the stop signals"
+        );
         std::thread::sleep(std::time::Duration::from_micros(200));
     }
-    run.signal("TERM");
+    run.signal(libc::SIGTERM);
     let (status, stderr) = run.finish();
     assert_eq!(status.signal(), Some(libc::SIGTERM), "{status:?}: {stderr}");
     assert!(!out.join("checkpoint.bin").exists(), "{stderr}");
@@ -1025,12 +1052,13 @@ fn a_stop_signal_during_set_up_ends_the_process_at_once() {
 
 /// A stopped `--no-output` run says that it wrote no checkpoint (it used to name one in
 /// "(no output directory)").
+#[cfg(unix)]
 #[test]
 fn a_stopped_run_without_outputs_says_it_wrote_no_checkpoint() {
     let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/jkr_deposition.toml");
     let mut run = SignalledRun::start(&["run", scene, "--no-output"]);
     run.wait_for("step ");
-    run.signal("INT");
+    run.signal(libc::SIGINT);
     let (status, stderr) = run.finish();
     assert_eq!(status.code(), Some(130), "{stderr}");
     assert!(

@@ -10,7 +10,9 @@ static FLAG: OnceLock<Arc<AtomicBool>> = OnceLock::new();
 /// The first stop signal received (0: none).
 static SIGNAL: AtomicI32 = AtomicI32::new(0);
 /// Whether the run has begun (its set-up done): before, a stop signal ends the process at
-/// once, as it would without powder's handling (nothing has run that a checkpoint keeps).
+/// once, as it would without powder's handling (nothing has run that a checkpoint keeps;
+/// folders the run created stay, empty, and one arriving just as the run begins may still
+/// end it before its first step).
 static RUNNING: AtomicBool = AtomicBool::new(false);
 
 /// SIGINT's number where the platform has no others: the status a stopped run exits with.

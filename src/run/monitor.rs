@@ -169,7 +169,7 @@ pub(super) fn first_failure(
             if light {
                 return monitor(engine, dt_rule, scene, (None, start), scale);
             }
-            let obs = engine.observe()?;
+            let obs = engine.observe_for_checks()?;
             scale = energy_scale(scale, &obs.energies, start);
             monitor(engine, dt_rule, scene, (Some(&obs), start), scale)
         });
