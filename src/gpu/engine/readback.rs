@@ -16,24 +16,26 @@ impl GpuEngine {
     /// Reads positions, velocities and (when the scene rotates) angular velocities back,
     /// in the scene's particle order.
     pub fn state(&self) -> Result<GpuState, PowderError> {
-        let s = &self.state;
-        let (state, motion) = &self.read_state()?;
-        let l = &s.layout;
-        let cells: Vec<[i32; 4]> = l.unpack(state, "cell");
-        let offs: Vec<[f32; 4]> = l.unpack(state, "off");
-        let vels: Vec<[f32; 4]> = l.unpack(motion, "vel");
-        let ids: Vec<[u32; 4]> = l.unpack(state, "ids");
-        let kahan_v: Vec<[f32; 4]> = l.unpack(motion, "kahan_v");
-        let kahan_o: Vec<[f32; 4]> = l.unpack(state, "kahan_o");
-        let omegas: Vec<[f32; 4]> = l.unpack(motion, "omega");
-        let vec3 = |v: [f32; 4]| DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64);
+        // (only the fields it is made of, not the whole buffers: the run reads it back
+        // after chunks)
+        let rotates = self.state.layout.place("omega").is_some();
+        let names = ["cell", "off", "ids", "kahan_o", "vel", "kahan_v", "omega"];
+        let f = self.read_fields(&names[..names.len() - usize::from(!rotates)])?;
+        let [cells, offs, ids, kahan_o, vels, kahan_v] = [0, 1, 2, 3, 4, 5].map(|i| &f[i]);
+        let omegas: &[[u32; 4]] = f.get(6).map_or(&[], |w| w);
+        let vec3 = |v: [u32; 4]| {
+            let v: [f32; 4] = bytemuck::cast(v);
+            DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64)
+        };
         let mut positions = vec![DVec3::ZERO; self.n as usize];
         let mut velocities = vec![DVec3::ZERO; self.n as usize];
         let mut angular_velocities = vec![DVec3::ZERO; omegas.len()];
         for k in 0..self.n as usize {
             let i = ids[k][0] as usize;
+            let (cell, off): ([i32; 4], [f32; 4]) =
+                (bytemuck::cast(cells[k]), bytemuck::cast(offs[k]));
             // the compensated values: x − c
-            positions[i] = crate::gpu::layout::decode3(cells[k], offs[k], self.origin, self.h)
+            positions[i] = crate::gpu::layout::decode3(cell, off, self.origin, self.h)
                 - vec3(kahan_o[k]);
             velocities[i] = vec3(vels[k]) - vec3(kahan_v[k]);
             if let Some(w) = omegas.get(k) {
