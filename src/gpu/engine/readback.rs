@@ -35,8 +35,8 @@ impl GpuEngine {
             let (cell, off): ([i32; 4], [f32; 4]) =
                 (bytemuck::cast(cells[k]), bytemuck::cast(offs[k]));
             // the compensated values: x − c
-            positions[i] = crate::gpu::layout::decode3(cell, off, self.origin, self.h)
-                - vec3(kahan_o[k]);
+            positions[i] =
+                crate::gpu::layout::decode3(cell, off, self.origin, self.h) - vec3(kahan_o[k]);
             velocities[i] = vec3(vels[k]) - vec3(kahan_v[k]);
             if let Some(w) = omegas.get(k) {
                 angular_velocities[i] = vec3(*w);
