@@ -338,6 +338,14 @@ fn the_monitor_stops_runs_that_go_wrong_and_keeps_the_last_good_state() {
     );
 }
 
+/// The step a monitor error names ("step N: ...").
+fn step_of(err: &str) -> u64 {
+    err.strip_prefix("step ")
+        .and_then(|r| r.split(':').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no step in {err}"))
+}
+
 /// A failing chunk stepped again from a copy of the state taken chunks before it (as a
 /// GPU run at 10^7 particles copies its state seldom) gives the same error and the same
 /// checkpoint of the chunk's start as one copied just before it, on both backends.
@@ -371,13 +379,8 @@ fn a_failing_chunk_is_found_from_an_older_copy_of_the_state() {
         let Some((err, ckpt)) = outcome(1) else {
             continue;
         };
-        let step: u64 = err
-            .strip_prefix("step ")
-            .and_then(|r| r.split(':').next())
-            .and_then(|n| n.parse().ok())
-            .unwrap_or_else(|| panic!("{backend}: {err}"));
         assert!(
-            step > 200 && err.contains("left the domain"),
+            step_of(&err) > 200 && err.contains("left the domain"),
             "{backend}: {err}"
         );
         let (err_old, ckpt_old) = outcome(u64::MAX).unwrap();
@@ -410,10 +413,6 @@ fn a_failure_is_named_at_its_own_step_on_any_cadence() {
             .next()
             .unwrap()
             .to_string()
-    };
-    let step_of = |e: &str| -> u64 {
-        let digits = e.trim_start_matches("step ");
-        digits[..digits.find(':').unwrap()].parse().unwrap()
     };
     let run = |s: &Scene| {
         let dir = tempfile::tempdir().unwrap();

@@ -274,19 +274,19 @@ impl Simulation for GpuEngine {
         Ok(obs)
     }
     fn observe_for_checks(&self) -> Result<Observation, PowderError> {
-        let s = self.state()?;
-        let (energies, contacts) = if self.has_ledger() {
-            let (energies, contacts) = self.energies_and_contact_stats(&s)?;
-            (energies.into(), Some(contacts))
+        let (s, energies, contacts) = if self.has_ledger() {
+            let (s, energies, contacts) = self.state_energies_and_contact_stats()?;
+            (s, energies.into(), Some(contacts))
         } else {
             // what the read-back state tells on the host, in f64
+            let s = self.state()?;
             let known = ObservedEnergies {
                 kinetic: self.kinetic_energy(&s),
                 gravitational: self.gravitational_energy(&s),
                 inserted: self.inserted_energy(),
                 ..Default::default()
             };
-            (known, None)
+            (s, known, None)
         };
         let walls = self.walls_now()?;
         Ok(Observation {

@@ -16,13 +16,35 @@ impl GpuEngine {
     /// Reads positions, velocities and (when the scene rotates) angular velocities back,
     /// in the scene's particle order.
     pub fn state(&self) -> Result<GpuState, PowderError> {
-        // (only the fields it is made of, not the whole buffers: the run reads it back
-        // after chunks)
+        Ok(self.read_state_fields(false)?.0)
+    }
+
+    /// [`Self::state`] with its energies and contact statistics
+    /// ([`Self::energies_and_contact_stats`]) from one read-back: what a run observes.
+    pub fn state_energies_and_contact_stats(
+        &self,
+    ) -> Result<(GpuState, Energies, ContactStats), PowderError> {
+        self.require_ledger()?;
+        let (state, rows) = self.read_state_fields(true)?;
+        let energies = self.energies_of(&rows, &state);
+        Ok((state, energies, self.contact_stats_of(&rows)))
+    }
+
+    /// The state's fields read back (only those it is made of, not the whole buffers: the
+    /// run reads them after chunks), with the ledger's rows where `ledger` and kept (else
+    /// none).
+    fn read_state_fields(&self, ledger: bool) -> Result<(GpuState, Vec<[f32; 4]>), PowderError> {
         let rotates = self.state.layout.place("omega").is_some();
-        let names = ["cell", "off", "ids", "kahan_o", "vel", "kahan_v", "omega"];
-        let f = self.read_fields(&names[..names.len() - usize::from(!rotates)])?;
+        let ledger = ledger && self.keeps.ledger;
+        let mut names = vec!["cell", "off", "ids", "kahan_o", "vel", "kahan_v"];
+        names.extend(rotates.then_some("omega"));
+        let ledger_at = names.len();
+        if ledger {
+            names.extend(crate::gpu::state::ledger_fields());
+        }
+        let f = self.read_fields(&names)?;
         let [cells, offs, ids, kahan_o, vels, kahan_v] = [0, 1, 2, 3, 4, 5].map(|i| &f[i]);
-        let omegas: &[[u32; 4]] = f.get(6).map_or(&[], |w| w);
+        let omegas: &[[u32; 4]] = if rotates { &f[6] } else { &[] };
         let vec3 = |v: [u32; 4]| {
             let v: [f32; 4] = bytemuck::cast(v);
             DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64)
@@ -42,11 +64,16 @@ impl GpuEngine {
                 angular_velocities[i] = vec3(*w);
             }
         }
-        Ok(GpuState {
+        let state = GpuState {
             positions,
             velocities,
             angular_velocities,
-        })
+        };
+        let rows = match ledger {
+            true => self.ledger_rows(ids, &f[ledger_at..]),
+            false => Vec::new(),
+        };
+        Ok((state, rows))
     }
 
     /// The deepest overlap over a12 of any contact in any step since the last call, and a
@@ -74,24 +101,33 @@ impl GpuEngine {
     /// The per-particle ledger rows (4 × vec4 per persistent id: the state's
     /// `gpu::state::ledger_fields`), or an error naming why there are none.
     pub(super) fn read_particle_ledger(&self) -> Result<Vec<[f32; 4]>, PowderError> {
-        if !self.keeps.ledger {
-            return Err(PowderError::Run(
-                "this GPU run keeps no energy ledger (GpuOptions { ledger: false })".into(),
-            ));
-        }
+        self.require_ledger()?;
         // (only the ids and the ledger's fields: 80 bytes a particle)
         let names: Vec<&str> = std::iter::once("ids")
             .chain(crate::gpu::state::ledger_fields())
             .collect();
         let fields = self.read_fields(&names)?;
-        let ids: &[[u32; 4]] = &fields[0];
+        Ok(self.ledger_rows(&fields[0], &fields[1..]))
+    }
+
+    fn require_ledger(&self) -> Result<(), PowderError> {
+        match self.keeps.ledger {
+            true => Ok(()),
+            false => Err(PowderError::Run(
+                "this GPU run keeps no energy ledger (GpuOptions { ledger: false })".into(),
+            )),
+        }
+    }
+
+    /// The ledger's fields (device order) as rows per persistent id, 4 a particle.
+    fn ledger_rows(&self, ids: &[[u32; 4]], fields: &[Vec<[u32; 4]>]) -> Vec<[f32; 4]> {
         let mut rows = vec![[0.0f32; 4]; 4 * self.n as usize];
-        for (f, values) in fields[1..].iter().enumerate() {
+        for (f, values) in fields.iter().enumerate() {
             for (k, v) in values.iter().enumerate() {
                 rows[4 * ids[k][0] as usize + f] = bytemuck::cast(*v);
             }
         }
-        Ok(rows)
+        rows
     }
 
     /// The state fields `names` read back, each its `n` vectors in the device's order:
